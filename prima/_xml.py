@@ -1,0 +1,237 @@
+"""Secure XML loading with exact source positions, shared by every loader.
+
+Documents come from strangers (an EA is loaded from the building the robot
+visits), so parsing is locked down: no DOCTYPE at all (hence no DTD, no
+external or internal entities, no entity-expansion bombs), no network, a size
+limit and a depth limit. After a successful parse, :class:`SourceMap` scans the
+raw text once to learn where every start tag, attribute value and text content
+begins; lxml itself only knows the line on which a start tag *ends*.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from lxml import etree
+
+from prima.errors import LocatedError, Problem, Severity
+
+MAX_BYTES = 1 << 20
+"""Largest document accepted (1 MiB); a dialogue document is far smaller."""
+
+MAX_DEPTH = 64
+"""Deepest element nesting accepted."""
+
+_DOCTYPE = re.compile(rb"<!DOCTYPE", re.IGNORECASE)
+_NAME_START = re.compile(r"[A-Za-z_:\u00C0-\uFFFF]")
+_ATTR = re.compile(r"""\s*([^\s=/>]+)\s*=\s*(["'])""")
+
+
+def _parser() -> etree.XMLParser:
+    return etree.XMLParser(
+        resolve_entities=False,
+        load_dtd=False,
+        dtd_validation=False,
+        no_network=True,
+        huge_tree=False,
+        remove_blank_text=False,
+    )
+
+
+@dataclass
+class _Place:
+    start: int
+    attrs: dict[str, tuple[int, str]] = field(default_factory=dict)
+    content: int = -1
+
+
+class SourceMap:
+    """Maps elements, attribute values and text content to 1-based line:col."""
+
+    def __init__(self, text: str, root: etree._Element) -> None:
+        self._text = text
+        self._line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
+        self._elements = list(root.iter(tag=etree.Element))  # keeps proxies alive
+        places = _scan_start_tags(text)
+        self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places))
+
+    def position(self, offset: int) -> tuple[int, int]:
+        """Line and column (both 1-based) of a character offset."""
+        lo, hi = 0, len(self._line_starts) - 1
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if self._line_starts[mid] <= offset:
+                lo = mid
+            else:
+                hi = mid - 1
+        return lo + 1, offset - self._line_starts[lo] + 1
+
+    def element(self, el: etree._Element) -> tuple[int, int]:
+        """Where the element's start tag begins (its ``<``)."""
+        place = self._places.get(el)
+        if place is None:
+            return (el.sourceline or 1, 1)
+        return self.position(place.start)
+
+    def attribute(self, el: etree._Element, name: str, index: int = 0) -> tuple[int, int]:
+        """Where character ``index`` of attribute ``name``'s (decoded) value is."""
+        place = self._places.get(el)
+        if place is None or name not in place.attrs:
+            return self.element(el)
+        start, raw = place.attrs[name]
+        return self.position(start + _raw_index(raw, index))
+
+    def text(self, el: etree._Element, index: int = 0) -> tuple[int, int]:
+        """Where character ``index`` of the element's text content is."""
+        place = self._places.get(el)
+        if place is None or place.content < 0:
+            return self.element(el)
+        end = self._text.find("<", place.content)
+        raw = self._text[place.content : end if end >= 0 else len(self._text)]
+        return self.position(place.content + _raw_index(raw, index))
+
+
+def _raw_index(raw: str, index: int) -> int:
+    """Offset in ``raw`` of decoded character ``index`` (entity refs count as one)."""
+    decoded = 0
+    i = 0
+    while i < len(raw) and decoded < index:
+        if raw[i] == "&":
+            end = raw.find(";", i)
+            i = end + 1 if end >= 0 else i + 1
+        else:
+            i += 1
+        decoded += 1
+    return i
+
+
+def _scan_start_tags(text: str) -> list[_Place]:
+    """Start tags of a well-formed document, in document order."""
+    places: list[_Place] = []
+    i = 0
+    n = len(text)
+    while True:
+        i = text.find("<", i)
+        if i < 0 or i + 1 >= n:
+            return places
+        if text.startswith("<!--", i):
+            i = text.find("-->", i) + 3
+        elif text.startswith("<![CDATA[", i):
+            i = text.find("]]>", i) + 3
+        elif text.startswith("<?", i):
+            i = text.find("?>", i) + 2
+        elif text.startswith("<!", i):
+            i = text.find(">", i) + 1
+        elif text[i + 1] == "/" or not _NAME_START.match(text[i + 1]):
+            i += 1
+        else:
+            place = _Place(start=i)
+            j = i + 1
+            while j < n and not text[j].isspace() and text[j] not in "/>":
+                j += 1
+            while True:
+                m = _ATTR.match(text, j)
+                if not m:
+                    break
+                quote = m.group(2)
+                value_start = m.end()
+                value_end = text.find(quote, value_start)
+                name = m.group(1).rpartition(":")[2] if ":" in m.group(1) and not m.group(1).startswith("xmlns") else m.group(1)
+                place.attrs[name] = (value_start, text[value_start:value_end])
+                j = value_end + 1
+            close = text.find(">", j)
+            if text[close - 1] != "/":
+                place.content = close + 1
+            places.append(place)
+            i = close + 1
+
+
+@dataclass
+class XmlDocument:
+    """A parsed document with its source map."""
+
+    name: str
+    root: etree._Element
+    where: SourceMap
+
+    def problem(
+        self,
+        el: etree._Element,
+        message: str,
+        *,
+        attribute: str | None = None,
+        index: int = 0,
+        severity: Severity = Severity.ERROR,
+    ) -> Problem:
+        """A problem located at an element, or inside one of its attributes."""
+        if attribute is None:
+            line, col = self.where.element(el)
+        else:
+            line, col = self.where.attribute(el, attribute, index)
+        return Problem(self.name, line, col, severity, message)
+
+
+def read_source(path: Path, error: type[LocatedError]) -> bytes:
+    """Read a file's bytes, turning OS errors and oversize files into problems."""
+    try:
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise error([Problem(str(path), 1, 1, Severity.ERROR,
+                                 f"file is {size} bytes; the limit is {MAX_BYTES}")])
+        return path.read_bytes()
+    except OSError as exc:
+        raise error([Problem(str(path), 1, 1, Severity.ERROR,
+                             f"cannot read file: {exc.strerror or exc}")]) from exc
+
+
+def parse_xml(data: bytes, name: str, error: type[LocatedError]) -> XmlDocument:
+    """Parse untrusted bytes securely; raise ``error`` with located problems."""
+
+    def fail(line: int, col: int, message: str) -> LocatedError:
+        return error([Problem(name, line, col, Severity.ERROR, message)])
+
+    if len(data) > MAX_BYTES:
+        raise fail(1, 1, f"document is {len(data)} bytes; the limit is {MAX_BYTES}")
+    doctype = _DOCTYPE.search(data)
+    if doctype:
+        before = data[: doctype.start()]
+        line = before.count(b"\n") + 1
+        col = doctype.start() - (before.rfind(b"\n") + 1) + 1
+        raise fail(line, col, "DOCTYPE declarations are not allowed "
+                              "(no DTDs or entities in PRIMA documents)")
+    try:
+        root = etree.fromstring(data, _parser())
+    except etree.XMLSyntaxError as exc:
+        line, col = exc.position if exc.position else (1, 1)
+        message = _syntax_message(exc)
+        raise fail(max(line, 1), max(col, 1), f"malformed XML: {message}") from exc
+    encoding = root.getroottree().docinfo.encoding or "utf-8"
+    try:
+        text = data.decode(encoding)
+    except (LookupError, UnicodeDecodeError) as exc:
+        raise fail(1, 1, f"cannot decode document as {encoding}") from exc
+    doc = XmlDocument(name=name, root=root, where=SourceMap(text, root))
+    _check_depth(doc, lambda el, msg: error([doc.problem(el, msg)]))
+    return doc
+
+
+def _syntax_message(exc: etree.XMLSyntaxError) -> str:
+    message = exc.msg or str(exc)
+    return re.sub(r", line \d+, column \d+$", "", message)
+
+
+def _check_depth(doc: XmlDocument, fail: Callable[[etree._Element, str], LocatedError]) -> None:
+    stack = [(doc.root, 1)]
+    while stack:
+        el, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise fail(el, f"elements nest deeper than {MAX_DEPTH} levels")
+        stack.extend((child, depth + 1) for child in el if isinstance(child.tag, str))
+
+
+def local_name(el: etree._Element) -> str:
+    """The element's tag without its namespace."""
+    return etree.QName(el).localname

@@ -1,0 +1,1 @@
+"""PXML documents and robot profiles: secure loading, schemas, meaning checks."""

@@ -1,0 +1,1 @@
+"""Run one PXML document: its states, variables, timers and handlers."""

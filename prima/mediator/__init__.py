@@ -1,0 +1,53 @@
+"""The mediator: working memory, atomic-behavior trees and the mediation rules.
+
+It imports neither the simulator nor the DSL: applications reach it through
+:class:`Request` and :class:`AppListener`, devices through :class:`Driver`.
+"""
+
+from prima.mediator.catalog import (
+    STANDARD_COMMANDS,
+    STANDARD_DEVICES,
+    Catalog,
+    CommandSpec,
+    Param,
+    ParamKind,
+    Priority,
+    Value,
+)
+from prima.mediator.interface import (
+    PREDEFINED_EVENTS,
+    AppKind,
+    AppListener,
+    AtomicBehavior,
+    Call,
+    Clock,
+    Driver,
+    Event,
+    ManualClock,
+    Outcome,
+    Request,
+    RunningOrder,
+)
+
+__all__ = [
+    "PREDEFINED_EVENTS",
+    "STANDARD_COMMANDS",
+    "STANDARD_DEVICES",
+    "AppKind",
+    "AppListener",
+    "AtomicBehavior",
+    "Call",
+    "Catalog",
+    "Clock",
+    "CommandSpec",
+    "Driver",
+    "Event",
+    "ManualClock",
+    "Outcome",
+    "Param",
+    "ParamKind",
+    "Priority",
+    "Request",
+    "RunningOrder",
+    "Value",
+]

@@ -1,0 +1,207 @@
+"""The Command catalog: MISSION.md section 4 (thesis Table 4.2) as data.
+
+Each Command names the devices its atomic behaviors occupy, whether it is a
+feedback loop (one AB per iteration), and whether it breaks the Communication
+Channel (which gives it low priority). Parameters are listed here too, so the
+DSL validates arguments and the simulator reads them from one table.
+
+A robot hardware profile extends the catalog with robot-specific Commands
+(only an FA may use those) via :meth:`Catalog.extended`.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Iterable, Iterator, Mapping, Union
+
+Value = Union[str, float, int, bool, None]
+"""A runtime value: what expressions produce and Commands take as arguments."""
+
+STANDARD_DEVICES: tuple[str, ...] = (
+    "human-detection",
+    "locomotion",
+    "localization",
+    "speaker",
+    "speech-recognition",
+    "neck",
+    "arm",
+)
+"""Devices every PRIMA robot has (thesis Sec. 2.4, Figure 2.4)."""
+
+
+class Priority(enum.IntEnum):
+    """Scheduling priority of a Command's atomic behaviors (thesis Sec. 4.3)."""
+
+    LOW = 0
+    """The Command breaks the Communication Channel (moves away from the user)."""
+    HIGH = 1
+    """The Command keeps the Communication Channel."""
+
+
+class ParamKind(str, enum.Enum):
+    """What an argument is, which decides how it is written and checked."""
+
+    TEXT = "text"
+    """Words to say: a string with ``{expr}`` interpolation."""
+    NUMBER = "number"
+    """A number (its unit is given by :attr:`Param.unit`)."""
+    PLACE = "place"
+    """A place on the building's map, written as a bare name."""
+    GESTURE = "gesture"
+    """A gesture the robot's profile knows, written as a bare name."""
+    GRAMMAR = "grammar"
+    """The id of an answer grammar declared in the document (Q&A only)."""
+    VARIABLE = "variable"
+    """The name of a document variable that receives a result (Q&A only)."""
+    SYMBOL = "symbol"
+    """Any other bare word (robot-specific Commands)."""
+
+
+SYMBOLIC_KINDS = frozenset({ParamKind.PLACE, ParamKind.GESTURE, ParamKind.GRAMMAR,
+                            ParamKind.VARIABLE, ParamKind.SYMBOL})
+"""Kinds written as bare names rather than expressions."""
+
+
+@dataclass(frozen=True)
+class Param:
+    """One motion argument of a Command."""
+
+    name: str
+    kind: ParamKind
+    required: bool = True
+    default: Value = None
+    unit: str = ""
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class CommandSpec:
+    """A Command type: what it occupies and how PRIMA schedules it."""
+
+    name: str
+    devices: frozenset[str]
+    feedback: bool = False
+    breaks_cc: bool = False
+    params: tuple[Param, ...] = ()
+    one_of: tuple[frozenset[str], ...] = ()
+    """Groups of parameters of which exactly one must be given."""
+    robot_specific: bool = False
+    doc: str = ""
+    priority_override: Priority | None = None
+
+    @property
+    def priority(self) -> Priority:
+        if self.priority_override is not None:
+            return self.priority_override
+        return Priority.LOW if self.breaks_cc else Priority.HIGH
+
+    def param(self, name: str) -> Param | None:
+        for p in self.params:
+            if p.name == name:
+                return p
+        return None
+
+
+def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
+          params: Iterable[Param] = (), one_of: Iterable[Iterable[str]] = (),
+          doc: str = "") -> CommandSpec:
+    return CommandSpec(
+        name=name,
+        devices=frozenset(devices.split()),
+        feedback=fb,
+        breaks_cc=breaks,
+        params=tuple(params),
+        one_of=tuple(frozenset(g) for g in one_of),
+        doc=doc,
+    )
+
+
+_P = Param
+_T, _N, _PL = ParamKind.TEXT, ParamKind.NUMBER, ParamKind.PLACE
+
+STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
+    _spec("ActiveSensingHuman", "human-detection locomotion localization", fb=True,
+          params=[_P("say", _T, False, "", doc="said at each retry; adds the speaker to the devices"),
+                  _P("turn", _N, False, 90.0, "deg", "how far to turn the view after 10 s unseen")],
+          doc="Stay still until the camera sees the user; after 10 s unseen, turn the view and retry."),
+    _spec("FaceHuman", "human-detection locomotion", doc="Turn the body to face the user."),
+    _spec("QA", "speaker speech-recognition",
+          params=[_P("prompt", _T),
+                  _P("grammar", ParamKind.GRAMMAR, doc="answer grammar declared in the document"),
+                  _P("into", ParamKind.VARIABLE, False, doc="variable that receives the answer"),
+                  _P("timeout", _N, False, 8.0, "s", "how long to listen for an answer")],
+          doc="Say a prompt, then listen for an answer until a timeout: one atomic behavior."),
+    _spec("TrackingHuman", "human-detection locomotion", fb=True,
+          params=[_P("distance", _N, False, 1.0, "m", "comfortable distance to keep")],
+          doc="Follow the user at a comfortable distance, one iteration at a time, until stopped."),
+    _spec("FaceHumanAndSpeak", "human-detection locomotion speaker",
+          params=[_P("text", _T)], doc="Face the user, then speak."),
+    _spec("TurnAndSpeak", "locomotion localization speaker",
+          params=[_P("angle", _N, unit="deg", doc="counter-clockwise turn"), _P("text", _T)],
+          doc="Turn by an angle while speaking."),
+    _spec("SetDirection", "locomotion localization",
+          params=[_P("heading", _N, False, unit="deg", doc="map heading, 0 = east, 90 = north"),
+                  _P("toward", _PL, False, doc="a place to face")],
+          one_of=[("heading", "toward")], doc="Turn to a map heading or toward a place."),
+    _spec("Turn", "locomotion", params=[_P("angle", _N, unit="deg", doc="counter-clockwise")],
+          doc="Turn the body in place by an angle."),
+    _spec("SetSpeedAndTime", "locomotion",
+          params=[_P("speed", _N, unit="m/s"), _P("time", _N, unit="s"),
+                  _P("spin", _N, False, 0.0, "deg/s", "turning rate while moving")],
+          doc="Drive at a speed for a time."),
+    _spec("StopMoving", "locomotion", doc="Stop the wheels."),
+    _spec("Speak", "speaker", params=[_P("text", _T)], doc="Say an utterance."),
+    _spec("MoveHead", "neck",
+          params=[_P("pan", _N, unit="deg"), _P("tilt", _N, False, 0.0, "deg")],
+          doc="Point the head (pan left/right, tilt up/down)."),
+    _spec("PointByHand", "arm",
+          params=[_P("toward", _PL, False, doc="a place to point at"),
+                  _P("angle", _N, False, unit="deg", doc="direction relative to the body")],
+          one_of=[("toward", "angle")], doc="Point the arm at a place or a direction."),
+    _spec("Gesture", "arm neck",
+          params=[_P("name", ParamKind.GESTURE, doc="a gesture the robot profile declares")],
+          doc="Play a named gesture with the arm and the head."),
+    _spec("TopologicalMove", "locomotion localization", fb=True, breaks=True,
+          params=[_P("to", _PL, doc="goal place on the building's map")],
+          doc="Drive to a named place over the map's place graph, one leg per iteration."),
+    _spec("SetPosition", "locomotion localization", fb=True, breaks=True,
+          params=[_P("x", _N, unit="m"), _P("y", _N, unit="m")],
+          doc="Drive to map coordinates."),
+    _spec("SetPositionAndDirection", "locomotion localization", fb=True, breaks=True,
+          params=[_P("x", _N, unit="m"), _P("y", _N, unit="m"),
+                  _P("heading", _N, unit="deg")],
+          doc="Drive to map coordinates, then turn to a heading."),
+)
+
+
+@dataclass(frozen=True)
+class Catalog:
+    """An immutable set of Command types, looked up by name."""
+
+    commands: Mapping[str, CommandSpec] = field(default_factory=dict)
+    devices: frozenset[str] = frozenset(STANDARD_DEVICES)
+
+    @classmethod
+    def standard(cls) -> Catalog:
+        """The common interface every robot offers, FA and EA alike."""
+        return cls({c.name: c for c in STANDARD_COMMANDS}, frozenset(STANDARD_DEVICES))
+
+    def extended(self, commands: Iterable[CommandSpec], devices: Iterable[str] = ()) -> Catalog:
+        """A catalog with robot-specific Commands and devices added."""
+        merged = dict(self.commands)
+        for c in commands:
+            merged[c.name] = c
+        return Catalog(merged, self.devices | frozenset(devices))
+
+    def __getitem__(self, name: str) -> CommandSpec:
+        return self.commands[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.commands
+
+    def __iter__(self) -> Iterator[CommandSpec]:
+        return iter(self.commands.values())
+
+    def get(self, name: str) -> CommandSpec | None:
+        return self.commands.get(name)

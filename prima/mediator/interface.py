@@ -1,0 +1,172 @@
+"""The mediator's contracts: requests from applications, drivers for devices.
+
+Applications (through their interpreters) send :class:`Request` objects and
+receive events, end events and cancellations through an :class:`AppListener`.
+Devices are driven through a :class:`Driver`, which starts one
+:class:`AtomicBehavior` at a time per device set and reports its end with an
+:class:`Outcome`. Time comes from an injected :class:`Clock`; the mediator
+never reads the wall clock.
+
+Nothing here knows about XML documents or physics.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Mapping, Protocol
+
+from prima.mediator.catalog import Value
+
+EMPTY: Mapping[str, Value] = MappingProxyType({})
+
+CommandId = int
+"""Mediator-wide id of one requested Command (increasing from 1)."""
+
+AbId = int
+"""Mediator-wide id of one atomic behavior (increasing from 1)."""
+
+TreeId = int
+"""Mediator-wide id of one AB tree (increasing from 0)."""
+
+
+class AppKind(str, enum.Enum):
+    """Which of the two roles an application plays."""
+
+    FA = "fa"
+    """Familiarity-oriented: the robot's own, resident application."""
+    EA = "ea"
+    """Environment-oriented: loaded from the building the robot visits."""
+
+
+class RunningOrder(str, enum.Enum):
+    """How a request links to the application's earlier requests (thesis 4.2(5))."""
+
+    AFTER_LATEST = "after-latest"
+    """Run after the app's latest Command if that is still in working memory."""
+    ASAP = "asap"
+    """Cancel the app's own trees that share a device, then start as soon as possible."""
+
+
+@dataclass(frozen=True)
+class Call:
+    """One Command with its arguments, as an application requests it."""
+
+    command: str
+    args: Mapping[str, Value] = EMPTY
+    extra: Mapping[str, Value] = EMPTY
+    """Additional (hardware) arguments; only an FA may pass them."""
+    label: str | None = None
+    """The author's id for this Command, if any (shown in traces)."""
+    extra_devices: frozenset[str] = frozenset()
+    """Devices occupied beyond the catalog's (e.g. the speaker for a sensing prompt)."""
+
+
+@dataclass(frozen=True)
+class Request:
+    """A request: one Command or a chain of Commands (root first)."""
+
+    app: str
+    calls: tuple[Call, ...]
+    order: RunningOrder = RunningOrder.AFTER_LATEST
+    group: bool = False
+    """Run the whole chain as one atomic behavior (thesis 4.1 (2))."""
+    reactive: bool = False
+    """The first Commands requested while handling a reactive event (rule 5)."""
+    follows: CommandId | None = None
+    """Made while handling this Command's end event or Q&A answer (rule 6a/6b):
+    the request stays in that Command's tree and carries no reactivity."""
+
+
+@dataclass(frozen=True)
+class AtomicBehavior:
+    """What a driver is asked to perform: one AB, never cut once started."""
+
+    id: AbId
+    app: str
+    tree: TreeId
+    calls: tuple[Call, ...]
+    """One Call normally; several for a grouped request, run in order."""
+    command_ids: tuple[CommandId, ...]
+    devices: frozenset[str]
+    iteration: int = 0
+    """For a feedback Command, which loop iteration this is (0, 1, 2, ...)."""
+    reactive: bool = False
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How an atomic behavior ended, as the driver reports it."""
+
+    values: Mapping[str, Value] = EMPTY
+    """Results: e.g. ``status``/``utterance`` of a Q&A, ``place`` reached."""
+    terminal: bool = True
+    """For a feedback iteration: True when the Command's loop is done."""
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something PRIMA posts to every loaded application (rule 5)."""
+
+    name: str
+    data: Mapping[str, Value] = field(default=EMPTY)
+    time: float = 0.0
+
+
+PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
+    "human-found": "the camera sees the user (data: distance)",
+    "human-lost": "the camera lost sight of the user",
+    "sound-heard": "a sound the robot recognises, e.g. a tune (data: sound)",
+    "message": "a network message arrived from the environment's server (data: sender, text)",
+    "place-reached": "a place on the map was reached while moving (data: place, kind)",
+})
+"""Events every robot posts, FA and EA alike; all are reactive."""
+
+
+class Clock(Protocol):
+    """Simulated time in seconds; injected, never the wall clock."""
+
+    def now(self) -> float: ...
+
+
+class ManualClock:
+    """A clock that moves only when told to; for tests and the run loop."""
+
+    def __init__(self, start: float = 0.0) -> None:
+        self._t = start
+
+    def now(self) -> float:
+        return self._t
+
+    def set(self, t: float) -> None:
+        if t < self._t:
+            raise ValueError(f"time cannot go back from {self._t} to {t}")
+        self._t = t
+
+
+class Driver(Protocol):
+    """The devices' side: the simulator implements this (a scripted double ships too)."""
+
+    def start(self, ab: AtomicBehavior) -> None:
+        """Begin performing ``ab``; report its end later via ``Mediator.finish``."""
+
+    def abandon(self, command_id: CommandId) -> None:
+        """A feedback Command was cancelled between iterations: drop its loop state."""
+
+
+class AppListener(Protocol):
+    """The application's side: an interpreter implements this.
+
+    Calls may re-enter the mediator (``submit`` and friends); the mediator
+    defers its selection until the callback returns.
+    """
+
+    def event(self, event: Event) -> None:
+        """A predefined or robot-specific event was posted."""
+
+    def command_ended(self, command_id: CommandId, outcome: Outcome) -> None:
+        """A requested Command finished (its last AB ended)."""
+
+    def command_cancelled(self, command_id: CommandId) -> None:
+        """A requested Command was cancelled before it started."""

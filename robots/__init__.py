@@ -1,0 +1,1 @@
+"""Robot hardware profiles shipped with PRIMA, as package data (``prima.robots``)."""

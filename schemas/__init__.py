@@ -1,0 +1,1 @@
+"""XSD schemas of PRIMA's documents, shipped as package data (``prima.schemas``)."""
