@@ -1,0 +1,244 @@
+"""Binding Command arguments, from the element form and from the chain notation.
+
+Both forms end in the same :class:`~prima.dsl.model.CommandCall`: arguments
+are compiled according to the parameter's kind (text is a template, numbers
+are literals or expressions, places and gestures are bare names or
+``{expression}``), then checked against the Command's signature.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import TYPE_CHECKING, Callable
+
+from lark import Tree
+from lxml import etree
+
+from prima._xml import local_name
+from prima.dsl.expr import (
+    ChainArg,
+    ChainStep,
+    Compiled,
+    Scope,
+    bare_name,
+    compile_chain_arg,
+    compile_expression,
+    compile_template,
+    constant,
+    string_literal,
+)
+from prima.dsl.model import CommandCall
+from prima.mediator.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
+from prima.mediator.interface import AppKind
+
+if TYPE_CHECKING:
+    from prima.dsl.loader import Builder, Spot
+
+_COMPUTED = re.compile(r"^\{(.*)\}$", re.S)
+
+
+def element_name(command: str) -> str:
+    """The element of a common Command: ``TopologicalMove`` -> ``topological-move``."""
+    return re.sub(r"(?<=[a-z])(?=[A-Z])", "-", command).lower()
+
+
+def compile_attribute(b: Builder, kind: ParamKind, el: etree._Element, attr: str) -> Compiled | None:
+    """Compile an argument written as an attribute value, by its parameter kind."""
+    raw = el.get(attr, "")
+    spot: Spot = (el, attr, 0)
+    if kind is ParamKind.TEXT:
+        return b.compile(spot, lambda: compile_template(raw))
+    m = _COMPUTED.match(raw)
+    if m:
+        return b.compile((el, attr, 1), lambda: compile_expression(m.group(1)))
+    if kind is ParamKind.NUMBER:
+        try:
+            value = float(raw)
+        except ValueError:
+            b.error(spot, f"'{raw}' is not a number (write a number, or {{expression}})")
+            return None
+        return constant(int(value) if value.is_integer() and "." not in raw else value, raw)
+    return constant(raw, raw)
+
+
+def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
+    """A Command written as an element (``<speak text="..."/>`` or ``<command name="...">``)."""
+    tag = local_name(el)
+    generic = tag == "command"
+    name = el.get("name", "") if generic else b.element_commands.get(tag, "")
+    spec = b.catalog.get(name)
+    if spec is None:
+        b.error((el, "name", 0), f"unknown Command '{name}'{b.known_commands_hint()}")
+        return None
+    args: dict[str, Compiled] = {}
+    spots: dict[str, Spot] = {}
+    if generic:
+        for arg in _children(el, "arg"):
+            pname = arg.get("name", "")
+            param = spec.param(pname)
+            if param is None:
+                b.error((arg, "name", 0), f"{name} has no argument '{pname}'{_params_hint(spec)}")
+            elif pname in spots:
+                b.error((arg, "name", 0), f"argument '{pname}' is given twice")
+            else:
+                spots[pname] = (arg, "value", 0)
+                _put(args, pname, compile_attribute(b, param.kind, arg, "value"))
+    else:
+        for param in spec.params:
+            if el.get(param.name) is not None:
+                spots[param.name] = (el, param.name, 0)
+                _put(args, param.name, compile_attribute(b, param.kind, el, param.name))
+    extras = [(x.get("name", ""), (x, "name", 0),
+               lambda x=x: _extra_attr(b, spec, x.get("name", ""), x)) for x in _children(el, "extra")]
+    label = el.get("id")
+    return _finish(b, spec, (el, None, 0), label, (el, "id", 0), args, spots, extras)
+
+
+def _children(el: etree._Element, tag: str) -> list[etree._Element]:
+    return [c for c in el if isinstance(c.tag, str) and local_name(c) == tag]
+
+
+def _extra_attr(b: Builder, spec: CommandSpec, name: str, el: etree._Element) -> Compiled | None:
+    param = b.profile.extras.get(spec.name, {}).get(name)
+    return compile_attribute(b, param.kind if param else ParamKind.TEXT, el, "value")
+
+
+def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> CommandCall | None:
+    """A Command written in the chain notation: ``label: Name(args)[extras]``."""
+    where: Spot = (el, "#text", step.index)
+    spec = b.catalog.get(step.command)
+    if spec is None:
+        b.error(where, f"unknown Command '{step.command}'{b.known_commands_hint()}")
+        return None
+    args: dict[str, Compiled] = {}
+    spots: dict[str, Spot] = {}
+    seen_named = False
+    for pos, arg in enumerate(step.args):
+        arg_spot: Spot = (el, "#text", arg.index)
+        if arg.name is None:
+            if seen_named:
+                b.error(arg_spot, "a positional argument cannot follow a named one")
+                continue
+            if pos >= len(spec.params):
+                b.error(arg_spot, f"{spec.name} takes at most {len(spec.params)} argument(s)"
+                                  f"{_params_hint(spec)}")
+                continue
+            param = spec.params[pos]
+        else:
+            seen_named = True
+            found = spec.param(arg.name)
+            if found is None:
+                b.error(arg_spot, f"{spec.name} has no argument '{arg.name}'{_params_hint(spec)}")
+                continue
+            param = found
+        if param.name in spots:
+            b.error(arg_spot, f"argument '{param.name}' is given twice")
+            continue
+        spots[param.name] = arg_spot
+        _put(args, param.name, _chain_value(b, param, arg, text, arg_spot))
+        name = bare_name(arg)
+        if param.kind is ParamKind.PLACE and name in b.variable_names:
+            b.warning(arg_spot, f"'{name}' is taken as a place name; write {{{name}}} "
+                                "to use the variable")
+    extras = [(x.name or "", (el, "#text", x.index), lambda x=x: _extra_chain(b, spec, x, text, el))
+              for x in step.extras]
+    label_spot: Spot = (el, "#text", step.label_index)
+    return _finish(b, spec, where, step.label, label_spot, args, spots, extras)
+
+
+def _chain_value(b: Builder, param: Param, arg: ChainArg, text: str, spot: Spot) -> Compiled | None:
+    if param.kind in SYMBOLIC_KINDS and not arg.computed:
+        name = bare_name(arg)
+        if name is None:
+            name = string_literal(arg)
+        if name is not None:
+            return constant(name, name)
+        written = _source(arg, text)
+        if _HYPHENATED.match(written):
+            b.error(spot, f"write \"{written}\" in quotes: in a chain, '-' between names "
+                          "reads as a subtraction")
+        elif param.kind in (ParamKind.GRAMMAR, ParamKind.VARIABLE):
+            b.error(spot, f"'{param.name}' must be a bare name")
+        else:
+            b.error(spot, f"'{param.name}' is a {param.kind.value}: write a bare name, "
+                          "or {expression} to compute it")
+        return None
+    return b.compile((spot[0], "#text", 0), lambda: compile_chain_arg(arg, text))
+
+
+_HYPHENATED = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\s*-\s*[A-Za-z0-9_]+)+$")
+
+
+def _source(arg: ChainArg, text: str) -> str:
+    tree = arg.tree
+    if isinstance(tree, Tree) and not tree.meta.empty:
+        return text[tree.meta.start_pos : tree.meta.end_pos]
+    return str(tree)
+
+
+def _extra_chain(b: Builder, spec: CommandSpec, x: ChainArg, text: str,
+                 el: etree._Element) -> Compiled | None:
+    param = b.profile.extras.get(spec.name, {}).get(x.name or "")
+    name = bare_name(x)
+    if param is not None and param.kind in SYMBOLIC_KINDS and name is not None:
+        return constant(name, name)
+    return b.compile((el, "#text", 0), lambda: compile_chain_arg(x, text))
+
+
+_NO_SCOPE = Scope({})
+
+
+def _put(args: dict[str, Compiled], name: str, compiled: Compiled | None) -> None:
+    if compiled is not None:
+        args[name] = compiled
+
+
+def _params_hint(spec: CommandSpec) -> str:
+    if not spec.params:
+        return f" ({spec.name} takes no arguments)"
+    return f" (arguments: {', '.join(p.name for p in spec.params)})"
+
+
+def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label_spot: Spot,
+            args: dict[str, Compiled], spots: dict[str, Spot],
+            extras: list[tuple[str, Spot, Callable[[], Compiled | None]]]) -> CommandCall:
+    """Checks shared by both forms, then the :class:`CommandCall`."""
+    if spec.robot_specific and b.kind is AppKind.EA:
+        b.error(where, f"only an FA may use the robot-specific Command '{spec.name}'")
+    for param in spec.params:
+        if param.required and param.name not in spots:
+            b.error(where, f"{spec.name} needs the argument '{param.name}'")
+    for group in spec.one_of:
+        present = sorted(group & spots.keys())
+        if len(present) != 1:
+            got = f" (got {', '.join(present)})" if present else ""
+            b.error(where, f"{spec.name} needs exactly one of {' or '.join(sorted(group))}{got}")
+    extra: dict[str, Compiled] = {}
+    declared = b.profile.extras.get(spec.name, {})
+    for name, spot, make in extras:
+        if b.kind is AppKind.EA:
+            b.error(spot, "only an FA may pass additional arguments")
+        elif name not in declared:
+            known = ", ".join(sorted(declared)) or "none"
+            b.error(spot, f"{spec.name} has no additional argument '{name}' on this robot "
+                          f"(declared: {known})")
+        else:
+            _put(extra, name, make())
+    symbols = {name: str(c.evaluate(_NO_SCOPE)) for name, c in args.items()
+               if c.constant and (p := spec.param(name)) is not None and p.kind in SYMBOLIC_KINDS}
+    for name, value in symbols.items():
+        if spec.param(name).kind is ParamKind.GESTURE:  # type: ignore[union-attr]
+            b.check_gesture(value, spots[name])
+    grammar = into = None
+    if spec.name == "QA":
+        args.pop("grammar", None)
+        args.pop("into", None)
+        grammar, into = symbols.get("grammar"), symbols.get("into")
+        if grammar:
+            b.need_grammar(grammar, spots["grammar"])
+        if into:
+            b.need_variable(into, spots["into"])
+    call = CommandCall(spec.name, args, extra, label, b.loc(where), grammar, into)
+    if label is not None:
+        b.add_label(label, call, label_spot)
+    return call

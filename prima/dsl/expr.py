@@ -1,0 +1,540 @@
+"""Expressions and command chains: parsed once with lark (LALR), compiled to closures.
+
+Nothing here calls Python's ``eval`` or ``exec``: a parse tree becomes a tree
+of small functions over a :class:`Scope`. Strings are templates
+(``"Hello {name}"``). Syntax faults raise :class:`SyntaxFault` with the
+character index of the fault, which the loader turns into ``file:line:col``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from typing import Callable, Mapping
+
+from lark import Lark, Token, Tree
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from prima.errors import ExecutionError
+from prima.mediator.catalog import Value
+
+MAX_TEXT = 10_000
+"""Longest string an expression may build (untrusted documents stay bounded)."""
+
+
+class SyntaxFault(Exception):
+    """A fault in an expression or chain, at a character index of its source."""
+
+    def __init__(self, index: int, message: str) -> None:
+        super().__init__(message)
+        self.index = index
+        self.message = message
+
+
+@dataclass
+class Scope:
+    """What an expression can see while it runs."""
+
+    variables: Mapping[str, Value]
+    event: Mapping[str, Value] | None = None
+
+
+Fn = Callable[[Scope], Value]
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """A compiled expression: call :meth:`evaluate` with a :class:`Scope`."""
+
+    source: str
+    fn: Fn = field(repr=False, compare=False)
+    names: frozenset[tuple[str, int]] = frozenset()
+    """Variables read, each with the index where it is named."""
+    event_uses: tuple[int, ...] = ()
+    """Indexes where ``event`` is read."""
+    constant: bool = False
+
+    def evaluate(self, scope: Scope) -> Value:
+        return self.fn(scope)
+
+
+def constant(value: Value, source: str = "") -> Compiled:
+    """A compiled expression that always yields ``value``."""
+    return Compiled(source or to_text(value), lambda _s: value, constant=True)
+
+
+# ---------------------------------------------------------------- values
+
+def to_text(value: Value) -> str:
+    """How a value reads when spoken or interpolated."""
+    if value is None:
+        return ""
+    if value is True:
+        return "true"
+    if value is False:
+        return "false"
+    if isinstance(value, float) and value.is_integer():
+        return str(int(value))
+    return str(value)
+
+
+def truthy(value: Value) -> bool:
+    return value not in (None, False, 0, "")
+
+
+def _number(value: Value, what: str) -> float | int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ExecutionError(f"{what} needs a number, got {_describe(value)}")
+    return value
+
+
+def _describe(value: Value) -> str:
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, str):
+        return f"text {value[:30]!r}"
+    return f"number {to_text(value)}"
+
+
+def _bounded(text: str) -> str:
+    if len(text) > MAX_TEXT:
+        raise ExecutionError(f"text longer than {MAX_TEXT} characters")
+    return text
+
+
+def _to_number(value: Value) -> Value:
+    if isinstance(value, str):
+        try:
+            f = float(value.strip())
+        except ValueError:
+            return None
+        if not math.isfinite(f):
+            return None
+        return int(f) if f.is_integer() else f
+    if isinstance(value, bool) or value is None:
+        return None
+    return value
+
+
+FUNCTIONS: Mapping[str, tuple[int, int, Callable[..., Value], str]] = {
+    "len": (1, 1, lambda s: len(to_text(s)), "number of characters of a text"),
+    "str": (1, 1, lambda v: to_text(v), "a value as text"),
+    "number": (1, 1, _to_number, "text as a number, or null if it is not one"),
+    "round": (1, 1, lambda v: round(_number(v, "round()")), "nearest whole number"),
+    "abs": (1, 1, lambda v: abs(_number(v, "abs()")), "absolute value"),
+    "min": (2, 8, lambda *a: min(_number(v, "min()") for v in a), "smallest of the numbers"),
+    "max": (2, 8, lambda *a: max(_number(v, "max()") for v in a), "largest of the numbers"),
+    "lower": (1, 1, lambda s: to_text(s).lower(), "text in lower case"),
+    "upper": (1, 1, lambda s: to_text(s).upper(), "text in upper case"),
+    "trim": (1, 1, lambda s: to_text(s).strip(), "text without surrounding spaces"),
+    "contains": (2, 2, lambda s, t: to_text(t).lower() in to_text(s).lower(),
+                 "whether the first text contains the second (ignoring case)"),
+    "startswith": (2, 2, lambda s, t: to_text(s).lower().startswith(to_text(t).lower()),
+                   "whether the first text starts with the second (ignoring case)"),
+}
+"""The only functions an expression may call: name -> (min args, max args, fn, doc)."""
+
+
+def _arith(op: str, a: Value, b: Value) -> Value:
+    if op == "+" and (isinstance(a, str) or isinstance(b, str)):
+        return _bounded(to_text(a) + to_text(b))
+    x, y = _number(a, f"'{op}'"), _number(b, f"'{op}'")
+    if op == "+":
+        return x + y
+    if op == "-":
+        return x - y
+    if op == "*":
+        return x * y
+    if y == 0:
+        raise ExecutionError(f"'{op}' by zero")
+    if op == "/":
+        q = x / y
+        return int(q) if q.is_integer() and isinstance(x, int) and isinstance(y, int) else q
+    return x % y
+
+
+def _compare(op: str, a: Value, b: Value) -> bool:
+    if op == "==":
+        return a == b and type(a) is type(b) or (_is_num(a) and _is_num(b) and a == b)
+    if op == "!=":
+        return not _compare("==", a, b)
+    if _is_num(a) and _is_num(b):
+        pass
+    elif not (isinstance(a, str) and isinstance(b, str)):
+        raise ExecutionError(f"cannot order {_describe(a)} and {_describe(b)} with '{op}'")
+    if op == "<":
+        return a < b  # type: ignore[operator]
+    if op == "<=":
+        return a <= b  # type: ignore[operator]
+    if op == ">":
+        return a > b  # type: ignore[operator]
+    return a >= b  # type: ignore[operator]
+
+
+def _is_num(v: Value) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+# ---------------------------------------------------------------- parsing
+
+@lru_cache(maxsize=1)
+def parser() -> Lark:
+    """The LALR parser for expressions and chains, built once per process."""
+    source = resources.files("prima.dsl").joinpath("pxml.lark").read_text(encoding="utf-8")
+    return Lark(source, parser="lalr", start=["expression", "chain"],
+                propagate_positions=True, maybe_placeholders=True)
+
+
+_READABLE = {
+    "NUMBER": "a number", "STRING": "a string", "NAME": "a name", "LPAR": "'('",
+    "RPAR": "')'", "COMMA": "','", "COLON": "':'", "DOT": "'.'", "LSQB": "'['",
+    "RSQB": "']'", "LBRACE": "'{'", "RBRACE": "'}'", "EQUAL": "'='",
+    "COMP_OP": "a comparison", "ADD_OP": "'+' or '-'", "MUL_OP": "'*', '/' or '%'",
+    "MINUS": "'-'", "AND": "'and'", "OR": "'or'", "NOT": "'not'", "TRUE": "'true'",
+    "FALSE": "'false'", "NULL": "'null'", "$END": "the end",
+}
+_VALUE_START = {"NUMBER", "STRING", "NAME", "LPAR", "MINUS", "TRUE", "FALSE", "NULL", "NOT"}
+
+
+def _syntax_fault(exc: UnexpectedInput, text: str, what: str) -> SyntaxFault:
+    index = exc.pos_in_stream if exc.pos_in_stream is not None else len(text)
+    if isinstance(exc, UnexpectedCharacters):
+        ch = text[index] if index < len(text) else ""
+        pair = text[index : index + 2]
+        if pair in ("&&", "||"):
+            hint = "and" if pair == "&&" else "or"
+            return SyntaxFault(index, f"{what}: '{pair}' is not an operator; write '{hint}'")
+        if ch == "!":
+            return SyntaxFault(index, f"{what}: '!' is not an operator; write 'not' (or '!=')")
+        if ch in "\"'":
+            return SyntaxFault(index, f"{what}: string is not closed")
+        return SyntaxFault(index, f"{what}: unexpected character {ch!r}")
+    if isinstance(exc, UnexpectedEOF) or (
+        isinstance(exc, UnexpectedToken) and exc.token.type == "$END"
+    ):
+        return SyntaxFault(len(text), f"{what}: ends too early; expected {_expected(exc)}")
+    if isinstance(exc, UnexpectedToken):
+        tok = exc.token
+        if tok.type == "EQUAL" and what == "expression":
+            return SyntaxFault(index, f"{what}: '=' assigns; write '==' to compare")
+        if tok.type == "NAME" and "COMMA" in exc.expected and what == "chain":
+            return SyntaxFault(index, f"{what}: missing ',' between Commands before {tok.value!r}")
+        return SyntaxFault(index, f"{what}: unexpected {str(tok)!r}; expected {_expected(exc)}")
+    return SyntaxFault(index, f"{what}: {exc}")
+
+
+def _expected(exc: UnexpectedInput) -> str:
+    expected = set(getattr(exc, "expected", None) or getattr(exc, "allowed", None) or ())
+    if expected & _VALUE_START:
+        expected = (expected - _VALUE_START) | {"value"}
+    names = sorted("a value" if e == "value" else _READABLE.get(e, e.lower()) for e in expected)
+    if len(names) > 4:
+        names = names[:4] + ["..."]
+    return " or ".join(names) if names else "something else"
+
+
+def _parse(text: str, start: str) -> Tree:
+    try:
+        return parser().parse(text, start=start)
+    except UnexpectedInput as exc:
+        raise _syntax_fault(exc, text, start) from None
+
+
+def compile_expression(text: str) -> Compiled:
+    """Parse and compile one expression (e.g. a ``cond`` attribute)."""
+    if not text.strip():
+        raise SyntaxFault(0, "expression: empty")
+    return _Compiler(text).compile(_parse(text, "expression"))
+
+
+def compile_template(text: str, offset: int = 0) -> Compiled:
+    """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``).
+
+    ``offset`` is added to reported fault indexes.
+    """
+    parts: list[str | Compiled] = []
+    i, n = 0, len(text)
+    literal: list[str] = []
+    while i < n:
+        ch = text[i]
+        if ch in "{}" and text.startswith(ch * 2, i):
+            literal.append(ch)
+            i += 2
+        elif ch == "}":
+            raise SyntaxFault(offset + i, "text: '}' without '{' (write '}}' for a brace)")
+        elif ch == "{":
+            end = _closing_brace(text, i + 1)
+            if end < 0:
+                raise SyntaxFault(offset + i, "text: '{' is not closed (write '{{' for a brace)")
+            if literal:
+                parts.append("".join(literal))
+                literal = []
+            inner = text[i + 1 : end]
+            try:
+                sub = compile_expression(inner)
+            except SyntaxFault as fault:
+                raise SyntaxFault(offset + i + 1 + fault.index, fault.message) from None
+            parts.append(_shift(sub, offset + i + 1))
+            i = end + 1
+        else:
+            literal.append(ch)
+            i += 1
+    if literal:
+        parts.append("".join(literal))
+    return _join(text, parts)
+
+
+def _closing_brace(text: str, i: int) -> int:
+    quote = ""
+    while i < len(text):
+        ch = text[i]
+        if quote:
+            if ch == "\\":
+                i += 1
+            elif ch == quote:
+                quote = ""
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "}":
+            return i
+        i += 1
+    return -1
+
+
+def _shift(c: Compiled, by: int) -> Compiled:
+    return Compiled(c.source, c.fn, frozenset((n, i + by) for n, i in c.names),
+                    tuple(i + by for i in c.event_uses), c.constant)
+
+
+def _join(source: str, parts: list[str | Compiled]) -> Compiled:
+    names = frozenset().union(*(p.names for p in parts if isinstance(p, Compiled)))
+    events = tuple(i for p in parts if isinstance(p, Compiled) for i in p.event_uses)
+    if all(isinstance(p, str) for p in parts):
+        return constant("".join(parts), source)  # type: ignore[arg-type]
+    pieces = [(p, None) if isinstance(p, str) else ("", p.fn) for p in parts]
+
+    def fn(scope: Scope) -> Value:
+        return _bounded("".join(text if f is None else to_text(f(scope)) for text, f in pieces))
+
+    return Compiled(source, fn, names, events)
+
+
+# ---------------------------------------------------------------- chains
+
+@dataclass(frozen=True)
+class ChainArg:
+    """One argument of a chain step, not yet bound to a Command's parameter."""
+
+    name: str | None
+    tree: Tree | Token
+    index: int
+    computed: bool = False
+
+
+@dataclass(frozen=True)
+class ChainStep:
+    """One Command in a chain, as written: ``label: Name(args)[extras]``."""
+
+    label: str | None
+    command: str
+    index: int
+    args: tuple[ChainArg, ...]
+    extras: tuple[ChainArg, ...]
+    label_index: int = 0
+
+
+def parse_chain(text: str) -> list[ChainStep]:
+    """Parse a command chain into steps; arguments are bound later."""
+    if not text.strip():
+        raise SyntaxFault(0, "chain: empty")
+    tree = _parse(text, "chain")
+    steps = []
+    for step in tree.children:
+        label, name, *rest = step.children
+        extras_tree = rest[-1] if rest and isinstance(rest[-1], Tree) and rest[-1].data == "extras" else None
+        args = [a for a in rest if a is not extras_tree and a is not None]
+        steps.append(ChainStep(
+            label=str(label) if label is not None else None,
+            command=str(name),
+            index=name.start_pos,
+            args=tuple(_chain_arg(a) for a in args),
+            extras=tuple(_chain_arg(a) for a in (extras_tree.children if extras_tree else ()) if a is not None),
+            label_index=label.start_pos if label is not None else name.start_pos,
+        ))
+    return steps
+
+
+def _chain_arg(node: Tree) -> ChainArg:
+    if node.data == "named":
+        name, value = node.children
+        return ChainArg(str(name), *_value(value), computed=_is_computed(value))
+    value = node.children[0]
+    return ChainArg(None, *_value(value), computed=_is_computed(value))
+
+
+def _is_computed(value: Tree | Token) -> bool:
+    return isinstance(value, Tree) and value.data == "computed"
+
+
+def _value(value: Tree | Token) -> tuple[Tree | Token, int]:
+    if isinstance(value, Tree) and value.data == "computed":
+        inner = value.children[0]
+        return inner, _start(inner)
+    return value, _start(value)
+
+
+def _start(node: Tree | Token) -> int:
+    if isinstance(node, Token):
+        return node.start_pos or 0
+    return node.meta.start_pos if not node.meta.empty else 0
+
+
+def bare_name(arg: ChainArg) -> str | None:
+    """The name if the argument is written as a bare name, else None."""
+    tree = arg.tree
+    if not arg.computed and isinstance(tree, Tree) and tree.data == "var":
+        return str(tree.children[0])
+    return None
+
+
+def string_literal(arg: ChainArg) -> str | None:
+    """The raw content of the argument if it is a plain string literal."""
+    tree = arg.tree
+    if not arg.computed and isinstance(tree, Tree) and tree.data == "string":
+        return str(tree.children[0])[1:-1]
+    return None
+
+
+def compile_chain_arg(arg: ChainArg, source: str) -> Compiled:
+    """Compile a chain argument as an expression."""
+    return _Compiler(source).compile(arg.tree)
+
+
+# ---------------------------------------------------------------- compiler
+
+_ESCAPES = {"n": "\n", "t": "\t", "\\": "\\", '"': '"', "'": "'"}
+
+
+class _Compiler:
+    """Turns a lark tree into a :class:`Compiled` closure tree."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self.names: set[tuple[str, int]] = set()
+        self.events: list[int] = []
+
+    def compile(self, tree: Tree | Token) -> Compiled:
+        fn, const = self._node(tree)
+        start, end = _span(tree, self.source)
+        text = self.source[start:end]
+        if const:
+            return constant(fn(Scope({})), text)
+        return Compiled(text, fn, frozenset(self.names), tuple(self.events))
+
+    def _node(self, node: Tree | Token) -> tuple[Fn, bool]:
+        kind = node.data
+        ch = node.children
+        if kind == "number":
+            raw = str(ch[0])
+            num: Value = float(raw) if "." in raw else int(raw)
+            return (lambda _s: num), True
+        if kind == "string":
+            tok = ch[0]
+            t = self._string(str(tok), tok.start_pos)
+            return t.fn, t.constant
+        if kind in ("true", "false", "null"):
+            v: Value = {"true": True, "false": False, "null": None}[kind]
+            return (lambda _s: v), True
+        if kind == "var":
+            name = str(ch[0])
+            if name == "event":
+                self.events.append(ch[0].start_pos)
+                return (lambda s: None if s.event is None else dict(s.event).get("name")), False
+            self.names.add((name, ch[0].start_pos))
+            return (lambda s: s.variables.get(name)), False
+        if kind == "field":
+            base, attr = str(ch[0]), str(ch[1])
+            if base != "event":
+                raise SyntaxFault(ch[0].start_pos,
+                                  f"expression: only 'event' has fields ('{base}.{attr}')")
+            self.events.append(ch[0].start_pos)
+            return (lambda s: None if s.event is None else s.event.get(attr)), False
+        if kind == "call":
+            return self._call(ch)
+        if kind == "neg":
+            f, c = self._node(ch[0])
+            return (lambda s: -_number(f(s), "'-'")), c
+        if kind == "not_":
+            f, c = self._node(ch[0])
+            return (lambda s: not truthy(f(s))), c
+        if kind in ("and_", "or_"):
+            (fa, ca), (fb, cb) = self._node(ch[0]), self._node(ch[1])
+            if kind == "and_":
+                return (lambda s: truthy(fa(s)) and truthy(fb(s))), ca and cb
+            return (lambda s: truthy(fa(s)) or truthy(fb(s))), ca and cb
+        if kind in ("binary", "compare"):
+            (fa, ca), op, (fb, cb) = self._node(ch[0]), str(ch[1]), self._node(ch[2])
+            if kind == "binary":
+                return (lambda s: _arith(op, fa(s), fb(s))), False
+            return (lambda s: _compare(op, fa(s), fb(s))), False
+        raise SyntaxFault(_start(node), f"expression: unsupported construct {kind!r}")
+
+    def _call(self, ch: list) -> tuple[Fn, bool]:
+        name_tok, *arg_nodes = ch
+        arg_nodes = [a for a in arg_nodes if a is not None]
+        name = str(name_tok)
+        if name not in FUNCTIONS:
+            known = ", ".join(sorted(FUNCTIONS))
+            raise SyntaxFault(name_tok.start_pos, f"expression: unknown function '{name}' (known: {known})")
+        lo, hi, impl, _doc = FUNCTIONS[name]
+        if not lo <= len(arg_nodes) <= hi:
+            want = str(lo) if lo == hi else f"{lo} to {hi}"
+            raise SyntaxFault(name_tok.start_pos,
+                              f"expression: {name}() takes {want} argument(s), got {len(arg_nodes)}")
+        fns = [self._node(a)[0] for a in arg_nodes]
+        return (lambda s: impl(*(f(s) for f in fns))), False
+
+    def _string(self, raw: str, start: int) -> Compiled:
+        body = raw[1:-1]
+        if "\\" in body:
+            decoded, index_map = _unescape(body)
+        else:
+            decoded, index_map = body, None
+        try:
+            t = compile_template(decoded)
+        except SyntaxFault as fault:
+            at = index_map[fault.index] if index_map and fault.index < len(index_map) else fault.index
+            raise SyntaxFault(start + 1 + at, fault.message) from None
+        shift = start + 1
+        for n, i in t.names:
+            self.names.add((n, shift + (index_map[i] if index_map and i < len(index_map) else i)))
+        self.events.extend(shift + i for i in t.event_uses)
+        return t
+
+
+def _unescape(body: str) -> tuple[str, list[int]]:
+    out: list[str] = []
+    where: list[int] = []
+    i = 0
+    while i < len(body):
+        if body[i] == "\\" and i + 1 < len(body):
+            out.append(_ESCAPES.get(body[i + 1], body[i + 1]))
+            where.append(i)
+            i += 2
+        else:
+            out.append(body[i])
+            where.append(i)
+            i += 1
+    return "".join(out), where
+
+
+def _span(node: Tree | Token, source: str) -> tuple[int, int]:
+    if isinstance(node, Token):
+        return node.start_pos or 0, node.end_pos or len(source)
+    if node.meta.empty:
+        return 0, len(source)
+    return node.meta.start_pos, node.meta.end_pos
