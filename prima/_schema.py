@@ -1,8 +1,13 @@
-"""XSD validation with xmlschema: schemas built once, errors made readable.
+"""XSD validation: libxml2 gives the verdict, xmlschema explains failures.
 
-xmlschema's messages are thorough but long and full of namespaces; here each
-becomes one line located at the element, the attribute or the unexpected
-child it is about.
+libxml2 (through lxml) decides in microseconds whether a document is valid;
+xmlschema, pure Python and about a hundred times slower, runs only on the
+documents libxml2 rejects, to produce its thorough diagnostics. Each of its
+errors becomes one line located at the element, attribute or unexpected
+child it is about. Both validators read the same shipped schemas, and the
+test suite checks that they agree on every document of the corpus; should
+they ever disagree, libxml2's own located errors are reported, so nothing
+invalid passes. Each schema is built once per process.
 """
 
 from __future__ import annotations
@@ -10,21 +15,36 @@ from __future__ import annotations
 import re
 from functools import lru_cache
 from importlib import resources
-from typing import Callable, Iterator
+from typing import TYPE_CHECKING, Callable, Iterator
 
-import xmlschema
 from lxml import etree
 
 from prima._xml import XmlDocument, local_name
-from prima.errors import Problem
+from prima.errors import Problem, Severity
+
+if TYPE_CHECKING:
+    import xmlschema
 
 Hint = Callable[[etree._Element, str, str], "str | None"]
 """Better wording for a failed attribute value: (element, attribute, value) -> message."""
 
 
+def _read(name: str) -> bytes:
+    return resources.files("prima.schemas").joinpath(name).read_bytes()
+
+
+@lru_cache(maxsize=None)
+def verdict_schema(name: str) -> etree.XMLSchema:
+    """libxml2's compiled form of ``schemas/<name>``, built once per process."""
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
+    return etree.XMLSchema(etree.fromstring(_read(name), parser))
+
+
 @lru_cache(maxsize=None)
 def schema(name: str) -> xmlschema.XMLSchema:
-    """The shipped schema ``schemas/<name>``, built once per process."""
+    """xmlschema's form of ``schemas/<name>``, built once per process, on first need."""
+    import xmlschema  # imported lazily: only documents with errors need it
+
     ref = resources.files("prima.schemas").joinpath(name)
     with resources.as_file(ref) as path:
         return xmlschema.XMLSchema(str(path))
@@ -44,7 +64,14 @@ def _clean(text: str) -> str:
 
 def validate(doc: XmlDocument, schema_name: str, hint: Hint | None = None) -> list[Problem]:
     """Every schema violation of ``doc`` as a located problem."""
-    return list(_problems(doc, schema(schema_name), hint))
+    checker = verdict_schema(schema_name)
+    if checker.validate(doc.root.getroottree()):
+        return []
+    problems = list(_problems(doc, schema(schema_name), hint))
+    if problems:
+        return problems
+    return [Problem(doc.name, e.line, max(e.column, 1), Severity.ERROR, f"schema: {_clean(e.message)}")
+            for e in checker.error_log]
 
 
 def _problems(doc: XmlDocument, xsd: xmlschema.XMLSchema, hint: Hint | None) -> Iterator[Problem]:

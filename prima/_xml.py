@@ -26,8 +26,6 @@ MAX_DEPTH = 64
 """Deepest element nesting accepted."""
 
 _DOCTYPE = re.compile(rb"<!DOCTYPE", re.IGNORECASE)
-_NAME_START = re.compile(r"[A-Za-z_:\u00C0-\uFFFF]")
-_ATTR = re.compile(r"""\s*([^\s=/>]+)\s*=\s*(["'])""")
 
 
 def _parser() -> etree.XMLParser:
@@ -108,45 +106,29 @@ def _raw_index(raw: str, index: int) -> int:
     return i
 
 
+_MARKUP = re.compile(
+    r"""<(?:!--.*?-->|!\[CDATA\[.*?\]\]>|\?.*?\?>|![^>]*>|/[^>]*>"""
+    r"""|(?P<name>[^\s/>!?][^\s/>]*)(?P<attrs>(?:\s+[^\s=/>]+\s*=\s*(?:"[^"]*"|'[^']*'))*)\s*(?P<empty>/?)>)""",
+    re.S,
+)
+_ATTRIBUTE = re.compile(r"""([^\s=/>]+)\s*=\s*(?:"([^"]*)"|'([^']*)')""")
+
+
 def _scan_start_tags(text: str) -> list[_Place]:
     """Start tags of a well-formed document, in document order."""
     places: list[_Place] = []
-    i = 0
-    n = len(text)
-    while True:
-        i = text.find("<", i)
-        if i < 0 or i + 1 >= n:
-            return places
-        if text.startswith("<!--", i):
-            i = text.find("-->", i) + 3
-        elif text.startswith("<![CDATA[", i):
-            i = text.find("]]>", i) + 3
-        elif text.startswith("<?", i):
-            i = text.find("?>", i) + 2
-        elif text.startswith("<!", i):
-            i = text.find(">", i) + 1
-        elif text[i + 1] == "/" or not _NAME_START.match(text[i + 1]):
-            i += 1
-        else:
-            place = _Place(start=i)
-            j = i + 1
-            while j < n and not text[j].isspace() and text[j] not in "/>":
-                j += 1
-            while True:
-                m = _ATTR.match(text, j)
-                if not m:
-                    break
-                quote = m.group(2)
-                value_start = m.end()
-                value_end = text.find(quote, value_start)
-                name = m.group(1).rpartition(":")[2] if ":" in m.group(1) and not m.group(1).startswith("xmlns") else m.group(1)
-                place.attrs[name] = (value_start, text[value_start:value_end])
-                j = value_end + 1
-            close = text.find(">", j)
-            if text[close - 1] != "/":
-                place.content = close + 1
-            places.append(place)
-            i = close + 1
+    for m in _MARKUP.finditer(text):
+        if m.group("name") is None:
+            continue
+        place = _Place(start=m.start(), content=-1 if m.group("empty") else m.end())
+        base = m.start("attrs")
+        for a in _ATTRIBUTE.finditer(m.group("attrs")):
+            raw_name = a.group(1)
+            name = raw_name.rpartition(":")[2] if not raw_name.startswith("xmlns") else raw_name
+            group = 2 if a.group(2) is not None else 3
+            place.attrs[name] = (base + a.start(group), a.group(group))
+        places.append(place)
+    return places
 
 
 @dataclass

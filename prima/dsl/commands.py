@@ -11,7 +11,6 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING, Callable
 
-from lark import Tree
 from lxml import etree
 
 from prima._xml import local_name
@@ -25,6 +24,7 @@ from prima.dsl.expr import (
     compile_expression,
     compile_template,
     constant,
+    span,
     string_literal,
 )
 from prima.dsl.model import CommandCall
@@ -115,6 +115,7 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
     seen_named = False
     for pos, arg in enumerate(step.args):
         arg_spot: Spot = (el, "#text", arg.index)
+        name_spot: Spot = (el, "#text", arg.name_index) if arg.name else arg_spot
         if arg.name is None:
             if seen_named:
                 b.error(arg_spot, "a positional argument cannot follow a named one")
@@ -128,11 +129,11 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
             seen_named = True
             found = spec.param(arg.name)
             if found is None:
-                b.error(arg_spot, f"{spec.name} has no argument '{arg.name}'{_params_hint(spec)}")
+                b.error(name_spot, f"{spec.name} has no argument '{arg.name}'{_params_hint(spec)}")
                 continue
             param = found
         if param.name in spots:
-            b.error(arg_spot, f"argument '{param.name}' is given twice")
+            b.error(name_spot, f"argument '{param.name}' is given twice")
             continue
         spots[param.name] = arg_spot
         _put(args, param.name, _chain_value(b, param, arg, text, arg_spot))
@@ -140,7 +141,7 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
         if param.kind is ParamKind.PLACE and name in b.variable_names:
             b.warning(arg_spot, f"'{name}' is taken as a place name; write {{{name}}} "
                                 "to use the variable")
-    extras = [(x.name or "", (el, "#text", x.index), lambda x=x: _extra_chain(b, spec, x, text, el))
+    extras = [(x.name or "", (el, "#text", x.name_index), lambda x=x: _extra_chain(b, spec, x, text, el))
               for x in step.extras]
     label_spot: Spot = (el, "#text", step.label_index)
     return _finish(b, spec, where, step.label, label_spot, args, spots, extras)
@@ -170,10 +171,8 @@ _HYPHENATED = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\s*-\s*[A-Za-z0-9_]+)+$")
 
 
 def _source(arg: ChainArg, text: str) -> str:
-    tree = arg.tree
-    if isinstance(tree, Tree) and not tree.meta.empty:
-        return text[tree.meta.start_pos : tree.meta.end_pos]
-    return str(tree)
+    start, end = span(arg.tree, text)
+    return text[start:end]
 
 
 def _extra_chain(b: Builder, spec: CommandSpec, x: ChainArg, text: str,

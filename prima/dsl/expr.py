@@ -185,8 +185,9 @@ def _is_num(v: Value) -> bool:
 def parser() -> Lark:
     """The LALR parser for expressions and chains, built once per process."""
     source = resources.files("prima.dsl").joinpath("pxml.lark").read_text(encoding="utf-8")
-    return Lark(source, parser="lalr", start=["expression", "chain"],
-                propagate_positions=True, maybe_placeholders=True)
+    # Positions come from tokens (see span): propagate_positions would cost
+    # about a third of every parse.
+    return Lark(source, parser="lalr", start=["expression", "chain"], maybe_placeholders=True)
 
 
 _READABLE = {
@@ -197,6 +198,7 @@ _READABLE = {
     "MINUS": "'-'", "AND": "'and'", "OR": "'or'", "NOT": "'not'", "TRUE": "'true'",
     "FALSE": "'false'", "NULL": "'null'", "$END": "the end",
 }
+_OPERATORS = {"COMP_OP", "ADD_OP", "MUL_OP", "AND", "OR"}
 _VALUE_START = {"NUMBER", "STRING", "NAME", "LPAR", "MINUS", "TRUE", "FALSE", "NULL", "NOT"}
 
 
@@ -223,6 +225,9 @@ def _syntax_fault(exc: UnexpectedInput, text: str, what: str) -> SyntaxFault:
             return SyntaxFault(index, f"{what}: '=' assigns; write '==' to compare")
         if tok.type == "NAME" and "COMMA" in exc.expected and what == "chain":
             return SyntaxFault(index, f"{what}: missing ',' between Commands before {tok.value!r}")
+        if what == "expression" and exc.expected & _OPERATORS:
+            return SyntaxFault(index, f"{what}: unexpected {str(tok)!r} after a complete value; "
+                                      "expected an operator or the end")
         return SyntaxFault(index, f"{what}: unexpected {str(tok)!r}; expected {_expected(exc)}")
     return SyntaxFault(index, f"{what}: {exc}")
 
@@ -333,6 +338,8 @@ class ChainArg:
     tree: Tree | Token
     index: int
     computed: bool = False
+    name_index: int = -1
+    """Where the argument's name is written (named arguments), else -1."""
 
 
 @dataclass(frozen=True)
@@ -371,7 +378,8 @@ def parse_chain(text: str) -> list[ChainStep]:
 def _chain_arg(node: Tree) -> ChainArg:
     if node.data == "named":
         name, value = node.children
-        return ChainArg(str(name), *_value(value), computed=_is_computed(value))
+        return ChainArg(str(name), *_value(value), computed=_is_computed(value),
+                        name_index=name.start_pos)
     value = node.children[0]
     return ChainArg(None, *_value(value), computed=_is_computed(value))
 
@@ -387,10 +395,15 @@ def _value(value: Tree | Token) -> tuple[Tree | Token, int]:
     return value, _start(value)
 
 
-def _start(node: Tree | Token) -> int:
+def _tokens(node: Tree | Token) -> list[Token]:
     if isinstance(node, Token):
-        return node.start_pos or 0
-    return node.meta.start_pos if not node.meta.empty else 0
+        return [node]
+    return [t for t in node.scan_values(lambda v: isinstance(v, Token))]
+
+
+def _start(node: Tree | Token) -> int:
+    tokens = _tokens(node)
+    return min(t.start_pos or 0 for t in tokens) if tokens else 0
 
 
 def bare_name(arg: ChainArg) -> str | None:
@@ -429,7 +442,7 @@ class _Compiler:
 
     def compile(self, tree: Tree | Token) -> Compiled:
         fn, const = self._node(tree)
-        start, end = _span(tree, self.source)
+        start, end = span(tree, self.source)
         text = self.source[start:end]
         if const:
             return constant(fn(Scope({})), text)
@@ -532,9 +545,18 @@ def _unescape(body: str) -> tuple[str, list[int]]:
     return "".join(out), where
 
 
-def _span(node: Tree | Token, source: str) -> tuple[int, int]:
-    if isinstance(node, Token):
-        return node.start_pos or 0, node.end_pos or len(source)
-    if node.meta.empty:
+def span(node: Tree | Token, source: str) -> tuple[int, int]:
+    """Where a subtree is written; closing parentheses (not kept as tokens) included."""
+    tokens = _tokens(node)
+    if not tokens:
         return 0, len(source)
-    return node.meta.start_pos, node.meta.end_pos
+    start = min(t.start_pos or 0 for t in tokens)
+    end = max(t.end_pos or 0 for t in tokens)
+    depth = source.count("(", start, end) - source.count(")", start, end)
+    while depth > 0 and end < len(source):
+        if source[end] == ")":
+            depth -= 1
+        elif not source[end].isspace():
+            break
+        end += 1
+    return start, end

@@ -308,9 +308,11 @@ class Builder:
                 self.error((el, None, 0), "blocks cannot nest: this <block> is inside the "
                                           f"<block> at line {self.loc((block, None, 0)).line}")
             inner_stream, inner_block = stream, el
-            for dev in (el.get("devices") or "").split():
+            listed = el.get("devices") or ""
+            for m in re.finditer(r"\S+", listed):
+                dev = m.group()
                 if dev not in self.catalog.devices:
-                    self.error((el, "devices", 0), f"unknown device '{dev}' "
+                    self.error((el, "devices", m.start()), f"unknown device '{dev}' "
                                                    f"(devices: {', '.join(sorted(self.catalog.devices))})")
         gid = el.get("id") or f"{tag}@{self.loc((el, None, 0)).line}"
         members: list[str] = []
@@ -584,7 +586,10 @@ def _similar(a: str, b: str) -> bool:
     if a == b or abs(len(a) - len(b)) > 1:
         return False
     if len(a) == len(b):
-        return sum(x != y for x, y in zip(a, b)) == 1
+        diffs = [i for i, (x, y) in enumerate(zip(a, b)) if x != y]
+        swapped = len(diffs) == 2 and diffs[1] == diffs[0] + 1 and \
+            a[diffs[0]] == b[diffs[1]] and a[diffs[1]] == b[diffs[0]]
+        return len(diffs) == 1 or swapped
     short, long_ = sorted((a, b), key=len)
     return any(long_[:i] + long_[i + 1:] == short for i in range(len(long_)))
 
@@ -613,11 +618,17 @@ def _hint_for(profile: RobotProfile) -> Callable[[etree._Element, str, str], str
 def check_document(data: bytes, name: str,
                    profile: RobotProfile | None = None) -> tuple[Document | None, list[Problem]]:
     """Every problem of a document, and the document itself if it has no errors."""
-    profile = profile or default_profile()
     try:
         doc = parse_xml(data, name, DocumentError)
     except DocumentError as exc:
         return None, list(exc.problems)
+    return check_parsed(doc, profile)
+
+
+def check_parsed(doc: XmlDocument,
+                 profile: RobotProfile | None = None) -> tuple[Document | None, list[Problem]]:
+    """Like :func:`check_document`, for a document already parsed securely."""
+    profile = profile or default_profile()
     if doc.root.tag != _NS + "pxml":
         return None, [doc.problem(doc.root, f"not a PXML document: the root must be "
                                             f'<pxml xmlns="{NAMESPACE}">, not <{local_name(doc.root)}>')]

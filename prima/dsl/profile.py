@@ -85,7 +85,11 @@ def _param(el: etree._Element) -> Param:
 
 def parse_profile(data: bytes, name: str) -> RobotProfile:
     """Load a profile from bytes; raise :class:`DocumentError` with every problem."""
-    doc = parse_xml(data, name, DocumentError)
+    return profile_from_xml(parse_xml(data, name, DocumentError))
+
+
+def profile_from_xml(doc: XmlDocument) -> RobotProfile:
+    """Load a profile already parsed securely; raise :class:`DocumentError`."""
     if doc.root.tag != f"{{{NAMESPACE}}}robot":
         raise DocumentError([doc.problem(
             doc.root, f'not a robot profile: expected <robot xmlns="{NAMESPACE}">')])

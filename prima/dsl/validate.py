@@ -13,9 +13,9 @@ from typing import Iterable
 from lxml import etree
 
 from prima._xml import parse_xml, read_source
-from prima.dsl.loader import check_document
+from prima.dsl.loader import check_parsed
 from prima.dsl.profile import NAMESPACE as ROBOT_NS
-from prima.dsl.profile import RobotProfile, parse_profile
+from prima.dsl.profile import RobotProfile, profile_from_xml
 from prima.errors import DocumentError, Problem, Severity
 
 
@@ -62,23 +62,14 @@ def collect(paths: Iterable[str | Path]) -> list[Path]:
 
 def check_file(path: Path, profile: RobotProfile | None = None) -> list[Problem]:
     """Every problem of one file (a PXML document or a robot profile)."""
-    name = str(path)
     try:
-        data = read_source(path, DocumentError)
-        if _root_namespace(data) == ROBOT_NS:
-            parse_profile(data, name)
+        doc = parse_xml(read_source(path, DocumentError), str(path), DocumentError)
+        if etree.QName(doc.root).namespace == ROBOT_NS:
+            profile_from_xml(doc)
             return []
     except DocumentError as exc:
         return list(exc.problems)
-    return check_document(data, name, profile)[1]
-
-
-def _root_namespace(data: bytes) -> str | None:
-    try:
-        doc = parse_xml(data, "", DocumentError)
-    except DocumentError:
-        return None
-    return etree.QName(doc.root).namespace
+    return check_parsed(doc, profile)[1]
 
 
 def validate_paths(paths: Iterable[Path], profile: RobotProfile | None = None) -> Report:

@@ -1,0 +1,145 @@
+"""Expressions: values, operators, templates, functions and located syntax faults."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from prima.dsl.expr import (
+    MAX_TEXT,
+    Scope,
+    SyntaxFault,
+    compile_expression,
+    compile_template,
+    parse_chain,
+    parser,
+)
+from prima.errors import ExecutionError
+
+SCOPE = Scope({"a": 2, "name": "Ann", "ch": 12, "nothing": None},
+              {"name": "message", "text": "hi", "sender": "kidode"})
+
+
+@pytest.mark.parametrize("source, value", [
+    ("1 + 2 * 3", 7),
+    ("(1 + 2) * 3", 9),
+    ("7 / 2", 3.5),
+    ("6 / 3", 2),
+    ("7 % 3", 1),
+    ("a - 1", 1),
+    ("-a", -2),
+    ("1 - -2", 3),
+    ("a * 3 + 1 == 7", True),
+    ("1 == 1.0", True),
+    ("'1' == 1", False),
+    ("a != 2", False),
+    ("'abc' < 'abd'", True),
+    ("not a > 1 or false", False),
+    ("true and null", False),
+    ("nothing == null", True),
+    ('"Hello {name}!"', "Hello Ann!"),
+    ("'{{literal}}'", "{literal}"),
+    ('"Channel " + ch', "Channel 12"),
+    ('"say \\"hi\\""', 'say "hi"'),
+    ("event", "message"),
+    ("event.text + ' from ' + event.sender", "hi from kidode"),
+    ("event.missing", None),
+    ("len(name)", 3),
+    ("number('18') + 1", 19),
+    ("number('eighteen')", None),
+    ("upper(name) + lower('X')", "ANNx"),
+    ("contains('The C Primer', 'c primer')", True),
+    ("startswith(trim('  yes please'), 'YES')", True),
+    ("min(3, a, 5) + max(1, 4)", 6),
+    ("round(2.6) + abs(-1)", 4),
+    ("str(1.0) + str(true) + str(null)", "1true"),
+])
+def test_values(source: str, value: object) -> None:
+    result = compile_expression(source).evaluate(SCOPE)
+    assert result == value and type(result) is type(value)
+
+
+def test_compiled_records_variables_and_event_uses_with_positions() -> None:
+    c = compile_expression("a + len(name) > 0 and event.text == '{ch}'")
+    assert c.names == {("a", 0), ("name", 8), ("ch", 38)}
+    assert c.event_uses == (22,)
+
+
+def test_constants_are_folded() -> None:
+    assert compile_expression("'hi'").constant
+    assert not compile_expression("a").constant
+
+
+@pytest.mark.parametrize("source, index, fragment", [
+    ("a = 1", 2, "write '==' to compare"),
+    ("a +", 3, "ends too early"),
+    ("(a", 2, "expected ')'"),
+    ("a && b", 2, "write 'and'"),
+    ("a || b", 2, "write 'or'"),
+    ("!a", 0, "write 'not'"),
+    ("1 2", 2, "after a complete value"),
+    ("foo(1)", 0, "unknown function 'foo'"),
+    ("len(1, 2)", 0, "len() takes 1 argument(s), got 2"),
+    ("'abc", 0, "string is not closed"),
+    ("x.y", 0, "only 'event' has fields"),
+    ("'{a +}'", 5, "ends too early"),
+    ("'a {'", 3, "'{' is not closed"),
+    ("'a }'", 3, "'}' without '{'"),
+    ("", 0, "empty"),
+])
+def test_syntax_faults_point_at_the_fault(source: str, index: int, fragment: str) -> None:
+    with pytest.raises(SyntaxFault) as info:
+        compile_expression(source)
+    assert info.value.index == index
+    assert fragment in info.value.message
+
+
+@pytest.mark.parametrize("source, fragment", [
+    ("'a' - 1", "'-' needs a number"),
+    ("1 / 0", "by zero"),
+    ("'a' < 1", "cannot order"),
+    ("round('x')", "round() needs a number"),
+])
+def test_runtime_errors_are_execution_errors(source: str, fragment: str) -> None:
+    compiled = compile_expression(source)
+    with pytest.raises(ExecutionError, match=re.escape(fragment)):
+        compiled.evaluate(SCOPE)
+
+
+def test_text_cannot_grow_without_bound() -> None:
+    big = Scope({"s": "x" * MAX_TEXT})
+    with pytest.raises(ExecutionError, match="longer than"):
+        compile_expression("s + s").evaluate(big)
+
+
+def test_template_positions_include_offset() -> None:
+    t = compile_template("Hi {name}", offset=10)
+    assert t.names == {("name", 14)}
+    with pytest.raises(SyntaxFault) as info:
+        compile_template("Hi {na me}", offset=10)
+    assert info.value.index == 17
+
+
+def test_chain_steps_labels_and_extras() -> None:
+    steps = parse_chain('Speak("Come on, let\'s go."), nav: TopologicalMove(kidode_room)[speed=0.3]')
+    assert [(s.label, s.command) for s in steps] == [(None, "Speak"), ("nav", "TopologicalMove")]
+    assert steps[1].index == 34 and steps[1].label_index == 29
+    [extra] = steps[1].extras
+    assert (extra.name, extra.name_index, extra.index) == ("speed", 63, 69)
+
+
+@pytest.mark.parametrize("source, index, fragment", [
+    ('Speak("x") Speak("y")', 11, "missing ','"),
+    ("Speak(", 6, "ends too early"),
+    ("", 0, "empty"),
+])
+def test_chain_syntax_faults(source: str, index: int, fragment: str) -> None:
+    with pytest.raises(SyntaxFault) as info:
+        parse_chain(source)
+    assert info.value.index == index and fragment in info.value.message
+
+
+def test_parser_is_lalr_and_built_once() -> None:
+    assert parser() is parser()
+    assert parser().options.parser == "lalr"
