@@ -1,0 +1,45 @@
+"""The docs describe every element, Command and CLI option that exists."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from lxml import etree
+
+from prima.cli import build_parser
+from prima.dsl.commands import element_name
+from prima.mediator.catalog import STANDARD_COMMANDS
+
+ROOT = Path(__file__).parents[1]
+XS = {"xs": "http://www.w3.org/2001/XMLSchema"}
+
+
+def _elements(xsd: str) -> set[str]:
+    tree = etree.parse(str(ROOT / "schemas" / xsd))
+    return {e.get("name") for e in tree.iterfind(".//xs:element[@name]", XS)}
+
+
+@pytest.mark.parametrize("xsd, doc", [("pxml.xsd", "pxml.md"), ("robot.xsd", "robot-profile.md")])
+def test_every_schema_element_is_documented(xsd: str, doc: str) -> None:
+    text = (ROOT / "docs" / doc).read_text()
+    forms = ("<{}>", "<{} ", "`{}`")  # Command elements are listed in a table
+    missing = {e for e in _elements(xsd) if not any(f.format(e) in text for f in forms)}
+    assert missing == set()
+
+
+def test_every_command_is_documented_in_both_forms() -> None:
+    text = (ROOT / "docs" / "pxml.md").read_text()
+    for spec in STANDARD_COMMANDS:
+        assert f"`{spec.name}`" in text and f"`{element_name(spec.name)}`" in text, spec.name
+        for param in spec.params:
+            assert f"`{param.name}`" in text, (spec.name, param.name)
+
+
+def test_every_cli_option_is_documented() -> None:
+    text = (ROOT / "docs" / "pxml.md").read_text() + (ROOT / "README.md").read_text()
+    parser = build_parser()
+    for action in parser._subparsers._group_actions[0].choices["validate"]._actions:  # type: ignore[union-attr]
+        for option in action.option_strings:
+            if option not in ("-h", "--help"):
+                assert option in text, option
