@@ -319,7 +319,7 @@ def tracking_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
         if seen:
             distance = d
             err = d - want
-            v = 0.0 if abs(err) < dead else 1.5 * (err - math.copysign(dead, err))
+            v = 0.0 if abs(err) < dead else 2.0 * (err - math.copysign(dead, err))
             world.command(max(v, -0.5 * sim.spec.max_speed), 3.0 * world.user_bearing())
         yield sleep(min(period, end - k.tick))
     return {"lost": False, "distance": round(distance, 3)}, False

@@ -79,6 +79,7 @@ class World:
         self.hz = hz
         self.dt = 1.0 / hz
         space = pymunk.Space()
+        space.collision_slop = 0.005  # metres: the default 0.1 would let bodies sink 10 cm
         for w in world_map.walls:
             seg = pymunk.Segment(space.static_body, (w.x1, w.y1), (w.x2, w.y2), w.thickness / 2)
             seg.filter = pymunk.ShapeFilter(categories=WALL)
