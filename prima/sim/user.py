@@ -201,7 +201,7 @@ class ScriptedUser:
         else:
             tx, ty = float(a.x or 0.0), float(a.y or 0.0)
         hx, hy = sim.world.human.position
-        for x, y in sim.route(hx, hy, tx, ty, 0.0):
+        for x, y in sim.route(hx, hy, tx, ty, 0.0) or [(tx, ty)]:
             yield from self._leg(x, y, speed)
         self._set_velocity(0.0, 0.0)
         self._record(UserActionKind.ARRIVE, target=a.target())
@@ -215,24 +215,37 @@ class ScriptedUser:
             d = math.hypot(rx - hx, ry - hy)
             if d > distance + 0.1:
                 v = min(speed, (d - distance) * 2.0)
-                self._set_velocity((rx - hx) / d * v, (ry - hy) / d * v)
+                wx, wy = self._toward_robot(hx, hy, rx, ry)
+                w = math.hypot(wx - hx, wy - hy)
+                self._set_velocity((wx - hx) / w * v, (wy - hy) / w * v)
             elif world.human_moving:
                 self._set_velocity(0.0, 0.0)
             yield sleep(period)
+
+    def _toward_robot(self, hx: float, hy: float, rx: float, ry: float) -> tuple[float, float]:
+        """Where to head for to reach the robot: straight, or over the place graph."""
+        sim = self._sim
+        if sim.world.clear(hx, hy, rx, ry):
+            return rx, ry
+        for wx, wy in sim.route(hx, hy, rx, ry, 0.0):
+            if math.hypot(wx - hx, wy - hy) > 0.05:
+                return wx, wy
+        return rx, ry
 
     def _touch(self, speed: float) -> Iterator[Wait]:
         sim = self._sim
         world = sim.world
         reach = sim.spec.radius + sim.spec.touch_reach + 0.25
-        for _ in range(120):  # give up after about a minute of chasing
+        for _ in range(240):  # give up after about two minutes of chasing
             rx, ry = world.robot.position
             hx, hy = world.human.position
             d = math.hypot(rx - hx, ry - hy)
             if d <= reach:
                 break
-            gap = d - (reach - _APPROACH_GAP)
-            step = min(gap, speed * 0.5)
-            yield from self._leg(hx + (rx - hx) / d * step, hy + (ry - hy) / d * step, speed)
+            wx, wy = self._toward_robot(hx, hy, rx, ry)
+            w = math.hypot(wx - hx, wy - hy)
+            step = min(d - (reach - _APPROACH_GAP) if (wx, wy) == (rx, ry) else w, speed * 0.5)
+            yield from self._leg(hx + (wx - hx) / w * step, hy + (wy - hy) / w * step, speed)
         self._set_velocity(0.0, 0.0)
         touched = world.user_distance() <= reach
         self._record(UserActionKind.TOUCH, target=None if touched else "missed")
