@@ -16,6 +16,8 @@ from prima.sim.records import (
     Zone,
     ZoneEntry,
 )
+from prima.sim.runner import CommandRunner, TraceEntry
+from prima.sim.scenario import Scenario, load_map, load_scenario
 from prima.sim.simulator import Simulator
 from prima.sim.spec import DEFAULT_GESTURES, RobotSpec
 from prima.sim.user import AnswerRule, ScriptedUser, TimedAction, UserScript
@@ -25,15 +27,18 @@ __all__ = [
     "DEFAULT_GESTURES",
     "AnswerRule",
     "Area",
+    "CommandRunner",
     "Picture",
     "Place",
     "PlaceKind",
     "Pose",
     "RobotSpec",
+    "Scenario",
     "ScheduledEvent",
     "ScriptedUser",
     "Simulator",
     "TimedAction",
+    "TraceEntry",
     "UserAction",
     "UserActionKind",
     "UserScript",
@@ -41,4 +46,6 @@ __all__ = [
     "WorldMap",
     "Zone",
     "ZoneEntry",
+    "load_map",
+    "load_scenario",
 ]

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
+__all__ = ["DEFAULT_GESTURES", "RobotSpec"]
+
 DEFAULT_GESTURES: Mapping[str, float] = MappingProxyType({
     "nod": 1.0,
     "shake-head": 1.2,
