@@ -110,8 +110,9 @@ class Kernel:
         """Resume processes whose awaited predicate now holds."""
         if not self._polls:
             return
+        polls, self._polls = self._polls, []
         keep = []
-        for entry in self._polls:
+        for entry in polls:
             proc, token, pred = entry
             if not proc.alive or proc.token != token:
                 continue
@@ -119,7 +120,7 @@ class Kernel:
                 self._fire(proc, token, True)
             else:
                 keep.append(entry)
-        self._polls = keep
+        self._polls = keep + self._polls  # waits begun by the processes just resumed
 
     def spawn(self, gen: ProcGen, exit: Callable[[Any], None] | None = None) -> Process:
         """Start a process later in the current tick; ``exit`` gets its return value."""
