@@ -1,0 +1,432 @@
+"""What each Command physically does: one generator per Command.
+
+A behavior is a kernel process: ``behavior(sim, call, command_id, iteration)``
+yields waits and returns ``(values, terminal)``. For a feedback Command one
+call is one loop iteration; ``terminal`` says whether the loop is done. For
+any other Command ``terminal`` is True. Arguments the call leaves out take the
+catalog's defaults (:mod:`prima.mediator.catalog`), the one table both the
+DSL and the simulator read.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable, Generator, Mapping
+
+from prima.mediator.catalog import Catalog, Value
+from prima.mediator.interface import AtomicBehavior, Call, CommandId
+from prima.sim.kernel import Wait, signal, sleep, until
+from prima.sim.maps import Place
+from prima.sim.records import Picture
+from prima.sim.simulator import Simulator
+from prima.sim.world import wrap_angle
+
+__all__ = ["BEHAVIORS", "perform"]
+
+Values = dict[str, Value]
+Result = tuple[Values, bool]
+Gen = Generator[Wait, Any, Result]
+Behavior = Callable[[Simulator, Call, CommandId, int], Gen]
+
+_CATALOG = Catalog.standard()
+
+
+class BadArgument(Exception):
+    """A Command argument the robot cannot use (the AB ends with an error value)."""
+
+
+# ---- arguments -------------------------------------------------------------------
+
+def _arg(call: Call, name: str) -> Value:
+    if name in call.args:
+        return call.args[name]
+    spec = _CATALOG.get(call.command)
+    param = spec.param(name) if spec is not None else None
+    return param.default if param is not None else None
+
+
+def _number(call: Call, name: str, required: bool = True) -> float | None:
+    value = _arg(call, name)
+    if value is None:
+        if required:
+            raise BadArgument(f"missing argument {name!r}")
+        return None
+    if isinstance(value, bool):
+        raise BadArgument(f"argument {name!r} must be a number, not {value!r}")
+    try:
+        number = float(value)
+    except ValueError:
+        raise BadArgument(f"argument {name!r} must be a number, not {value!r}") from None
+    if not math.isfinite(number):
+        raise BadArgument(f"argument {name!r} must be finite, not {value!r}")
+    return number
+
+
+def _req(call: Call, name: str) -> float:
+    value = _number(call, name)
+    if value is None:
+        raise BadArgument(f"missing argument {name!r}")
+    return value
+
+
+def _text(call: Call, name: str) -> str:
+    value = _arg(call, name)
+    return "" if value is None else str(value)
+
+
+def _place(sim: Simulator, call: Call, name: str) -> Place | None:
+    value = _arg(call, name)
+    if value is None:
+        return None
+    place = sim.map.place(str(value))
+    if place is None:
+        raise BadArgument(f"unknown place {value!r} on map {sim.map.name!r}")
+    return place
+
+
+def _pose(sim: Simulator) -> Values:
+    p = sim.localize()
+    return {"x": round(p.x, 3), "y": round(p.y, 3), "heading": round(p.heading, 1) % 360.0}
+
+
+# ---- motion helpers -------------------------------------------------------------------
+
+def _stop(sim: Simulator) -> Generator[Wait, Any, None]:
+    world = sim.world
+    yield signal(lambda wake: world.stop(lambda: wake(True)))
+
+
+def _turn(sim: Simulator, delta: float) -> Generator[Wait, Any, None]:
+    world = sim.world
+    if world.mode:
+        yield from _stop(sim)
+    yield signal(lambda wake: world.turn_by(delta, wake))
+
+
+def _face(sim: Simulator, heading: float) -> Generator[Wait, Any, None]:
+    yield from _turn(sim, wrap_angle(heading - sim.world.robot.angle))
+
+
+def _go(sim: Simulator, x: float, y: float) -> Generator[Wait, Any, bool]:
+    """Turn toward (x, y), drive there; False if something blocked the way."""
+    world = sim.world
+    if world.mode:
+        yield from _stop(sim)
+    px, py = world.robot.position
+    if math.hypot(x - px, y - py) < 1e-6:
+        return True
+    delta = wrap_angle(math.atan2(y - py, x - px) - world.robot.angle)
+    if abs(delta) > math.radians(1.0):
+        yield from _turn(sim, delta)
+    arrived = yield signal(lambda wake: world.drive_to(x, y, wake))
+    return bool(arrived)
+
+
+def _heading_to(sim: Simulator, place: Place) -> float | None:
+    """Map heading (radians) from the robot toward a place (its ``facing`` when there)."""
+    x, y = sim.world.robot.position
+    if math.hypot(place.x - x, place.y - y) <= sim.spec.place_tolerance:
+        return None if place.facing is None else math.radians(place.facing)
+    return math.atan2(place.y - y, place.x - x)
+
+
+# ---- talking ------------------------------------------------------------------------------
+
+def speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
+    yield sleep(n)
+    return {"duration": n / sim.kernel.hz}, True
+
+
+def qa(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    prompt = _text(call, "prompt")
+    timeout = _req(call, "timeout")
+    if timeout < 0:
+        raise BadArgument(f"timeout must not be negative, not {timeout:g}")
+    yield sleep(sim.ticks(sim.spec.speech_duration(prompt)))
+    sim.ask(prompt)
+    heard = yield signal(sim.open_mic, sim.ticks(timeout), timeout=None)
+    sim.close_mic()
+    if heard is None:
+        return {"status": "noinput"}, True
+    return {"status": "answered", "utterance": str(heard)}, True
+
+
+# ---- turning --------------------------------------------------------------------------------
+
+def face_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    world = sim.world
+    seen, distance = world.sees_user(sim.kernel.tick, any_direction=True)
+    if not seen:
+        return {"found": False}, True
+    yield from _turn(sim, world.user_bearing())
+    return {"found": True, "distance": round(distance, 3), **_pose(sim)}, True
+
+
+def face_human_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    values, _ = yield from face_human(sim, call, cid, it)
+    said, _ = yield from speak(sim, call, cid, it)
+    return {**values, **said}, True
+
+
+def turn(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    yield from _turn(sim, math.radians(_req(call, "angle")))
+    return _pose(sim), True
+
+
+def turn_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    angle = _req(call, "angle")
+    n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
+    end = sim.kernel.tick + n
+    yield from _turn(sim, math.radians(angle))
+    if end > sim.kernel.tick:
+        yield sleep(end - sim.kernel.tick)
+    return {**_pose(sim), "duration": n / sim.kernel.hz}, True
+
+
+def set_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    heading = _number(call, "heading", required=False)
+    toward = _place(sim, call, "toward")
+    if (heading is None) == (toward is None):
+        raise BadArgument("give exactly one of 'heading' and 'toward'")
+    target = math.radians(heading) if heading is not None else _heading_to(sim, toward)  # type: ignore[arg-type]
+    if target is not None:
+        yield from _face(sim, target)
+    return _pose(sim), True
+
+
+# ---- wheels ---------------------------------------------------------------------------------
+
+def set_speed_and_time(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    speed, seconds = _req(call, "speed"), _req(call, "time")
+    spin = _req(call, "spin")
+    if seconds < 0:
+        raise BadArgument(f"time must not be negative, not {seconds:g}")
+    world = sim.world
+    if world.mode:
+        yield from _stop(sim)
+    world.command(speed, math.radians(spin))
+    yield sleep(sim.ticks(seconds))
+    yield from _stop(sim)
+    return _pose(sim), True
+
+
+def stop_moving(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    yield from _stop(sim)
+    return _pose(sim), True
+
+
+# ---- head and arm ---------------------------------------------------------------------------
+
+def _clamp(value: float, limits: tuple[float, float]) -> float:
+    return max(limits[0], min(limits[1], value))
+
+
+def move_head(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    spec, world, tick = sim.spec, sim.world, sim.kernel.tick
+    pan = _clamp(_req(call, "pan"), spec.head_pan_range)
+    tilt = _clamp(_req(call, "tilt"), spec.head_tilt_range)
+    change = max(abs(pan - world.head_pan.at(tick)), abs(tilt - world.head_tilt.at(tick)))
+    n = sim.ticks(change / spec.head_rate)
+    world.head_pan.move(pan, tick, n)
+    world.head_tilt.move(tilt, tick, n)
+    world.joints_until = max(world.joints_until, tick + n)
+    yield sleep(n)
+    return {"pan": pan, "tilt": tilt}, True
+
+
+def point_by_hand(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    spec, world, tick = sim.spec, sim.world, sim.kernel.tick
+    angle = _number(call, "angle", required=False)
+    toward = _place(sim, call, "toward")
+    if (angle is None) == (toward is None):
+        raise BadArgument("give exactly one of 'toward' and 'angle'")
+    if toward is not None:
+        target = _heading_to(sim, toward)
+        angle = 0.0 if target is None else math.degrees(wrap_angle(target - world.robot.angle))
+    angle = _clamp(angle or 0.0, spec.arm_range)
+    n = sim.ticks(abs(angle - world.arm.at(tick)) / spec.arm_rate)
+    world.arm.move(angle, tick, n)
+    yield sleep(n)
+    return {"angle": round(angle, 1)}, True
+
+
+def gesture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    name = _text(call, "name")
+    seconds = sim.spec.gestures.get(name)
+    if seconds is None:
+        return {"error": f"the robot has no gesture {name!r}"}, True
+    yield sleep(sim.ticks(seconds))
+    return {"gesture": name}, True
+
+
+def take_picture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    world, tick = sim.world, sim.kernel.tick
+    seen, distance = world.sees_user(tick)
+    pose = sim.localize()
+    heading = round(math.degrees(world.camera_heading(tick)) % 360.0, 1) % 360.0
+    yield sleep(sim.ticks(sim.spec.picture_time))
+    picture = Picture(sim.now(), round(pose.x, 3), round(pose.y, 3), heading, seen,
+                      round(distance, 3) if seen else None)
+    sim.pictures.append(picture)
+    return {"saw_user": seen, "heading": heading, "picture": len(sim.pictures)}, True
+
+
+# ---- feedback loops --------------------------------------------------------------------------
+
+def active_sensing_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    say = _text(call, "say")
+    angle = _req(call, "turn")
+    k = sim.kernel
+    speech_end = k.tick + (sim.ticks(sim.spec.speech_duration(say)) if say else 0)
+    sim.search()
+    found = yield until(lambda: sim.seen, sim.ticks(sim.spec.search_time))
+    if speech_end > k.tick:
+        yield sleep(speech_end - k.tick)
+    if found:
+        sim.end_loop(cid)
+        return {"found": True, "distance": round(sim.world.user_distance(), 3)}, True
+    yield from _turn(sim, math.radians(angle))
+    seen, distance = sim.world.sees_user(k.tick)
+    if seen:  # the user came into view while the view turned
+        sim.end_loop(cid)
+        return {"found": True, "distance": round(distance, 3), "turned": angle}, True
+    return {"found": False, "turned": angle}, False
+
+
+def tracking_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    want = _req(call, "distance")
+    if want <= 0:
+        raise BadArgument(f"distance must be positive, not {want:g}")
+    k, world = sim.kernel, sim.world
+    if not sim.seen:
+        found = yield until(lambda: sim.seen, sim.ticks(sim.spec.lose_after))
+        if not found:
+            sim.announce_lost()
+            yield from _stop(sim)
+            sim.end_loop(cid)
+            return {"lost": True}, True
+    end = k.tick + sim.ticks(sim.spec.tracking_interval)
+    period = k.hz // 10
+    dead = sim.spec.tracking_band / 6
+    distance = world.user_distance()
+    while k.tick < end:
+        if not sim.seen:  # the monitor has posted human-lost
+            yield from _stop(sim)
+            sim.end_loop(cid)
+            return {"lost": True}, True
+        seen, d = world.sees_user(k.tick)
+        if seen:
+            distance = d
+            err = d - want
+            v = 0.0 if abs(err) < dead else 2.0 * (err - math.copysign(dead, err))
+            world.command(max(v, -0.5 * sim.spec.max_speed), 3.0 * world.user_bearing())
+        yield sleep(min(period, end - k.tick))
+    return {"lost": False, "distance": round(distance, 3)}, False
+
+
+def topological_move(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    goal = _place(sim, call, "to")
+    if goal is None:
+        raise BadArgument("missing argument 'to'")
+    at, path = sim.plan(goal.name)
+    if at is not None and at.name == goal.name:
+        sim.emit("place-reached", {"place": goal.name, "kind": goal.kind.value})
+        sim.end_loop(cid)
+        return {"place": goal.name, "kind": goal.kind.value, "goal": goal.name,
+                "remaining": 0}, True
+    if not path:
+        return {"error": f"no route to {goal.name!r}"}, True
+    nxt = path[0]
+    arrived = yield from _go(sim, nxt.x, nxt.y)
+    if not arrived:
+        return {"error": f"blocked on the way to {nxt.name!r}", **_pose(sim)}, True
+    sim.emit("place-reached", {"place": nxt.name, "kind": nxt.kind.value})
+    done = nxt.name == goal.name
+    if done:
+        sim.end_loop(cid)
+    return {"place": nxt.name, "kind": nxt.kind.value, "goal": goal.name,
+            "remaining": len(path) - 1}, done
+
+
+def _set_position(sim: Simulator, call: Call, cid: CommandId,
+                  heading: float | None) -> Gen:
+    tx, ty = _req(call, "x"), _req(call, "y")
+    world, spec = sim.world, sim.spec
+    tol = spec.position_tolerance
+    x, y = world.robot.position
+    if math.hypot(tx - x, ty - y) > tol:
+        points = sim.route(x, y, tx, ty, spec.radius / 2)
+        if not points:
+            return {"error": f"no route to ({tx:g}, {ty:g})"}, True
+        nx, ny = points[0]
+        seg = math.hypot(nx - x, ny - y)
+        if seg > spec.leg_length:
+            nx, ny = x + (nx - x) * spec.leg_length / seg, y + (ny - y) * spec.leg_length / seg
+        if not (yield from _go(sim, nx, ny)):
+            return {"error": "blocked", **_pose(sim)}, True
+        x, y = world.robot.position
+    reached = math.hypot(tx - x, ty - y) <= tol
+    if reached and heading is not None:
+        yield from _face(sim, math.radians(heading))
+    if reached:
+        sim.end_loop(cid)
+    return {**_pose(sim), "reached": reached}, reached
+
+
+def set_position(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    return (yield from _set_position(sim, call, cid, None))
+
+
+def set_position_and_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    return (yield from _set_position(sim, call, cid, _req(call, "heading")))
+
+
+BEHAVIORS: Mapping[str, Behavior] = {
+    "ActiveSensingHuman": active_sensing_human,
+    "FaceHuman": face_human,
+    "QA": qa,
+    "TrackingHuman": tracking_human,
+    "FaceHumanAndSpeak": face_human_and_speak,
+    "TurnAndSpeak": turn_and_speak,
+    "SetDirection": set_direction,
+    "Turn": turn,
+    "SetSpeedAndTime": set_speed_and_time,
+    "StopMoving": stop_moving,
+    "Speak": speak,
+    "MoveHead": move_head,
+    "PointByHand": point_by_hand,
+    "Gesture": gesture,
+    "TopologicalMove": topological_move,
+    "SetPosition": set_position,
+    "SetPositionAndDirection": set_position_and_direction,
+    "TakePicture": take_picture,
+}
+"""Every Command the simulated robot performs (the standard ones plus TakePicture)."""
+
+
+def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
+    """Perform an atomic behavior's calls in order; return merged values and terminal.
+
+    In a grouped AB each feedback call performs one iteration; the AB is
+    terminal only if every feedback call in it is. An error (unknown
+    Command, unusable argument) ends the AB at once with an ``error`` value.
+    """
+    values: Values = {}
+    terminal = True
+    for i, call in enumerate(ab.calls):
+        cid = ab.command_ids[i] if i < len(ab.command_ids) else 0
+        behavior = BEHAVIORS.get(call.command)
+        if behavior is None:
+            values["error"] = f"the simulated robot has no Command {call.command!r}"
+            return values, True
+        try:
+            out, done = yield from behavior(sim, call, cid, ab.iteration)
+        except BadArgument as exc:
+            values["error"] = f"{call.command}: {exc}"
+            return values, True
+        values.update(out)
+        if "error" in out:
+            return values, True
+        terminal = terminal and done
+    return values, terminal

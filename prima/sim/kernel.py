@@ -1,0 +1,160 @@
+"""Discrete-event kernel: integer ticks, a time-ordered agenda, generator processes.
+
+Simulated time is an integer tick count (``tick / hz`` seconds), so repeated
+runs never drift apart through float rounding. Work is kept in a heap ordered
+by (tick, insertion number): two runs that schedule the same things in the
+same order do the same things in the same order.
+
+Behaviors and the scripted user are generator *processes* that yield a
+:class:`Wait`: sleep for some ticks, wait until a predicate holds (polled at
+sensing times), or start something (a motion, listening) and wait until it
+calls back. A process is resumed with the value that woke it.
+"""
+
+from __future__ import annotations
+
+import heapq
+from typing import Any, Callable, Generator
+
+__all__ = ["Kernel", "Process", "Wait", "sleep", "until", "signal"]
+
+Waker = Callable[[Any], None]
+
+
+class Wait:
+    """What a process waits for; whichever comes first resumes it."""
+
+    __slots__ = ("ticks", "pred", "start", "timeout")
+
+    def __init__(self, ticks: int | None = None, pred: Callable[[], bool] | None = None,
+                 start: Callable[[Waker], bool] | None = None, timeout: Any = None) -> None:
+        self.ticks = ticks
+        """Resume with ``timeout`` after this many ticks."""
+        self.pred = pred
+        """Resume with True as soon as this holds (checked at sensing times)."""
+        self.start = start
+        """Called with a waker; return False if there is nothing to wait for."""
+        self.timeout = timeout
+
+
+def sleep(ticks: int) -> Wait:
+    """Resume after ``ticks`` ticks (zero: later in the same tick)."""
+    return Wait(ticks=max(0, ticks))
+
+
+def until(pred: Callable[[], bool], ticks: int | None = None) -> Wait:
+    """Resume with True when ``pred()`` holds, or with False after ``ticks``."""
+    return Wait(ticks=ticks, pred=pred, timeout=False)
+
+
+def signal(start: Callable[[Waker], bool], ticks: int | None = None,
+           timeout: Any = None) -> Wait:
+    """Call ``start(waker)``; resume with what the waker is given, or ``timeout``."""
+    return Wait(ticks=ticks, start=start, timeout=timeout)
+
+
+ProcGen = Generator[Wait, Any, Any]
+
+
+class Process:
+    """A running generator with a token that invalidates stale wake-ups."""
+
+    __slots__ = ("gen", "token", "alive", "exit")
+
+    def __init__(self, gen: ProcGen, exit: Callable[[Any], None] | None) -> None:
+        self.gen = gen
+        self.token = 0
+        self.alive = True
+        self.exit = exit
+
+
+class Kernel:
+    """The agenda and the processes; ``tick`` only moves forward."""
+
+    def __init__(self, hz: int) -> None:
+        self.hz = hz
+        self.tick = 0
+        self._heap: list[tuple[int, int, Callable[[], None]]] = []
+        self._seq = 0
+        self._polls: list[tuple[Process, int, Callable[[], bool]]] = []
+
+    def now(self) -> float:
+        return self.tick / self.hz
+
+    def ticks(self, seconds: float) -> int:
+        """A duration in whole ticks (nearest; at least one for a positive duration)."""
+        n = round(seconds * self.hz)
+        return max(1, n) if seconds > 0 else 0
+
+    def at(self, tick: int, fn: Callable[[], None]) -> None:
+        """Do ``fn`` at ``tick`` (never earlier than now)."""
+        self._seq += 1
+        heapq.heappush(self._heap, (max(tick, self.tick), self._seq, fn))
+
+    def next_tick(self) -> int | None:
+        return self._heap[0][0] if self._heap else None
+
+    def due(self) -> bool:
+        return bool(self._heap) and self._heap[0][0] <= self.tick
+
+    def run_due(self) -> bool:
+        """Do everything scheduled up to now; True if anything ran."""
+        heap = self._heap
+        ran = False
+        while heap and heap[0][0] <= self.tick:
+            heapq.heappop(heap)[2]()
+            ran = True
+        return ran
+
+    def check_polls(self) -> None:
+        """Resume processes whose awaited predicate now holds."""
+        if not self._polls:
+            return
+        polls, self._polls = self._polls, []
+        keep = []
+        for entry in polls:
+            proc, token, pred = entry
+            if not proc.alive or proc.token != token:
+                continue
+            if pred():
+                self._fire(proc, token, True)
+            else:
+                keep.append(entry)
+        self._polls = keep + self._polls  # waits begun by the processes just resumed
+
+    def spawn(self, gen: ProcGen, exit: Callable[[Any], None] | None = None) -> Process:
+        """Start a process later in the current tick; ``exit`` gets its return value."""
+        proc = Process(gen, exit)
+        self.at(self.tick, lambda: self._fire(proc, 0, None))
+        return proc
+
+    def kill(self, proc: Process | None) -> None:
+        """Stop a process for good (its ``exit`` is not called)."""
+        if proc is not None and proc.alive:
+            proc.alive = False
+            proc.token += 1
+            proc.gen.close()
+
+    def _fire(self, proc: Process, token: int, value: Any) -> None:
+        if not proc.alive or proc.token != token:
+            return
+        proc.token += 1
+        try:
+            wait = proc.gen.send(value)
+        except StopIteration as stop:
+            proc.alive = False
+            if proc.exit is not None:
+                proc.exit(stop.value)
+            return
+        token = proc.token
+        if wait.start is not None:
+            def waker(v: Any = True) -> None:
+                self.at(self.tick, lambda: self._fire(proc, token, v))
+            if wait.start(waker) is False:
+                self.at(self.tick, lambda: self._fire(proc, token, True))
+                return
+        if wait.ticks is not None:
+            timeout = wait.timeout
+            self.at(self.tick + wait.ticks, lambda: self._fire(proc, token, timeout))
+        if wait.pred is not None:
+            self._polls.append((proc, token, wait.pred))

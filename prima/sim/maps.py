@@ -1,0 +1,182 @@
+"""A building's map: walls, named places, the topological place graph, areas.
+
+Pure data plus graph search; the pymunk world is built from it in
+:mod:`prima.sim.world`, and XML loading lives in :mod:`prima.sim.scenario`.
+"""
+
+from __future__ import annotations
+
+import enum
+import heapq
+import math
+from dataclasses import dataclass, field
+from typing import Mapping
+
+__all__ = ["Area", "Place", "PlaceKind", "Wall", "WorldMap"]
+
+
+class PlaceKind(str, enum.Enum):
+    """What a named place on the map is (reported with ``place-reached``)."""
+
+    ENTRANCE = "entrance"
+    """Where visitors come in."""
+    HALL = "hall"
+    """An open hall or lobby."""
+    CORRIDOR = "corridor"
+    """A point along a corridor."""
+    CORNER = "corner"
+    """A corner where the route turns."""
+    DOOR = "door"
+    """A doorway between two areas."""
+    ROOM = "room"
+    """A room (for example, a professor's office)."""
+    POSTER = "poster"
+    """A poster on a wall."""
+    PANEL = "panel"
+    """A museum display panel."""
+    SHELF = "shelf"
+    """A library bookshelf."""
+    COUNTER = "counter"
+    """A service counter."""
+    POINT = "point"
+    """Any other named point."""
+
+
+@dataclass(frozen=True)
+class Place:
+    """A named place: where the robot stands when it is there."""
+
+    name: str
+    kind: PlaceKind
+    x: float
+    y: float
+    facing: float | None = None
+    """Heading (deg) toward the thing at this place (a panel, a shelf), if any."""
+
+    def to_dict(self) -> dict[str, object]:
+        return {"name": self.name, "kind": self.kind.value, "x": self.x, "y": self.y,
+                "facing": self.facing}
+
+
+@dataclass(frozen=True)
+class Wall:
+    """A straight wall (or shelf, or panel board): it blocks motion and sight."""
+
+    x1: float
+    y1: float
+    x2: float
+    y2: float
+    thickness: float = 0.1
+
+    def to_dict(self) -> dict[str, float]:
+        return {"x1": self.x1, "y1": self.y1, "x2": self.x2, "y2": self.y2,
+                "thickness": self.thickness}
+
+
+@dataclass(frozen=True)
+class Area:
+    """A named axis-aligned rectangle (a room, an exhibition); zones refer to areas."""
+
+    name: str
+    x1: float
+    y1: float
+    x2: float
+    y2: float
+
+    def contains(self, x: float, y: float) -> bool:
+        return (min(self.x1, self.x2) <= x <= max(self.x1, self.x2)
+                and min(self.y1, self.y2) <= y <= max(self.y1, self.y2))
+
+    def to_dict(self) -> dict[str, object]:
+        return {"name": self.name, "x1": self.x1, "y1": self.y1, "x2": self.x2, "y2": self.y2}
+
+
+@dataclass(frozen=True)
+class WorldMap:
+    """Walls, places, undirected place-graph edges and areas of one building."""
+
+    name: str
+    walls: tuple[Wall, ...] = ()
+    places: tuple[Place, ...] = ()
+    edges: tuple[tuple[str, str], ...] = ()
+    areas: tuple[Area, ...] = ()
+    source: str = ""
+    """The file it was loaded from, if any."""
+    _index: Mapping[str, Place] = field(init=False, repr=False, compare=False)
+    _adjacent: Mapping[str, tuple[tuple[str, float], ...]] = field(
+        init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        index = {p.name: p for p in self.places}
+        if len(index) != len(self.places):
+            raise ValueError(f"map {self.name!r} has duplicate place names")
+        adjacent: dict[str, list[tuple[str, float]]] = {name: [] for name in index}
+        for a, b in self.edges:
+            if a not in index or b not in index:
+                raise ValueError(f"map {self.name!r}: edge {a}-{b} names an unknown place")
+            d = math.hypot(index[a].x - index[b].x, index[a].y - index[b].y)
+            adjacent[a].append((b, d))
+            adjacent[b].append((a, d))
+        object.__setattr__(self, "_index", index)
+        object.__setattr__(self, "_adjacent",
+                           {k: tuple(v) for k, v in adjacent.items()})
+
+    def place(self, name: str) -> Place | None:
+        """The place called ``name``, or None."""
+        return self._index.get(name)
+
+    def area(self, name: str) -> Area | None:
+        for a in self.areas:
+            if a.name == name:
+                return a
+        return None
+
+    def neighbours(self, name: str) -> tuple[tuple[str, float], ...]:
+        """Places joined to ``name`` by an edge, with the edge lengths (m)."""
+        return self._adjacent.get(name, ())
+
+    def shortest_path(self, starts: Mapping[str, float],
+                      goals: Mapping[str, float]) -> list[str]:
+        """Cheapest place path from a start to a goal over the place graph.
+
+        ``starts`` and ``goals`` map place names to the cost of getting onto
+        and off the graph there. Returns the place names, start and goal
+        included; empty if no goal is reachable. Ties are broken by place
+        order in the map, so plans are deterministic.
+        """
+        order = {p.name: i for i, p in enumerate(self.places)}
+        best: dict[str, float] = {}
+        back: dict[str, str | None] = {}
+        heap: list[tuple[float, int, int, str, str | None]] = []
+        seq = 0
+        for name, cost in starts.items():
+            if name in order:
+                seq += 1
+                heapq.heappush(heap, (cost, order[name], seq, name, None))
+        while heap:
+            cost, _, _, name, prev = heapq.heappop(heap)
+            if name in best:
+                continue
+            best[name] = cost
+            back[name] = prev
+            for other, d in self._adjacent[name]:
+                if other not in best:
+                    seq += 1
+                    heapq.heappush(heap, (cost + d, order[other], seq, other, name))
+        reachable = [(best[g] + c, order[g], g) for g, c in goals.items() if g in best]
+        if not reachable:
+            return []
+        path = [min(reachable)[2]]
+        while back[path[-1]] is not None:
+            path.append(back[path[-1]])  # type: ignore[arg-type]
+        return path[::-1]
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "name": self.name,
+            "walls": [w.to_dict() for w in self.walls],
+            "places": [p.to_dict() for p in self.places],
+            "edges": [list(e) for e in self.edges],
+            "areas": [a.to_dict() for a in self.areas],
+        }
+

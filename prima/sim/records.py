@@ -1,0 +1,129 @@
+"""Plain records: poses, user actions, zone entries, pictures, scheduled events, zones.
+
+All are frozen dataclasses with a stable ``to_dict()`` so traces and golden
+files can serialize them.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+from typing import Mapping
+
+from prima.mediator.catalog import Value
+from prima.sim.maps import Area
+
+__all__ = ["Picture", "Pose", "ScheduledEvent", "UserAction", "UserActionKind", "Zone",
+           "ZoneEntry"]
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A position on the map (m) and a heading (deg, 0 = east, 90 = north)."""
+
+    x: float
+    y: float
+    heading: float = 0.0
+
+    def distance_to(self, x: float, y: float) -> float:
+        return math.hypot(x - self.x, y - self.y)
+
+    def to_dict(self) -> dict[str, float]:
+        return {"x": self.x, "y": self.y, "heading": self.heading}
+
+
+class UserActionKind(str, enum.Enum):
+    """What the scripted user did (the trace prints these as ``U`` lines)."""
+
+    SAY = "say"
+    """Said something (``text``); ``heard`` tells whether the robot's microphone caught it."""
+    TOUCH = "touch"
+    """Touched the robot's touch sensor."""
+    WALK = "walk"
+    """Started walking to a place or position (``target``)."""
+    ARRIVE = "arrive"
+    """Reached the place or position of a walk or leave (``target``)."""
+    FOLLOW = "follow"
+    """Started following the robot."""
+    LEAVE = "leave"
+    """Started walking away from the robot to ``target``."""
+    STOP = "stop"
+    """Stopped walking or following and stands still."""
+
+
+@dataclass(frozen=True)
+class UserAction:
+    """One thing the scripted user did, at simulated time ``time`` (s)."""
+
+    time: float
+    action: UserActionKind
+    text: str | None = None
+    target: str | None = None
+    heard: bool | None = None
+    """For ``say``: whether a listening Q&A heard it."""
+
+    def to_dict(self) -> dict[str, object]:
+        out: dict[str, object] = {"time": self.time, "action": self.action.value}
+        if self.text is not None:
+            out["text"] = self.text
+        if self.target is not None:
+            out["target"] = self.target
+        if self.heard is not None:
+            out["heard"] = self.heard
+        return out
+
+
+@dataclass(frozen=True)
+class ZoneEntry:
+    """The robot entered a zone of the scenario; the run loop loads its EA."""
+
+    time: float
+    zone: str
+    ea: str
+    """The EA document path as the scenario wrote it (relative to the scenario file)."""
+
+    def to_dict(self) -> dict[str, object]:
+        return {"time": self.time, "zone": self.zone, "ea": self.ea}
+
+
+@dataclass(frozen=True)
+class Picture:
+    """What one camera capture (Take a Picture) saw."""
+
+    time: float
+    x: float
+    y: float
+    heading: float
+    """Direction the camera looked (deg)."""
+    saw_user: bool
+    user_distance: float | None = None
+
+    def to_dict(self) -> dict[str, object]:
+        return {"time": self.time, "x": self.x, "y": self.y, "heading": self.heading,
+                "saw_user": self.saw_user, "user_distance": self.user_distance}
+
+
+@dataclass(frozen=True)
+class ScheduledEvent:
+    """Something the environment posts at time ``at`` (s): a network message,
+    a sound, or any other named event with its data."""
+
+    at: float
+    name: str
+    data: Mapping[str, Value] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, object]:
+        return {"at": self.at, "name": self.name, "data": dict(self.data)}
+
+
+@dataclass(frozen=True)
+class Zone:
+    """An area of the map whose entry by the robot loads an EA document."""
+
+    name: str
+    ea: str
+    area: Area
+
+    def to_dict(self) -> dict[str, object]:
+        return {"name": self.name, "ea": self.ea, "area": self.area.to_dict()}

@@ -1,0 +1,149 @@
+"""A stand-in for the mediator: perform Commands one after another on a simulator.
+
+:class:`CommandRunner` is a scripted test double (it ships in the package so
+tests, benchmarks and the ``python -m prima.sim run`` command can drive the
+simulator without documents or a mediator). It starts one atomic behavior at
+a time, repeats a feedback Command's iterations until one is terminal, and
+records everything the simulator reports, in order, as :class:`TraceEntry`.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Mapping
+
+from prima.mediator.catalog import Catalog, Value
+from prima.mediator.interface import AtomicBehavior, Call, CommandId, Event, Outcome
+from prima.sim.records import UserAction, ZoneEntry
+from prima.sim.simulator import Simulator
+
+__all__ = ["CommandRunner", "TraceEntry"]
+
+
+@dataclass(frozen=True)
+class TraceEntry:
+    """One thing that happened: kind is ``end`` (an AB ended), ``event``, ``user`` or ``zone``."""
+
+    time: float
+    kind: str
+    name: str
+    """The Command (end), event name (event), user action (user) or zone (zone)."""
+    data: Mapping[str, Value] = field(default_factory=dict)
+    iteration: int = 0
+    terminal: bool = True
+
+    def to_dict(self) -> dict[str, object]:
+        return {"time": self.time, "kind": self.kind, "name": self.name,
+                "data": dict(self.data), "iteration": self.iteration,
+                "terminal": self.terminal}
+
+    def __str__(self) -> str:
+        data = ", ".join(f"{k}={v!r}" for k, v in self.data.items())
+        extra = f" #{self.iteration}" if self.kind == "end" and self.iteration else ""
+        more = "" if self.terminal else " (more)"
+        return f"{self.time:8.2f}  {self.kind:5}  {self.name}{extra}{more}  {data}"
+
+
+class CommandRunner:
+    """Performs queued Commands in order on ``sim``; records what happens."""
+
+    def __init__(self, sim: Simulator, catalog: Catalog | None = None) -> None:
+        self.sim = sim
+        self.catalog = catalog or Catalog.standard()
+        self.trace: list[TraceEntry] = []
+        self._queue: deque[Call] = deque()
+        self._ab = 0
+        self._cid = 0
+        self._current: tuple[Call, CommandId, int] | None = None
+        self._stopping = False
+        sim.finished = self._finished
+        sim.on_event = self._event
+        sim.on_user = self._user
+        sim.on_zone = self._zone
+
+    def queue(self, *calls: Call) -> None:
+        """Perform these Commands after the ones already queued."""
+        self._queue.extend(calls)
+        if self._current is None:
+            self._next()
+
+    def stop_loop(self) -> None:
+        """End the running feedback Command after its current iteration (like a cancel)."""
+        self._stopping = self._current is not None
+
+    @property
+    def busy(self) -> bool:
+        return self._current is not None
+
+    def run(self, until: float) -> list[TraceEntry]:
+        """Advance the simulator event by event up to ``until``; return the trace."""
+        sim = self.sim
+        while True:
+            t = sim.next_time()
+            if t is None or t > until:
+                break
+            sim.advance_to(t)
+        sim.advance_to(until)
+        return self.trace
+
+    def ends(self, command: str | None = None) -> list[TraceEntry]:
+        return [e for e in self.trace if e.kind == "end" and command in (None, e.name)]
+
+    def events(self, name: str | None = None) -> list[TraceEntry]:
+        return [e for e in self.trace if e.kind == "event" and name in (None, e.name)]
+
+    # ---- callbacks ------------------------------------------------------------------
+
+    def _devices(self, call: Call) -> frozenset[str]:
+        spec = self.catalog.get(call.command)
+        devices = spec.devices if spec is not None else frozenset({"camera"})
+        if call.command == "ActiveSensingHuman" and call.args.get("say"):
+            devices |= {"speaker"}
+        return devices | call.extra_devices
+
+    def _next(self) -> None:
+        if not self._queue:
+            self._current = None
+            return
+        call = self._queue.popleft()
+        self._cid += 1
+        self._start(call, self._cid, 0)
+
+    def _start(self, call: Call, cid: CommandId, iteration: int) -> None:
+        self._ab += 1
+        self._current = (call, cid, iteration)
+        self.sim.start(AtomicBehavior(self._ab, "runner", 0, (call,), (cid,),
+                                      self._devices(call), iteration))
+
+    def _finished(self, ab: int, outcome: Outcome) -> None:
+        if self._current is None:
+            raise RuntimeError(f"atomic behavior {ab} ended but the runner started none")
+        call, cid, iteration = self._current
+        self.trace.append(TraceEntry(self.sim.now(), "end", call.command,
+                                     MappingProxyType(dict(outcome.values)),
+                                     iteration, outcome.terminal))
+        if not outcome.terminal and not self._stopping:
+            self._start(call, cid, iteration + 1)
+        else:
+            if not outcome.terminal:
+                self.sim.abandon(cid)
+            self._stopping = False
+            self._next()
+
+    def _event(self, event: Event) -> None:
+        self.trace.append(TraceEntry(event.time, "event", event.name, event.data))
+
+    def _user(self, action: UserAction) -> None:
+        data: dict[str, Value] = {}
+        if action.text is not None:
+            data["text"] = action.text
+        if action.target is not None:
+            data["target"] = action.target
+        if action.heard is not None:
+            data["heard"] = action.heard
+        self.trace.append(TraceEntry(action.time, "user", action.action.value, data))
+
+    def _zone(self, entry: ZoneEntry) -> None:
+        self.trace.append(TraceEntry(entry.time, "zone", entry.zone, {"ea": entry.ea}))

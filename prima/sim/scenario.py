@@ -1,0 +1,374 @@
+"""Scenario and map files: loading, validation (XSD, then meaning), the Scenario record.
+
+Loading is two-stage, like documents: the XSD checks structure, then the
+meaning checks look at what the schema cannot (unknown places, a wall across a
+graph edge, actions out of time order, a bad regular expression). Every problem
+is a :class:`~prima.errors.Problem` with ``file:line:col``; all of a file's
+problems are raised together as one :class:`~prima.errors.ScenarioError`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import pymunk
+from lxml import etree
+
+from prima._xml import XmlDocument, local_name, parse_xml, read_source
+from prima.errors import Problem, ScenarioError
+from prima.sim._schema import validate
+from prima.sim.maps import Area, Place, PlaceKind, Wall, WorldMap
+from prima.sim.records import Pose, ScheduledEvent, UserActionKind, Zone
+from prima.sim.user import AnswerRule, TimedAction, UserScript
+
+__all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
+
+MAP_NS = "urn:prima:map:1"
+SCENARIO_NS = "urn:prima:scenario:1"
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A loaded scenario. Paths are kept as written (relative to the scenario file)."""
+
+    name: str
+    source: str
+    """The scenario file's path."""
+    map: WorldMap
+    robot: Pose
+    until: float
+    """The run ends at this simulated time (s)."""
+    seed: int = 0
+    rate: int = 50
+    """Physics steps per simulated second."""
+    noise: float = 0.0
+    """Localization noise: standard deviation of x and y (m)."""
+    heading_noise: float = 0.0
+    """Localization noise: standard deviation of the heading (deg)."""
+    profile: str | None = None
+    """Robot hardware profile path; the run loop turns it into a RobotSpec."""
+    fa: str | None = None
+    ea: str | None = None
+    """The EA running from the start (more may be loaded on entering zones)."""
+    user: UserScript | None = None
+    events: tuple[ScheduledEvent, ...] = ()
+    zones: tuple[Zone, ...] = ()
+    description: str = ""
+
+    def resolve(self, path: str) -> Path:
+        """A path written in the scenario, relative to the scenario file's folder."""
+        return (Path(self.source).parent / path).resolve()
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "name": self.name, "source": self.source, "map": self.map.name,
+            "robot": self.robot.to_dict(), "until": self.until, "seed": self.seed,
+            "rate": self.rate, "noise": self.noise, "heading_noise": self.heading_noise,
+            "profile": self.profile, "fa": self.fa, "ea": self.ea,
+            "user": None if self.user is None else self.user.to_dict(),
+            "events": [e.to_dict() for e in self.events],
+            "zones": [z.to_dict() for z in self.zones],
+        }
+
+
+# ---- shared helpers ----------------------------------------------------------------------
+
+def _parse(path: Path, schema: str, namespace: str, root: str) -> XmlDocument:
+    doc = parse_xml(read_source(path, ScenarioError), str(path), ScenarioError)
+    if etree.QName(doc.root).namespace != namespace or local_name(doc.root) != root:
+        raise ScenarioError([doc.problem(
+            doc.root, f"expected a <{root}> element in namespace {namespace!r}, "
+                      f"found <{local_name(doc.root)}>"
+                      f" in {etree.QName(doc.root).namespace or 'no namespace'!r}")])
+    problems = validate(doc, schema)
+    if problems:
+        raise ScenarioError(problems)
+    return doc
+
+
+def _children(el: etree._Element) -> Iterator[etree._Element]:
+    return (c for c in el if isinstance(c.tag, str))
+
+
+def _num(el: etree._Element, name: str, default: float | None = None) -> float | None:
+    value = el.get(name)
+    return default if value is None else float(value)
+
+
+def _f(el: etree._Element, name: str) -> float:
+    return float(el.get(name, "0"))
+
+
+def _text(el: etree._Element) -> str:
+    return " ".join((el.text or "").split())
+
+
+# ---- maps --------------------------------------------------------------------------------
+
+def load_map(path: str | Path) -> WorldMap:
+    """Load and check a map file; raise ScenarioError with located problems."""
+    path = Path(path)
+    doc = _parse(path, "map.xsd", MAP_NS, "map")
+    walls: list[Wall] = []
+    places: list[Place] = []
+    edges: list[tuple[str, str]] = []
+    areas: list[Area] = []
+    problems: list[Problem] = []
+    place_at: dict[str, etree._Element] = {}
+    area_names: set[str] = set()
+    edge_els: list[etree._Element] = []
+    description = ""
+    for el in _children(doc.root):
+        tag = local_name(el)
+        if tag == "description":
+            description = _text(el)
+        elif tag == "wall":
+            walls.append(Wall(_f(el, "x1"), _f(el, "y1"), _f(el, "x2"), _f(el, "y2"),
+                              float(el.get("thickness", "0.1"))))
+        elif tag == "place":
+            name = el.get("name", "")
+            if name in place_at:
+                line = doc.where.element(place_at[name])[0]
+                problems.append(doc.problem(el, f"place {name!r} is already defined on line {line}",
+                                            attribute="name"))
+                continue
+            place_at[name] = el
+            places.append(Place(name, PlaceKind(el.get("kind", "point")), _f(el, "x"),
+                                _f(el, "y"), _num(el, "facing")))
+        elif tag == "edge":
+            edge_els.append(el)
+        elif tag == "area":
+            name = el.get("name", "")
+            if name in area_names:
+                problems.append(doc.problem(el, f"area {name!r} is already defined",
+                                            attribute="name"))
+                continue
+            area_names.add(name)
+            areas.append(Area(name, _f(el, "x1"), _f(el, "y1"), _f(el, "x2"), _f(el, "y2")))
+    space = _wall_space(walls)
+    by_name = {p.name: p for p in places}
+    for el in edge_els:
+        a, b = el.get("from", ""), el.get("to", "")
+        bad = False
+        for attr, name in (("from", a), ("to", b)):
+            if name not in by_name:
+                problems.append(doc.problem(el, f"unknown place {name!r}{_known(by_name)}",
+                                            attribute=attr))
+                bad = True
+        if bad:
+            continue
+        if a == b:
+            problems.append(doc.problem(el, f"edge joins place {a!r} to itself"))
+            continue
+        pa, pb = by_name[a], by_name[b]
+        hit = space.segment_query_first((pa.x, pa.y), (pb.x, pb.y), 0.0, pymunk.ShapeFilter())
+        if hit is not None:
+            problems.append(doc.problem(
+                el, f"edge {a} -> {b} crosses a wall at ({hit.point.x:.2f}, {hit.point.y:.2f})"))
+            continue
+        edges.append((a, b))
+    if problems:
+        raise ScenarioError(sorted(problems))
+    name = doc.root.get("name", path.stem)
+    return WorldMap(name, tuple(walls), tuple(places), tuple(edges), tuple(areas),
+                    source=str(path))
+
+
+def _wall_space(walls: list[Wall]) -> pymunk.Space:
+    space = pymunk.Space()
+    for w in walls:
+        space.add(pymunk.Segment(space.static_body, (w.x1, w.y1), (w.x2, w.y2), w.thickness / 2))
+    return space
+
+
+def _known(names: dict[str, object]) -> str:
+    if not names:
+        return ""
+    shown = sorted(names)
+    more = "" if len(shown) <= 12 else ", ..."
+    return f" (known: {', '.join(shown[:12])}{more})"
+
+
+# ---- scenarios --------------------------------------------------------------------------------
+
+_ACTIONS = {k.value: k for k in (UserActionKind.SAY, UserActionKind.TOUCH, UserActionKind.WALK,
+                                 UserActionKind.LEAVE, UserActionKind.FOLLOW,
+                                 UserActionKind.STOP)}
+
+
+class _Loader:
+    def __init__(self, doc: XmlDocument, path: Path) -> None:
+        self.doc = doc
+        self.path = path
+        self.problems: list[Problem] = []
+        self.map: WorldMap | None = None
+
+    def bad(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
+        self.problems.append(self.doc.problem(el, message, attribute=attribute))
+
+    def place(self, el: etree._Element, attribute: str) -> Place | None:
+        name = el.get(attribute)
+        if name is None or self.map is None:
+            return None
+        place = self.map.place(name)
+        if place is None:
+            known = {p.name: p for p in self.map.places}
+            self.bad(el, f"unknown place {name!r} on map {self.map.name!r}{_known(known)}",
+                     attribute)
+        return place
+
+    def where(self, el: etree._Element, attribute: str = "place") -> Pose:
+        """A pose given as a place name, or as x and y; heading from the element or the place."""
+        has_xy = el.get("x") is not None or el.get("y") is not None
+        if el.get(attribute) is not None and has_xy:
+            self.bad(el, f"give either '{attribute}' or 'x' and 'y', not both", attribute)
+        elif el.get(attribute) is None and (el.get("x") is None or el.get("y") is None):
+            self.bad(el, f"<{local_name(el)}> needs '{attribute}' or both 'x' and 'y'")
+            return Pose(0.0, 0.0)
+        place = self.place(el, attribute)
+        heading = _num(el, "heading")
+        if place is not None:
+            return Pose(place.x, place.y, heading if heading is not None else place.facing or 0.0)
+        return Pose(_f(el, "x"), _f(el, "y"), heading or 0.0)
+
+    def load(self) -> Scenario:
+        root = self.doc.root
+        kids = {local_name(c): c for c in _children(root)}
+        map_el = kids["map"]
+        href = map_el.get("href", "")
+        map_path = self.path.parent / href
+        if not map_path.is_file():
+            self.bad(map_el, f"map file {href!r} not found (looked for {map_path})", "href")
+            raise ScenarioError(self.problems)
+        self.map = load_map(map_path)
+        robot_el = kids["robot"]
+        robot = self.where(robot_el)
+        apps = kids.get("apps")
+        user = self.user(kids["user"]) if "user" in kids else None
+        events, zones = self.environment(root)
+        if self.problems:
+            raise ScenarioError(sorted(self.problems))
+        return Scenario(
+            name=root.get("name", self.path.stem), source=str(self.path), map=self.map,
+            robot=robot, until=float(root.get("until", "0")), seed=int(root.get("seed", "0")),
+            rate=self.rate(root), noise=float(robot_el.get("noise", "0")),
+            heading_noise=float(robot_el.get("heading-noise", "0")),
+            profile=robot_el.get("profile"),
+            fa=apps.get("fa") if apps is not None else None,
+            ea=apps.get("ea") if apps is not None else None,
+            user=user, events=events, zones=zones,
+            description=_text(kids["description"]) if "description" in kids else "")
+
+    def rate(self, root: etree._Element) -> int:
+        rate = int(root.get("rate", "50"))
+        if rate % 10:
+            self.bad(root, f"rate must be a multiple of 10 steps per second, not {rate}", "rate")
+        return rate
+
+    def user(self, el: etree._Element) -> UserScript:
+        start = self.where(el)
+        speed = float(el.get("speed", "0.3"))
+        actions: list[TimedAction] = []
+        answers: list[AnswerRule] = []
+        last = -math.inf
+        for child in _children(el):
+            tag = local_name(child)
+            if tag == "answer":
+                answers.append(self.answer(child))
+                continue
+            at = float(child.get("at", "0"))
+            if at < last:
+                self.bad(child, f"<{tag}> at {at:g} s comes after an action at {last:g} s; "
+                                "list the user's actions in time order", "at")
+            last = max(last, at)
+            kind = _ACTIONS[tag]
+            place = None
+            if kind in (UserActionKind.WALK, UserActionKind.LEAVE):
+                has_xy = child.get("x") is not None or child.get("y") is not None
+                if child.get("to") is not None and has_xy:
+                    self.bad(child, "give either 'to' or 'x' and 'y', not both", "to")
+                elif child.get("to") is None and (child.get("x") is None or child.get("y") is None):
+                    self.bad(child, f"<{tag}> needs 'to' (a place) or both 'x' and 'y'")
+                found = self.place(child, "to")
+                place = found.name if found is not None else None
+            actions.append(TimedAction(
+                at=at, action=kind, text=child.get("text"), place=place,
+                x=_num(child, "x"), y=_num(child, "y"), speed=_num(child, "speed"),
+                distance=float(child.get("distance", "1.0"))))
+        return UserScript(start, speed, tuple(actions), tuple(answers))
+
+    def answer(self, el: etree._Element) -> AnswerRule:
+        contains, pattern = el.get("contains"), el.get("matches")
+        if contains is not None and pattern is not None:
+            self.bad(el, "give either 'contains' or 'matches', not both", "matches")
+        if pattern is not None:
+            try:
+                re.compile(pattern)
+            except re.error as exc:
+                self.bad(el, f"bad regular expression: {exc.msg}", "matches")
+                pattern = None
+        nth = el.get("nth")
+        return AnswerRule(say=el.get("say"), contains=contains, pattern=pattern,
+                          after=float(el.get("after", "1.0")),
+                          nth=int(nth) if nth is not None else None)
+
+    def environment(self, root: etree._Element) -> tuple[tuple[ScheduledEvent, ...],
+                                                          tuple[Zone, ...]]:
+        events: list[ScheduledEvent] = []
+        zones: list[Zone] = []
+        zone_names: set[str] = set()
+        last = -math.inf
+        for el in _children(root):
+            tag = local_name(el)
+            if tag in ("message", "sound", "event"):
+                at = float(el.get("at", "0"))
+                if at < last:
+                    self.bad(el, f"<{tag}> at {at:g} s comes after one at {last:g} s; list "
+                                 "messages, sounds and events in time order", "at")
+                last = max(last, at)
+                if tag == "message":
+                    events.append(ScheduledEvent(at, "message", {
+                        "sender": el.get("sender", ""), "text": el.get("text", "")}))
+                elif tag == "sound":
+                    events.append(ScheduledEvent(at, "sound-heard", {"sound": el.get("name", "")}))
+                else:
+                    data = {d.get("name", ""): d.get("value", "") for d in _children(el)}
+                    events.append(ScheduledEvent(at, el.get("name", ""), data))
+            elif tag == "zone":
+                zone = self.zone(el)
+                if zone is not None:
+                    if zone.name in zone_names:
+                        self.bad(el, f"zone {zone.name!r} is already defined", "name")
+                    zone_names.add(zone.name)
+                    zones.append(zone)
+        return tuple(events), tuple(zones)
+
+    def zone(self, el: etree._Element) -> Zone | None:
+        name, ea = el.get("name", ""), el.get("ea", "")
+        rect = [el.get(a) for a in ("x1", "y1", "x2", "y2")]
+        area_name = el.get("area")
+        if area_name is not None:
+            if any(v is not None for v in rect):
+                self.bad(el, "give either 'area' or x1, y1, x2, y2, not both", "area")
+                return None
+            area = self.map.area(area_name) if self.map is not None else None
+            if area is None:
+                known = {a.name: a for a in self.map.areas} if self.map is not None else {}
+                self.bad(el, f"unknown area {area_name!r}{_known(known)}", "area")
+                return None
+            return Zone(name, ea, area)
+        if any(v is None for v in rect):
+            self.bad(el, "a zone needs 'area' or all of x1, y1, x2, y2")
+            return None
+        return Zone(name, ea, Area(name, *(float(v or 0) for v in rect)))
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Load and check a scenario file (and its map); raise ScenarioError on any problem."""
+    path = Path(path)
+    doc = _parse(path, "scenario.xsd", SCENARIO_NS, "scenario")
+    return _Loader(doc, path).load()

@@ -1,0 +1,360 @@
+"""The simulator: a world, a scripted user and the environment, driven by events.
+
+:class:`Simulator` implements the mediator's :class:`~prima.mediator.Driver`
+(``start`` one atomic behavior, ``abandon`` a feedback loop) and is a
+:class:`~prima.mediator.Clock` (``now``). The run loop drives it with
+``next_time()`` and ``advance_to(t)``; everything it has to say comes back
+through four injected callbacks, each at the simulated time it happens:
+
+* ``finished(ab_id, outcome)``: an atomic behavior ended (wire to ``Mediator.finish``);
+* ``on_event(event)``: a predefined or robot-specific event (human-found, touched, ...);
+* ``on_user(action)``: something the scripted user did (for the trace);
+* ``on_zone(entry)``: the robot entered a zone; load its EA.
+
+Physics is stepped at a fixed ``1 / hz`` only while something moves; idle
+stretches are jumped over. The only randomness is a seeded ``random.Random``
+(localization noise), so identical inputs give identical runs.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Callable, Iterable, Mapping
+
+from prima.mediator.catalog import Value
+from prima.mediator.interface import AbId, AtomicBehavior, CommandId, Event, Outcome
+from prima.sim.kernel import Kernel, Waker
+from prima.sim.maps import Place, WorldMap
+from prima.sim.records import Picture, Pose, ScheduledEvent, UserAction, Zone, ZoneEntry
+from prima.sim.spec import RobotSpec
+from prima.sim.user import ScriptedUser, UserScript
+from prima.sim.world import World
+
+if TYPE_CHECKING:
+    from prima.sim.scenario import Scenario
+
+__all__ = ["Simulator"]
+
+Finished = Callable[[AbId, Outcome], None]
+SENSE_HZ = 10
+"""How often (per simulated second) sensors are read while something moves."""
+
+
+def _ignore(*_: object) -> None:
+    return None
+
+
+class Simulator:
+    """A deterministic simulated robot, its building and its user."""
+
+    def __init__(self, world_map: WorldMap, *, spec: RobotSpec | None = None,
+                 robot: Pose = Pose(0.0, 0.0, 0.0), user: UserScript | None = None,
+                 events: Iterable[ScheduledEvent] = (), zones: Iterable[Zone] = (),
+                 seed: int = 0, hz: int = 50, noise: float = 0.0, heading_noise: float = 0.0,
+                 finished: Finished | None = None,
+                 on_event: Callable[[Event], None] | None = None,
+                 on_user: Callable[[UserAction], None] | None = None,
+                 on_zone: Callable[[ZoneEntry], None] | None = None) -> None:
+        if hz <= 0 or hz % SENSE_HZ:
+            raise ValueError(f"hz must be a positive multiple of {SENSE_HZ}, not {hz}")
+        self.map = world_map
+        self.spec = spec or RobotSpec()
+        self.kernel = Kernel(hz)
+        self.world = World(world_map, self.spec, hz, robot, user.start if user else None)
+        self.random = random.Random(seed)
+        self.noise = noise
+        self.heading_noise = heading_noise
+        self.finished: Finished = finished or _ignore
+        self.on_event: Callable[[Event], None] = on_event or _ignore
+        self.on_user: Callable[[UserAction], None] = on_user or _ignore
+        self.on_zone: Callable[[ZoneEntry], None] = on_zone or _ignore
+        self.inbox: list[Mapping[str, Value]] = []
+        """Network messages received so far (sender, text)."""
+        self.pictures: list[Picture] = []
+        """Camera captures taken so far."""
+        self.steps = 0
+        """Physics steps taken so far."""
+        self.seen = False
+        """Human detection's current belief: the user is in view."""
+        self._unseen_since: int | None = None
+        self._announced: str | None = None
+        self._sensing = 0
+        self._running: dict[AbId, AtomicBehavior] = {}
+        self._loops: dict[CommandId, dict[str, Value]] = {}
+        self._mic: Waker | None = None
+        self._sense_every = hz // SENSE_HZ
+        self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
+        self._zones = tuple(zones)
+        self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
+        for ev in events:
+            self.kernel.at(round(ev.at * hz), lambda ev=ev: self._post(ev))
+        self.user = ScriptedUser(user, self) if user is not None else None
+        if self.user is not None:
+            self.user.begin()
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario, *, spec: RobotSpec | None = None,
+                      finished: Finished | None = None,
+                      on_event: Callable[[Event], None] | None = None,
+                      on_user: Callable[[UserAction], None] | None = None,
+                      on_zone: Callable[[ZoneEntry], None] | None = None) -> Simulator:
+        """A simulator for a loaded scenario (``spec`` from the robot profile, if any)."""
+        return cls(scenario.map, spec=spec, robot=scenario.robot, user=scenario.user,
+                   events=scenario.events, zones=scenario.zones, seed=scenario.seed,
+                   hz=scenario.rate, noise=scenario.noise,
+                   heading_noise=scenario.heading_noise, finished=finished,
+                   on_event=on_event, on_user=on_user, on_zone=on_zone)
+
+    # ---- Clock -----------------------------------------------------------------
+
+    def now(self) -> float:
+        """Simulated time (s); during a callback, the time of what is reported."""
+        return self.kernel.tick / self.kernel.hz
+
+    # ---- Driver ----------------------------------------------------------------
+
+    def start(self, ab: AtomicBehavior) -> None:
+        """Begin ``ab`` now; ``finished`` is called when it ends (never from inside here)."""
+        from prima.sim.behaviors import perform  # behaviors import this module
+        if ab.id in self._running:
+            raise ValueError(f"atomic behavior {ab.id} is already running")
+        self._running[ab.id] = ab
+        if "human-detection" in ab.devices:
+            self._sensing += 1
+        self.kernel.spawn(perform(self, ab), lambda result: self._finish(ab, result))
+
+    def abandon(self, command_id: CommandId) -> None:
+        """Forget a feedback loop; if nothing else drives the wheels, hold still."""
+        self._loops.pop(command_id, None)
+        self._hold_still()
+
+    # ---- discrete-event API -------------------------------------------------------
+
+    def next_time(self) -> float | None:
+        """When something next happens (at most one second ahead while anything moves)."""
+        k = self.kernel
+        nxt = k.next_tick()
+        if self._moving():
+            horizon = k.tick + k.hz
+            nxt = horizon if nxt is None else min(nxt, horizon)
+        return None if nxt is None else nxt / k.hz
+
+    def advance_to(self, t: float) -> None:
+        """Run up to time ``t``, reporting everything on the way at its own time."""
+        k = self.kernel
+        target = math.floor(t * k.hz + 1e-6)
+        if target < k.tick:
+            raise ValueError(f"cannot go back from {self.now()} to {t}")
+        world = self.world
+        every = self._sense_every
+        heap = k._heap
+        while True:
+            self._settle()
+            if k.tick >= target:
+                return
+            if self._moving():
+                while True:
+                    done = world.step()
+                    k.tick += 1
+                    self.steps += 1
+                    if done is not None:
+                        done()
+                    if k.tick % every == 0:
+                        self._sense()
+                    if (k.tick >= target or (heap and heap[0][0] <= k.tick)
+                            or not (world.mode or world.human_moving
+                                    or k.tick < world.joints_until)):
+                        break
+            else:
+                nxt = k.next_tick()
+                k.tick = target if nxt is None or nxt > target else max(nxt, k.tick)
+
+    def run(self, until: float) -> None:
+        """Advance to ``until`` (the same as ``advance_to``; for readability)."""
+        self.advance_to(until)
+
+    # ---- state -------------------------------------------------------------------
+
+    def robot_pose(self) -> Pose:
+        return self.world.robot_pose()
+
+    def user_pose(self) -> Pose:
+        return self.world.user_pose()
+
+    def localize(self) -> Pose:
+        """The robot's pose as its localization reports it (with seeded noise, if any)."""
+        p = self.world.robot_pose()
+        if self.noise <= 0 and self.heading_noise <= 0:
+            return p
+        g = self.random.gauss
+        return Pose(p.x + g(0.0, self.noise) if self.noise > 0 else p.x,
+                    p.y + g(0.0, self.noise) if self.noise > 0 else p.y,
+                    (p.heading + g(0.0, self.heading_noise)) % 360.0
+                    if self.heading_noise > 0 else p.heading)
+
+    def user_visible(self) -> bool:
+        """Whether the camera sees the user right now (field of view, range, sight)."""
+        return self.world.sees_user(self.kernel.tick)[0]
+
+    # ---- services for behaviors and the scripted user -------------------------------
+
+    def ticks(self, seconds: float) -> int:
+        return self.kernel.ticks(seconds)
+
+    def emit(self, name: str, data: Mapping[str, Value]) -> None:
+        """Post an event to the applications (through ``on_event``)."""
+        self.on_event(Event(name, MappingProxyType(dict(data)), self.now()))
+
+    def report_user(self, action: UserAction) -> None:
+        self.on_user(action)
+
+    def loop_state(self, command_id: CommandId) -> dict[str, Value]:
+        """Per-Command state kept across a feedback loop's iterations."""
+        return self._loops.setdefault(command_id, {})
+
+    def end_loop(self, command_id: CommandId) -> None:
+        self._loops.pop(command_id, None)
+
+    def ask(self, prompt: str) -> None:
+        """The robot finished asking ``prompt`` and starts listening."""
+        if self.user is not None:
+            self.user.hear_question(prompt)
+
+    def open_mic(self, waker: Waker) -> bool:
+        self._mic = waker
+        return True
+
+    def close_mic(self) -> None:
+        self._mic = None
+
+    def hear(self, text: str) -> bool:
+        """The user says ``text``: True if a listening Q&A heard it."""
+        mic = self._mic
+        if mic is None or self.world.user_distance() > self.spec.hearing_range:
+            return False
+        self._mic = None
+        mic(text)
+        return True
+
+    def announce_lost(self) -> None:
+        """Post human-lost, unless it is the last of found/lost already posted."""
+        if self._announced != "lost":
+            self._announced = "lost"
+            self.emit("human-lost", {})
+
+    def search(self) -> None:
+        """Start a fresh search: forget that the user was seen (no event)."""
+        self.seen = False
+        self._unseen_since = None
+
+    def route(self, x: float, y: float, tx: float, ty: float,
+              radius: float) -> list[tuple[float, float]]:
+        """Waypoints from (x, y) to (tx, ty): straight if clear, else over the place graph."""
+        world = self.world
+        if world.clear(x, y, tx, ty, radius):
+            return [(tx, ty)]
+        places = self.map.places
+        starts = {p.name: math.hypot(p.x - x, p.y - y) for p in places
+                  if world.clear(x, y, p.x, p.y, radius)}
+        goals = {p.name: math.hypot(p.x - tx, p.y - ty) for p in places
+                 if world.clear(p.x, p.y, tx, ty, radius)}
+        path = self.map.shortest_path(starts, goals)
+        if not path:
+            return []
+        points = []
+        for name in path:
+            place = self.map.place(name)
+            if place is not None:
+                points.append((place.x, place.y))
+        return points + [(tx, ty)]
+
+    def plan(self, goal: str) -> tuple[Place | None, list[Place]]:
+        """The place the robot is at (if any) and the places still to visit to ``goal``."""
+        x, y = self.world.robot.position
+        tol = self.spec.place_tolerance
+        near = [(math.hypot(p.x - x, p.y - y), i, p) for i, p in enumerate(self.map.places)]
+        at = min(near)[2] if near and min(near)[0] <= tol else None
+        if at is not None:
+            starts = {at.name: 0.0}
+        else:
+            radius = self.spec.radius / 2
+            starts = {p.name: d for d, _, p in near if self.world.clear(x, y, p.x, p.y, radius)}
+        names = self.map.shortest_path(starts, {goal: 0.0})
+        if at is not None and names:
+            names = names[1:]
+        return at, [p for p in (self.map.place(n) for n in names) if p is not None]
+
+    # ---- internals ------------------------------------------------------------------
+
+    def _moving(self) -> bool:
+        w = self.world
+        return bool(w.mode or w.human_moving or self.kernel.tick < w.joints_until)
+
+    def _settle(self) -> None:
+        k = self.kernel
+        while True:
+            k.run_due()
+            if self._sensing:
+                self._update_monitor()
+            k.check_polls()
+            if not k.due():
+                return
+
+    def _sense(self) -> None:
+        if self._sensing:
+            self._update_monitor()
+        if self._zones and self.world.mode:
+            self._check_zones()
+        self.kernel.check_polls()
+
+    def _update_monitor(self) -> None:
+        tick = self.kernel.tick
+        seen, distance = self.world.sees_user(tick)
+        if seen:
+            self._unseen_since = None
+            if not self.seen:
+                self.seen = True
+                self._announced = "found"
+                self.emit("human-found", {"distance": round(distance, 3)})
+        elif self.seen:
+            if self._unseen_since is None:
+                self._unseen_since = tick
+                self.kernel.at(tick + self._lose_ticks, _ignore)  # look again then
+            elif tick - self._unseen_since >= self._lose_ticks:
+                self.seen = False
+                self._unseen_since = None
+                self.announce_lost()
+
+    def _check_zones(self) -> None:
+        x, y = self.world.robot.position
+        for zone in self._zones:
+            inside = zone.area.contains(x, y)
+            if inside and zone.name not in self._inside:
+                self._inside.add(zone.name)
+                self.on_zone(ZoneEntry(self.now(), zone.name, zone.ea))
+            elif not inside:
+                self._inside.discard(zone.name)
+
+    def _post(self, ev: ScheduledEvent) -> None:
+        if ev.name == "message":
+            self.inbox.append(MappingProxyType(dict(ev.data)))
+        self.emit(ev.name, ev.data)
+
+    def _finish(self, ab: AtomicBehavior, result: tuple[dict[str, Value], bool]) -> None:
+        values, terminal = result
+        del self._running[ab.id]
+        if "human-detection" in ab.devices:
+            self._sensing -= 1
+            if not self._sensing:
+                self._unseen_since = None
+        if "locomotion" in ab.devices and self.world.mode:
+            self.kernel.at(self.kernel.tick + 1, self._hold_still)
+        self.finished(ab.id, Outcome(MappingProxyType(values), terminal))
+
+    def _hold_still(self) -> None:
+        """Stop the wheels unless a running atomic behavior drives them."""
+        if self.world.mode and not any("locomotion" in ab.devices
+                                       for ab in self._running.values()):
+            self.world.stop()

@@ -1,0 +1,253 @@
+"""The scripted user: timed actions plus answer rules, played in the world.
+
+A :class:`UserScript` is plain data (a scenario file produces one; tests may
+build one directly). :class:`ScriptedUser` plays it inside a
+:class:`~prima.sim.simulator.Simulator`: it walks (over the place graph when a
+wall is in the way), follows or leaves the robot, touches it, and answers the
+robot's questions by its rules ("when the robot asks something containing X,
+after D seconds say Y"). A question no rule matches gets no answer, and so
+does one asked while the user is out of earshot.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Iterator
+
+from prima.sim.kernel import Process, Wait, sleep
+from prima.sim.records import Pose, UserAction, UserActionKind
+
+if TYPE_CHECKING:
+    from prima.sim.simulator import Simulator
+
+__all__ = ["AnswerRule", "ScriptedUser", "TimedAction", "UserScript"]
+
+
+@dataclass(frozen=True)
+class TimedAction:
+    """One thing the user does at time ``at`` (s).
+
+    ``action`` is one of say, touch, walk, follow, leave, stop. Walk and leave
+    go to ``place`` or to (``x``, ``y``); follow keeps ``distance`` behind
+    the robot; say says ``text``.
+    """
+
+    at: float
+    action: UserActionKind
+    text: str | None = None
+    place: str | None = None
+    x: float | None = None
+    y: float | None = None
+    speed: float | None = None
+    distance: float = 1.0
+
+    def target(self) -> str | None:
+        if self.place is not None:
+            return self.place
+        if self.x is not None and self.y is not None:
+            return f"({self.x:g}, {self.y:g})"
+        return None
+
+    def to_dict(self) -> dict[str, object]:
+        return {"at": self.at, "action": self.action.value, "text": self.text,
+                "place": self.place, "x": self.x, "y": self.y, "speed": self.speed,
+                "distance": self.distance}
+
+
+@dataclass(frozen=True)
+class AnswerRule:
+    """When the robot asks something matching, answer ``say`` after ``after`` s.
+
+    ``contains`` is a case-insensitive substring, ``pattern`` a regular
+    expression searched in the prompt; give one (neither matches any prompt).
+    ``say`` None means: stay silent (the Q&A times out). With ``nth`` the rule
+    applies only to the n-th prompt it matches (1-based).
+    """
+
+    say: str | None
+    contains: str | None = None
+    pattern: str | None = None
+    after: float = 1.0
+    nth: int | None = None
+
+    def matches(self, prompt: str) -> bool:
+        if self.contains is not None:
+            return self.contains.casefold() in prompt.casefold()
+        if self.pattern is not None:
+            return re.search(self.pattern, prompt, re.IGNORECASE) is not None
+        return True
+
+    def to_dict(self) -> dict[str, object]:
+        return {"say": self.say, "contains": self.contains, "pattern": self.pattern,
+                "after": self.after, "nth": self.nth}
+
+
+@dataclass(frozen=True)
+class UserScript:
+    """Where the user starts, how fast they walk, what they do and answer."""
+
+    start: Pose
+    speed: float = 0.3
+    """Walking speed (m/s)."""
+    actions: tuple[TimedAction, ...] = ()
+    answers: tuple[AnswerRule, ...] = ()
+
+    def to_dict(self) -> dict[str, object]:
+        return {"start": self.start.to_dict(), "speed": self.speed,
+                "actions": [a.to_dict() for a in self.actions],
+                "answers": [r.to_dict() for r in self.answers]}
+
+
+_FOLLOW_PERIOD = 0.1
+_APPROACH_GAP = 0.15
+
+
+class ScriptedUser:
+    """Plays a :class:`UserScript` in a simulator (created by the simulator)."""
+
+    def __init__(self, script: UserScript, sim: Simulator) -> None:
+        self.script = script
+        self._sim = sim
+        self._motion: Process | None = None
+        self._matched = [0] * len(script.answers)
+
+    def begin(self) -> None:
+        """Put every timed action on the agenda."""
+        k = self._sim.kernel
+        for action in self.script.actions:
+            k.at(round(action.at * k.hz), lambda a=action: self._do(a))
+
+    # ---- hearing and speaking ---------------------------------------------------
+
+    def hear_question(self, prompt: str) -> None:
+        """The robot asked ``prompt`` and now listens: answer by the first matching rule."""
+        sim = self._sim
+        if sim.world.user_distance() > sim.spec.hearing_range:
+            return
+        for i, rule in enumerate(self.script.answers):
+            if not rule.matches(prompt):
+                continue
+            self._matched[i] += 1
+            if rule.nth is not None and self._matched[i] != rule.nth:
+                continue
+            if rule.say is not None:
+                k = sim.kernel
+                text = rule.say
+                k.at(k.tick + round(rule.after * k.hz), lambda: self.say(text))
+            return
+
+    def say(self, text: str) -> None:
+        heard = self._sim.hear(text)
+        self._record(UserActionKind.SAY, text=text, heard=heard)
+
+    # ---- actions ----------------------------------------------------------------
+
+    def _do(self, a: TimedAction) -> None:
+        kind = a.action
+        if kind is UserActionKind.SAY:
+            self.say(a.text or "")
+        elif kind is UserActionKind.STOP:
+            self._halt()
+            self._record(kind)
+        elif kind is UserActionKind.FOLLOW:
+            self._record(kind, target="robot")
+            self._move(self._follow(a.distance, a.speed or self.script.speed))
+        elif kind is UserActionKind.TOUCH:
+            self._move(self._touch(a.speed or self.script.speed))
+        else:  # walk, leave
+            self._record(kind, target=a.target())
+            self._move(self._walk(a, a.speed or self.script.speed))
+
+    def _record(self, kind: UserActionKind, *, text: str | None = None,
+                target: str | None = None, heard: bool | None = None) -> None:
+        self._sim.report_user(UserAction(self._sim.now(), kind, text, target, heard))
+
+    def _move(self, gen: Iterator[Wait]) -> None:
+        self._halt()
+        self._motion = self._sim.kernel.spawn(gen)  # type: ignore[arg-type]
+
+    def _halt(self) -> None:
+        self._sim.kernel.kill(self._motion)
+        self._motion = None
+        self._set_velocity(0.0, 0.0)
+
+    def _set_velocity(self, vx: float, vy: float) -> None:
+        world = self._sim.world
+        world.human.velocity = (vx, vy)
+        world.human_moving = vx != 0.0 or vy != 0.0
+        if world.human_moving:
+            world.human.angle = math.atan2(vy, vx)
+
+    def _leg(self, x: float, y: float, speed: float) -> Iterator[Wait]:
+        human = self._sim.world.human
+        hx, hy = human.position
+        length = math.hypot(x - hx, y - hy)
+        if length < 1e-6:
+            return
+        k = self._sim.kernel
+        n = max(1, math.ceil(length / (speed / k.hz)))
+        self._set_velocity((x - hx) * k.hz / n, (y - hy) * k.hz / n)
+        yield sleep(n)
+        human.position = (x, y)
+
+    def _walk(self, a: TimedAction, speed: float) -> Iterator[Wait]:
+        sim = self._sim
+        if a.place is not None:
+            place = sim.map.place(a.place)
+            here = sim.world.user_pose()
+            tx, ty = (place.x, place.y) if place is not None else (here.x, here.y)
+        else:
+            tx, ty = float(a.x or 0.0), float(a.y or 0.0)
+        hx, hy = sim.world.human.position
+        for x, y in sim.route(hx, hy, tx, ty, 0.0) or [(tx, ty)]:
+            yield from self._leg(x, y, speed)
+        self._set_velocity(0.0, 0.0)
+        self._record(UserActionKind.ARRIVE, target=a.target())
+
+    def _follow(self, distance: float, speed: float) -> Iterator[Wait]:
+        world = self._sim.world
+        period = self._sim.kernel.ticks(_FOLLOW_PERIOD)
+        while True:
+            rx, ry = world.robot.position
+            hx, hy = world.human.position
+            d = math.hypot(rx - hx, ry - hy)
+            if d > distance + 0.1:
+                v = min(speed, (d - distance) * 2.0)
+                wx, wy = self._toward_robot(hx, hy, rx, ry)
+                w = math.hypot(wx - hx, wy - hy)
+                self._set_velocity((wx - hx) / w * v, (wy - hy) / w * v)
+            elif world.human_moving:
+                self._set_velocity(0.0, 0.0)
+            yield sleep(period)
+
+    def _toward_robot(self, hx: float, hy: float, rx: float, ry: float) -> tuple[float, float]:
+        """Where to head for to reach the robot: straight, or over the place graph."""
+        sim = self._sim
+        if sim.world.clear(hx, hy, rx, ry):
+            return rx, ry
+        for wx, wy in sim.route(hx, hy, rx, ry, 0.0):
+            if math.hypot(wx - hx, wy - hy) > 0.05:
+                return wx, wy
+        return rx, ry
+
+    def _touch(self, speed: float) -> Iterator[Wait]:
+        sim = self._sim
+        world = sim.world
+        reach = sim.spec.radius + sim.spec.touch_reach + 0.25
+        for _ in range(240):  # give up after about two minutes of chasing
+            rx, ry = world.robot.position
+            hx, hy = world.human.position
+            d = math.hypot(rx - hx, ry - hy)
+            if d <= reach:
+                break
+            wx, wy = self._toward_robot(hx, hy, rx, ry)
+            w = math.hypot(wx - hx, wy - hy)
+            step = min(d - (reach - _APPROACH_GAP) if (wx, wy) == (rx, ry) else w, speed * 0.5)
+            yield from self._leg(hx + (wx - hx) / w * step, hy + (wy - hy) / w * step, speed)
+        self._set_velocity(0.0, 0.0)
+        touched = world.user_distance() <= reach
+        self._record(UserActionKind.TOUCH, target=None if touched else "missed")
+        if touched:
+            sim.emit("touched", {})

@@ -1,0 +1,343 @@
+"""The physical world: a pymunk space with walls, the robot and the user.
+
+The robot is a dynamic round body (walls and the user block it) whose wheels
+are driven by one of three controllers, all stepped at the fixed time step:
+
+* a *linear profile* (drive straight to a point: accelerate, cruise, brake),
+* an *angular profile* (turn in place by an angle),
+* a *velocity command* (wanted speed and turning rate, reached within the
+  acceleration limits; used by Tracking Human and Set Speed and Time).
+
+Per-step Python work is kept small: pymunk property access costs more than a
+physics step here, so velocities are written only when they change and the
+profiles keep their own progress instead of reading positions back.
+
+The user is a kinematic body moved by :mod:`prima.sim.user`. Head and arm
+angles are interpolated on demand, never stepped.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import pymunk
+
+from prima.sim.maps import WorldMap
+from prima.sim.records import Pose
+from prima.sim.spec import RobotSpec
+
+__all__ = ["World", "wrap_angle"]
+
+WALL = 0b001
+ROBOT = 0b010
+HUMAN = 0b100
+_SIGHT = pymunk.ShapeFilter(mask=WALL)
+HUMAN_RADIUS = 0.25
+
+_IDLE, _LINEAR, _ANGULAR, _VELOCITY = 0, 1, 2, 3
+
+Done = Callable[[bool], None]
+"""Called when a profile motion ends; the flag is True if it arrived, False if blocked."""
+
+
+def wrap_angle(a: float) -> float:
+    """An angle in radians brought into [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+class _Joint:
+    """A head or arm angle moving linearly between two ticks (computed on demand)."""
+
+    __slots__ = ("a0", "a1", "t0", "t1")
+
+    def __init__(self, value: float = 0.0) -> None:
+        self.a0 = self.a1 = value
+        self.t0 = self.t1 = 0
+
+    def at(self, tick: int) -> float:
+        if tick >= self.t1:
+            return self.a1
+        if tick <= self.t0:
+            return self.a0
+        return self.a0 + (self.a1 - self.a0) * (tick - self.t0) / (self.t1 - self.t0)
+
+    def move(self, target: float, tick: int, ticks: int) -> None:
+        self.a0 = self.at(tick)
+        self.a1 = target
+        self.t0 = tick
+        self.t1 = tick + ticks
+
+
+class World:
+    """The pymunk space and the bodies in it, stepped at ``1 / hz`` seconds."""
+
+    def __init__(self, world_map: WorldMap, spec: RobotSpec, hz: int,
+                 robot: Pose, user: Pose | None) -> None:
+        self.map = world_map
+        self.spec = spec
+        self.hz = hz
+        self.dt = 1.0 / hz
+        space = pymunk.Space()
+        space.collision_slop = 0.005  # metres: the default 0.1 would let bodies sink 10 cm
+        for w in world_map.walls:
+            seg = pymunk.Segment(space.static_body, (w.x1, w.y1), (w.x2, w.y2), w.thickness / 2)
+            seg.filter = pymunk.ShapeFilter(categories=WALL)
+            seg.friction = 0.0
+            space.add(seg)
+        body = pymunk.Body(20.0, float("inf"))
+        body.position = (robot.x, robot.y)
+        body.angle = math.radians(robot.heading)
+        shape = pymunk.Circle(body, spec.radius)
+        shape.filter = pymunk.ShapeFilter(categories=ROBOT)
+        shape.friction = 0.0
+        space.add(body, shape)
+        self.space = space
+        self.robot = body
+        self.has_user = user is not None
+        human = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        start = user or Pose(-1000.0, -1000.0)
+        human.position = (start.x, start.y)
+        human.angle = math.radians(start.heading)
+        hshape = pymunk.Circle(human, HUMAN_RADIUS)
+        hshape.filter = pymunk.ShapeFilter(categories=HUMAN)
+        space.add(human, hshape)
+        self.human = human
+        self.human_moving = False
+        self.head_pan = _Joint()
+        self.head_tilt = _Joint()
+        self.arm = _Joint()
+        self.joints_until = 0
+        # robot wheel controller
+        self.mode = _IDLE
+        self._done: Done | None = None
+        self._on_stopped: list[Callable[[], None]] = []
+        self._v = 0.0  # current speed along the motion (m/s or rad/s)
+        self._s = 0.0  # progress along the profile
+        self._len = 0.0
+        self._ux = self._uy = 0.0
+        self._tx = self._ty = self._ta = 0.0
+        self._cmd_v = self._cmd_w = 0.0
+        self._w = 0.0
+        self._a_dt = spec.max_accel * self.dt
+        self._alpha_dt = math.radians(spec.turn_accel) * self.dt
+        self._vmax = spec.max_speed
+        self._wmax = math.radians(spec.max_turn_rate)
+
+    # ---- queries -------------------------------------------------------------
+
+    def robot_pose(self) -> Pose:
+        x, y = self.robot.position
+        return Pose(x, y, math.degrees(self.robot.angle) % 360.0)
+
+    def user_pose(self) -> Pose:
+        x, y = self.human.position
+        return Pose(x, y, math.degrees(self.human.angle) % 360.0)
+
+    def user_distance(self) -> float:
+        rx, ry = self.robot.position
+        ux, uy = self.human.position
+        return math.hypot(ux - rx, uy - ry)
+
+    def clear(self, ax: float, ay: float, bx: float, by: float, radius: float = 0.0) -> bool:
+        """True if no wall lies on the segment from a to b (fattened by ``radius``)."""
+        return self.space.segment_query_first((ax, ay), (bx, by), radius, _SIGHT) is None
+
+    def camera_heading(self, tick: int) -> float:
+        """Where the head camera looks (radians, map frame)."""
+        return self.robot.angle + math.radians(self.head_pan.at(tick))
+
+    def sees_user(self, tick: int, *, any_direction: bool = False) -> tuple[bool, float]:
+        """Human detection: in range, in the camera's field of view, in line of sight.
+
+        With ``any_direction`` the field of view is ignored (the robot senses
+        the user around it, as Face Human needs). Returns (seen, distance).
+        """
+        if not self.has_user:
+            return False, math.inf
+        rx, ry = self.robot.position
+        ux, uy = self.human.position
+        dx = ux - rx
+        dy = uy - ry
+        d = math.hypot(dx, dy)
+        if d > self.spec.camera_range:
+            return False, d
+        if not any_direction:
+            rel = wrap_angle(math.atan2(dy, dx) - self.camera_heading(tick))
+            if abs(rel) > math.radians(self.spec.camera_fov) / 2:
+                return False, d
+        return self.space.segment_query_first((rx, ry), (ux, uy), 0.0, _SIGHT) is None, d
+
+    def user_bearing(self) -> float:
+        """Direction from the robot to the user relative to the body (radians)."""
+        rx, ry = self.robot.position
+        ux, uy = self.human.position
+        return wrap_angle(math.atan2(uy - ry, ux - rx) - self.robot.angle)
+
+    @property
+    def moving(self) -> bool:
+        return self.mode != _IDLE or self.human_moving
+
+    # ---- robot wheel commands --------------------------------------------------
+
+    def drive_to(self, x: float, y: float, done: Done) -> bool:
+        """Drive straight to (x, y) from standstill. False if already there."""
+        px, py = self.robot.position
+        length = math.hypot(x - px, y - py)
+        self._halt()
+        if length < 1e-6:
+            return False
+        self._ux = (x - px) / length
+        self._uy = (y - py) / length
+        self._tx, self._ty = x, y
+        self._len, self._s, self._v = length, 0.0, 0.0
+        self._done = done
+        self.mode = _LINEAR
+        return True
+
+    def turn_by(self, delta: float, done: Done) -> bool:
+        """Turn in place by ``delta`` radians (counter-clockwise positive)."""
+        self._halt()
+        if abs(delta) < 1e-9:
+            return False
+        self._ta = self.robot.angle + delta
+        self._ux = 1.0 if delta > 0 else -1.0
+        self._len, self._s, self._v = abs(delta), 0.0, 0.0
+        self._done = done
+        self.mode = _ANGULAR
+        return True
+
+    def command(self, v: float, w: float) -> None:
+        """Wanted forward speed (m/s) and turning rate (rad/s), within the limits."""
+        v = max(-self._vmax, min(self._vmax, v))
+        w = max(-self._wmax, min(self._wmax, w))
+        if self.mode != _VELOCITY:
+            self._halt()
+            self._v = self._w = 0.0
+            self.mode = _VELOCITY
+        self._cmd_v, self._cmd_w = v, w
+
+    def stop(self, stopped: Callable[[], None] | None = None) -> bool:
+        """Brake to a standstill; ``stopped`` is called when still. False if already still."""
+        if self.mode == _IDLE:
+            return False
+        if self.mode != _VELOCITY:
+            # profiles brake by abandoning the profile at the current speed
+            v = self._v
+            lin = self.mode == _LINEAR
+            ux, uy = self._ux, self._uy
+            self._halt()
+            self.mode = _VELOCITY
+            if lin:
+                self._v, self._w = v, 0.0
+            else:
+                self._v, self._w = 0.0, v * ux
+        self._cmd_v = self._cmd_w = 0.0
+        if stopped is not None:
+            self._on_stopped.append(stopped)
+        return True
+
+    def _halt(self) -> None:
+        """Forget the current controller (the caller sets a new one)."""
+        if self.mode != _IDLE:
+            self.robot.velocity = (0.0, 0.0)
+            self.robot.angular_velocity = 0.0
+        self.mode = _IDLE
+        self._done = None
+
+    # ---- stepping ------------------------------------------------------------
+
+    def step(self) -> Callable[[], None] | None:
+        """Advance one fixed step; returns a callback if a motion just ended."""
+        mode = self.mode
+        dt = self.dt
+        if mode == _LINEAR:
+            rem = self._len - self._s
+            v = min(self._vmax, self._v + self._a_dt, math.sqrt(2.0 * self.spec.max_accel * rem))
+            last = v * dt >= rem
+            if last:
+                v = rem / dt
+            if v != self._v:
+                self.robot.velocity = (self._ux * v, self._uy * v)
+                self._v = v
+            self.space.step(dt)
+            self._s += v * dt
+            if last:
+                return self._finish_linear()
+            return None
+        if mode == _ANGULAR:
+            rem = self._len - self._s
+            accel = math.radians(self.spec.turn_accel)
+            w = min(self._wmax, self._v + self._alpha_dt, math.sqrt(2.0 * accel * rem))
+            last = w * dt >= rem
+            if last:
+                w = rem / dt
+            if w != self._v:
+                self.robot.angular_velocity = self._ux * w
+                self._v = w
+            self.space.step(dt)
+            self._s += w * dt
+            if last:
+                body = self.robot
+                body.angular_velocity = 0.0
+                body.angle = self._ta
+                return self._finish(True)
+            return None
+        if mode == _VELOCITY:
+            return self._step_velocity(dt)
+        self.space.step(dt)
+        return None
+
+    def _step_velocity(self, dt: float) -> Callable[[], None] | None:
+        v, w = self._v, self._w
+        dv = self._cmd_v - v
+        dw = self._cmd_w - w
+        a = self._a_dt
+        al = self._alpha_dt
+        nv = v + (dv if -a <= dv <= a else (a if dv > 0 else -a))
+        nw = w + (dw if -al <= dw <= al else (al if dw > 0 else -al))
+        body = self.robot
+        if nv != 0.0 and (nv != v or w != 0.0 or nw != w):
+            ang = body.angle
+            body.velocity = (math.cos(ang) * nv, math.sin(ang) * nv)
+        elif nv == 0.0 and v != 0.0:
+            body.velocity = (0.0, 0.0)
+        if nw != w:
+            body.angular_velocity = nw
+        self._v, self._w = nv, nw
+        self.space.step(dt)
+        if nv == 0.0 and nw == 0.0 and self._cmd_v == 0.0 and self._cmd_w == 0.0:
+            body.velocity = (0.0, 0.0)
+            self.mode = _IDLE
+            waiting, self._on_stopped = self._on_stopped, []
+            if waiting:
+                def report() -> None:
+                    for f in waiting:
+                        f()
+                return report
+        return None
+
+    def _finish_linear(self) -> Callable[[], None] | None:
+        body = self.robot
+        body.velocity = (0.0, 0.0)
+        x, y = body.position
+        arrived = math.hypot(x - self._tx, y - self._ty) < 0.05
+        if arrived:
+            body.position = (self._tx, self._ty)
+        return self._finish(arrived)
+
+    def _finish(self, arrived: bool) -> Callable[[], None] | None:
+        done = self._done
+        self.mode = _IDLE
+        self._done = None
+        self._v = 0.0
+        waiting, self._on_stopped = self._on_stopped, []
+        if done is None and not waiting:
+            return None
+
+        def report() -> None:
+            if done is not None:
+                done(arrived)
+            for f in waiting:
+                f()
+        return report

@@ -1,0 +1,202 @@
+"""The issue's acceptance tests for the simulator."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from prima.sim import Pose, Simulator
+from prima.sim.runner import CommandRunner
+from prima.sim.scenario import load_scenario
+
+from tests.sim.helpers import EXAMPLES, call, runner, walk
+
+
+def test_topological_move_reaches_goal_through_graph_and_reports_corner() -> None:
+    r = runner("office", Pose(1, 3, 0))
+    r.queue(call("TopologicalMove", to="kidode-room"))
+    r.run(200)
+    legs = r.ends("TopologicalMove")
+    assert [e.data["place"] for e in legs] == [
+        "hall", "poster", "corner", "kidode-door", "kidode-room"]
+    assert [e.iteration for e in legs] == [0, 1, 2, 3, 4]
+    assert [e.terminal for e in legs] == [False, False, False, False, True]
+    corner = legs[2]
+    assert corner.data["kind"] == "corner"
+    reached = [(e.data["place"], e.data["kind"]) for e in r.events("place-reached")]
+    assert ("corner", "corner") in reached
+    assert reached[-1] == ("kidode-room", "room")
+    # each place-reached event comes at the same time as its leg's end
+    assert [e.time for e in r.events("place-reached")] == [e.time for e in legs]
+    pose = r.sim.robot_pose()
+    assert math.hypot(pose.x - 18, pose.y - 10) < 0.01
+    # 0.4 m/s over ~22 m with turns: well over 55 s of driving
+    assert 55 < legs[-1].time < 120
+
+
+def test_topological_move_replans_from_where_the_robot_is() -> None:
+    r = runner("office", Pose(12, 3, 180))  # in the corridor, facing back to the hall
+    r.queue(call("TopologicalMove", to="kidode-room"))
+    r.run(200)
+    places = [e.data["place"] for e in r.ends("TopologicalMove")]
+    assert places == ["corner", "kidode-door", "kidode-room"]
+
+
+def test_tracking_human_keeps_the_distance_band_while_the_user_walks_a_route() -> None:
+    # museum exhibition: the user walks east, then north-east, then back west
+    r = runner("museum", Pose(7, 3, 0), Pose(8, 3, 0),
+               walk(2, 12, 3), walk(20, 14, 5.5), walk(32, 9, 5.5))
+    r.queue(call("TrackingHuman", distance=1.0))
+    samples: list[float] = []
+    sim = r.sim
+    t = 0.0
+    while t < 55:
+        t += 0.5
+        r.run(t)
+        if t >= 3:
+            samples.append(sim.world.user_distance())
+    ends = r.ends("TrackingHuman")
+    assert len(ends) >= 50 and not any(e.terminal for e in ends)
+    assert not r.events("human-lost")
+    band = sim.spec.tracking_band
+    assert min(samples) > 1.0 - band, samples
+    assert max(samples) < 1.0 + band, samples
+    assert abs(sum(samples) / len(samples) - 1.0) < band
+    # the robot really moved along: it ended near where the user ended
+    assert sim.robot_pose().distance_to(9, 5.5) < 1.5
+
+
+def test_tracking_human_loses_a_user_who_walks_behind_a_wall() -> None:
+    # office: robot in the hall, user walks out of the hall and behind its wall
+    r = runner("office", Pose(3, 3, 0), Pose(4.2, 3, 0), walk(1, 7, 3), walk(5, 7.5, 3.5))
+    r.queue(call("TrackingHuman", distance=1.0))
+    r.run(5)
+    assert not r.events("human-lost")
+    r.sim.world.human.position = (8, 6)  # teleport the user behind the corridor wall
+    r.run(12)
+    lost = r.events("human-lost")
+    assert len(lost) == 1
+    last = r.ends("TrackingHuman")[-1]
+    assert last.terminal and last.data["lost"] is True
+
+
+def test_a_wall_hides_the_user_from_human_detection() -> None:
+    # library: robot at (6, 4) looking east down at the first bookshelf (x = 8)
+    sim = Simulator(_library(), robot=Pose(6, 4, 0),
+                    user=_script(Pose(7.5, 4, 0)))
+    assert sim.user_visible()
+    sim.world.human.position = (9, 4)  # same direction, 3 m away, behind the shelf
+    assert not sim.user_visible()
+    sim.world.human.position = (9, 8.5)  # 5.1 m: out of camera range even in the open
+    assert not sim.user_visible()
+
+
+def test_human_found_only_when_the_user_comes_out_from_behind_the_shelf() -> None:
+    # the user walks up aisle-1 (behind the shelf) and out into the robot's view
+    r = runner("library", Pose(6.5, 7.5, 0), Pose(9, 3, 90), walk(1, 9, 7.6), walk(20, 8.6, 8.4))
+    r.queue(call("ActiveSensingHuman", turn=0))
+    r.run(30)
+    found = r.events("human-found")
+    assert len(found) == 1
+    # from (6.5, 7.5) the shelf (x 8, y up to 7.2) hides the user until they are past y ~ 7.3
+    arrive = [e.time for e in r.trace if e.kind == "user" and e.name == "arrive"][0]
+    assert 1 + (7.0 - 3) / 0.3 < found[0].time <= arrive + 0.1
+    assert r.ends("ActiveSensingHuman")[-1].data["found"] is True
+
+
+def test_active_sensing_turns_after_10_s_and_finds_a_user_behind_the_robot() -> None:
+    r = runner("museum", Pose(9.5, 4, 0), Pose(8, 4, 0))  # user 1.5 m straight behind
+    r.queue(call("ActiveSensingHuman", say="Where are you?"))
+    r.run(60)
+    ends = r.ends("ActiveSensingHuman")
+    # 10 s unseen, turn 90; 10 s unseen, turn 90 more: the user comes into view
+    assert [e.terminal for e in ends] == [False, True]
+    turn = _turn_time(90)
+    assert ends[0].time == pytest.approx(10.0 + turn, abs=0.1)
+    assert ends[0].data == {"found": False, "turned": 90.0}
+    assert ends[1].time == pytest.approx(2 * (10.0 + turn), abs=0.2)
+    assert ends[1].data["found"] is True and ends[1].data["distance"] == 1.5
+    found = r.events("human-found")
+    # seen as soon as the user enters the 60 degree field of view, during the turn
+    assert len(found) == 1 and 10 + turn + 10 < found[0].time < ends[1].time
+    assert r.sim.robot_pose().heading == pytest.approx(180.0, abs=0.01)
+
+
+def test_active_sensing_finds_a_visible_user_at_once() -> None:
+    r = runner("museum", Pose(9.5, 4, 0), Pose(11, 4, 180))
+    r.queue(call("ActiveSensingHuman"))
+    r.run(5)
+    [end] = r.ends("ActiveSensingHuman")
+    assert end.time == 0.0 and end.terminal and end.data["found"] is True
+    assert [e.time for e in r.events("human-found")] == [0.0]
+
+
+@pytest.mark.parametrize("words", [1, 5, 10, 25])
+def test_speak_lasts_as_long_as_its_text_takes(words: int) -> None:
+    r = runner("museum", Pose(2, 4, 0))
+    text = " ".join(["word"] * words)
+    r.queue(call("Speak", text=text))
+    r.run(30)
+    [end] = r.ends("Speak")
+    rate = r.sim.spec.speech_rate
+    expected = max(r.sim.spec.min_utterance, words / rate)
+    assert end.time == pytest.approx(expected, abs=0.02)
+    assert end.data["duration"] == pytest.approx(expected, abs=0.02)
+
+
+def _run_example() -> list[dict[str, object]]:
+    scenario = load_scenario(EXAMPLES / "office-kidode.xml")
+    r = CommandRunner(Simulator.from_scenario(scenario))
+    r.queue(call("QA", prompt="Where are you going?", grammar="g"),
+            call("Speak", text="Come on, let's go."),
+            call("TopologicalMove", to="kidode-room"),
+            call("ActiveSensingHuman", say="Where are you?"),
+            call("TrackingHuman", distance=1.2))
+    r.run(scenario.until)
+    return [e.to_dict() for e in r.trace]
+
+
+def test_two_runs_of_the_same_scenario_give_identical_event_sequences() -> None:
+    first = _run_example()
+    second = _run_example()
+    assert first == second
+    kinds = {e["kind"] for e in first}
+    assert {"end", "event", "user"} <= kinds
+
+
+def test_advancing_in_chunks_gives_the_same_run_as_event_by_event() -> None:
+    scenario = load_scenario(EXAMPLES / "office-kidode.xml")
+
+    def run(step: float | None) -> list[dict[str, object]]:
+        r = CommandRunner(Simulator.from_scenario(scenario))
+        r.queue(call("TopologicalMove", to="kidode-room"), call("TrackingHuman"))
+        if step is None:
+            r.run(150)
+        else:
+            t = 0.0
+            while t < 150:
+                t = min(150, t + step)
+                r.sim.advance_to(t)
+        return [e.to_dict() for e in r.trace]
+
+    assert run(None) == run(0.37) == run(7.0)
+
+
+def _library():  # type: ignore[no-untyped-def]
+    from tests.sim.helpers import world_map
+    return world_map("library")
+
+
+def _script(start: Pose):  # type: ignore[no-untyped-def]
+    from prima.sim import UserScript
+    return UserScript(start)
+
+
+def _turn_time(degrees: float) -> float:
+    # trapezoid profile: 180 deg/s^2 up to 90 deg/s
+    accel, top = 180.0, 90.0
+    ramp = top * top / accel
+    if degrees <= ramp:
+        return 2 * math.sqrt(degrees / accel)
+    return 2 * top / accel + (degrees - ramp) / top

@@ -1,0 +1,207 @@
+"""Each Command does what a user would expect of the robot."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from prima.mediator.interface import AtomicBehavior
+from prima.sim import Pose, ScheduledEvent, Simulator, TimedAction, UserActionKind, Zone
+from prima.sim.runner import CommandRunner
+
+from tests.sim.helpers import call, runner, world_map
+
+CENTER = Pose(9.5, 4, 0)
+
+
+@pytest.mark.parametrize("angle, heading", [(90, 90), (-90, 270), (270, 270), (450, 90)])
+def test_turn_rotates_the_body_counter_clockwise(angle: float, heading: float) -> None:
+    r = runner("museum", CENTER)
+    r.queue(call("Turn", angle=angle))
+    r.run(20)
+    assert r.sim.robot_pose().heading == pytest.approx(heading, abs=0.01)
+    end = r.ends("Turn")[0]
+    assert end.time == pytest.approx(abs(angle) / 90 + 0.5, abs=0.1)  # ramp + cruise
+
+
+def test_set_direction_to_a_heading_and_toward_a_place() -> None:
+    r = runner("museum", CENTER)
+    r.queue(call("SetDirection", heading=135), call("SetDirection", toward="panel-2"))
+    r.run(20)
+    first, second = r.ends("SetDirection")
+    assert first.data["heading"] == pytest.approx(135, abs=0.1)
+    expected = math.degrees(math.atan2(6.4 - 4, 12 - 9.5))
+    assert second.data["heading"] == pytest.approx(expected, abs=0.1)
+
+
+def test_set_direction_at_a_panel_faces_the_panel() -> None:
+    r = runner("museum", Pose(12, 6.4, 0))
+    r.queue(call("SetDirection", toward="panel-2"), call("PointByHand", toward="panel-2"))
+    r.run(20)
+    assert r.ends("SetDirection")[0].data["heading"] == pytest.approx(90, abs=0.1)
+    assert r.ends("PointByHand")[0].data["angle"] == 0.0
+
+
+def test_set_position_drives_in_short_legs_around_walls() -> None:
+    # from the lobby into the exhibition room: the straight line is blocked by the partition
+    r = runner("museum", Pose(1.5, 1.5, 0))
+    r.queue(call("SetPosition", x=6.0, y=1.5))
+    r.run(120)
+    ends = r.ends("SetPosition")
+    assert ends[-1].terminal and ends[-1].data["reached"] is True
+    assert len(ends) >= 4 and not any(e.terminal for e in ends[:-1])
+    assert r.sim.robot_pose().distance_to(6.0, 1.5) <= r.sim.spec.position_tolerance
+
+
+def test_set_position_and_direction_ends_facing_the_heading() -> None:
+    r = runner("museum", CENTER)
+    r.queue(call("SetPositionAndDirection", x=11, y=5, heading=90))
+    r.run(60)
+    last = r.ends("SetPositionAndDirection")[-1]
+    assert last.terminal and last.data["heading"] == pytest.approx(90, abs=0.1)
+    assert (last.data["x"], last.data["y"]) == (pytest.approx(11, abs=0.05),
+                                                 pytest.approx(5, abs=0.05))
+
+
+def test_set_speed_and_time_drives_and_a_wall_stops_it() -> None:
+    r = runner("museum", Pose(14, 4, 0))  # 2 m from the east wall at x = 16
+    r.queue(call("SetSpeedAndTime", speed=0.4, time=10))
+    r.run(30)
+    pose = r.sim.robot_pose()
+    assert 15.7 < pose.x < 16 - 0.05 - 0.2 + 0.03  # pressed against the wall, not through it
+
+
+def test_stop_moving_brakes_within_the_acceleration_limit() -> None:
+    r = runner("museum", CENTER)
+    r.sim.world.command(0.4, 0.0)
+    r.sim.advance_to(2.0)
+    r.queue(call("StopMoving"))
+    r.run(5)
+    end = r.ends("StopMoving")[0]
+    assert end.time == pytest.approx(2.0 + 0.4 / 0.5, abs=0.05)
+    assert r.sim.world.mode == 0
+
+
+def test_move_head_changes_what_the_camera_sees() -> None:
+    r = runner("museum", CENTER, Pose(9.5, 6, 0))  # user to the robot's left
+    assert not r.sim.user_visible()
+    r.queue(call("MoveHead", pan=90, tilt=10))
+    r.run(5)
+    assert r.ends("MoveHead")[0].data == {"pan": 90.0, "tilt": 10.0}
+    assert r.ends("MoveHead")[0].time == pytest.approx(1.0)
+    assert r.sim.user_visible()
+
+
+def test_face_human_turns_toward_the_user_even_out_of_view() -> None:
+    r = runner("museum", CENTER, Pose(9.5, 2, 0))  # to the robot's right
+    r.queue(call("FaceHumanAndSpeak", text="Hello there"))
+    r.run(10)
+    end = r.ends("FaceHumanAndSpeak")[0]
+    assert end.data["found"] is True and end.data["heading"] == pytest.approx(270, abs=0.1)
+
+
+def test_gestures_last_their_profile_time_and_unknown_ones_fail() -> None:
+    r = runner("museum", CENTER)
+    r.queue(call("Gesture", name="bow"), call("Gesture", name="juggle"))
+    r.run(10)
+    bow, juggle = r.ends("Gesture")
+    assert bow.time == pytest.approx(1.5) and bow.data == {"gesture": "bow"}
+    assert "juggle" in str(juggle.data["error"])
+
+
+def test_take_picture_captures_what_the_camera_sees() -> None:
+    r = runner("museum", CENTER, Pose(11, 4, 180))
+    r.queue(call("TakePicture"), call("Turn", angle=180), call("TakePicture"))
+    r.run(10)
+    first, second = r.ends("TakePicture")
+    assert first.data["saw_user"] is True and second.data["saw_user"] is False
+    assert second.data["heading"] == pytest.approx(180)
+    assert len(r.sim.pictures) == 2
+
+
+def test_unknown_commands_and_bad_arguments_end_with_an_error_not_a_crash() -> None:
+    r = runner("museum", CENTER)
+    r.queue(call("Fly", height=3), call("Turn", angle="left"),
+            call("TopologicalMove", to="nowhere"))
+    r.run(1)
+    errors = [e.data["error"] for e in r.ends()]
+    assert "no Command 'Fly'" in errors[0]
+    assert "must be a number" in errors[1]
+    assert "unknown place 'nowhere'" in errors[2]
+    assert all(e.time == 0.0 and e.terminal for e in r.ends())
+
+
+def test_finished_is_never_called_from_inside_start() -> None:
+    calls: list[int] = []
+    sim = Simulator(world_map("museum"), robot=CENTER, finished=lambda ab, o: calls.append(ab))
+    sim.start(AtomicBehavior(1, "fa", 0, (call("Fly"),), (1,), frozenset()))
+    assert calls == [] and sim.next_time() == 0.0
+    sim.advance_to(0.0)
+    assert calls == [1]
+
+
+def test_a_grouped_ab_performs_its_calls_in_order() -> None:
+    ends: list[tuple[float, dict]] = []
+    sim = Simulator(world_map("museum"), robot=CENTER,
+                    finished=lambda ab, o: ends.append((sim.now(), dict(o.values))))
+    sim.start(AtomicBehavior(1, "fa", 0, (call("Speak", text="one two three four five"),
+                                         call("Turn", angle=90)), (1, 2),
+                             frozenset({"speaker", "locomotion"})))
+    sim.advance_to(10)
+    [(time, values)] = ends
+    assert time == pytest.approx(2.0 + 1.5, abs=0.1)
+    assert values["duration"] == 2.0 and values["heading"] == pytest.approx(90)
+
+
+def test_abandoned_tracking_holds_still() -> None:
+    r = runner("museum", Pose(7, 3, 0), Pose(8.5, 3, 0),
+               TimedAction(1, UserActionKind.WALK, x=13, y=3))
+    r.queue(call("TrackingHuman"))
+    r.run(6)
+    r.stop_loop()
+    r.run(12)
+    x = r.sim.robot_pose().x
+    r.run(20)
+    assert r.sim.robot_pose().x == x and r.sim.world.mode == 0
+
+
+def test_network_messages_sounds_and_zones() -> None:
+    events = (ScheduledEvent(3, "message", {"sender": "Kidode", "text": "Late."}),
+              ScheduledEvent(4, "sound-heard", {"sound": "tune"}))
+    museum = world_map("museum")
+    zone = Zone("exhibition", "ea1.pxml", museum.area("exhibition"))  # type: ignore[arg-type]
+    r = CommandRunner(Simulator(museum, robot=Pose(1.5, 4, 0), events=events, zones=(zone,)))
+    r.queue(call("TopologicalMove", to="center"))
+    r.run(60)
+    names = [(e.kind, e.name) for e in r.trace if e.kind in ("event", "zone")]
+    assert ("event", "message") in names and ("event", "sound-heard") in names
+    assert ("zone", "exhibition") in names
+    zone_entry = [e for e in r.trace if e.kind == "zone"][0]
+    assert zone_entry.data["ea"] == "ea1.pxml" and 5 < zone_entry.time < 20
+    assert r.sim.inbox[0]["sender"] == "Kidode"
+
+
+def test_touch_walks_up_to_the_robot_and_posts_touched() -> None:
+    r = runner("museum", CENTER, Pose(12, 4, 180), TimedAction(1, UserActionKind.TOUCH))
+    r.run(30)
+    touched = r.events("touched")
+    assert len(touched) == 1
+    # walks 2.5 - 0.95 m at 0.3 m/s before touching
+    assert 5 < touched[0].time < 8
+
+
+def test_idle_stretches_are_jumped_over() -> None:
+    sim = Simulator(world_map("museum"), robot=CENTER,
+                    events=(ScheduledEvent(3000, "sound-heard", {"sound": "tune"}),))
+    assert sim.next_time() == 3000.0
+    sim.advance_to(3600)
+    assert sim.steps == 0 and sim.now() == 3600.0
+
+
+def test_localization_noise_is_seeded() -> None:
+    def poses(seed: int) -> list[tuple[float, float]]:
+        sim = Simulator(world_map("museum"), robot=CENTER, seed=seed, noise=0.05)
+        return [(p.x, p.y) for p in (sim.localize() for _ in range(3))]
+    assert poses(1) == poses(1) != poses(2)
+    assert all(abs(x - 9.5) < 0.3 for x, _ in poses(1))
