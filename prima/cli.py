@@ -10,12 +10,13 @@ import argparse
 import json
 import os
 import sys
-from typing import Sequence, TextIO
+from pathlib import Path
+from typing import Callable, Sequence, TextIO
 
 from prima import __version__
 from prima.dsl.profile import RobotProfile, default_profile, load_profile
-from prima.dsl.validate import collect, validate_paths
-from prima.errors import LocatedError
+from prima.dsl.validate import Checker, collect, validate_paths
+from prima.errors import LocatedError, Problem
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
 
@@ -30,10 +31,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     validate = commands.add_parser(
         "validate",
-        help="check PXML documents and robot profiles",
-        description="Check PXML documents (and robot profiles): well-formedness, schema, "
-                    "meaning. Prints one line per problem as file:line:col: error|warning: "
-                    "message. Folders are searched for *.pxml files.",
+        help="check PXML documents, robot profiles, scenarios and maps",
+        description="Check PXML documents, robot profiles, scenarios and maps: "
+                    "well-formedness, schema, meaning. Prints one line per problem as "
+                    "file:line:col: error|warning: message. Folders are searched for "
+                    "*.pxml and *.xml files.",
     )
     validate.add_argument("paths", nargs="+", metavar="PATH", help="files or folders")
     validate.add_argument("--robot", metavar="PROFILE",
@@ -61,6 +63,22 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     return EXIT_USAGE  # pragma: no cover - argparse enforces the choice
 
 
+def _scenario_checkers() -> dict[str, Checker]:
+    """Scenario and map files are the simulator's; the CLI joins both worlds."""
+    from prima.sim.scenario import MAP_NS, SCENARIO_NS, load_map, load_scenario
+
+    def checker(load: Callable[[Path], object]) -> Checker:
+        def check(path: Path) -> list[Problem]:
+            try:
+                load(path)
+            except LocatedError as exc:
+                return list(exc.problems)
+            return []
+        return check
+
+    return {SCENARIO_NS: checker(load_scenario), MAP_NS: checker(load_map)}
+
+
 def _profile(path: str | None, err: TextIO) -> RobotProfile | None:
     try:
         return load_profile(path) if path else default_profile()
@@ -76,13 +94,13 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     except FileNotFoundError as exc:
         print(f"prima validate: error: no such file or folder: {exc}", file=err)
         return EXIT_USAGE
-    if not files:
-        print(f"prima validate: error: no .pxml documents in {' '.join(args.paths)}", file=err)
-        return EXIT_USAGE
     profile = _profile(args.robot, err)
     if profile is None:
         return EXIT_ERRORS
-    report = validate_paths(files, profile)
+    report = validate_paths(files, profile, _scenario_checkers())
+    if not report.files:
+        print(f"prima validate: error: no PRIMA files in {' '.join(args.paths)}", file=err)
+        return EXIT_USAGE
     if args.format == "json":
         json.dump(report.to_dict(), out, indent=2)
         out.write("\n")

@@ -71,7 +71,7 @@ def test_usage_errors_exit_2(argv: list[str], fragment: str, capsys: pytest.Capt
 
 def test_folder_without_documents_is_a_usage_error(tmp_path: Path) -> None:
     code, _, err = run("validate", str(tmp_path))
-    assert code == 2 and "no .pxml documents" in err
+    assert code == 2 and "no PRIMA files" in err
 
 
 def test_bad_robot_profile_is_reported(tmp_path: Path) -> None:
@@ -97,3 +97,28 @@ def test_python_m_prima_never_prints_a_traceback() -> None:
     assert result.returncode == 1
     assert "Traceback" not in result.stdout + result.stderr
     assert result.stdout.count(": error: ") >= 30
+
+
+def test_scenario_files_validate_like_documents(tmp_path: Path) -> None:
+    bad = tmp_path / "bad-scenario.xml"
+    bad.write_text('<scenario xmlns="urn:prima:scenario:1" name="s" until="10">\n'
+                   '  <map href="nowhere.xml"/>\n  <robot x="0" y="0"/>\n</scenario>\n')
+    code, out, _ = run("validate", str(bad))
+    assert code == 1
+    assert out.startswith(f"{bad}:2:") and ": error: " in out
+
+
+def test_shipped_scenarios_and_maps_validate() -> None:
+    code, out, err = run("validate", str(ROOT / "scenarios"))
+    assert (code, out) == (0, "")
+    assert "0 error(s)" in err
+
+
+def test_unknown_xml_in_a_folder_is_skipped_but_named_is_an_error(tmp_path: Path) -> None:
+    other = tmp_path / "pom.xml"
+    other.write_text("<project/>")
+    (tmp_path / "app.pxml").write_bytes((ROOT / "apps/ea/ea3-navigate.pxml").read_bytes())
+    code, _, err = run("validate", str(tmp_path))
+    assert code == 0 and "1 file checked" in err
+    code, out, _ = run("validate", str(other))
+    assert code == 1 and "not a PXML document" in out

@@ -1,18 +1,21 @@
 """Validating files and folders: what ``prima validate`` does, as a library call.
 
-Each file is dispatched on its root element: a PXML document or a robot
-profile. Folders are searched for ``*.pxml`` documents.
+Each file is dispatched on its root element's namespace: a PXML document, a
+robot profile, or another kind the caller knows how to check (the CLI adds
+scenarios and maps). Folders are searched for ``*.pxml`` and ``*.xml`` files.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from io import BytesIO
 from pathlib import Path
-from typing import Iterable
+from typing import Callable, Iterable, Mapping
 
 from lxml import etree
 
 from prima._xml import parse_xml, read_source
+from prima.dsl.loader import NAMESPACE as PXML_NS
 from prima.dsl.loader import check_parsed
 from prima.dsl.profile import NAMESPACE as ROBOT_NS
 from prima.dsl.profile import RobotProfile, profile_from_xml
@@ -43,28 +46,53 @@ class Report:
         }
 
 
-def collect(paths: Iterable[str | Path]) -> list[Path]:
-    """Files to validate: files as given, folders searched for ``*.pxml``.
+Checker = Callable[[Path], list[Problem]]
+"""Checks one file of some other kind (e.g. a scenario) and returns its problems."""
 
-    Raises FileNotFoundError for a path that does not exist.
+
+def collect(paths: Iterable[str | Path]) -> list[tuple[Path, bool]]:
+    """Files to validate, each with whether it was named explicitly.
+
+    Folders are searched for ``*.pxml`` and ``*.xml``. Raises
+    FileNotFoundError for a path that does not exist.
     """
-    out: list[Path] = []
+    out: list[tuple[Path, bool]] = []
     for raw in paths:
         path = Path(raw)
         if path.is_dir():
-            out.extend(sorted(path.rglob("*.pxml")))
+            found = sorted({*path.rglob("*.pxml"), *path.rglob("*.xml")})
+            out.extend((f, False) for f in found)
         elif path.exists():
-            out.append(path)
+            out.append((path, True))
         else:
             raise FileNotFoundError(str(raw))
     return out
 
 
-def check_file(path: Path, profile: RobotProfile | None = None) -> list[Problem]:
-    """Every problem of one file (a PXML document or a robot profile)."""
+def root_namespace(data: bytes) -> str | None:
+    """The namespace of the root element, read without parsing the whole file."""
     try:
-        doc = parse_xml(read_source(path, DocumentError), str(path), DocumentError)
-        if etree.QName(doc.root).namespace == ROBOT_NS:
+        for _event, el in etree.iterparse(BytesIO(data), events=("start",), resolve_entities=False,
+                                          load_dtd=False, no_network=True):
+            return etree.QName(el).namespace
+    except etree.XMLSyntaxError:
+        return None
+    return None
+
+
+def check_file(path: Path, profile: RobotProfile | None = None,
+               checkers: Mapping[str, Checker] | None = None) -> list[Problem]:
+    """Every problem of one file: a PXML document, a robot profile, or a kind in ``checkers``."""
+    try:
+        data = read_source(path, DocumentError)
+    except DocumentError as exc:
+        return list(exc.problems)
+    namespace = root_namespace(data)
+    if checkers and namespace in checkers:
+        return checkers[namespace](path)
+    try:
+        doc = parse_xml(data, str(path), DocumentError)
+        if namespace == ROBOT_NS:
             profile_from_xml(doc)
             return []
     except DocumentError as exc:
@@ -72,10 +100,25 @@ def check_file(path: Path, profile: RobotProfile | None = None) -> list[Problem]
     return check_parsed(doc, profile)[1]
 
 
-def validate_paths(paths: Iterable[Path], profile: RobotProfile | None = None) -> Report:
-    """Validate every file; problems are sorted by file, then position."""
+def known(path: Path, checkers: Mapping[str, Checker] | None = None) -> bool:
+    """Whether a file found in a folder is one this validator knows."""
+    if path.suffix == ".pxml":
+        return True
+    try:
+        namespace = root_namespace(read_source(path, DocumentError))
+    except DocumentError:
+        return False
+    return namespace in (PXML_NS, ROBOT_NS) or bool(checkers and namespace in checkers)
+
+
+def validate_paths(paths: Iterable[tuple[Path, bool] | Path], profile: RobotProfile | None = None,
+                   checkers: Mapping[str, Checker] | None = None) -> Report:
+    """Validate every file; files found in folders are skipped unless they are known kinds."""
     report = Report()
-    for path in paths:
+    for item in paths:
+        path, explicit = item if isinstance(item, tuple) else (item, True)
+        if not explicit and not known(path, checkers):
+            continue
         report.files.append(str(path))
-        report.problems.extend(check_file(path, profile))
+        report.problems.extend(check_file(path, profile, checkers))
     return report

@@ -20,7 +20,7 @@ from lxml import etree
 
 from prima._xml import XmlDocument, local_name, parse_xml, read_source
 from prima.errors import Problem, ScenarioError
-from prima.sim._schema import validate
+from prima._schema import validate
 from prima.sim.maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim.records import Pose, ScheduledEvent, UserActionKind, Zone
 from prima.sim.user import AnswerRule, TimedAction, UserScript

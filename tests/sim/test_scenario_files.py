@@ -74,7 +74,7 @@ def test_schema_error_points_at_the_attribute(tmp_path: Path) -> None:
 def test_schema_error_for_an_unknown_element(tmp_path: Path) -> None:
     path = scenario_file(tmp_path, MAP_REF + '  <robot place="entrance"/>\n  <dance at="1"/>\n')
     [(line, col, message)] = problems(path)
-    assert (line, col) == (5, 3) and "<dance> is not allowed here" in message
+    assert (line, col) == (5, 3) and "<dance> is not allowed" in message
 
 
 def test_unknown_place(tmp_path: Path) -> None:
