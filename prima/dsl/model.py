@@ -152,8 +152,21 @@ MAX_UTTERANCE = 500
 
 
 def words(text: str) -> list[str]:
-    """Normalised words of an utterance: lower case, punctuation dropped."""
-    return _WORD.findall(text[:MAX_UTTERANCE].lower().replace("\u2019", "'"))
+    """Normalised words of an utterance: lower case, punctuation dropped.
+
+    A possessive ``'s`` and apostrophes are dropped too (``Kidode's`` reads as
+    ``kidode``, ``I'll`` as ``ill``): recognisers are not reliable about them,
+    and synonyms are normalised the same way.
+    """
+    raw = _WORD.findall(text[:MAX_UTTERANCE].lower().replace("\u2019", "'"))
+    out = []
+    for word in raw:
+        if word.endswith("'s"):
+            word = word[:-2]
+        word = word.replace("'", "")
+        if word:
+            out.append(word)
+    return out
 
 
 @dataclass(frozen=True)

@@ -33,11 +33,13 @@ def grammars(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyp
     ("rooms", "the kitchen", None),
     ("rooms", "Kidodes", None),
     ("reply", "No.", "no"),
-    ("reply", "Yes. I see. I'll wait in your room.", "i see i'll wait in your room"),
+    ("reply", "Yes. I see. I'll wait in your room.", "i see ill wait in your room"),
+    ("rooms", "Kidode's office", "kidode_room"),
     ("reply", "yes", "yes"),
     ("reply", "maybe", None),
     ("hour", "18", "18"),
     ("hour", "at 7 o'clock", "7"),
+    ("hour", "at 7 oclock", "7"),
     ("hour", "eighteen", None),
 ])
 def test_match(grammars, grammar: str, heard: str, value: str | None) -> None:  # type: ignore[no-untyped-def]

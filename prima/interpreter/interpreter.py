@@ -1,0 +1,380 @@
+"""Runs one PXML document: states, variables, handlers, timers, requests.
+
+One :class:`Interpreter` per loaded application. It is the application's
+:class:`~prima.mediator.interface.AppListener`: the mediator calls it with
+events, end events and cancellations, and it answers by sending requests
+through a :class:`MediatorPort`. Every event is handled to completion at
+once (in no simulated time), so a request made while handling a Command's
+end event always reaches the mediator promptly (MISSION.md rule 6a).
+
+A runtime error (a bad value, a goto loop) raises :class:`AppFailure` after
+recording it; the run loop then unloads this application alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Mapping, Protocol
+
+from prima.dsl.expr import Compiled, Scope, to_text, truthy
+from prima.dsl.model import (
+    Action,
+    Assign,
+    CancelTimer,
+    CommandCall,
+    Document,
+    Goto,
+    Handler,
+    HandlerKind,
+    If,
+    Loc,
+    Log,
+    Raise,
+    Request,
+    Send,
+    StartTimer,
+    State,
+)
+from prima.errors import ExecutionError
+from prima.mediator.catalog import Catalog, ParamKind, Value
+from prima.mediator.interface import (
+    PREDEFINED_EVENTS,
+    Call,
+    Clock,
+    CommandId,
+    Event,
+    Outcome,
+)
+from prima.mediator.interface import Request as MediatorRequest
+
+MAX_TRANSITIONS = 100
+"""State changes allowed while handling one event (a goto loop is an error)."""
+MAX_RAISED = 100
+"""Own events allowed to pile up while handling one event."""
+
+
+class MediatorPort(Protocol):
+    """What an interpreter needs from the mediator."""
+
+    def submit(self, request: MediatorRequest) -> tuple[CommandId, ...]: ...
+
+    def open_stream(self, app: str, hold: float) -> None: ...
+
+    def close_stream(self, app: str) -> None: ...
+
+    def open_block(self, app: str, *, devices: frozenset[str] | None = None,
+                   watchdog: float) -> None: ...
+
+    def close_block(self, app: str) -> None: ...
+
+
+@dataclass(frozen=True)
+class Note:
+    """Something an interpreter tells the trace: a log line, a message sent, an error."""
+
+    time: float
+    app: str
+    kind: str
+    """``log``, ``send``, ``state`` or ``error``."""
+    text: str
+    detail: Mapping[str, Value] = field(default_factory=dict)
+
+
+class AppFailure(Exception):
+    """The application hit a runtime error and must be unloaded (already recorded)."""
+
+
+class _Leave(Exception):
+    """A goto: unwinds the running handler."""
+
+    def __init__(self, target: str) -> None:
+        self.target = target
+
+
+@dataclass
+class _Handling:
+    """What the current handling adds to requests (rules 5 and 6)."""
+
+    reactive: bool = False
+    follows: CommandId | None = None
+    requested: bool = False
+
+
+@dataclass
+class _Timer:
+    due: float
+    reactive: bool
+    seq: int
+
+
+class Interpreter:
+    """Runs one document against a mediator port."""
+
+    def __init__(self, document: Document, app: str, port: MediatorPort, clock: Clock, *,
+                 catalog: Catalog, robot_events: Mapping[str, bool] | None = None,
+                 note: Callable[[Note], None] | None = None,
+                 send: Callable[[str, str, str], None] | None = None) -> None:
+        self.document = document
+        self.app = app
+        self.port = port
+        self.clock = clock
+        self.catalog = catalog
+        self.robot_events = dict(robot_events or {})
+        self._note = note or (lambda _n: None)
+        self._send = send or (lambda _app, _to, _text: None)
+        self.variables: dict[str, Value] = {}
+        self.state: str | None = None
+        self.stopped = False
+        self._commands: dict[CommandId, CommandCall] = {}
+        self._timers: dict[str, _Timer] = {}
+        self._timer_seq = 0
+        self._raised: list[str] = []
+        self._handling = _Handling()
+
+    # ------------------------------------------------------------ lifecycle
+
+    def start(self) -> None:
+        """Initialise the variables and enter the initial state."""
+        self._guard(self._start)
+
+    def _start(self) -> None:
+        for var in self.document.variables.values():
+            self.variables[var.name] = None if var.init is None else self._eval(var.init, var.loc)
+        self._run_handling(_Handling(), lambda: self._transition(self.document.initial))
+
+    def stop(self) -> None:
+        """Stop handling anything (the application was unloaded)."""
+        self.stopped = True
+        self._timers.clear()
+
+    # ------------------------------------------------------------ AppListener
+
+    def event(self, event: Event) -> None:
+        if self.stopped:
+            return
+        data = {"name": event.name, **dict(event.data)}
+        reactive = self._default_reactivity(event.name)
+        self._guard(lambda: self._dispatch(HandlerKind.EVENT, event.name, data, reactive, None))
+
+    def command_ended(self, command_id: CommandId, outcome: Outcome) -> None:
+        call = self._commands.pop(command_id, None)
+        if self.stopped or call is None or call.label is None:
+            return
+        values = dict(outcome.values)
+        if call.command != "QA":
+            self._guard(lambda: self._dispatch(HandlerKind.END, call.label or "", values,
+                                               False, command_id))
+            return
+        utterance = values.get("utterance")
+        kind = HandlerKind.NOINPUT
+        data: dict[str, Value] = {"name": kind.value}
+        if values.get("status") == "answered" and utterance is not None:
+            grammar = self.document.grammars[call.grammar or ""]
+            answer = grammar.match(to_text(utterance))
+            kind = HandlerKind.NOMATCH if answer is None else HandlerKind.ANSWER
+            data = {"name": kind.value, "utterance": to_text(utterance), "answer": answer}
+            if answer is not None and call.into:
+                self.variables[call.into] = answer
+        self._guard(lambda: self._dispatch(kind, call.label or "", data, False, command_id))
+
+    def command_cancelled(self, command_id: CommandId) -> None:
+        self._commands.pop(command_id, None)
+
+    # ------------------------------------------------------------ timers
+
+    def next_deadline(self) -> float | None:
+        """When the next timer fires, if any."""
+        if self.stopped or not self._timers:
+            return None
+        return min(t.due for t in self._timers.values())
+
+    def advance(self) -> None:
+        """Fire every timer that is due at the clock's time, oldest first."""
+        now = self.clock.now()
+        while not self.stopped:
+            due = sorted((t.due, t.seq, name) for name, t in self._timers.items() if t.due <= now)
+            if not due:
+                return
+            name = due[0][2]
+            timer = self._timers.pop(name)
+            self._guard(lambda: self._dispatch(HandlerKind.EVENT, name, {"name": name},
+                                               timer.reactive, None))
+
+    # ------------------------------------------------------------ handling
+
+    def _default_reactivity(self, name: str) -> bool:
+        if name in PREDEFINED_EVENTS:
+            return True
+        if name in self.robot_events:
+            return self.robot_events[name]
+        declared = self.document.events.get(name)
+        return bool(declared and declared.reactive)
+
+    def _guard(self, work: Callable[[], None]) -> None:
+        try:
+            work()
+        except ExecutionError as exc:
+            self.stopped = True
+            self._timers.clear()
+            self._note(Note(self.clock.now(), self.app, "error", str(exc)))
+            raise AppFailure(str(exc)) from exc
+
+    def _dispatch(self, kind: HandlerKind, key: str, data: dict[str, Value],
+                  reactive: bool, follows: CommandId | None) -> None:
+        self._run_handling(_Handling(reactive=reactive, follows=follows),
+                           lambda: self._handle(kind, key, data))
+
+    def _run_handling(self, handling: _Handling, work: Callable[[], None]) -> None:
+        previous, self._handling = self._handling, handling
+        try:
+            work()
+            self._drain_raised()
+        finally:
+            self._handling = previous
+
+    def _drain_raised(self) -> None:
+        while self._raised and not self.stopped:
+            name = self._raised.pop(0)
+            reactive = self._default_reactivity(name)
+            handling = _Handling(reactive=reactive)
+            previous, self._handling = self._handling, handling
+            try:
+                self._handle(HandlerKind.EVENT, name, {"name": name})
+            finally:
+                self._handling = previous
+
+    def _handle(self, kind: HandlerKind, key: str, data: dict[str, Value]) -> None:
+        handler = self._find(kind, key, data)
+        if handler is None:
+            return
+        if kind is HandlerKind.EVENT and handler.reactive is not None:
+            self._handling.reactive = handler.reactive
+        scope = Scope(self.variables, data)
+        try:
+            self._actions(handler.actions, scope)
+        except _Leave as leave:
+            self._transition(leave.target)
+
+    def _find(self, kind: HandlerKind, key: str, data: dict[str, Value]) -> Handler | None:
+        state = self.document.states.get(self.state or "")
+        handlers = (state.handlers if state else ()) + self.document.handlers
+        scope = Scope(self.variables, data)
+        for handler in handlers:
+            if handler.kind is kind and handler.key == key and (
+                    handler.cond is None or truthy(self._eval(handler.cond, handler.loc, scope))):
+                return handler
+        return None
+
+    def _transition(self, target: str) -> None:
+        for _ in range(MAX_TRANSITIONS):
+            try:
+                self._enter(target)
+                return
+            except _Leave as leave:
+                target = leave.target
+        raise ExecutionError(f"{self._where(None)}more than {MAX_TRANSITIONS} state changes "
+                             "while handling one event (a <goto> loop?)")
+
+    def _enter(self, target: str) -> None:
+        old = self.document.states.get(self.state or "")
+        new = self.document.states[target]
+        self._switch_groups(old, new)
+        self.state = target
+        self._note(Note(self.clock.now(), self.app, "state", target))
+        self._actions(new.entry, Scope(self.variables, None))
+
+    def _switch_groups(self, old: State | None, new: State) -> None:
+        if old is not None and old.block is not None and old.block != new.block:
+            self.port.close_block(self.app)
+        if old is not None and old.stream is not None and old.stream != new.stream:
+            self.port.close_stream(self.app)
+        if new.stream is not None and (old is None or old.stream != new.stream):
+            self.port.open_stream(self.app, self.document.streams[new.stream].hold)
+        if new.block is not None and (old is None or old.block != new.block):
+            block = self.document.blocks[new.block]
+            self.port.open_block(self.app, devices=block.devices, watchdog=block.watchdog)
+
+    # ------------------------------------------------------------ actions
+
+    def _actions(self, actions: tuple[Action, ...], scope: Scope) -> None:
+        for action in actions:
+            self._action(action, scope)
+
+    def _action(self, action: Action, scope: Scope) -> None:
+        if isinstance(action, Request):
+            self._request(action, scope)
+        elif isinstance(action, Assign):
+            self.variables[action.name] = self._eval(action.expr, action.loc, scope)
+        elif isinstance(action, If):
+            for cond, body in action.branches:
+                if truthy(self._eval(cond, action.loc, scope)):
+                    self._actions(body, scope)
+                    return
+            self._actions(action.otherwise, scope)
+        elif isinstance(action, Goto):
+            raise _Leave(action.state)
+        elif isinstance(action, Send):
+            text = to_text(self._eval(action.text, action.loc, scope))
+            self._note(Note(self.clock.now(), self.app, "send", text, {"to": action.to}))
+            self._send(self.app, action.to, text)
+        elif isinstance(action, Raise):
+            if len(self._raised) >= MAX_RAISED:
+                raise ExecutionError(f"{self._where(action.loc)}more than {MAX_RAISED} events "
+                                     "raised while handling one event")
+            self._raised.append(action.event)
+        elif isinstance(action, StartTimer):
+            after = self._number(self._eval(action.after, action.loc, scope), "after", action.loc)
+            self._timer_seq += 1
+            self._timers[action.name] = _Timer(self.clock.now() + max(0.0, float(after)),
+                                               action.reactive, self._timer_seq)
+        elif isinstance(action, CancelTimer):
+            self._timers.pop(action.name, None)
+        elif isinstance(action, Log):
+            self._note(Note(self.clock.now(), self.app, "log",
+                            to_text(self._eval(action.text, action.loc, scope))))
+
+    def _request(self, request: Request, scope: Scope) -> None:
+        calls = tuple(self._call(c, scope) for c in request.calls)
+        handling = self._handling
+        reactive = handling.reactive and not handling.requested
+        handling.requested = True
+        ids = self.port.submit(MediatorRequest(
+            app=self.app, calls=calls, order=request.order, group=request.group,
+            reactive=reactive, follows=handling.follows))
+        for cid, call in zip(ids, request.calls):
+            self._commands[cid] = call
+
+    def _call(self, call: CommandCall, scope: Scope) -> Call:
+        spec = self.catalog[call.command]
+        args: dict[str, Value] = {}
+        for name, compiled in call.args.items():
+            param = spec.param(name)
+            value = self._eval(compiled, call.loc, scope)
+            if param is not None and param.kind is ParamKind.NUMBER:
+                args[name] = self._number(value, f"{call.command} '{name}'", call.loc)
+            else:
+                args[name] = to_text(value)
+        for param in spec.params:
+            if param.name not in args and param.default is not None and \
+                    param.kind not in (ParamKind.GRAMMAR, ParamKind.VARIABLE):
+                args[param.name] = param.default
+        extra = {name: self._eval(c, call.loc, scope) for name, c in call.extra.items()}
+        devices = frozenset({"speaker"}) if call.command == "ActiveSensingHuman" and args.get("say") \
+            else frozenset()
+        return Call(call.command, args, extra, call.label, devices)
+
+    # ------------------------------------------------------------ values
+
+    def _eval(self, compiled: Compiled, loc: Loc, scope: Scope | None = None) -> Value:
+        try:
+            return compiled.evaluate(scope or Scope(self.variables, None))
+        except ExecutionError as exc:
+            raise ExecutionError(f"{self._where(loc)}{exc} (in {compiled.source!r})") from exc
+
+    def _number(self, value: Value, what: str, loc: Loc) -> float | int:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ExecutionError(f"{self._where(loc)}{what} must be a number, got {value!r}")
+        return value
+
+    def _where(self, loc: Loc | None) -> str:
+        return f"{self.document.path}:{loc.line}:{loc.col}: " if loc else f"{self.document.path}: "

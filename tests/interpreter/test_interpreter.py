@@ -1,0 +1,190 @@
+"""The interpreter against a recording port: states, handlers, request flags, errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from prima.dsl.loader import check_document
+from prima.dsl.profile import default_profile
+from prima.interpreter import AppFailure, Interpreter, Note
+from prima.mediator.interface import Event, ManualClock, Outcome, Request, RunningOrder
+
+
+class Port:
+    """Records what the interpreter asks of the mediator."""
+
+    def __init__(self) -> None:
+        self.requests: list[Request] = []
+        self.calls: list[tuple[str, object]] = []
+        self.next_id = 0
+
+    def submit(self, request: Request) -> tuple[int, ...]:
+        self.requests.append(request)
+        ids = tuple(range(self.next_id + 1, self.next_id + 1 + len(request.calls)))
+        self.next_id += len(request.calls)
+        return ids
+
+    def open_stream(self, app: str, hold: float) -> None:
+        self.calls.append(("open_stream", hold))
+
+    def close_stream(self, app: str) -> None:
+        self.calls.append(("close_stream", None))
+
+    def open_block(self, app: str, *, devices: frozenset[str] | None = None, watchdog: float) -> None:
+        self.calls.append(("open_block", (devices, watchdog)))
+
+    def close_block(self, app: str) -> None:
+        self.calls.append(("close_block", None))
+
+
+def make(body: str, kind: str = "fa", tmp: Path | None = None):  # type: ignore[no-untyped-def]
+    source = f'<pxml xmlns="urn:prima:pxml:1" kind="{kind}" name="t">{body}</pxml>'.encode()
+    document, problems = check_document(source, "t.pxml")
+    assert document is not None, [str(p) for p in problems]
+    port, clock, notes, sent = Port(), ManualClock(), [], []
+    interp = Interpreter(document, "app", port, clock, catalog=default_profile().catalog(),
+                         robot_events=default_profile().events, note=notes.append,
+                         send=lambda app, to, text: sent.append((to, text)))
+    interp.start()
+    return interp, port, clock, notes, sent
+
+
+def texts(port: Port) -> list[list[str]]:
+    return [[str(c.args.get("text") or c.args.get("prompt") or c.command) for c in r.calls]
+            for r in port.requests]
+
+
+def test_initial_state_entry_runs_and_variables_initialise() -> None:
+    interp, port, *_ = make('<var name="n" expr="2 + 3"/><state id="s" initial="true"><entry>'
+                            '<chain>Speak("n is {n}"), Turn(n * 10)</chain></entry></state>')
+    [request] = port.requests
+    assert [c.command for c in request.calls] == ["Speak", "Turn"]
+    assert request.calls[0].args["text"] == "n is 5" and request.calls[1].args["angle"] == 50
+    assert not request.reactive and request.follows is None
+    assert request.order is RunningOrder.AFTER_LATEST
+    assert interp.state == "s"
+
+
+def test_first_request_of_a_reactive_event_is_reactive_and_only_the_first() -> None:
+    interp, port, *_ = make(
+        '<state id="s" initial="true"><on event="touched"><chain order="asap">StopMoving()</chain>'
+        '<goto state="t"/></on></state>'
+        '<state id="t"><entry><chain>Speak("second")</chain></entry></state>')
+    interp.event(Event("touched"))
+    first, second = port.requests
+    assert first.reactive and first.order is RunningOrder.ASAP
+    assert not second.reactive  # requested in the entry of the state the handling entered
+    assert interp.state == "t"
+
+
+def test_handler_can_turn_reactivity_off_and_timers_follow_their_flag() -> None:
+    interp, port, clock, *_ = make(
+        '<state id="s" initial="true"><entry><timer name="tick" after="5" reactive="true"/>'
+        '<timer name="tock" after="7"/></entry>'
+        '<on event="message" reactive="false"><chain>Speak("m")</chain></on>'
+        '<on event="tick"><chain>Speak("tick")</chain></on>'
+        '<on event="tock"><chain>Speak("tock")</chain></on></state>')
+    interp.event(Event("message", {"sender": "x", "text": "y"}))
+    assert interp.next_deadline() == 5
+    clock.set(5)
+    interp.advance()
+    assert interp.next_deadline() == 7
+    clock.set(7)
+    interp.advance()
+    assert [(r.calls[0].args["text"], r.reactive) for r in port.requests] == [
+        ("m", False), ("tick", True), ("tock", False)]
+    assert interp.next_deadline() is None
+
+
+def test_end_event_requests_follow_the_finished_command() -> None:
+    interp, port, *_ = make(
+        '<state id="s" initial="true"><entry><chain>nav: TopologicalMove(hall)</chain></entry>'
+        '<on-end of="nav"><chain>Speak("Here we are, {event.place}.")</chain></on-end></state>')
+    [nav_id] = (1,)
+    interp.command_ended(nav_id, Outcome({"place": "hall"}))
+    request = port.requests[-1]
+    assert request.follows == nav_id and not request.reactive
+    assert request.calls[0].args["text"] == "Here we are, hall."
+
+
+@pytest.mark.parametrize("outcome, expected", [
+    ({"status": "answered", "utterance": "Prof. Kidode's room"}, "answer kidode-room"),
+    ({"status": "answered", "utterance": "the kitchen"}, "nomatch the kitchen"),
+    ({"status": "noinput"}, "noinput"),
+])
+def test_qa_outcomes_dispatch_to_answer_nomatch_noinput(outcome: dict, expected: str) -> None:
+    interp, port, *_ = make(
+        '<var name="goal"/><grammar id="rooms"><choice value="kidode-room">Kidode</choice></grammar>'
+        '<state id="s" initial="true"><entry><chain>q: QA("Where?", rooms, goal)</chain></entry>'
+        '<on-answer of="q"><log text="answer {goal}"/><chain>Speak("ok")</chain></on-answer>'
+        '<on-nomatch of="q"><log text="nomatch {event.utterance}"/></on-nomatch>'
+        '<on-noinput of="q"><log text="noinput"/></on-noinput></state>')
+    notes: list[Note] = []
+    interp._note = notes.append
+    interp.command_ended(1, Outcome(outcome))
+    assert [n.text for n in notes if n.kind == "log"] == [expected]
+    if expected.startswith("answer"):
+        assert port.requests[-1].follows == 1
+
+
+def test_streams_and_blocks_open_and_close_with_their_states() -> None:
+    interp, port, *_ = make(
+        '<state id="a" initial="true"><on event="touched"><goto state="b"/></on></state>'
+        '<stream hold="12"><state id="b"><on event="touched"><goto state="c"/></on></state>'
+        '<state id="c"><on event="touched"><goto state="d"/></on></state></stream>'
+        '<block watchdog="20" devices="camera"><state id="d"><on event="touched"><goto state="a"/></on></state></block>')
+    for _ in range(4):
+        interp.event(Event("touched"))
+    assert port.calls == [("open_stream", 12.0), ("close_stream", None),
+                          ("open_block", (frozenset({"camera"}), 20.0)), ("close_block", None)]
+
+
+def test_send_and_raise() -> None:
+    interp, port, _c, notes, sent = make(
+        '<event name="dance" reactive="true"/>'
+        '<state id="s" initial="true"><on event="sound-heard" reactive="false">'
+        '<send to="host" text="heard {event.sound}"/><raise event="dance"/></on>'
+        '<on event="dance"><chain>Gesture(dance)</chain></on></state>')
+    interp.event(Event("sound-heard", {"sound": "tune"}))
+    assert sent == [("host", "heard tune")]
+    [request] = port.requests
+    assert request.calls[0].args["name"] == "dance" and request.reactive
+
+
+def test_runtime_error_is_recorded_and_stops_the_application() -> None:
+    interp, port, _c, notes, _s = make(
+        '<var name="n" expr="0"/><state id="s" initial="true">'
+        '<on event="touched"><assign name="n" expr="10 / n"/></on></state>')
+    with pytest.raises(AppFailure):
+        interp.event(Event("touched"))
+    [error] = [n for n in notes if n.kind == "error"]
+    assert error.text.startswith("t.pxml:1:") and "by zero" in error.text
+    interp.event(Event("touched"))  # stopped: ignored, no second error
+    assert [n.kind for n in notes].count("error") == 1
+
+
+def test_goto_loop_is_bounded() -> None:
+    interp, *_rest = make(
+        '<state id="a" initial="true"><on event="touched"><goto state="b"/></on></state>'
+        '<state id="b"><entry><goto state="c"/></entry></state>'
+        '<state id="c"><entry><goto state="b"/></entry></state>')
+    with pytest.raises(AppFailure, match="more than 100 state changes"):
+        interp.event(Event("touched"))
+
+
+def test_number_argument_of_the_wrong_type_is_a_runtime_error() -> None:
+    interp, *_rest = make('<var name="a" expr="\'left\'"/><state id="s" initial="true">'
+                          '<on event="touched"><chain>Turn({a})</chain></on></state>')
+    with pytest.raises(AppFailure, match="Turn 'angle' must be a number"):
+        interp.event(Event("touched"))
+
+
+def test_active_sensing_with_a_prompt_also_uses_the_speaker() -> None:
+    _i, port, *_ = make('<state id="s" initial="true"><entry>'
+                        '<chain>ActiveSensingHuman("Where are you?"), ActiveSensingHuman()</chain>'
+                        '</entry></state>')
+    with_prompt, without = port.requests[0].calls
+    assert with_prompt.extra_devices == {"speaker"} and without.extra_devices == frozenset()
+    assert with_prompt.args["turn"] == 90.0
