@@ -70,6 +70,8 @@ class Simulator:
         self.on_event: Callable[[Event], None] = on_event or _ignore
         self.on_user: Callable[[UserAction], None] = on_user or _ignore
         self.on_zone: Callable[[ZoneEntry], None] = on_zone or _ignore
+        self.reports = 0
+        """How many reports (ends, events, user actions, zone entries) so far."""
         self.inbox: list[Mapping[str, Value]] = []
         """Network messages received so far (sender, text)."""
         self.pictures: list[Picture] = []
@@ -141,8 +143,13 @@ class Simulator:
             nxt = horizon if nxt is None else min(nxt, horizon)
         return None if nxt is None else nxt / k.hz
 
-    def advance_to(self, t: float) -> None:
-        """Run up to time ``t``, reporting everything on the way at its own time."""
+    def advance_to(self, t: float, *, stop_on_report: bool = False) -> None:
+        """Run up to time ``t``, reporting everything on the way at its own time.
+
+        With ``stop_on_report``, return as soon as anything was reported (an
+        AB's end, an event, a user action, a zone entry), so that a run loop
+        can handle deadlines the report created before time moves on.
+        """
         k = self.kernel
         target = math.floor(t * k.hz + 1e-6)
         if target < k.tick:
@@ -150,9 +157,10 @@ class Simulator:
         world = self.world
         every = self._sense_every
         heap = k._heap
+        before = self.reports if stop_on_report else -1
         while True:
             self._settle()
-            if k.tick >= target:
+            if k.tick >= target or (stop_on_report and self.reports != before):
                 return
             if self._moving():
                 while True:
@@ -164,6 +172,7 @@ class Simulator:
                     if k.tick % every == 0:
                         self._sense()
                     if (k.tick >= target or (heap and heap[0][0] <= k.tick)
+                            or (stop_on_report and self.reports != before)
                             or not (world.mode or world.human_moving
                                     or k.tick < world.joints_until)):
                         break
@@ -205,9 +214,11 @@ class Simulator:
 
     def emit(self, name: str, data: Mapping[str, Value]) -> None:
         """Post an event to the applications (through ``on_event``)."""
+        self.reports += 1
         self.on_event(Event(name, MappingProxyType(dict(data)), self.now()))
 
     def report_user(self, action: UserAction) -> None:
+        self.reports += 1
         self.on_user(action)
 
     def loop_state(self, command_id: CommandId) -> dict[str, Value]:
@@ -333,6 +344,7 @@ class Simulator:
             inside = zone.area.contains(x, y)
             if inside and zone.name not in self._inside:
                 self._inside.add(zone.name)
+                self.reports += 1
                 self.on_zone(ZoneEntry(self.now(), zone.name, zone.ea))
             elif not inside:
                 self._inside.discard(zone.name)
@@ -351,6 +363,7 @@ class Simulator:
                 self._unseen_since = None
         if "locomotion" in ab.devices and self.world.mode:
             self.kernel.at(self.kernel.tick + 1, self._hold_still)
+        self.reports += 1
         self.finished(ab.id, Outcome(MappingProxyType(values), terminal))
 
     def _hold_still(self) -> None:

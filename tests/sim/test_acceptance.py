@@ -200,3 +200,25 @@ def _turn_time(degrees: float) -> float:
     if degrees <= ramp:
         return 2 * math.sqrt(degrees / accel)
     return 2 * top / accel + (degrees - ramp) / top
+
+
+def test_stop_on_report_returns_at_each_report_and_changes_nothing() -> None:
+    scenario = load_scenario(EXAMPLES / "office-kidode.xml")
+
+    def run(stop: bool) -> tuple[list[dict[str, object]], list[float]]:
+        r = CommandRunner(Simulator.from_scenario(scenario))
+        r.queue(call("TopologicalMove", to="kidode-room"))
+        returns = []
+        while r.sim.now() < 60:
+            seen = r.sim.reports
+            r.sim.advance_to(60, stop_on_report=stop)
+            returns.append(r.sim.now())
+            if stop:
+                assert r.sim.reports > seen or r.sim.now() == 60
+        return [e.to_dict() for e in r.trace], returns
+
+    plain, _ = run(False)
+    stopping, returns = run(True)
+    assert stopping == plain
+    report_times = sorted({e["time"] for e in plain if e["time"] < 60})
+    assert set(report_times) <= set(returns) and len(returns) > 5
