@@ -21,6 +21,13 @@ from prima.mediator.catalog import Value
 
 EMPTY: Mapping[str, Value] = MappingProxyType({})
 
+
+def _empty() -> Mapping[str, Value]:
+    # A factory, not a plain default: Python 3.11+ dataclasses reject unhashable
+    # defaults such as a mappingproxy.
+    return EMPTY
+
+
 CommandId = int
 """Mediator-wide id of one requested Command (increasing from 1)."""
 
@@ -54,8 +61,8 @@ class Call:
     """One Command with its arguments, as an application requests it."""
 
     command: str
-    args: Mapping[str, Value] = EMPTY
-    extra: Mapping[str, Value] = EMPTY
+    args: Mapping[str, Value] = field(default_factory=_empty)
+    extra: Mapping[str, Value] = field(default_factory=_empty)
     """Additional (hardware) arguments; only an FA may pass them."""
     label: str | None = None
     """The author's id for this Command, if any (shown in traces)."""
@@ -99,7 +106,7 @@ class AtomicBehavior:
 class Outcome:
     """How an atomic behavior ended, as the driver reports it."""
 
-    values: Mapping[str, Value] = EMPTY
+    values: Mapping[str, Value] = field(default_factory=_empty)
     """Results: e.g. ``status``/``utterance`` of a Q&A, ``place`` reached."""
     terminal: bool = True
     """For a feedback iteration: True when the Command's loop is done."""
@@ -110,7 +117,7 @@ class Event:
     """Something PRIMA posts to every loaded application (rule 5)."""
 
     name: str
-    data: Mapping[str, Value] = field(default=EMPTY)
+    data: Mapping[str, Value] = field(default_factory=_empty)
     time: float = 0.0
 
 
