@@ -262,7 +262,7 @@ class Mediator(RoundsMixin):
             self._recent.pop(q.popleft().id, None)
 
     def _link_asap(self, app: _App, devices: frozenset[str],
-                   now: float) -> tuple[Link | None, list[_Command]]:
+                   now: float) -> tuple[Link, list[_Command]]:
         """As soon as possible: cancel the app's own trees that share a device."""
         running: _Node | None = None
         last: _Node | None = None
@@ -285,7 +285,7 @@ class Mediator(RoundsMixin):
             return Link(Rule.ASAP, running, running.tree, enter_now=False), cancelled
         if last is not None:
             return Link(Rule.ASAP, last, last.tree, enter_now=True), cancelled
-        return None, cancelled
+        return Link(Rule.ASAP), cancelled  # nothing shares a device: a new tree at once
 
     # ================================================================= driver
     def finish(self, ab_id: AbId, outcome: Outcome = Outcome()) -> None:

@@ -39,3 +39,19 @@ def start_time(h: Harness, ab: int) -> float:
 
 def rules(h: Harness, kind: DecisionKind) -> list[Rule]:
     return [d.rule for d in h.decisions if d.kind is kind]
+
+
+def ghost(h: Harness, *calls: Call, asap: bool = False) -> None:
+    """Occupy devices with ABs no loaded app owns.
+
+    A temporary EA requests ``calls`` and is unloaded at once: its running ABs
+    finish normally (never cut), its waiting ones are cancelled. Call this before
+    the real EA registers.
+    """
+    from prima.mediator import AppKind
+    from prima.mediator.testing import ScriptedApp
+
+    h.mediator.register("ghost", AppKind.EA, ScriptedApp("ghost"))
+    for c in calls:
+        h.mediator.submit(req("ghost", c, asap=True))
+    h.mediator.unregister("ghost")
