@@ -10,12 +10,11 @@ more can start, so the result does not depend on how callbacks nest.
 from __future__ import annotations
 
 from collections import deque
-from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Callable, Iterator
+from typing import Callable
 
 from prima.errors import MediationError
-from prima.mediator.catalog import Catalog, Priority
+from prima.mediator.catalog import Catalog, CommandSpec, Priority
 from prima.mediator.decisions import Decision, DecisionKind, Rule
 from prima.mediator.interface import (
     AbId,
@@ -30,13 +29,36 @@ from prima.mediator.interface import (
     Request,
     RunningOrder,
 )
+from prima.mediator.holds import HoldsMixin
 from prima.mediator.memory import WorkingMemory
 from prima.mediator.requests import IN_MEMORY, Link, check_request, link_after_latest
 from prima.mediator.rounds import RoundsMixin
 from prima.mediator.snapshot import Snapshot, take
-from prima.mediator.state import NodeState, _App, _Block, _Command, _Node, _Stream
+from prima.mediator.state import NodeState, _App, _Command, _Node
 
 __all__ = ["Mediator", "MediatorConfig"]
+
+
+class _Op:
+    """One public operation: selection runs when the outermost one completes."""
+
+    __slots__ = ("_m", "_outer")
+
+    def __init__(self, mediator: Mediator) -> None:
+        self._m = mediator
+        self._outer = False
+
+    def __enter__(self) -> None:
+        m = self._m
+        self._outer = m._depth == 0 and not m._settling
+        m._depth += 1
+
+    def __exit__(self, exc_type: object, exc: object, tb: object) -> bool:
+        m = self._m
+        m._depth -= 1
+        if exc_type is None and self._outer:
+            m._settle()
+        return False
 
 
 @dataclass(frozen=True)
@@ -52,7 +74,7 @@ class MediatorConfig:
         return {"end_grace": self.end_grace}
 
 
-class Mediator(RoundsMixin):
+class Mediator(HoldsMixin, RoundsMixin):
     """PRIMA's mediator (MISSION.md sections 3-5)."""
 
     def __init__(self, catalog: Catalog, driver: Driver, clock: Clock, *,
@@ -77,6 +99,14 @@ class Mediator(RoundsMixin):
 
     # ================================================================ plumbing
     @property
+    def _apps_with_holds(self) -> bool:
+        """Some app has an open stream or block (else no AB can be held)."""
+        for app in self._apps.values():
+            if app.stream is not None or app.block is not None:
+                return True
+        return False
+
+    @property
     def catalog(self) -> Catalog:
         return self._catalog
 
@@ -93,36 +123,30 @@ class Mediator(RoundsMixin):
         """Registered applications, in registration order."""
         return tuple(self._apps)
 
-    @contextmanager
-    def _op(self) -> Iterator[None]:
-        outer = self._depth == 0 and not self._settling
-        self._depth += 1
-        try:
-            yield
-        finally:
-            self._depth -= 1
-        if outer:
-            self._settle()
+    def _op(self) -> _Op:
+        return _Op(self)
 
     def _emit(self, kind: DecisionKind, rule: Rule, node: _Node | None = None, *,
               app: str | None = None, command: _Command | None = None,
               detail: str = "", tree: int | None = None) -> None:
         self._seq += 1
-        if node is not None:
-            cmds = (command,) if command is not None else node.commands
-            d = Decision(
-                t=self._clock.now(), seq=self._seq, kind=kind, rule=rule,
-                app=node.app.name, ab=node.id, tree=node.tree.id,
-                command="+".join(c.spec.name for c in cmds), command_id=cmds[0].id,
-                command_ids=tuple(c.id for c in cmds), devices=node.sorted_devices,
-                reactive=node.reactive, iteration=node.iteration, label=cmds[0].call.label,
-                detail=detail)
-        else:
-            d = Decision(t=self._clock.now(), seq=self._seq, kind=kind, rule=rule, app=app,
-                         tree=tree, detail=detail)
         self._decisions += 1
-        if self._record_cb is not None:
-            self._record_cb(d)
+        if self._record_cb is None:
+            return
+        if node is None:
+            d = Decision._build(self._clock.now(), self._seq, kind, rule, app, None, tree, None,
+                                None, (), (), False, 0, None, detail)
+        elif command is None:
+            d = Decision._build(self._clock.now(), self._seq, kind, rule, node.app.name, node.id,
+                                node.tree.id, node.name, node.command_ids[0], node.command_ids,
+                                node.sorted_devices, node.reactive, node.iteration,
+                                node.commands[0].call.label, detail)
+        else:
+            d = Decision._build(self._clock.now(), self._seq, kind, rule, node.app.name, node.id,
+                                node.tree.id, command.spec.name, command.id, (command.id,),
+                                node.sorted_devices, node.reactive, node.iteration,
+                                command.call.label, detail)
+        self._record_cb(d)
 
     def _call(self, app: _App, method: str, *args: object) -> None:
         """Call an app's listener; an exception removes the app, never the mediator."""
@@ -196,36 +220,42 @@ class Mediator(RoundsMixin):
         with self._op():
             return self._accept(app, request, specs)
 
-    def _accept(self, app: _App, request: Request, specs: list) -> tuple[CommandId, ...]:
+    def _accept(self, app: _App, request: Request,
+                specs: list[tuple[CommandSpec, frozenset[str]]]) -> tuple[CommandId, ...]:
         now = self._clock.now()
         seq = self._next_seq
         self._next_seq += 1
-        cmds = []
-        for call, (spec, _devices) in zip(request.calls, specs):
-            cmds.append(_Command(self._next_command, app, call, spec))
-            self._next_command += 1
-        all_devices = frozenset().union(*(d for _s, d in specs))
+        cid = self._next_command
+        cmds = [_Command(cid + i, app, call, spec)
+                for i, (call, (spec, _d)) in enumerate(zip(request.calls, specs))]
+        self._next_command = cid + len(cmds)
+        if len(specs) == 1:
+            all_devices = specs[0][1]
+        else:
+            all_devices = frozenset().union(*(d for _s, d in specs))
         cancelled: list[_Command] = []
-        link = self._link_follows(app, request, now)
+        link = self._link_follows(app, request, now) if request.follows is not None else None
         if link is None and request.order is RunningOrder.ASAP:
             link, cancelled = self._link_asap(app, all_devices, now)
         if link is None:
             link = link_after_latest(app)
         tree = link.tree if link.tree is not None else self._wm.new_tree(app)
         reactive = request.reactive and link.reactive_allowed
+        wm = self._wm
         if request.group:
-            groups = [(tuple(cmds), all_devices,
-                       min((s.priority for s, _d in specs), default=Priority.HIGH))]
+            prio = min((s.priority for s, _d in specs), default=Priority.HIGH)
+            root = wm.new_node(app, tree, tuple(cmds), all_devices, prio, reactive, seq)
+            wm.link(link.parent, root)
         else:
-            groups = [((c,), d, s.priority) for c, (s, d) in zip(cmds, specs)]
-        parent = link.parent
-        root: _Node | None = None
-        for i, (gcmds, devs, prio) in enumerate(groups):
-            node = self._wm.new_node(app, tree, gcmds, devs, prio, reactive and i == 0, seq)
-            self._wm.link(parent, node)
-            if root is None:
-                root = node
-            parent = node
+            parent = link.parent
+            root = None
+            for c, (spec, devs) in zip(cmds, specs):
+                node = wm.new_node(app, tree, (c,), devs, spec.priority,
+                                   reactive and root is None, seq)
+                wm.link(parent, node)
+                if root is None:
+                    root = node
+                parent = node
         if root is None:  # pragma: no cover - check_request guarantees a call
             raise MediationError("empty request")
         app.latest = cmds[-1]
@@ -233,19 +263,21 @@ class Mediator(RoundsMixin):
             app.stream.tree = tree
         if app.block is not None and not app.block.expired:
             app.block.tree = tree
-        before = f"before AB{link.parent.id}" if link.parent is not None else "roots the tree"
-        self._emit(DecisionKind.REQUEST, link.rule, root,
-                   detail=f"{len(cmds)} Command(s) {'as one AB ' if request.group else ''}{before}")
+        if self._record_cb is not None:
+            before = f"before AB{link.parent.id}" if link.parent is not None else "roots the tree"
+            grouped = "as one AB " if request.group else ""
+            self._emit(DecisionKind.REQUEST, link.rule, root,
+                       detail=f"{len(cmds)} Command(s) {grouped}{before}")
+        else:
+            self._emit(DecisionKind.REQUEST, link.rule, root)
         if link.enter_now:
-            self._wm.enter_waiting(root, parent_finished=link.parent_finished)
+            wm.enter_waiting(root, parent_finished=link.parent_finished)
         for cmd in cancelled:
             self._call(cmd.app, "command_cancelled", cmd.id)
         return tuple(c.id for c in cmds)
 
     def _link_follows(self, app: _App, request: Request, now: float) -> Link | None:
         """CS exceptions (a)/(b): a request made while handling X's end stays in X's tree."""
-        if request.follows is None:
-            return None
         self._prune_recent(now)
         cmd = self._recent.get(request.follows)
         if cmd is None or cmd.app is not app or cmd.node is None:
@@ -347,117 +379,17 @@ class Mediator(RoundsMixin):
             for app in list(self._apps.values()):
                 self._call(app, "event", event)
 
-    # ======================================================== streams, blocks
-    def _app(self, name: str) -> _App:
-        app = self._apps.get(name)
-        if app is None:
-            raise MediationError(f"unknown application {name!r}")
-        return app
-
-    def open_stream(self, app: str, hold: float) -> None:
-        """Begin an explicit stream block (rule 6c): one CS, held while the app waits."""
-        a = self._app(app)
-        if a.stream is not None:
-            raise MediationError(f"{app}: a stream is already open")
-        if hold < 0:
-            raise MediationError(f"{app}: stream hold must be >= 0, got {hold}")
-        with self._op():
-            latest = a.latest.node if a.latest is not None else None
-            tree = latest.tree if latest is not None and latest.state in IN_MEMORY else None
-            st = _Stream(hold, tree)
-            for t in a.trees.values():
-                for n in t.nodes.values():
-                    if n.state is NodeState.RUNNING:
-                        st.devices.update(n.devices)
-            a.stream = st
-
-    def close_stream(self, app: str) -> None:
-        """End the explicit stream block; its hold (if any) is released."""
-        a = self._app(app)
-        if a.stream is None:
-            raise MediationError(f"{app}: no stream is open")
-        with self._op():
-            self._end_stream(a, Rule.STREAM_CLOSE)
-
-    def _end_stream(self, app: _App, rule: Rule) -> None:
-        st = app.stream
-        app.stream = None
-        if st is not None and st.armed:
-            self._wm.dirty.update(st.devices)
-            self._emit(DecisionKind.RELEASE, rule, app=app.name,
-                       detail="stream hold on " + ", ".join(sorted(st.devices)))
-
-    def open_block(self, app: str, *, devices: frozenset[str] | None = None,
-                   watchdog: float) -> None:
-        """Begin a begin/end block: one IU, its devices reserved once it starts."""
-        a = self._app(app)
-        if a.block is not None:
-            raise MediationError(f"{app}: a block is already open")
-        if watchdog <= 0:
-            raise MediationError(f"{app}: block watchdog must be > 0, got {watchdog}")
-        devs = self._catalog.devices if devices is None else frozenset(devices)
-        unknown = devs - self._catalog.devices
-        if unknown:
-            raise MediationError(f"{app}: block names unknown devices {sorted(unknown)}")
-        with self._op():
-            latest = a.latest.node if a.latest is not None else None
-            tree = latest.tree if latest is not None and latest.state in IN_MEMORY else None
-            a.block = _Block(devs, watchdog, self._next_command, tree)
-
-    def close_block(self, app: str) -> None:
-        """Conclude the block (also fine after its watchdog fired)."""
-        a = self._app(app)
-        if a.block is None:
-            raise MediationError(f"{app}: no block is open")
-        with self._op():
-            self._end_block(a, Rule.BLOCK_CLOSE)
-
-    def _end_block(self, app: _App, rule: Rule) -> None:
-        blk = app.block
-        app.block = None
-        if blk is not None and blk.reserving:
-            self._wm.dirty.update(blk.devices)
-            self._emit(DecisionKind.RELEASE, rule, app=app.name,
-                       detail="block on " + ", ".join(sorted(blk.devices)))
-
-    # ============================================================== deadlines
-    def next_deadline(self) -> float | None:
-        """The earliest pending hold timeout or watchdog, if any."""
-        best: float | None = None
-        for app in self._apps.values():
-            st, blk = app.stream, app.block
-            if st is not None and st.armed and (best is None or st.deadline < best):
-                best = st.deadline
-            if blk is not None and blk.reserving and (best is None or blk.deadline < best):
-                best = blk.deadline
-        return best
-
-    def advance(self) -> None:
-        """Handle every deadline that has passed, then run selection."""
-        with self._op():
-            now = self._clock.now()
-            for app in list(self._apps.values()):
-                st, blk = app.stream, app.block
-                if st is not None and st.armed and st.deadline <= now:
-                    st.armed = False
-                    st.lapsed = True
-                    self._wm.dirty.update(st.devices)
-                    self._emit(DecisionKind.RELEASE, Rule.HOLD_TIMEOUT, app=app.name,
-                               detail="stream hold on " + ", ".join(sorted(st.devices)))
-                if blk is not None and blk.reserving and blk.deadline <= now:
-                    blk.expired = True
-                    self._wm.dirty.update(blk.devices)
-                    self._emit(DecisionKind.RELEASE, Rule.WATCHDOG, app=app.name,
-                               detail="block on " + ", ".join(sorted(blk.devices)))
-
     # ================================================================ looking
     def snapshot(self) -> Snapshot:
         """A frozen, comparable view of working memory."""
         return take(self._clock.now(), self._wm, self._apps.values())
 
-    def _ab(self, node: _Node) -> AtomicBehavior:
-        return AtomicBehavior(
-            id=node.id, app=node.app.name, tree=node.tree.id,
-            calls=tuple(c.call for c in node.commands),
-            command_ids=tuple(c.id for c in node.commands),
-            devices=node.devices, iteration=node.iteration, reactive=node.reactive)
+    @staticmethod
+    def _ab(node: _Node) -> AtomicBehavior:
+        # Built without the frozen __init__ (hot path; AtomicBehavior has no checks).
+        ab = object.__new__(AtomicBehavior)
+        object.__setattr__(ab, "__dict__", {
+            "id": node.id, "app": node.app.name, "tree": node.tree.id,
+            "calls": tuple(c.call for c in node.commands), "command_ids": node.command_ids,
+            "devices": node.devices, "iteration": node.iteration, "reactive": node.reactive})
+        return ab

@@ -119,6 +119,22 @@ class Decision:
     """The author's label of the (first) Command, if any."""
     detail: str = ""
 
+    @classmethod
+    def _build(cls, t: float, seq: int, kind: DecisionKind, rule: Rule, app: str | None,
+               ab: AbId | None, tree: TreeId | None, command: str | None,
+               command_id: CommandId | None, command_ids: tuple[CommandId, ...],
+               devices: tuple[str, ...], reactive: bool, iteration: int, label: str | None,
+               detail: str) -> Decision:
+        """Build without the frozen ``__init__`` (one attribute store instead of 15):
+        the mediator emits a decision for everything it does, on its hot path."""
+        d = object.__new__(cls)
+        object.__setattr__(d, "__dict__", {
+            "t": t, "seq": seq, "kind": kind, "rule": rule, "app": app, "ab": ab,
+            "tree": tree, "command": command, "command_id": command_id,
+            "command_ids": command_ids, "devices": devices, "reactive": reactive,
+            "iteration": iteration, "label": label, "detail": detail})
+        return d
+
     def to_dict(self) -> dict[str, object]:
         """A JSON-ready dict with a stable key order."""
         return {

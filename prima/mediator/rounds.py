@@ -29,16 +29,18 @@ class RoundsMixin:
     def _settle(self: Mediator) -> None:
         """Run rounds until nothing more can start; then hand the starts to the driver."""
         self._settling = True
+        wm = self._wm
         try:
             while True:
-                self._update_holds()
-                wm = self._wm
+                for app in self._apps.values():
+                    if app.stream is not None:
+                        self._update_holds()
+                        break
                 if not (wm.new or wm.dirty or wm.pjf):
                     break
-                started = self._round()
-                for node in started:
+                for node in self._round():
                     self._driver.start(self._ab(node))
-            self._wm.maybe_compact()
+            wm.maybe_compact()
         finally:
             self._settling = False
 
@@ -81,67 +83,80 @@ class RoundsMixin:
         wm.new = []
         dirty = wm.dirty
         wm.dirty = set()
+        busy = wm.busy
         pjf_on: dict[str, list[_Node]] = {}
         for n in pjf.values():
             if n.state is NodeState.WAITING:
                 for d in n.sorted_devices:
                     pjf_on.setdefault(d, []).append(n)
-
-        def best(device: str) -> _Node | None:
-            return wm.index.best(device, pjf, pjf_on)
+        best = wm.index.best
 
         cands: dict[int, _Node] = {}
         for n in new:
             if n.state is NodeState.WAITING:
                 cands[n.id] = n
-        for d in sorted(dirty):
-            b = best(d)
+        for d in (sorted(dirty) if len(dirty) > 1 else dirty):
+            b = best(d, pjf, pjf_on)
             if b is not None:
                 cands[b.id] = b
-        busy_before = frozenset(wm.busy)
-        later: list[tuple[str, _Tree]] = []
+        if not cands:
+            return []
+        order = list(cands.values())
+        if len(order) > 1:
+            order.sort(key=lambda n: rank(n, pjf))
+        later: list[tuple[bool, _Tree]] = []
         started: list[_Node] = []
-        for x in sorted(cands.values(), key=lambda n: rank(n, pjf)):
+        for x in order:
             if x.state is not NodeState.WAITING:
                 continue
-            if any(d in wm.busy for d in x.sorted_devices):
+            devices = x.sorted_devices
+            blocked = False
+            for d in devices:
+                if d in busy or best(d, pjf, pjf_on) is not x:
+                    blocked = True
+                    break
+            if blocked:
                 continue
-            if any(best(d) is not x for d in x.sorted_devices):
-                continue
-            held = self._holder(x)
-            if held is not None:
-                self._note_hold(x, *held)
-                continue
+            if self._apps_with_holds:
+                held = self._holder(x)
+                if held is not None:
+                    self._note_hold(x, *held)
+                    continue
             x_rank = rank(x, pjf)
             wm.start(x)
             started.append(x)
             self._on_start(x)
             # Who did it beat? The best remaining waiting AB on each of its devices.
-            losers = [b for b in (best(d) for d in x.sorted_devices) if b is not None]
+            losers = []
+            for d in devices:
+                b = best(d, pjf, pjf_on)
+                if b is not None:
+                    losers.append(b)
             rule = Rule.FREE_DEVICES
             if losers:
-                top = min(losers, key=lambda n: rank(n, pjf))
+                top = min(losers, key=lambda n: rank(n, pjf)) if len(losers) > 1 else losers[0]
                 rule = separating_rule(x_rank, rank(top, pjf))
             self._emit(DecisionKind.START, rule, x)
             if x.tree.suspended is not None:
                 self._emit(DecisionKind.RESUME, rule, x, detail="resumed from the suspended IU")
-                later.append(("resume", x.tree))
-            seen: set[int] = set()
+                later.append((False, x.tree))
             for loser in losers:
                 tree = loser.tree
-                if tree is x.tree or tree.id in seen or tree.suspended is not None:
+                if tree is x.tree or tree.suspended is not None:
                     continue
-                seen.add(tree.id)
-                ready = (busy_before.isdisjoint(loser.devices) and self._holder(loser) is None)
-                if ready and not any(op == "suspend" and t is tree for op, t in later):
+                if any(is_suspend and t is tree for is_suspend, t in later):
+                    continue
+                # "Ready": it lost only to this round's starts, not to ABs already running.
+                ready = all(busy.get(d) is None or busy[d] in started for d in loser.devices)
+                if ready and self._holder(loser) is None:
                     self._emit(DecisionKind.SUSPEND, rule, loser,
                                detail=f"lost to AB{x.id} ({x.app.name})")
-                    later.append(("suspend", tree))
-        for op, tree in later:
-            if op == "resume":
-                wm.resume(tree)
-            else:
+                    later.append((True, tree))
+        for is_suspend, tree in later:
+            if is_suspend:
                 wm.suspend(tree)
+            else:
+                wm.resume(tree)
         # "Parent just finished" lasts one round: others may now rank above.
         for n in pjf.values():
             if n.state is NodeState.WAITING:

@@ -64,23 +64,6 @@ def separating_rule(winner: Rank, loser: Rank) -> Rule:
     return Rule.OLDEST
 
 
-def _tier(node: _Node) -> int:
-    if node.reactive:
-        return _REACTIVE
-    if node.tree.suspended is not None:
-        return _SUSPENDED
-    return _PLAIN
-
-
-def _key(node: _Node, tier: int) -> tuple[int, ...]:
-    if tier == _REACTIVE:
-        return (-node.seq, node.id)
-    if tier == _SUSPENDED:
-        susp = node.tree.suspended
-        return (-(susp or 0), node.seq, node.id)
-    return (node.seq, node.id)
-
-
 class WaitIndex:
     """Waiting ABs per device, in heaps with lazy deletion.
 
@@ -104,45 +87,50 @@ class WaitIndex:
     def add(self, node: _Node) -> None:
         """File a waiting AB (or re-file it after its tree's suspension changed)."""
         node.version += 1
-        tier = _tier(node)
+        if node.reactive:
+            tier = _REACTIVE
+            entry: tuple = (-node.seq, node.id, node.version, node)
+        elif node.tree.suspended is not None:
+            tier = _SUSPENDED
+            entry = (-node.tree.suspended, node.seq, node.id, node.version, node)
+        else:
+            tier = _PLAIN
+            entry = (node.seq, node.id, node.version, node)
         node.tier = tier
         slot = (0 if node.priority == Priority.HIGH else _TIERS) + tier
-        entry = (*_key(node, tier), node.version, node)
+        heaps = self._heaps
         for d in node.sorted_devices:
-            heapq.heappush(self._device(d)[slot], entry)
-            self._entries += 1
-
-    @staticmethod
-    def _valid(entry: tuple) -> bool:
-        node: _Node = entry[-1]
-        return node.state is NodeState.WAITING and node.version == entry[-2]
-
-    def _top(self, heap: list[tuple]) -> _Node | None:
-        while heap:
-            entry = heap[0]
-            if self._valid(entry):
-                return entry[-1]
-            heapq.heappop(heap)
-            self._entries -= 1
-        return None
+            dev = heaps.get(d)
+            if dev is None:
+                dev = self._device(d)
+            heapq.heappush(dev[slot], entry)
+        self._entries += len(node.sorted_devices)
 
     def best(self, device: str, pjf: dict[int, _Node],
              pjf_on: dict[str, list[_Node]]) -> _Node | None:
         """The best-ranked waiting AB that needs ``device``, or None."""
         heaps = self._heaps.get(device)
-        extra = pjf_on.get(device, ())
+        extra = pjf_on.get(device) if pjf_on else None
         if heaps is None and not extra:
             return None
+        waiting = NodeState.WAITING
         for base, prio in ((0, Priority.HIGH), (_TIERS, Priority.LOW)):
             found: list[_Node] = []
             if heaps is not None:
                 for slot in range(base, base + _TIERS):
-                    top = self._top(heaps[slot])
-                    if top is not None:
-                        found.append(top)
-            for n in extra:
-                if n.state is NodeState.WAITING and n.priority == prio:
-                    found.append(n)
+                    heap = heaps[slot]
+                    while heap:
+                        entry = heap[0]
+                        node = entry[-1]
+                        if node.state is waiting and node.version == entry[-2]:
+                            found.append(node)
+                            break
+                        heapq.heappop(heap)
+                        self._entries -= 1
+            if extra:
+                for n in extra:
+                    if n.state is waiting and n.priority == prio:
+                        found.append(n)
             if found:
                 if len(found) == 1:
                     return found[0]

@@ -141,12 +141,25 @@ class _Tree:
         """Nodes in working memory, in creation order."""
 
 
+_SORTED: dict[frozenset[str], tuple[str, ...]] = {}
+
+
+def _sorted(devices: frozenset[str]) -> tuple[str, ...]:
+    """Device sets, sorted once (there are few distinct ones: one per Command type)."""
+    out = _SORTED.get(devices)
+    if out is None:
+        if len(_SORTED) > 4096:
+            _SORTED.clear()
+        out = _SORTED[devices] = tuple(sorted(devices))
+    return out
+
+
 class _Node:
     """One atomic behavior in a tree."""
 
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
-                 "tier")
+                 "tier", "name", "command_ids", "feedback")
 
     def __init__(self, ab: AbId, app: _App, tree: _Tree, commands: tuple[_Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -156,7 +169,7 @@ class _Node:
         self.tree = tree
         self.commands = commands
         self.devices = devices
-        self.sorted_devices = tuple(sorted(devices))
+        self.sorted_devices = _sorted(devices)
         self.priority = priority
         self.reactive = reactive
         self.iteration = iteration
@@ -169,13 +182,14 @@ class _Node:
         self.version = 0
         """Bumped whenever its waiting-index entries must be re-filed."""
         self.tier = 0
-
-    @property
-    def name(self) -> str:
-        return "+".join(c.spec.name for c in self.commands)
-
-    @property
-    def feedback(self) -> bool:
-        return len(self.commands) == 1 and self.commands[0].spec.feedback
+        if len(commands) == 1:
+            first = commands[0]
+            self.name = first.spec.name
+            self.command_ids: tuple[CommandId, ...] = (first.id,)
+            self.feedback = first.spec.feedback
+        else:
+            self.name = "+".join(c.spec.name for c in commands)
+            self.command_ids = tuple(c.id for c in commands)
+            self.feedback = False
 
 
