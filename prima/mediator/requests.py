@@ -5,9 +5,10 @@ The before node is decided in this order:
 1. ``follows=X`` within ``end_grace`` of X's end: a child of X, in X's tree
    (rule ``end-event``; CS exceptions (a) and (b)).
 2. As soon as possible: cancel the app's own not-yet-started work in trees
-   that share a device with the request; the newest running AB there that
-   shares a device, else the newest cancelled node, is the before node
-   (rule ``asap``).
+   that share a device with the request (a running feedback Command stops
+   after its current iteration); the newest running AB there that shares a
+   device, else the newest cancelled node, is the before node; with no such
+   tree the request roots a new one (rule ``asap`` in every case).
 3. After latest: the app's latest Command if still in working memory
    (rule ``after-latest``); inside an open stream or block, its tree even if
    the latest Command already finished (rule ``stream``); else a new tree
