@@ -71,3 +71,11 @@ class ScenarioError(LocatedError):
 
 class ExecutionError(PrimaError):
     """A running application did something impossible (reported in the trace)."""
+
+
+class MediationError(PrimaError, ValueError):
+    """The mediator refused an operation: unknown app or Command, a second EA,
+    an unbalanced stream or block, a driver reporting an AB that is not running.
+
+    Working memory is left unchanged when this is raised.
+    """

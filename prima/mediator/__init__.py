@@ -14,6 +14,8 @@ from prima.mediator.catalog import (
     Priority,
     Value,
 )
+from prima.mediator.core import Mediator, MediatorConfig
+from prima.mediator.decisions import Decision, DecisionKind, Rule
 from prima.mediator.interface import (
     PREDEFINED_EVENTS,
     AppKind,
@@ -28,6 +30,8 @@ from prima.mediator.interface import (
     Request,
     RunningOrder,
 )
+from prima.mediator.snapshot import HoldView, NodeView, Snapshot, TreeView
+from prima.mediator.state import NodeState
 
 __all__ = [
     "PREDEFINED_EVENTS",
@@ -40,14 +44,24 @@ __all__ = [
     "Catalog",
     "Clock",
     "CommandSpec",
+    "Decision",
+    "DecisionKind",
     "Driver",
     "Event",
+    "HoldView",
     "ManualClock",
+    "Mediator",
+    "MediatorConfig",
+    "NodeState",
+    "NodeView",
     "Outcome",
     "Param",
     "ParamKind",
     "Priority",
     "Request",
+    "Rule",
     "RunningOrder",
+    "Snapshot",
+    "TreeView",
     "Value",
 ]

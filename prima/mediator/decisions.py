@@ -1,0 +1,171 @@
+"""The decision record: every start, cancel, suspend and resume names its rule.
+
+The mediator emits one :class:`Decision` per thing it decides, in order
+(``seq`` increases by one). The interpreter/runner turns them into trace
+lines, and golden files serialize :meth:`Decision.to_dict`, so the names of
+:class:`Rule` and :class:`DecisionKind` members are part of the contract.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+from prima.mediator.interface import AbId, CommandId, TreeId
+
+__all__ = ["Decision", "DecisionKind", "Rule"]
+
+
+class DecisionKind(str, enum.Enum):
+    """What the mediator decided."""
+
+    REGISTER = "register"
+    """An application was loaded."""
+    UNREGISTER = "unregister"
+    """An application was unloaded (EA swap, or it failed)."""
+    REQUEST = "request"
+    """A request was accepted: its Commands joined a tree (``rule`` says how)."""
+    START = "start"
+    """An AB was handed to the driver (``rule`` says why it won)."""
+    END = "end"
+    """The driver reported an AB's end."""
+    CANCEL = "cancel"
+    """A Command was cancelled before it started (or between feedback iterations)."""
+    SUSPEND = "suspend"
+    """A tree lost a device to another tree's AB and was pushed on the suspended stack."""
+    RESUME = "resume"
+    """An AB of a suspended tree started; the tree left the suspended stack."""
+    HOLD = "hold"
+    """A waiting AB could start but a stream hold or a block keeps its devices."""
+    RELEASE = "release"
+    """A stream hold or a block reservation ended."""
+    ERROR = "error"
+    """An application's callback raised; the application is removed."""
+
+
+class Rule(str, enum.Enum):
+    """Why the mediator decided what it did (MISSION.md section 5)."""
+
+    # --- how a request joined working memory (rule 3, rule 6) ---------------
+    NEW_TREE = "new-tree"
+    """After latest, but the app's latest Command had left working memory: a new tree (CS)."""
+    AFTER_LATEST = "after-latest"
+    """Linked after the app's latest Command, still in working memory."""
+    ASAP = "asap"
+    """As soon as possible: the app's own trees sharing a device were cancelled."""
+    END_EVENT = "end-event"
+    """Made while handling a Command's end (``follows``), within the grace: same tree."""
+    STREAM = "stream"
+    """Inside an explicit stream or a begin/end block: continues its tree."""
+    # --- why an AB started (rule 4) -----------------------------------------
+    FREE_DEVICES = "free-devices"
+    """The AB's devices were free and no other waiting AB wanted them."""
+    PRIORITY = "priority"
+    """It keeps the Communication Channel; the AB it beat breaks it."""
+    REACTIVITY = "reactivity"
+    """It is the latest reactive AB (response speed)."""
+    PARENT_FINISHED = "parent-finished"
+    """Its before node just finished: it continues the active stream."""
+    RESUME_STREAM = "resume-stream"
+    """Its tree is the most recently suspended stream."""
+    OLDEST = "oldest"
+    """It belongs to the oldest request."""
+    # --- ends -----------------------------------------------------------------
+    COMPLETED = "completed"
+    """The driver reported the AB done (terminal, or not for a feedback iteration)."""
+    # --- holds and blocks (rule 3 grouping, rule 6c) --------------------------
+    STREAM_HOLD = "stream-hold"
+    """Another app's open stream holds the devices while it waits (non-reactive ABs wait)."""
+    HOLD_TIMEOUT = "hold-timeout"
+    """A stream hold ended: the stream stayed idle for its hold time."""
+    STREAM_CLOSE = "stream-close"
+    """A stream hold ended: the app closed the stream."""
+    BLOCK = "block"
+    """Another app's begin/end block reserves the devices (reactive ABs wait too)."""
+    BLOCK_CLOSE = "block-close"
+    """A block reservation ended: the app closed the block."""
+    WATCHDOG = "watchdog"
+    """A block reservation ended: the block ran longer than its watchdog."""
+    # --- applications (rule 7) ----------------------------------------------
+    REGISTER = "register"
+    """The application was loaded."""
+    UNLOAD = "unload"
+    """The application was unloaded: its waiting work is cancelled, holds freed."""
+    APP_FAILURE = "app-failure"
+    """The application's callback raised; it is unloaded, the other app goes on."""
+
+
+@dataclass(frozen=True)
+class Decision:
+    """One decision, with the rule that made it."""
+
+    t: float
+    seq: int
+    kind: DecisionKind
+    rule: Rule
+    app: str | None = None
+    ab: AbId | None = None
+    tree: TreeId | None = None
+    command: str | None = None
+    """Command name; ``A+B`` for a grouped AB."""
+    command_id: CommandId | None = None
+    """The first (usually only) Command of the AB."""
+    command_ids: tuple[CommandId, ...] = ()
+    devices: tuple[str, ...] = ()
+    """Sorted device names."""
+    reactive: bool = False
+    iteration: int = 0
+    label: str | None = None
+    """The author's label of the (first) Command, if any."""
+    detail: str = ""
+
+    @classmethod
+    def _build(cls, t: float, seq: int, kind: DecisionKind, rule: Rule, app: str | None,
+               ab: AbId | None, tree: TreeId | None, command: str | None,
+               command_id: CommandId | None, command_ids: tuple[CommandId, ...],
+               devices: tuple[str, ...], reactive: bool, iteration: int, label: str | None,
+               detail: str) -> Decision:
+        """Build without the frozen ``__init__`` (one attribute store instead of 15):
+        the mediator emits a decision for everything it does, on its hot path."""
+        d = object.__new__(cls)
+        object.__setattr__(d, "__dict__", {
+            "t": t, "seq": seq, "kind": kind, "rule": rule, "app": app, "ab": ab,
+            "tree": tree, "command": command, "command_id": command_id,
+            "command_ids": command_ids, "devices": devices, "reactive": reactive,
+            "iteration": iteration, "label": label, "detail": detail})
+        return d
+
+    def to_dict(self) -> dict[str, object]:
+        """A JSON-ready dict with a stable key order."""
+        return {
+            "t": self.t,
+            "seq": self.seq,
+            "kind": self.kind.value,
+            "rule": self.rule.value,
+            "app": self.app,
+            "ab": self.ab,
+            "tree": self.tree,
+            "command": self.command,
+            "command_id": self.command_id,
+            "command_ids": list(self.command_ids),
+            "devices": list(self.devices),
+            "reactive": self.reactive,
+            "iteration": self.iteration,
+            "label": self.label,
+            "detail": self.detail,
+        }
+
+    def __str__(self) -> str:
+        parts = [f"t={self.t:g}", self.kind.value]
+        if self.app is not None:
+            parts.append(self.app)
+        if self.ab is not None:
+            parts.append(f"AB{self.ab}")
+        if self.command is not None:
+            parts.append(self.command)
+        if self.iteration:
+            parts.append(f"#{self.iteration}")
+        parts.append(f"[{self.rule.value}]")
+        if self.detail:
+            parts.append(self.detail)
+        return " ".join(parts)

@@ -1,0 +1,237 @@
+"""Scripted test doubles: drive the mediator without a simulator.
+
+- :class:`ScriptedDriver`: AB durations and outcomes from a number, a table
+  (by Command name) or a function; it refuses to start two ABs on one device.
+- :class:`ScriptedApp`: an :class:`AppListener` that records what it is told
+  and runs optional handlers (which may call back into the mediator).
+- :class:`Harness`: a tiny deterministic discrete-event loop: a
+  :class:`ManualClock`, pending AB ends, scheduled actions and the mediator's
+  own deadlines, processed in time order.
+- :func:`plain_scan`: the selection rule written the slow, obvious way, as an
+  oracle for tests.
+
+Example::
+
+    h = Harness(duration={"Speak": 2.0})
+    fa = h.app("fa", AppKind.FA)
+    h.mediator.submit(Request("fa", (Call("Speak", {"text": "hi"}),)))
+    h.run()
+    assert h.clock.now() == 2.0
+"""
+
+from __future__ import annotations
+
+import heapq
+from typing import Callable, Mapping, Union
+
+from prima.mediator.catalog import Catalog
+from prima.mediator.core import Mediator, MediatorConfig
+from prima.mediator.decisions import Decision, DecisionKind
+from prima.mediator.interface import (
+    AbId,
+    AppKind,
+    AtomicBehavior,
+    CommandId,
+    Event,
+    ManualClock,
+    Outcome,
+)
+from prima.mediator.selection import rank
+from prima.mediator.state import NodeState
+
+__all__ = ["Harness", "ScriptedApp", "ScriptedDriver", "feedback_iterations", "plain_scan"]
+
+Durations = Union[float, Mapping[str, float], Callable[[AtomicBehavior], float]]
+
+
+def feedback_iterations(n: int | Mapping[str, int],
+                        values: Mapping[str, object] | None = None) -> Callable[[AtomicBehavior], Outcome]:
+    """An outcome function: a feedback Command ends after ``n`` iterations."""
+    def outcome(ab: AtomicBehavior) -> Outcome:
+        count = n if isinstance(n, int) else n.get(ab.calls[0].command, 1)
+        return Outcome(values=dict(values or {}), terminal=ab.iteration + 1 >= count)
+    return outcome
+
+
+class ScriptedDriver:
+    """A driver whose ABs take scripted times and end with scripted outcomes."""
+
+    def __init__(self, duration: Durations = 1.0,
+                 outcome: Callable[[AtomicBehavior], Outcome] | None = None) -> None:
+        self._duration = duration
+        self._outcome = outcome
+        self.started: list[AtomicBehavior] = []
+        self.abandoned: list[CommandId] = []
+        self.running: dict[AbId, AtomicBehavior] = {}
+        self.on_start: Callable[[AtomicBehavior], None] | None = None
+
+    def duration_of(self, ab: AtomicBehavior) -> float:
+        d = self._duration
+        if callable(d):
+            return float(d(ab))
+        if isinstance(d, Mapping):
+            return float(d.get(ab.calls[0].command, d.get("*", 1.0)))
+        return float(d)
+
+    def outcome_of(self, ab: AtomicBehavior) -> Outcome:
+        if self._outcome is None:
+            return Outcome()
+        return self._outcome(ab)
+
+    def start(self, ab: AtomicBehavior) -> None:
+        for other in self.running.values():
+            shared = ab.devices & other.devices
+            if shared:
+                raise RuntimeError(
+                    f"AB{ab.id} started on {sorted(shared)} held by running AB{other.id}")
+        self.started.append(ab)
+        self.running[ab.id] = ab
+        if self.on_start is not None:
+            self.on_start(ab)
+
+    def abandon(self, command_id: CommandId) -> None:
+        self.abandoned.append(command_id)
+
+    def ended(self, ab_id: AbId) -> AtomicBehavior:
+        return self.running.pop(ab_id)
+
+
+class ScriptedApp:
+    """An application listener that records everything and runs optional handlers."""
+
+    def __init__(self, name: str,
+                 on_event: Callable[[Event], None] | None = None,
+                 on_ended: Callable[[CommandId, Outcome], None] | None = None,
+                 on_cancelled: Callable[[CommandId], None] | None = None) -> None:
+        self.name = name
+        self.on_event = on_event
+        self.on_ended = on_ended
+        self.on_cancelled = on_cancelled
+        self.events: list[Event] = []
+        self.ended: list[tuple[CommandId, Outcome]] = []
+        self.cancelled: list[CommandId] = []
+
+    def event(self, event: Event) -> None:
+        self.events.append(event)
+        if self.on_event is not None:
+            self.on_event(event)
+
+    def command_ended(self, command_id: CommandId, outcome: Outcome) -> None:
+        self.ended.append((command_id, outcome))
+        if self.on_ended is not None:
+            self.on_ended(command_id, outcome)
+
+    def command_cancelled(self, command_id: CommandId) -> None:
+        self.cancelled.append(command_id)
+        if self.on_cancelled is not None:
+            self.on_cancelled(command_id)
+
+    @property
+    def ended_ids(self) -> list[CommandId]:
+        return [cid for cid, _ in self.ended]
+
+
+class Harness:
+    """A deterministic discrete-event loop around one mediator."""
+
+    def __init__(self, catalog: Catalog | None = None, *, duration: Durations = 1.0,
+                 outcome: Callable[[AtomicBehavior], Outcome] | None = None,
+                 config: MediatorConfig = MediatorConfig(), immediate: bool = False,
+                 keep: bool = True) -> None:
+        self.clock = ManualClock()
+        self.decisions: list[Decision] = []
+        self.driver = ScriptedDriver(duration, outcome)
+        self.driver.on_start = self._scheduled_end
+        self.immediate = immediate
+        """Zero-length ABs end from inside ``driver.start`` (re-entrant ``finish``)."""
+        self.mediator = Mediator(catalog or Catalog.standard(), self.driver, self.clock,
+                                 config=config,
+                                 record=self.decisions.append if keep else None)
+        self._queue: list[tuple[float, int, str, object]] = []
+        self._order = 0
+
+    def app(self, name: str, kind: AppKind, **handlers: Callable) -> ScriptedApp:
+        """Register a :class:`ScriptedApp` (handlers as in its constructor)."""
+        listener = ScriptedApp(name, **handlers)
+        self.mediator.register(name, kind, listener)
+        return listener
+
+    def _push(self, t: float, kind: str, payload: object) -> None:
+        self._order += 1
+        heapq.heappush(self._queue, (t, self._order, kind, payload))
+
+    def _scheduled_end(self, ab: AtomicBehavior) -> None:
+        d = self.driver.duration_of(ab)
+        if d <= 0 and self.immediate:
+            self._finish(ab)
+        else:
+            self._push(self.clock.now() + max(d, 0.0), "end", ab)
+
+    def _finish(self, ab: AtomicBehavior) -> None:
+        self.driver.ended(ab.id)
+        self.mediator.finish(ab.id, self.driver.outcome_of(ab))
+
+    def at(self, t: float, action: Callable[[], object]) -> None:
+        """Run ``action`` when the clock reaches ``t``."""
+        self._push(t, "action", action)
+
+    def step(self) -> bool:
+        """Process the next instant's first item; False when nothing is left."""
+        tq = self._queue[0][0] if self._queue else None
+        td = self.mediator.next_deadline()
+        options = [t for t in (tq, td) if t is not None]
+        if not options:
+            return False
+        t = max(min(options), self.clock.now())
+        self.clock.set(t)
+        if td is not None and td <= t:
+            self.mediator.advance()
+            return True
+        _t, _o, kind, payload = heapq.heappop(self._queue)
+        if kind == "end":
+            self._finish(payload)  # type: ignore[arg-type]
+        else:
+            payload()  # type: ignore[operator]
+        return True
+
+    def run(self, until: float | None = None, max_steps: int = 1_000_000) -> None:
+        """Process events (up to time ``until``, if given)."""
+        for _ in range(max_steps):
+            if until is not None:
+                tq = self._queue[0][0] if self._queue else None
+                td = self.mediator.next_deadline()
+                nxt = min((t for t in (tq, td) if t is not None), default=None)
+                if nxt is None or nxt > until:
+                    self.clock.set(max(until, self.clock.now()))
+                    return
+            if not self.step():
+                return
+        raise RuntimeError(f"harness did not settle within {max_steps} steps")
+
+    # ------------------------------------------------------------ inspection
+    def kinds(self, *kinds: DecisionKind) -> list[Decision]:
+        return [d for d in self.decisions if d.kind in kinds]
+
+    def starts(self) -> list[Decision]:
+        return self.kinds(DecisionKind.START)
+
+
+def plain_scan(mediator: Mediator) -> list[AbId]:
+    """The ABs a plain rank-order walk of the whole waiting list would start now.
+
+    An oracle for tests: after any operation it must be empty (the mediator
+    already started everything that could start).
+    """
+    wm = mediator._wm
+    waiting = [n for n in wm.nodes.values() if n.state is NodeState.WAITING]
+    waiting.sort(key=lambda n: rank(n, wm.pjf))
+    busy = set(wm.busy)
+    reserved: set[str] = set()
+    out: list[AbId] = []
+    for n in waiting:
+        if n.devices & busy or n.devices & reserved or mediator._holder(n) is not None:
+            reserved |= n.devices
+            continue
+        out.append(n.id)
+        busy |= n.devices
+    return out

@@ -1,0 +1,233 @@
+"""Property-based tests over random request streams from two applications.
+
+- no device is ever held by two running ABs (the scripted driver raises);
+- no started AB is ever cut, every AB ends exactly once (completed, or
+  cancelled before it started), every Command gets exactly one callback
+  unless its app was unloaded;
+- with bounded holds, nothing waits forever: after every step nothing is left
+  that a plain scan would start, and at the end working memory is empty;
+- the same inputs give the same decision sequence.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from prima.mediator import AppKind, Call, DecisionKind, Event, Outcome, Request, RunningOrder
+from prima.mediator.testing import Harness, ScriptedApp, plain_scan
+
+POOL = ["Speak", "Turn", "MoveHead", "Gesture", "PointByHand", "FaceHumanAndSpeak", "QA",
+        "TrackingHuman", "TopologicalMove", "StopMoving", "TurnAndSpeak", "FaceHuman"]
+
+
+@dataclass(frozen=True)
+class Act:
+    t: float
+    app: str
+    kind: str          # submit | event | stream | block | swap
+    commands: tuple[str, ...] = ()
+    asap: bool = False
+    reactive: bool = False
+    group: bool = False
+    follows_latest: bool = False
+    hold: float = 1.0
+
+
+acts = st.builds(
+    Act,
+    t=st.sampled_from([0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.5, 6.0, 9.0]),
+    app=st.sampled_from(["fa", "ea"]),
+    kind=st.sampled_from(["submit"] * 6 + ["event", "stream", "block", "swap"]),
+    commands=st.lists(st.sampled_from(POOL), min_size=1, max_size=3).map(tuple),
+    asap=st.booleans(), reactive=st.booleans(), group=st.booleans(),
+    follows_latest=st.booleans(),
+    hold=st.sampled_from([0.0, 0.5, 2.0]),
+)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    acts: tuple[Act, ...]
+    durations: tuple[float, ...]
+    iterations: tuple[int, ...]
+    follow_every: int
+    fail_on_event: int
+    immediate: bool
+
+
+scenarios = st.builds(
+    Scenario,
+    acts=st.lists(acts, max_size=25).map(lambda a: tuple(sorted(a, key=lambda x: x.t))),
+    durations=st.lists(st.sampled_from([0.0, 0.5, 1.0, 2.0, 3.5]), min_size=1, max_size=7).map(tuple),
+    iterations=st.lists(st.integers(1, 4), min_size=1, max_size=5).map(tuple),
+    follow_every=st.integers(0, 4),
+    fail_on_event=st.integers(0, 6),
+    immediate=st.booleans(),
+)
+
+
+def _args(name: str) -> dict:
+    return {"Speak": {"text": "x"}, "Turn": {"angle": 1.0}, "MoveHead": {"pan": 1.0},
+            "Gesture": {"name": "bow"}, "PointByHand": {"angle": 1.0},
+            "FaceHumanAndSpeak": {"text": "x"}, "QA": {"prompt": "?", "grammar": "g"},
+            "TopologicalMove": {"to": "room"}, "TurnAndSpeak": {"angle": 1.0, "text": "x"},
+            }.get(name, {})
+
+
+def run(sc: Scenario) -> tuple[Harness, dict[str, ScriptedApp], set[int]]:
+    def duration(ab) -> float:
+        return sc.durations[(ab.id * 7 + ab.iteration) % len(sc.durations)]
+
+    def outcome(ab) -> Outcome:
+        n = sc.iterations[ab.command_ids[0] % len(sc.iterations)]
+        return Outcome(terminal=ab.iteration + 1 >= n)
+
+    h = Harness(duration=duration, outcome=outcome, immediate=sc.immediate)
+    m = h.mediator
+    apps: dict[str, ScriptedApp] = {}
+    unloaded: set[int] = set()   # Commands whose app was unloaded before they concluded
+    owner: dict[int, str] = {}
+    names = {"fa": "fa", "ea": "ea"}
+    events_seen: Counter[str] = Counter()
+    followups: set[int] = set()
+
+    def listener(role: str, name: str) -> ScriptedApp:
+        def on_ended(cid: int, _o: Outcome) -> None:
+            if sc.follow_every and cid % sc.follow_every == 0 and cid not in followups:
+                for c in m.submit(Request(name, (Call("Speak", {"text": "ok"}),), follows=cid)):
+                    owner[c] = name
+                    followups.add(c)
+
+        def on_event(_e: Event) -> None:
+            events_seen[name] += 1
+            if role == "ea" and sc.fail_on_event and events_seen[name] == sc.fail_on_event:
+                raise RuntimeError("scripted crash")
+            for c in m.submit(Request(name, (Call("Turn", {"angle": 5.0}),), reactive=True)):
+                owner[c] = name
+
+        app = ScriptedApp(name, on_event=on_event, on_ended=on_ended)
+        apps[name] = app
+        return app
+
+    m.register("fa", AppKind.FA, listener("fa", "fa"))
+    m.register("ea", AppKind.EA, listener("ea", "ea"))
+    swaps = 0
+
+    def act(a: Act) -> None:
+        nonlocal swaps
+        name = names[a.app]
+        if name not in m.apps():
+            return
+        if a.kind == "submit":
+            latest = max((c for c, o in owner.items() if o == name), default=None)
+            r = Request(name, tuple(Call(c, _args(c)) for c in a.commands),
+                        order=RunningOrder.ASAP if a.asap else RunningOrder.AFTER_LATEST,
+                        group=a.group and not any(c in ("TrackingHuman", "TopologicalMove")
+                                                  for c in a.commands),
+                        reactive=a.reactive,
+                        follows=latest if a.follows_latest else None)
+            for c in m.submit(r):
+                owner[c] = name
+        elif a.kind == "event":
+            m.post(Event("touched"))
+        elif a.kind == "stream":
+            if m._apps[name].stream is None:
+                m.open_stream(name, hold=a.hold)
+            else:
+                m.close_stream(name)
+        elif a.kind == "block":
+            if m._apps[name].block is None:
+                m.open_block(name, devices=frozenset({"speaker", "neck"}) if a.asap else None,
+                             watchdog=1.0 + a.hold)
+            else:
+                m.close_block(name)
+        elif a.kind == "swap" and a.app == "ea":
+            for c, o in owner.items():
+                if o == name:
+                    unloaded.add(c)
+            m.unregister(name)
+            swaps += 1
+            names["ea"] = f"ea{swaps}"
+            m.register(names["ea"], AppKind.EA, listener("ea", names["ea"]))
+
+    for a in sc.acts:
+        h.at(a.t, lambda a=a: act(a))
+    steps = 0
+    while h.step():
+        steps += 1
+        assert plain_scan(m) == [], f"a startable AB was left waiting at t={h.clock.now()}"
+        assert steps < 20_000
+    # Apps that failed were unloaded by the mediator.
+    for d in h.kinds(DecisionKind.UNREGISTER):
+        for c, o in owner.items():
+            if o == d.app:
+                unloaded.add(c)
+    return h, apps, unloaded
+
+
+@settings(max_examples=300, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(scenarios)
+def test_random_streams_keep_every_invariant(sc: Scenario) -> None:
+    h, apps, unloaded = run(sc)      # the scripted driver raises on any double booking
+    starts = Counter(d.ab for d in h.kinds(DecisionKind.START))
+    ends = Counter(d.ab for d in h.kinds(DecisionKind.END))
+    assert all(n == 1 for n in starts.values()), "an AB started twice"
+    assert starts == ends, "a started AB did not end exactly once (or ended unstarted)"
+    # Cancelled ABs never started, except a feedback iteration whose Command was cut
+    # between iterations (the AB itself ran to its end).
+    for d in h.kinds(DecisionKind.CANCEL):
+        assert d.ab not in starts or d.detail == "feedback loop stopped between iterations"
+    # Working memory drains: nothing waits forever once holds are bounded.
+    snap = h.mediator.snapshot()
+    assert snap.trees == () and snap.waiting == () and snap.running == ()
+    assert h.mediator.next_deadline() is None or snap.holds
+    # Each Command of a still-loaded app got exactly one callback.
+    seen: Counter[int] = Counter()
+    for app in apps.values():
+        seen.update(app.ended_ids)
+        seen.update(app.cancelled)
+    assert all(n == 1 for n in seen.values())
+    requested = {c for d in h.kinds(DecisionKind.REQUEST) for c in d.command_ids}
+    missing = requested - set(seen) - unloaded
+    assert not missing, f"Commands {sorted(missing)} never concluded"
+
+
+@settings(max_examples=40, deadline=None)
+@given(scenarios)
+def test_same_inputs_same_decisions(sc: Scenario) -> None:
+    a, _, _ = run(sc)
+    b, _, _ = run(sc)
+    assert [d.to_dict() for d in a.decisions] == [d.to_dict() for d in b.decisions]
+
+
+_SCRIPT = """
+import json, sys
+sys.path.insert(0, {root!r})
+from tests.mediator.test_properties import Act, Scenario, run
+acts = tuple(Act(t=i * 0.5, app=("fa", "ea")[i % 2], kind=("submit", "submit", "event", "stream")[i % 4],
+                 commands=(("Speak", "Gesture"), ("FaceHumanAndSpeak",), ("Turn", "MoveHead"))[i % 3],
+                 asap=i % 5 == 0, reactive=i % 3 == 0, group=i % 4 == 1) for i in range(30))
+h, _, _ = run(Scenario(acts, (1.0, 0.5, 2.0), (2, 1, 3), 3, 0, False))
+print(json.dumps([d.to_dict() for d in h.decisions]))
+"""
+
+
+def test_decisions_do_not_depend_on_hash_seeds() -> None:
+    """Device names are strings: set order varies with PYTHONHASHSEED; decisions must not."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = str(Path(__file__).resolve().parents[2])
+    outs = []
+    for seed in ("1", "2", "3"):
+        env = dict(os.environ, PYTHONHASHSEED=seed, PYTHONPATH=root)
+        outs.append(subprocess.run([sys.executable, "-c", _SCRIPT.format(root=root)], env=env,
+                                   capture_output=True, text=True, check=True).stdout)
+    assert outs[0] == outs[1] == outs[2] and len(outs[0]) > 1000
