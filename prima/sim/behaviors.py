@@ -326,27 +326,81 @@ def tracking_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
 
 
 def topological_move(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+    """One iteration: at most ``leg_length`` metres toward the next place on the route.
+
+    Short iterations keep the robot responsive (another application's reaction
+    can start between any two). A blocked iteration (someone in the way) waits
+    a second and ends non-terminal, so the loop tries again; after
+    ``MAX_BLOCKED`` blocked iterations in a row it gives up.
+    """
     goal = _place(sim, call, "to")
     if goal is None:
         raise BadArgument("missing argument 'to'")
-    at, path = sim.plan(goal.name)
+    state = sim.loop_state(cid)
+    at, path = _route(sim, goal, state)
     if at is not None and at.name == goal.name:
         sim.emit("place-reached", {"place": goal.name, "kind": goal.kind.value})
         sim.end_loop(cid)
         return {"place": goal.name, "kind": goal.kind.value, "goal": goal.name,
                 "remaining": 0}, True
     if not path:
+        sim.end_loop(cid)
         return {"error": f"no route to {goal.name!r}"}, True
     nxt = path[0]
-    arrived = yield from _go(sim, nxt.x, nxt.y)
-    if not arrived:
-        return {"error": f"blocked on the way to {nxt.name!r}", **_pose(sim)}, True
+    x, y = sim.world.robot.position
+    tx, ty, partial = _toward(sim, x, y, nxt.x, nxt.y)
+    if not (yield from _go(sim, tx, ty)):
+        blocked = int(state.get("blocked") or 0) + 1
+        state["blocked"] = blocked
+        if blocked >= MAX_BLOCKED:
+            sim.end_loop(cid)
+            return {"error": f"blocked on the way to {nxt.name!r}", **_pose(sim)}, True
+        yield sleep(sim.ticks(1.0))
+        return {"blocked": True, "toward": nxt.name, "goal": goal.name, **_pose(sim)}, False
+    state["blocked"] = 0
+    if partial:
+        state["toward"] = nxt.name
+        state["x"], state["y"] = sim.world.robot.position
+        return {"toward": nxt.name, "goal": goal.name, "remaining": len(path)}, False
+    state["toward"] = None
     sim.emit("place-reached", {"place": nxt.name, "kind": nxt.kind.value})
     done = nxt.name == goal.name
     if done:
         sim.end_loop(cid)
     return {"place": nxt.name, "kind": nxt.kind.value, "goal": goal.name,
             "remaining": len(path) - 1}, done
+
+
+def _route(sim: Simulator, goal: Place, state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
+    """The places still to visit; mid-leg, keep heading for the same place.
+
+    Replanning from scratch only when the robot is not where this loop left
+    it (another application moved it): otherwise a place visible further on
+    would make the robot skip, and not report, the places on its way.
+    """
+    toward = sim.map.place(str(state.get("toward") or ""))
+    if toward is not None:
+        x, y = sim.world.robot.position
+        lx, ly = state.get("x"), state.get("y")
+        if isinstance(lx, float) and isinstance(ly, float) and math.hypot(x - lx, y - ly) < 0.05:
+            names = sim.map.shortest_path({toward.name: 0.0}, {goal.name: 0.0})
+            places = [p for p in (sim.map.place(n) for n in names) if p is not None]
+            if places:
+                return None, places
+    return sim.plan(goal.name)
+
+
+MAX_BLOCKED = 30
+"""Blocked iterations in a row after which a move gives up (about 30 s of waiting)."""
+
+
+def _toward(sim: Simulator, x: float, y: float, tx: float, ty: float) -> tuple[float, float, bool]:
+    """The end of this iteration's leg toward (tx, ty), and whether it stops short."""
+    leg = sim.spec.leg_length
+    seg = math.hypot(tx - x, ty - y)
+    if seg <= leg + sim.spec.place_tolerance:
+        return tx, ty, False
+    return x + (tx - x) * leg / seg, y + (ty - y) * leg / seg, True
 
 
 def _set_position(sim: Simulator, call: Call, cid: CommandId,
@@ -359,10 +413,7 @@ def _set_position(sim: Simulator, call: Call, cid: CommandId,
         points = sim.route(x, y, tx, ty, spec.radius / 2)
         if not points:
             return {"error": f"no route to ({tx:g}, {ty:g})"}, True
-        nx, ny = points[0]
-        seg = math.hypot(nx - x, ny - y)
-        if seg > spec.leg_length:
-            nx, ny = x + (nx - x) * spec.leg_length / seg, y + (ny - y) * spec.leg_length / seg
+        nx, ny, _partial = _toward(sim, x, y, *points[0])
         if not (yield from _go(sim, nx, ny)):
             return {"error": "blocked", **_pose(sim)}, True
         x, y = world.robot.position
