@@ -140,12 +140,12 @@ class Mediator(HoldsMixin, RoundsMixin):
             d = Decision._build(self._clock.now(), self._seq, kind, rule, node.app.name, node.id,
                                 node.tree.id, node.name, node.command_ids[0], node.command_ids,
                                 node.sorted_devices, node.reactive, node.iteration,
-                                node.commands[0].call.label, detail)
+                                node.commands[0].call.label, detail, node.calls)
         else:
             d = Decision._build(self._clock.now(), self._seq, kind, rule, node.app.name, node.id,
                                 node.tree.id, command.spec.name, command.id, (command.id,),
                                 node.sorted_devices, node.reactive, node.iteration,
-                                command.call.label, detail)
+                                command.call.label, detail, (command.call,))
         self._record_cb(d)
 
     def _call(self, app: _App, method: str, *args: object) -> None:

@@ -9,9 +9,9 @@ lines, and golden files serialize :meth:`Decision.to_dict`, so the names of
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-from prima.mediator.interface import AbId, CommandId, TreeId
+from prima.mediator.interface import AbId, Call, CommandId, TreeId
 
 __all__ = ["Decision", "DecisionKind", "Rule"]
 
@@ -118,13 +118,15 @@ class Decision:
     label: str | None = None
     """The author's label of the (first) Command, if any."""
     detail: str = ""
+    calls: tuple[Call, ...] = field(default=(), compare=False, repr=False)
+    """The AB's Commands with their arguments (not part of ``to_dict`` or equality)."""
 
     @classmethod
     def _build(cls, t: float, seq: int, kind: DecisionKind, rule: Rule, app: str | None,
                ab: AbId | None, tree: TreeId | None, command: str | None,
                command_id: CommandId | None, command_ids: tuple[CommandId, ...],
                devices: tuple[str, ...], reactive: bool, iteration: int, label: str | None,
-               detail: str) -> Decision:
+               detail: str, calls: tuple[Call, ...] = ()) -> Decision:
         """Build without the frozen ``__init__`` (one attribute store instead of 15):
         the mediator emits a decision for everything it does, on its hot path."""
         d = object.__new__(cls)
@@ -132,7 +134,7 @@ class Decision:
             "t": t, "seq": seq, "kind": kind, "rule": rule, "app": app, "ab": ab,
             "tree": tree, "command": command, "command_id": command_id,
             "command_ids": command_ids, "devices": devices, "reactive": reactive,
-            "iteration": iteration, "label": label, "detail": detail})
+            "iteration": iteration, "label": label, "detail": detail, "calls": calls})
         return d
 
     def to_dict(self) -> dict[str, object]:

@@ -159,7 +159,7 @@ class _Node:
 
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
-                 "tier", "name", "command_ids", "feedback")
+                 "tier", "name", "command_ids", "feedback", "calls")
 
     def __init__(self, ab: AbId, app: _App, tree: _Tree, commands: tuple[_Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -182,6 +182,7 @@ class _Node:
         self.version = 0
         """Bumped whenever its waiting-index entries must be re-filed."""
         self.tier = 0
+        self.calls = tuple(c.call for c in commands)
         if len(commands) == 1:
             first = commands[0]
             self.name = first.spec.name
