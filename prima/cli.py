@@ -42,6 +42,24 @@ def build_parser() -> argparse.ArgumentParser:
                           help="robot hardware profile (default: the shipped home robot)")
     validate.add_argument("--format", choices=("text", "json"), default="text",
                           help="output format (default: text)")
+    run = commands.add_parser(
+        "run",
+        help="run a scenario in the simulator and print its trace",
+        description="Run a scenario: its FA and EA on the simulated robot, mediated by "
+                    "PRIMA. Prints the trace: a table like the thesis' figures (text), or "
+                    "one JSON object per line (jsonl).",
+    )
+    run.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
+    run.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
+    run.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
+    run.add_argument("--robot", metavar="PROFILE",
+                     help="robot hardware profile (default: the scenario's, else the home robot)")
+    run.add_argument("--seed", type=int, metavar="N", help="random seed (default: the scenario's)")
+    run.add_argument("--until", type=float, metavar="SECONDS",
+                     help="simulated time to stop at (default: the scenario's)")
+    run.add_argument("--format", choices=("text", "jsonl"), default="text",
+                     help="trace format (default: text)")
+    run.add_argument("--out", metavar="FILE", help="write the trace to FILE instead of stdout")
     return parser
 
 
@@ -57,6 +75,8 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     try:
         if args.command == "validate":
             return _validate(args, out, err)
+        if args.command == "run":
+            return _run(args, out, err)
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return EXIT_ERRORS
@@ -111,3 +131,29 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         print(f"{n} file{'s' if n != 1 else ''} checked: {report.errors} error(s), "
               f"{report.warnings} warning(s)", file=err)
     return EXIT_ERRORS if report.errors else EXIT_OK
+
+
+def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.run import Run
+    from prima.trace import format_text, format_jsonl
+
+    if args.until is not None and args.until <= 0:
+        print("prima run: error: --until must be positive", file=err)
+        return EXIT_USAGE
+    for path in (args.scenario, args.fa, args.ea, args.robot):
+        if path is not None and not Path(path).is_file():
+            print(f"prima run: error: no such file: {path}", file=err)
+            return EXIT_USAGE
+    try:
+        lines = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
+                    seed=args.seed, until=args.until).run()
+    except LocatedError as exc:
+        for problem in exc.problems:
+            print(problem, file=err)
+        return EXIT_ERRORS
+    text = format_text(lines) if args.format == "text" else format_jsonl(lines)
+    if args.out:
+        Path(args.out).write_text(text, encoding="utf-8")
+    else:
+        out.write(text)
+    return EXIT_OK

@@ -412,6 +412,13 @@ class Builder:
             calls = self._request_calls(el)
             if calls is None:
                 return None
+            grouped = el.get("group") in ("true", "1")
+            for call in calls if grouped else ():
+                if self.catalog[call.command].feedback:
+                    self.error((el, "group", 0), f"a grouped request cannot hold the feedback "
+                                                 f"Command {call.command}: each of its loop "
+                                                 "iterations is an atomic behavior of its own")
+                    return None
             return Request(tuple(calls), RunningOrder(el.get("order", "after-latest")),
                            el.get("group") in ("true", "1"), loc)
         if tag == "assign":

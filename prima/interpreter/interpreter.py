@@ -35,7 +35,7 @@ from prima.dsl.model import (
     StartTimer,
     State,
 )
-from prima.errors import ExecutionError
+from prima.errors import ExecutionError, PrimaError
 from prima.mediator.catalog import Catalog, ParamKind, Value
 from prima.mediator.interface import (
     PREDEFINED_EVENTS,
@@ -338,9 +338,12 @@ class Interpreter:
         handling = self._handling
         reactive = handling.reactive and not handling.requested
         handling.requested = True
-        ids = self.port.submit(MediatorRequest(
-            app=self.app, calls=calls, order=request.order, group=request.group,
-            reactive=reactive, follows=handling.follows))
+        try:
+            ids = self.port.submit(MediatorRequest(
+                app=self.app, calls=calls, order=request.order, group=request.group,
+                reactive=reactive, follows=handling.follows))
+        except PrimaError as exc:  # the mediator refused it (e.g. a Command the robot lacks)
+            raise ExecutionError(f"{self._where(request.loc)}request refused: {exc}") from exc
         for cid, call in zip(ids, request.calls):
             self._commands[cid] = call
 

@@ -1,0 +1,249 @@
+"""A simulated run: documents, interpreters, the mediator and the simulator joined.
+
+Data flows one way at a time (MISSION.md section 2): the simulator's events
+go to the mediator, which posts them to the interpreters; their requests go to
+the mediator, which starts atomic behaviors on the simulator's devices; the
+simulator reports each end back. The simulator is the clock. Every decision,
+event, user action and application note becomes a :class:`TraceLine`.
+
+This module is the only place that knows all four parts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from prima.dsl.loader import load_document
+from prima.dsl.model import Document
+from prima.dsl.profile import RobotProfile, default_profile, load_profile
+from prima.errors import PrimaError
+from prima.interpreter import AppFailure, Interpreter, Note
+from prima.mediator import AppKind, Event, Mediator, Outcome, Request
+from prima.mediator.decisions import Decision, DecisionKind
+from prima.sim import RobotSpec, Simulator
+from prima.sim.records import UserAction, ZoneEntry
+from prima.sim.scenario import Scenario, load_scenario
+from prima.trace import Kind, TraceLine
+
+MAX_IDLE_ROUNDS = 10_000
+"""Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
+
+_DECISION_KINDS = {
+    DecisionKind.REQUEST: Kind.REQUEST, DecisionKind.START: Kind.START, DecisionKind.END: Kind.END,
+    DecisionKind.CANCEL: Kind.CANCEL, DecisionKind.SUSPEND: Kind.SUSPEND,
+    DecisionKind.RESUME: Kind.RESUME, DecisionKind.HOLD: Kind.HOLD,
+    DecisionKind.RELEASE: Kind.RELEASE, DecisionKind.UNREGISTER: Kind.UNLOAD,
+}
+_SPOKEN = ("text", "prompt", "say")
+
+
+def spec_from_profile(profile: RobotProfile) -> RobotSpec:
+    """The simulator's physical figures for a robot hardware profile."""
+    return RobotSpec(
+        radius=profile.radius, max_speed=profile.max_speed, max_accel=profile.max_accel,
+        max_turn_rate=profile.max_turn_rate, speech_rate=profile.speech_rate,
+        camera_fov=profile.camera_fov, camera_range=profile.camera_range,
+        head_pan_range=profile.pan_range, head_tilt_range=profile.tilt_range,
+        gestures=dict(profile.gestures),
+    )
+
+
+@dataclass
+class _App:
+    name: str
+    role: AppKind
+    document: Document
+    interpreter: Interpreter
+    failed: bool = False
+
+
+class _Port:
+    """What an interpreter may ask of the mediator, and nothing more."""
+
+    def __init__(self, run: Run) -> None:
+        self._run = run
+
+    def submit(self, request: Request) -> tuple[int, ...]:
+        return self._run.mediator.submit(request)
+
+    def open_stream(self, app: str, hold: float) -> None:
+        self._run.mediator.open_stream(app, hold)
+
+    def close_stream(self, app: str) -> None:
+        self._run.mediator.close_stream(app)
+
+    def open_block(self, app: str, *, devices: frozenset[str] | None = None,
+                   watchdog: float) -> None:
+        self._run.mediator.open_block(app, devices=devices, watchdog=watchdog)
+
+    def close_block(self, app: str) -> None:
+        self._run.mediator.close_block(app)
+
+
+class Run:
+    """One simulated run of a scenario with its FA and EA."""
+
+    def __init__(self, scenario: str | Path, *, fa: str | Path | None = None,
+                 ea: str | Path | None = None, robot: str | Path | None = None,
+                 seed: int | None = None, until: float | None = None) -> None:
+        loaded = load_scenario(scenario)
+        if seed is not None:
+            loaded = dataclasses.replace(loaded, seed=seed)
+        self.scenario: Scenario = loaded
+        self.until = loaded.until if until is None else until
+        profile_path = robot or (loaded.resolve(loaded.profile) if loaded.profile else None)
+        self.profile = load_profile(profile_path) if profile_path else default_profile()
+        self.fa_path = Path(fa) if fa else (loaded.resolve(loaded.fa) if loaded.fa else None)
+        self.ea_path = Path(ea) if ea else (loaded.resolve(loaded.ea) if loaded.ea else None)
+        # Load every document up front: a broken one stops the run before it starts.
+        self._documents = {p: load_document(p, self.profile)
+                           for p in (self.fa_path, self.ea_path) if p is not None}
+        self.lines: list[TraceLine] = []
+        self.apps: dict[str, _App] = {}
+        self._outcomes: dict[int, Outcome] = {}
+        self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile))
+        self.mediator = Mediator(self.profile.catalog(), self.sim, self.sim, record=self._decision)
+        self.sim.finished = self._finished
+        self.sim.on_event = self._event
+        self.sim.on_user = self._user
+        self.sim.on_zone = self._zone
+        self._port = _Port(self)
+
+    # ------------------------------------------------------------ the loop
+
+    def run(self) -> list[TraceLine]:
+        """Run to the end; returns the trace."""
+        if self.fa_path is not None:
+            self._load(self.fa_path, AppKind.FA)
+        if self.ea_path is not None:
+            self._load(self.ea_path, AppKind.EA)
+        sim, hz = self.sim, self.sim.kernel.hz
+        idle, last = 0, -1.0
+        while sim.now() < self.until:
+            deadlines = [sim.next_time(), self.mediator.next_deadline()]
+            deadlines += [a.interpreter.next_deadline() for a in list(self.apps.values())]
+            t = min([d for d in deadlines if d is not None] + [self.until])
+            t = max(math.ceil(t * hz - 1e-6) / hz, sim.now())
+            sim.advance_to(t, stop_on_report=True)
+            self.mediator.advance()
+            for app in list(self.apps.values()):
+                self._guard(app, app.interpreter.advance)
+            idle = idle + 1 if sim.now() == last else 0
+            last = sim.now()
+            if idle > MAX_IDLE_ROUNDS:
+                raise RuntimeError(f"run loop stuck at t={last}")
+        return self.lines
+
+    # ------------------------------------------------------------ applications
+
+    def _load(self, path: Path, role: AppKind) -> None:
+        document = self._documents.get(path) or load_document(path, self.profile)
+        name = document.name
+        interpreter = Interpreter(document, name, self._port, self.sim,
+                                  catalog=self.profile.catalog(), robot_events=self.profile.events,
+                                  note=self._note, send=lambda _a, _to, _t: None)
+        app = _App(name, role, document, interpreter)
+        self.apps[name] = app
+        self._line(Kind.LOAD, app=name, detail={"document": path.name, "role": role.value})
+        self.mediator.register(name, role, interpreter)
+        self._guard(app, interpreter.start)
+
+    def _guard(self, app: _App, work) -> None:  # type: ignore[no-untyped-def]
+        """Run an interpreter call outside the mediator's callbacks; a failure unloads it."""
+        if app.failed:
+            return
+        try:
+            work()
+        except AppFailure:
+            self._fail(app)
+            if app.name in self.mediator.apps:
+                self.mediator.unregister(app.name)
+
+    def _fail(self, app: _App) -> None:
+        app.failed = True
+        app.interpreter.stop()
+        self.apps.pop(app.name, None)
+
+    def _zone(self, entry: ZoneEntry) -> None:
+        path = self.scenario.resolve(entry.ea)
+        current = next((a for a in self.apps.values() if a.role is AppKind.EA), None)
+        if current is not None and self.ea_path == path:
+            return
+        if current is not None:
+            current.interpreter.stop()
+            self.apps.pop(current.name, None)
+            self.mediator.unregister(current.name)
+        self.ea_path = path
+        try:
+            self._load(path, AppKind.EA)
+        except PrimaError as exc:
+            self._line(Kind.ERROR, text=str(exc).splitlines()[0], detail={"zone": entry.zone})
+
+    # ------------------------------------------------------------ recording
+
+    def _line(self, kind: Kind, **fields: object) -> None:
+        self.lines.append(TraceLine(self.sim.now(), len(self.lines), kind, **fields))  # type: ignore[arg-type]
+
+    def _decision(self, d: Decision) -> None:
+        if d.kind is DecisionKind.ERROR:
+            app = self.apps.get(d.app or "")
+            if app is not None and not app.failed:  # an unexpected failure, not one we recorded
+                self._line(Kind.ERROR, app=d.app, text=d.detail, reason=d.rule.value)
+            if app is not None:
+                self._fail(app)
+            return
+        kind = _DECISION_KINDS.get(d.kind)
+        if kind is None:
+            return
+        call = d.calls[0] if d.calls else None
+        text = None
+        detail: dict[str, object] = {}
+        if d.command_id is not None:
+            detail["command_id"] = d.command_id
+        if kind is Kind.END and d.ab is not None:
+            outcome = self._outcomes.pop(d.ab, None)
+            if outcome is not None and outcome.values:
+                detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
+        if call is not None:
+            text = next((str(call.args[k]) for k in _SPOKEN if call.args.get(k)), None)
+            others = [f"{k}={v}" for k, v in call.args.items() if k not in _SPOKEN
+                      and not (call.command == "QA" and k == "timeout")]
+            if others:
+                detail["args"] = " ".join(others)
+            if call.label:
+                detail["label"] = call.label
+        if d.iteration:
+            detail["iteration"] = d.iteration
+        if d.detail and kind is not Kind.START:
+            text = text if kind in (Kind.REQUEST, Kind.END) else d.detail
+        self._line(kind, app=d.app, ab=d.ab, tree=d.tree, command=d.command, text=text,
+                   devices=tuple(d.devices) if d.devices else None,
+                   reactive=d.reactive if d.ab is not None else None,
+                   reason=d.rule.value, detail=detail)
+
+    def _finished(self, ab: int, outcome: Outcome) -> None:
+        self._outcomes[ab] = outcome
+        self.mediator.finish(ab, outcome)
+
+    def _event(self, event: Event) -> None:
+        self._line(Kind.EVENT, text=event.name, detail=dict(event.data))
+        self.mediator.post(event)
+
+    def _user(self, action: UserAction) -> None:
+        detail: dict[str, object] = {}
+        if action.target is not None:
+            detail["target"] = action.target
+        if action.heard is not None:
+            detail["heard"] = action.heard
+        self._line(Kind.USER, action=action.action.value, text=action.text, detail=detail)
+
+    def _note(self, note: Note) -> None:
+        if note.kind == "error":
+            self._line(Kind.ERROR, app=note.app, text=note.text)
+        elif note.kind == "send":
+            self._line(Kind.SEND, app=note.app, text=note.text, detail=dict(note.detail))
+        elif note.kind == "log":
+            self._line(Kind.LOG, app=note.app, text=note.text)

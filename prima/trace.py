@@ -1,0 +1,182 @@
+"""The trace of a run: one record per thing that happened, in order.
+
+Records are frozen and serialise to a stable dict (``--format jsonl`` writes
+one per line); :func:`format_text` renders them like the thesis' own tables
+(Figures 5.3 and 5.9): numbered lines, simulated time, ``R`` (robot) or
+``U`` (user), the application, the behavior with utterances quoted, and
+``(o)`` where an event caused it. Golden traces are the text form.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+from dataclasses import dataclass, field
+from typing import Iterable, Mapping
+
+from prima.mediator.catalog import Value
+
+
+class Kind(str, enum.Enum):
+    """What a trace line records."""
+
+    LOAD = "load"
+    """An application was loaded."""
+    UNLOAD = "unload"
+    """An application was unloaded (EA swap, end of its environment, or failure)."""
+    EVENT = "event"
+    """PRIMA posted an event to the applications (a reactive cause)."""
+    USER = "user"
+    """The user did something (``action``: say, touch, walk, ...)."""
+    REQUEST = "request"
+    """An application sent Commands to the mediator."""
+    START = "start"
+    """An atomic behavior started on the robot's devices."""
+    END = "end"
+    """An atomic behavior ended."""
+    CANCEL = "cancel"
+    """A Command was cancelled before it started."""
+    SUSPEND = "suspend"
+    """A stream lost its devices to another stream and waits."""
+    RESUME = "resume"
+    """A suspended stream continued from its suspended behavior."""
+    ERROR = "error"
+    """An application failed; it is unloaded, the other goes on."""
+    HOLD = "hold"
+    """A behavior waits because an explicit stream or a block keeps its devices."""
+    RELEASE = "release"
+    """An explicit stream's hold or a block ended."""
+    SEND = "send"
+    """An application sent a message to the environment's server."""
+    LOG = "log"
+    """An application's ``<log>`` line."""
+
+
+@dataclass(frozen=True)
+class TraceLine:
+    """One record of a run."""
+
+    t: float
+    seq: int
+    kind: Kind
+    app: str | None = None
+    ab: int | None = None
+    tree: int | None = None
+    command: str | None = None
+    text: str | None = None
+    devices: tuple[str, ...] | None = None
+    reactive: bool | None = None
+    reason: str | None = None
+    action: str | None = None
+    detail: Mapping[str, Value] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, object]:
+        out: dict[str, object] = {"t": round(self.t, 3), "seq": self.seq, "kind": self.kind.value}
+        for name in ("app", "ab", "tree", "command", "text", "reactive", "reason", "action"):
+            value = getattr(self, name)
+            if value is not None:
+                out[name] = value
+        if self.devices is not None:
+            out["devices"] = list(self.devices)
+        if self.detail:
+            out["detail"] = dict(sorted(self.detail.items()))
+        return out
+
+
+_SPOKEN = ("text", "prompt", "say")
+
+
+def _describe_start(line: TraceLine) -> str:
+    d = line.detail
+    parts = [line.command or "?"]
+    if line.text:
+        parts.append(f'"{line.text}"')
+    args = d.get("args")
+    if isinstance(args, str) and args:
+        parts.append(args)
+    if d.get("iteration"):
+        parts.append(f"(iteration {d['iteration']})")
+    return " ".join(parts)
+
+
+def _describe(line: TraceLine) -> str | None:
+    k = line.kind
+    d = line.detail
+    if k is Kind.LOAD:
+        return f"loads {d.get('document', '')} ({d.get('role', '')})"
+    if k is Kind.UNLOAD:
+        return f"unloads the application ({line.reason})"
+    if k is Kind.EVENT:
+        data = ", ".join(f"{key}={value!r}" for key, value in sorted(d.items()))
+        return f"event {line.text}" + (f": {data}" if data else "")
+    if k is Kind.USER:
+        return _describe_user(line)
+    if k is Kind.START:
+        return _describe_start(line)
+    if k is Kind.CANCEL:
+        return f"cancels {line.command}"
+    if k is Kind.SUSPEND:
+        return f"suspends its stream at {line.command}"
+    if k is Kind.RESUME:
+        return f"resumes its stream at {line.command}"
+    if k is Kind.HOLD:
+        return f"holds {line.command} back ({line.text})" if line.text else f"holds {line.command} back"
+    if k is Kind.RELEASE:
+        return f"releases its hold ({line.reason})"
+    if k is Kind.ERROR:
+        return f"ERROR: {line.text}"
+    if k is Kind.SEND:
+        return f'sends to {d.get("to")}: "{line.text}"'
+    if k is Kind.LOG:
+        return f"log: {line.text}"
+    return None  # request and end lines are in the jsonl trace only
+
+
+def _describe_user(line: TraceLine) -> str:
+    action = line.action
+    target = line.detail.get("target")
+    if action == "say":
+        heard = "" if line.detail.get("heard", True) else " (not heard)"
+        return f'"{line.text}"{heard}'
+    if action == "touch":
+        return "touches the robot"
+    if action in ("walk", "leave"):
+        return f"{'walks' if action == 'walk' else 'walks away'} to {target}"
+    if action == "arrive":
+        return f"arrives at {target}"
+    if action == "follow":
+        return "follows the robot"
+    if action == "stop":
+        return "stops"
+    return str(action)
+
+
+def format_jsonl(lines: Iterable[TraceLine]) -> str:
+    """One JSON object per line, keys in a stable order."""
+    return "".join(json.dumps(line.to_dict(), ensure_ascii=False) + "\n" for line in lines)
+
+
+def format_text(lines: Iterable[TraceLine]) -> str:
+    """The trace as a table like the thesis' figures (one behavior per row)."""
+    rows = ["  No.     time  R/U  app          behavior"]
+    n = 0
+    last_start: dict[str | None, object] = {}
+    for line in lines:
+        text = _describe(line)
+        if text is None:
+            continue
+        if line.kind is Kind.START:
+            # A feedback loop's iterations show once, and again after an interruption.
+            command_id = line.detail.get("command_id")
+            repeat = line.detail.get("iteration") and last_start.get(line.app) == command_id
+            last_start[line.app] = command_id
+            if repeat:
+                continue
+        who = "U" if line.kind is Kind.USER else "R"
+        mark = " (o)" if line.kind is Kind.EVENT or (line.kind is Kind.START and line.reactive) else ""
+        why = f"  [{line.reason}]" if line.reason and line.kind in (
+            Kind.START, Kind.CANCEL, Kind.SUSPEND, Kind.RESUME, Kind.HOLD) else ""
+        app = line.app or ""
+        rows.append(f"{n:5d} {line.t:8.2f}   {who}   {app:<12} {text}{mark}{why}")
+        n += 1
+    return "\n".join(rows) + "\n"
