@@ -15,6 +15,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 from prima.dsl.loader import load_document
 from prima.dsl.model import Document
@@ -151,7 +152,7 @@ class Run:
         self.mediator.register(name, role, interpreter)
         self._guard(app, interpreter.start)
 
-    def _guard(self, app: _App, work) -> None:  # type: ignore[no-untyped-def]
+    def _guard(self, app: _App, work: Callable[[], None]) -> None:
         """Run an interpreter call outside the mediator's callbacks; a failure unloads it."""
         if app.failed:
             return
@@ -190,7 +191,7 @@ class Run:
     def _decision(self, d: Decision) -> None:
         if d.kind is DecisionKind.ERROR:
             app = self.apps.get(d.app or "")
-            if app is not None and not app.failed:  # an unexpected failure, not one we recorded
+            if app is None or not app.failed:  # not an error the interpreter already reported
                 self._line(Kind.ERROR, app=d.app, text=d.detail, reason=d.rule.value)
             if app is not None:
                 self._fail(app)
@@ -242,6 +243,9 @@ class Run:
 
     def _note(self, note: Note) -> None:
         if note.kind == "error":
+            app = self.apps.get(note.app)
+            if app is not None:
+                app.failed = True  # the mediator's own error decision adds nothing
             self._line(Kind.ERROR, app=note.app, text=note.text)
         elif note.kind == "send":
             self._line(Kind.SEND, app=note.app, text=note.text, detail=dict(note.detail))

@@ -180,3 +180,26 @@ def format_text(lines: Iterable[TraceLine]) -> str:
         rows.append(f"{n:5d} {line.t:8.2f}   {who}   {app:<12} {text}{mark}{why}")
         n += 1
     return "\n".join(rows) + "\n"
+
+
+def device_overlaps(lines: Iterable[TraceLine]) -> list[str]:
+    """Every moment two running atomic behaviors held the same device (should be none).
+
+    Lines are taken in trace order, so at one instant an AB's end must come
+    before the start of the next AB on its devices.
+    """
+    holder: dict[str, TraceLine] = {}
+    problems = []
+    for line in lines:
+        if line.kind is Kind.START:
+            for device in line.devices or ():
+                other = holder.get(device)
+                if other is not None:
+                    problems.append(f"t={line.t}: AB {line.ab} ({line.command}) started on "
+                                    f"{device} held by AB {other.ab} ({other.command})")
+                holder[device] = line
+        elif line.kind is Kind.END:
+            for device in line.devices or ():
+                if holder.get(device) is not None and holder[device].ab == line.ab:
+                    del holder[device]
+    return problems

@@ -1,0 +1,108 @@
+"""The whole stack: documents, interpreters, mediator and simulator in one run."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import pytest
+
+from prima.cli import main
+from prima.run import Run
+from prima.trace import Kind, device_overlaps, format_jsonl, format_text
+
+ROOT = Path(__file__).parents[1]
+OFFICE = ROOT / "scenarios" / "examples" / "office-kidode.xml"
+
+
+def run_cli(*argv: str) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    return main(list(argv), out=out, err=err), out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def office():  # type: ignore[no-untyped-def]
+    return Run(OFFICE, until=120).run()
+
+
+def test_same_inputs_give_a_byte_identical_trace(office) -> None:  # type: ignore[no-untyped-def]
+    again = Run(OFFICE, until=120).run()
+    assert format_jsonl(again) == format_jsonl(office)
+    assert format_text(again) == format_text(office)
+
+
+def test_no_two_behaviors_share_a_device_at_once(office) -> None:  # type: ignore[no-untyped-def]
+    assert [line for line in office if line.kind is Kind.START]
+    assert device_overlaps(office) == []
+
+
+def test_overlap_checker_catches_an_overlap(office) -> None:  # type: ignore[no-untyped-def]
+    ends = [i for i, line in enumerate(office) if line.kind is Kind.END]
+    broken = office[: ends[0]] + office[ends[0] + 1:]  # drop one end: its device stays held
+    assert device_overlaps(broken)
+
+
+def test_the_navigation_story_runs(office) -> None:  # type: ignore[no-untyped-def]
+    said = [line.text for line in office if line.kind is Kind.START and line.command == "Speak"]
+    assert said[:2] == ["Come on, let's go.", "I've just got a message."]
+    assert "I've just reached the goal." in said
+    reached = [line.detail.get("place") for line in office if line.kind is Kind.EVENT
+               and line.text == "place-reached"]
+    assert reached[-1] == "kidode-room" and "corner" in reached
+    sent = [line for line in office if line.kind is Kind.SEND]
+    assert [s.detail["to"] for s in sent] == ["host"]
+
+
+def test_jsonl_records_have_the_documented_fields(office) -> None:  # type: ignore[no-untyped-def]
+    records = [json.loads(line) for line in format_jsonl(office).splitlines()]
+    assert [r["seq"] for r in records] == list(range(len(records)))
+    assert all(set(r) >= {"t", "seq", "kind"} for r in records)
+    start = next(r for r in records if r["kind"] == "start" and r.get("command") == "QA")
+    assert start["text"] == "Where are you going?" and start["app"] == "ea3-navigate"
+    assert start["devices"] == ["speaker", "speech-recognition"] and start["reason"]
+    user = next(r for r in records if r["kind"] == "user")
+    assert user["action"] in ("say", "follow", "walk", "touch")
+    times = [r["t"] for r in records]
+    assert times == sorted(times)
+
+
+FAILING_FA = """<pxml xmlns="urn:prima:pxml:1" kind="fa" name="broken-fa">
+  <var name="n" expr="0"/>
+  <state id="s" initial="true">
+    <on event="message"><assign name="n" expr="1 / n"/></on>
+  </state>
+</pxml>"""
+
+
+def test_a_failing_application_is_unloaded_and_the_other_goes_on(tmp_path: Path) -> None:
+    fa = tmp_path / "broken.pxml"
+    fa.write_text(FAILING_FA)
+    lines = Run(OFFICE, fa=fa, until=120).run()
+    [error] = [line for line in lines if line.kind is Kind.ERROR]
+    assert error.app == "broken-fa" and "by zero" in error.text and "broken.pxml:4:" in error.text
+    unload = next(line for line in lines if line.kind is Kind.UNLOAD)
+    assert unload.app == "broken-fa" and unload.seq > error.seq
+    later = [line for line in lines if line.seq > error.seq and line.app == "ea3-navigate"
+             and line.kind is Kind.START]
+    assert later, "the EA must go on after the FA failed"
+    assert not [line for line in lines if line.seq > unload.seq and line.app == "broken-fa"]
+
+
+def test_cli_writes_text_or_jsonl(tmp_path: Path) -> None:
+    code, out, _ = run_cli("run", str(OFFICE), "--until", "30")
+    assert code == 0 and out.startswith("  No.") and '"Where are you going?"' in out
+    target = tmp_path / "trace.jsonl"
+    code, out, _ = run_cli("run", str(OFFICE), "--until", "30", "--format", "jsonl",
+                           "--out", str(target), "--seed", "3")
+    assert code == 0 and out == ""
+    assert json.loads(target.read_text().splitlines()[0])["kind"] == "load"
+
+
+def test_cli_reports_bad_inputs(tmp_path: Path) -> None:
+    assert run_cli("run", "nope.xml")[0] == 2
+    assert run_cli("run", str(OFFICE), "--until", "-1")[0] == 2
+    bad = tmp_path / "bad.pxml"
+    bad.write_text('<pxml xmlns="urn:prima:pxml:1" kind="fa" name="x"><state id="s"/></pxml>')
+    code, _, err = run_cli("run", str(OFFICE), "--fa", str(bad))
+    assert code == 1 and f"{bad}:1:1: error: no initial state" in err
