@@ -160,7 +160,7 @@ class Run:
             work()
         except AppFailure:
             self._fail(app)
-            if app.name in self.mediator.apps:
+            if app.name in self.mediator.apps():
                 self.mediator.unregister(app.name)
 
     def _fail(self, app: _App) -> None:

@@ -106,3 +106,17 @@ def test_cli_reports_bad_inputs(tmp_path: Path) -> None:
     bad.write_text('<pxml xmlns="urn:prima:pxml:1" kind="fa" name="x"><state id="s"/></pxml>')
     code, _, err = run_cli("run", str(OFFICE), "--fa", str(bad))
     assert code == 1 and f"{bad}:1:1: error: no initial state" in err
+
+
+@pytest.mark.parametrize("where", ["entry", "timer"])
+def test_failures_outside_mediator_callbacks_unload_too(tmp_path: Path, where: str) -> None:
+    action = '<assign name="n" expr="1 / n"/>'
+    body = (f"<entry>{action}</entry>" if where == "entry" else
+            f'<entry><timer name="t" after="5"/></entry><on event="t">{action}</on>')
+    fa = tmp_path / "broken.pxml"
+    fa.write_text(f'<pxml xmlns="urn:prima:pxml:1" kind="fa" name="broken-fa"><var name="n" expr="0"/>'
+                  f'<state id="s" initial="true">{body}</state></pxml>')
+    lines = Run(OFFICE, fa=fa, until=30).run()
+    kinds = [(line.kind, line.app) for line in lines if line.kind in (Kind.ERROR, Kind.UNLOAD)]
+    assert kinds == [(Kind.ERROR, "broken-fa"), (Kind.UNLOAD, "broken-fa")]
+    assert any(line.app == "ea3-navigate" and line.kind is Kind.START for line in lines)
