@@ -60,6 +60,16 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--format", choices=("text", "jsonl"), default="text",
                      help="trace format (default: text)")
     run.add_argument("--out", metavar="FILE", help="write the trace to FILE instead of stdout")
+    test = commands.add_parser(
+        "test",
+        help="run scenarios and compare their traces with golden traces",
+        description="Run every scenario that has a golden trace beside it "
+                    "(NAME.golden.txt next to NAME.xml) and show a diff where the trace "
+                    "changed. --update rewrites the golden traces: review them first.",
+    )
+    test.add_argument("paths", nargs="+", metavar="PATH", help="scenario files or folders")
+    test.add_argument("--update", action="store_true",
+                      help="rewrite the golden traces with this run's traces")
     return parser
 
 
@@ -77,6 +87,8 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
             return _validate(args, out, err)
         if args.command == "run":
             return _run(args, out, err)
+        if args.command == "test":
+            return _test(args, out, err)
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return EXIT_ERRORS
@@ -157,3 +169,32 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     else:
         out.write(text)
     return EXIT_OK
+
+
+def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.golden import check, scenarios_with_goldens
+
+    try:
+        scenarios = scenarios_with_goldens(args.paths)
+    except FileNotFoundError as exc:
+        print(f"prima test: error: no such file or folder: {exc}", file=err)
+        return EXIT_USAGE
+    if not scenarios:
+        print(f"prima test: error: no scenario with a golden trace in {' '.join(args.paths)}",
+              file=err)
+        return EXIT_USAGE
+    failed = 0
+    for scenario in scenarios:
+        try:
+            result = check(scenario, update=args.update)
+        except LocatedError as exc:
+            for problem in exc.problems:
+                print(problem, file=err)
+            failed += 1
+            continue
+        print(f"{result.status:9} {scenario}", file=out)
+        if result.status in ("different", "missing"):
+            failed += 1
+            out.write(result.diff)
+    print(f"{len(scenarios)} scenario(s): {failed} failed", file=err)
+    return EXIT_ERRORS if failed else EXIT_OK

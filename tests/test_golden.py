@@ -1,0 +1,64 @@
+"""Golden-trace testing: prima test and the prima_golden pytest fixture."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import pytest
+
+from prima.cli import main
+from prima.golden import check, golden_path
+
+ROOT = Path(__file__).parents[1]
+pytest_plugins = ["pytester"]
+
+
+def scenario(tmp_path: Path, message_at: int = 25) -> Path:
+    text = (ROOT / "scenarios/examples/office-kidode.xml").read_text()
+    text = text.replace("../../apps", str(ROOT / "apps")).replace("../maps", str(ROOT / "scenarios/maps"))
+    text = text.replace('until="240"', 'until="40"').replace('at="25"', f'at="{message_at}"')
+    path = tmp_path / "office.xml"
+    path.write_text(text)
+    return path
+
+
+def test_check_is_missing_then_updated_then_same_then_different(tmp_path: Path) -> None:
+    path = scenario(tmp_path)
+    assert check(path).status == "missing" and not golden_path(path).exists()
+    assert check(path, update=True).status == "updated"
+    assert check(path).status == "same"
+    scenario(tmp_path, message_at=27)
+    result = check(path)
+    assert result.status == "different"
+    assert "-    " in result.diff and "27.00" in result.diff and "25.00" in result.diff
+
+
+def test_prima_test_cli(tmp_path: Path) -> None:
+    path = scenario(tmp_path)
+
+    def cli(*argv: str) -> tuple[int, str]:
+        out, err = io.StringIO(), io.StringIO()
+        return main(["test", *argv], out=out, err=err), out.getvalue()
+
+    assert cli(str(tmp_path))[0] == 2  # a folder with no golden trace yet
+    assert cli("--update", str(path)) == (0, f"updated   {path}\n")
+    assert cli(str(tmp_path)) == (0, f"same      {path}\n")
+    scenario(tmp_path, message_at=27)
+    code, out = cli(str(tmp_path))
+    assert code == 1 and out.startswith(f"different {path}\n---")
+
+
+def test_pytest_fixture(pytester: pytest.Pytester, tmp_path: Path) -> None:
+    path = scenario(tmp_path)
+    pytester.makepyfile(f"""
+        def test_office(prima_golden):
+            prima_golden({str(path)!r})
+    """)
+    pytester.runpytest().assert_outcomes(failed=1)  # no golden yet
+    pytester.runpytest("--prima-update-goldens").assert_outcomes(passed=1)
+    pytester.runpytest().assert_outcomes(passed=1)
+    scenario(tmp_path, message_at=27)
+    result = pytester.runpytest()
+    result.assert_outcomes(failed=1)
+    result.stdout.fnmatch_lines(["*differs from its golden trace*"])
