@@ -36,10 +36,13 @@ def test_every_command_is_documented_in_both_forms() -> None:
             assert f"`{param.name}`" in text, (spec.name, param.name)
 
 
-def test_every_cli_option_is_documented() -> None:
-    text = (ROOT / "docs" / "pxml.md").read_text() + (ROOT / "README.md").read_text()
-    parser = build_parser()
-    for action in parser._subparsers._group_actions[0].choices["validate"]._actions:  # type: ignore[union-attr]
+@pytest.mark.parametrize("command, doc", [("validate", "pxml.md"), ("run", "running.md"),
+                                          ("test", "running.md")])
+def test_every_cli_option_is_documented(command: str, doc: str) -> None:
+    text = (ROOT / "docs" / doc).read_text()
+    assert f"prima {command}" in text
+    sub = build_parser()._subparsers._group_actions[0].choices[command]  # type: ignore[union-attr]
+    for action in sub._actions:
         for option in action.option_strings:
             if option not in ("-h", "--help"):
                 assert option in text, option
