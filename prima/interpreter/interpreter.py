@@ -336,12 +336,16 @@ class Interpreter:
     def _request(self, request: Request, scope: Scope) -> None:
         calls = tuple(self._call(c, scope) for c in request.calls)
         handling = self._handling
-        reactive = handling.reactive and not handling.requested
+        # Both flags go on the first request of a handling only (MISSION.md rules 5
+        # and 6a); later requests link after it (after-latest), in the same stream.
+        first = not handling.requested
+        reactive = handling.reactive and first
+        follows = handling.follows if first else None
         handling.requested = True
         try:
             ids = self.port.submit(MediatorRequest(
                 app=self.app, calls=calls, order=request.order, group=request.group,
-                reactive=reactive, follows=handling.follows))
+                reactive=reactive, follows=follows))
         except PrimaError as exc:  # the mediator refused it (e.g. a Command the robot lacks)
             raise ExecutionError(f"{self._where(request.loc)}request refused: {exc}") from exc
         for cid, call in zip(ids, request.calls):

@@ -188,3 +188,15 @@ def test_active_sensing_with_a_prompt_also_uses_the_speaker() -> None:
     with_prompt, without = port.requests[0].calls
     assert with_prompt.extra_devices == {"speaker"} and without.extra_devices == frozenset()
     assert with_prompt.args["turn"] == 90.0
+
+
+def test_only_the_first_request_of_an_end_handler_follows_the_ended_command() -> None:
+    interp, port, *_ = make(
+        '<grammar id="g"><choice>right</choice></grammar>'
+        '<state id="s" initial="true"><entry><chain>q: QA("Which way?", g)</chain></entry>'
+        '<on-answer of="q"><chain>Turn(-90)</chain><goto state="t"/></on-answer></state>'
+        '<state id="t"><entry><chain>QA("May I take a picture?", g)</chain></entry></state>')
+    interp.command_ended(1, Outcome({"status": "answered", "utterance": "right"}))
+    turn, ask = port.requests[1:]
+    assert turn.follows == 1
+    assert ask.follows is None and ask.order is RunningOrder.AFTER_LATEST  # after the Turn
