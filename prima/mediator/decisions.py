@@ -82,6 +82,9 @@ class Rule(str, enum.Enum):
     """A stream hold ended: the app closed the stream."""
     BLOCK = "block"
     """Another app's begin/end block reserves the devices (reactive ABs wait too)."""
+    KEEP_CHANNEL = "keep-channel"
+    """It would break the Communication Channel while another app talks with the user:
+    it waits until that talk ends (thesis Sec. 3.3, Fig. 3.3)."""
     BLOCK_CLOSE = "block-close"
     """A block reservation ended: the app closed the block."""
     WATCHDOG = "watchdog"

@@ -16,7 +16,7 @@ from typing import Iterator
 from prima.mediator.catalog import Priority
 from prima.mediator.interface import AbId, TreeId
 from prima.mediator.selection import WaitIndex
-from prima.mediator.state import NodeState, _App, _Command, _Node, _Tree
+from prima.mediator.state import TALK_DEVICES, NodeState, _App, _Command, _Node, _Tree
 
 __all__ = ["WorkingMemory"]
 
@@ -30,6 +30,8 @@ class WorkingMemory:
         self.trees: dict[TreeId, _Tree] = {}
         """Trees in working memory (with at least one such node)."""
         self.busy: dict[str, _Node] = {}
+        self.channel_devices: frozenset[str] = frozenset()
+        """Devices of the Commands that break the Communication Channel."""
         """Device -> the running AB that occupies it."""
         self.index = WaitIndex()
         self.waiting = 0
@@ -98,6 +100,9 @@ class WorkingMemory:
             if self.busy.get(d) is node:
                 del self.busy[d]
         self.dirty.update(node.devices)
+        if not TALK_DEVICES.isdisjoint(node.devices):
+            # A CC-breaking AB may have waited for this talk to end (the channel rule).
+            self.dirty.update(self.channel_devices)
         node.tree.running -= 1
         self._inactive(node.app, now)
         children = node.children

@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING
 
 from prima.mediator.decisions import DecisionKind, Rule
 from prima.mediator.selection import rank, separating_rule
-from prima.mediator.state import NodeState, _App, _Node, _Tree
+from prima.mediator.catalog import Priority
+from prima.mediator.state import TALK_DEVICES, NodeState, _App, _Node, _Tree
 
 if TYPE_CHECKING:
     from prima.mediator.core import Mediator
@@ -62,7 +63,18 @@ class RoundsMixin:
                     self._wm.dirty.update(st.devices)
 
     def _holder(self: Mediator, node: _Node) -> tuple[Rule, _App] | None:
-        """Another app's block or armed stream hold that keeps ``node`` from starting."""
+        """Another app's block, armed stream hold, or talk that keeps ``node`` from starting.
+
+        The talk: a Command that breaks the Communication Channel (moving away)
+        never starts while another application talks with the user, so the robot
+        does not leave in the middle of a conversation (thesis Sec. 3.3).
+        """
+        if node.priority is Priority.LOW:
+            busy = self._wm.busy
+            for d in TALK_DEVICES:
+                talker = busy.get(d)
+                if talker is not None and talker.app is not node.app:
+                    return Rule.KEEP_CHANNEL, talker.app
         for other in self._apps.values():
             if other is node.app:
                 continue
@@ -117,7 +129,7 @@ class RoundsMixin:
                     break
             if blocked:
                 continue
-            if self._apps_with_holds:
+            if self._apps_with_holds or x.priority is Priority.LOW:
                 held = self._holder(x)
                 if held is not None:
                     self._note_hold(x, *held)
@@ -164,6 +176,11 @@ class RoundsMixin:
         return started
 
     def _note_hold(self: Mediator, node: _Node, rule: Rule, holder: _App) -> None:
+        if rule is Rule.KEEP_CHANNEL:
+            if node.id not in self._channel_held:
+                self._channel_held.add(node.id)
+                self._emit(DecisionKind.HOLD, rule, node, detail=f"{holder.name} is talking")
+            return
         box = holder.block if rule is Rule.BLOCK else holder.stream
         if box is None or node.id in box.held:
             return

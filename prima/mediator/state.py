@@ -105,6 +105,11 @@ class _App:
         self.block: _Block | None = None
 
 
+TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
+"""Devices through which the robot talks with its user: while another app uses
+them, a Command that breaks the Communication Channel waits."""
+
+
 class _Command:
     """One requested Command."""
 

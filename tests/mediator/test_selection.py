@@ -11,7 +11,7 @@ import pytest
 from prima.mediator import AppKind, DecisionKind, Rule
 from prima.mediator.testing import Harness, plain_scan
 
-from tests.mediator.helpers import call, ghost, req, speak, start_of
+from tests.mediator.helpers import call, ghost, req, speak, start_of, start_time
 
 
 def _apps(h: Harness) -> Harness:
@@ -180,3 +180,30 @@ def test_incremental_selection_matches_a_plain_scan(n: int) -> None:
     while h.step():
         assert plain_scan(m) == []
     assert m.snapshot().waiting == ()
+
+
+def test_a_cc_breaking_move_waits_while_the_other_app_talks_with_the_user() -> None:
+    """The channel rule (thesis Sec. 3.3, Fig. 5.3 line 7: "The robot stopped and
+    said ..."). Without it the EA's next leg (no shared device) would start at
+    t=0 and the robot would drive away in the middle of the FA's question."""
+    h = _apps(Harness(duration=2.0))
+    m = h.mediator
+    m.submit(req("fa", call("QA", prompt="What's the matter with you?", timeout=5.0)))  # AB1 0-2
+    m.submit(req("ea", call("TopologicalMove", to="room")))                              # AB2 LOW
+    m.submit(req("ea", call("Speak", text="on the way")))                              # AB3 (chained)
+    h.run(until=10.0)
+    assert start_time(h, 2) == 2.0  # only once the FA's talk ended
+    [hold] = [d for d in h.decisions if d.kind is DecisionKind.HOLD]
+    assert (hold.ab, hold.rule, hold.t) == (2, Rule.KEEP_CHANNEL, 0.0)
+
+
+def test_an_app_may_talk_while_it_moves_itself() -> None:
+    """The channel rule is about the other application: the EA itself may say
+    hello while navigating (MISSION.md rule 2)."""
+    h = _apps(Harness(duration=2.0))
+    m = h.mediator
+    m.submit(req("ea", call("Speak", text="Follow me.")))                             # AB1 0-2
+    m.submit(req("ea", call("TopologicalMove", to="room"), asap=True))               # AB2 LOW
+    h.run(until=10.0)
+    assert start_time(h, 2) == 0.0
+    assert not [d for d in h.decisions if d.kind is DecisionKind.HOLD]
