@@ -286,11 +286,20 @@ def active_sensing_human(sim: Simulator, call: Call, cid: CommandId, it: int) ->
     if found:
         sim.end_loop(cid)
         return {"found": True, "distance": round(sim.world.user_distance(), 3)}, True
-    yield from _turn(sim, math.radians(angle))
-    seen, distance = sim.world.sees_user(k.tick)
-    if seen:  # the user came into view while the view turned
+    # Turn the view; stop as soon as the user comes into view (Turn-and-Search).
+    world = sim.world
+    if world.mode:
+        yield from _stop(sim)
+    turned: list[bool] = []
+    if world.turn_by(math.radians(angle), lambda *_a: turned.append(True)):
+        yield until(lambda: bool(turned) or sim.seen)
+    if sim.seen and not turned:
+        yield from _stop(sim)
+    seen, distance = world.sees_user(k.tick)
+    if seen or sim.seen:
         sim.end_loop(cid)
-        return {"found": True, "distance": round(distance, 3), "turned": angle}, True
+        return {"found": True, "distance": round(world.user_distance(), 3),
+                "turned": angle}, True
     return {"found": False, "turned": angle}, False
 
 

@@ -133,12 +133,13 @@ def test_active_sensing_turns_after_10_s_and_finds_a_user_behind_the_robot() -> 
     turn = _turn_time(90)
     assert ends[0].time == pytest.approx(10.0 + turn, abs=0.1)
     assert ends[0].data == {"found": False, "turned": 90.0}
-    assert ends[1].time == pytest.approx(2 * (10.0 + turn), abs=0.2)
+    # the second turn stops as soon as the user comes into the 60 degree field of view
+    assert 2 * 10.0 + turn < ends[1].time < 2 * (10.0 + turn)
     assert ends[1].data["found"] is True and ends[1].data["distance"] == 1.5
     found = r.events("human-found")
-    # seen as soon as the user enters the 60 degree field of view, during the turn
-    assert len(found) == 1 and 10 + turn + 10 < found[0].time < ends[1].time
-    assert r.sim.robot_pose().heading == pytest.approx(180.0, abs=0.01)
+    assert len(found) == 1 and 10 + turn + 10 < found[0].time <= ends[1].time
+    heading = r.sim.robot_pose().heading
+    assert 150.0 < heading < 180.0  # turned only until the user (at 180) was in view
 
 
 def test_active_sensing_finds_a_visible_user_at_once() -> None:
