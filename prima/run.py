@@ -199,7 +199,6 @@ class Run:
         kind = _DECISION_KINDS.get(d.kind)
         if kind is None:
             return
-        call = d.calls[0] if d.calls else None
         text = None
         detail: dict[str, object] = {}
         if d.command_id is not None:
@@ -208,14 +207,15 @@ class Run:
             outcome = self._outcomes.pop(d.ab, None)
             if outcome is not None and outcome.values:
                 detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
-        if call is not None:
-            text = next((str(call.args[k]) for k in _SPOKEN if call.args.get(k)), None)
-            others = [f"{k}={v}" for k, v in call.args.items() if k not in _SPOKEN
-                      and not (call.command == "QA" and k == "timeout")]
-            if others:
-                detail["args"] = " ".join(others)
-            if call.label:
-                detail["label"] = call.label
+        spoken = [str(c.args[k]) for c in d.calls for k in _SPOKEN if c.args.get(k)]
+        if spoken:
+            text = " / ".join(spoken)
+        others = [f"{k}={v}" for c in d.calls for k, v in c.args.items() if k not in _SPOKEN
+                  and not (c.command == "QA" and k == "timeout")]
+        if others:
+            detail["args"] = " ".join(others)
+        if d.calls and d.calls[0].label:
+            detail["label"] = d.calls[0].label
         if d.iteration:
             detail["iteration"] = d.iteration
         if d.detail and kind is not Kind.START:
