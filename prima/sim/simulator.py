@@ -90,6 +90,8 @@ class Simulator:
         self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
         self._zones = tuple(zones)
         self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
+        self._near: set[str] = {p.name for p in self.map.places
+                                if math.hypot(p.x - robot.x, p.y - robot.y) <= self.spec.passing_radius}
         for ev in events:
             self.kernel.at(round(ev.at * hz), lambda ev=ev: self._post(ev))
         self.user = ScriptedUser(user, self) if user is not None else None
@@ -318,6 +320,8 @@ class Simulator:
             self._update_monitor()
         if self._zones and self.world.mode:
             self._check_zones()
+        if self.world.mode:
+            self._check_passing()
         self.kernel.check_polls()
 
     def _update_monitor(self) -> None:
@@ -337,6 +341,21 @@ class Simulator:
                 self.seen = False
                 self._unseen_since = None
                 self.announce_lost()
+
+    def _check_passing(self) -> None:
+        """Report places the robot passes while no Topological Move reports its route."""
+        x, y = self.world.robot.position
+        radius = self.spec.passing_radius
+        navigating = any(c.command == "TopologicalMove" for ab in self._running.values()
+                         for c in ab.calls)
+        for place in self.map.places:
+            near = math.hypot(place.x - x, place.y - y) <= radius
+            if near and place.name not in self._near:
+                self._near.add(place.name)
+                if not navigating:
+                    self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
+            elif not near:
+                self._near.discard(place.name)
 
     def _check_zones(self) -> None:
         x, y = self.world.robot.position

@@ -70,6 +70,9 @@ class RobotSpec:
     picture_time: float = 0.5
     """How long a camera capture takes (s)."""
     place_tolerance: float = 0.15
+    passing_radius: float = 1.5
+    """A place is reported as reached when the robot passes this close to it
+    while no Topological Move reports its own route (e.g. while tracking)."""
     """Within this distance the robot counts as being at a place (m)."""
     position_tolerance: float = 0.05
     """Set Position is done within this distance of its target (m)."""

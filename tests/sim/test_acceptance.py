@@ -241,3 +241,13 @@ def test_stop_on_report_returns_at_each_report_and_changes_nothing() -> None:
     assert stopping == plain
     report_times = sorted({e["time"] for e in plain if e["time"] < 60})
     assert set(report_times) <= set(returns) and len(returns) > 5
+
+
+def test_places_passed_while_tracking_are_reported() -> None:
+    # the user leads the robot round the office corner: localization notices the corner
+    r = runner("office", Pose(11, 3, 0), Pose(12.2, 3, 0), walk(1, 15, 3), walk(10, 15, 8))
+    r.queue(call("TrackingHuman", distance=1.0))
+    r.run(40)
+    reached = [e.data["place"] for e in r.events("place-reached")]
+    assert reached.count("corner") == 1
+    assert "kidode-room" not in reached  # never came near it
