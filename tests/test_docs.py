@@ -46,3 +46,15 @@ def test_every_cli_option_is_documented(command: str, doc: str) -> None:
         for option in action.option_strings:
             if option not in ("-h", "--help"):
                 assert option in text, option
+
+
+def test_readme_example_validates() -> None:
+    import re
+
+    from prima.dsl.loader import check_document
+
+    snippet = re.search(r"```xml\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
+    snippet = snippet.replace('<state id="guide">', '<state id="guide" initial="true">', 1)
+    source = f'<pxml xmlns="urn:prima:pxml:1" kind="ea" name="readme">{snippet}</pxml>'
+    document, problems = check_document(source.encode(), "README.md")
+    assert document is not None and problems == [], [str(p) for p in problems]
