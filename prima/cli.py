@@ -95,6 +95,16 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     return EXIT_USAGE  # pragma: no cover - argparse enforces the choice
 
 
+def _report(exc: LocatedError, err: TextIO) -> None:
+    for problem in exc.problems:
+        print(problem, file=err)
+
+
+def _usage(command: str, message: str, err: TextIO) -> int:
+    print(f"prima {command}: error: {message}", file=err)
+    return EXIT_USAGE
+
+
 def _scenario_checkers() -> dict[str, Checker]:
     """Scenario and map files are the simulator's; the CLI joins both worlds."""
     from prima.sim.scenario import MAP_NS, SCENARIO_NS, load_map, load_scenario
@@ -115,8 +125,7 @@ def _profile(path: str | None, err: TextIO) -> RobotProfile | None:
     try:
         return load_profile(path) if path else default_profile()
     except LocatedError as exc:
-        for problem in exc.problems:
-            print(problem, file=err)
+        _report(exc, err)
         return None
 
 
@@ -124,15 +133,13 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     try:
         files = collect(args.paths)
     except FileNotFoundError as exc:
-        print(f"prima validate: error: no such file or folder: {exc}", file=err)
-        return EXIT_USAGE
+        return _usage("validate", f"no such file or folder: {exc}", err)
     profile = _profile(args.robot, err)
     if profile is None:
         return EXIT_ERRORS
     report = validate_paths(files, profile, _scenario_checkers())
     if not report.files:
-        print(f"prima validate: error: no PRIMA files in {' '.join(args.paths)}", file=err)
-        return EXIT_USAGE
+        return _usage("validate", f"no PRIMA files in {' '.join(args.paths)}", err)
     if args.format == "json":
         json.dump(report.to_dict(), out, indent=2)
         out.write("\n")
@@ -150,18 +157,15 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.trace import format_text, format_jsonl
 
     if args.until is not None and args.until <= 0:
-        print("prima run: error: --until must be positive", file=err)
-        return EXIT_USAGE
+        return _usage("run", "--until must be positive", err)
     for path in (args.scenario, args.fa, args.ea, args.robot):
         if path is not None and not Path(path).is_file():
-            print(f"prima run: error: no such file: {path}", file=err)
-            return EXIT_USAGE
+            return _usage("run", f"no such file: {path}", err)
     try:
         lines = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
                     seed=args.seed, until=args.until).run()
     except LocatedError as exc:
-        for problem in exc.problems:
-            print(problem, file=err)
+        _report(exc, err)
         return EXIT_ERRORS
     text = format_text(lines) if args.format == "text" else format_jsonl(lines)
     if args.out:
@@ -177,19 +181,15 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     try:
         scenarios = scenarios_with_goldens(args.paths)
     except FileNotFoundError as exc:
-        print(f"prima test: error: no such file or folder: {exc}", file=err)
-        return EXIT_USAGE
+        return _usage("test", f"no such file or folder: {exc}", err)
     if not scenarios:
-        print(f"prima test: error: no scenario with a golden trace in {' '.join(args.paths)}",
-              file=err)
-        return EXIT_USAGE
+        return _usage("test", f"no scenario with a golden trace in {' '.join(args.paths)}", err)
     failed = 0
     for scenario in scenarios:
         try:
             result = check(scenario, update=args.update)
         except LocatedError as exc:
-            for problem in exc.problems:
-                print(problem, file=err)
+            _report(exc, err)
             failed += 1
             continue
         print(f"{result.status:9} {scenario}", file=out)
