@@ -33,7 +33,7 @@ def make_corpus(folder: Path, n: int = 100) -> list[Path]:
 def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         files = make_corpus(Path(tmp))
-        lines = sum(len(f.read_text().splitlines()) for f in files)
+        lines = sum(len(f.read_text().splitlines()) for f, _named in files)
         report = validate_paths(files)  # warm up: build schemas and the parser once
         assert report.errors == 0, report.problems
         runs = []

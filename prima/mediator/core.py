@@ -88,7 +88,6 @@ class Mediator(HoldsMixin, RoundsMixin):
         self._wm = WorkingMemory()
         self._wm.channel_devices = frozenset().union(
             *(c.devices for c in catalog if c.breaks_cc))
-        self._channel_held: set[int] = set()
         self._apps: dict[str, _App] = {}
         self._app_order = 0
         self._next_command = 1

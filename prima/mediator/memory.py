@@ -32,6 +32,8 @@ class WorkingMemory:
         self.busy: dict[str, _Node] = {}
         self.channel_devices: frozenset[str] = frozenset()
         """Devices of the Commands that break the Communication Channel."""
+        self.channel_held: set[int] = set()
+        """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
         """Device -> the running AB that occupies it."""
         self.index = WaitIndex()
         self.waiting = 0
@@ -88,6 +90,7 @@ class WorkingMemory:
 
     def start(self, node: _Node) -> None:
         node.state = NodeState.RUNNING
+        self.channel_held.discard(node.id)
         self.waiting -= 1
         for d in node.sorted_devices:
             self.busy[d] = node
@@ -100,8 +103,8 @@ class WorkingMemory:
             if self.busy.get(d) is node:
                 del self.busy[d]
         self.dirty.update(node.devices)
-        if not TALK_DEVICES.isdisjoint(node.devices):
-            # A CC-breaking AB may have waited for this talk to end (the channel rule).
+        if self.channel_held and not TALK_DEVICES.isdisjoint(node.devices):
+            # A CC-breaking AB waited for this talk to end (the channel rule).
             self.dirty.update(self.channel_devices)
         node.tree.running -= 1
         self._inactive(node.app, now)
@@ -113,6 +116,7 @@ class WorkingMemory:
         """Remove a not-yet-started node."""
         was_waiting = node.state is NodeState.WAITING
         node.state = NodeState.CANCELLED
+        self.channel_held.discard(node.id)
         node.children = []
         if was_waiting:
             self.waiting -= 1

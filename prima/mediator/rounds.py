@@ -75,6 +75,8 @@ class RoundsMixin:
                 talker = busy.get(d)
                 if talker is not None and talker.app is not node.app:
                     return Rule.KEEP_CHANNEL, talker.app
+            if not self._apps_with_holds:
+                return None
         for other in self._apps.values():
             if other is node.app:
                 continue
@@ -177,8 +179,9 @@ class RoundsMixin:
 
     def _note_hold(self: Mediator, node: _Node, rule: Rule, holder: _App) -> None:
         if rule is Rule.KEEP_CHANNEL:
-            if node.id not in self._channel_held:
-                self._channel_held.add(node.id)
+            held = self._wm.channel_held
+            if node.id not in held:
+                held.add(node.id)
                 self._emit(DecisionKind.HOLD, rule, node, detail=f"{holder.name} is talking")
             return
         box = holder.block if rule is Rule.BLOCK else holder.stream

@@ -187,13 +187,14 @@ class _Node:
         self.version = 0
         """Bumped whenever its waiting-index entries must be re-filed."""
         self.tier = 0
-        self.calls = tuple(c.call for c in commands)
         if len(commands) == 1:
             first = commands[0]
+            self.calls: tuple[Call, ...] = (first.call,)
             self.name = first.spec.name
             self.command_ids: tuple[CommandId, ...] = (first.id,)
             self.feedback = first.spec.feedback
         else:
+            self.calls = tuple([c.call for c in commands])
             self.name = "+".join(c.spec.name for c in commands)
             self.command_ids = tuple(c.id for c in commands)
             self.feedback = False
