@@ -145,7 +145,7 @@ class Run:
         name = document.name
         interpreter = Interpreter(document, name, self._port, self.sim,
                                   catalog=self.profile.catalog(), robot_events=self.profile.events,
-                                  note=self._note, send=lambda _a, _to, _t: None)
+                                  note=self._note, send=lambda _app, to, text: self.sim.send(to, text))
         app = _App(name, role, document, interpreter)
         self.apps[name] = app
         self._line(Kind.LOAD, app=name, detail={"document": path.name, "role": role.value})

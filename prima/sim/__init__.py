@@ -10,6 +10,7 @@ from prima.sim.maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim.records import (
     Picture,
     Pose,
+    ReplyRule,
     ScheduledEvent,
     UserAction,
     UserActionKind,
@@ -32,6 +33,7 @@ __all__ = [
     "Place",
     "PlaceKind",
     "Pose",
+    "ReplyRule",
     "RobotSpec",
     "Scenario",
     "ScheduledEvent",

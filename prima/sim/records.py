@@ -118,6 +118,26 @@ class ScheduledEvent:
 
 
 @dataclass(frozen=True)
+class ReplyRule:
+    """How a server of the environment answers what an application sends it."""
+
+    to: str
+    """The server's name, as applications address it (``<send to="...">``)."""
+    text: str
+    """The reply; ``{text}`` stands for the message that was sent."""
+    after: float = 1.0
+    """Seconds between the send and the reply."""
+    contains: str | None = None
+    """Reply only to messages containing this (ignoring case); None: any message."""
+
+    def matches(self, to: str, text: str) -> bool:
+        return to == self.to and (self.contains is None or self.contains.lower() in text.lower())
+
+    def to_dict(self) -> dict[str, object]:
+        return {"to": self.to, "text": self.text, "after": self.after, "contains": self.contains}
+
+
+@dataclass(frozen=True)
 class Zone:
     """An area of the map whose entry by the robot loads an EA document."""
 

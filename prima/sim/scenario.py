@@ -22,7 +22,7 @@ from prima._xml import XmlDocument, local_name, parse_xml, read_source
 from prima.errors import Problem, ScenarioError
 from prima._schema import validate
 from prima.sim.maps import Area, Place, PlaceKind, Wall, WorldMap
-from prima.sim.records import Pose, ScheduledEvent, UserActionKind, Zone
+from prima.sim.records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim.user import AnswerRule, TimedAction, UserScript
 
 __all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
@@ -56,6 +56,8 @@ class Scenario:
     """The EA running from the start (more may be loaded on entering zones)."""
     user: UserScript | None = None
     events: tuple[ScheduledEvent, ...] = ()
+    replies: tuple[ReplyRule, ...] = ()
+    """How the environment's servers answer what the applications send them."""
     zones: tuple[Zone, ...] = ()
     description: str = ""
 
@@ -71,6 +73,7 @@ class Scenario:
             "profile": self.profile, "fa": self.fa, "ea": self.ea,
             "user": None if self.user is None else self.user.to_dict(),
             "events": [e.to_dict() for e in self.events],
+            "replies": [r.to_dict() for r in self.replies],
             "zones": [z.to_dict() for z in self.zones],
         }
 
@@ -202,6 +205,7 @@ _ACTIONS = {k.value: k for k in (UserActionKind.SAY, UserActionKind.TOUCH, UserA
 
 class _Loader:
     def __init__(self, doc: XmlDocument, path: Path) -> None:
+        self.replies: list[ReplyRule] = []
         self.doc = doc
         self.path = path
         self.problems: list[Problem] = []
@@ -260,7 +264,7 @@ class _Loader:
             profile=robot_el.get("profile"),
             fa=apps.get("fa") if apps is not None else None,
             ea=apps.get("ea") if apps is not None else None,
-            user=user, events=events, zones=zones,
+            user=user, events=events, replies=tuple(self.replies), zones=zones,
             description=_text(kids["description"]) if "description" in kids else "")
 
     def rate(self, root: etree._Element) -> int:
@@ -338,6 +342,9 @@ class _Loader:
                 else:
                     data = {d.get("name", ""): d.get("value", "") for d in _children(el)}
                     events.append(ScheduledEvent(at, el.get("name", ""), data))
+            elif tag == "reply":
+                self.replies.append(ReplyRule(el.get("to", ""), el.get("text", ""),
+                                              float(el.get("after", "1.0")), el.get("contains")))
             elif tag == "zone":
                 zone = self.zone(el)
                 if zone is not None:

@@ -27,7 +27,15 @@ from prima.mediator.catalog import Value
 from prima.mediator.interface import AbId, AtomicBehavior, CommandId, Event, Outcome
 from prima.sim.kernel import Kernel, Waker
 from prima.sim.maps import Place, WorldMap
-from prima.sim.records import Picture, Pose, ScheduledEvent, UserAction, Zone, ZoneEntry
+from prima.sim.records import (
+    Picture,
+    Pose,
+    ReplyRule,
+    ScheduledEvent,
+    UserAction,
+    Zone,
+    ZoneEntry,
+)
 from prima.sim.spec import RobotSpec
 from prima.sim.user import ScriptedUser, UserScript
 from prima.sim.world import World
@@ -52,6 +60,7 @@ class Simulator:
     def __init__(self, world_map: WorldMap, *, spec: RobotSpec | None = None,
                  robot: Pose = Pose(0.0, 0.0, 0.0), user: UserScript | None = None,
                  events: Iterable[ScheduledEvent] = (), zones: Iterable[Zone] = (),
+                 replies: Iterable[ReplyRule] = (),
                  seed: int = 0, hz: int = 50, noise: float = 0.0, heading_noise: float = 0.0,
                  finished: Finished | None = None,
                  on_event: Callable[[Event], None] | None = None,
@@ -73,6 +82,9 @@ class Simulator:
         self.reports = 0
         """How many reports (ends, events, user actions, zone entries) so far."""
         self.inbox: list[Mapping[str, Value]] = []
+        self.outbox: list[Mapping[str, Value]] = []
+        """What the applications sent to the environment's servers."""
+        self.replies: tuple[ReplyRule, ...] = tuple(replies)
         """Network messages received so far (sender, text)."""
         self.pictures: list[Picture] = []
         """Camera captures taken so far."""
@@ -98,6 +110,21 @@ class Simulator:
         if self.user is not None:
             self.user.begin()
 
+    def send(self, to: str, text: str) -> None:
+        """An application sends ``text`` to the environment's server ``to``.
+
+        The first of the scenario's reply rules that matches schedules the
+        server's answer, a ``message`` event, ``after`` seconds from now.
+        """
+        self.outbox.append(MappingProxyType({"time": self.now(), "to": to, "text": text}))
+        for rule in self.replies:
+            if rule.matches(to, text):
+                reply = ScheduledEvent(self.now() + rule.after, "message",
+                                       {"sender": to, "text": rule.text.replace("{text}", text)})
+                self.kernel.at(self.kernel.tick + self.ticks(rule.after),
+                               lambda ev=reply: self._post(ev))
+                return
+
     @classmethod
     def from_scenario(cls, scenario: Scenario, *, spec: RobotSpec | None = None,
                       finished: Finished | None = None,
@@ -106,7 +133,8 @@ class Simulator:
                       on_zone: Callable[[ZoneEntry], None] | None = None) -> Simulator:
         """A simulator for a loaded scenario (``spec`` from the robot profile, if any)."""
         return cls(scenario.map, spec=spec, robot=scenario.robot, user=scenario.user,
-                   events=scenario.events, zones=scenario.zones, seed=scenario.seed,
+                   events=scenario.events, replies=scenario.replies, zones=scenario.zones,
+                   seed=scenario.seed,
                    hz=scenario.rate, noise=scenario.noise,
                    heading_noise=scenario.heading_noise, finished=finished,
                    on_event=on_event, on_user=on_user, on_zone=on_zone)

@@ -251,3 +251,24 @@ def test_places_passed_while_tracking_are_reported() -> None:
     reached = [e.data["place"] for e in r.events("place-reached")]
     assert reached.count("corner") == 1
     assert "kidode-room" not in reached  # never came near it
+
+
+def test_servers_reply_to_what_applications_send() -> None:
+    from prima.sim import ReplyRule
+
+    events = []
+    sim = Simulator(_library(), robot=Pose(2, 2, 0), on_event=events.append, replies=(
+        ReplyRule("video", "OK: {text}", after=4.0, contains="record"),
+        ReplyRule("video", "unknown request"),
+    ))
+    sim.advance_to(1.0)
+    sim.send("video", "Record channel 12")
+    sim.send("library", "search: nothing")      # no rule for this server: no reply
+    sim.advance_to(3.0)
+    sim.send("video", "status?")
+    sim.advance_to(10.0)
+    assert [(e.time, e.name, dict(e.data)) for e in events] == [
+        (4.0, "message", {"sender": "video", "text": "unknown request"}),
+        (5.0, "message", {"sender": "video", "text": "OK: Record channel 12"}),
+    ]
+    assert [m["to"] for m in sim.outbox] == ["video", "library", "video"]
