@@ -177,6 +177,8 @@ def parse_xml(data: bytes, name: str, error: type[LocatedError]) -> XmlDocument:
 
     if len(data) > MAX_BYTES:
         raise fail(1, 1, f"document is {len(data)} bytes; the limit is {MAX_BYTES}")
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in data[:4]:
+        raise fail(1, 1, "PRIMA documents must be UTF-8 (this one looks like UTF-16 or UTF-32)")
     doctype = _DOCTYPE.search(data)
     if doctype:
         before = data[: doctype.start()]
@@ -190,7 +192,11 @@ def parse_xml(data: bytes, name: str, error: type[LocatedError]) -> XmlDocument:
         line, col = exc.position if exc.position else (1, 1)
         message = _syntax_message(exc)
         raise fail(max(line, 1), max(col, 1), f"malformed XML: {message}") from exc
-    encoding = root.getroottree().docinfo.encoding or "utf-8"
+    info = root.getroottree().docinfo
+    if info.doctype or info.internalDTD is not None:  # defence in depth: never expected here
+        raise fail(1, 1, "DOCTYPE declarations are not allowed "
+                         "(no DTDs or entities in PRIMA documents)")
+    encoding = info.encoding or "utf-8"
     try:
         text = data.decode(encoding)
     except (LookupError, UnicodeDecodeError) as exc:

@@ -23,6 +23,9 @@ from prima.mediator.catalog import Value
 MAX_TEXT = 10_000
 """Longest string an expression may build (untrusted documents stay bounded)."""
 
+MAX_NUMBER = 2.0 ** 53
+"""Largest magnitude of a number (beyond it, integers lose exactness anyway)."""
+
 
 class SyntaxFault(Exception):
     """A fault in an expression or chain, at a character index of its source."""
@@ -112,7 +115,7 @@ def _to_number(value: Value) -> Value:
             f = float(value.strip())
         except ValueError:
             return None
-        if not math.isfinite(f):
+        if not math.isfinite(f) or abs(f) > MAX_NUMBER:
             return None
         return int(f) if f.is_integer() else f
     if isinstance(value, bool) or value is None:
@@ -124,7 +127,8 @@ FUNCTIONS: Mapping[str, tuple[int, int, Callable[..., Value], str]] = {
     "len": (1, 1, lambda s: len(to_text(s)), "number of characters of a text"),
     "str": (1, 1, lambda v: to_text(v), "a value as text"),
     "number": (1, 1, _to_number, "text as a number, or null if it is not one"),
-    "round": (1, 1, lambda v: round(_number(v, "round()")), "nearest whole number"),
+    "round": (1, 1, lambda v: round(_in_range(_number(v, "round()"), "round()")),
+              "nearest whole number"),
     "abs": (1, 1, lambda v: abs(_number(v, "abs()")), "absolute value"),
     "min": (2, 8, lambda *a: min(_number(v, "min()") for v in a), "smallest of the numbers"),
     "max": (2, 8, lambda *a: max(_number(v, "max()") for v in a), "largest of the numbers"),
@@ -142,7 +146,16 @@ FUNCTIONS: Mapping[str, tuple[int, int, Callable[..., Value], str]] = {
 def _arith(op: str, a: Value, b: Value) -> Value:
     if op == "+" and (isinstance(a, str) or isinstance(b, str)):
         return _bounded(to_text(a) + to_text(b))
-    x, y = _number(a, f"'{op}'"), _number(b, f"'{op}'")
+    return _in_range(_compute(op, _number(a, f"'{op}'"), _number(b, f"'{op}'")), op)
+
+
+def _in_range(value: float | int, op: str) -> float | int:
+    if not (isinstance(value, int) or math.isfinite(value)) or abs(value) > MAX_NUMBER:
+        raise ExecutionError(f"'{op}' gives a number too large (limit {MAX_NUMBER:.0f})")
+    return value
+
+
+def _compute(op: str, x: float | int, y: float | int) -> float | int:
     if op == "+":
         return x + y
     if op == "-":
@@ -453,6 +466,8 @@ class _Compiler:
         ch = node.children
         if kind == "number":
             raw = str(ch[0])
+            if len(raw) > 20:
+                raise SyntaxFault(ch[0].start_pos, "expression: number too long")
             num: Value = float(raw) if "." in raw else int(raw)
             return (lambda _s: num), True
         if kind == "string":

@@ -51,6 +51,9 @@ MAX_TRANSITIONS = 100
 """State changes allowed while handling one event (a goto loop is an error)."""
 MAX_RAISED = 100
 """Own events allowed to pile up while handling one event."""
+MAX_TIMERS_AT_ONCE = 100
+"""Timer firings allowed at one simulated instant (a timer restarting itself with
+``after="0"`` would otherwise never let time move on)."""
 
 
 class MediatorPort(Protocol):
@@ -130,6 +133,7 @@ class Interpreter:
         self._timer_seq = 0
         self._raised: list[str] = []
         self._handling = _Handling()
+        self._fired_at, self._fired = -1.0, 0
 
     # ------------------------------------------------------------ lifecycle
 
@@ -189,16 +193,32 @@ class Interpreter:
         return min(t.due for t in self._timers.values())
 
     def advance(self) -> None:
-        """Fire every timer that is due at the clock's time, oldest first."""
+        """Fire the timers due at the clock's time, oldest first.
+
+        Only the timers due when this call begins fire; one restarted meanwhile
+        fires on a later call. Too many firings at one instant is an error.
+        """
         now = self.clock.now()
-        while not self.stopped:
-            due = sorted((t.due, t.seq, name) for name, t in self._timers.items() if t.due <= now)
-            if not due:
+        due = sorted((t.due, t.seq, name) for name, t in self._timers.items() if t.due <= now)
+        for _due, seq, name in due:
+            timer = self._timers.get(name)
+            if self.stopped or timer is None or timer.seq != seq:
+                continue  # cancelled or restarted by an earlier handler
+            del self._timers[name]
+            if now != self._fired_at:
+                self._fired_at, self._fired = now, 0
+            self._fired += 1
+            if self._fired > MAX_TIMERS_AT_ONCE:
+                self._guard(lambda: self._raise_error(
+                    f"{self.document.path}: more than {MAX_TIMERS_AT_ONCE} timers fired at "
+                    f"t={now:g} s (a timer restarting itself with after=\"0\"?)"))
                 return
-            name = due[0][2]
-            timer = self._timers.pop(name)
             self._guard(lambda: self._dispatch(HandlerKind.EVENT, name, {"name": name},
                                                timer.reactive, None))
+
+    @staticmethod
+    def _raise_error(message: str) -> None:
+        raise ExecutionError(message)
 
     # ------------------------------------------------------------ handling
 
@@ -213,11 +233,18 @@ class Interpreter:
     def _guard(self, work: Callable[[], None]) -> None:
         try:
             work()
+        except AppFailure:
+            raise
         except ExecutionError as exc:
-            self.stopped = True
-            self._timers.clear()
-            self._note(Note(self.clock.now(), self.app, "error", str(exc)))
-            raise AppFailure(str(exc)) from exc
+            self._fail(str(exc), exc)
+        except Exception as exc:  # noqa: BLE001 - a document must never take the run down
+            self._fail(f"{self.document.path}: unexpected error: {type(exc).__name__}: {exc}", exc)
+
+    def _fail(self, message: str, exc: Exception) -> None:
+        self.stopped = True
+        self._timers.clear()
+        self._note(Note(self.clock.now(), self.app, "error", message))
+        raise AppFailure(message) from exc
 
     def _dispatch(self, kind: HandlerKind, key: str, data: dict[str, Value],
                   reactive: bool, follows: CommandId | None) -> None:

@@ -237,8 +237,13 @@ class Mediator(HoldsMixin, RoundsMixin):
             all_devices = frozenset().union(*(d for _s, d in specs))
         cancelled: list[_Command] = []
         link = self._link_follows(app, request, now) if request.follows is not None else None
-        if link is None and request.order is RunningOrder.ASAP:
-            link, cancelled = self._link_asap(app, all_devices, now)
+        if request.order is RunningOrder.ASAP:
+            # A newer request wins even when it is made in an end handler: the app's
+            # own waiting work on its devices is cancelled; the end-event link only
+            # chooses the tree when nothing of the app was in the way.
+            asap, cancelled = self._link_asap(app, all_devices, now)
+            if link is None or asap.parent is not None:
+                link = asap
         if link is None:
             link = link_after_latest(app)
         tree = link.tree if link.tree is not None else self._wm.new_tree(app)
@@ -365,6 +370,7 @@ class Mediator(HoldsMixin, RoundsMixin):
                 cmd.ended_at = now
                 self._recent[cmd.id] = cmd
                 self._recent_q.append(cmd)
+            self._prune_recent(now)  # ended Commands are kept only for the end grace
         for child in children:
             if child.state is NodeState.PENDING:
                 wm.enter_waiting(child, parent_finished=True)

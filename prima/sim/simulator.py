@@ -119,10 +119,12 @@ class Simulator:
         self.outbox.append(MappingProxyType({"time": self.now(), "to": to, "text": text}))
         for rule in self.replies:
             if rule.matches(to, text):
-                reply = ScheduledEvent(self.now() + rule.after, "message",
+                # At least one step later: an app that sends on every reply must
+                # not make time stand still.
+                ticks = max(1, self.ticks(rule.after))
+                reply = ScheduledEvent((self.kernel.tick + ticks) / self.kernel.hz, "message",
                                        {"sender": to, "text": rule.text.replace("{text}", text)})
-                self.kernel.at(self.kernel.tick + self.ticks(rule.after),
-                               lambda ev=reply: self._post(ev))
+                self.kernel.at(self.kernel.tick + ticks, lambda ev=reply: self._post(ev))
                 return
 
     @classmethod

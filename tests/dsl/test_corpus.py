@@ -142,3 +142,17 @@ def test_parse_error_carries_location() -> None:
     [problem] = info.value.problems
     assert (problem.file, problem.line) == ("x.pxml", 2)
     assert "mismatch" in problem.message
+
+
+@pytest.mark.parametrize("codec", ["utf-16", "utf-16-le", "utf-32"])
+def test_non_utf8_documents_cannot_smuggle_a_doctype(tmp_path: Path, codec: str) -> None:
+    # In UTF-16 the bytes of "<!DOCTYPE" differ, and an attribute's entity
+    # reference would be expanded by the parser: such files are refused outright.
+    doc = ('<?xml version="1.0" encoding="UTF-16"?>\n'
+           '<!DOCTYPE pxml [<!ENTITY hi "Hello from an entity">]>\n'
+           '<pxml xmlns="urn:prima:pxml:1" kind="fa" name="t">'
+           '<var name="x" expr="\'&hi;\'"/><state id="s" initial="true"/></pxml>')
+    path = tmp_path / "smuggled.pxml"
+    path.write_bytes(doc.encode(codec))
+    [problem] = check_file(path)
+    assert (problem.line, problem.col) == (1, 1) and "must be UTF-8" in problem.message

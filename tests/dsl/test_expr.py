@@ -143,3 +143,15 @@ def test_chain_syntax_faults(source: str, index: int, fragment: str) -> None:
 def test_parser_is_lalr_and_built_once() -> None:
     assert parser() is parser()
     assert parser().options.parser == "lalr"
+
+
+@pytest.mark.parametrize("source", ["99999999 * 99999999 * 99999999", "number('1e300') * 2",
+                                    "round(9007199254740993.0 * 2)"])
+def test_numbers_stay_bounded(source: str) -> None:
+    with pytest.raises(ExecutionError, match="too large|needs a number"):
+        compile_expression(source).evaluate(SCOPE)
+
+
+def test_overlong_number_literal_is_a_syntax_fault() -> None:
+    with pytest.raises(SyntaxFault, match="number too long"):
+        compile_expression("1" * 30)

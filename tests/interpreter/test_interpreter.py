@@ -200,3 +200,32 @@ def test_only_the_first_request_of_an_end_handler_follows_the_ended_command() ->
     turn, ask = port.requests[1:]
     assert turn.follows == 1
     assert ask.follows is None and ask.order is RunningOrder.AFTER_LATEST  # after the Turn
+
+
+def test_a_timer_restarting_itself_at_once_is_bounded() -> None:
+    interp, port, clock, notes, _s = make(
+        '<state id="s" initial="true"><entry><timer name="tick" after="1"/></entry>'
+        '<on event="tick"><timer name="tick" after="0"/></on></state>')
+    clock.set(1.0)
+    for _ in range(200):  # what the run loop does: advance while a timer is due now
+        if interp.next_deadline() is None:
+            break
+        try:
+            interp.advance()
+        except AppFailure:
+            break
+    assert interp.stopped
+    assert "more than 100 timers fired" in [n for n in notes if n.kind == "error"][0].text
+
+
+def test_an_unexpected_exception_becomes_a_located_app_failure() -> None:
+    interp, port, *_ = make('<state id="s" initial="true"><on event="touched">'
+                            '<chain>Speak("x")</chain></on></state>')
+
+    def explode(_request: object) -> tuple[int, ...]:
+        raise RuntimeError("boom")
+
+    port.submit = explode  # type: ignore[method-assign]
+    with pytest.raises(AppFailure, match="unexpected error: RuntimeError: boom"):
+        interp.event(Event("touched"))
+    assert interp.stopped

@@ -264,3 +264,39 @@ def test_ea_may_not_use_robot_specific_commands_or_extra_arguments() -> None:
         m.submit(req("ea", Call("Speak", {"text": "x"}, extra={"volume": 3})))
     m.submit(req("fa", Call("CaptureImage")))
     assert h.driver.started[0].devices == frozenset({"camera"})
+
+
+def test_asap_in_an_end_handler_still_cancels_the_apps_waiting_work() -> None:
+    """Rule 3 (asap) holds inside CS exception (a): the newer request wins."""
+    from prima.mediator import AppKind, DecisionKind
+    from prima.mediator.testing import Harness
+    from tests.mediator.helpers import req, speak
+
+    h = Harness(duration=2.0)
+    m = h.mediator
+    first: list[int] = []
+
+    def on_ended(cid: int, _outcome: object) -> None:
+        if first and cid == first[0]:
+            m.submit(req("fa", speak("urgent"), asap=True, follows=cid))
+
+    h.app("fa", AppKind.FA, on_ended=on_ended)
+    first.extend(m.submit(req("fa", speak("X"))))
+    m.submit(req("fa", speak("queued 1"), speak("queued 2")))
+    h.run()
+    cancelled = [d.calls[0].args["text"] for d in h.decisions if d.kind is DecisionKind.CANCEL]
+    started = [d.calls[0].args["text"] for d in h.decisions if d.kind is DecisionKind.START]
+    assert cancelled == ["queued 1", "queued 2"] and started == ["X", "urgent"]
+
+
+def test_ended_commands_are_not_kept_beyond_the_end_grace() -> None:
+    from prima.mediator import AppKind
+    from prima.mediator.testing import Harness
+    from tests.mediator.helpers import req, speak
+
+    h = Harness(duration=1.0)
+    h.app("fa", AppKind.FA)
+    for i in range(200):
+        h.at(i * 1.0, lambda: h.mediator.submit(req("fa", speak("tick"))))
+    h.run()
+    assert len(h.mediator._recent) <= 1 and len(h.mediator._recent_q) <= 1

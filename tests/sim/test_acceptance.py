@@ -272,3 +272,19 @@ def test_servers_reply_to_what_applications_send() -> None:
         (5.0, "message", {"sender": "video", "text": "OK: Record channel 12"}),
     ]
     assert [m["to"] for m in sim.outbox] == ["video", "library", "video"]
+
+
+def test_a_server_replying_at_once_still_lets_time_move() -> None:
+    from prima.sim import ReplyRule
+
+    sim = Simulator(_library(), robot=Pose(2, 2, 0), replies=(ReplyRule("srv", "pong", after=0.0),))
+    pongs = []
+
+    def ping_back(event) -> None:  # type: ignore[no-untyped-def]
+        pongs.append(event.time)
+        sim.send("srv", "ping")
+
+    sim.on_event = ping_back
+    sim.send("srv", "ping")
+    sim.advance_to(1.0)  # would never return if the reply came at the same instant
+    assert len(pongs) == 50 and pongs[0] == pytest.approx(0.02)
