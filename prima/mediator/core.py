@@ -89,6 +89,7 @@ class Mediator(HoldsMixin, RoundsMixin):
         self._wm.channel_devices = frozenset().union(
             *(c.devices for c in catalog if c.breaks_cc))
         self._apps: dict[str, _App] = {}
+        self._parked: list[_Node] = []
         self._app_order = 0
         self._next_command = 1
         self._next_seq = 1

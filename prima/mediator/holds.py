@@ -65,6 +65,7 @@ class HoldsMixin:
         app.stream = None
         if st is not None and st.armed:
             self._wm.dirty.update(st.devices)
+            self._unpark_all()
             self._emit(DecisionKind.RELEASE, rule, app=app.name,
                        detail="stream hold on " + ", ".join(sorted(st.devices)))
 
@@ -98,6 +99,7 @@ class HoldsMixin:
         app.block = None
         if blk is not None and blk.reserving:
             self._wm.dirty.update(blk.devices)
+            self._unpark_all()
             self._emit(DecisionKind.RELEASE, rule, app=app.name,
                        detail="block on " + ", ".join(sorted(blk.devices)))
 
@@ -123,10 +125,12 @@ class HoldsMixin:
                     st.armed = False
                     st.lapsed = True
                     self._wm.dirty.update(st.devices)
+                    self._unpark_all()
                     self._emit(DecisionKind.RELEASE, Rule.HOLD_TIMEOUT, app=app.name,
                                detail="stream hold on " + ", ".join(sorted(st.devices)))
                 if blk is not None and blk.reserving and blk.deadline <= now:
                     blk.expired = True
                     self._wm.dirty.update(blk.devices)
+                    self._unpark_all()
                     self._emit(DecisionKind.RELEASE, Rule.WATCHDOG, app=app.name,
                                detail="block on " + ", ".join(sorted(blk.devices)))

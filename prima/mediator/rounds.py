@@ -61,6 +61,7 @@ class RoundsMixin:
                 if st.armed:
                     st.armed = False
                     self._wm.dirty.update(st.devices)
+                    self._unpark_all()
 
     def _holder(self: Mediator, node: _Node) -> tuple[Rule, _App] | None:
         """Another app's block, armed stream hold, or talk that keeps ``node`` from starting.
@@ -135,6 +136,8 @@ class RoundsMixin:
                 held = self._holder(x)
                 if held is not None:
                     self._note_hold(x, *held)
+                    if held[0] is not Rule.KEEP_CHANNEL:
+                        self._park(x)
                     continue
             x_rank = rank(x, pjf)
             wm.start(x)
@@ -176,6 +179,25 @@ class RoundsMixin:
             if n.state is NodeState.WAITING:
                 wm.dirty.update(n.devices)
         return started
+
+    def _park(self: Mediator, node: _Node) -> None:
+        """Take a held AB out of its devices' ranking, so it does not reserve them
+        against the holder's own ABs (the block or stream goes on meanwhile)."""
+        node.parked = True
+        node.version += 1  # its index entries are stale from now on
+        self._parked.append(node)
+        self._wm.dirty.update(node.devices)
+
+    def _unpark_all(self: Mediator) -> None:
+        """A hold or block ended: re-file the parked ABs (a hold still in force parks
+        them again in the next round)."""
+        wm = self._wm
+        for node in self._parked:
+            node.parked = False
+            if node.state is NodeState.WAITING:
+                wm.index.add(node)
+                wm.dirty.update(node.devices)
+        self._parked = []
 
     def _note_hold(self: Mediator, node: _Node, rule: Rule, holder: _App) -> None:
         if rule is Rule.KEEP_CHANNEL:

@@ -129,7 +129,7 @@ class WaitIndex:
                         self._entries -= 1
             if extra:
                 for n in extra:
-                    if n.state is waiting and n.priority == prio:
+                    if n.state is waiting and n.priority == prio and not n.parked:
                         found.append(n)
             if found:
                 if len(found) == 1:

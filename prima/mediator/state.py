@@ -164,7 +164,7 @@ class _Node:
 
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
-                 "tier", "name", "command_ids", "feedback", "calls")
+                 "tier", "name", "command_ids", "feedback", "calls", "parked")
 
     def __init__(self, ab: AbId, app: _App, tree: _Tree, commands: tuple[_Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -187,6 +187,8 @@ class _Node:
         self.version = 0
         """Bumped whenever its waiting-index entries must be re-filed."""
         self.tier = 0
+        self.parked = False
+        """Held by another app's block or stream hold: out of the device ranking."""
         if len(commands) == 1:
             first = commands[0]
             self.calls: tuple[Call, ...] = (first.call,)

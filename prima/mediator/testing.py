@@ -26,7 +26,7 @@ from typing import Callable, Mapping, Union
 
 from prima.mediator.catalog import Catalog
 from prima.mediator.core import Mediator, MediatorConfig
-from prima.mediator.decisions import Decision, DecisionKind
+from prima.mediator.decisions import Decision, DecisionKind, Rule
 from prima.mediator.interface import (
     AbId,
     AppKind,
@@ -229,7 +229,10 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
     reserved: set[str] = set()
     out: list[AbId] = []
     for n in waiting:
-        if n.devices & busy or n.devices & reserved or mediator._holder(n) is not None:
+        held = mediator._holder(n)
+        if held is not None and held[0] is not Rule.KEEP_CHANNEL:
+            continue  # held by a block or stream hold: it reserves nothing
+        if n.devices & busy or n.devices & reserved or held is not None:
             reserved |= n.devices
             continue
         out.append(n.id)

@@ -157,3 +157,25 @@ def test_unregistering_concludes_blocks_and_streams() -> None:
         (2.0, Rule.UNLOAD), (2.0, Rule.UNLOAD)]
     assert start_of(h, 2).t == 2.0
     assert m.next_deadline() is None
+
+
+def test_an_ab_held_by_a_block_does_not_hold_up_the_block_itself() -> None:
+    """The other app's reactive AB, held by the block, outranks the block's next AB
+    on the speaker; it must not reserve the speaker against the block (which
+    would leave the device idle until the watchdog, then let the other app in)."""
+    from prima.mediator import AppKind, DecisionKind
+    from prima.mediator.testing import Harness
+    from tests.mediator.helpers import req, speak
+
+    h = Harness(duration=2.0)
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m = h.mediator
+    m.open_block("fa", devices=frozenset({"speaker"}), watchdog=30.0)
+    m.submit(req("fa", speak("block 1")))
+    h.at(0.5, lambda: m.submit(req("ea", speak("ea reactive"), reactive=True)))
+    h.at(1.0, lambda: m.submit(req("fa", speak("block 2"))))
+    h.at(5.0, lambda: m.close_block("fa"))
+    h.run(until=60)
+    starts = [(d.t, d.calls[0].args["text"]) for d in h.decisions if d.kind is DecisionKind.START]
+    assert starts == [(0.0, "block 1"), (2.0, "block 2"), (5.0, "ea reactive")]
