@@ -49,9 +49,12 @@ from prima.dsl.model import (
 from prima.dsl.profile import STANDARD_GESTURES, RobotProfile, default_profile
 from prima.errors import DocumentError, Problem, Severity
 from prima.mediator.catalog import ParamKind
+from prima.mediator.core import MediatorConfig
 from prima.mediator.interface import PREDEFINED_EVENTS, AppKind, RunningOrder
 
 NAMESPACE = "urn:prima:pxml:1"
+MAX_STREAM_HOLD = MediatorConfig.max_stream_hold
+MAX_BLOCK_WATCHDOG = MediatorConfig.max_block_watchdog
 _NS = f"{{{NAMESPACE}}}"
 
 Spot = Tuple[etree._Element, Optional[str], int]
@@ -324,10 +327,20 @@ class Builder:
         if gid in table:
             self.error((el, "id", 0), f"duplicate {tag} id '{gid}'")
         if tag == "stream":
-            streams[gid] = StreamBlock(gid, float(el.get("hold", "10")), tuple(members), loc)
+            hold = float(el.get("hold", "10"))
+            if hold > MAX_STREAM_HOLD:
+                self.warning((el, "hold", 0), f"PRIMA holds a stream for at most "
+                                              f"{MAX_STREAM_HOLD:g} s; hold={hold:g} acts as "
+                                              f"{MAX_STREAM_HOLD:g}")
+            streams[gid] = StreamBlock(gid, hold, tuple(members), loc)
         else:
             devices = el.get("devices")
-            blocks[gid] = AtomicBlock(gid, float(el.get("watchdog", "30")),
+            watchdog = float(el.get("watchdog", "30"))
+            if watchdog > MAX_BLOCK_WATCHDOG:
+                self.warning((el, "watchdog", 0), f"PRIMA ends a block after at most "
+                                                  f"{MAX_BLOCK_WATCHDOG:g} s; watchdog={watchdog:g} "
+                                                  f"acts as {MAX_BLOCK_WATCHDOG:g}")
+            blocks[gid] = AtomicBlock(gid, watchdog,
                                       frozenset(devices.split()) if devices else None,
                                       tuple(members), loc)
         return members

@@ -70,8 +70,17 @@ class MediatorConfig:
     its tree (CS exceptions (a)/(b)). A handler that requests at once is always
     in time; one that waits on a timer or polls is not."""
 
+    max_stream_hold: float = 30.0
+    """Upper bound on an explicit stream's hold, whatever the document asks: the
+    other application's response speed stays bounded (rule 6c)."""
+
+    max_block_watchdog: float = 60.0
+    """Upper bound on a begin/end block's watchdog, whatever the document asks:
+    a runaway block cannot starve the other application (rule 3)."""
+
     def to_dict(self) -> dict[str, object]:
-        return {"end_grace": self.end_grace}
+        return {"end_grace": self.end_grace, "max_stream_hold": self.max_stream_hold,
+                "max_block_watchdog": self.max_block_watchdog}
 
 
 class Mediator(HoldsMixin, RoundsMixin):

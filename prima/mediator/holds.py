@@ -45,7 +45,7 @@ class HoldsMixin:
         with self._op():
             latest = a.latest.node if a.latest is not None else None
             tree = latest.tree if latest is not None and latest.state in IN_MEMORY else None
-            st = _Stream(hold, tree)
+            st = _Stream(min(hold, self._config.max_stream_hold), tree)
             for t in a.trees.values():
                 for n in t.nodes.values():
                     if n.state is NodeState.RUNNING:
@@ -84,7 +84,8 @@ class HoldsMixin:
         with self._op():
             latest = a.latest.node if a.latest is not None else None
             tree = latest.tree if latest is not None and latest.state in IN_MEMORY else None
-            a.block = _Block(devs, watchdog, self._next_command, tree)
+            a.block = _Block(devs, min(watchdog, self._config.max_block_watchdog),
+                             self._next_command, tree)
 
     def close_block(self: Mediator, app: str) -> None:
         """Conclude the block (also fine after its watchdog fired)."""

@@ -179,3 +179,22 @@ def test_an_ab_held_by_a_block_does_not_hold_up_the_block_itself() -> None:
     h.run(until=60)
     starts = [(d.t, d.calls[0].args["text"]) for d in h.decisions if d.kind is DecisionKind.START]
     assert starts == [(0.0, "block 1"), (2.0, "block 2"), (5.0, "ea reactive")]
+
+
+def test_a_documents_watchdog_and_hold_are_capped() -> None:
+    """Rules 3 and 6c: PRIMA, not the (untrusted) author, bounds blocks and holds."""
+    from prima.mediator import AppKind, DecisionKind, Rule
+    from prima.mediator.testing import Harness
+    from tests.mediator.helpers import req, speak
+
+    h = Harness(duration=1.0)
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m = h.mediator
+    m.open_block("ea", watchdog=1_000_000.0)
+    m.submit(req("ea", speak("hog")))
+    h.at(2.0, lambda: m.submit(req("fa", speak("let me talk"), reactive=True)))
+    h.run(until=1000)
+    [release] = [d for d in h.decisions if d.kind is DecisionKind.RELEASE]
+    assert (release.rule, release.t) == (Rule.WATCHDOG, 60.0)
+    assert [d.t for d in h.decisions if d.kind is DecisionKind.START][-1] == 60.0
