@@ -20,7 +20,7 @@ from typing import Callable
 from prima.dsl.loader import load_document
 from prima.dsl.model import Document
 from prima.dsl.profile import RobotProfile, default_profile, load_profile
-from prima.errors import PrimaError
+from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import AppKind, Event, Mediator, Outcome, Request
 from prima.mediator.decisions import Decision, DecisionKind
@@ -39,6 +39,15 @@ _DECISION_KINDS = {
     DecisionKind.RELEASE: Kind.RELEASE, DecisionKind.UNREGISTER: Kind.UNLOAD,
 }
 _SPOKEN = ("text", "prompt", "say")
+
+
+def _check_slot(document: Document, role: AppKind) -> Document:
+    """An FA document runs as the FA, an EA document as the EA."""
+    if document.kind is not role:
+        raise DocumentError([Problem(document.path, 1, 1, Severity.ERROR,
+                                     f"this is an {document.kind.name} (kind=\"{document.kind.value}\"); "
+                                     f"it cannot run as the {role.name}")])
+    return document
 
 
 def spec_from_profile(profile: RobotProfile) -> RobotSpec:
@@ -100,8 +109,15 @@ class Run:
         self.fa_path = Path(fa) if fa else (loaded.resolve(loaded.fa) if loaded.fa else None)
         self.ea_path = Path(ea) if ea else (loaded.resolve(loaded.ea) if loaded.ea else None)
         # Load every document up front: a broken one stops the run before it starts.
-        self._documents = {p: load_document(p, self.profile)
-                           for p in (self.fa_path, self.ea_path) if p is not None}
+        self._documents: dict[Path, Document] = {}
+        for path, role in ((self.fa_path, AppKind.FA), (self.ea_path, AppKind.EA)):
+            if path is not None:
+                self._documents[path] = _check_slot(load_document(path, self.profile), role)
+        names = [d.name for d in self._documents.values()]
+        if len(names) == 2 and names[0] == names[1]:
+            raise DocumentError([Problem(str(self.ea_path), 1, 1, Severity.ERROR,
+                                         f"the FA and the EA are both named '{names[0]}'; "
+                                         "each application needs a name of its own")])
         self.lines: list[TraceLine] = []
         self.apps: dict[str, _App] = {}
         self._outcomes: dict[int, Outcome] = {}
@@ -141,15 +157,19 @@ class Run:
     # ------------------------------------------------------------ applications
 
     def _load(self, path: Path, role: AppKind) -> None:
-        document = self._documents.get(path) or load_document(path, self.profile)
+        document = self._documents.get(path) or _check_slot(load_document(path, self.profile), role)
         name = document.name
+        if name in self.apps:
+            raise DocumentError([Problem(str(path), 1, 1, Severity.ERROR,
+                                         f"an application named '{name}' is already loaded; "
+                                         "each application needs a name of its own")])
         interpreter = Interpreter(document, name, self._port, self.sim,
                                   catalog=self.profile.catalog(), robot_events=self.profile.events,
                                   note=self._note, send=lambda _app, to, text: self.sim.send(to, text))
         app = _App(name, role, document, interpreter)
-        self.apps[name] = app
         self._line(Kind.LOAD, app=name, detail={"document": path.name, "role": role.value})
         self.mediator.register(name, role, interpreter)
+        self.apps[name] = app
         self._guard(app, interpreter.start)
 
     def _guard(self, app: _App, work: Callable[[], None]) -> None:

@@ -120,3 +120,13 @@ def test_failures_outside_mediator_callbacks_unload_too(tmp_path: Path, where: s
     kinds = [(line.kind, line.app) for line in lines if line.kind in (Kind.ERROR, Kind.UNLOAD)]
     assert kinds == [(Kind.ERROR, "broken-fa"), (Kind.UNLOAD, "broken-fa")]
     assert any(line.app == "ea3-navigate" and line.kind is Kind.START for line in lines)
+
+
+def test_documents_must_fit_their_slot_and_have_distinct_names(tmp_path: Path) -> None:
+    code, _, err = run_cli("run", str(OFFICE), "--fa", str(ROOT / "apps/ea/ea3-navigate.pxml"))
+    assert code == 1 and 'this is an EA (kind="ea"); it cannot run as the FA' in err
+    twin = tmp_path / "twin.pxml"
+    twin.write_text((ROOT / "apps/ea/ea3-navigate.pxml").read_text().replace(
+        'name="ea3-navigate"', 'name="fa2-follow"'))
+    code, _, err = run_cli("run", str(OFFICE), "--ea", str(twin))
+    assert code == 1 and "both named 'fa2-follow'" in err

@@ -252,6 +252,12 @@ class _Loader:
         robot_el = kids["robot"]
         robot = self.where(robot_el)
         apps = kids.get("apps")
+        self.exists(robot_el, "profile")
+        if apps is not None:
+            self.exists(apps, "fa")
+            self.exists(apps, "ea")
+        for zone_el in (c for c in _children(root) if local_name(c) == "zone"):
+            self.exists(zone_el, "ea")
         user = self.user(kids["user"]) if "user" in kids else None
         events, zones = self.environment(root)
         if self.problems:
@@ -266,6 +272,13 @@ class _Loader:
             ea=apps.get("ea") if apps is not None else None,
             user=user, events=events, replies=tuple(self.replies), zones=zones,
             description=_text(kids["description"]) if "description" in kids else "")
+
+    def exists(self, el: etree._Element, attribute: str) -> None:
+        """A file the scenario names (a document, a profile) must exist; it is not opened."""
+        value = el.get(attribute)
+        if value is not None and not (self.path.parent / value).is_file():
+            self.bad(el, f"file {value!r} not found (looked for {self.path.parent / value})",
+                     attribute)
 
     def rate(self, root: etree._Element) -> int:
         rate = int(root.get("rate", "50"))

@@ -97,11 +97,12 @@ def test_several_problems_are_reported_together(tmp_path: Path) -> None:
                          '  <zone name="z" ea="e.pxml" area="garden"/>\n')
     found = problems(path)
     lines = [(line, message.split(":")[0]) for line, _, message in found]
-    assert [line for line, _ in lines] == [4, 7, 8, 10]
+    assert [line for line, _ in lines] == [4, 7, 8, 10, 10]
     assert "unknown place 'lobby'" in found[0][2]
     assert "comes after an action at 5 s" in found[1][2]
     assert "bad regular expression" in found[2][2]
-    assert "unknown area 'garden'" in found[3][2]
+    assert {"file 'e.pxml' not found", "unknown area 'garden'"} == {
+        m.split(" (")[0] for _, _, m in found[3:]}
 
 
 def test_missing_map_file(tmp_path: Path) -> None:
