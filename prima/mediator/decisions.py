@@ -36,7 +36,8 @@ class DecisionKind(str, enum.Enum):
     RESUME = "resume"
     """An AB of a suspended tree started; the tree left the suspended stack."""
     HOLD = "hold"
-    """A waiting AB could start but a stream hold or a block keeps its devices."""
+    """Another app's stream hold or block keeps a waiting AB from its devices, or the
+    channel rule keeps a CC-breaking AB waiting while the other app talks."""
     RELEASE = "release"
     """A stream hold or a block reservation ended."""
     ERROR = "error"

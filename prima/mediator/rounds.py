@@ -125,6 +125,13 @@ class RoundsMixin:
             if x.state is not NodeState.WAITING:
                 continue
             devices = x.sorted_devices
+            held = self._holder(x) if self._apps_with_holds or x.priority is Priority.LOW else None
+            if held is not None and held[0] is not Rule.KEEP_CHANNEL:
+                # Held by another app's block or stream hold: out of the ranking at
+                # once, busy devices or not, so it reserves nothing meanwhile.
+                self._note_hold(x, *held)
+                self._park(x)
+                continue
             blocked = False
             for d in devices:
                 if d in busy or best(d, pjf, pjf_on) is not x:
@@ -132,13 +139,9 @@ class RoundsMixin:
                     break
             if blocked:
                 continue
-            if self._apps_with_holds or x.priority is Priority.LOW:
-                held = self._holder(x)
-                if held is not None:
-                    self._note_hold(x, *held)
-                    if held[0] is not Rule.KEEP_CHANNEL:
-                        self._park(x)
-                    continue
+            if held is not None:  # the channel rule: it waits, still ranked
+                self._note_hold(x, *held)
+                continue
             x_rank = rank(x, pjf)
             wm.start(x)
             started.append(x)

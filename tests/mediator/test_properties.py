@@ -231,3 +231,18 @@ def test_decisions_do_not_depend_on_hash_seeds() -> None:
         outs.append(subprocess.run([sys.executable, "-c", _SCRIPT.format(root=root)], env=env,
                                    capture_output=True, text=True, check=True).stdout)
     assert outs[0] == outs[1] == outs[2] and len(outs[0]) > 1000
+
+
+def test_found_by_hypothesis_a_held_ab_on_a_busy_device_reserves_nothing() -> None:
+    """A block holds the FA's FaceHumanAndSpeak, which also waits for the busy
+    locomotion: it must not keep the speaker from the EA's own next Speak."""
+    def act(t: float, app: str, kind: str, command: str) -> Act:
+        return Act(t=t, app=app, kind=kind, commands=(command,), asap=False, reactive=False,
+                   group=False, follows_latest=False, hold=0.0)
+
+    run(Scenario(acts=(act(0.0, "fa", "submit", "Speak"), act(0.0, "fa", "event", "Speak"),
+                       act(0.0, "ea", "submit", "Speak"), act(0.0, "ea", "block", "Speak"),
+                       act(0.0, "fa", "event", "Speak"),
+                       act(0.25, "fa", "submit", "FaceHumanAndSpeak")),
+                 durations=(0.5,), iterations=(1,), follow_every=1, fail_on_event=0,
+                 immediate=False))
