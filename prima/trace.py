@@ -83,9 +83,6 @@ class TraceLine:
         return out
 
 
-_SPOKEN = ("text", "prompt", "say")
-
-
 def _describe_start(line: TraceLine) -> str:
     d = line.detail
     parts = [line.command or "?"]

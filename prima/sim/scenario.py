@@ -124,12 +124,9 @@ def load_map(path: str | Path) -> WorldMap:
     place_at: dict[str, etree._Element] = {}
     area_names: set[str] = set()
     edge_els: list[etree._Element] = []
-    description = ""
     for el in _children(doc.root):
         tag = local_name(el)
-        if tag == "description":
-            description = _text(el)
-        elif tag == "wall":
+        if tag == "wall":
             walls.append(Wall(_f(el, "x1"), _f(el, "y1"), _f(el, "x2"), _f(el, "y2"),
                               float(el.get("thickness", "0.1"))))
         elif tag == "place":

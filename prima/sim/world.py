@@ -225,7 +225,7 @@ class World:
             # profiles brake by abandoning the profile at the current speed
             v = self._v
             lin = self.mode == _LINEAR
-            ux, uy = self._ux, self._uy
+            ux = self._ux
             self._halt()
             self.mode = _VELOCITY
             if lin:
