@@ -81,15 +81,23 @@ def root_namespace(data: bytes) -> str | None:
 
 
 def check_file(path: Path, profile: RobotProfile | None = None,
-               checkers: Mapping[str, Checker] | None = None) -> list[Problem]:
-    """Every problem of one file: a PXML document, a robot profile, or a kind in ``checkers``."""
+               checkers: Mapping[str, Checker] | None = None, *,
+               skip_unknown: bool = False) -> list[Problem] | None:
+    """Every problem of one file: a PXML document, a robot profile, or a kind in ``checkers``.
+
+    With ``skip_unknown`` (a file found in a folder), an ``.xml`` file of no
+    known kind, or one that cannot be read, gives None: it is not ours.
+    """
+    skippable = skip_unknown and path.suffix != ".pxml"
     try:
         data = read_source(path, DocumentError)
     except DocumentError as exc:
-        return list(exc.problems)
+        return None if skippable else list(exc.problems)
     namespace = root_namespace(data)
     if checkers and namespace in checkers:
         return checkers[namespace](path)
+    if skippable and namespace not in (PXML_NS, ROBOT_NS):
+        return None
     try:
         doc = parse_xml(data, str(path), DocumentError)
         if namespace == ROBOT_NS:
@@ -100,25 +108,15 @@ def check_file(path: Path, profile: RobotProfile | None = None,
     return check_parsed(doc, profile)[1]
 
 
-def known(path: Path, checkers: Mapping[str, Checker] | None = None) -> bool:
-    """Whether a file found in a folder is one this validator knows."""
-    if path.suffix == ".pxml":
-        return True
-    try:
-        namespace = root_namespace(read_source(path, DocumentError))
-    except DocumentError:
-        return False
-    return namespace in (PXML_NS, ROBOT_NS) or bool(checkers and namespace in checkers)
-
-
 def validate_paths(paths: Iterable[tuple[Path, bool] | Path], profile: RobotProfile | None = None,
                    checkers: Mapping[str, Checker] | None = None) -> Report:
     """Validate every file; files found in folders are skipped unless they are known kinds."""
     report = Report()
     for item in paths:
         path, explicit = item if isinstance(item, tuple) else (item, True)
-        if not explicit and not known(path, checkers):
+        problems = check_file(path, profile, checkers, skip_unknown=not explicit)
+        if problems is None:
             continue
         report.files.append(str(path))
-        report.problems.extend(check_file(path, profile, checkers))
+        report.problems.extend(problems)
     return report
