@@ -35,6 +35,8 @@ if TYPE_CHECKING:
     from prima.dsl.loader import Builder, Spot
 
 _COMPUTED = re.compile(r"^\{(.*)\}$", re.S)
+COMMANDS_HINT = "; see docs/pxml.md for the Commands"
+"""Appended to an unknown Command's error."""
 
 
 def element_name(command: str) -> str:
@@ -68,7 +70,7 @@ def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
     name = el.get("name", "") if generic else b.element_commands.get(tag, "")
     spec = b.catalog.get(name)
     if spec is None:
-        b.error((el, "name", 0), f"unknown Command '{name}'{b.known_commands_hint()}")
+        b.error((el, "name", 0), f"unknown Command '{name}'{COMMANDS_HINT}")
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
@@ -108,7 +110,7 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
     where: Spot = (el, "#text", step.index)
     spec = b.catalog.get(step.command)
     if spec is None:
-        b.error(where, f"unknown Command '{step.command}'{b.known_commands_hint()}")
+        b.error(where, f"unknown Command '{step.command}'{COMMANDS_HINT}")
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}

@@ -60,7 +60,6 @@ _NS = f"{{{NAMESPACE}}}"
 Spot = Tuple[etree._Element, Optional[str], int]
 """Where to point: (element, None | "#text" | attribute name, character index)."""
 
-_COMMAND_TAGS = {"command"}
 
 
 @dataclass
@@ -90,6 +89,7 @@ class Builder:
         self.variable_names = {v.get("name", "") for v in self._top("var")}
         self.labels: dict[str, CommandCall] = {}
         self.timers: dict[str, tuple[bool, Spot]] = {}
+        self._state_elements: dict[str, etree._Element] = {}
         self.in_handler = False
 
     # ------------------------------------------------------------ reporting
@@ -139,9 +139,6 @@ class Builder:
         return self.compile((el, attr, 0), lambda: compile_template(text))
 
     # ------------------------------------------------------------ references
-
-    def known_commands_hint(self) -> str:
-        return "; see docs/pxml.md for the Commands"
 
     def check_gesture(self, name: str, spot: Spot) -> None:
         if name not in self.profile.gestures and name not in STANDARD_GESTURES:
@@ -292,6 +289,7 @@ class Builder:
         tag = local_name(el)
         if tag == "state":
             state = self._state(el, stream, block)
+            self._state_elements.setdefault(state.id, el)
             if state.id in states:
                 self.error((el, "id", 0), f"duplicate state id '{state.id}' "
                                           f"(first at line {states[state.id].loc.line})")
@@ -317,7 +315,7 @@ class Builder:
                 if dev not in self.catalog.devices:
                     self.error((el, "devices", m.start()), f"unknown device '{dev}' "
                                                    f"(devices: {', '.join(sorted(self.catalog.devices))})")
-        gid = el.get("id") or f"{tag}@{self.loc((el, None, 0)).line}"
+        gid = self._group_id(el)
         members: list[str] = []
         for child in el:
             if isinstance(child.tag, str):
@@ -359,10 +357,12 @@ class Builder:
         sid = el.get("id", "")
         return State(sid, el.get("initial") in ("true", "1"), entry, tuple(handlers),
                      self.loc((el, None, 0)),
-                     stream=None if stream is None else stream.get("id") or
-                     f"stream@{self.loc((stream, None, 0)).line}",
-                     block=None if block is None else block.get("id") or
-                     f"block@{self.loc((block, None, 0)).line}")
+                     stream=None if stream is None else self._group_id(stream),
+                     block=None if block is None else self._group_id(block))
+
+    def _group_id(self, el: etree._Element) -> str:
+        """A stream's or block's id, or ``stream@LINE`` when it has none."""
+        return el.get("id") or f"{local_name(el)}@{self.loc((el, None, 0)).line}"
 
     def _handler(self, el: etree._Element) -> Handler:
         kind = HandlerKind(local_name(el))
@@ -553,15 +553,9 @@ class Builder:
             self.error((self.doc.root, None, 0), 'no initial state: mark one <state initial="true">')
             return None
         for extra in initial[1:]:
-            self.error(self._state_spot(extra), f"more than one initial state "
+            self.error((self._state_elements[extra.id], "initial", 0), f"more than one initial state "
                                                 f"('{initial[0].id}' and '{extra.id}')")
         return initial[0].id
-
-    def _state_spot(self, state: State) -> Spot:
-        for el in self.doc.root.iter(_NS + "state"):
-            if el.get("id") == state.id:
-                return (el, "initial", 0) if el.get("initial") else (el, None, 0)
-        return (self.doc.root, None, 0)
 
     def _check_reachable(self, states: dict[str, State], handlers: list[Handler],
                          initial: str | None) -> None:
@@ -582,12 +576,9 @@ class Builder:
                     todo.append(target)
         for state in states.values():
             if state.id not in seen:
-                self.warning(self._state_spot_plain(state), f"state '{state.id}' is unreachable "
-                                                            f"from the initial state '{initial}'")
-
-    def _state_spot_plain(self, state: State) -> Spot:
-        el, _w, _i = self._state_spot(state)
-        return (el, None, 0)
+                self.warning((self._state_elements[state.id], None, 0),
+                             f"state '{state.id}' is unreachable from the initial state "
+                             f"'{initial}'")
 
 
 def _goto_targets(actions) -> set[str]:  # type: ignore[no-untyped-def]
