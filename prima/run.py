@@ -65,7 +65,6 @@ def spec_from_profile(profile: RobotProfile) -> RobotSpec:
 class _App:
     name: str
     role: AppKind
-    document: Document
     interpreter: Interpreter
     failed: bool = False
 
@@ -122,7 +121,8 @@ class Run:
         self.apps: dict[str, _App] = {}
         self._outcomes: dict[int, Outcome] = {}
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile))
-        self.mediator = Mediator(self.profile.catalog(), self.sim, self.sim, record=self._decision)
+        self.catalog = self.profile.catalog()
+        self.mediator = Mediator(self.catalog, self.sim, self.sim, record=self._decision)
         self.sim.finished = self._finished
         self.sim.on_event = self._event
         self.sim.on_user = self._user
@@ -164,9 +164,9 @@ class Run:
                                          f"an application named '{name}' is already loaded; "
                                          "each application needs a name of its own")])
         interpreter = Interpreter(document, name, self._port, self.sim,
-                                  catalog=self.profile.catalog(), robot_events=self.profile.events,
+                                  catalog=self.catalog, robot_events=self.profile.events,
                                   note=self._note, send=lambda _app, to, text: self.sim.send(to, text))
-        app = _App(name, role, document, interpreter)
+        app = _App(name, role, interpreter)
         self._line(Kind.LOAD, app=name, detail={"document": path.name, "role": role.value})
         self.mediator.register(name, role, interpreter)
         self.apps[name] = app
