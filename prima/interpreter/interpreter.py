@@ -209,16 +209,11 @@ class Interpreter:
                 self._fired_at, self._fired = now, 0
             self._fired += 1
             if self._fired > MAX_TIMERS_AT_ONCE:
-                self._guard(lambda: self._raise_error(
-                    f"{self.document.path}: more than {MAX_TIMERS_AT_ONCE} timers fired at "
-                    f"t={now:g} s (a timer restarting itself with after=\"0\"?)"))
-                return
+                message = (f"{self.document.path}: more than {MAX_TIMERS_AT_ONCE} timers fired "
+                           f"at t={now:g} s (a timer restarting itself with after=\"0\"?)")
+                self._fail(message, ExecutionError(message))
             self._guard(lambda: self._dispatch(HandlerKind.EVENT, name, {"name": name},
                                                timer.reactive, None))
-
-    @staticmethod
-    def _raise_error(message: str) -> None:
-        raise ExecutionError(message)
 
     # ------------------------------------------------------------ handling
 
@@ -262,13 +257,8 @@ class Interpreter:
     def _drain_raised(self) -> None:
         while self._raised and not self.stopped:
             name = self._raised.pop(0)
-            reactive = self._default_reactivity(name)
-            handling = _Handling(reactive=reactive)
-            previous, self._handling = self._handling, handling
-            try:
-                self._handle(HandlerKind.EVENT, name, {"name": name})
-            finally:
-                self._handling = previous
+            self._dispatch(HandlerKind.EVENT, name, {"name": name},
+                           self._default_reactivity(name), None)
 
     def _handle(self, kind: HandlerKind, key: str, data: dict[str, Value]) -> None:
         handler = self._find(kind, key, data)
