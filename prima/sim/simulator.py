@@ -376,16 +376,18 @@ class Simulator:
         """Report places the robot passes while no Topological Move reports its route."""
         x, y = self.world.robot.position
         radius = self.spec.passing_radius
-        navigating = any(c.command == "TopologicalMove" for ab in self._running.values()
-                         for c in ab.calls)
         for place in self.map.places:
             near = math.hypot(place.x - x, place.y - y) <= radius
             if near and place.name not in self._near:
                 self._near.add(place.name)
-                if not navigating:
+                if not self._navigating():  # asked only on arrival: this runs every step
                     self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
             elif not near:
                 self._near.discard(place.name)
+
+    def _navigating(self) -> bool:
+        return any(c.command == "TopologicalMove" for ab in self._running.values()
+                   for c in ab.calls)
 
     def _check_zones(self) -> None:
         x, y = self.world.robot.position
