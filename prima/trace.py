@@ -14,7 +14,7 @@ import json
 from dataclasses import dataclass, field
 from typing import Iterable, Mapping
 
-from prima.mediator.catalog import Value
+from prima.catalog import Value
 
 
 class Kind(str, enum.Enum):

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from prima import _schema
+from prima import xmlio as _schema
 from prima.cli import main
 
 ROOT = Path(__file__).parents[1]

@@ -9,7 +9,7 @@ from lxml import etree
 
 from prima.cli import build_parser
 from prima.dsl.commands import element_name
-from prima.mediator.catalog import STANDARD_COMMANDS
+from prima.catalog import STANDARD_COMMANDS
 
 ROOT = Path(__file__).parents[1]
 XS = {"xs": "http://www.w3.org/2001/XMLSchema"}

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Callable
 
 from lxml import etree
 
-from prima._xml import local_name
+from prima.xmlio import local_name
 from prima.dsl.expr import (
     ChainArg,
     ChainStep,
@@ -28,7 +28,7 @@ from prima.dsl.expr import (
     string_literal,
 )
 from prima.dsl.model import CommandCall
-from prima.mediator.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
+from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
 from prima.mediator.interface import AppKind
 
 if TYPE_CHECKING:

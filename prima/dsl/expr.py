@@ -18,7 +18,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from prima.errors import ExecutionError
-from prima.mediator.catalog import Value
+from prima.catalog import Value
 
 MAX_TEXT = 10_000
 """Longest string an expression may build (untrusted documents stay bounded)."""

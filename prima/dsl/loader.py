@@ -16,8 +16,8 @@ from typing import Callable, Optional, Tuple
 
 from lxml import etree
 
-from prima._schema import validate
-from prima._xml import XmlDocument, local_name, parse_xml, read_source
+from prima.xmlio import validate
+from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
 from prima.dsl.commands import bind_element, bind_step, compile_attribute, element_name
 from prima.dsl.expr import Compiled, SyntaxFault, compile_expression, compile_template, parse_chain
 from prima.dsl.model import (
@@ -48,7 +48,7 @@ from prima.dsl.model import (
 )
 from prima.dsl.profile import STANDARD_GESTURES, RobotProfile, default_profile
 from prima.errors import DocumentError, Problem, Severity
-from prima.mediator.catalog import ParamKind
+from prima.catalog import ParamKind
 from prima.mediator.core import MediatorConfig
 from prima.mediator.interface import PREDEFINED_EVENTS, AppKind, RunningOrder
 

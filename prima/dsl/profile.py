@@ -16,10 +16,10 @@ from typing import Mapping
 
 from lxml import etree
 
-from prima._schema import validate
-from prima._xml import XmlDocument, local_name, parse_xml, read_source
+from prima.xmlio import validate
+from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
 from prima.errors import DocumentError, Problem
-from prima.mediator.catalog import (
+from prima.catalog import (
     STANDARD_DEVICES,
     Catalog,
     CommandSpec,

@@ -14,7 +14,7 @@ from typing import Callable, Iterable, Mapping
 
 from lxml import etree
 
-from prima._xml import parse_xml, read_source
+from prima.xmlio import parse_xml, read_source
 from prima.dsl.loader import NAMESPACE as PXML_NS
 from prima.dsl.loader import check_parsed
 from prima.dsl.profile import NAMESPACE as ROBOT_NS

@@ -36,7 +36,7 @@ from prima.dsl.model import (
     State,
 )
 from prima.errors import ExecutionError, PrimaError
-from prima.mediator.catalog import Catalog, ParamKind, Value
+from prima.catalog import Catalog, ParamKind, Value
 from prima.mediator.interface import (
     PREDEFINED_EVENTS,
     Call,

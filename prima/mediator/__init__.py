@@ -4,7 +4,7 @@ It imports neither the simulator nor the DSL: applications reach it through
 :class:`Request` and :class:`AppListener`, devices through :class:`Driver`.
 """
 
-from prima.mediator.catalog import (
+from prima.catalog import (
     STANDARD_COMMANDS,
     STANDARD_DEVICES,
     Catalog,

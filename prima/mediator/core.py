@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from prima.errors import MediationError
-from prima.mediator.catalog import Catalog, CommandSpec, Priority
+from prima.catalog import Catalog, CommandSpec, Priority
 from prima.mediator.decisions import Decision, DecisionKind, Rule
 from prima.mediator.interface import (
     AbId,

@@ -12,12 +12,11 @@ Nothing here knows about XML documents or physics.
 
 from __future__ import annotations
 
-import enum
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping, Protocol
 
-from prima.mediator.catalog import Value
+from prima.vocab import PREDEFINED_EVENTS, AppKind, RunningOrder, Value
 
 EMPTY: Mapping[str, Value] = MappingProxyType({})
 
@@ -33,24 +32,6 @@ AbId = int
 
 TreeId = int
 """Mediator-wide id of one AB tree (increasing from 0)."""
-
-
-class AppKind(str, enum.Enum):
-    """Which of the two roles an application plays."""
-
-    FA = "fa"
-    """Familiarity-oriented: the robot's own, resident application."""
-    EA = "ea"
-    """Environment-oriented: loaded from the building the robot visits."""
-
-
-class RunningOrder(str, enum.Enum):
-    """How a request links to the application's earlier requests (thesis 4.2(5))."""
-
-    AFTER_LATEST = "after-latest"
-    """Run after the app's latest Command if that is still in working memory."""
-    ASAP = "asap"
-    """Cancel the app's own trees that share a device, then start as soon as possible."""
 
 
 @dataclass(frozen=True)
@@ -116,16 +97,6 @@ class Event:
     name: str
     data: Mapping[str, Value] = field(default_factory=_empty, hash=False)
     time: float = 0.0
-
-
-PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
-    "human-found": "the camera sees the user (data: distance)",
-    "human-lost": "the camera lost sight of the user",
-    "sound-heard": "a sound the robot recognises, e.g. a tune (data: sound)",
-    "message": "a network message arrived from the environment's server (data: sender, text)",
-    "place-reached": "a place on the map was reached while moving (data: place, kind)",
-})
-"""Events every robot posts, FA and EA alike; all are reactive."""
 
 
 class Clock(Protocol):

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Iterator
 
-from prima.mediator.catalog import Priority
+from prima.catalog import Priority
 from prima.mediator.interface import AbId, TreeId
 from prima.mediator.selection import WaitIndex
 from prima.mediator.state import TALK_DEVICES, NodeState, _App, _Command, _Node, _Tree

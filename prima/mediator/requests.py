@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from prima.errors import MediationError
-from prima.mediator.catalog import Catalog, CommandSpec
+from prima.catalog import Catalog, CommandSpec
 from prima.mediator.decisions import Rule
 from prima.mediator.interface import AppKind, Request, RunningOrder
 from prima.mediator.state import NodeState, _App, _Command, _Node, _Tree

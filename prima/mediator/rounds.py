@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from prima.mediator.decisions import DecisionKind, Rule
 from prima.mediator.selection import rank, separating_rule
-from prima.mediator.catalog import Priority
+from prima.catalog import Priority
 from prima.mediator.state import TALK_DEVICES, NodeState, _App, _Node, _Tree
 
 if TYPE_CHECKING:

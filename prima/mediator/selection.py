@@ -21,7 +21,7 @@ from __future__ import annotations
 import heapq
 from typing import Iterable
 
-from prima.mediator.catalog import Priority
+from prima.catalog import Priority
 from prima.mediator.decisions import Rule
 from prima.mediator.state import NodeState, _Node
 

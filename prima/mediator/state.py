@@ -16,7 +16,7 @@ from __future__ import annotations
 import enum
 from typing import TYPE_CHECKING
 
-from prima.mediator.catalog import CommandSpec, Priority
+from prima.catalog import CommandSpec, Priority
 from prima.mediator.interface import AbId, AppKind, Call, CommandId, TreeId
 
 if TYPE_CHECKING:

@@ -24,7 +24,7 @@ from __future__ import annotations
 import heapq
 from typing import Callable, Mapping, Union
 
-from prima.mediator.catalog import Catalog
+from prima.catalog import Catalog
 from prima.mediator.core import Mediator, MediatorConfig
 from prima.mediator.decisions import Decision, DecisionKind, Rule
 from prima.mediator.interface import (

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from typing import Any, Callable, Generator, Mapping
 
-from prima.mediator.catalog import Catalog, Value
+from prima.catalog import Catalog, Value
 from prima.mediator.interface import AtomicBehavior, Call, CommandId
 from prima.sim.kernel import Wait, signal, sleep, until
 from prima.sim.maps import Place

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
-from prima.mediator.catalog import Value
+from prima.catalog import Value
 from prima.sim.maps import Area
 
 __all__ = ["Picture", "Pose", "ScheduledEvent", "UserAction", "UserActionKind", "Zone",

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
-from prima.mediator.catalog import Catalog, Value
+from prima.catalog import Catalog, Value
 from prima.mediator.interface import AtomicBehavior, Call, CommandId, Event, Outcome
 from prima.sim.records import UserAction, ZoneEntry
 from prima.sim.simulator import Simulator

@@ -18,9 +18,9 @@ from typing import Iterator
 import pymunk
 from lxml import etree
 
-from prima._xml import XmlDocument, local_name, parse_xml, read_source
+from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
 from prima.errors import Problem, ScenarioError
-from prima._schema import validate
+from prima.xmlio import validate
 from prima.sim.maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim.records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim.user import AnswerRule, TimedAction, UserScript

@@ -23,7 +23,7 @@ import random
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
-from prima.mediator.catalog import Value
+from prima.catalog import Value
 from prima.mediator.interface import AbId, AtomicBehavior, CommandId, Event, Outcome
 from prima.sim.kernel import Kernel, Waker
 from prima.sim.maps import Place, WorldMap

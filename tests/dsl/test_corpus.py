@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from prima._schema import schema, verdict_schema
-from prima._xml import MAX_BYTES, _parser, parse_xml
+from prima.xmlio import schema, verdict_schema
+from prima.xmlio import MAX_BYTES, _parser, parse_xml
 from prima.dsl.validate import check_file
 from prima.errors import DocumentError, Problem, Severity
 

@@ -6,7 +6,7 @@ import pytest
 
 from prima.dsl.profile import default_profile, parse_profile
 from prima.errors import DocumentError
-from prima.mediator.catalog import STANDARD_DEVICES, Priority
+from prima.catalog import STANDARD_DEVICES, Priority
 
 
 def test_default_profile_extends_the_catalog() -> None:

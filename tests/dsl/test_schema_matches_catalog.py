@@ -7,7 +7,7 @@ from pathlib import Path
 from lxml import etree
 
 from prima.dsl.commands import element_name
-from prima.mediator.catalog import STANDARD_COMMANDS
+from prima.catalog import STANDARD_COMMANDS
 
 XSD = Path(__file__).parents[2] / "schemas" / "pxml.xsd"
 XS = {"xs": "http://www.w3.org/2001/XMLSchema"}

@@ -1,22 +1,39 @@
 """The Command catalog: MISSION.md section 4 (thesis Table 4.2) as data.
 
-Each Command names the devices its atomic behaviors occupy, whether it is a
-feedback loop (one AB per iteration), and whether it breaks the Communication
-Channel (which gives it low priority). Parameters are listed here too, so the
-DSL validates arguments and the simulator reads them from one table.
+This is the one place that knows what a Command is: the devices its atomic
+behaviors occupy, whether it is a feedback loop (one AB per iteration), whether
+it breaks the Communication Channel (which gives it low priority), whether it
+prompts and then listens for an answer, which of its arguments are words the
+robot says (and which devices saying them adds), its parameters with their
+defaults, and, for a robot-specific Command, how long it takes. The DSL checks
+arguments against it, the interpreter and the mediator read devices from it,
+the simulator reads defaults and durations from it, the trace reads what is
+spoken from it. No other module special-cases a Command by its name.
 
 A robot hardware profile extends the catalog with robot-specific Commands
-(only an FA may use those) via :meth:`Catalog.extended`.
+(only an FA may use those) via :meth:`Catalog.extended`. Like
+:mod:`prima.vocab`, this module imports nothing heavy.
 """
 
 from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Mapping, Union
+from typing import Iterable, Iterator, Mapping
 
-Value = Union[str, float, int, bool, None]
-"""A runtime value: what expressions produce and Commands take as arguments."""
+from prima.vocab import Value
+
+__all__ = [
+    "STANDARD_COMMANDS",
+    "STANDARD_DEVICES",
+    "SYMBOLIC_KINDS",
+    "TALK_DEVICES",
+    "Catalog",
+    "CommandSpec",
+    "Param",
+    "ParamKind",
+    "Priority",
+]
 
 STANDARD_DEVICES: tuple[str, ...] = (
     "human-detection",
@@ -28,6 +45,10 @@ STANDARD_DEVICES: tuple[str, ...] = (
     "arm",
 )
 """Devices every PRIMA robot has (thesis Sec. 2.4, Figure 2.4)."""
+
+TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
+"""Devices through which the robot talks with its user: while another application
+uses them, a Command that breaks the Communication Channel waits (thesis Sec. 3.3)."""
 
 
 class Priority(enum.IntEnum):
@@ -43,7 +64,7 @@ class ParamKind(str, enum.Enum):
     """What an argument is, which decides how it is written and checked."""
 
     TEXT = "text"
-    """Words to say: a string with ``{expr}`` interpolation."""
+    """Words the robot says: a string with ``{expr}`` interpolation."""
     NUMBER = "number"
     """A number (its unit is given by :attr:`Param.unit`)."""
     PLACE = "place"
@@ -73,6 +94,11 @@ class Param:
     default: Value = None
     unit: str = ""
     doc: str = ""
+    devices: frozenset[str] = frozenset()
+    """Devices the Command occupies in addition when this argument is given (not
+    empty): Active Sensing Human's ``say`` adds the speaker."""
+    shown: bool = True
+    """Shown among the Command's arguments in the trace (a Q&A's timeout is not)."""
 
 
 @dataclass(frozen=True)
@@ -89,6 +115,12 @@ class CommandSpec:
     robot_specific: bool = False
     doc: str = ""
     priority_override: Priority | None = None
+    listens: bool = False
+    """It says a prompt, then listens for the user's answer until a timeout, as one
+    atomic behavior (a Q&A); its application handles the answer, a no-match or the
+    silence (``<on-answer>``, ``<on-nomatch>``, ``<on-noinput>``)."""
+    duration: float | None = None
+    """For a robot-specific Command: how long it keeps its devices (s)."""
 
     @property
     def priority(self) -> Priority:
@@ -102,10 +134,30 @@ class CommandSpec:
                 return p
         return None
 
+    def arg(self, args: Mapping[str, Value], name: str) -> Value:
+        """An argument's value as given, else its parameter's default (None if neither)."""
+        if name in args:
+            return args[name]
+        p = self.param(name)
+        return None if p is None else p.default
+
+    def devices_for(self, args: Mapping[str, Value]) -> frozenset[str]:
+        """The devices a call with these arguments occupies."""
+        devices = self.devices
+        for p in self.params:
+            if p.devices and args.get(p.name):
+                devices = devices | p.devices
+        return devices
+
+    def spoken(self, args: Mapping[str, Value]) -> list[str]:
+        """The words a call with these arguments says (its non-empty text arguments)."""
+        return [str(args[p.name]) for p in self.params
+                if p.kind is ParamKind.TEXT and args.get(p.name)]
+
 
 def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
-          params: Iterable[Param] = (), one_of: Iterable[Iterable[str]] = (),
-          doc: str = "") -> CommandSpec:
+          listens: bool = False, params: Iterable[Param] = (),
+          one_of: Iterable[Iterable[str]] = (), doc: str = "") -> CommandSpec:
     return CommandSpec(
         name=name,
         devices=frozenset(devices.split()),
@@ -114,6 +166,7 @@ def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
         params=tuple(params),
         one_of=tuple(frozenset(g) for g in one_of),
         doc=doc,
+        listens=listens,
     )
 
 
@@ -122,15 +175,17 @@ _T, _N, _PL = ParamKind.TEXT, ParamKind.NUMBER, ParamKind.PLACE
 
 STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
     _spec("ActiveSensingHuman", "human-detection locomotion localization", fb=True,
-          params=[_P("say", _T, False, "", doc="said at each retry; adds the speaker to the devices"),
+          params=[_P("say", _T, False, "", doc="said at each retry; adds the speaker to the devices",
+                     devices=frozenset({"speaker"})),
                   _P("turn", _N, False, 90.0, "deg", "how far to turn the view after 10 s unseen")],
           doc="Stay still until the camera sees the user; after 10 s unseen, turn the view and retry."),
     _spec("FaceHuman", "human-detection locomotion", doc="Turn the body to face the user."),
-    _spec("QA", "speaker speech-recognition",
+    _spec("QA", "speaker speech-recognition", listens=True,
           params=[_P("prompt", _T),
                   _P("grammar", ParamKind.GRAMMAR, doc="answer grammar declared in the document"),
                   _P("into", ParamKind.VARIABLE, False, doc="variable that receives the answer"),
-                  _P("timeout", _N, False, 8.0, "s", "how long to listen for an answer")],
+                  _P("timeout", _N, False, 8.0, "s", "how long to listen for an answer",
+                     shown=False)],
           doc="Say a prompt, then listen for an answer until a timeout: one atomic behavior."),
     _spec("TrackingHuman", "human-detection locomotion", fb=True,
           params=[_P("distance", _N, False, 1.0, "m", "comfortable distance to keep")],
@@ -181,6 +236,8 @@ class Catalog:
 
     commands: Mapping[str, CommandSpec] = field(default_factory=dict)
     devices: frozenset[str] = frozenset(STANDARD_DEVICES)
+    talk_devices: frozenset[str] = TALK_DEVICES
+    """Devices through which the robot talks with its user (the channel rule)."""
 
     @classmethod
     def standard(cls) -> Catalog:
@@ -192,7 +249,12 @@ class Catalog:
         merged = dict(self.commands)
         for c in commands:
             merged[c.name] = c
-        return Catalog(merged, self.devices | frozenset(devices))
+        return Catalog(merged, self.devices | frozenset(devices), self.talk_devices)
+
+    @property
+    def channel_devices(self) -> frozenset[str]:
+        """Devices of the Commands that break the Communication Channel."""
+        return frozenset().union(*(c.devices for c in self.commands.values() if c.breaks_cc))
 
     def __getitem__(self, name: str) -> CommandSpec:
         return self.commands[name]

@@ -1,0 +1,68 @@
+"""PRIMA's shared vocabulary: value types, roles, running orders, events, bounds.
+
+Every package speaks these words, so they live here, in a module that imports
+nothing heavy (no lxml, lark or pymunk): loading a document does not import the
+mediator, and the mediator does not import the DSL, to learn what an EA is.
+"""
+
+from __future__ import annotations
+
+import enum
+from types import MappingProxyType
+from typing import Mapping, Union
+
+__all__ = [
+    "MAX_BLOCK_WATCHDOG",
+    "MAX_NUMBER",
+    "MAX_STREAM_HOLD",
+    "MAX_TEXT",
+    "PREDEFINED_EVENTS",
+    "AppKind",
+    "RunningOrder",
+    "Value",
+]
+
+Value = Union[str, float, int, bool, None]
+"""A runtime value: what expressions produce and Commands take as arguments."""
+
+
+class AppKind(str, enum.Enum):
+    """Which role an application plays."""
+
+    FA = "fa"
+    """Familiarity-oriented: the robot's own, resident application."""
+    EA = "ea"
+    """Environment-oriented: loaded from the building the robot visits."""
+
+
+class RunningOrder(str, enum.Enum):
+    """How a request links to the application's earlier requests (thesis 4.2(5))."""
+
+    AFTER_LATEST = "after-latest"
+    """Run after the app's latest Command if that is still in working memory."""
+    ASAP = "asap"
+    """Cancel the app's own trees that share a device, then start as soon as possible."""
+
+
+PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
+    "human-found": "the camera sees the user (data: distance)",
+    "human-lost": "the camera lost sight of the user",
+    "sound-heard": "a sound the robot recognises, e.g. a tune (data: sound)",
+    "message": "a network message arrived from the environment's server (data: sender, text)",
+    "place-reached": "a place on the map was reached while moving (data: place, kind)",
+})
+"""Events every robot posts, FA and EA alike; all are reactive."""
+
+MAX_STREAM_HOLD = 30.0
+"""Upper bound on an explicit stream's hold (s), whatever a document asks: the
+other application's response speed stays bounded (rule 6c)."""
+
+MAX_BLOCK_WATCHDOG = 60.0
+"""Upper bound on a begin/end block's watchdog (s), whatever a document asks: a
+runaway block cannot starve the other application (rule 3)."""
+
+MAX_TEXT = 10_000
+"""Longest text an application may build or say (characters)."""
+
+MAX_NUMBER = 2.0 ** 53
+"""Largest magnitude of a number (beyond it, integers lose exactness anyway)."""
