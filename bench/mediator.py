@@ -140,9 +140,7 @@ def bench_mixed(requests: int = 4000, seed: int = 7) -> tuple[float, int]:
             ("QA", {"prompt": "?", "grammar": "g"}), ("TrackingHuman", {}),
             ("TopologicalMove", {"to": "room"}), ("PointByHand", {"angle": 1.0})]
     h = Harness(duration=lambda ab: 0.5 + (ab.id * 7919 % 13) / 4.0,
-                outcome=lambda ab: Outcome(terminal=ab.iteration >= ab.id % 3), keep=False)
-    count = [0]
-    h.mediator._record_cb = lambda d: count.__setitem__(0, count[0] + 1)
+                outcome=lambda ab: Outcome(terminal=ab.iteration >= ab.id % 3))
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
     for i in range(requests):
@@ -153,7 +151,7 @@ def bench_mixed(requests: int = 4000, seed: int = 7) -> tuple[float, int]:
         h.at(i * 0.8, lambda r=r: h.mediator.submit(r))
     t0 = time.perf_counter()
     h.run()
-    return time.perf_counter() - t0, count[0]
+    return time.perf_counter() - t0, len(h.decisions)
 
 
 def main() -> int:

@@ -176,7 +176,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
 
 def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.golden import check, scenarios_with_goldens
+    from prima.golden import Status, check, scenarios_with_goldens
 
     try:
         scenarios = scenarios_with_goldens(args.paths)
@@ -192,8 +192,8 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             _report(exc, err)
             failed += 1
             continue
-        print(f"{result.status:9} {scenario}", file=out)
-        if result.status in ("different", "missing"):
+        print(f"{result.status.value:9} {scenario}", file=out)
+        if result.status in (Status.DIFFERENT, Status.MISSING):
             failed += 1
             out.write(result.diff)
     print(f"{len(scenarios)} scenario(s): {failed} failed", file=err)

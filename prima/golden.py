@@ -9,9 +9,10 @@ runs the scenario and compares; goldens are written only when asked
 from __future__ import annotations
 
 import difflib
+import enum
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable
 
 from prima.run import Run
 from prima.trace import format_text
@@ -38,13 +39,25 @@ def scenarios_with_goldens(paths: Iterable[str | Path]) -> list[Path]:
     return found
 
 
+class Status(str, enum.Enum):
+    """How a scenario's run compared with its golden trace."""
+
+    SAME = "same"
+    """The trace is the golden trace."""
+    DIFFERENT = "different"
+    """The trace differs (``Result.diff`` shows how)."""
+    MISSING = "missing"
+    """The scenario has no golden trace yet."""
+    UPDATED = "updated"
+    """The golden trace was (re)written with this run's trace."""
+
+
 @dataclass(frozen=True)
 class Result:
     """How one scenario compared with its golden trace."""
 
     scenario: Path
-    status: str
-    """``same``, ``different``, ``missing`` (no golden yet) or ``updated``."""
+    status: Status
     diff: str = ""
 
 
@@ -54,15 +67,15 @@ def check(scenario: Path, *, update: bool = False) -> Result:
     golden = golden_path(scenario)
     if update:
         if golden.exists() and golden.read_text(encoding="utf-8") == actual:
-            return Result(scenario, "same")
+            return Result(scenario, Status.SAME)
         golden.write_text(actual, encoding="utf-8")
-        return Result(scenario, "updated")
+        return Result(scenario, Status.UPDATED)
     if not golden.exists():
-        return Result(scenario, "missing")
+        return Result(scenario, Status.MISSING)
     expected = golden.read_text(encoding="utf-8")
     if expected == actual:
-        return Result(scenario, "same")
+        return Result(scenario, Status.SAME)
     diff = "".join(difflib.unified_diff(
         expected.splitlines(keepends=True), actual.splitlines(keepends=True),
         fromfile=str(golden), tofile=f"{scenario} (this run)", n=2))
-    return Result(scenario, "different", diff)
+    return Result(scenario, Status.DIFFERENT, diff)

@@ -6,18 +6,21 @@ Installed with PRIMA (entry point ``pytest11``). In a test::
         prima_golden("scenarios/my-guide.xml")
 
 fails with a readable diff when the run's trace differs from
-``scenarios/my-guide.golden.txt``. Run ``pytest --prima-update-goldens`` to
-rewrite the golden files after reviewing the change.
+``scenarios/my-guide.golden.txt``. A relative path is taken from the folder of
+the test file that asks, not from where pytest was started. Run
+``pytest --prima-update-goldens`` to rewrite the golden files after reviewing
+the change.
+
+The plugin is loaded by every pytest run in an environment where PRIMA is
+installed, so it imports nothing of PRIMA until a test uses the fixture.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import pytest
-
-from prima.golden import check
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -28,14 +31,18 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 @pytest.fixture
 def prima_golden(request: pytest.FixtureRequest) -> Callable[[str | Path], None]:
     """Check a scenario's run against its golden trace (fails with a diff)."""
+    from prima.golden import Status, check  # only now: the whole stack comes with it
+
     update = bool(request.config.getoption("--prima-update-goldens"))
+    here = Path(request.path).parent
 
     def compare(scenario: str | Path) -> None:
-        result = check(Path(scenario), update=update)
-        if result.status == "missing":
+        path = here / scenario  # an absolute scenario path stays as it is
+        result = check(path, update=update)
+        if result.status is Status.MISSING:
             pytest.fail(f"{scenario}: no golden trace yet; review a run and create it with "
                         "pytest --prima-update-goldens", pytrace=False)
-        if result.status == "different":
+        if result.status is Status.DIFFERENT:
             pytest.fail(f"{scenario}: the trace differs from its golden trace\n{result.diff}",
                         pytrace=False)
 

@@ -23,7 +23,7 @@ from prima.dsl.profile import RobotProfile, default_profile, load_profile
 from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import AppKind, Event, Mediator, Outcome, Request
-from prima.mediator.decisions import Decision, DecisionKind
+from prima.mediator import Decision, DecisionKind
 from prima.sim import RobotSpec, Simulator
 from prima.sim.records import UserAction, ZoneEntry
 from prima.sim.scenario import Scenario, load_scenario
@@ -36,7 +36,7 @@ _DECISION_KINDS = {
     DecisionKind.REQUEST: Kind.REQUEST, DecisionKind.START: Kind.START, DecisionKind.END: Kind.END,
     DecisionKind.CANCEL: Kind.CANCEL, DecisionKind.SUSPEND: Kind.SUSPEND,
     DecisionKind.RESUME: Kind.RESUME, DecisionKind.HOLD: Kind.HOLD,
-    DecisionKind.RELEASE: Kind.RELEASE, DecisionKind.UNREGISTER: Kind.UNLOAD,
+    DecisionKind.RELEASE: Kind.RELEASE, DecisionKind.UNLOAD: Kind.UNLOAD,
 }
 _SPOKEN = ("text", "prompt", "say")
 
@@ -209,7 +209,7 @@ class Run:
         self.lines.append(TraceLine(self.sim.now(), len(self.lines), kind, **fields))  # type: ignore[arg-type]
 
     def _decision(self, d: Decision) -> None:
-        if d.kind is DecisionKind.ERROR:
+        if d.kind is DecisionKind.FAILURE:
             app = self.apps.get(d.app or "")
             if app is None or not app.failed:  # not an error the interpreter already reported
                 self._line(Kind.ERROR, app=d.app, text=d.detail, reason=d.rule.value)

@@ -29,7 +29,7 @@ from prima.dsl.expr import (
 )
 from prima.dsl.model import CommandCall
 from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
-from prima.mediator.interface import AppKind
+from prima.mediator import AppKind
 
 if TYPE_CHECKING:
     from prima.dsl.loader import Builder, Spot

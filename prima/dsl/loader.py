@@ -49,8 +49,8 @@ from prima.dsl.model import (
 from prima.dsl.profile import STANDARD_GESTURES, RobotProfile, default_profile
 from prima.errors import DocumentError, Problem, Severity
 from prima.catalog import ParamKind
-from prima.mediator.core import MediatorConfig
-from prima.mediator.interface import PREDEFINED_EVENTS, AppKind, RunningOrder
+from prima.mediator import MediatorConfig
+from prima.mediator import PREDEFINED_EVENTS, AppKind, RunningOrder
 
 NAMESPACE = "urn:prima:pxml:1"
 MAX_STREAM_HOLD = MediatorConfig.max_stream_hold

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Mapping, Union
 
 from prima.dsl.expr import Compiled
-from prima.mediator.interface import AppKind, RunningOrder
+from prima.mediator import AppKind, RunningOrder
 
 
 @dataclass(frozen=True)

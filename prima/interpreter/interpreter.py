@@ -37,7 +37,7 @@ from prima.dsl.model import (
 )
 from prima.errors import ExecutionError, PrimaError
 from prima.catalog import Catalog, ParamKind, Value
-from prima.mediator.interface import (
+from prima.mediator import (
     PREDEFINED_EVENTS,
     Call,
     Clock,
@@ -45,7 +45,7 @@ from prima.mediator.interface import (
     Event,
     Outcome,
 )
-from prima.mediator.interface import Request as MediatorRequest
+from prima.mediator import Request as MediatorRequest
 
 MAX_TRANSITIONS = 100
 """State changes allowed while handling one event (a goto loop is an error)."""

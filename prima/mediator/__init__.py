@@ -1,7 +1,9 @@
 """The mediator: working memory, atomic-behavior trees and the mediation rules.
 
 It imports neither the simulator nor the DSL: applications reach it through
-:class:`Request` and :class:`AppListener`, devices through :class:`Driver`.
+:class:`Request` and :class:`AppListener`, devices through :class:`Driver`,
+time through a :class:`Clock`. Scripted test doubles (a driver, an app, a
+discrete-event harness) are in :mod:`prima.mediator.testing`.
 """
 
 from prima.catalog import (
@@ -12,38 +14,43 @@ from prima.catalog import (
     Param,
     ParamKind,
     Priority,
-    Value,
 )
-from prima.mediator.core import Mediator, MediatorConfig
-from prima.mediator.decisions import Decision, DecisionKind, Rule
-from prima.mediator.interface import (
-    PREDEFINED_EVENTS,
-    AppKind,
+from prima.mediator._decisions import Decision, DecisionKind, Rule
+from prima.mediator._interface import (
+    AbId,
     AppListener,
     AtomicBehavior,
     Call,
     Clock,
+    CommandId,
     Driver,
     Event,
     ManualClock,
     Outcome,
     Request,
-    RunningOrder,
+    TreeId,
 )
-from prima.mediator.snapshot import HoldView, NodeView, Snapshot, TreeView
-from prima.mediator.state import NodeState
+from prima.mediator._mediator import Mediator, MediatorConfig
+from prima.mediator._ranking import CRITERIA, Criterion, Scope
+from prima.mediator._snapshot import HoldView, NodeView, Snapshot, TreeView
+from prima.mediator._state import NodeState
+from prima.vocab import PREDEFINED_EVENTS, AppKind, RunningOrder, Value
 
 __all__ = [
+    "CRITERIA",
     "PREDEFINED_EVENTS",
     "STANDARD_COMMANDS",
     "STANDARD_DEVICES",
+    "AbId",
     "AppKind",
     "AppListener",
     "AtomicBehavior",
     "Call",
     "Catalog",
     "Clock",
+    "CommandId",
     "CommandSpec",
+    "Criterion",
     "Decision",
     "DecisionKind",
     "Driver",
@@ -61,7 +68,9 @@ __all__ = [
     "Request",
     "Rule",
     "RunningOrder",
+    "Scope",
     "Snapshot",
+    "TreeId",
     "TreeView",
     "Value",
 ]

@@ -22,30 +22,31 @@ Example::
 from __future__ import annotations
 
 import heapq
-from typing import Callable, Mapping, Union
+from collections.abc import Callable, Mapping
 
 from prima.catalog import Catalog
-from prima.mediator.core import Mediator, MediatorConfig
-from prima.mediator.decisions import Decision, DecisionKind, Rule
-from prima.mediator.interface import (
+from prima.errors import RunError, SimulationError
+from prima.mediator._decisions import Decision, DecisionKind, Rule
+from prima.mediator._interface import (
     AbId,
-    AppKind,
     AtomicBehavior,
     CommandId,
     Event,
     ManualClock,
     Outcome,
 )
-from prima.mediator.selection import rank
-from prima.mediator.state import NodeState
+from prima.mediator._mediator import Mediator, MediatorConfig
+from prima.mediator._ranking import rank
+from prima.mediator._state import NodeState
+from prima.vocab import AppKind, Value
 
 __all__ = ["Harness", "ScriptedApp", "ScriptedDriver", "feedback_iterations", "plain_scan"]
 
-Durations = Union[float, Mapping[str, float], Callable[[AtomicBehavior], float]]
+Durations = float | Mapping[str, float] | Callable[[AtomicBehavior], float]
 
 
-def feedback_iterations(n: int | Mapping[str, int],
-                        values: Mapping[str, object] | None = None) -> Callable[[AtomicBehavior], Outcome]:
+def feedback_iterations(n: int | Mapping[str, int], values: Mapping[str, Value] | None = None,
+                        ) -> Callable[[AtomicBehavior], Outcome]:
     """An outcome function: a feedback Command ends after ``n`` iterations."""
     def outcome(ab: AtomicBehavior) -> Outcome:
         count = n if isinstance(n, int) else n.get(ab.calls[0].command, 1)
@@ -82,7 +83,7 @@ class ScriptedDriver:
         for other in self.running.values():
             shared = ab.devices & other.devices
             if shared:
-                raise RuntimeError(
+                raise SimulationError(
                     f"AB{ab.id} started on {sorted(shared)} held by running AB{other.id}")
         self.started.append(ab)
         self.running[ab.id] = ab
@@ -147,25 +148,28 @@ class Harness:
         self.mediator = Mediator(catalog or Catalog.standard(), self.driver, self.clock,
                                  config=config,
                                  record=self.decisions.append if keep else None)
-        self._queue: list[tuple[float, int, str, object]] = []
+        self._queue: list[tuple[float, int, Callable[[], object]]] = []
         self._order = 0
 
-    def app(self, name: str, kind: AppKind, **handlers: Callable) -> ScriptedApp:
+    def app(self, name: str, kind: AppKind, *,
+            on_event: Callable[[Event], None] | None = None,
+            on_ended: Callable[[CommandId, Outcome], None] | None = None,
+            on_cancelled: Callable[[CommandId], None] | None = None) -> ScriptedApp:
         """Register a :class:`ScriptedApp` (handlers as in its constructor)."""
-        listener = ScriptedApp(name, **handlers)
+        listener = ScriptedApp(name, on_event, on_ended, on_cancelled)
         self.mediator.register(name, kind, listener)
         return listener
 
-    def _push(self, t: float, kind: str, payload: object) -> None:
+    def _push(self, t: float, action: Callable[[], object]) -> None:
         self._order += 1
-        heapq.heappush(self._queue, (t, self._order, kind, payload))
+        heapq.heappush(self._queue, (t, self._order, action))
 
     def _scheduled_end(self, ab: AtomicBehavior) -> None:
         d = self.driver.duration_of(ab)
         if d <= 0 and self.immediate:
             self._finish(ab)
         else:
-            self._push(self.clock.now() + max(d, 0.0), "end", ab)
+            self._push(self.clock.now() + max(d, 0.0), lambda: self._finish(ab))
 
     def _finish(self, ab: AtomicBehavior) -> None:
         self.driver.ended(ab.id)
@@ -173,7 +177,7 @@ class Harness:
 
     def at(self, t: float, action: Callable[[], object]) -> None:
         """Run ``action`` when the clock reaches ``t``."""
-        self._push(t, "action", action)
+        self._push(t, action)
 
     def step(self) -> bool:
         """Process the next instant's first item; False when nothing is left."""
@@ -187,11 +191,8 @@ class Harness:
         if td is not None and td <= t:
             self.mediator.advance()
             return True
-        _t, _o, kind, payload = heapq.heappop(self._queue)
-        if kind == "end":
-            self._finish(payload)  # type: ignore[arg-type]
-        else:
-            payload()  # type: ignore[operator]
+        _t, _o, action = heapq.heappop(self._queue)
+        action()
         return True
 
     def run(self, until: float | None = None, max_steps: int = 1_000_000) -> None:
@@ -206,7 +207,7 @@ class Harness:
                     return
             if not self.step():
                 return
-        raise RuntimeError(f"harness did not settle within {max_steps} steps")
+        raise RunError(f"harness did not settle within {max_steps} steps")
 
     # ------------------------------------------------------------ inspection
     def kinds(self, *kinds: DecisionKind) -> list[Decision]:
@@ -222,14 +223,14 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
     An oracle for tests: after any operation it must be empty (the mediator
     already started everything that could start).
     """
-    wm = mediator._wm
+    wm = mediator._wm  # this module belongs to the package: it may look inside
     waiting = [n for n in wm.nodes.values() if n.state is NodeState.WAITING]
     waiting.sort(key=lambda n: rank(n, wm.pjf))
     busy = set(wm.busy)
     reserved: set[str] = set()
     out: list[AbId] = []
     for n in waiting:
-        held = mediator._holder(n)
+        held = mediator._holds.holder(n)
         if held is not None and held[0] is not Rule.KEEP_CHANNEL:
             continue  # held by a block or stream hold: it reserves nothing
         if n.devices & busy or n.devices & reserved or held is not None:

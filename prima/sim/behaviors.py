@@ -14,7 +14,7 @@ import math
 from typing import Any, Callable, Generator, Mapping
 
 from prima.catalog import Catalog, Value
-from prima.mediator.interface import AtomicBehavior, Call, CommandId
+from prima.mediator import AtomicBehavior, Call, CommandId
 from prima.sim.kernel import Wait, signal, sleep, until
 from prima.sim.maps import Place
 from prima.sim.records import Picture

@@ -15,7 +15,7 @@ import sys
 from typing import Sequence, TextIO
 
 from prima.errors import ScenarioError
-from prima.mediator.interface import Call
+from prima.mediator import Call
 from prima.sim.runner import CommandRunner
 from prima.sim.scenario import load_map, load_scenario
 from prima.sim.simulator import Simulator

@@ -15,7 +15,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 from prima.catalog import Catalog, Value
-from prima.mediator.interface import AtomicBehavior, Call, CommandId, Event, Outcome
+from prima.mediator import AtomicBehavior, Call, CommandId, Event, Outcome
 from prima.sim.records import UserAction, ZoneEntry
 from prima.sim.simulator import Simulator
 

@@ -24,7 +24,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
 from prima.catalog import Value
-from prima.mediator.interface import AbId, AtomicBehavior, CommandId, Event, Outcome
+from prima.mediator import AbId, AtomicBehavior, CommandId, Event, Outcome
 from prima.sim.kernel import Kernel, Waker
 from prima.sim.maps import Place, WorldMap
 from prima.sim.records import (

@@ -9,7 +9,7 @@ import pytest
 from prima.dsl.loader import check_document
 from prima.dsl.profile import default_profile
 from prima.interpreter import AppFailure, Interpreter, Note
-from prima.mediator.interface import Event, ManualClock, Outcome, Request, RunningOrder
+from prima.mediator import Event, ManualClock, Outcome, Request, RunningOrder
 
 
 class Port:

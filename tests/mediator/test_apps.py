@@ -47,7 +47,7 @@ def test_an_ea_swap_cancels_its_work_frees_its_devices_and_never_cuts() -> None:
     assert h.driver.abandoned == [3]
     assert museum.cancelled == [] and museum.ended == []  # unloaded: no more callbacks
     assert start_of(h, 4).t == 3.0 and fa.ended_ids == [4]
-    unreg = h.kinds(DecisionKind.UNREGISTER)
+    unreg = h.kinds(DecisionKind.UNLOAD)
     assert [(d.t, d.app, d.rule) for d in unreg] == [(1.5, "museum", Rule.UNLOAD)]
     assert m.snapshot().trees == ()
 
@@ -65,10 +65,10 @@ def test_a_failing_app_is_removed_and_the_other_goes_on() -> None:
     m.submit(req("fa", speak("mine")))                   # AB3 waits
     h.at(0.5, lambda: m.post(Event("human-found")))
     h.run()
-    (err,) = h.kinds(DecisionKind.ERROR)
+    (err,) = h.kinds(DecisionKind.FAILURE)
     assert (err.app, err.rule) == ("ea", Rule.APP_FAILURE)
     assert "interpreter crashed" in err.detail
-    assert [(d.app, d.rule) for d in h.kinds(DecisionKind.UNREGISTER)] == [("ea", Rule.APP_FAILURE)]
+    assert [(d.app, d.rule) for d in h.kinds(DecisionKind.UNLOAD)] == [("ea", Rule.APP_FAILURE)]
     # Its running AB finished (never cut) but no more callbacks reached it.
     assert ea.ended == [] and start_of(h, 3).t == 1.0
     assert fa.events and fa.ended_ids == [3]
@@ -89,7 +89,7 @@ def test_a_failure_inside_an_end_handler_is_contained() -> None:
     m.submit(req("fa", speak("x"), speak("y")))
     m.submit(req("ea", speak("z")))
     h.run()
-    assert [d.app for d in h.kinds(DecisionKind.ERROR)] == ["fa"]
+    assert [d.app for d in h.kinds(DecisionKind.FAILURE)] == ["fa"]
     assert ea.ended_ids == [3]
     assert m.snapshot().trees == ()
 

@@ -27,7 +27,8 @@ def test_decisions_serialize_stably() -> None:
     start = h.starts()[0]
     assert start == Decision(t=0.0, seq=3, kind=DecisionKind.START, rule=Rule.FREE_DEVICES,
                              app="fa", ab=1, tree=0, command="Speak+Gesture", command_id=1,
-                             command_ids=(1, 2), devices=("arm", "neck", "speaker"))
+                             command_ids=(1, 2), devices=("arm", "neck", "speaker"),
+                             calls=(speak("hi"), call("Gesture", name="bow")))
     d = start.to_dict()
     assert list(d) == ["t", "seq", "kind", "rule", "app", "ab", "tree", "command", "command_id",
                        "command_ids", "devices", "reactive", "iteration", "label", "detail"]

@@ -17,7 +17,16 @@ from dataclasses import dataclass
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from prima.mediator import AppKind, Call, DecisionKind, Event, Outcome, Request, RunningOrder
+from prima.mediator import (
+    AppKind,
+    AtomicBehavior,
+    Call,
+    DecisionKind,
+    Event,
+    Outcome,
+    Request,
+    RunningOrder,
+)
 from prima.mediator.testing import Harness, ScriptedApp, plain_scan
 
 POOL = ["Speak", "Turn", "MoveHead", "Gesture", "PointByHand", "FaceHumanAndSpeak", "QA",
@@ -62,7 +71,8 @@ class Scenario:
 scenarios = st.builds(
     Scenario,
     acts=st.lists(acts, max_size=25).map(lambda a: tuple(sorted(a, key=lambda x: x.t))),
-    durations=st.lists(st.sampled_from([0.0, 0.5, 1.0, 2.0, 3.5]), min_size=1, max_size=7).map(tuple),
+    durations=st.lists(st.sampled_from([0.0, 0.5, 1.0, 2.0, 3.5]), min_size=1,
+                       max_size=7).map(tuple),
     iterations=st.lists(st.integers(1, 4), min_size=1, max_size=5).map(tuple),
     follow_every=st.integers(0, 4),
     fail_on_event=st.integers(0, 6),
@@ -78,95 +88,118 @@ def _args(name: str) -> dict:
             }.get(name, {})
 
 
-def run(sc: Scenario) -> tuple[Harness, dict[str, ScriptedApp], set[int]]:
-    def duration(ab) -> float:
-        return sc.durations[(ab.id * 7 + ab.iteration) % len(sc.durations)]
+class _Play:
+    """Plays one random scenario against a mediator in the scripted harness."""
 
-    def outcome(ab) -> Outcome:
-        n = sc.iterations[ab.command_ids[0] % len(sc.iterations)]
+    def __init__(self, sc: Scenario) -> None:
+        self.sc = sc
+        self.h = Harness(duration=self.duration, outcome=self.outcome, immediate=sc.immediate)
+        self.m = self.h.mediator
+        self.apps: dict[str, ScriptedApp] = {}
+        self.unloaded: set[int] = set()  # Commands whose app was unloaded before they concluded
+        self.owner: dict[int, str] = {}
+        self.names = {"fa": "fa", "ea": "ea"}
+        self.events_seen: Counter[str] = Counter()
+        self.followups: set[int] = set()
+        self.streams: set[str] = set()
+        self.blocks: set[str] = set()
+        self.swaps = 0
+        self.m.register("fa", AppKind.FA, self.listener("fa", "fa"))
+        self.m.register("ea", AppKind.EA, self.listener("ea", "ea"))
+
+    def duration(self, ab: AtomicBehavior) -> float:
+        return self.sc.durations[(ab.id * 7 + ab.iteration) % len(self.sc.durations)]
+
+    def outcome(self, ab: AtomicBehavior) -> Outcome:
+        n = self.sc.iterations[ab.command_ids[0] % len(self.sc.iterations)]
         return Outcome(terminal=ab.iteration + 1 >= n)
 
-    h = Harness(duration=duration, outcome=outcome, immediate=sc.immediate)
-    m = h.mediator
-    apps: dict[str, ScriptedApp] = {}
-    unloaded: set[int] = set()   # Commands whose app was unloaded before they concluded
-    owner: dict[int, str] = {}
-    names = {"fa": "fa", "ea": "ea"}
-    events_seen: Counter[str] = Counter()
-    followups: set[int] = set()
+    def own(self, ids: tuple[int, ...], name: str) -> None:
+        for c in ids:
+            self.owner[c] = name
 
-    def listener(role: str, name: str) -> ScriptedApp:
+    def listener(self, role: str, name: str) -> ScriptedApp:
+        sc, m = self.sc, self.m
+
         def on_ended(cid: int, _o: Outcome) -> None:
-            if sc.follow_every and cid % sc.follow_every == 0 and cid not in followups:
-                for c in m.submit(Request(name, (Call("Speak", {"text": "ok"}),), follows=cid)):
-                    owner[c] = name
-                    followups.add(c)
+            if sc.follow_every and cid % sc.follow_every == 0 and cid not in self.followups:
+                ids = m.submit(Request(name, (Call("Speak", {"text": "ok"}),), follows=cid))
+                self.own(ids, name)
+                self.followups.update(ids)
 
         def on_event(_e: Event) -> None:
-            events_seen[name] += 1
-            if role == "ea" and sc.fail_on_event and events_seen[name] == sc.fail_on_event:
+            self.events_seen[name] += 1
+            if role == "ea" and sc.fail_on_event and self.events_seen[name] == sc.fail_on_event:
                 raise RuntimeError("scripted crash")
-            for c in m.submit(Request(name, (Call("Turn", {"angle": 5.0}),), reactive=True)):
-                owner[c] = name
+            self.own(m.submit(Request(name, (Call("Turn", {"angle": 5.0}),), reactive=True)), name)
 
         app = ScriptedApp(name, on_event=on_event, on_ended=on_ended)
-        apps[name] = app
+        self.apps[name] = app
         return app
 
-    m.register("fa", AppKind.FA, listener("fa", "fa"))
-    m.register("ea", AppKind.EA, listener("ea", "ea"))
-    swaps = 0
-
-    def act(a: Act) -> None:
-        nonlocal swaps
-        name = names[a.app]
-        if name not in m.apps():
+    def act(self, a: Act) -> None:
+        name = self.names[a.app]
+        if name not in self.m.apps():
             return
-        if a.kind == "submit":
-            latest = max((c for c, o in owner.items() if o == name), default=None)
-            r = Request(name, tuple(Call(c, _args(c)) for c in a.commands),
-                        order=RunningOrder.ASAP if a.asap else RunningOrder.AFTER_LATEST,
-                        group=a.group and not any(c in ("TrackingHuman", "TopologicalMove")
-                                                  for c in a.commands),
-                        reactive=a.reactive,
-                        follows=latest if a.follows_latest else None)
-            for c in m.submit(r):
-                owner[c] = name
-        elif a.kind == "event":
-            m.post(Event("touched"))
-        elif a.kind == "stream":
-            if m._apps[name].stream is None:
-                m.open_stream(name, hold=a.hold)
-            else:
-                m.close_stream(name)
-        elif a.kind == "block":
-            if m._apps[name].block is None:
-                m.open_block(name, devices=frozenset({"speaker", "neck"}) if a.asap else None,
-                             watchdog=1.0 + a.hold)
-            else:
-                m.close_block(name)
-        elif a.kind == "swap" and a.app == "ea":
-            for c, o in owner.items():
-                if o == name:
-                    unloaded.add(c)
-            m.unregister(name)
-            swaps += 1
-            names["ea"] = f"ea{swaps}"
-            m.register(names["ea"], AppKind.EA, listener("ea", names["ea"]))
+        getattr(self, f"act_{a.kind}")(a, name)
 
-    for a in sc.acts:
-        h.at(a.t, lambda a=a: act(a))
-    steps = 0
-    while h.step():
-        steps += 1
-        assert plain_scan(m) == [], f"a startable AB was left waiting at t={h.clock.now()}"
-        assert steps < 20_000
-    # Apps that failed were unloaded by the mediator.
-    for d in h.kinds(DecisionKind.UNREGISTER):
-        for c, o in owner.items():
-            if o == d.app:
-                unloaded.add(c)
-    return h, apps, unloaded
+    def act_submit(self, a: Act, name: str) -> None:
+        latest = max((c for c, o in self.owner.items() if o == name), default=None)
+        feedback = any(c in ("TrackingHuman", "TopologicalMove") for c in a.commands)
+        r = Request(name, tuple(Call(c, _args(c)) for c in a.commands),
+                    order=RunningOrder.ASAP if a.asap else RunningOrder.AFTER_LATEST,
+                    group=a.group and not feedback, reactive=a.reactive,
+                    follows=latest if a.follows_latest else None)
+        self.own(self.m.submit(r), name)
+
+    def act_event(self, _a: Act, _name: str) -> None:
+        self.m.post(Event("touched"))
+
+    def act_stream(self, a: Act, name: str) -> None:
+        if name not in self.streams:
+            self.m.open_stream(name, hold=a.hold)
+            self.streams.add(name)
+        else:
+            self.m.close_stream(name)
+            self.streams.discard(name)
+
+    def act_block(self, a: Act, name: str) -> None:
+        if name not in self.blocks:
+            self.m.open_block(name, devices=frozenset({"speaker", "neck"}) if a.asap else None,
+                              watchdog=1.0 + a.hold)
+            self.blocks.add(name)
+        else:
+            self.m.close_block(name)
+            self.blocks.discard(name)
+
+    def act_swap(self, a: Act, name: str) -> None:
+        if a.app != "ea":
+            return
+        self.unloaded.update(c for c, o in self.owner.items() if o == name)
+        self.m.unregister(name)
+        self.swaps += 1
+        self.names["ea"] = f"ea{self.swaps}"
+        self.m.register(self.names["ea"], AppKind.EA, self.listener("ea", self.names["ea"]))
+
+    def play(self) -> None:
+        h, m = self.h, self.m
+        for a in self.sc.acts:
+            h.at(a.t, lambda a=a: self.act(a))
+        steps = 0
+        while h.step():
+            steps += 1
+            assert plain_scan(m) == [], f"a startable AB was left waiting at t={h.clock.now()}"
+            assert steps < 20_000
+        # Apps that failed were unloaded by the mediator.
+        for d in h.kinds(DecisionKind.UNLOAD):
+            self.unloaded.update(c for c, o in self.owner.items() if o == d.app)
+
+
+def run(sc: Scenario) -> tuple[Harness, dict[str, ScriptedApp], set[int]]:
+    """Play a scenario; the harness, the apps' listeners, and the Commands unloaded."""
+    play = _Play(sc)
+    play.play()
+    return play.h, play.apps, play.unloaded
 
 
 @settings(max_examples=300, deadline=None, database=None,
@@ -209,8 +242,9 @@ _SCRIPT = """
 import json, sys
 sys.path.insert(0, {root!r})
 from tests.mediator.test_properties import Act, Scenario, run
-acts = tuple(Act(t=i * 0.5, app=("fa", "ea")[i % 2], kind=("submit", "submit", "event", "stream")[i % 4],
-                 commands=(("Speak", "Gesture"), ("FaceHumanAndSpeak",), ("Turn", "MoveHead"))[i % 3],
+kinds = ("submit", "submit", "event", "stream")
+commands = (("Speak", "Gesture"), ("FaceHumanAndSpeak",), ("Turn", "MoveHead"))
+acts = tuple(Act(t=i * 0.5, app=("fa", "ea")[i % 2], kind=kinds[i % 4], commands=commands[i % 3],
                  asap=i % 5 == 0, reactive=i % 3 == 0, group=i % 4 == 1) for i in range(30))
 h, _, _ = run(Scenario(acts, (1.0, 0.5, 2.0), (2, 1, 3), 3, 0, False))
 print(json.dumps([d.to_dict() for d in h.decisions]))

@@ -190,7 +190,7 @@ def test_a_cc_breaking_move_waits_while_the_other_app_talks_with_the_user() -> N
     m = h.mediator
     m.submit(req("fa", call("QA", prompt="What's the matter with you?", timeout=5.0)))  # AB1 0-2
     m.submit(req("ea", call("TopologicalMove", to="room")))                              # AB2 LOW
-    m.submit(req("ea", call("Speak", text="on the way")))                              # AB3 (chained)
+    m.submit(req("ea", call("Speak", text="on the way")))                          # AB3, chained
     h.run(until=10.0)
     assert start_time(h, 2) == 2.0  # only once the FA's talk ended
     [hold] = [d for d in h.decisions if d.kind is DecisionKind.HOLD]

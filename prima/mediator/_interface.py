@@ -12,17 +12,35 @@ Nothing here knows about XML documents or physics.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping, Protocol
+from typing import NamedTuple, Protocol
 
-from prima.vocab import PREDEFINED_EVENTS, AppKind, RunningOrder, Value
+from prima.errors import MediationError
+from prima.vocab import RunningOrder, Value
+
+__all__ = [
+    "AbId",
+    "AppListener",
+    "AtomicBehavior",
+    "Call",
+    "Clock",
+    "CommandId",
+    "Driver",
+    "Event",
+    "ManualClock",
+    "Outcome",
+    "Request",
+    "TreeId",
+]
 
 EMPTY: Mapping[str, Value] = MappingProxyType({})
 
 
 def _empty() -> Mapping[str, Value]:
     return EMPTY
+
 
 CommandId = int
 """Mediator-wide id of one requested Command (increasing from 1)."""
@@ -64,9 +82,12 @@ class Request:
     the request stays in that Command's tree and carries no reactivity."""
 
 
-@dataclass(frozen=True)
-class AtomicBehavior:
-    """What a driver is asked to perform: one AB, never cut once started."""
+class AtomicBehavior(NamedTuple):
+    """What a driver is asked to perform: one AB, never cut once started.
+
+    An immutable record (a named tuple: one is built for every start, on the
+    mediator's hot path).
+    """
 
     id: AbId
     app: str
@@ -116,7 +137,7 @@ class ManualClock:
 
     def set(self, t: float) -> None:
         if t < self._t:
-            raise ValueError(f"time cannot go back from {self._t} to {t}")
+            raise MediationError(f"time cannot go back from {self._t} to {t}")
         self._t = t
 
 

@@ -7,8 +7,8 @@ finished) -> WAITING (on the waiting list) -> RUNNING -> DONE, or to
 CANCELLED before it starts. A tree is in working memory while any node is
 pending, waiting or running, and *active* while any node runs.
 
-Everything here is internal and mutable; :mod:`prima.mediator.snapshot`
-gives the frozen public view.
+Everything here is internal and mutable; :mod:`._snapshot` gives the frozen
+public view.
 """
 
 from __future__ import annotations
@@ -17,12 +17,13 @@ import enum
 from typing import TYPE_CHECKING
 
 from prima.catalog import CommandSpec, Priority
-from prima.mediator.interface import AbId, AppKind, Call, CommandId, TreeId
+from prima.mediator._interface import AbId, Call, CommandId, TreeId
+from prima.vocab import AppKind
 
 if TYPE_CHECKING:
-    from prima.mediator.interface import AppListener
+    from prima.mediator._interface import AppListener
 
-__all__ = ["NodeState"]
+__all__ = ["IN_MEMORY", "App", "Command", "Node", "NodeState", "Tree"]
 
 
 class NodeState(str, enum.Enum):
@@ -41,53 +42,14 @@ class NodeState(str, enum.Enum):
 
 
 IN_MEMORY = (NodeState.PENDING, NodeState.WAITING, NodeState.RUNNING)
+"""The states of a node that is still in working memory."""
 
 
-class _Stream:
-    """An explicit stream block (``open_stream`` ... ``close_stream``)."""
-
-    __slots__ = ("hold", "tree", "devices", "armed", "deadline", "lapsed", "held")
-
-    def __init__(self, hold: float, tree: _Tree | None) -> None:
-        self.hold = hold
-        self.tree = tree
-        self.devices: set[str] = set()
-        self.armed = False
-        """The hold is in force (the app is idle)."""
-        self.deadline = 0.0
-        self.lapsed = False
-        """The hold timed out in this idle period; it re-arms after the next activity."""
-        self.held: set[AbId] = set()
-        """ABs already recorded as held in this hold period."""
-
-
-class _Block:
-    """A begin/end block (``open_block`` ... ``close_block``)."""
-
-    __slots__ = ("devices", "watchdog", "first_command", "tree", "started",
-                 "deadline", "expired", "held")
-
-    def __init__(self, devices: frozenset[str], watchdog: float, first_command: CommandId,
-                 tree: _Tree | None) -> None:
-        self.devices = devices
-        self.watchdog = watchdog
-        self.first_command = first_command
-        self.tree = tree
-        self.started = False
-        self.deadline = 0.0
-        self.expired = False
-        self.held: set[AbId] = set()
-
-    @property
-    def reserving(self) -> bool:
-        return self.started and not self.expired
-
-
-class _App:
+class App:
     """One registration of an application."""
 
     __slots__ = ("name", "kind", "listener", "alive", "order", "latest", "active",
-                 "idle_since", "trees", "stream", "block")
+                 "idle_since", "trees")
 
     def __init__(self, name: str, kind: AppKind, listener: AppListener, order: int) -> None:
         self.name = name
@@ -95,32 +57,28 @@ class _App:
         self.listener = listener
         self.alive = True
         self.order = order
-        self.latest: _Command | None = None
+        """Registration order (1 for the first application)."""
+        self.latest: Command | None = None
+        """The application's latest requested Command (rule 3, after latest)."""
         self.active = 0
         """Nodes of this app that are waiting or running."""
         self.idle_since = 0.0
         """When ``active`` last dropped to zero."""
-        self.trees: dict[TreeId, _Tree] = {}
-        self.stream: _Stream | None = None
-        self.block: _Block | None = None
+        self.trees: dict[TreeId, Tree] = {}
+        """Its trees in working memory."""
 
 
-TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
-"""Devices through which the robot talks with its user: while another app uses
-them, a Command that breaks the Communication Channel waits."""
-
-
-class _Command:
+class Command:
     """One requested Command."""
 
     __slots__ = ("id", "app", "call", "spec", "node", "ended", "cancelled", "cut", "ended_at")
 
-    def __init__(self, cid: CommandId, app: _App, call: Call, spec: CommandSpec) -> None:
+    def __init__(self, cid: CommandId, app: App, call: Call, spec: CommandSpec) -> None:
         self.id = cid
         self.app = app
         self.call = call
         self.spec = spec
-        self.node: _Node | None = None
+        self.node: Node | None = None
         """Its current node (the latest iteration for a feedback Command)."""
         self.ended = False
         self.cancelled = False
@@ -129,12 +87,12 @@ class _Command:
         self.ended_at = 0.0
 
 
-class _Tree:
+class Tree:
     """One AB tree (one Communication Stream)."""
 
-    __slots__ = ("id", "app", "live", "running", "suspended", "nodes")
+    __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "version")
 
-    def __init__(self, tid: TreeId, app: _App) -> None:
+    def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
         self.app = app
         self.live = 0
@@ -142,8 +100,10 @@ class _Tree:
         self.running = 0
         self.suspended: int | None = None
         """Position on the suspended stack (larger = more recent), or None."""
-        self.nodes: dict[AbId, _Node] = {}
+        self.nodes: dict[AbId, Node] = {}
         """Nodes in working memory, in creation order."""
+        self.version = 0
+        """Bumped whenever the waiting index must re-rank the tree (suspend, resume)."""
 
 
 _SORTED: dict[frozenset[str], tuple[str, ...]] = {}
@@ -159,14 +119,14 @@ def _sorted(devices: frozenset[str]) -> tuple[str, ...]:
     return out
 
 
-class _Node:
+class Node:
     """One atomic behavior in a tree."""
 
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
-                 "tier", "name", "command_ids", "feedback", "calls", "parked")
+                 "name", "command_ids", "feedback", "calls", "parked")
 
-    def __init__(self, ab: AbId, app: _App, tree: _Tree, commands: tuple[_Command, ...],
+    def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
                  iteration: int = 0) -> None:
         self.id = ab
@@ -180,25 +140,19 @@ class _Node:
         self.iteration = iteration
         self.parent: AbId | None = None
         """The before node's id (kept as an id so finished nodes can be freed)."""
-        self.children: list[_Node] = []
+        self.children: list[Node] = []
         self.state = NodeState.PENDING
         self.seq = seq
         """The request's sequence number: smaller is older."""
         self.version = 0
-        """Bumped whenever its waiting-index entries must be re-filed."""
-        self.tier = 0
+        """Bumped whenever its waiting-index entries go stale."""
         self.parked = False
         """Held by another app's block or stream hold: out of the device ranking."""
+        self.calls: tuple[Call, ...] = tuple(c.call for c in commands)
+        self.command_ids: tuple[CommandId, ...] = tuple(c.id for c in commands)
         if len(commands) == 1:
-            first = commands[0]
-            self.calls: tuple[Call, ...] = (first.call,)
-            self.name = first.spec.name
-            self.command_ids: tuple[CommandId, ...] = (first.id,)
-            self.feedback = first.spec.feedback
+            self.name = commands[0].spec.name
+            self.feedback = commands[0].spec.feedback
         else:
-            self.calls = tuple([c.call for c in commands])
             self.name = "+".join(c.spec.name for c in commands)
-            self.command_ids = tuple(c.id for c in commands)
             self.feedback = False
-
-

@@ -1,22 +1,22 @@
 """Working memory (thesis Figure 4.3): trees, the waiting list, running ABs,
-device occupancy, active trees and the suspended-stream stack.
+device occupancy and the suspended-stream stack.
 
 :class:`WorkingMemory` only keeps the books; the mediator decides. Its
 primitive updates are the ones Figure 4.3 names: a root enters the waiting
 list when its tree is accepted, an AB's children enter it when the AB ends.
-It also tracks what a selection round must look at next: ABs that just
+It also tracks what the next selection round must look at: ABs that just
 entered the waiting list, ABs whose parent just finished, and *dirty* devices
 (freed, released, or whose best waiting AB may have changed).
 """
 
 from __future__ import annotations
 
-from typing import Iterator
+from collections.abc import Iterator
 
 from prima.catalog import Priority
-from prima.mediator.interface import AbId, TreeId
-from prima.mediator.selection import WaitIndex
-from prima.mediator.state import TALK_DEVICES, NodeState, _App, _Command, _Node, _Tree
+from prima.mediator._index import WaitIndex
+from prima.mediator._interface import AbId, TreeId
+from prima.mediator._state import App, Command, Node, NodeState, Tree
 
 __all__ = ["WorkingMemory"]
 
@@ -25,40 +25,38 @@ class WorkingMemory:
     """The mediator's books. Internal: use :meth:`Mediator.snapshot` to look."""
 
     def __init__(self) -> None:
-        self.nodes: dict[AbId, _Node] = {}
+        self.nodes: dict[AbId, Node] = {}
         """Nodes pending, waiting or running."""
-        self.trees: dict[TreeId, _Tree] = {}
+        self.trees: dict[TreeId, Tree] = {}
         """Trees in working memory (with at least one such node)."""
-        self.busy: dict[str, _Node] = {}
-        self.channel_devices: frozenset[str] = frozenset()
-        """Devices of the Commands that break the Communication Channel."""
-        self.channel_held: set[int] = set()
-        """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
+        self.busy: dict[str, Node] = {}
         """Device -> the running AB that occupies it."""
         self.index = WaitIndex()
         self.waiting = 0
-        self.new: list[_Node] = []
+        """How many ABs are on the waiting list."""
+        self.new: list[Node] = []
         """ABs that entered the waiting list since the last selection round."""
-        self.pjf: dict[AbId, _Node] = {}
+        self.pjf: dict[AbId, Node] = {}
         """ABs whose parent finished since the last selection round."""
         self.dirty: set[str] = set()
-        self.suspended: dict[TreeId, _Tree] = {}
-        """The suspended-stream stack (``_Tree.suspended`` orders it)."""
+        """Devices whose best waiting AB may have changed since the last round."""
+        self.suspended: dict[TreeId, Tree] = {}
+        """The suspended-stream stack (``Tree.suspended`` orders it)."""
         self._next_ab = 1
         self._next_tree = 0
         self._next_susp = 1
 
     # ----------------------------------------------------------------- building
-    def new_tree(self, app: _App) -> _Tree:
-        tree = _Tree(self._next_tree, app)
+    def new_tree(self, app: App) -> Tree:
+        tree = Tree(self._next_tree, app)
         self._next_tree += 1
         return tree
 
-    def new_node(self, app: _App, tree: _Tree, commands: tuple[_Command, ...],
+    def new_node(self, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
-                 iteration: int = 0) -> _Node:
-        node = _Node(self._next_ab, app, tree, commands, devices, priority, reactive, seq,
-                     iteration)
+                 iteration: int = 0) -> Node:
+        node = Node(self._next_ab, app, tree, commands, devices, priority, reactive, seq,
+                    iteration)
         self._next_ab += 1
         self.nodes[node.id] = node
         tree.nodes[node.id] = node
@@ -70,7 +68,7 @@ class WorkingMemory:
         return node
 
     @staticmethod
-    def link(parent: _Node | None, child: _Node) -> None:
+    def link(parent: Node | None, child: Node) -> None:
         if parent is None:
             return
         child.parent = parent.id
@@ -78,7 +76,7 @@ class WorkingMemory:
             parent.children.append(child)
 
     # ------------------------------------------------------------------ changes
-    def enter_waiting(self, node: _Node, *, parent_finished: bool) -> None:
+    def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
         node.state = NodeState.WAITING
         node.app.active += 1
@@ -88,35 +86,43 @@ class WorkingMemory:
         if parent_finished:
             self.pjf[node.id] = node
 
-    def start(self, node: _Node) -> None:
+    def refile(self, node: Node) -> None:
+        """A parked AB takes its place in the ranking again."""
+        node.parked = False
+        if node.state is NodeState.WAITING:
+            self.index.add(node)
+            self.dirty.update(node.devices)
+
+    def park(self, node: Node) -> None:
+        """Take a waiting AB out of its devices' ranking (its index entries go stale)."""
+        node.parked = True
+        node.version += 1
+        self.dirty.update(node.devices)
+
+    def start(self, node: Node) -> None:
         node.state = NodeState.RUNNING
-        self.channel_held.discard(node.id)
         self.waiting -= 1
         for d in node.sorted_devices:
             self.busy[d] = node
         node.tree.running += 1
 
-    def end(self, node: _Node, now: float) -> list[_Node]:
+    def end(self, node: Node, now: float) -> list[Node]:
         """A running AB ended: free its devices; returns its children (now orphans)."""
         node.state = NodeState.DONE
         for d in node.sorted_devices:
             if self.busy.get(d) is node:
                 del self.busy[d]
         self.dirty.update(node.devices)
-        if self.channel_held and not TALK_DEVICES.isdisjoint(node.devices):
-            # A CC-breaking AB waited for this talk to end (the channel rule).
-            self.dirty.update(self.channel_devices)
         node.tree.running -= 1
         self._inactive(node.app, now)
         children = node.children
         node.children = []
         return children
 
-    def cancel(self, node: _Node, now: float) -> None:
+    def cancel(self, node: Node, now: float) -> None:
         """Remove a not-yet-started node."""
         was_waiting = node.state is NodeState.WAITING
         node.state = NodeState.CANCELLED
-        self.channel_held.discard(node.id)
         node.children = []
         if was_waiting:
             self.waiting -= 1
@@ -124,7 +130,7 @@ class WorkingMemory:
             self._inactive(node.app, now)
         self.leave(node)
 
-    def leave(self, node: _Node) -> None:
+    def leave(self, node: Node) -> None:
         """Take a finished or cancelled node out of working memory."""
         self.nodes.pop(node.id, None)
         tree = node.tree
@@ -134,49 +140,46 @@ class WorkingMemory:
         if tree.live == 0:
             self.trees.pop(tree.id, None)
             tree.app.trees.pop(tree.id, None)
+            self.index.forget(tree)
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
 
     @staticmethod
-    def _inactive(app: _App, now: float) -> None:
+    def _inactive(app: App, now: float) -> None:
         app.active -= 1
         if app.active == 0:
             app.idle_since = now
 
     # -------------------------------------------------------- suspended stack
-    def suspend(self, tree: _Tree) -> bool:
+    def suspend(self, tree: Tree) -> bool:
         """Push a tree on the suspended stack (once). True if it was pushed."""
         if tree.suspended is not None or tree.live == 0:
             return False
         tree.suspended = self._next_susp
         self._next_susp += 1
         self.suspended[tree.id] = tree
-        self._refile(tree)
+        self.dirty.update(self.index.rerank(tree))
         return True
 
-    def resume(self, tree: _Tree) -> None:
+    def resume(self, tree: Tree) -> None:
         if tree.suspended is None:
             return
         tree.suspended = None
         self.suspended.pop(tree.id, None)
-        self._refile(tree)
-
-    def _refile(self, tree: _Tree) -> None:
-        for n in self.waiting_in(tree):
-            self.index.add(n)
-            self.dirty.update(n.devices)
+        self.dirty.update(self.index.rerank(tree))
 
     # ------------------------------------------------------------------ queries
     @staticmethod
-    def waiting_in(tree: _Tree) -> Iterator[_Node]:
+    def waiting_in(tree: Tree) -> Iterator[Node]:
         return (n for n in list(tree.nodes.values()) if n.state is NodeState.WAITING)
 
-    def stack(self) -> list[_Tree]:
+    def stack(self) -> list[Tree]:
         """The suspended stack, top (most recently suspended) first."""
         return sorted(self.suspended.values(), key=lambda t: -(t.suspended or 0))
 
     def maybe_compact(self) -> None:
         """Drop stale index entries once they outnumber live ones."""
-        if self.index.entries() > 4 * (self.waiting * 3 + 64):
-            self.index.compact(n for n in self.nodes.values() if n.state is NodeState.WAITING)
+        if self.index.entries > 4 * (self.waiting * 3 + 64):
+            self.index.compact(n for n in self.nodes.values()
+                               if n.state is NodeState.WAITING and not n.parked)

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable
 
-from prima.mediator.interface import AbId, CommandId, TreeId
-from prima.mediator.memory import WorkingMemory
-from prima.mediator.state import NodeState, _App, _Node
+from prima.mediator._holds import Holds
+from prima.mediator._interface import AbId, CommandId, TreeId
+from prima.mediator._memory import WorkingMemory
+from prima.mediator._state import Node, NodeState
 
 __all__ = ["HoldView", "NodeView", "Snapshot", "TreeView"]
 
@@ -81,7 +81,7 @@ class Snapshot:
         return tuple(t.id for t in self.trees if t.active)
 
 
-def _node_view(n: _Node) -> NodeView:
+def _node_view(n: Node) -> NodeView:
     return NodeView(
         ab=n.id, app=n.app.name, tree=n.tree.id, parent=n.parent, command=n.name,
         command_ids=tuple(c.id for c in n.commands), devices=n.sorted_devices,
@@ -89,17 +89,11 @@ def _node_view(n: _Node) -> NodeView:
     )
 
 
-def take(t: float, wm: WorkingMemory, apps: Iterable[_App]) -> Snapshot:
-    """Build a :class:`Snapshot` (costs a scan: for tests, not the hot path)."""
+def take(t: float, wm: WorkingMemory, in_force: Holds) -> Snapshot:
+    """Build a :class:`Snapshot` (costs a scan: for tests and tools, not the hot path)."""
     nodes = sorted(wm.nodes.values(), key=lambda n: n.id)
-    holds: list[HoldView] = []
-    for app in apps:
-        st = app.stream
-        if st is not None and st.armed:
-            holds.append(HoldView(app.name, "stream", tuple(sorted(st.devices)), st.deadline))
-        blk = app.block
-        if blk is not None and blk.reserving:
-            holds.append(HoldView(app.name, "block", tuple(sorted(blk.devices)), blk.deadline))
+    holds = [HoldView(app, kind, devices, deadline)
+             for app, kind, devices, deadline in in_force.in_force()]
     return Snapshot(
         t=t,
         waiting=tuple(n.id for n in nodes if n.state is NodeState.WAITING),

@@ -1,0 +1,289 @@
+"""What keeps a ready AB from starting besides its devices: holds.
+
+Three things hold an AB back, and this module owns all their state:
+
+- **Explicit stream blocks** (rule 6c). A stream's hold is *armed* when its
+  app has nothing waiting or running inside the open stream: other apps'
+  non-reactive ABs that need the stream's devices wait. It lapses as soon as
+  the app is busy again (its own ABs then compete as usual, the stream's
+  continuation ranking as "parent just finished"), and is released by
+  ``close_stream``, by the hold timeout, or by unloading the app.
+- **Begin/end blocks.** A block reserves its devices for its app alone,
+  reactive requests included, from its first AB's start until
+  ``close_block``, the watchdog, or unloading.
+- **The channel rule** (thesis Sec. 3.3). A Command that breaks the
+  Communication Channel (moving away) does not start while another
+  application talks with the user; it stays ranked and waits.
+
+An AB held by another app's stream hold or block is *parked*: out of its
+devices' ranking, so it reserves nothing against the holder.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from prima.catalog import Catalog, Priority
+from prima.errors import MediationError
+from prima.mediator._decisions import DecisionKind, Rule
+from prima.mediator._interface import AbId, CommandId
+from prima.mediator._log import DecisionLog
+from prima.mediator._memory import WorkingMemory
+from prima.mediator._state import App, Node, NodeState, Tree
+
+__all__ = ["Block", "Holds", "Stream"]
+
+
+class Stream:
+    """An explicit stream block (``open_stream`` ... ``close_stream``)."""
+
+    __slots__ = ("hold", "tree", "devices", "armed", "deadline", "lapsed", "held")
+
+    def __init__(self, hold: float, tree: Tree | None) -> None:
+        self.hold = hold
+        self.tree = tree
+        """The tree that continues the stream (rule ``stream``)."""
+        self.devices: set[str] = set()
+        """Devices the stream's ABs used: what its hold keeps."""
+        self.armed = False
+        """The hold is in force (the app is idle)."""
+        self.deadline = 0.0
+        self.lapsed = False
+        """The hold timed out in this idle period; it re-arms after the next activity."""
+        self.held: set[AbId] = set()
+        """ABs already recorded as held in this hold period."""
+
+
+class Block:
+    """A begin/end block (``open_block`` ... ``close_block``)."""
+
+    __slots__ = ("devices", "watchdog", "first_command", "tree", "started",
+                 "deadline", "expired", "held")
+
+    def __init__(self, devices: frozenset[str], watchdog: float, first_command: CommandId,
+                 tree: Tree | None) -> None:
+        self.devices = devices
+        self.watchdog = watchdog
+        self.first_command = first_command
+        """Commands from this id on belong to the block."""
+        self.tree = tree
+        self.started = False
+        self.deadline = 0.0
+        self.expired = False
+        self.held: set[AbId] = set()
+
+    @property
+    def reserving(self) -> bool:
+        """Its devices are reserved now (it started, and the watchdog has not fired)."""
+        return self.started and not self.expired
+
+
+class Holds:
+    """Streams, blocks, the channel rule, parked ABs and their deadlines."""
+
+    def __init__(self, apps: Mapping[str, App], wm: WorkingMemory, log: DecisionLog,
+                 catalog: Catalog) -> None:
+        self._apps = apps
+        self._wm = wm
+        self._log = log
+        self._catalog = catalog
+        self._talk = tuple(sorted(catalog.talk_devices))
+        self._channel_devices = catalog.channel_devices
+        self._streams: dict[str, Stream] = {}
+        self._blocks: dict[str, Block] = {}
+        self._parked: list[Node] = []
+        self._channel_held: set[AbId] = set()
+        """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
+
+    # ------------------------------------------------------------------ queries
+    def open(self) -> bool:
+        """Some app has an open stream or block (else no AB can be held by one)."""
+        return bool(self._streams) or bool(self._blocks)
+
+    def stream(self, app: App) -> Stream | None:
+        return self._streams.get(app.name)
+
+    def block(self, app: App) -> Block | None:
+        return self._blocks.get(app.name)
+
+    def continues(self, app: App, tree: Tree) -> bool:
+        """An open stream or live block of the app owns this tree (rule ``stream``)."""
+        st, blk = self._streams.get(app.name), self._blocks.get(app.name)
+        return ((st is not None and st.tree is tree)
+                or (blk is not None and not blk.expired and blk.tree is tree))
+
+    def holder(self, node: Node) -> tuple[Rule, App] | None:
+        """Another app's talk, block or armed stream hold that keeps ``node`` from starting."""
+        if node.priority is Priority.LOW:
+            busy = self._wm.busy
+            for d in self._talk:
+                talker = busy.get(d)
+                if talker is not None and talker.app is not node.app:
+                    return Rule.KEEP_CHANNEL, talker.app
+        if not self.open():
+            return None
+        for other in self._apps.values():
+            if other is node.app:
+                continue
+            blk = self._blocks.get(other.name)
+            if blk is not None and blk.reserving and not node.devices.isdisjoint(blk.devices):
+                return Rule.BLOCK, other
+            st = self._streams.get(other.name)
+            if (st is not None and st.armed and not node.reactive
+                    and not node.devices.isdisjoint(st.devices)):
+                return Rule.STREAM_HOLD, other
+        return None
+
+    # ----------------------------------------------------------- streams, blocks
+    def open_stream(self, app: App, hold: float, tree: Tree | None) -> None:
+        if app.name in self._streams:
+            raise MediationError(f"{app.name}: a stream is already open")
+        st = Stream(hold, tree)
+        for t in app.trees.values():
+            for n in t.nodes.values():
+                if n.state is NodeState.RUNNING:
+                    st.devices.update(n.devices)
+        self._streams[app.name] = st
+
+    def close_stream(self, app: App, rule: Rule) -> None:
+        """End the app's stream (if open); an armed hold is released."""
+        st = self._streams.pop(app.name, None)
+        if st is not None and st.armed:
+            self._release(st.devices)
+            self._log.emit(DecisionKind.RELEASE, rule, app=app.name,
+                           detail="stream hold on " + ", ".join(sorted(st.devices)))
+
+    def open_block(self, app: App, devices: frozenset[str], watchdog: float,
+                   first_command: CommandId, tree: Tree | None) -> None:
+        if app.name in self._blocks:
+            raise MediationError(f"{app.name}: a block is already open")
+        self._blocks[app.name] = Block(devices, watchdog, first_command, tree)
+
+    def close_block(self, app: App, rule: Rule) -> None:
+        """End the app's block (if open); a reservation is released."""
+        blk = self._blocks.pop(app.name, None)
+        if blk is not None and blk.reserving:
+            self._release(blk.devices)
+            self._log.emit(DecisionKind.RELEASE, rule, app=app.name,
+                           detail="block on " + ", ".join(sorted(blk.devices)))
+
+    def _release(self, devices: set[str] | frozenset[str]) -> None:
+        self._wm.dirty.update(devices)
+        self.unpark_all()
+
+    # ----------------------------------------------------------- the AB's life
+    def requested(self, app: App, tree: Tree) -> None:
+        """The app's request joined ``tree``: its open stream and live block continue it."""
+        st, blk = self._streams.get(app.name), self._blocks.get(app.name)
+        if st is not None:
+            st.tree = tree
+        if blk is not None and not blk.expired:
+            blk.tree = tree
+
+    def started(self, node: Node, now: float) -> None:
+        """An AB started: a block's first AB arms its watchdog; a stream learns devices."""
+        self._channel_held.discard(node.id)
+        app = node.app
+        blk = self._blocks.get(app.name)
+        if (blk is not None and not blk.started and not blk.expired
+                and node.commands[0].id >= blk.first_command):
+            blk.started = True
+            blk.deadline = now + blk.watchdog
+        st = self._streams.get(app.name)
+        if st is not None:
+            st.devices.update(node.devices)
+
+    def ended(self, node: Node) -> None:
+        """An AB ended: if it talked, CC-breaking ABs held by the channel rule may go."""
+        if self._channel_held and not node.devices.isdisjoint(self._talk):
+            self._wm.dirty.update(self._channel_devices)
+
+    def cancelled(self, node: Node) -> None:
+        self._channel_held.discard(node.id)
+
+    def update(self) -> None:
+        """Arm a stream hold when its app goes idle; let it lapse when it is busy again."""
+        if not self._streams:
+            return
+        for app in self._apps.values():
+            st = self._streams.get(app.name)
+            if st is None:
+                continue
+            if app.active == 0:
+                if not st.armed and not st.lapsed and st.devices:
+                    st.armed = True
+                    st.deadline = app.idle_since + st.hold
+                    st.held = set()
+            else:
+                st.lapsed = False
+                if st.armed:
+                    st.armed = False
+                    self._release(st.devices)
+
+    # ----------------------------------------------------------- held ABs
+    def park(self, node: Node) -> None:
+        """Take a held AB out of its devices' ranking, so it does not reserve them
+        against the holder's own ABs (the block or stream goes on meanwhile)."""
+        self._wm.park(node)
+        self._parked.append(node)
+
+    def unpark_all(self) -> None:
+        """A hold or block ended: re-file the parked ABs (a hold still in force parks
+        them again in the next round)."""
+        parked, self._parked = self._parked, []
+        for node in parked:
+            self._wm.refile(node)
+
+    def note(self, node: Node, rule: Rule, holder: App) -> None:
+        """Record that ``holder`` keeps ``node`` waiting (once per hold)."""
+        if rule is Rule.KEEP_CHANNEL:
+            if node.id not in self._channel_held:
+                self._channel_held.add(node.id)
+                self._log.emit(DecisionKind.HOLD, rule, node, detail=f"{holder.name} is talking")
+            return
+        box: Block | Stream | None = (self._blocks.get(holder.name) if rule is Rule.BLOCK
+                                      else self._streams.get(holder.name))
+        if box is None or node.id in box.held:
+            return
+        box.held.add(node.id)
+        self._log.emit(DecisionKind.HOLD, rule, node, detail=f"devices kept for {holder.name}")
+
+    # ----------------------------------------------------------- deadlines
+    def next_deadline(self) -> float | None:
+        """The earliest pending hold timeout or watchdog, if any."""
+        best: float | None = None
+        for app in self._apps.values():
+            st, blk = self._streams.get(app.name), self._blocks.get(app.name)
+            if st is not None and st.armed and (best is None or st.deadline < best):
+                best = st.deadline
+            if blk is not None and blk.reserving and (best is None or blk.deadline < best):
+                best = blk.deadline
+        return best
+
+    def expire(self, now: float) -> None:
+        """End every hold whose timeout and every block whose watchdog has passed."""
+        for app in list(self._apps.values()):
+            st, blk = self._streams.get(app.name), self._blocks.get(app.name)
+            if st is not None and st.armed and st.deadline <= now:
+                st.armed = False
+                st.lapsed = True
+                self._release(st.devices)
+                self._log.emit(DecisionKind.RELEASE, Rule.HOLD_TIMEOUT, app=app.name,
+                               detail="stream hold on " + ", ".join(sorted(st.devices)))
+            if blk is not None and blk.reserving and blk.deadline <= now:
+                blk.expired = True
+                self._release(blk.devices)
+                self._log.emit(DecisionKind.RELEASE, Rule.WATCHDOG, app=app.name,
+                               detail="block on " + ", ".join(sorted(blk.devices)))
+
+    # ----------------------------------------------------------- looking
+    def in_force(self) -> list[tuple[str, str, tuple[str, ...], float]]:
+        """Holds in force: (app, ``stream`` or ``block``, devices, deadline)."""
+        out = []
+        for app in self._apps.values():
+            st, blk = self._streams.get(app.name), self._blocks.get(app.name)
+            if st is not None and st.armed:
+                out.append((app.name, "stream", tuple(sorted(st.devices)), st.deadline))
+            if blk is not None and blk.reserving:
+                out.append((app.name, "block", tuple(sorted(blk.devices)), blk.deadline))
+        return out

@@ -1,0 +1,337 @@
+"""The mediator: one facade over small collaborators, each with its own state.
+
+- :class:`~._memory.WorkingMemory`: trees, the waiting list and its index,
+  running ABs, device occupancy, the suspended stack;
+- :class:`~._intake.Intake`: checks requests and links them (rules 3, 6);
+- :class:`~._holds.Holds`: explicit streams, blocks and the channel rule;
+- :class:`~._rounds.Selector`: selection rounds (rule 4), suspend and resume;
+- :class:`~._log.DecisionLog`: numbers and records every decision.
+
+Every public method is one *operation*. Operations may nest: an
+application's listener or the driver may call back into the mediator while
+it is calling them. Working memory is updated at once, but selection runs
+only when the outermost operation completes, round after round until nothing
+more can start, so the result does not depend on how callbacks nest.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import TracebackType
+
+from prima.catalog import Catalog
+from prima.errors import MediationError
+from prima.mediator._decisions import Decision, DecisionKind, Rule
+from prima.mediator._holds import Holds
+from prima.mediator._intake import Intake
+from prima.mediator._interface import (
+    AbId,
+    AppListener,
+    Clock,
+    CommandId,
+    Driver,
+    Event,
+    Outcome,
+    Request,
+)
+from prima.mediator._log import DecisionLog
+from prima.mediator._memory import WorkingMemory
+from prima.mediator._rounds import Selector
+from prima.mediator._snapshot import Snapshot, take
+from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
+from prima.vocab import MAX_BLOCK_WATCHDOG, MAX_STREAM_HOLD, AppKind
+
+__all__ = ["Mediator", "MediatorConfig"]
+
+
+@dataclass(frozen=True)
+class MediatorConfig:
+    """Tunable bounds of the mediation rules."""
+
+    end_grace: float = 0.5
+    """Seconds after a Command's end within which a ``follows`` request stays in
+    its tree (CS exceptions (a)/(b)). A handler that requests at once is always
+    in time; one that waits on a timer or polls is not."""
+
+    max_stream_hold: float = MAX_STREAM_HOLD
+    """Upper bound on an explicit stream's hold, whatever the document asks: the
+    other application's response speed stays bounded (rule 6c)."""
+
+    max_block_watchdog: float = MAX_BLOCK_WATCHDOG
+    """Upper bound on a begin/end block's watchdog, whatever the document asks:
+    a runaway block cannot starve the other application (rule 3)."""
+
+
+class _Operation:
+    """One public operation: selection runs when the outermost one completes."""
+
+    __slots__ = ("_m", "_outer")
+
+    def __init__(self, mediator: Mediator) -> None:
+        self._m = mediator
+        self._outer = False
+
+    def __enter__(self) -> None:
+        m = self._m
+        self._outer = m._depth == 0 and not m._settling
+        m._depth += 1
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        m = self._m
+        m._depth -= 1
+        if exc_type is None and self._outer:
+            m._settle()
+
+
+class Mediator:
+    """PRIMA's mediator (MISSION.md sections 3-5)."""
+
+    def __init__(self, catalog: Catalog, driver: Driver, clock: Clock, *,
+                 config: MediatorConfig = MediatorConfig(),
+                 record: Callable[[Decision], None] | None = None) -> None:
+        self._catalog = catalog
+        self._driver = driver
+        self._clock = clock
+        self._config = config
+        self._apps: dict[str, App] = {}
+        self._app_order = 0
+        self._wm = WorkingMemory()
+        self._log = DecisionLog(clock, record)
+        self._holds = Holds(self._apps, self._wm, self._log, catalog)
+        self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
+                              config.end_grace)
+        self._selector = Selector(self._wm, self._holds, self._log, driver, clock)
+        self._depth = 0
+        self._settling = False
+
+    # ================================================================ looking
+    @property
+    def catalog(self) -> Catalog:
+        return self._catalog
+
+    @property
+    def config(self) -> MediatorConfig:
+        return self._config
+
+    @property
+    def decisions(self) -> int:
+        """How many decisions were made so far."""
+        return self._log.count
+
+    def apps(self) -> tuple[str, ...]:
+        """Registered applications, in registration order."""
+        return tuple(self._apps)
+
+    def snapshot(self) -> Snapshot:
+        """A frozen, comparable view of working memory."""
+        return take(self._clock.now(), self._wm, self._holds)
+
+    # ============================================================ applications
+    def register(self, app: str, kind: AppKind, listener: AppListener) -> None:
+        """Load an application: one FA, at most one EA (swap: unregister the old EA first)."""
+        kind = AppKind(kind)
+        if not app:
+            raise MediationError("an application needs a name")
+        if app in self._apps:
+            raise MediationError(f"application {app!r} is already registered")
+        for other in self._apps.values():
+            if other.kind is kind:
+                raise MediationError(
+                    f"cannot register {app!r}: {kind.name} {other.name!r} is loaded "
+                    f"(one FA, at most one EA; unregister {other.name!r} first)")
+        with self._operation():
+            self._app_order += 1
+            self._apps[app] = App(app, kind, listener, self._app_order)
+            self._log.emit(DecisionKind.LOAD, Rule.REGISTER, app=app, detail=kind.name)
+
+    def unregister(self, app: str) -> None:
+        """Unload an application: cancel its waiting work, free its holds; running ABs finish."""
+        a = self._app(app)
+        with self._operation():
+            self._unload(a, Rule.UNLOAD)
+
+    def _unload(self, app: App, rule: Rule) -> None:
+        now = self._clock.now()
+        app.alive = False
+        self._apps.pop(app.name, None)
+        for tree in sorted(app.trees.values(), key=lambda t: t.id):
+            for node in list(tree.nodes.values()):
+                if node.state is NodeState.RUNNING:
+                    if node.feedback:
+                        node.commands[0].cut = True
+                else:
+                    self._intake.cancel(node, Rule.UNLOAD, now)
+        self._holds.close_stream(app, Rule.UNLOAD)
+        self._holds.close_block(app, Rule.UNLOAD)
+        self._log.emit(DecisionKind.UNLOAD, rule, app=app.name)
+
+    def _app(self, name: str) -> App:
+        app = self._apps.get(name)
+        if app is None:
+            raise MediationError(f"unknown application {name!r}")
+        return app
+
+    def _call(self, app: App, callback: Callable[[AppListener], None], what: str) -> None:
+        """Call an app's listener; an exception removes the app, never the mediator."""
+        if not app.alive:
+            return
+        try:
+            callback(app.listener)
+        except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
+            if app.alive:
+                self._log.emit(DecisionKind.FAILURE, Rule.APP_FAILURE, app=app.name,
+                               detail=f"{what}: {type(exc).__name__}: {exc}")
+                self._unload(app, Rule.APP_FAILURE)
+
+    # ================================================================ requests
+    def submit(self, request: Request) -> tuple[CommandId, ...]:
+        """Accept a request; returns one Command id per Call (MISSION.md rule 3)."""
+        app, specs = self._intake.check(request)
+        with self._operation():
+            ids, cancelled = self._intake.accept(app, request, specs, self._clock.now())
+            self._tell_cancelled(cancelled)
+            return ids
+
+    def _tell_cancelled(self, commands: list[Command]) -> None:
+        for cmd in commands:
+            self._tell(cmd.app, cmd.id, None)
+
+    def _tell(self, app: App, command_id: CommandId, outcome: Outcome | None) -> None:
+        """Tell an app that its Command ended (with ``outcome``) or was cancelled (None)."""
+        if outcome is None:
+            self._call(app, lambda listener: listener.command_cancelled(command_id),
+                       "command_cancelled")
+        else:
+            self._call(app, lambda listener: listener.command_ended(command_id, outcome),
+                       "command_ended")
+
+    # ================================================================= driver
+    def finish(self, ab_id: AbId, outcome: Outcome = Outcome()) -> None:
+        """The driver reports an AB's end (MISSION.md rule 3, feedback iterations)."""
+        node = self._wm.nodes.get(ab_id)
+        if node is None or node.state is not NodeState.RUNNING:
+            raise MediationError(f"AB{ab_id} is not running")
+        with self._operation():
+            self._end(node, outcome)
+
+    def _end(self, node: Node, outcome: Outcome) -> None:
+        now = self._clock.now()
+        wm = self._wm
+        children = wm.end(node, now)
+        self._holds.ended(node)
+        detail = ""
+        if node.feedback:
+            detail = "terminal" if outcome.terminal else "not terminal"
+        self._log.emit(DecisionKind.END, Rule.COMPLETED, node, detail=detail)
+        app = node.app
+        cmd0 = node.commands[0]
+        ended: tuple[Command, ...] = ()
+        cancelled: Command | None = None
+        if node.feedback and not outcome.terminal and not cmd0.cut:
+            children = [self._next_iteration(node, children)]
+        elif node.feedback and not outcome.terminal:
+            cancelled = cmd0
+            cmd0.cancelled = True
+            self._log.emit(DecisionKind.CANCEL, Rule.ASAP if app.alive else Rule.UNLOAD, node,
+                           detail="feedback loop stopped between iterations")
+            self._driver.abandon(cmd0.id)
+        else:
+            ended = node.commands
+            self._intake.ended(ended, now)
+        for child in children:
+            if child.state is NodeState.PENDING:
+                wm.enter_waiting(child, parent_finished=True)
+        wm.leave(node)
+        if cancelled is not None:
+            self._tell_cancelled([cancelled])
+        for cmd in ended:
+            self._tell(app, cmd.id, outcome)
+
+    def _next_iteration(self, node: Node, children: list[Node]) -> Node:
+        """Insert a feedback Command's next iteration between ``node`` and its children."""
+        nxt = self._wm.new_node(node.app, node.tree, node.commands, node.devices,
+                                node.priority, False, node.seq, node.iteration + 1)
+        nxt.parent = node.id
+        nxt.children = children
+        for c in children:
+            c.parent = nxt.id
+        return nxt
+
+    # ================================================================= events
+    def post(self, event: Event) -> None:
+        """Broadcast a predefined or robot event to every registered app (rule 5)."""
+        with self._operation():
+            for app in list(self._apps.values()):
+                self._call(app, lambda listener: listener.event(event), "event")
+
+    # ======================================================== streams, blocks
+    def open_stream(self, app: str, hold: float) -> None:
+        """Begin an explicit stream block (rule 6c): one CS, held while the app waits."""
+        a = self._app(app)
+        if self._holds.stream(a) is not None:
+            raise MediationError(f"{app}: a stream is already open")
+        if hold < 0:
+            raise MediationError(f"{app}: stream hold must be >= 0, got {hold}")
+        with self._operation():
+            self._holds.open_stream(a, min(hold, self._config.max_stream_hold),
+                                    self._latest_tree(a))
+
+    def close_stream(self, app: str) -> None:
+        """End the explicit stream block; its hold (if any) is released."""
+        a = self._app(app)
+        if self._holds.stream(a) is None:
+            raise MediationError(f"{app}: no stream is open")
+        with self._operation():
+            self._holds.close_stream(a, Rule.STREAM_CLOSE)
+
+    def open_block(self, app: str, *, devices: frozenset[str] | None = None,
+                   watchdog: float) -> None:
+        """Begin a begin/end block: one IU, its devices reserved once it starts."""
+        a = self._app(app)
+        if self._holds.block(a) is not None:
+            raise MediationError(f"{app}: a block is already open")
+        if watchdog <= 0:
+            raise MediationError(f"{app}: block watchdog must be > 0, got {watchdog}")
+        devs = self._catalog.devices if devices is None else frozenset(devices)
+        unknown = devs - self._catalog.devices
+        if unknown:
+            raise MediationError(f"{app}: block names unknown devices {sorted(unknown)}")
+        with self._operation():
+            self._holds.open_block(a, devs, min(watchdog, self._config.max_block_watchdog),
+                                   self._intake.next_command, self._latest_tree(a))
+
+    def close_block(self, app: str) -> None:
+        """Conclude the block (also fine after its watchdog fired)."""
+        a = self._app(app)
+        if self._holds.block(a) is None:
+            raise MediationError(f"{app}: no block is open")
+        with self._operation():
+            self._holds.close_block(a, Rule.BLOCK_CLOSE)
+
+    @staticmethod
+    def _latest_tree(app: App) -> Tree | None:
+        latest = app.latest.node if app.latest is not None else None
+        return latest.tree if latest is not None and latest.state in IN_MEMORY else None
+
+    # ============================================================== deadlines
+    def next_deadline(self) -> float | None:
+        """The earliest pending hold timeout or watchdog, if any."""
+        return self._holds.next_deadline()
+
+    def advance(self) -> None:
+        """Handle every deadline that has passed, then run selection."""
+        with self._operation():
+            self._holds.expire(self._clock.now())
+
+    # ================================================================ plumbing
+    def _operation(self) -> _Operation:
+        return _Operation(self)
+
+    def _settle(self) -> None:
+        self._settling = True
+        try:
+            self._selector.settle()
+        finally:
+            self._settling = False

@@ -1,0 +1,103 @@
+"""Ranking waiting ABs (MISSION.md rule 4): one ordered list of named criteria.
+
+A waiting AB's rank is the tuple of its keys under :data:`CRITERIA`, in
+order; the smaller rank wins. Each criterion names the :class:`Rule` that a
+``start`` decision reports when that criterion is the one that separated the
+winner from the AB it beat. To add a criterion, add one entry: the index
+(:mod:`._index`) builds its keys from this list, and selection ranks with it.
+
+A criterion's :class:`Scope` says when its key can change while the AB waits,
+which is all the index needs to know:
+
+- ``NODE``: fixed from the moment the AB enters the waiting list;
+- ``TREE``: a property of the AB's tree that can change (suspension); the
+  index re-ranks the tree, not each of its ABs;
+- ``ROUND``: true for one selection round only (parent just finished). Such a
+  key must be ``(0,)`` for the ABs the round names and ``(1,)`` for all others.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable, Collection
+from dataclasses import dataclass
+
+from prima.mediator._decisions import Rule
+from prima.mediator._state import Node
+
+__all__ = ["CRITERIA", "Criterion", "Key", "Rank", "Scope", "rank", "separating_rule"]
+
+Key = tuple[int, ...]
+Rank = tuple[Key, ...]
+
+
+class Scope(str, enum.Enum):
+    """When a criterion's key can change while an AB waits."""
+
+    NODE = "node"
+    """Never: fixed when the AB enters the waiting list."""
+    TREE = "tree"
+    """When the AB's tree changes (it is suspended or resumed)."""
+    ROUND = "round"
+    """Every selection round (the ABs whose parent just finished)."""
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """One criterion of rule 4: a key per waiting AB, smaller wins."""
+
+    rule: Rule
+    """What a ``start`` decision names when this criterion decided it."""
+    scope: Scope
+    key: Callable[[Node, Collection[int]], Key]
+    """The AB's key; the collection holds the ids of the ABs whose parent just
+    finished (only ``ROUND`` criteria look at it)."""
+
+
+def _priority(node: Node, _pjf: Collection[int]) -> Key:
+    return (-int(node.priority),)
+
+
+def _reactivity(node: Node, _pjf: Collection[int]) -> Key:
+    return (0, -node.seq) if node.reactive else (1, 0)
+
+
+def _parent_finished(node: Node, pjf: Collection[int]) -> Key:
+    return (0,) if node.id in pjf else (1,)
+
+
+def _resume_stream(node: Node, _pjf: Collection[int]) -> Key:
+    suspended = node.tree.suspended
+    return (1, 0) if suspended is None else (0, -suspended)
+
+
+def _oldest(node: Node, _pjf: Collection[int]) -> Key:
+    return (node.seq, node.id)
+
+
+CRITERIA: tuple[Criterion, ...] = (
+    Criterion(Rule.PRIORITY, Scope.NODE, _priority),
+    # 1. HIGH (keeps the Communication Channel) before LOW (breaks it).
+    Criterion(Rule.REACTIVITY, Scope.NODE, _reactivity),
+    # 2. reactive ABs first, the latest reactive first (response speed).
+    Criterion(Rule.PARENT_FINISHED, Scope.ROUND, _parent_finished),
+    # 3. ABs whose before node just finished (keep the active stream).
+    Criterion(Rule.RESUME_STREAM, Scope.TREE, _resume_stream),
+    # 4. ABs of a suspended stream, the most recently suspended first ...
+    Criterion(Rule.OLDEST, Scope.NODE, _oldest),
+    # ... then the oldest request first, then the AB id.
+)
+"""Rule 4, in order."""
+
+
+def rank(node: Node, pjf: Collection[int]) -> Rank:
+    """The full rank of a waiting AB; ``pjf`` holds the ids whose parent just finished."""
+    return tuple(c.key(node, pjf) for c in CRITERIA)
+
+
+def separating_rule(winner: Rank, loser: Rank) -> Rule:
+    """The first criterion on which ``winner`` beats ``loser``."""
+    for criterion, a, b in zip(CRITERIA, winner, loser, strict=True):
+        if a != b:
+            return criterion.rule
+    return Rule.OLDEST

@@ -1,0 +1,196 @@
+"""Selection rounds (MISSION.md rule 4), suspension and resumption.
+
+A round looks only at ABs that may have become startable since the last one:
+ABs that just entered the waiting list, and the best waiting AB on each
+*dirty* device. An AB starts when all its devices are free, no hold keeps it
+(:mod:`._holds`), and it is the best-ranked waiting AB on each of its devices
+(:mod:`._ranking`). This is exactly what walking the whole waiting list in
+rank order would start (a better AB that cannot start reserves its devices),
+but without touching the ABs that cannot start.
+
+When an AB starts and, on one of its devices, the best AB it beat belongs to
+another tree and was ready (its devices free, nothing holding it), that tree
+is suspended; when an AB of a suspended tree starts, the tree resumes.
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Iterable
+
+from prima.catalog import Priority
+from prima.mediator._decisions import DecisionKind, Rule
+from prima.mediator._holds import Holds
+from prima.mediator._index import WaitIndex
+from prima.mediator._interface import AbId, AtomicBehavior, Clock, Driver
+from prima.mediator._log import DecisionLog
+from prima.mediator._memory import WorkingMemory
+from prima.mediator._ranking import Rank, rank, separating_rule
+from prima.mediator._state import Node, NodeState, Tree
+
+__all__ = ["Selector", "atomic_behavior"]
+
+
+def atomic_behavior(node: Node) -> AtomicBehavior:
+    """What the driver is asked to perform for a node."""
+    return AtomicBehavior(id=node.id, app=node.app.name, tree=node.tree.id, calls=node.calls,
+                          command_ids=node.command_ids, devices=node.devices,
+                          iteration=node.iteration, reactive=node.reactive)
+
+
+class _Round:
+    """One round's ranking: the index, plus the ABs whose parent just finished.
+
+    Parent-finished lasts one round, so it is not in the index: each device's
+    parent-finished ABs are heaped here (built on first need), and a device's
+    best AB is the better of the index's answer and this heap's top.
+    """
+
+    def __init__(self, pjf: dict[AbId, Node], index: WaitIndex) -> None:
+        self.pjf = pjf
+        self._index = index
+        self._heaps: dict[str, list[tuple[Rank, Node]]] | None = None
+
+    def rank(self, node: Node) -> Rank:
+        return rank(node, self.pjf)
+
+    def best(self, device: str) -> Node | None:
+        """The best-ranked waiting AB that needs ``device``, or None."""
+        top = self._index.top(device)
+        if not self.pjf:
+            return top
+        finished = self._finished_top(device)
+        if finished is None or finished is top:
+            return top
+        if top is None:
+            return finished
+        return min(top, finished, key=self.rank)
+
+    def _finished_top(self, device: str) -> Node | None:
+        heaps = self._heaps
+        if heaps is None:
+            heaps = self._heaps = {}
+            for n in self.pjf.values():
+                if n.state is NodeState.WAITING:
+                    for d in n.sorted_devices:
+                        heaps.setdefault(d, []).append((self.rank(n), n))
+            for heap in heaps.values():
+                heapq.heapify(heap)
+        found = heaps.get(device)
+        while found:
+            node = found[0][1]
+            if node.state is NodeState.WAITING and not node.parked:
+                return node
+            heapq.heappop(found)
+        return None
+
+
+class Selector:
+    """Runs selection rounds and hands the ABs they start to the driver."""
+
+    def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
+                 clock: Clock) -> None:
+        self._wm = wm
+        self._holds = holds
+        self._log = log
+        self._driver = driver
+        self._clock = clock
+
+    def settle(self) -> None:
+        """Run rounds until nothing more can start."""
+        wm = self._wm
+        while True:
+            self._holds.update()
+            if not (wm.new or wm.dirty or wm.pjf):
+                break
+            for node in self.round():
+                self._driver.start(atomic_behavior(node))
+        wm.maybe_compact()
+
+    def round(self) -> list[Node]:
+        """One round: start every AB that can start now; returns them."""
+        wm = self._wm
+        pjf, wm.pjf = wm.pjf, {}
+        new, wm.new = wm.new, []
+        dirty, wm.dirty = wm.dirty, set()
+        view = _Round(pjf, wm.index)
+        started: list[Node] = []
+        later: list[tuple[bool, Tree]] = []
+        for x in self._candidates(new, dirty, view):
+            if x.state is NodeState.WAITING and self._startable(x, view):
+                self._start(x, view, started, later)
+        for is_suspend, tree in later:
+            if is_suspend:
+                wm.suspend(tree)
+            else:
+                wm.resume(tree)
+        # "Parent just finished" lasts one round: others may now rank above.
+        for n in pjf.values():
+            if n.state is NodeState.WAITING:
+                wm.dirty.update(n.devices)
+        return started
+
+    @staticmethod
+    def _candidates(new: Iterable[Node], dirty: set[str], view: _Round) -> list[Node]:
+        """What may start: ABs new on the waiting list, the best on each dirty device."""
+        cands: dict[int, Node] = {n.id: n for n in new if n.state is NodeState.WAITING}
+        for d in sorted(dirty):
+            b = view.best(d)
+            if b is not None:
+                cands[b.id] = b
+        order = list(cands.values())
+        if len(order) > 1:
+            order.sort(key=view.rank)
+        return order
+
+    def _startable(self, x: Node, view: _Round) -> bool:
+        holds = self._holds
+        held = holds.holder(x) if holds.open() or x.priority is Priority.LOW else None
+        if held is not None and held[0] is not Rule.KEEP_CHANNEL:
+            # Held by another app's block or stream hold: out of the ranking at
+            # once, busy devices or not, so it reserves nothing meanwhile.
+            holds.note(x, *held)
+            holds.park(x)
+            return False
+        busy = self._wm.busy
+        for d in x.sorted_devices:
+            if d in busy or view.best(d) is not x:
+                return False
+        if held is not None:  # the channel rule: it waits, still ranked
+            holds.note(x, *held)
+            return False
+        return True
+
+    def _start(self, x: Node, view: _Round, started: list[Node],
+               later: list[tuple[bool, Tree]]) -> None:
+        x_rank = view.rank(x)
+        self._wm.start(x)
+        started.append(x)
+        self._holds.started(x, self._clock.now())
+        # Who did it beat? The best remaining waiting AB on each of its devices.
+        losers = [b for d in x.sorted_devices if (b := view.best(d)) is not None]
+        rule = Rule.FREE_DEVICES
+        if losers:
+            top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
+            rule = separating_rule(x_rank, view.rank(top))
+        self._log.emit(DecisionKind.START, rule, x)
+        if x.tree.suspended is not None:
+            self._log.emit(DecisionKind.RESUME, rule, x, detail="resumed from the suspended IU")
+            later.append((False, x.tree))
+        self._suspend_losers(x, losers, rule, started, later)
+
+    def _suspend_losers(self, x: Node, losers: list[Node], rule: Rule, started: list[Node],
+                        later: list[tuple[bool, Tree]]) -> None:
+        busy = self._wm.busy
+        for loser in losers:
+            tree = loser.tree
+            if tree is x.tree or tree.suspended is not None:
+                continue
+            if any(is_suspend and t is tree for is_suspend, t in later):
+                continue
+            # "Ready": it lost only to this round's starts, not to ABs already running.
+            ready = all(busy.get(d) is None or busy[d] in started for d in loser.devices)
+            if ready and self._holds.holder(loser) is None:
+                self._log.emit(DecisionKind.SUSPEND, rule, loser,
+                               detail=f"lost to AB{x.id} ({x.app.name})")
+                later.append((True, tree))
