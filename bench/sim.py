@@ -24,9 +24,15 @@ except ModuleNotFoundError:  # running from a checkout without installing
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from prima.mediator.interface import Call  # noqa: E402
-from prima.sim import Pose, Simulator, TimedAction, UserActionKind, UserScript  # noqa: E402
-from prima.sim.runner import CommandRunner  # noqa: E402
-from prima.sim.scenario import load_map  # noqa: E402
+from prima.sim import (  # noqa: E402
+    CommandRunner,
+    Pose,
+    Simulator,
+    TimedAction,
+    UserActionKind,
+    UserScript,
+    load_map,
+)
 
 MAP = Path(__file__).resolve().parents[1] / "scenarios" / "maps" / "office.xml"
 

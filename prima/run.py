@@ -24,9 +24,7 @@ from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import AppKind, Event, Mediator, Outcome, Request
 from prima.mediator.decisions import Decision, DecisionKind
-from prima.sim import RobotSpec, Simulator
-from prima.sim.records import UserAction, ZoneEntry
-from prima.sim.scenario import Scenario, load_scenario
+from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, TraceLine
 
 MAX_IDLE_ROUNDS = 10_000

@@ -5,9 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from prima.mediator.interface import Call
-from prima.sim import Pose, Simulator, TimedAction, UserActionKind, UserScript, WorldMap
-from prima.sim.runner import CommandRunner
-from prima.sim.scenario import load_map
+from prima.sim import (
+    CommandRunner,
+    Pose,
+    Simulator,
+    TimedAction,
+    UserActionKind,
+    UserScript,
+    WorldMap,
+    load_map,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 MAPS = ROOT / "scenarios" / "maps"

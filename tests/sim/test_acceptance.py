@@ -6,9 +6,7 @@ import math
 
 import pytest
 
-from prima.sim import Pose, Simulator
-from prima.sim.runner import CommandRunner
-from prima.sim.scenario import load_scenario
+from prima.sim import CommandRunner, Pose, Simulator, load_scenario
 
 from tests.sim.helpers import EXAMPLES, call, runner, walk
 

@@ -7,8 +7,15 @@ import math
 import pytest
 
 from prima.mediator.interface import AtomicBehavior
-from prima.sim import Pose, ScheduledEvent, Simulator, TimedAction, UserActionKind, Zone
-from prima.sim.runner import CommandRunner
+from prima.sim import (
+    CommandRunner,
+    Pose,
+    ScheduledEvent,
+    Simulator,
+    TimedAction,
+    UserActionKind,
+    Zone,
+)
 
 from tests.sim.helpers import call, runner, world_map
 

@@ -10,8 +10,7 @@ from pathlib import Path
 import pytest
 
 from prima.errors import ScenarioError
-from prima.sim.cli import main
-from prima.sim.scenario import load_map, load_scenario
+from prima.sim import load_map, load_scenario, main
 
 from tests.sim.helpers import EXAMPLES, MAPS, ROOT
 

@@ -2,7 +2,7 @@
 
 A :class:`UserScript` is plain data (a scenario file produces one; tests may
 build one directly). :class:`ScriptedUser` plays it inside a
-:class:`~prima.sim.simulator.Simulator`: it walks (over the place graph when a
+:class:`~prima.sim.Simulator`: it walks (over the place graph when a
 wall is in the way), follows or leaves the robot, touches it, and answers the
 robot's questions by its rules ("when the robot asks something containing X,
 after D seconds say Y"). A question no rule matches gets no answer, and so
@@ -16,11 +16,11 @@ import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Iterator
 
-from prima.sim.kernel import Process, Wait, sleep
-from prima.sim.records import Pose, UserAction, UserActionKind
+from prima.sim._kernel import Process, Wait, sleep
+from prima.sim._records import Pose, UserAction, UserActionKind
 
 if TYPE_CHECKING:
-    from prima.sim.simulator import Simulator
+    from prima.sim._simulator import Simulator
 
 __all__ = ["AnswerRule", "ScriptedUser", "TimedAction", "UserScript"]
 

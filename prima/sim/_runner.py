@@ -16,8 +16,8 @@ from typing import Mapping
 
 from prima.catalog import Catalog, Value
 from prima.mediator.interface import AtomicBehavior, Call, CommandId, Event, Outcome
-from prima.sim.records import UserAction, ZoneEntry
-from prima.sim.simulator import Simulator
+from prima.sim._records import UserAction, ZoneEntry
+from prima.sim._simulator import Simulator
 
 __all__ = ["CommandRunner", "TraceEntry"]
 

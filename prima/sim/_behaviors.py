@@ -15,11 +15,11 @@ from typing import Any, Callable, Generator, Mapping
 
 from prima.catalog import Catalog, Value
 from prima.mediator.interface import AtomicBehavior, Call, CommandId
-from prima.sim.kernel import Wait, signal, sleep, until
-from prima.sim.maps import Place
-from prima.sim.records import Picture
-from prima.sim.simulator import Simulator
-from prima.sim.world import wrap_angle
+from prima.sim._kernel import Wait, signal, sleep, until
+from prima.sim._maps import Place
+from prima.sim._records import Picture
+from prima.sim._simulator import Simulator
+from prima.sim._world import wrap_angle
 
 __all__ = ["BEHAVIORS", "perform"]
 

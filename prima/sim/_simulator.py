@@ -25,9 +25,9 @@ from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
 from prima.catalog import Value
 from prima.mediator.interface import AbId, AtomicBehavior, CommandId, Event, Outcome
-from prima.sim.kernel import Kernel, Waker
-from prima.sim.maps import Place, WorldMap
-from prima.sim.records import (
+from prima.sim._kernel import Kernel, Waker
+from prima.sim._maps import Place, WorldMap
+from prima.sim._records import (
     Picture,
     Pose,
     ReplyRule,
@@ -36,12 +36,12 @@ from prima.sim.records import (
     Zone,
     ZoneEntry,
 )
-from prima.sim.spec import RobotSpec
-from prima.sim.user import ScriptedUser, UserScript
-from prima.sim.world import World
+from prima.sim._spec import RobotSpec
+from prima.sim._user import ScriptedUser, UserScript
+from prima.sim._world import World
 
 if TYPE_CHECKING:
-    from prima.sim.scenario import Scenario
+    from prima.sim._scenario import Scenario
 
 __all__ = ["Simulator"]
 
@@ -151,7 +151,7 @@ class Simulator:
 
     def start(self, ab: AtomicBehavior) -> None:
         """Begin ``ab`` now; ``finished`` is called when it ends (never from inside here)."""
-        from prima.sim.behaviors import perform  # behaviors import this module
+        from prima.sim._behaviors import perform  # behaviors import this module
         if ab.id in self._running:
             raise ValueError(f"atomic behavior {ab.id} is already running")
         self._running[ab.id] = ab

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 from prima.catalog import Value
-from prima.sim.maps import Area
+from prima.sim._maps import Area
 
 __all__ = ["Picture", "Pose", "ScheduledEvent", "UserAction", "UserActionKind", "Zone",
            "ZoneEntry"]

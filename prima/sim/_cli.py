@@ -16,9 +16,9 @@ from typing import Sequence, TextIO
 
 from prima.errors import ScenarioError
 from prima.mediator.interface import Call
-from prima.sim.runner import CommandRunner
-from prima.sim.scenario import load_map, load_scenario
-from prima.sim.simulator import Simulator
+from prima.sim._runner import CommandRunner
+from prima.sim._scenario import load_map, load_scenario
+from prima.sim._simulator import Simulator
 
 __all__ = ["build_parser", "main"]
 
