@@ -23,7 +23,7 @@ try:
 except ModuleNotFoundError:  # running from a checkout without installing
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from prima.mediator.interface import Call  # noqa: E402
+from prima.mediator import Call  # noqa: E402
 from prima.sim import (  # noqa: E402
     CommandRunner,
     Pose,

@@ -11,22 +11,25 @@ DSL and the simulator read.
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Generator, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Generator, Mapping
 
-from prima.catalog import Catalog, Value
-from prima.mediator.interface import AtomicBehavior, Call, CommandId
+from prima.catalog import Catalog
+from prima.mediator import AtomicBehavior, Call
 from prima.sim._kernel import Wait, signal, sleep, until
 from prima.sim._maps import Place
 from prima.sim._records import Picture
-from prima.sim._simulator import Simulator
 from prima.sim._world import wrap_angle
+from prima.vocab import Value
+
+if TYPE_CHECKING:
+    from prima.sim._simulator import Simulator
 
 __all__ = ["BEHAVIORS", "perform"]
 
 Values = dict[str, Value]
 Result = tuple[Values, bool]
 Gen = Generator[Wait, Any, Result]
-Behavior = Callable[[Simulator, Call, CommandId, int], Gen]
+Behavior = Callable[["Simulator", Call, int, int], Gen]
 
 _CATALOG = Catalog.standard()
 
@@ -132,13 +135,13 @@ def _heading_to(sim: Simulator, place: Place) -> float | None:
 
 # ---- talking ------------------------------------------------------------------------------
 
-def speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
     yield sleep(n)
     return {"duration": n / sim.kernel.hz}, True
 
 
-def qa(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     prompt = _text(call, "prompt")
     timeout = _req(call, "timeout")
     if timeout < 0:
@@ -154,7 +157,7 @@ def qa(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
 
 # ---- turning --------------------------------------------------------------------------------
 
-def face_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     world = sim.world
     seen, distance = world.sees_user(sim.kernel.tick, any_direction=True)
     if not seen:
@@ -163,18 +166,18 @@ def face_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"found": True, "distance": round(distance, 3), **_pose(sim)}, True
 
 
-def face_human_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def face_human_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     values, _ = yield from face_human(sim, call, cid, it)
     said, _ = yield from speak(sim, call, cid, it)
     return {**values, **said}, True
 
 
-def turn(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def turn(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     yield from _turn(sim, math.radians(_req(call, "angle")))
     return _pose(sim), True
 
 
-def turn_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     angle = _req(call, "angle")
     n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
     end = sim.kernel.tick + n
@@ -184,7 +187,7 @@ def turn_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {**_pose(sim), "duration": n / sim.kernel.hz}, True
 
 
-def set_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     heading = _number(call, "heading", required=False)
     toward = _place(sim, call, "toward")
     if (heading is None) == (toward is None):
@@ -197,7 +200,7 @@ def set_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
 
 # ---- wheels ---------------------------------------------------------------------------------
 
-def set_speed_and_time(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def set_speed_and_time(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     speed, seconds = _req(call, "speed"), _req(call, "time")
     spin = _req(call, "spin")
     if seconds < 0:
@@ -211,7 +214,7 @@ def set_speed_and_time(sim: Simulator, call: Call, cid: CommandId, it: int) -> G
     return _pose(sim), True
 
 
-def stop_moving(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def stop_moving(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     yield from _stop(sim)
     return _pose(sim), True
 
@@ -222,7 +225,7 @@ def _clamp(value: float, limits: tuple[float, float]) -> float:
     return max(limits[0], min(limits[1], value))
 
 
-def move_head(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def move_head(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
     pan = _clamp(_req(call, "pan"), spec.head_pan_range)
     tilt = _clamp(_req(call, "tilt"), spec.head_tilt_range)
@@ -235,7 +238,7 @@ def move_head(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"pan": pan, "tilt": tilt}, True
 
 
-def point_by_hand(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
     angle = _number(call, "angle", required=False)
     toward = _place(sim, call, "toward")
@@ -251,7 +254,7 @@ def point_by_hand(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"angle": round(angle, 1)}, True
 
 
-def gesture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def gesture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     name = _text(call, "name")
     seconds = sim.spec.gestures.get(name)
     if seconds is None:
@@ -260,7 +263,7 @@ def gesture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"gesture": name}, True
 
 
-def take_picture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     world, tick = sim.world, sim.kernel.tick
     seen, distance = world.sees_user(tick)
     pose = sim.localize()
@@ -274,7 +277,7 @@ def take_picture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
 
 # ---- feedback loops --------------------------------------------------------------------------
 
-def active_sensing_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     say = _text(call, "say")
     angle = _req(call, "turn")
     k = sim.kernel
@@ -303,7 +306,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: CommandId, it: int) ->
     return {"found": False, "turned": angle}, False
 
 
-def tracking_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     want = _req(call, "distance")
     if want <= 0:
         raise BadArgument(f"distance must be positive, not {want:g}")
@@ -334,7 +337,7 @@ def tracking_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"lost": False, "distance": round(distance, 3)}, False
 
 
-def topological_move(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def topological_move(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     """One iteration: at most ``leg_length`` metres toward the next place on the route.
 
     Short iterations keep the robot responsive (another application's reaction
@@ -412,7 +415,7 @@ def _toward(sim: Simulator, x: float, y: float, tx: float, ty: float) -> tuple[f
     return x + (tx - x) * leg / seg, y + (ty - y) * leg / seg, True
 
 
-def _set_position(sim: Simulator, call: Call, cid: CommandId,
+def _set_position(sim: Simulator, call: Call, cid: int,
                   heading: float | None) -> Gen:
     tx, ty = _req(call, "x"), _req(call, "y")
     world, spec = sim.world, sim.spec
@@ -434,11 +437,11 @@ def _set_position(sim: Simulator, call: Call, cid: CommandId,
     return {**_pose(sim), "reached": reached}, reached
 
 
-def set_position(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def set_position(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return (yield from _set_position(sim, call, cid, None))
 
 
-def set_position_and_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def set_position_and_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return (yield from _set_position(sim, call, cid, _req(call, "heading")))
 
 

@@ -15,7 +15,7 @@ import sys
 from typing import Sequence, TextIO
 
 from prima.errors import ScenarioError
-from prima.mediator.interface import Call
+from prima.mediator import Call
 from prima.sim._runner import CommandRunner
 from prima.sim._scenario import load_map, load_scenario
 from prima.sim._simulator import Simulator

@@ -11,8 +11,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
-from prima.catalog import Value
 from prima.sim._maps import Area
+from prima.vocab import Value
 
 __all__ = ["Picture", "Pose", "ScheduledEvent", "UserAction", "UserActionKind", "Zone",
            "ZoneEntry"]

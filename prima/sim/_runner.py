@@ -14,10 +14,11 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
-from prima.catalog import Catalog, Value
-from prima.mediator.interface import AtomicBehavior, Call, CommandId, Event, Outcome
+from prima.catalog import Catalog
+from prima.mediator import AtomicBehavior, Call, Event, Outcome
 from prima.sim._records import UserAction, ZoneEntry
 from prima.sim._simulator import Simulator
+from prima.vocab import Value
 
 __all__ = ["CommandRunner", "TraceEntry"]
 
@@ -56,7 +57,7 @@ class CommandRunner:
         self._queue: deque[Call] = deque()
         self._ab = 0
         self._cid = 0
-        self._current: tuple[Call, CommandId, int] | None = None
+        self._current: tuple[Call, int, int] | None = None
         self._stopping = False
         sim.finished = self._finished
         sim.on_event = self._event
@@ -111,7 +112,7 @@ class CommandRunner:
         self._cid += 1
         self._start(call, self._cid, 0)
 
-    def _start(self, call: Call, cid: CommandId, iteration: int) -> None:
+    def _start(self, call: Call, cid: int, iteration: int) -> None:
         self._ab += 1
         self._current = (call, cid, iteration)
         self.sim.start(AtomicBehavior(self._ab, "runner", 0, (call,), (cid,),

@@ -18,12 +18,11 @@ from typing import Iterator
 import pymunk
 from lxml import etree
 
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
 from prima.errors import Problem, ScenarioError
-from prima.xmlio import validate
 from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
+from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
 
 __all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
 

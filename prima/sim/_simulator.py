@@ -23,8 +23,8 @@ import random
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
-from prima.catalog import Value
-from prima.mediator.interface import AbId, AtomicBehavior, CommandId, Event, Outcome
+from prima.mediator import AtomicBehavior, Event, Outcome
+from prima.sim._behaviors import perform
 from prima.sim._kernel import Kernel, Waker
 from prima.sim._maps import Place, WorldMap
 from prima.sim._records import (
@@ -39,13 +39,14 @@ from prima.sim._records import (
 from prima.sim._spec import RobotSpec
 from prima.sim._user import ScriptedUser, UserScript
 from prima.sim._world import World
+from prima.vocab import Value
 
 if TYPE_CHECKING:
     from prima.sim._scenario import Scenario
 
 __all__ = ["Simulator"]
 
-Finished = Callable[[AbId, Outcome], None]
+Finished = Callable[[int, Outcome], None]
 SENSE_HZ = 10
 """How often (per simulated second) sensors are read while something moves."""
 
@@ -95,8 +96,8 @@ class Simulator:
         self._unseen_since: int | None = None
         self._announced: str | None = None
         self._sensing = 0
-        self._running: dict[AbId, AtomicBehavior] = {}
-        self._loops: dict[CommandId, dict[str, Value]] = {}
+        self._running: dict[int, AtomicBehavior] = {}
+        self._loops: dict[int, dict[str, Value]] = {}
         self._mic: Waker | None = None
         self._sense_every = hz // SENSE_HZ
         self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
@@ -151,7 +152,6 @@ class Simulator:
 
     def start(self, ab: AtomicBehavior) -> None:
         """Begin ``ab`` now; ``finished`` is called when it ends (never from inside here)."""
-        from prima.sim._behaviors import perform  # behaviors import this module
         if ab.id in self._running:
             raise ValueError(f"atomic behavior {ab.id} is already running")
         self._running[ab.id] = ab
@@ -159,7 +159,7 @@ class Simulator:
             self._sensing += 1
         self.kernel.spawn(perform(self, ab), lambda result: self._finish(ab, result))
 
-    def abandon(self, command_id: CommandId) -> None:
+    def abandon(self, command_id: int) -> None:
         """Forget a feedback loop; if nothing else drives the wheels, hold still."""
         self._loops.pop(command_id, None)
         self._hold_still()
@@ -253,11 +253,11 @@ class Simulator:
         self.reports += 1
         self.on_user(action)
 
-    def loop_state(self, command_id: CommandId) -> dict[str, Value]:
+    def loop_state(self, command_id: int) -> dict[str, Value]:
         """Per-Command state kept across a feedback loop's iterations."""
         return self._loops.setdefault(command_id, {})
 
-    def end_loop(self, command_id: CommandId) -> None:
+    def end_loop(self, command_id: int) -> None:
         self._loops.pop(command_id, None)
 
     def ask(self, prompt: str) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from prima.mediator.interface import Call
+from prima.mediator import Call
 from prima.sim import (
     CommandRunner,
     Pose,

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from prima.mediator.interface import AtomicBehavior
+from prima.mediator import AtomicBehavior
 from prima.sim import (
     CommandRunner,
     Pose,
