@@ -118,8 +118,9 @@ class Run:
         self.lines: list[TraceLine] = []
         self.apps: dict[str, _App] = {}
         self._outcomes: dict[int, Outcome] = {}
-        self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile))
         self.catalog = self.profile.catalog()
+        self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
+                                           catalog=self.catalog)
         self.mediator = Mediator(self.catalog, self.sim, self.sim, record=self._decision)
         self.sim.finished = self._finished
         self.sim.on_event = self._event

@@ -4,8 +4,9 @@ A behavior is a kernel process: ``behavior(sim, call, command_id, iteration)``
 yields waits and returns ``(values, terminal)``. For a feedback Command one
 call is one loop iteration; ``terminal`` says whether the loop is done. For
 any other Command ``terminal`` is True. Arguments the call leaves out take the
-catalog's defaults (:mod:`prima.mediator.catalog`), the one table both the
-DSL and the simulator read.
+defaults of the simulator's catalog (:class:`~prima.catalog.Catalog`, built from
+the robot profile), the one table both the DSL and the simulator read; so does
+a robot-specific Command's duration.
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any, Callable, Generator, Mapping
 
-from prima.catalog import Catalog
 from prima.mediator import AtomicBehavior, Call
 from prima.sim._kernel import Wait, signal, sleep, until
 from prima.sim._maps import Place
@@ -31,8 +31,6 @@ Result = tuple[Values, bool]
 Gen = Generator[Wait, Any, Result]
 Behavior = Callable[["Simulator", Call, int, int], Gen]
 
-_CATALOG = Catalog.standard()
-
 
 class BadArgument(Exception):
     """A Command argument the robot cannot use (the AB ends with an error value)."""
@@ -40,16 +38,13 @@ class BadArgument(Exception):
 
 # ---- arguments -------------------------------------------------------------------
 
-def _arg(call: Call, name: str) -> Value:
-    if name in call.args:
-        return call.args[name]
-    spec = _CATALOG.get(call.command)
-    param = spec.param(name) if spec is not None else None
-    return param.default if param is not None else None
+def _arg(sim: Simulator, call: Call, name: str) -> Value:
+    """The argument as given, else its parameter's default in the robot's catalog."""
+    return sim.catalog[call.command].arg(call.args, name)
 
 
-def _number(call: Call, name: str, required: bool = True) -> float | None:
-    value = _arg(call, name)
+def _number(sim: Simulator, call: Call, name: str, required: bool = True) -> float | None:
+    value = _arg(sim, call, name)
     if value is None:
         if required:
             raise BadArgument(f"missing argument {name!r}")
@@ -65,20 +60,20 @@ def _number(call: Call, name: str, required: bool = True) -> float | None:
     return number
 
 
-def _req(call: Call, name: str) -> float:
-    value = _number(call, name)
+def _req(sim: Simulator, call: Call, name: str) -> float:
+    value = _number(sim, call, name)
     if value is None:
         raise BadArgument(f"missing argument {name!r}")
     return value
 
 
-def _text(call: Call, name: str) -> str:
-    value = _arg(call, name)
+def _text(sim: Simulator, call: Call, name: str) -> str:
+    value = _arg(sim, call, name)
     return "" if value is None else str(value)
 
 
 def _place(sim: Simulator, call: Call, name: str) -> Place | None:
-    value = _arg(call, name)
+    value = _arg(sim, call, name)
     if value is None:
         return None
     place = sim.map.place(str(value))
@@ -136,14 +131,14 @@ def _heading_to(sim: Simulator, place: Place) -> float | None:
 # ---- talking ------------------------------------------------------------------------------
 
 def speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
+    n = sim.ticks(sim.spec.speech_duration(_text(sim, call, "text")))
     yield sleep(n)
     return {"duration": n / sim.kernel.hz}, True
 
 
 def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    prompt = _text(call, "prompt")
-    timeout = _req(call, "timeout")
+    prompt = _text(sim, call, "prompt")
+    timeout = _req(sim, call, "timeout")
     if timeout < 0:
         raise BadArgument(f"timeout must not be negative, not {timeout:g}")
     yield sleep(sim.ticks(sim.spec.speech_duration(prompt)))
@@ -173,13 +168,13 @@ def face_human_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def turn(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    yield from _turn(sim, math.radians(_req(call, "angle")))
+    yield from _turn(sim, math.radians(_req(sim, call, "angle")))
     return _pose(sim), True
 
 
 def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    angle = _req(call, "angle")
-    n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
+    angle = _req(sim, call, "angle")
+    n = sim.ticks(sim.spec.speech_duration(_text(sim, call, "text")))
     end = sim.kernel.tick + n
     yield from _turn(sim, math.radians(angle))
     if end > sim.kernel.tick:
@@ -188,7 +183,7 @@ def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    heading = _number(call, "heading", required=False)
+    heading = _number(sim, call, "heading", required=False)
     toward = _place(sim, call, "toward")
     if (heading is None) == (toward is None):
         raise BadArgument("give exactly one of 'heading' and 'toward'")
@@ -201,8 +196,8 @@ def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 # ---- wheels ---------------------------------------------------------------------------------
 
 def set_speed_and_time(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    speed, seconds = _req(call, "speed"), _req(call, "time")
-    spin = _req(call, "spin")
+    speed, seconds = _req(sim, call, "speed"), _req(sim, call, "time")
+    spin = _req(sim, call, "spin")
     if seconds < 0:
         raise BadArgument(f"time must not be negative, not {seconds:g}")
     world = sim.world
@@ -227,8 +222,8 @@ def _clamp(value: float, limits: tuple[float, float]) -> float:
 
 def move_head(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
-    pan = _clamp(_req(call, "pan"), spec.head_pan_range)
-    tilt = _clamp(_req(call, "tilt"), spec.head_tilt_range)
+    pan = _clamp(_req(sim, call, "pan"), spec.head_pan_range)
+    tilt = _clamp(_req(sim, call, "tilt"), spec.head_tilt_range)
     change = max(abs(pan - world.head_pan.at(tick)), abs(tilt - world.head_tilt.at(tick)))
     n = sim.ticks(change / spec.head_rate)
     world.head_pan.move(pan, tick, n)
@@ -240,7 +235,7 @@ def move_head(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
-    angle = _number(call, "angle", required=False)
+    angle = _number(sim, call, "angle", required=False)
     toward = _place(sim, call, "toward")
     if (angle is None) == (toward is None):
         raise BadArgument("give exactly one of 'toward' and 'angle'")
@@ -255,7 +250,7 @@ def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def gesture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    name = _text(call, "name")
+    name = _text(sim, call, "name")
     seconds = sim.spec.gestures.get(name)
     if seconds is None:
         return {"error": f"the robot has no gesture {name!r}"}, True
@@ -264,11 +259,15 @@ def gesture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    """Capture what the camera sees now; the capture lasts the profile's duration."""
+    duration = sim.catalog[call.command].duration
+    if duration is None:
+        return {"error": f"the robot profile gives {call.command} no duration"}, True
     world, tick = sim.world, sim.kernel.tick
     seen, distance = world.sees_user(tick)
     pose = sim.localize()
     heading = round(math.degrees(world.camera_heading(tick)) % 360.0, 1) % 360.0
-    yield sleep(sim.ticks(sim.spec.picture_time))
+    yield sleep(sim.ticks(duration))
     picture = Picture(sim.now(), round(pose.x, 3), round(pose.y, 3), heading, seen,
                       round(distance, 3) if seen else None)
     sim.pictures.append(picture)
@@ -278,8 +277,8 @@ def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 # ---- feedback loops --------------------------------------------------------------------------
 
 def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    say = _text(call, "say")
-    angle = _req(call, "turn")
+    say = _text(sim, call, "say")
+    angle = _req(sim, call, "turn")
     k = sim.kernel
     speech_end = k.tick + (sim.ticks(sim.spec.speech_duration(say)) if say else 0)
     sim.search()
@@ -307,7 +306,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    want = _req(call, "distance")
+    want = _req(sim, call, "distance")
     if want <= 0:
         raise BadArgument(f"distance must be positive, not {want:g}")
     k, world = sim.kernel, sim.world
@@ -417,7 +416,7 @@ def _toward(sim: Simulator, x: float, y: float, tx: float, ty: float) -> tuple[f
 
 def _set_position(sim: Simulator, call: Call, cid: int,
                   heading: float | None) -> Gen:
-    tx, ty = _req(call, "x"), _req(call, "y")
+    tx, ty = _req(sim, call, "x"), _req(sim, call, "y")
     world, spec = sim.world, sim.spec
     tol = spec.position_tolerance
     x, y = world.robot.position
@@ -442,7 +441,7 @@ def set_position(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def set_position_and_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    return (yield from _set_position(sim, call, cid, _req(call, "heading")))
+    return (yield from _set_position(sim, call, cid, _req(sim, call, "heading")))
 
 
 BEHAVIORS: Mapping[str, Behavior] = {
@@ -472,15 +471,16 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
     """Perform an atomic behavior's calls in order; return merged values and terminal.
 
     In a grouped AB each feedback call performs one iteration; the AB is
-    terminal only if every feedback call in it is. An error (unknown
-    Command, unusable argument) ends the AB at once with an ``error`` value.
+    terminal only if every feedback call in it is. An error (a Command the
+    robot lacks, one its catalog does not declare, an unusable argument) ends
+    the AB at once with an ``error`` value.
     """
     values: Values = {}
     terminal = True
     for i, call in enumerate(ab.calls):
         cid = ab.command_ids[i] if i < len(ab.command_ids) else 0
         behavior = BEHAVIORS.get(call.command)
-        if behavior is None:
+        if behavior is None or call.command not in sim.catalog:
             values["error"] = f"the simulated robot has no Command {call.command!r}"
             return values, True
         try:

@@ -23,6 +23,7 @@ import random
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
+from prima.catalog import Catalog
 from prima.mediator import AtomicBehavior, Event, Outcome
 from prima.sim._behaviors import perform
 from prima.sim._kernel import Kernel, Waker
@@ -59,6 +60,7 @@ class Simulator:
     """A deterministic simulated robot, its building and its user."""
 
     def __init__(self, world_map: WorldMap, *, spec: RobotSpec | None = None,
+                 catalog: Catalog | None = None,
                  robot: Pose = Pose(0.0, 0.0, 0.0), user: UserScript | None = None,
                  events: Iterable[ScheduledEvent] = (), zones: Iterable[Zone] = (),
                  replies: Iterable[ReplyRule] = (),
@@ -71,6 +73,8 @@ class Simulator:
             raise ValueError(f"hz must be a positive multiple of {SENSE_HZ}, not {hz}")
         self.map = world_map
         self.spec = spec or RobotSpec()
+        self.catalog = catalog if catalog is not None else Catalog.standard()
+        """The Commands the robot offers: argument defaults, robot-specific durations."""
         self.kernel = Kernel(hz)
         self.world = World(world_map, self.spec, hz, robot, user.start if user else None)
         self.random = random.Random(seed)
@@ -130,12 +134,14 @@ class Simulator:
 
     @classmethod
     def from_scenario(cls, scenario: Scenario, *, spec: RobotSpec | None = None,
+                      catalog: Catalog | None = None,
                       finished: Finished | None = None,
                       on_event: Callable[[Event], None] | None = None,
                       on_user: Callable[[UserAction], None] | None = None,
                       on_zone: Callable[[ZoneEntry], None] | None = None) -> Simulator:
-        """A simulator for a loaded scenario (``spec`` from the robot profile, if any)."""
-        return cls(scenario.map, spec=spec, robot=scenario.robot, user=scenario.user,
+        """A simulator for a loaded scenario (``spec`` and ``catalog`` from the robot profile)."""
+        return cls(scenario.map, spec=spec, catalog=catalog, robot=scenario.robot,
+                   user=scenario.user,
                    events=scenario.events, replies=scenario.replies, zones=scenario.zones,
                    seed=scenario.seed,
                    hz=scenario.rate, noise=scenario.noise,

@@ -67,8 +67,6 @@ class RobotSpec:
     """How far from the robot's body the user can be and still touch it (m)."""
     lose_after: float = 1.0
     """The user counts as lost after this long unseen (s)."""
-    picture_time: float = 0.5
-    """How long a camera capture takes (s)."""
     place_tolerance: float = 0.15
     passing_radius: float = 1.5
     """A place is reported as reached when the robot passes this close to it

@@ -6,6 +6,7 @@ import math
 
 import pytest
 
+from prima.catalog import Catalog, CommandSpec
 from prima.mediator import AtomicBehavior
 from prima.sim import (
     CommandRunner,
@@ -117,14 +118,35 @@ def test_gestures_last_their_profile_time_and_unknown_ones_fail() -> None:
     assert "juggle" in str(juggle.data["error"])
 
 
+def _with_camera(duration: float | None) -> Catalog:
+    """The standard catalog plus a robot-specific TakePicture lasting ``duration``."""
+    picture = CommandSpec("TakePicture", frozenset({"camera"}), robot_specific=True,
+                          duration=duration)
+    return Catalog.standard().extended([picture], ["camera"])
+
+
 def test_take_picture_captures_what_the_camera_sees() -> None:
-    r = runner("museum", CENTER, Pose(11, 4, 180))
+    r = runner("museum", CENTER, Pose(11, 4, 180), catalog=_with_camera(0.8))
     r.queue(call("TakePicture"), call("Turn", angle=180), call("TakePicture"))
     r.run(10)
     first, second = r.ends("TakePicture")
     assert first.data["saw_user"] is True and second.data["saw_user"] is False
     assert second.data["heading"] == pytest.approx(180)
     assert len(r.sim.pictures) == 2
+    # each capture lasts the duration the robot's catalog gives it
+    assert first.time == pytest.approx(0.8)
+    assert second.time - r.ends("Turn")[0].time == pytest.approx(0.8)
+
+
+def test_a_robot_specific_command_needs_its_catalog() -> None:
+    r = runner("museum", CENTER, catalog=_with_camera(None))
+    r.queue(call("TakePicture"))
+    r.run(1)
+    assert "no duration" in str(r.ends("TakePicture")[0].data["error"])
+    r = runner("museum", CENTER)  # the standard catalog has no TakePicture
+    r.queue(call("TakePicture"))
+    r.run(1)
+    assert "no Command 'TakePicture'" in str(r.ends("TakePicture")[0].data["error"])
 
 
 def test_unknown_commands_and_bad_arguments_end_with_an_error_not_a_crash() -> None:
