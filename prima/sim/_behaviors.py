@@ -342,8 +342,17 @@ def topological_move(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     Short iterations keep the robot responsive (another application's reaction
     can start between any two). A blocked iteration (someone in the way) waits
     a second and ends non-terminal, so the loop tries again; after
-    ``MAX_BLOCKED`` blocked iterations in a row it gives up.
+    ``MAX_BLOCKED`` blocked iterations in a row it gives up. While it runs, the
+    simulator leaves reporting the places reached to it (``sim.navigating``).
     """
+    sim.navigating += 1
+    try:
+        return (yield from _move_leg(sim, call, cid))
+    finally:
+        sim.navigating -= 1
+
+
+def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
     goal = _place(sim, call, "to")
     if goal is None:
         raise BadArgument("missing argument 'to'")

@@ -48,11 +48,15 @@ class TraceEntry:
 
 
 class CommandRunner:
-    """Performs queued Commands in order on ``sim``; records what happens."""
+    """Performs queued Commands in order on ``sim``; records what happens.
+
+    ``catalog`` gives the devices each Command occupies (default: the
+    simulator's own catalog).
+    """
 
     def __init__(self, sim: Simulator, catalog: Catalog | None = None) -> None:
         self.sim = sim
-        self.catalog = catalog or Catalog.standard()
+        self.catalog = catalog if catalog is not None else sim.catalog
         self.trace: list[TraceEntry] = []
         self._queue: deque[Call] = deque()
         self._ab = 0
@@ -99,9 +103,7 @@ class CommandRunner:
 
     def _devices(self, call: Call) -> frozenset[str]:
         spec = self.catalog.get(call.command)
-        devices = spec.devices if spec is not None else frozenset({"camera"})
-        if call.command == "ActiveSensingHuman" and call.args.get("say"):
-            devices |= {"speaker"}
+        devices = spec.devices_for(call.args) if spec is not None else frozenset()
         return devices | call.extra_devices
 
     def _next(self) -> None:

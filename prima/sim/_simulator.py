@@ -97,6 +97,8 @@ class Simulator:
         """Physics steps taken so far."""
         self.seen = False
         """Human detection's current belief: the user is in view."""
+        self.navigating = 0
+        """How many Topological Moves are running: they report the places they reach."""
         self._unseen_since: int | None = None
         self._announced: str | None = None
         self._sensing = 0
@@ -386,14 +388,10 @@ class Simulator:
             near = math.hypot(place.x - x, place.y - y) <= radius
             if near and place.name not in self._near:
                 self._near.add(place.name)
-                if not self._navigating():  # asked only on arrival: this runs every step
+                if not self.navigating:
                     self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
             elif not near:
                 self._near.discard(place.name)
-
-    def _navigating(self) -> bool:
-        return any(c.command == "TopologicalMove" for ab in self._running.values()
-                   for c in ab.calls)
 
     def _check_zones(self) -> None:
         x, y = self.world.robot.position
