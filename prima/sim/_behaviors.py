@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any, Callable, Generator, Mapping
 
+from prima.errors import CommandError
 from prima.mediator import AtomicBehavior, Call
 from prima.sim._kernel import Wait, signal, sleep, until
 from prima.sim._maps import Place
@@ -32,10 +33,6 @@ Gen = Generator[Wait, Any, Result]
 Behavior = Callable[["Simulator", Call, int, int], Gen]
 
 
-class BadArgument(Exception):
-    """A Command argument the robot cannot use (the AB ends with an error value)."""
-
-
 # ---- arguments -------------------------------------------------------------------
 
 def _arg(sim: Simulator, call: Call, name: str) -> Value:
@@ -47,23 +44,23 @@ def _number(sim: Simulator, call: Call, name: str, required: bool = True) -> flo
     value = _arg(sim, call, name)
     if value is None:
         if required:
-            raise BadArgument(f"missing argument {name!r}")
+            raise CommandError(f"missing argument {name!r}")
         return None
     if isinstance(value, bool):
-        raise BadArgument(f"argument {name!r} must be a number, not {value!r}")
+        raise CommandError(f"argument {name!r} must be a number, not {value!r}")
     try:
         number = float(value)
     except ValueError:
-        raise BadArgument(f"argument {name!r} must be a number, not {value!r}") from None
+        raise CommandError(f"argument {name!r} must be a number, not {value!r}") from None
     if not math.isfinite(number):
-        raise BadArgument(f"argument {name!r} must be finite, not {value!r}")
+        raise CommandError(f"argument {name!r} must be finite, not {value!r}")
     return number
 
 
 def _req(sim: Simulator, call: Call, name: str) -> float:
     value = _number(sim, call, name)
     if value is None:
-        raise BadArgument(f"missing argument {name!r}")
+        raise CommandError(f"missing argument {name!r}")
     return value
 
 
@@ -78,7 +75,7 @@ def _place(sim: Simulator, call: Call, name: str) -> Place | None:
         return None
     place = sim.map.place(str(value))
     if place is None:
-        raise BadArgument(f"unknown place {value!r} on map {sim.map.name!r}")
+        raise CommandError(f"unknown place {value!r} on map {sim.map.name!r}")
     return place
 
 
@@ -140,7 +137,7 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     prompt = _text(sim, call, "prompt")
     timeout = _req(sim, call, "timeout")
     if timeout < 0:
-        raise BadArgument(f"timeout must not be negative, not {timeout:g}")
+        raise CommandError(f"timeout must not be negative, not {timeout:g}")
     yield sleep(sim.ticks(sim.spec.speech_duration(prompt)))
     sim.ask(prompt)
     heard = yield signal(sim.open_mic, sim.ticks(timeout), timeout=None)
@@ -186,7 +183,7 @@ def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     heading = _number(sim, call, "heading", required=False)
     toward = _place(sim, call, "toward")
     if (heading is None) == (toward is None):
-        raise BadArgument("give exactly one of 'heading' and 'toward'")
+        raise CommandError("give exactly one of 'heading' and 'toward'")
     target = math.radians(heading) if heading is not None else _heading_to(sim, toward)  # type: ignore[arg-type]
     if target is not None:
         yield from _face(sim, target)
@@ -199,7 +196,7 @@ def set_speed_and_time(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     speed, seconds = _req(sim, call, "speed"), _req(sim, call, "time")
     spin = _req(sim, call, "spin")
     if seconds < 0:
-        raise BadArgument(f"time must not be negative, not {seconds:g}")
+        raise CommandError(f"time must not be negative, not {seconds:g}")
     world = sim.world
     if world.mode:
         yield from _stop(sim)
@@ -238,7 +235,7 @@ def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     angle = _number(sim, call, "angle", required=False)
     toward = _place(sim, call, "toward")
     if (angle is None) == (toward is None):
-        raise BadArgument("give exactly one of 'toward' and 'angle'")
+        raise CommandError("give exactly one of 'toward' and 'angle'")
     if toward is not None:
         target = _heading_to(sim, toward)
         angle = 0.0 if target is None else math.degrees(wrap_angle(target - world.robot.angle))
@@ -308,7 +305,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     want = _req(sim, call, "distance")
     if want <= 0:
-        raise BadArgument(f"distance must be positive, not {want:g}")
+        raise CommandError(f"distance must be positive, not {want:g}")
     k, world = sim.kernel, sim.world
     if not sim.seen:
         found = yield until(lambda: sim.seen, sim.ticks(sim.spec.lose_after))
@@ -355,7 +352,7 @@ def topological_move(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
     goal = _place(sim, call, "to")
     if goal is None:
-        raise BadArgument("missing argument 'to'")
+        raise CommandError("missing argument 'to'")
     state = sim.loop_state(cid)
     at, path = _route(sim, goal, state)
     if at is not None and at.name == goal.name:
@@ -494,7 +491,7 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
             return values, True
         try:
             out, done = yield from behavior(sim, call, cid, ab.iteration)
-        except BadArgument as exc:
+        except CommandError as exc:
             values["error"] = f"{call.command}: {exc}"
             return values, True
         values.update(out)

@@ -12,6 +12,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
+from prima.errors import SimulationError
+
 __all__ = ["Area", "Place", "PlaceKind", "Wall", "WorldMap"]
 
 
@@ -109,11 +111,11 @@ class WorldMap:
     def __post_init__(self) -> None:
         index = {p.name: p for p in self.places}
         if len(index) != len(self.places):
-            raise ValueError(f"map {self.name!r} has duplicate place names")
+            raise SimulationError(f"map {self.name!r} has duplicate place names")
         adjacent: dict[str, list[tuple[str, float]]] = {name: [] for name in index}
         for a, b in self.edges:
             if a not in index or b not in index:
-                raise ValueError(f"map {self.name!r}: edge {a}-{b} names an unknown place")
+                raise SimulationError(f"map {self.name!r}: edge {a}-{b} names an unknown place")
             d = math.hypot(index[a].x - index[b].x, index[a].y - index[b].y)
             adjacent[a].append((b, d))
             adjacent[b].append((a, d))

@@ -15,6 +15,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 from prima.catalog import Catalog
+from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior, Call, Event, Outcome
 from prima.sim._records import UserAction, ZoneEntry
 from prima.sim._simulator import Simulator
@@ -122,7 +123,7 @@ class CommandRunner:
 
     def _finished(self, ab: int, outcome: Outcome) -> None:
         if self._current is None:
-            raise RuntimeError(f"atomic behavior {ab} ended but the runner started none")
+            raise SimulationError(f"atomic behavior {ab} ended but the runner started none")
         call, cid, iteration = self._current
         self.trace.append(TraceEntry(self.sim.now(), "end", call.command,
                                      MappingProxyType(dict(outcome.values)),

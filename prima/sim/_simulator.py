@@ -24,6 +24,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Callable, Iterable, Mapping
 
 from prima.catalog import Catalog
+from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior, Event, Outcome
 from prima.sim._behaviors import perform
 from prima.sim._kernel import Kernel, Waker
@@ -70,7 +71,7 @@ class Simulator:
                  on_user: Callable[[UserAction], None] | None = None,
                  on_zone: Callable[[ZoneEntry], None] | None = None) -> None:
         if hz <= 0 or hz % SENSE_HZ:
-            raise ValueError(f"hz must be a positive multiple of {SENSE_HZ}, not {hz}")
+            raise SimulationError(f"hz must be a positive multiple of {SENSE_HZ}, not {hz}")
         self.map = world_map
         self.spec = spec or RobotSpec()
         self.catalog = catalog if catalog is not None else Catalog.standard()
@@ -161,7 +162,7 @@ class Simulator:
     def start(self, ab: AtomicBehavior) -> None:
         """Begin ``ab`` now; ``finished`` is called when it ends (never from inside here)."""
         if ab.id in self._running:
-            raise ValueError(f"atomic behavior {ab.id} is already running")
+            raise SimulationError(f"atomic behavior {ab.id} is already running")
         self._running[ab.id] = ab
         if "human-detection" in ab.devices:
             self._sensing += 1
@@ -193,7 +194,7 @@ class Simulator:
         k = self.kernel
         target = math.floor(t * k.hz + 1e-6)
         if target < k.tick:
-            raise ValueError(f"cannot go back from {self.now()} to {t}")
+            raise SimulationError(f"cannot go back from {self.now()} to {t}")
         world = self.world
         every = self._sense_every
         heap = k._heap

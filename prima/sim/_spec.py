@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
+from prima.errors import SimulationError
+
 __all__ = ["DEFAULT_GESTURES", "RobotSpec"]
 
 DEFAULT_GESTURES: Mapping[str, float] = MappingProxyType({
@@ -90,10 +92,10 @@ class RobotSpec:
         for name in positive:
             value = getattr(self, name)
             if not value > 0:
-                raise ValueError(f"RobotSpec.{name} must be positive, not {value!r}")
+                raise SimulationError(f"RobotSpec.{name} must be positive, not {value!r}")
         for name, seconds in self.gestures.items():
             if not seconds > 0:
-                raise ValueError(f"gesture {name!r} must last a positive time, not {seconds!r}")
+                raise SimulationError(f"gesture {name!r} must last a positive time, not {seconds!r}")
 
     def speech_duration(self, text: str) -> float:
         """How long saying ``text`` takes, from its word count and the speech rate."""

@@ -7,14 +7,17 @@ import math
 import pytest
 
 from prima.catalog import Catalog, CommandSpec
+from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior
 from prima.sim import (
     CommandRunner,
     Pose,
+    RobotSpec,
     ScheduledEvent,
     Simulator,
     TimedAction,
     UserActionKind,
+    WorldMap,
     Zone,
 )
 
@@ -168,6 +171,24 @@ def test_finished_is_never_called_from_inside_start() -> None:
     assert calls == [] and sim.next_time() == 0.0
     sim.advance_to(0.0)
     assert calls == [1]
+
+
+def test_misuse_raises_simulation_errors() -> None:
+    museum = world_map("museum")
+    with pytest.raises(SimulationError, match="multiple of 10"):
+        Simulator(museum, hz=55)
+    sim = Simulator(museum, robot=CENTER)
+    ab = AtomicBehavior(1, "fa", 0, (call("Speak", text="hello"),), (1,), frozenset({"speaker"}))
+    sim.start(ab)
+    with pytest.raises(SimulationError, match="already running"):
+        sim.start(ab)
+    sim.advance_to(2.0)
+    with pytest.raises(SimulationError, match="cannot go back"):
+        sim.advance_to(1.0)
+    with pytest.raises(SimulationError, match="must be positive"):
+        RobotSpec(radius=0.0)
+    with pytest.raises(SimulationError, match="duplicate place names"):
+        WorldMap("m", places=(museum.places[0], museum.places[0]))
 
 
 def test_a_grouped_ab_performs_its_calls_in_order() -> None:

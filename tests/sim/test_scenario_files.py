@@ -165,6 +165,15 @@ def test_cli_run_prints_the_trace() -> None:
     assert "place-reached" in text and "zone   exhibition" in text
 
 
+
+def test_cli_run_rejects_a_bad_command_as_a_usage_error(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["run", str(EXAMPLES / "museum-tour.xml"), "--command", '{"to": "panel-1"}'])
+    assert info.value.code == 2
+    assert "bad --command" in capsys.readouterr().err
+
+
 XMLLINT = shutil.which("xmllint")
 SHIPPED = ([("map.xsd", p) for p in sorted(MAPS.glob("*.xml"))]
            + [("scenario.xsd", p) for p in sorted(EXAMPLES.glob("*.xml"))])
