@@ -26,6 +26,7 @@ except ModuleNotFoundError:  # running from a checkout without installing
 from prima.mediator import Call  # noqa: E402
 from prima.sim import (  # noqa: E402
     CommandRunner,
+    EntryKind,
     Pose,
     Simulator,
     TimedAction,
@@ -77,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"physics steps: {sim.steps:,} ({moving / args.seconds:.0%} of the run moving), "
           f"{wall / max(sim.steps, 1) * 1e6:.2f} us per step, all included")
     print(f"{legs} topological-move legs, {len(runner.events())} events, "
-          f"{len([e for e in runner.trace if e.kind == 'user'])} user actions")
+          f"{len([e for e in runner.trace if e.kind is EntryKind.USER])} user actions")
     print(f"bare pymunk step of this world: {bare_step_cost(build(10)):.2f} us")
     return 0
 

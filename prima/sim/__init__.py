@@ -22,7 +22,7 @@ from prima.sim._records import (
     Zone,
     ZoneEntry,
 )
-from prima.sim._runner import CommandRunner, TraceEntry
+from prima.sim._runner import CommandRunner, EntryKind, TraceEntry
 from prima.sim._scenario import MAP_NS, SCENARIO_NS, Scenario, load_map, load_scenario
 from prima.sim._simulator import Simulator
 from prima.sim._spec import DEFAULT_GESTURES, RobotSpec
@@ -36,6 +36,7 @@ __all__ = [
     "AnswerRule",
     "Area",
     "CommandRunner",
+    "EntryKind",
     "Picture",
     "Place",
     "PlaceKind",

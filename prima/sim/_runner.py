@@ -9,6 +9,7 @@ records everything the simulator reports, in order, as :class:`TraceEntry`.
 
 from __future__ import annotations
 
+import enum
 from collections import deque
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -21,15 +22,28 @@ from prima.sim._records import UserAction, ZoneEntry
 from prima.sim._simulator import Simulator
 from prima.vocab import Value
 
-__all__ = ["CommandRunner", "TraceEntry"]
+__all__ = ["CommandRunner", "EntryKind", "TraceEntry"]
+
+
+class EntryKind(str, enum.Enum):
+    """What a :class:`TraceEntry` records."""
+
+    END = "end"
+    """An atomic behavior ended (``name``: its Command; ``data``: its values)."""
+    EVENT = "event"
+    """The simulator posted an event (``name``: the event; ``data``: its data)."""
+    USER = "user"
+    """The scripted user did something (``name``: the action; ``data``: text, target, heard)."""
+    ZONE = "zone"
+    """The robot entered a zone (``name``: the zone; ``data``: its EA)."""
 
 
 @dataclass(frozen=True)
 class TraceEntry:
-    """One thing that happened: kind is ``end`` (an AB ended), ``event``, ``user`` or ``zone``."""
+    """One thing that happened, at simulated time ``time`` (s)."""
 
     time: float
-    kind: str
+    kind: EntryKind
     name: str
     """The Command (end), event name (event), user action (user) or zone (zone)."""
     data: Mapping[str, Value] = field(default_factory=dict)
@@ -37,15 +51,15 @@ class TraceEntry:
     terminal: bool = True
 
     def to_dict(self) -> dict[str, object]:
-        return {"time": self.time, "kind": self.kind, "name": self.name,
+        return {"time": self.time, "kind": self.kind.value, "name": self.name,
                 "data": dict(self.data), "iteration": self.iteration,
                 "terminal": self.terminal}
 
     def __str__(self) -> str:
         data = ", ".join(f"{k}={v!r}" for k, v in self.data.items())
-        extra = f" #{self.iteration}" if self.kind == "end" and self.iteration else ""
+        extra = f" #{self.iteration}" if self.kind is EntryKind.END and self.iteration else ""
         more = "" if self.terminal else " (more)"
-        return f"{self.time:8.2f}  {self.kind:5}  {self.name}{extra}{more}  {data}"
+        return f"{self.time:8.2f}  {self.kind.value:5}  {self.name}{extra}{more}  {data}"
 
 
 class CommandRunner:
@@ -95,10 +109,10 @@ class CommandRunner:
         return self.trace
 
     def ends(self, command: str | None = None) -> list[TraceEntry]:
-        return [e for e in self.trace if e.kind == "end" and command in (None, e.name)]
+        return [e for e in self.trace if e.kind is EntryKind.END and command in (None, e.name)]
 
     def events(self, name: str | None = None) -> list[TraceEntry]:
-        return [e for e in self.trace if e.kind == "event" and name in (None, e.name)]
+        return [e for e in self.trace if e.kind is EntryKind.EVENT and name in (None, e.name)]
 
     # ---- callbacks ------------------------------------------------------------------
 
@@ -125,7 +139,7 @@ class CommandRunner:
         if self._current is None:
             raise SimulationError(f"atomic behavior {ab} ended but the runner started none")
         call, cid, iteration = self._current
-        self.trace.append(TraceEntry(self.sim.now(), "end", call.command,
+        self.trace.append(TraceEntry(self.sim.now(), EntryKind.END, call.command,
                                      MappingProxyType(dict(outcome.values)),
                                      iteration, outcome.terminal))
         if not outcome.terminal and not self._stopping:
@@ -137,7 +151,7 @@ class CommandRunner:
             self._next()
 
     def _event(self, event: Event) -> None:
-        self.trace.append(TraceEntry(event.time, "event", event.name, event.data))
+        self.trace.append(TraceEntry(event.time, EntryKind.EVENT, event.name, event.data))
 
     def _user(self, action: UserAction) -> None:
         data: dict[str, Value] = {}
@@ -147,7 +161,7 @@ class CommandRunner:
             data["target"] = action.target
         if action.heard is not None:
             data["heard"] = action.heard
-        self.trace.append(TraceEntry(action.time, "user", action.action.value, data))
+        self.trace.append(TraceEntry(action.time, EntryKind.USER, action.action.value, data))
 
     def _zone(self, entry: ZoneEntry) -> None:
-        self.trace.append(TraceEntry(entry.time, "zone", entry.zone, {"ea": entry.ea}))
+        self.trace.append(TraceEntry(entry.time, EntryKind.ZONE, entry.zone, {"ea": entry.ea}))

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from prima.sim import CommandRunner, Pose, Simulator, load_scenario
+from prima.sim import CommandRunner, EntryKind, Pose, Simulator, load_scenario
 
 from tests.sim.helpers import EXAMPLES, call, runner, walk
 
@@ -116,7 +116,7 @@ def test_human_found_only_when_the_user_comes_out_from_behind_the_shelf() -> Non
     found = r.events("human-found")
     assert len(found) == 1
     # from (6.5, 7.5) the shelf (x 8, y up to 7.2) hides the user until they are past y ~ 7.3
-    arrive = [e.time for e in r.trace if e.kind == "user" and e.name == "arrive"][0]
+    arrive = [e.time for e in r.trace if e.kind is EntryKind.USER and e.name == "arrive"][0]
     assert 1 + (7.0 - 3) / 0.3 < found[0].time <= arrive + 0.1
     assert r.ends("ActiveSensingHuman")[-1].data["found"] is True
 

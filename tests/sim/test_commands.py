@@ -11,6 +11,7 @@ from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior
 from prima.sim import (
     CommandRunner,
+    EntryKind,
     Pose,
     RobotSpec,
     ScheduledEvent,
@@ -224,10 +225,10 @@ def test_network_messages_sounds_and_zones() -> None:
     r = CommandRunner(Simulator(museum, robot=Pose(1.5, 4, 0), events=events, zones=(zone,)))
     r.queue(call("TopologicalMove", to="center"))
     r.run(60)
-    names = [(e.kind, e.name) for e in r.trace if e.kind in ("event", "zone")]
-    assert ("event", "message") in names and ("event", "sound-heard") in names
-    assert ("zone", "exhibition") in names
-    zone_entry = [e for e in r.trace if e.kind == "zone"][0]
+    names = [(e.kind, e.name) for e in r.trace if e.kind in (EntryKind.EVENT, EntryKind.ZONE)]
+    assert (EntryKind.EVENT, "message") in names and (EntryKind.EVENT, "sound-heard") in names
+    assert (EntryKind.ZONE, "exhibition") in names
+    zone_entry = [e for e in r.trace if e.kind is EntryKind.ZONE][0]
     assert zone_entry.data["ea"] == "ea1.pxml" and 5 < zone_entry.time < 20
     assert r.sim.inbox[0]["sender"] == "Kidode"
 
