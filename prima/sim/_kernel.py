@@ -78,9 +78,6 @@ class Kernel:
         self._seq = 0
         self._polls: list[tuple[Process, int, Callable[[], bool]]] = []
 
-    def now(self) -> float:
-        return self.tick / self.hz
-
     def ticks(self, seconds: float) -> int:
         """A duration in whole ticks (nearest; at least one for a positive duration)."""
         n = round(seconds * self.hz)

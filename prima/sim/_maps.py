@@ -133,10 +133,6 @@ class WorldMap:
                 return a
         return None
 
-    def neighbours(self, name: str) -> tuple[tuple[str, float], ...]:
-        """Places joined to ``name`` by an edge, with the edge lengths (m)."""
-        return self._adjacent.get(name, ())
-
     def shortest_path(self, starts: Mapping[str, float],
                       goals: Mapping[str, float]) -> list[str]:
         """Cheapest place path from a start to a goal over the place graph.

@@ -1,7 +1,6 @@
 """Plain records: poses, user actions, zone entries, pictures, scheduled events, zones.
 
-All are frozen dataclasses with a stable ``to_dict()`` so traces and golden
-files can serialize them.
+All are frozen dataclasses with a ``to_dict()`` giving plain data (for JSON).
 """
 
 from __future__ import annotations

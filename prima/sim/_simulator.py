@@ -88,10 +88,11 @@ class Simulator:
         self.reports = 0
         """How many reports (ends, events, user actions, zone entries) so far."""
         self.inbox: list[Mapping[str, Value]] = []
+        """Network messages received so far (sender, text)."""
         self.outbox: list[Mapping[str, Value]] = []
         """What the applications sent to the environment's servers."""
         self.replies: tuple[ReplyRule, ...] = tuple(replies)
-        """Network messages received so far (sender, text)."""
+        """How the environment's servers answer what the applications send them."""
         self.pictures: list[Picture] = []
         """Camera captures taken so far."""
         self.steps = 0
@@ -220,10 +221,6 @@ class Simulator:
             else:
                 nxt = k.next_tick()
                 k.tick = target if nxt is None or nxt > target else max(nxt, k.tick)
-
-    def run(self, until: float) -> None:
-        """Advance to ``until`` (the same as ``advance_to``; for readability)."""
-        self.advance_to(until)
 
     # ---- state -------------------------------------------------------------------
 

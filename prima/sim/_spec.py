@@ -70,10 +70,10 @@ class RobotSpec:
     lose_after: float = 1.0
     """The user counts as lost after this long unseen (s)."""
     place_tolerance: float = 0.15
-    passing_radius: float = 1.5
-    """A place is reported as reached when the robot passes this close to it
-    while no Topological Move reports its own route (e.g. while tracking)."""
     """Within this distance the robot counts as being at a place (m)."""
+    passing_radius: float = 1.5
+    """A place is reported as reached when the robot passes this close to it (m)
+    while no Topological Move reports its own route (e.g. while tracking)."""
     position_tolerance: float = 0.05
     """Set Position is done within this distance of its target (m)."""
     leg_length: float = 1.5

@@ -174,10 +174,6 @@ class World:
         ux, uy = self.human.position
         return wrap_angle(math.atan2(uy - ry, ux - rx) - self.robot.angle)
 
-    @property
-    def moving(self) -> bool:
-        return self.mode != _IDLE or self.human_moving
-
     # ---- robot wheel commands --------------------------------------------------
 
     def drive_to(self, x: float, y: float, done: Done) -> bool:
