@@ -12,7 +12,8 @@ a robot-specific Command's duration.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Callable, Generator, Mapping
+from collections.abc import Callable, Generator, Mapping
+from typing import TYPE_CHECKING, Any
 
 from prima.errors import CommandError
 from prima.mediator import AtomicBehavior, Call
@@ -182,9 +183,12 @@ def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     heading = _number(sim, call, "heading", required=False)
     toward = _place(sim, call, "toward")
-    if (heading is None) == (toward is None):
+    if heading is not None and toward is None:
+        target: float | None = math.radians(heading)
+    elif toward is not None and heading is None:
+        target = _heading_to(sim, toward)
+    else:
         raise CommandError("give exactly one of 'heading' and 'toward'")
-    target = math.radians(heading) if heading is not None else _heading_to(sim, toward)  # type: ignore[arg-type]
     if target is not None:
         yield from _face(sim, target)
     return _pose(sim), True
@@ -388,7 +392,8 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
             "remaining": len(path) - 1}, done
 
 
-def _route(sim: Simulator, goal: Place, state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
+def _route(sim: Simulator, goal: Place,
+           state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
     """The places still to visit; mid-leg, keep heading for the same place.
 
     Replanning from scratch only when the robot is not where this loop left

@@ -14,9 +14,10 @@ calls back. A process is resumed with the value that woke it.
 from __future__ import annotations
 
 import heapq
-from typing import Any, Callable, Generator
+from collections.abc import Callable, Generator
+from typing import Any
 
-__all__ = ["Kernel", "Process", "Wait", "sleep", "until", "signal"]
+__all__ = ["Kernel", "ProcGen", "Process", "Wait", "Waker", "signal", "sleep", "until"]
 
 Waker = Callable[[Any], None]
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 import enum
 import heapq
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 from prima.errors import SimulationError
 
@@ -164,9 +164,11 @@ class WorldMap:
         reachable = [(best[g] + c, order[g], g) for g, c in goals.items() if g in best]
         if not reachable:
             return []
-        path = [min(reachable)[2]]
-        while back[path[-1]] is not None:
-            path.append(back[path[-1]])  # type: ignore[arg-type]
+        path: list[str] = []
+        node: str | None = min(reachable)[2]
+        while node is not None:
+            path.append(node)
+            node = back[node]
         return path[::-1]
 
     def to_dict(self) -> dict[str, object]:

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 from prima.sim._maps import Area
 from prima.vocab import Value

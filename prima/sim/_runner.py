@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import enum
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping
 
 from prima.catalog import Catalog
 from prima.errors import SimulationError

@@ -18,10 +18,12 @@ stretches are jumped over. The only randomness is a seeded ``random.Random``
 
 from __future__ import annotations
 
+import functools
 import math
 import random
+from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Callable, Iterable, Mapping
+from typing import TYPE_CHECKING
 
 from prima.catalog import Catalog
 from prima.errors import SimulationError
@@ -62,7 +64,7 @@ class Simulator:
 
     def __init__(self, world_map: WorldMap, *, spec: RobotSpec | None = None,
                  catalog: Catalog | None = None,
-                 robot: Pose = Pose(0.0, 0.0, 0.0), user: UserScript | None = None,
+                 robot: Pose | None = None, user: UserScript | None = None,
                  events: Iterable[ScheduledEvent] = (), zones: Iterable[Zone] = (),
                  replies: Iterable[ReplyRule] = (),
                  seed: int = 0, hz: int = 50, noise: float = 0.0, heading_noise: float = 0.0,
@@ -72,6 +74,7 @@ class Simulator:
                  on_zone: Callable[[ZoneEntry], None] | None = None) -> None:
         if hz <= 0 or hz % SENSE_HZ:
             raise SimulationError(f"hz must be a positive multiple of {SENSE_HZ}, not {hz}")
+        robot = robot if robot is not None else Pose(0.0, 0.0, 0.0)
         self.map = world_map
         self.spec = spec or RobotSpec()
         self.catalog = catalog if catalog is not None else Catalog.standard()
@@ -111,10 +114,10 @@ class Simulator:
         self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
         self._zones = tuple(zones)
         self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
-        self._near: set[str] = {p.name for p in self.map.places
-                                if math.hypot(p.x - robot.x, p.y - robot.y) <= self.spec.passing_radius}
+        self._near = {p.name for p in self.map.places
+                      if robot.distance_to(p.x, p.y) <= self.spec.passing_radius}
         for ev in events:
-            self.kernel.at(round(ev.at * hz), lambda ev=ev: self._post(ev))
+            self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
         self.user = ScriptedUser(user, self) if user is not None else None
         if self.user is not None:
             self.user.begin()
@@ -133,7 +136,7 @@ class Simulator:
                 ticks = max(1, self.ticks(rule.after))
                 reply = ScheduledEvent((self.kernel.tick + ticks) / self.kernel.hz, "message",
                                        {"sender": to, "text": rule.text.replace("{text}", text)})
-                self.kernel.at(self.kernel.tick + ticks, lambda ev=reply: self._post(ev))
+                self.kernel.at(self.kernel.tick + ticks, functools.partial(self._post, reply))
                 return
 
     @classmethod

@@ -8,9 +8,9 @@ spirit of NEC's PaPeRo: round, wheeled, about 40 cm across, slow and careful.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping
 
 from prima.errors import SimulationError
 
@@ -95,7 +95,8 @@ class RobotSpec:
                 raise SimulationError(f"RobotSpec.{name} must be positive, not {value!r}")
         for name, seconds in self.gestures.items():
             if not seconds > 0:
-                raise SimulationError(f"gesture {name!r} must last a positive time, not {seconds!r}")
+                raise SimulationError(
+                    f"gesture {name!r} must last a positive time, not {seconds!r}")
 
     def speech_duration(self, text: str) -> float:
         """How long saying ``text`` takes, from its word count and the speech rate."""

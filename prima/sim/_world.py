@@ -19,7 +19,7 @@ angles are interpolated on demand, never stepped.
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 import pymunk
 

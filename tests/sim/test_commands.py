@@ -221,7 +221,9 @@ def test_network_messages_sounds_and_zones() -> None:
     events = (ScheduledEvent(3, "message", {"sender": "Kidode", "text": "Late."}),
               ScheduledEvent(4, "sound-heard", {"sound": "tune"}))
     museum = world_map("museum")
-    zone = Zone("exhibition", "ea1.pxml", museum.area("exhibition"))  # type: ignore[arg-type]
+    exhibition = museum.area("exhibition")
+    assert exhibition is not None
+    zone = Zone("exhibition", "ea1.pxml", exhibition)
     r = CommandRunner(Simulator(museum, robot=Pose(1.5, 4, 0), events=events, zones=(zone,)))
     r.queue(call("TopologicalMove", to="center"))
     r.run(60)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import shutil
 import subprocess
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -26,7 +27,8 @@ def scenario_file(tmp_path: Path, body: str, *, attrs: str = 'name="t" until="10
     return path
 
 
-def problems(path: Path, loader=load_scenario) -> list[tuple[int, int, str]]:  # type: ignore[no-untyped-def]
+def problems(path: Path,
+             loader: Callable[[Path], object] = load_scenario) -> list[tuple[int, int, str]]:
     with pytest.raises(ScenarioError) as info:
         loader(path)
     for p in info.value.problems:
@@ -112,7 +114,8 @@ def test_missing_map_file(tmp_path: Path) -> None:
 
 def test_wrong_root_element(tmp_path: Path) -> None:
     path = tmp_path / "m.xml"
-    path.write_text(HEAD + '<map xmlns="urn:prima:map:1" name="m"><place name="a" x="0" y="0"/></map>\n')
+    path.write_text(HEAD + '<map xmlns="urn:prima:map:1" name="m">'
+                    '<place name="a" x="0" y="0"/></map>\n')
     [(line, col, message)] = problems(path)
     assert line == 2 and "expected a <scenario> element" in message
 
