@@ -24,9 +24,16 @@ except ModuleNotFoundError:  # running from a checkout without installing
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from prima.mediator import Call  # noqa: E402
-from prima.sim import Pose, Simulator, TimedAction, UserActionKind, UserScript  # noqa: E402
-from prima.sim.runner import CommandRunner  # noqa: E402
-from prima.sim.scenario import load_map  # noqa: E402
+from prima.sim import (  # noqa: E402
+    CommandRunner,
+    EntryKind,
+    Pose,
+    Simulator,
+    TimedAction,
+    UserActionKind,
+    UserScript,
+    load_map,
+)
 
 MAP = Path(__file__).resolve().parents[1] / "scenarios" / "maps" / "office.xml"
 
@@ -71,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"physics steps: {sim.steps:,} ({moving / args.seconds:.0%} of the run moving), "
           f"{wall / max(sim.steps, 1) * 1e6:.2f} us per step, all included")
     print(f"{legs} topological-move legs, {len(runner.events())} events, "
-          f"{len([e for e in runner.trace if e.kind == 'user'])} user actions")
+          f"{len([e for e in runner.trace if e.kind is EntryKind.USER])} user actions")
     print(f"bare pymunk step of this world: {bare_step_cost(build(10)):.2f} us")
     return 0
 

@@ -107,7 +107,7 @@ def _usage(command: str, message: str, err: TextIO) -> int:
 
 def _scenario_checkers() -> dict[str, Checker]:
     """Scenario and map files are the simulator's; the CLI joins both worlds."""
-    from prima.sim.scenario import MAP_NS, SCENARIO_NS, load_map, load_scenario
+    from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
     def checker(load: Callable[[Path], object]) -> Checker:
         def check(path: Path) -> list[Problem]:

@@ -24,9 +24,7 @@ from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import AppKind, Event, Mediator, Outcome, Request
 from prima.mediator import Decision, DecisionKind
-from prima.sim import RobotSpec, Simulator
-from prima.sim.records import UserAction, ZoneEntry
-from prima.sim.scenario import Scenario, load_scenario
+from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, TraceLine
 
 MAX_IDLE_ROUNDS = 10_000
@@ -120,8 +118,9 @@ class Run:
         self.lines: list[TraceLine] = []
         self.apps: dict[str, _App] = {}
         self._outcomes: dict[int, Outcome] = {}
-        self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile))
         self.catalog = self.profile.catalog()
+        self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
+                                           catalog=self.catalog)
         self.mediator = Mediator(self.catalog, self.sim, self.sim, record=self._decision)
         self.sim.finished = self._finished
         self.sim.on_event = self._event

@@ -157,6 +157,7 @@ def _build(doc: XmlDocument) -> tuple[RobotProfile, list[Problem]]:
                 doc=el.get("doc", ""),
                 priority_override=None if priority is None else
                 (Priority.HIGH if priority == "high" else Priority.LOW),
+                duration=_num(el, "duration") if el.get("duration") else None,
             ))
             if el.get("duration"):
                 durations[name] = _num(el, "duration")

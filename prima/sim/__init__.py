@@ -3,11 +3,16 @@
 Build a :class:`Simulator` from a scenario file (:func:`load_scenario`,
 :meth:`Simulator.from_scenario`) or directly from a :class:`WorldMap`, wire
 its callbacks, then drive it with ``next_time()`` / ``advance_to(t)``.
+:class:`CommandRunner` drives it without documents or a mediator (tests,
+benchmarks, ``python -m prima.sim run``).
+
+Everything public is named here; the modules behind it are private.
 """
 
-from prima.sim.behaviors import BEHAVIORS
-from prima.sim.maps import Area, Place, PlaceKind, Wall, WorldMap
-from prima.sim.records import (
+from prima.sim._behaviors import BEHAVIORS
+from prima.sim._cli import main
+from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
+from prima.sim._records import (
     Picture,
     Pose,
     ReplyRule,
@@ -17,18 +22,21 @@ from prima.sim.records import (
     Zone,
     ZoneEntry,
 )
-from prima.sim.runner import CommandRunner, TraceEntry
-from prima.sim.scenario import Scenario, load_map, load_scenario
-from prima.sim.simulator import Simulator
-from prima.sim.spec import DEFAULT_GESTURES, RobotSpec
-from prima.sim.user import AnswerRule, ScriptedUser, TimedAction, UserScript
+from prima.sim._runner import CommandRunner, EntryKind, TraceEntry
+from prima.sim._scenario import MAP_NS, SCENARIO_NS, Scenario, load_map, load_scenario
+from prima.sim._simulator import Simulator
+from prima.sim._spec import DEFAULT_GESTURES, RobotSpec
+from prima.sim._user import AnswerRule, ScriptedUser, TimedAction, UserScript
 
 __all__ = [
     "BEHAVIORS",
     "DEFAULT_GESTURES",
+    "MAP_NS",
+    "SCENARIO_NS",
     "AnswerRule",
     "Area",
     "CommandRunner",
+    "EntryKind",
     "Picture",
     "Place",
     "PlaceKind",
@@ -50,4 +58,5 @@ __all__ = [
     "ZoneEntry",
     "load_map",
     "load_scenario",
+    "main",
 ]

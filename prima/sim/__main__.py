@@ -2,6 +2,6 @@
 
 import sys
 
-from prima.sim.cli import main
+from prima.sim import main
 
 sys.exit(main())

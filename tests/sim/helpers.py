@@ -3,11 +3,21 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from prima.mediator import Call
-from prima.sim import Pose, Simulator, TimedAction, UserActionKind, UserScript, WorldMap
-from prima.sim.runner import CommandRunner
-from prima.sim.scenario import load_map
+from prima.sim import (
+    AnswerRule,
+    CommandRunner,
+    Pose,
+    Simulator,
+    TimedAction,
+    UserActionKind,
+    UserScript,
+    WorldMap,
+    load_map,
+)
+from prima.vocab import Value
 
 ROOT = Path(__file__).resolve().parents[2]
 MAPS = ROOT / "scenarios" / "maps"
@@ -22,8 +32,8 @@ def world_map(name: str) -> WorldMap:
     return _maps[name]
 
 
-def call(command: str, **args: object) -> Call:
-    return Call(command, dict(args))  # type: ignore[arg-type]
+def call(command: str, **args: Value) -> Call:
+    return Call(command, dict(args))
 
 
 def walk(at: float, x: float, y: float, speed: float | None = None) -> TimedAction:
@@ -31,8 +41,8 @@ def walk(at: float, x: float, y: float, speed: float | None = None) -> TimedActi
 
 
 def runner(map_name: str, robot: Pose, user: Pose | None = None, *actions: TimedAction,
-           answers: tuple = (), **kwargs: object) -> CommandRunner:
+           answers: tuple[AnswerRule, ...] = (), **kwargs: Any) -> CommandRunner:
     script = None if user is None else UserScript(user, actions=tuple(actions),
                                                   answers=tuple(answers))
-    sim = Simulator(world_map(map_name), robot=robot, user=script, **kwargs)  # type: ignore[arg-type]
+    sim = Simulator(world_map(map_name), robot=robot, user=script, **kwargs)
     return CommandRunner(sim)

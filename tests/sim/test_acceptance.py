@@ -3,14 +3,23 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 
 import pytest
 
-from prima.sim import Pose, Simulator
-from prima.sim.runner import CommandRunner
-from prima.sim.scenario import load_scenario
+from prima.mediator import Event
+from prima.sim import (
+    CommandRunner,
+    EntryKind,
+    Pose,
+    ReplyRule,
+    Simulator,
+    UserScript,
+    WorldMap,
+    load_scenario,
+)
 
-from tests.sim.helpers import EXAMPLES, call, runner, walk
+from tests.sim.helpers import EXAMPLES, call, runner, walk, world_map
 
 
 def test_topological_move_reaches_goal_through_graph_and_reports_corner() -> None:
@@ -27,7 +36,7 @@ def test_topological_move_reaches_goal_through_graph_and_reports_corner() -> Non
     assert all(e.data["toward"] for e in legs if "place" not in e.data)
     times = [0.0] + [e.time for e in legs]
     spec = r.sim.spec
-    assert max(b - a for a, b in zip(times, times[1:])) < spec.leg_length / spec.max_speed + 3
+    assert max(b - a for a, b in pairwise(times)) < spec.leg_length / spec.max_speed + 3
     corner = next(e for e in arrivals if e.data["place"] == "corner")
     assert corner.data["kind"] == "corner"
     reached = [(e.data["place"], e.data["kind"]) for e in r.events("place-reached")]
@@ -118,7 +127,7 @@ def test_human_found_only_when_the_user_comes_out_from_behind_the_shelf() -> Non
     found = r.events("human-found")
     assert len(found) == 1
     # from (6.5, 7.5) the shelf (x 8, y up to 7.2) hides the user until they are past y ~ 7.3
-    arrive = [e.time for e in r.trace if e.kind == "user" and e.name == "arrive"][0]
+    arrive = [e.time for e in r.trace if e.kind is EntryKind.USER and e.name == "arrive"][0]
     assert 1 + (7.0 - 3) / 0.3 < found[0].time <= arrive + 0.1
     assert r.ends("ActiveSensingHuman")[-1].data["found"] is True
 
@@ -202,13 +211,11 @@ def test_advancing_in_chunks_gives_the_same_run_as_event_by_event() -> None:
     assert run(None) == run(0.37) == run(7.0)
 
 
-def _library():  # type: ignore[no-untyped-def]
-    from tests.sim.helpers import world_map
+def _library() -> WorldMap:
     return world_map("library")
 
 
-def _script(start: Pose):  # type: ignore[no-untyped-def]
-    from prima.sim import UserScript
+def _script(start: Pose) -> UserScript:
     return UserScript(start)
 
 
@@ -254,8 +261,6 @@ def test_places_passed_while_tracking_are_reported() -> None:
 
 
 def test_servers_reply_to_what_applications_send() -> None:
-    from prima.sim import ReplyRule
-
     events = []
     sim = Simulator(_library(), robot=Pose(2, 2, 0), on_event=events.append, replies=(
         ReplyRule("video", "OK: {text}", after=4.0, contains="record"),
@@ -275,12 +280,10 @@ def test_servers_reply_to_what_applications_send() -> None:
 
 
 def test_a_server_replying_at_once_still_lets_time_move() -> None:
-    from prima.sim import ReplyRule
-
     sim = Simulator(_library(), robot=Pose(2, 2, 0), replies=(ReplyRule("srv", "pong", after=0.0),))
     pongs = []
 
-    def ping_back(event) -> None:  # type: ignore[no-untyped-def]
+    def ping_back(event: Event) -> None:
         pongs.append(event.time)
         sim.send("srv", "ping")
 

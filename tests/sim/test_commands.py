@@ -6,9 +6,21 @@ import math
 
 import pytest
 
+from prima.catalog import Catalog, CommandSpec
+from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior
-from prima.sim import Pose, ScheduledEvent, Simulator, TimedAction, UserActionKind, Zone
-from prima.sim.runner import CommandRunner
+from prima.sim import (
+    CommandRunner,
+    EntryKind,
+    Pose,
+    RobotSpec,
+    ScheduledEvent,
+    Simulator,
+    TimedAction,
+    UserActionKind,
+    WorldMap,
+    Zone,
+)
 
 from tests.sim.helpers import call, runner, world_map
 
@@ -110,14 +122,35 @@ def test_gestures_last_their_profile_time_and_unknown_ones_fail() -> None:
     assert "juggle" in str(juggle.data["error"])
 
 
+def _with_camera(duration: float | None) -> Catalog:
+    """The standard catalog plus a robot-specific TakePicture lasting ``duration``."""
+    picture = CommandSpec("TakePicture", frozenset({"camera"}), robot_specific=True,
+                          duration=duration)
+    return Catalog.standard().extended([picture], ["camera"])
+
+
 def test_take_picture_captures_what_the_camera_sees() -> None:
-    r = runner("museum", CENTER, Pose(11, 4, 180))
+    r = runner("museum", CENTER, Pose(11, 4, 180), catalog=_with_camera(0.8))
     r.queue(call("TakePicture"), call("Turn", angle=180), call("TakePicture"))
     r.run(10)
     first, second = r.ends("TakePicture")
     assert first.data["saw_user"] is True and second.data["saw_user"] is False
     assert second.data["heading"] == pytest.approx(180)
     assert len(r.sim.pictures) == 2
+    # each capture lasts the duration the robot's catalog gives it
+    assert first.time == pytest.approx(0.8)
+    assert second.time - r.ends("Turn")[0].time == pytest.approx(0.8)
+
+
+def test_a_robot_specific_command_needs_its_catalog() -> None:
+    r = runner("museum", CENTER, catalog=_with_camera(None))
+    r.queue(call("TakePicture"))
+    r.run(1)
+    assert "no duration" in str(r.ends("TakePicture")[0].data["error"])
+    r = runner("museum", CENTER)  # the standard catalog has no TakePicture
+    r.queue(call("TakePicture"))
+    r.run(1)
+    assert "no Command 'TakePicture'" in str(r.ends("TakePicture")[0].data["error"])
 
 
 def test_unknown_commands_and_bad_arguments_end_with_an_error_not_a_crash() -> None:
@@ -139,6 +172,24 @@ def test_finished_is_never_called_from_inside_start() -> None:
     assert calls == [] and sim.next_time() == 0.0
     sim.advance_to(0.0)
     assert calls == [1]
+
+
+def test_misuse_raises_simulation_errors() -> None:
+    museum = world_map("museum")
+    with pytest.raises(SimulationError, match="multiple of 10"):
+        Simulator(museum, hz=55)
+    sim = Simulator(museum, robot=CENTER)
+    ab = AtomicBehavior(1, "fa", 0, (call("Speak", text="hello"),), (1,), frozenset({"speaker"}))
+    sim.start(ab)
+    with pytest.raises(SimulationError, match="already running"):
+        sim.start(ab)
+    sim.advance_to(2.0)
+    with pytest.raises(SimulationError, match="cannot go back"):
+        sim.advance_to(1.0)
+    with pytest.raises(SimulationError, match="must be positive"):
+        RobotSpec(radius=0.0)
+    with pytest.raises(SimulationError, match="duplicate place names"):
+        WorldMap("m", places=(museum.places[0], museum.places[0]))
 
 
 def test_a_grouped_ab_performs_its_calls_in_order() -> None:
@@ -170,14 +221,16 @@ def test_network_messages_sounds_and_zones() -> None:
     events = (ScheduledEvent(3, "message", {"sender": "Kidode", "text": "Late."}),
               ScheduledEvent(4, "sound-heard", {"sound": "tune"}))
     museum = world_map("museum")
-    zone = Zone("exhibition", "ea1.pxml", museum.area("exhibition"))  # type: ignore[arg-type]
+    exhibition = museum.area("exhibition")
+    assert exhibition is not None
+    zone = Zone("exhibition", "ea1.pxml", exhibition)
     r = CommandRunner(Simulator(museum, robot=Pose(1.5, 4, 0), events=events, zones=(zone,)))
     r.queue(call("TopologicalMove", to="center"))
     r.run(60)
-    names = [(e.kind, e.name) for e in r.trace if e.kind in ("event", "zone")]
-    assert ("event", "message") in names and ("event", "sound-heard") in names
-    assert ("zone", "exhibition") in names
-    zone_entry = [e for e in r.trace if e.kind == "zone"][0]
+    names = [(e.kind, e.name) for e in r.trace if e.kind in (EntryKind.EVENT, EntryKind.ZONE)]
+    assert (EntryKind.EVENT, "message") in names and (EntryKind.EVENT, "sound-heard") in names
+    assert (EntryKind.ZONE, "exhibition") in names
+    zone_entry = [e for e in r.trace if e.kind is EntryKind.ZONE][0]
     assert zone_entry.data["ea"] == "ea1.pxml" and 5 < zone_entry.time < 20
     assert r.sim.inbox[0]["sender"] == "Kidode"
 

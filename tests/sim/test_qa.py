@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from prima.sim import AnswerRule, Pose, TimedAction, UserActionKind
+from prima.sim import AnswerRule, EntryKind, Pose, TimedAction, UserActionKind
 
 from tests.sim.helpers import call, runner
 
@@ -21,7 +21,7 @@ def test_an_answer_rule_answers_after_its_delay() -> None:
     prompt_time = 4 / 2.5
     assert end.time == pytest.approx(prompt_time + 1.5)
     assert dict(end.data) == {"status": "answered", "utterance": "Prof. Kidode's room."}
-    [said] = [e for e in r.trace if e.kind == "user"]
+    [said] = [e for e in r.trace if e.kind is EntryKind.USER]
     assert said.name == "say" and said.data["heard"] is True and said.time == end.time
 
 
@@ -58,7 +58,7 @@ def test_speech_outside_listening_is_not_heard() -> None:
                TimedAction(3.0, UserActionKind.SAY, text="Video timer."))
     r.queue(call("QA", prompt="What's the matter with you?", grammar="g", timeout=4))
     r.run(30)
-    said = [e for e in r.trace if e.kind == "user"]
+    said = [e for e in r.trace if e.kind is EntryKind.USER]
     assert [(e.data["text"], e.data["heard"]) for e in said] == [
         ("Hello", False), ("Video timer.", True)]
     assert r.ends("QA")[0].data["utterance"] == "Video timer."

@@ -5,13 +5,13 @@ from __future__ import annotations
 import io
 import shutil
 import subprocess
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
 from prima.errors import ScenarioError
-from prima.sim.cli import main
-from prima.sim.scenario import load_map, load_scenario
+from prima.sim import load_map, load_scenario, main
 
 from tests.sim.helpers import EXAMPLES, MAPS, ROOT
 
@@ -27,7 +27,8 @@ def scenario_file(tmp_path: Path, body: str, *, attrs: str = 'name="t" until="10
     return path
 
 
-def problems(path: Path, loader=load_scenario) -> list[tuple[int, int, str]]:  # type: ignore[no-untyped-def]
+def problems(path: Path,
+             loader: Callable[[Path], object] = load_scenario) -> list[tuple[int, int, str]]:
     with pytest.raises(ScenarioError) as info:
         loader(path)
     for p in info.value.problems:
@@ -113,7 +114,8 @@ def test_missing_map_file(tmp_path: Path) -> None:
 
 def test_wrong_root_element(tmp_path: Path) -> None:
     path = tmp_path / "m.xml"
-    path.write_text(HEAD + '<map xmlns="urn:prima:map:1" name="m"><place name="a" x="0" y="0"/></map>\n')
+    path.write_text(HEAD + '<map xmlns="urn:prima:map:1" name="m">'
+                    '<place name="a" x="0" y="0"/></map>\n')
     [(line, col, message)] = problems(path)
     assert line == 2 and "expected a <scenario> element" in message
 
@@ -164,6 +166,15 @@ def test_cli_run_prints_the_trace() -> None:
     assert status == 0
     text = out.getvalue()
     assert "place-reached" in text and "zone   exhibition" in text
+
+
+
+def test_cli_run_rejects_a_bad_command_as_a_usage_error(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["run", str(EXAMPLES / "museum-tour.xml"), "--command", '{"to": "panel-1"}'])
+    assert info.value.code == 2
+    assert "bad --command" in capsys.readouterr().err
 
 
 XMLLINT = shutil.which("xmllint")

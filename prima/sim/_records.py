@@ -1,18 +1,17 @@
 """Plain records: poses, user actions, zone entries, pictures, scheduled events, zones.
 
-All are frozen dataclasses with a stable ``to_dict()`` so traces and golden
-files can serialize them.
+All are frozen dataclasses with a ``to_dict()`` giving plain data (for JSON).
 """
 
 from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
-from prima.catalog import Value
-from prima.sim.maps import Area
+from prima.sim._maps import Area
+from prima.vocab import Value
 
 __all__ = ["Picture", "Pose", "ScheduledEvent", "UserAction", "UserActionKind", "Zone",
            "ZoneEntry"]

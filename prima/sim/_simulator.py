@@ -18,16 +18,20 @@ stretches are jumped over. The only randomness is a seeded ``random.Random``
 
 from __future__ import annotations
 
+import functools
 import math
 import random
+from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Callable, Iterable, Mapping
+from typing import TYPE_CHECKING
 
-from prima.catalog import Value
-from prima.mediator import AbId, AtomicBehavior, CommandId, Event, Outcome
-from prima.sim.kernel import Kernel, Waker
-from prima.sim.maps import Place, WorldMap
-from prima.sim.records import (
+from prima.catalog import Catalog
+from prima.errors import SimulationError
+from prima.mediator import AtomicBehavior, Event, Outcome
+from prima.sim._behaviors import perform
+from prima.sim._kernel import Kernel, Waker
+from prima.sim._maps import Place, WorldMap
+from prima.sim._records import (
     Picture,
     Pose,
     ReplyRule,
@@ -36,16 +40,17 @@ from prima.sim.records import (
     Zone,
     ZoneEntry,
 )
-from prima.sim.spec import RobotSpec
-from prima.sim.user import ScriptedUser, UserScript
-from prima.sim.world import World
+from prima.sim._spec import RobotSpec
+from prima.sim._user import ScriptedUser, UserScript
+from prima.sim._world import World
+from prima.vocab import Value
 
 if TYPE_CHECKING:
-    from prima.sim.scenario import Scenario
+    from prima.sim._scenario import Scenario
 
 __all__ = ["Simulator"]
 
-Finished = Callable[[AbId, Outcome], None]
+Finished = Callable[[int, Outcome], None]
 SENSE_HZ = 10
 """How often (per simulated second) sensors are read while something moves."""
 
@@ -58,7 +63,8 @@ class Simulator:
     """A deterministic simulated robot, its building and its user."""
 
     def __init__(self, world_map: WorldMap, *, spec: RobotSpec | None = None,
-                 robot: Pose = Pose(0.0, 0.0, 0.0), user: UserScript | None = None,
+                 catalog: Catalog | None = None,
+                 robot: Pose | None = None, user: UserScript | None = None,
                  events: Iterable[ScheduledEvent] = (), zones: Iterable[Zone] = (),
                  replies: Iterable[ReplyRule] = (),
                  seed: int = 0, hz: int = 50, noise: float = 0.0, heading_noise: float = 0.0,
@@ -67,9 +73,12 @@ class Simulator:
                  on_user: Callable[[UserAction], None] | None = None,
                  on_zone: Callable[[ZoneEntry], None] | None = None) -> None:
         if hz <= 0 or hz % SENSE_HZ:
-            raise ValueError(f"hz must be a positive multiple of {SENSE_HZ}, not {hz}")
+            raise SimulationError(f"hz must be a positive multiple of {SENSE_HZ}, not {hz}")
+        robot = robot if robot is not None else Pose(0.0, 0.0, 0.0)
         self.map = world_map
         self.spec = spec or RobotSpec()
+        self.catalog = catalog if catalog is not None else Catalog.standard()
+        """The Commands the robot offers: argument defaults, robot-specific durations."""
         self.kernel = Kernel(hz)
         self.world = World(world_map, self.spec, hz, robot, user.start if user else None)
         self.random = random.Random(seed)
@@ -82,30 +91,33 @@ class Simulator:
         self.reports = 0
         """How many reports (ends, events, user actions, zone entries) so far."""
         self.inbox: list[Mapping[str, Value]] = []
+        """Network messages received so far (sender, text)."""
         self.outbox: list[Mapping[str, Value]] = []
         """What the applications sent to the environment's servers."""
         self.replies: tuple[ReplyRule, ...] = tuple(replies)
-        """Network messages received so far (sender, text)."""
+        """How the environment's servers answer what the applications send them."""
         self.pictures: list[Picture] = []
         """Camera captures taken so far."""
         self.steps = 0
         """Physics steps taken so far."""
         self.seen = False
         """Human detection's current belief: the user is in view."""
+        self.navigating = 0
+        """How many Topological Moves are running: they report the places they reach."""
         self._unseen_since: int | None = None
         self._announced: str | None = None
         self._sensing = 0
-        self._running: dict[AbId, AtomicBehavior] = {}
-        self._loops: dict[CommandId, dict[str, Value]] = {}
+        self._running: dict[int, AtomicBehavior] = {}
+        self._loops: dict[int, dict[str, Value]] = {}
         self._mic: Waker | None = None
         self._sense_every = hz // SENSE_HZ
         self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
         self._zones = tuple(zones)
         self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
-        self._near: set[str] = {p.name for p in self.map.places
-                                if math.hypot(p.x - robot.x, p.y - robot.y) <= self.spec.passing_radius}
+        self._near = {p.name for p in self.map.places
+                      if robot.distance_to(p.x, p.y) <= self.spec.passing_radius}
         for ev in events:
-            self.kernel.at(round(ev.at * hz), lambda ev=ev: self._post(ev))
+            self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
         self.user = ScriptedUser(user, self) if user is not None else None
         if self.user is not None:
             self.user.begin()
@@ -124,17 +136,19 @@ class Simulator:
                 ticks = max(1, self.ticks(rule.after))
                 reply = ScheduledEvent((self.kernel.tick + ticks) / self.kernel.hz, "message",
                                        {"sender": to, "text": rule.text.replace("{text}", text)})
-                self.kernel.at(self.kernel.tick + ticks, lambda ev=reply: self._post(ev))
+                self.kernel.at(self.kernel.tick + ticks, functools.partial(self._post, reply))
                 return
 
     @classmethod
     def from_scenario(cls, scenario: Scenario, *, spec: RobotSpec | None = None,
+                      catalog: Catalog | None = None,
                       finished: Finished | None = None,
                       on_event: Callable[[Event], None] | None = None,
                       on_user: Callable[[UserAction], None] | None = None,
                       on_zone: Callable[[ZoneEntry], None] | None = None) -> Simulator:
-        """A simulator for a loaded scenario (``spec`` from the robot profile, if any)."""
-        return cls(scenario.map, spec=spec, robot=scenario.robot, user=scenario.user,
+        """A simulator for a loaded scenario (``spec`` and ``catalog`` from the robot profile)."""
+        return cls(scenario.map, spec=spec, catalog=catalog, robot=scenario.robot,
+                   user=scenario.user,
                    events=scenario.events, replies=scenario.replies, zones=scenario.zones,
                    seed=scenario.seed,
                    hz=scenario.rate, noise=scenario.noise,
@@ -151,15 +165,14 @@ class Simulator:
 
     def start(self, ab: AtomicBehavior) -> None:
         """Begin ``ab`` now; ``finished`` is called when it ends (never from inside here)."""
-        from prima.sim.behaviors import perform  # behaviors import this module
         if ab.id in self._running:
-            raise ValueError(f"atomic behavior {ab.id} is already running")
+            raise SimulationError(f"atomic behavior {ab.id} is already running")
         self._running[ab.id] = ab
         if "human-detection" in ab.devices:
             self._sensing += 1
         self.kernel.spawn(perform(self, ab), lambda result: self._finish(ab, result))
 
-    def abandon(self, command_id: CommandId) -> None:
+    def abandon(self, command_id: int) -> None:
         """Forget a feedback loop; if nothing else drives the wheels, hold still."""
         self._loops.pop(command_id, None)
         self._hold_still()
@@ -185,7 +198,7 @@ class Simulator:
         k = self.kernel
         target = math.floor(t * k.hz + 1e-6)
         if target < k.tick:
-            raise ValueError(f"cannot go back from {self.now()} to {t}")
+            raise SimulationError(f"cannot go back from {self.now()} to {t}")
         world = self.world
         every = self._sense_every
         heap = k._heap
@@ -211,10 +224,6 @@ class Simulator:
             else:
                 nxt = k.next_tick()
                 k.tick = target if nxt is None or nxt > target else max(nxt, k.tick)
-
-    def run(self, until: float) -> None:
-        """Advance to ``until`` (the same as ``advance_to``; for readability)."""
-        self.advance_to(until)
 
     # ---- state -------------------------------------------------------------------
 
@@ -253,11 +262,11 @@ class Simulator:
         self.reports += 1
         self.on_user(action)
 
-    def loop_state(self, command_id: CommandId) -> dict[str, Value]:
+    def loop_state(self, command_id: int) -> dict[str, Value]:
         """Per-Command state kept across a feedback loop's iterations."""
         return self._loops.setdefault(command_id, {})
 
-    def end_loop(self, command_id: CommandId) -> None:
+    def end_loop(self, command_id: int) -> None:
         self._loops.pop(command_id, None)
 
     def ask(self, prompt: str) -> None:
@@ -380,14 +389,10 @@ class Simulator:
             near = math.hypot(place.x - x, place.y - y) <= radius
             if near and place.name not in self._near:
                 self._near.add(place.name)
-                if not self._navigating():  # asked only on arrival: this runs every step
+                if not self.navigating:
                     self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
             elif not near:
                 self._near.discard(place.name)
-
-    def _navigating(self) -> bool:
-        return any(c.command == "TopologicalMove" for ab in self._running.values()
-                   for c in ab.calls)
 
     def _check_zones(self) -> None:
         x, y = self.world.robot.position

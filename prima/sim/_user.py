@@ -2,7 +2,7 @@
 
 A :class:`UserScript` is plain data (a scenario file produces one; tests may
 build one directly). :class:`ScriptedUser` plays it inside a
-:class:`~prima.sim.simulator.Simulator`: it walks (over the place graph when a
+:class:`~prima.sim.Simulator`: it walks (over the place graph when a
 wall is in the way), follows or leaves the robot, touches it, and answers the
 robot's questions by its rules ("when the robot asks something containing X,
 after D seconds say Y"). A question no rule matches gets no answer, and so
@@ -11,16 +11,17 @@ does one asked while the user is out of earshot.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Iterator
+from typing import TYPE_CHECKING
 
-from prima.sim.kernel import Process, Wait, sleep
-from prima.sim.records import Pose, UserAction, UserActionKind
+from prima.sim._kernel import ProcGen, Process, sleep
+from prima.sim._records import Pose, UserAction, UserActionKind
 
 if TYPE_CHECKING:
-    from prima.sim.simulator import Simulator
+    from prima.sim._simulator import Simulator
 
 __all__ = ["AnswerRule", "ScriptedUser", "TimedAction", "UserScript"]
 
@@ -117,7 +118,7 @@ class ScriptedUser:
         """Put every timed action on the agenda."""
         k = self._sim.kernel
         for action in self.script.actions:
-            k.at(round(action.at * k.hz), lambda a=action: self._do(a))
+            k.at(round(action.at * k.hz), functools.partial(self._do, action))
 
     # ---- hearing and speaking ---------------------------------------------------
 
@@ -134,8 +135,7 @@ class ScriptedUser:
                 continue
             if rule.say is not None:
                 k = sim.kernel
-                text = rule.say
-                k.at(k.tick + round(rule.after * k.hz), lambda: self.say(text))
+                k.at(k.tick + round(rule.after * k.hz), functools.partial(self.say, rule.say))
             return
 
     def say(self, text: str) -> None:
@@ -164,9 +164,9 @@ class ScriptedUser:
                 target: str | None = None, heard: bool | None = None) -> None:
         self._sim.report_user(UserAction(self._sim.now(), kind, text, target, heard))
 
-    def _move(self, gen: Iterator[Wait]) -> None:
+    def _move(self, gen: ProcGen) -> None:
         self._halt()
-        self._motion = self._sim.kernel.spawn(gen)  # type: ignore[arg-type]
+        self._motion = self._sim.kernel.spawn(gen)
 
     def _halt(self) -> None:
         self._sim.kernel.kill(self._motion)
@@ -180,7 +180,7 @@ class ScriptedUser:
         if world.human_moving:
             world.human.angle = math.atan2(vy, vx)
 
-    def _leg(self, x: float, y: float, speed: float) -> Iterator[Wait]:
+    def _leg(self, x: float, y: float, speed: float) -> ProcGen:
         human = self._sim.world.human
         hx, hy = human.position
         length = math.hypot(x - hx, y - hy)
@@ -192,7 +192,7 @@ class ScriptedUser:
         yield sleep(n)
         human.position = (x, y)
 
-    def _walk(self, a: TimedAction, speed: float) -> Iterator[Wait]:
+    def _walk(self, a: TimedAction, speed: float) -> ProcGen:
         sim = self._sim
         if a.place is not None:
             place = sim.map.place(a.place)
@@ -206,7 +206,7 @@ class ScriptedUser:
         self._set_velocity(0.0, 0.0)
         self._record(UserActionKind.ARRIVE, target=a.target())
 
-    def _follow(self, distance: float, speed: float) -> Iterator[Wait]:
+    def _follow(self, distance: float, speed: float) -> ProcGen:
         world = self._sim.world
         period = self._sim.kernel.ticks(_FOLLOW_PERIOD)
         while True:
@@ -232,7 +232,7 @@ class ScriptedUser:
                 return wx, wy
         return rx, ry
 
-    def _touch(self, speed: float) -> Iterator[Wait]:
+    def _touch(self, speed: float) -> ProcGen:
         sim = self._sim
         world = sim.world
         reach = sim.spec.radius + sim.spec.touch_reach + 0.25

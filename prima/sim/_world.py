@@ -12,20 +12,20 @@ Per-step Python work is kept small: pymunk property access costs more than a
 physics step here, so velocities are written only when they change and the
 profiles keep their own progress instead of reading positions back.
 
-The user is a kinematic body moved by :mod:`prima.sim.user`. Head and arm
+The user is a kinematic body moved by the scripted user. Head and arm
 angles are interpolated on demand, never stepped.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 import pymunk
 
-from prima.sim.maps import WorldMap
-from prima.sim.records import Pose
-from prima.sim.spec import RobotSpec
+from prima.sim._maps import WorldMap
+from prima.sim._records import Pose
+from prima.sim._spec import RobotSpec
 
 __all__ = ["World", "wrap_angle"]
 
@@ -173,10 +173,6 @@ class World:
         rx, ry = self.robot.position
         ux, uy = self.human.position
         return wrap_angle(math.atan2(uy - ry, ux - rx) - self.robot.angle)
-
-    @property
-    def moving(self) -> bool:
-        return self.mode != _IDLE or self.human_moving
 
     # ---- robot wheel commands --------------------------------------------------
 

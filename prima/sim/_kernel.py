@@ -14,9 +14,10 @@ calls back. A process is resumed with the value that woke it.
 from __future__ import annotations
 
 import heapq
-from typing import Any, Callable, Generator
+from collections.abc import Callable, Generator
+from typing import Any
 
-__all__ = ["Kernel", "Process", "Wait", "sleep", "until", "signal"]
+__all__ = ["Kernel", "ProcGen", "Process", "Wait", "Waker", "signal", "sleep", "until"]
 
 Waker = Callable[[Any], None]
 
@@ -77,9 +78,6 @@ class Kernel:
         self._heap: list[tuple[int, int, Callable[[], None]]] = []
         self._seq = 0
         self._polls: list[tuple[Process, int, Callable[[], bool]]] = []
-
-    def now(self) -> float:
-        return self.tick / self.hz
 
     def ticks(self, seconds: float) -> int:
         """A duration in whole ticks (nearest; at least one for a positive duration)."""

@@ -1,7 +1,7 @@
 """A building's map: walls, named places, the topological place graph, areas.
 
-Pure data plus graph search; the pymunk world is built from it in
-:mod:`prima.sim.world`, and XML loading lives in :mod:`prima.sim.scenario`.
+Pure data plus graph search; the simulator builds its pymunk world from it,
+and :func:`~prima.sim.load_map` reads it from a map file.
 """
 
 from __future__ import annotations
@@ -9,8 +9,10 @@ from __future__ import annotations
 import enum
 import heapq
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
+
+from prima.errors import SimulationError
 
 __all__ = ["Area", "Place", "PlaceKind", "Wall", "WorldMap"]
 
@@ -109,11 +111,11 @@ class WorldMap:
     def __post_init__(self) -> None:
         index = {p.name: p for p in self.places}
         if len(index) != len(self.places):
-            raise ValueError(f"map {self.name!r} has duplicate place names")
+            raise SimulationError(f"map {self.name!r} has duplicate place names")
         adjacent: dict[str, list[tuple[str, float]]] = {name: [] for name in index}
         for a, b in self.edges:
             if a not in index or b not in index:
-                raise ValueError(f"map {self.name!r}: edge {a}-{b} names an unknown place")
+                raise SimulationError(f"map {self.name!r}: edge {a}-{b} names an unknown place")
             d = math.hypot(index[a].x - index[b].x, index[a].y - index[b].y)
             adjacent[a].append((b, d))
             adjacent[b].append((a, d))
@@ -130,10 +132,6 @@ class WorldMap:
             if a.name == name:
                 return a
         return None
-
-    def neighbours(self, name: str) -> tuple[tuple[str, float], ...]:
-        """Places joined to ``name`` by an edge, with the edge lengths (m)."""
-        return self._adjacent.get(name, ())
 
     def shortest_path(self, starts: Mapping[str, float],
                       goals: Mapping[str, float]) -> list[str]:
@@ -166,9 +164,11 @@ class WorldMap:
         reachable = [(best[g] + c, order[g], g) for g, c in goals.items() if g in best]
         if not reachable:
             return []
-        path = [min(reachable)[2]]
-        while back[path[-1]] is not None:
-            path.append(back[path[-1]])  # type: ignore[arg-type]
+        path: list[str] = []
+        node: str | None = min(reachable)[2]
+        while node is not None:
+            path.append(node)
+            node = back[node]
         return path[::-1]
 
     def to_dict(self) -> dict[str, object]:

@@ -12,13 +12,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Sequence, TextIO
+from collections.abc import Sequence
+from typing import TextIO
 
 from prima.errors import ScenarioError
 from prima.mediator import Call
-from prima.sim.runner import CommandRunner
-from prima.sim.scenario import load_map, load_scenario
-from prima.sim.simulator import Simulator
+from prima.sim._runner import CommandRunner
+from prima.sim._scenario import load_map, load_scenario
+from prima.sim._simulator import Simulator
 
 __all__ = ["build_parser", "main"]
 
@@ -33,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="run a scenario headless (no applications)")
     run.add_argument("file")
     run.add_argument("--until", type=float, help="stop at this time instead of the scenario's")
-    run.add_argument("--command", action="append", default=[], metavar="JSON",
+    run.add_argument("--command", action="append", default=[], metavar="JSON", type=_call,
                      help='a Command to perform, e.g. \'{"command": "TopologicalMove", '
                           '"args": {"to": "corner"}}\' (repeatable)')
     run.add_argument("--json", action="store_true", help="print one JSON object per line")
@@ -59,24 +60,21 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
         return status
     try:
         scenario = load_scenario(args.file)
-        calls = [_call(text) for text in args.command]
     except ScenarioError as exc:
         for problem in exc.problems:
             print(problem, file=err)
         return 1
-    except ValueError as exc:
-        print(f"error: {exc}", file=err)
-        return 2
     runner = CommandRunner(Simulator.from_scenario(scenario))
-    runner.queue(*calls)
+    runner.queue(*args.command)
     for entry in runner.run(args.until if args.until is not None else scenario.until):
         print(json.dumps(entry.to_dict()) if args.json else str(entry), file=out)
     return 0
 
 
 def _call(text: str) -> Call:
+    """A ``--command`` argument: a JSON object with ``command`` and optional ``args``."""
     try:
         data = json.loads(text)
         return Call(str(data["command"]), dict(data.get("args", {})))
     except (json.JSONDecodeError, KeyError, TypeError, AttributeError) as exc:
-        raise ValueError(f"bad --command {text!r}: {exc}") from exc
+        raise argparse.ArgumentTypeError(f"bad --command {text!r}: {exc}") from exc

@@ -8,9 +8,11 @@ spirit of NEC's PaPeRo: round, wheeled, about 40 cm across, slow and careful.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping
+
+from prima.errors import SimulationError
 
 __all__ = ["DEFAULT_GESTURES", "RobotSpec"]
 
@@ -67,13 +69,11 @@ class RobotSpec:
     """How far from the robot's body the user can be and still touch it (m)."""
     lose_after: float = 1.0
     """The user counts as lost after this long unseen (s)."""
-    picture_time: float = 0.5
-    """How long a camera capture takes (s)."""
     place_tolerance: float = 0.15
-    passing_radius: float = 1.5
-    """A place is reported as reached when the robot passes this close to it
-    while no Topological Move reports its own route (e.g. while tracking)."""
     """Within this distance the robot counts as being at a place (m)."""
+    passing_radius: float = 1.5
+    """A place is reported as reached when the robot passes this close to it (m)
+    while no Topological Move reports its own route (e.g. while tracking)."""
     position_tolerance: float = 0.05
     """Set Position is done within this distance of its target (m)."""
     leg_length: float = 1.5
@@ -92,10 +92,11 @@ class RobotSpec:
         for name in positive:
             value = getattr(self, name)
             if not value > 0:
-                raise ValueError(f"RobotSpec.{name} must be positive, not {value!r}")
+                raise SimulationError(f"RobotSpec.{name} must be positive, not {value!r}")
         for name, seconds in self.gestures.items():
             if not seconds > 0:
-                raise ValueError(f"gesture {name!r} must last a positive time, not {seconds!r}")
+                raise SimulationError(
+                    f"gesture {name!r} must last a positive time, not {seconds!r}")
 
     def speech_duration(self, text: str) -> float:
         """How long saying ``text`` takes, from its word count and the speech rate."""

@@ -4,83 +4,79 @@ A behavior is a kernel process: ``behavior(sim, call, command_id, iteration)``
 yields waits and returns ``(values, terminal)``. For a feedback Command one
 call is one loop iteration; ``terminal`` says whether the loop is done. For
 any other Command ``terminal`` is True. Arguments the call leaves out take the
-catalog's defaults (:mod:`prima.mediator.catalog`), the one table both the
-DSL and the simulator read.
+defaults of the simulator's catalog (:class:`~prima.catalog.Catalog`, built from
+the robot profile), the one table both the DSL and the simulator read; so does
+a robot-specific Command's duration.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Generator, Mapping
+from collections.abc import Callable, Generator, Mapping
+from typing import TYPE_CHECKING, Any
 
-from prima.catalog import Catalog, Value
-from prima.mediator import AtomicBehavior, Call, CommandId
-from prima.sim.kernel import Wait, signal, sleep, until
-from prima.sim.maps import Place
-from prima.sim.records import Picture
-from prima.sim.simulator import Simulator
-from prima.sim.world import wrap_angle
+from prima.errors import CommandError
+from prima.mediator import AtomicBehavior, Call
+from prima.sim._kernel import Wait, signal, sleep, until
+from prima.sim._maps import Place
+from prima.sim._records import Picture
+from prima.sim._world import wrap_angle
+from prima.vocab import Value
+
+if TYPE_CHECKING:
+    from prima.sim._simulator import Simulator
 
 __all__ = ["BEHAVIORS", "perform"]
 
 Values = dict[str, Value]
 Result = tuple[Values, bool]
 Gen = Generator[Wait, Any, Result]
-Behavior = Callable[[Simulator, Call, CommandId, int], Gen]
-
-_CATALOG = Catalog.standard()
-
-
-class BadArgument(Exception):
-    """A Command argument the robot cannot use (the AB ends with an error value)."""
+Behavior = Callable[["Simulator", Call, int, int], Gen]
 
 
 # ---- arguments -------------------------------------------------------------------
 
-def _arg(call: Call, name: str) -> Value:
-    if name in call.args:
-        return call.args[name]
-    spec = _CATALOG.get(call.command)
-    param = spec.param(name) if spec is not None else None
-    return param.default if param is not None else None
+def _arg(sim: Simulator, call: Call, name: str) -> Value:
+    """The argument as given, else its parameter's default in the robot's catalog."""
+    return sim.catalog[call.command].arg(call.args, name)
 
 
-def _number(call: Call, name: str, required: bool = True) -> float | None:
-    value = _arg(call, name)
+def _number(sim: Simulator, call: Call, name: str, required: bool = True) -> float | None:
+    value = _arg(sim, call, name)
     if value is None:
         if required:
-            raise BadArgument(f"missing argument {name!r}")
+            raise CommandError(f"missing argument {name!r}")
         return None
     if isinstance(value, bool):
-        raise BadArgument(f"argument {name!r} must be a number, not {value!r}")
+        raise CommandError(f"argument {name!r} must be a number, not {value!r}")
     try:
         number = float(value)
     except ValueError:
-        raise BadArgument(f"argument {name!r} must be a number, not {value!r}") from None
+        raise CommandError(f"argument {name!r} must be a number, not {value!r}") from None
     if not math.isfinite(number):
-        raise BadArgument(f"argument {name!r} must be finite, not {value!r}")
+        raise CommandError(f"argument {name!r} must be finite, not {value!r}")
     return number
 
 
-def _req(call: Call, name: str) -> float:
-    value = _number(call, name)
+def _req(sim: Simulator, call: Call, name: str) -> float:
+    value = _number(sim, call, name)
     if value is None:
-        raise BadArgument(f"missing argument {name!r}")
+        raise CommandError(f"missing argument {name!r}")
     return value
 
 
-def _text(call: Call, name: str) -> str:
-    value = _arg(call, name)
+def _text(sim: Simulator, call: Call, name: str) -> str:
+    value = _arg(sim, call, name)
     return "" if value is None else str(value)
 
 
 def _place(sim: Simulator, call: Call, name: str) -> Place | None:
-    value = _arg(call, name)
+    value = _arg(sim, call, name)
     if value is None:
         return None
     place = sim.map.place(str(value))
     if place is None:
-        raise BadArgument(f"unknown place {value!r} on map {sim.map.name!r}")
+        raise CommandError(f"unknown place {value!r} on map {sim.map.name!r}")
     return place
 
 
@@ -132,17 +128,17 @@ def _heading_to(sim: Simulator, place: Place) -> float | None:
 
 # ---- talking ------------------------------------------------------------------------------
 
-def speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
+def speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    n = sim.ticks(sim.spec.speech_duration(_text(sim, call, "text")))
     yield sleep(n)
     return {"duration": n / sim.kernel.hz}, True
 
 
-def qa(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    prompt = _text(call, "prompt")
-    timeout = _req(call, "timeout")
+def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    prompt = _text(sim, call, "prompt")
+    timeout = _req(sim, call, "timeout")
     if timeout < 0:
-        raise BadArgument(f"timeout must not be negative, not {timeout:g}")
+        raise CommandError(f"timeout must not be negative, not {timeout:g}")
     yield sleep(sim.ticks(sim.spec.speech_duration(prompt)))
     sim.ask(prompt)
     heard = yield signal(sim.open_mic, sim.ticks(timeout), timeout=None)
@@ -154,7 +150,7 @@ def qa(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
 
 # ---- turning --------------------------------------------------------------------------------
 
-def face_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     world = sim.world
     seen, distance = world.sees_user(sim.kernel.tick, any_direction=True)
     if not seen:
@@ -163,20 +159,20 @@ def face_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"found": True, "distance": round(distance, 3), **_pose(sim)}, True
 
 
-def face_human_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def face_human_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     values, _ = yield from face_human(sim, call, cid, it)
     said, _ = yield from speak(sim, call, cid, it)
     return {**values, **said}, True
 
 
-def turn(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    yield from _turn(sim, math.radians(_req(call, "angle")))
+def turn(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    yield from _turn(sim, math.radians(_req(sim, call, "angle")))
     return _pose(sim), True
 
 
-def turn_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    angle = _req(call, "angle")
-    n = sim.ticks(sim.spec.speech_duration(_text(call, "text")))
+def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    angle = _req(sim, call, "angle")
+    n = sim.ticks(sim.spec.speech_duration(_text(sim, call, "text")))
     end = sim.kernel.tick + n
     yield from _turn(sim, math.radians(angle))
     if end > sim.kernel.tick:
@@ -184,12 +180,15 @@ def turn_and_speak(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {**_pose(sim), "duration": n / sim.kernel.hz}, True
 
 
-def set_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    heading = _number(call, "heading", required=False)
+def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    heading = _number(sim, call, "heading", required=False)
     toward = _place(sim, call, "toward")
-    if (heading is None) == (toward is None):
-        raise BadArgument("give exactly one of 'heading' and 'toward'")
-    target = math.radians(heading) if heading is not None else _heading_to(sim, toward)  # type: ignore[arg-type]
+    if heading is not None and toward is None:
+        target: float | None = math.radians(heading)
+    elif toward is not None and heading is None:
+        target = _heading_to(sim, toward)
+    else:
+        raise CommandError("give exactly one of 'heading' and 'toward'")
     if target is not None:
         yield from _face(sim, target)
     return _pose(sim), True
@@ -197,11 +196,11 @@ def set_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
 
 # ---- wheels ---------------------------------------------------------------------------------
 
-def set_speed_and_time(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    speed, seconds = _req(call, "speed"), _req(call, "time")
-    spin = _req(call, "spin")
+def set_speed_and_time(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    speed, seconds = _req(sim, call, "speed"), _req(sim, call, "time")
+    spin = _req(sim, call, "spin")
     if seconds < 0:
-        raise BadArgument(f"time must not be negative, not {seconds:g}")
+        raise CommandError(f"time must not be negative, not {seconds:g}")
     world = sim.world
     if world.mode:
         yield from _stop(sim)
@@ -211,7 +210,7 @@ def set_speed_and_time(sim: Simulator, call: Call, cid: CommandId, it: int) -> G
     return _pose(sim), True
 
 
-def stop_moving(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def stop_moving(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     yield from _stop(sim)
     return _pose(sim), True
 
@@ -222,10 +221,10 @@ def _clamp(value: float, limits: tuple[float, float]) -> float:
     return max(limits[0], min(limits[1], value))
 
 
-def move_head(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def move_head(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
-    pan = _clamp(_req(call, "pan"), spec.head_pan_range)
-    tilt = _clamp(_req(call, "tilt"), spec.head_tilt_range)
+    pan = _clamp(_req(sim, call, "pan"), spec.head_pan_range)
+    tilt = _clamp(_req(sim, call, "tilt"), spec.head_tilt_range)
     change = max(abs(pan - world.head_pan.at(tick)), abs(tilt - world.head_tilt.at(tick)))
     n = sim.ticks(change / spec.head_rate)
     world.head_pan.move(pan, tick, n)
@@ -235,12 +234,12 @@ def move_head(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"pan": pan, "tilt": tilt}, True
 
 
-def point_by_hand(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
-    angle = _number(call, "angle", required=False)
+    angle = _number(sim, call, "angle", required=False)
     toward = _place(sim, call, "toward")
     if (angle is None) == (toward is None):
-        raise BadArgument("give exactly one of 'toward' and 'angle'")
+        raise CommandError("give exactly one of 'toward' and 'angle'")
     if toward is not None:
         target = _heading_to(sim, toward)
         angle = 0.0 if target is None else math.degrees(wrap_angle(target - world.robot.angle))
@@ -251,8 +250,8 @@ def point_by_hand(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"angle": round(angle, 1)}, True
 
 
-def gesture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    name = _text(call, "name")
+def gesture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    name = _text(sim, call, "name")
     seconds = sim.spec.gestures.get(name)
     if seconds is None:
         return {"error": f"the robot has no gesture {name!r}"}, True
@@ -260,12 +259,16 @@ def gesture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"gesture": name}, True
 
 
-def take_picture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    """Capture what the camera sees now; the capture lasts the profile's duration."""
+    duration = sim.catalog[call.command].duration
+    if duration is None:
+        return {"error": f"the robot profile gives {call.command} no duration"}, True
     world, tick = sim.world, sim.kernel.tick
     seen, distance = world.sees_user(tick)
     pose = sim.localize()
     heading = round(math.degrees(world.camera_heading(tick)) % 360.0, 1) % 360.0
-    yield sleep(sim.ticks(sim.spec.picture_time))
+    yield sleep(sim.ticks(duration))
     picture = Picture(sim.now(), round(pose.x, 3), round(pose.y, 3), heading, seen,
                       round(distance, 3) if seen else None)
     sim.pictures.append(picture)
@@ -274,9 +277,9 @@ def take_picture(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
 
 # ---- feedback loops --------------------------------------------------------------------------
 
-def active_sensing_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    say = _text(call, "say")
-    angle = _req(call, "turn")
+def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    say = _text(sim, call, "say")
+    angle = _req(sim, call, "turn")
     k = sim.kernel
     speech_end = k.tick + (sim.ticks(sim.spec.speech_duration(say)) if say else 0)
     sim.search()
@@ -303,10 +306,10 @@ def active_sensing_human(sim: Simulator, call: Call, cid: CommandId, it: int) ->
     return {"found": False, "turned": angle}, False
 
 
-def tracking_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    want = _req(call, "distance")
+def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    want = _req(sim, call, "distance")
     if want <= 0:
-        raise BadArgument(f"distance must be positive, not {want:g}")
+        raise CommandError(f"distance must be positive, not {want:g}")
     k, world = sim.kernel, sim.world
     if not sim.seen:
         found = yield until(lambda: sim.seen, sim.ticks(sim.spec.lose_after))
@@ -334,17 +337,26 @@ def tracking_human(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
     return {"lost": False, "distance": round(distance, 3)}, False
 
 
-def topological_move(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def topological_move(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     """One iteration: at most ``leg_length`` metres toward the next place on the route.
 
     Short iterations keep the robot responsive (another application's reaction
     can start between any two). A blocked iteration (someone in the way) waits
     a second and ends non-terminal, so the loop tries again; after
-    ``MAX_BLOCKED`` blocked iterations in a row it gives up.
+    ``MAX_BLOCKED`` blocked iterations in a row it gives up. While it runs, the
+    simulator leaves reporting the places reached to it (``sim.navigating``).
     """
+    sim.navigating += 1
+    try:
+        return (yield from _move_leg(sim, call, cid))
+    finally:
+        sim.navigating -= 1
+
+
+def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
     goal = _place(sim, call, "to")
     if goal is None:
-        raise BadArgument("missing argument 'to'")
+        raise CommandError("missing argument 'to'")
     state = sim.loop_state(cid)
     at, path = _route(sim, goal, state)
     if at is not None and at.name == goal.name:
@@ -380,7 +392,8 @@ def topological_move(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen
             "remaining": len(path) - 1}, done
 
 
-def _route(sim: Simulator, goal: Place, state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
+def _route(sim: Simulator, goal: Place,
+           state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
     """The places still to visit; mid-leg, keep heading for the same place.
 
     Replanning from scratch only when the robot is not where this loop left
@@ -412,9 +425,9 @@ def _toward(sim: Simulator, x: float, y: float, tx: float, ty: float) -> tuple[f
     return x + (tx - x) * leg / seg, y + (ty - y) * leg / seg, True
 
 
-def _set_position(sim: Simulator, call: Call, cid: CommandId,
+def _set_position(sim: Simulator, call: Call, cid: int,
                   heading: float | None) -> Gen:
-    tx, ty = _req(call, "x"), _req(call, "y")
+    tx, ty = _req(sim, call, "x"), _req(sim, call, "y")
     world, spec = sim.world, sim.spec
     tol = spec.position_tolerance
     x, y = world.robot.position
@@ -434,12 +447,12 @@ def _set_position(sim: Simulator, call: Call, cid: CommandId,
     return {**_pose(sim), "reached": reached}, reached
 
 
-def set_position(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
+def set_position(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return (yield from _set_position(sim, call, cid, None))
 
 
-def set_position_and_direction(sim: Simulator, call: Call, cid: CommandId, it: int) -> Gen:
-    return (yield from _set_position(sim, call, cid, _req(call, "heading")))
+def set_position_and_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    return (yield from _set_position(sim, call, cid, _req(sim, call, "heading")))
 
 
 BEHAVIORS: Mapping[str, Behavior] = {
@@ -469,20 +482,21 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
     """Perform an atomic behavior's calls in order; return merged values and terminal.
 
     In a grouped AB each feedback call performs one iteration; the AB is
-    terminal only if every feedback call in it is. An error (unknown
-    Command, unusable argument) ends the AB at once with an ``error`` value.
+    terminal only if every feedback call in it is. An error (a Command the
+    robot lacks, one its catalog does not declare, an unusable argument) ends
+    the AB at once with an ``error`` value.
     """
     values: Values = {}
     terminal = True
     for i, call in enumerate(ab.calls):
         cid = ab.command_ids[i] if i < len(ab.command_ids) else 0
         behavior = BEHAVIORS.get(call.command)
-        if behavior is None:
+        if behavior is None or call.command not in sim.catalog:
             values["error"] = f"the simulated robot has no Command {call.command!r}"
             return values, True
         try:
             out, done = yield from behavior(sim, call, cid, ab.iteration)
-        except BadArgument as exc:
+        except CommandError as exc:
             values["error"] = f"{call.command}: {exc}"
             return values, True
         values.update(out)

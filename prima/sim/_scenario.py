@@ -11,19 +11,18 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
 
 import pymunk
 from lxml import etree
 
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
 from prima.errors import Problem, ScenarioError
-from prima.xmlio import validate
-from prima.sim.maps import Area, Place, PlaceKind, Wall, WorldMap
-from prima.sim.records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
-from prima.sim.user import AnswerRule, TimedAction, UserScript
+from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
+from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
+from prima.sim._user import AnswerRule, TimedAction, UserScript
+from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
 
 __all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
 
@@ -185,10 +184,11 @@ def _wall_space(walls: list[Wall]) -> pymunk.Space:
     return space
 
 
-def _known(names: dict[str, object]) -> str:
-    if not names:
-        return ""
+def _known(names: Iterable[str]) -> str:
+    """A hint listing up to 12 of ``names`` (empty if there are none)."""
     shown = sorted(names)
+    if not shown:
+        return ""
     more = "" if len(shown) <= 12 else ", ..."
     return f" (known: {', '.join(shown[:12])}{more})"
 
@@ -217,7 +217,7 @@ class _Loader:
             return None
         place = self.map.place(name)
         if place is None:
-            known = {p.name: p for p in self.map.places}
+            known = (p.name for p in self.map.places)
             self.bad(el, f"unknown place {name!r} on map {self.map.name!r}{_known(known)}",
                      attribute)
         return place
@@ -374,7 +374,7 @@ class _Loader:
                 return None
             area = self.map.area(area_name) if self.map is not None else None
             if area is None:
-                known = {a.name: a for a in self.map.areas} if self.map is not None else {}
+                known = [a.name for a in self.map.areas] if self.map is not None else []
                 self.bad(el, f"unknown area {area_name!r}{_known(known)}", "area")
                 return None
             return Zone(name, ea, area)
