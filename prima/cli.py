@@ -11,12 +11,13 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Callable, Sequence, TextIO
+from collections.abc import Callable, Iterable, Sequence
+from typing import TextIO
 
 from prima import __version__
 from prima.dsl.profile import RobotProfile, default_profile, load_profile
 from prima.dsl.validate import Checker, collect, validate_paths
-from prima.errors import LocatedError, Problem
+from prima.errors import LocatedError, PrimaError, Problem
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
 
@@ -82,22 +83,27 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
         args = parser.parse_args(argv)
     except SystemExit as exc:
         return int(exc.code or 0)
+    command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
     try:
-        if args.command == "validate":
-            return _validate(args, out, err)
-        if args.command == "run":
-            return _run(args, out, err)
-        if args.command == "test":
-            return _test(args, out, err)
+        return command(args, out, err)
+    except LocatedError as exc:
+        _report(exc.problems, err)
+        return EXIT_ERRORS
+    except PrimaError as exc:  # a user's error is a message, never a traceback
+        print(f"prima {args.command}: error: {exc}", file=err)
+        return EXIT_ERRORS
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return EXIT_ERRORS
-    return EXIT_USAGE  # pragma: no cover - argparse enforces the choice
 
 
-def _report(exc: LocatedError, err: TextIO) -> None:
-    for problem in exc.problems:
-        print(problem, file=err)
+def _report(problems: Iterable[Problem], to: TextIO) -> None:
+    """One line per problem; under a fault inside an expression, its line and a caret."""
+    for problem in problems:
+        print(problem, file=to)
+        caret = problem.caret()
+        if caret:
+            print(caret, file=to)
 
 
 def _usage(command: str, message: str, err: TextIO) -> int:
@@ -121,12 +127,8 @@ def _scenario_checkers() -> dict[str, Checker]:
     return {SCENARIO_NS: checker(load_scenario), MAP_NS: checker(load_map)}
 
 
-def _profile(path: str | None, err: TextIO) -> RobotProfile | None:
-    try:
-        return load_profile(path) if path else default_profile()
-    except LocatedError as exc:
-        _report(exc, err)
-        return None
+def _profile(path: str | None) -> RobotProfile:
+    return load_profile(path) if path else default_profile()
 
 
 def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -134,18 +136,14 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         files = collect(args.paths)
     except FileNotFoundError as exc:
         return _usage("validate", f"no such file or folder: {exc}", err)
-    profile = _profile(args.robot, err)
-    if profile is None:
-        return EXIT_ERRORS
-    report = validate_paths(files, profile, _scenario_checkers())
+    report = validate_paths(files, _profile(args.robot), _scenario_checkers())
     if not report.files:
         return _usage("validate", f"no PRIMA files in {' '.join(args.paths)}", err)
     if args.format == "json":
         json.dump(report.to_dict(), out, indent=2)
         out.write("\n")
     else:
-        for problem in report.problems:
-            print(problem, file=out)
+        _report(report.problems, out)
         n = len(report.files)
         print(f"{n} file{'s' if n != 1 else ''} checked: {report.errors} error(s), "
               f"{report.warnings} warning(s)", file=err)
@@ -161,12 +159,8 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     for path in (args.scenario, args.fa, args.ea, args.robot):
         if path is not None and not Path(path).is_file():
             return _usage("run", f"no such file: {path}", err)
-    try:
-        lines = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
-                    seed=args.seed, until=args.until).run()
-    except LocatedError as exc:
-        _report(exc, err)
-        return EXIT_ERRORS
+    lines = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
+                seed=args.seed, until=args.until).run()
     text = format_text(lines) if args.format == "text" else format_jsonl(lines)
     if args.out:
         Path(args.out).write_text(text, encoding="utf-8")
@@ -189,7 +183,7 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         try:
             result = check(scenario, update=args.update)
         except LocatedError as exc:
-            _report(exc, err)
+            _report(exc.problems, err)
             failed += 1
             continue
         print(f"{result.status.value:9} {scenario}", file=out)
@@ -198,3 +192,11 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             out.write(result.diff)
     print(f"{len(scenarios)} scenario(s): {failed} failed", file=err)
     return EXIT_ERRORS if failed else EXIT_OK
+
+
+_COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
+    "validate": _validate,
+    "run": _run,
+    "test": _test,
+}
+"""What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

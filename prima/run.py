@@ -13,37 +13,34 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any
 
 from prima.dsl.loader import load_document
 from prima.dsl.model import Document
 from prima.dsl.profile import RobotProfile, default_profile, load_profile
-from prima.errors import DocumentError, PrimaError, Problem, Severity
-from prima.interpreter import AppFailure, Interpreter, Note
-from prima.mediator import AppKind, Event, Mediator, Outcome, Request
-from prima.mediator import Decision, DecisionKind
+from prima.catalog import Catalog, ParamKind
+from prima.errors import AppFailure, DocumentError, PrimaError, Problem, RunError, Severity
+from prima.interpreter import Interpreter, Note, NoteKind
+from prima.mediator import AppKind, Call, Decision, DecisionKind, Event, Mediator, Outcome, Request
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
-from prima.trace import Kind, TraceLine
+from prima.trace import Kind, RecordKind, TraceLine
+from prima.vocab import Value
+
+__all__ = ["MAX_IDLE_ROUNDS", "Run", "spec_from_profile"]
 
 MAX_IDLE_ROUNDS = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
-
-_DECISION_KINDS = {
-    DecisionKind.REQUEST: Kind.REQUEST, DecisionKind.START: Kind.START, DecisionKind.END: Kind.END,
-    DecisionKind.CANCEL: Kind.CANCEL, DecisionKind.SUSPEND: Kind.SUSPEND,
-    DecisionKind.RESUME: Kind.RESUME, DecisionKind.HOLD: Kind.HOLD,
-    DecisionKind.RELEASE: Kind.RELEASE, DecisionKind.UNLOAD: Kind.UNLOAD,
-}
-_SPOKEN = ("text", "prompt", "say")
 
 
 def _check_slot(document: Document, role: AppKind) -> Document:
     """An FA document runs as the FA, an EA document as the EA."""
     if document.kind is not role:
+        kind = document.kind
         raise DocumentError([Problem(document.path, 1, 1, Severity.ERROR,
-                                     f"this is an {document.kind.name} (kind=\"{document.kind.value}\"); "
+                                     f"this is an {kind.name} (kind=\"{kind.value}\"); "
                                      f"it cannot run as the {role.name}")])
     return document
 
@@ -150,7 +147,7 @@ class Run:
             idle = idle + 1 if sim.now() == last else 0
             last = sim.now()
             if idle > MAX_IDLE_ROUNDS:
-                raise RuntimeError(f"run loop stuck at t={last}")
+                raise RunError(f"run loop stuck at t={last}")
         return self.lines
 
     # ------------------------------------------------------------ applications
@@ -164,10 +161,11 @@ class Run:
                                          "each application needs a name of its own")])
         interpreter = Interpreter(document, name, self._port, self.sim,
                                   catalog=self.catalog, robot_events=self.profile.events,
-                                  note=self._note, send=lambda _app, to, text: self.sim.send(to, text))
+                                  note=self._note,
+                                  send=lambda _app, to, text: self.sim.send(to, text))
         app = _App(name, role, interpreter)
-        self._line(Kind.LOAD, app=name, detail={"document": path.name, "role": role.value})
-        self.mediator.register(name, role, interpreter)
+        self._loading = path
+        self.mediator.register(name, role, interpreter)  # its load decision is traced
         self.apps[name] = app
         self._guard(app, interpreter.start)
 
@@ -204,8 +202,8 @@ class Run:
 
     # ------------------------------------------------------------ recording
 
-    def _line(self, kind: Kind, **fields: object) -> None:
-        self.lines.append(TraceLine(self.sim.now(), len(self.lines), kind, **fields))  # type: ignore[arg-type]
+    def _line(self, kind: RecordKind, **fields: Any) -> None:
+        self.lines.append(TraceLine(self.sim.now(), len(self.lines), kind, **fields))
 
     def _decision(self, d: Decision) -> None:
         if d.kind is DecisionKind.FAILURE:
@@ -214,31 +212,32 @@ class Run:
                 self._line(Kind.ERROR, app=d.app, text=d.detail, reason=d.rule.value)
             if app is not None:
                 self._fail(app)
-            return
-        kind = _DECISION_KINDS.get(d.kind)
-        if kind is None:
-            return
-        text = None
-        detail: dict[str, object] = {}
+        elif d.kind is DecisionKind.LOAD:
+            self._line(d.kind, app=d.app, detail={"document": self._loading.name,
+                                                  "role": d.detail.lower()})
+        else:
+            self._decision_line(d)
+
+    def _decision_line(self, d: Decision) -> None:
+        kind = d.kind
+        detail: dict[str, Value] = {}
         if d.command_id is not None:
             detail["command_id"] = d.command_id
-        if kind is Kind.END and d.ab is not None:
+        if kind is DecisionKind.END and d.ab is not None:
             outcome = self._outcomes.pop(d.ab, None)
             if outcome is not None and outcome.values:
                 detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
-        spoken = [str(c.args[k]) for c in d.calls for k in _SPOKEN if c.args.get(k)]
-        if spoken:
-            text = " / ".join(spoken)
-        others = [f"{k}={v}" for c in d.calls for k, v in c.args.items() if k not in _SPOKEN
-                  and not (c.command == "QA" and k == "timeout")]
+        spoken = [words for c in d.calls for words in self.catalog[c.command].spoken(c.args)]
+        text = " / ".join(spoken) if spoken else None
+        others = [arg for c in d.calls for arg in _shown_args(self.catalog, c)]
         if others:
             detail["args"] = " ".join(others)
         if d.calls and d.calls[0].label:
             detail["label"] = d.calls[0].label
         if d.iteration:
             detail["iteration"] = d.iteration
-        if d.detail and kind is not Kind.START:
-            text = text if kind in (Kind.REQUEST, Kind.END) else d.detail
+        if d.detail and kind not in (DecisionKind.START, DecisionKind.REQUEST, DecisionKind.END):
+            text = d.detail
         self._line(kind, app=d.app, ab=d.ab, tree=d.tree, command=d.command, text=text,
                    devices=tuple(d.devices) if d.devices else None,
                    reactive=d.reactive if d.ab is not None else None,
@@ -261,12 +260,23 @@ class Run:
         self._line(Kind.USER, action=action.action.value, text=action.text, detail=detail)
 
     def _note(self, note: Note) -> None:
-        if note.kind == "error":
+        if note.kind is NoteKind.ERROR:
             app = self.apps.get(note.app)
             if app is not None:
-                app.failed = True  # the mediator's own error decision adds nothing
+                app.failed = True  # the mediator's own failure decision adds nothing
             self._line(Kind.ERROR, app=note.app, text=note.text)
-        elif note.kind == "send":
+        elif note.kind is NoteKind.SEND:
             self._line(Kind.SEND, app=note.app, text=note.text, detail=dict(note.detail))
-        elif note.kind == "log":
+        elif note.kind is NoteKind.LOG:
             self._line(Kind.LOG, app=note.app, text=note.text)
+
+
+def _shown_args(catalog: Catalog, call: Call) -> list[str]:
+    """A call's arguments as the trace shows them: ``name=value``, words said aside."""
+    spec = catalog[call.command]
+    out = []
+    for name, value in call.args.items():
+        param = spec.param(name)
+        if param is None or (param.shown and param.kind is not ParamKind.TEXT):
+            out.append(f"{name}={value}")
+    return out

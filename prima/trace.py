@@ -11,45 +11,35 @@ from __future__ import annotations
 
 import enum
 import json
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping
 
-from prima.catalog import Value
+from prima.mediator import DecisionKind
+from prima.vocab import Value
+
+__all__ = ["Kind", "RecordKind", "TraceLine", "device_overlaps", "format_jsonl", "format_text"]
 
 
 class Kind(str, enum.Enum):
-    """What a trace line records."""
+    """What the run itself records. The mediator's decisions are recorded with
+    their own :class:`~prima.mediator.DecisionKind` (``load``, ``unload``,
+    ``request``, ``start``, ``end``, ``cancel``, ``suspend``, ``resume``,
+    ``hold``, ``release``)."""
 
-    LOAD = "load"
-    """An application was loaded."""
-    UNLOAD = "unload"
-    """An application was unloaded (EA swap, end of its environment, or failure)."""
     EVENT = "event"
     """PRIMA posted an event to the applications (a reactive cause)."""
     USER = "user"
     """The user did something (``action``: say, touch, walk, ...)."""
-    REQUEST = "request"
-    """An application sent Commands to the mediator."""
-    START = "start"
-    """An atomic behavior started on the robot's devices."""
-    END = "end"
-    """An atomic behavior ended."""
-    CANCEL = "cancel"
-    """A Command was cancelled before it started."""
-    SUSPEND = "suspend"
-    """A stream lost its devices to another stream and waits."""
-    RESUME = "resume"
-    """A suspended stream continued from its suspended behavior."""
     ERROR = "error"
     """An application failed; it is unloaded, the other goes on."""
-    HOLD = "hold"
-    """A behavior waits because an explicit stream or a block keeps its devices."""
-    RELEASE = "release"
-    """An explicit stream's hold or a block ended."""
     SEND = "send"
     """An application sent a message to the environment's server."""
     LOG = "log"
     """An application's ``<log>`` line."""
+
+
+RecordKind = Kind | DecisionKind
+"""The kind of a trace line: the run's own, or a mediator decision's."""
 
 
 @dataclass(frozen=True)
@@ -58,7 +48,7 @@ class TraceLine:
 
     t: float
     seq: int
-    kind: Kind
+    kind: RecordKind
     app: str | None = None
     ab: int | None = None
     tree: int | None = None
@@ -96,37 +86,43 @@ def _describe_start(line: TraceLine) -> str:
     return " ".join(parts)
 
 
+def _describe_event(line: TraceLine) -> str:
+    data = ", ".join(f"{key}={value!r}" for key, value in sorted(line.detail.items()))
+    return f"event {line.text}" + (f": {data}" if data else "")
+
+
+def _describe_hold(line: TraceLine) -> str:
+    return f"holds {line.command} back ({line.text})" if line.text else f"holds {line.command} back"
+
+
+_DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
+    DecisionKind.LOAD: lambda line: (f"loads {line.detail.get('document', '')} "
+                                     f"({line.detail.get('role', '')})"),
+    DecisionKind.UNLOAD: lambda line: f"unloads the application ({line.reason})",
+    DecisionKind.REQUEST: lambda _line: None,  # requests and ends: in the jsonl trace only
+    DecisionKind.START: lambda line: _describe_start(line),
+    DecisionKind.END: lambda _line: None,
+    DecisionKind.CANCEL: lambda line: f"cancels {line.command}",
+    DecisionKind.SUSPEND: lambda line: f"suspends its stream at {line.command}",
+    DecisionKind.RESUME: lambda line: f"resumes its stream at {line.command}",
+    DecisionKind.HOLD: _describe_hold,
+    DecisionKind.RELEASE: lambda line: f"releases its hold ({line.reason})",
+    DecisionKind.FAILURE: lambda line: f"ERROR: {line.text}",
+    Kind.EVENT: _describe_event,
+    Kind.USER: lambda line: _describe_user(line),
+    Kind.ERROR: lambda line: f"ERROR: {line.text}",
+    Kind.SEND: lambda line: f'sends to {line.detail.get("to")}: "{line.text}"',
+    Kind.LOG: lambda line: f"log: {line.text}",
+}
+"""How each kind of line reads in the text trace (None: not shown there)."""
+
+_REASON_SHOWN = frozenset({DecisionKind.START, DecisionKind.CANCEL, DecisionKind.SUSPEND,
+                           DecisionKind.RESUME, DecisionKind.HOLD})
+"""Kinds whose text line ends with the mediation rule in brackets."""
+
+
 def _describe(line: TraceLine) -> str | None:
-    k = line.kind
-    d = line.detail
-    if k is Kind.LOAD:
-        return f"loads {d.get('document', '')} ({d.get('role', '')})"
-    if k is Kind.UNLOAD:
-        return f"unloads the application ({line.reason})"
-    if k is Kind.EVENT:
-        data = ", ".join(f"{key}={value!r}" for key, value in sorted(d.items()))
-        return f"event {line.text}" + (f": {data}" if data else "")
-    if k is Kind.USER:
-        return _describe_user(line)
-    if k is Kind.START:
-        return _describe_start(line)
-    if k is Kind.CANCEL:
-        return f"cancels {line.command}"
-    if k is Kind.SUSPEND:
-        return f"suspends its stream at {line.command}"
-    if k is Kind.RESUME:
-        return f"resumes its stream at {line.command}"
-    if k is Kind.HOLD:
-        return f"holds {line.command} back ({line.text})" if line.text else f"holds {line.command} back"
-    if k is Kind.RELEASE:
-        return f"releases its hold ({line.reason})"
-    if k is Kind.ERROR:
-        return f"ERROR: {line.text}"
-    if k is Kind.SEND:
-        return f'sends to {d.get("to")}: "{line.text}"'
-    if k is Kind.LOG:
-        return f"log: {line.text}"
-    return None  # request and end lines are in the jsonl trace only
+    return _DESCRIBE[line.kind](line)
 
 
 def _describe_user(line: TraceLine) -> str:
@@ -162,7 +158,7 @@ def format_text(lines: Iterable[TraceLine]) -> str:
         text = _describe(line)
         if text is None:
             continue
-        if line.kind is Kind.START:
+        if line.kind is DecisionKind.START:
             # A feedback loop's iterations show once, and again after an interruption.
             command_id = line.detail.get("command_id")
             repeat = line.detail.get("iteration") and last_start.get(line.app) == command_id
@@ -170,9 +166,9 @@ def format_text(lines: Iterable[TraceLine]) -> str:
             if repeat:
                 continue
         who = "U" if line.kind is Kind.USER else "R"
-        mark = " (o)" if line.kind is Kind.EVENT or (line.kind is Kind.START and line.reactive) else ""
-        why = f"  [{line.reason}]" if line.reason and line.kind in (
-            Kind.START, Kind.CANCEL, Kind.SUSPEND, Kind.RESUME, Kind.HOLD) else ""
+        reactive_start = line.kind is DecisionKind.START and line.reactive
+        mark = " (o)" if line.kind is Kind.EVENT or reactive_start else ""
+        why = f"  [{line.reason}]" if line.reason and line.kind in _REASON_SHOWN else ""
         app = line.app or ""
         rows.append(f"{n:5d} {line.t:8.2f}   {who}   {app:<12} {text}{mark}{why}")
         n += 1
@@ -188,14 +184,14 @@ def device_overlaps(lines: Iterable[TraceLine]) -> list[str]:
     holder: dict[str, TraceLine] = {}
     problems = []
     for line in lines:
-        if line.kind is Kind.START:
+        if line.kind is DecisionKind.START:
             for device in line.devices or ():
                 other = holder.get(device)
                 if other is not None:
                     problems.append(f"t={line.t}: AB {line.ab} ({line.command}) started on "
                                     f"{device} held by AB {other.ab} ({other.command})")
                 holder[device] = line
-        elif line.kind is Kind.END:
+        elif line.kind is DecisionKind.END:
             for device in line.devices or ():
                 if holder.get(device) is not None and holder[device].ab == line.ab:
                     del holder[device]

@@ -63,7 +63,8 @@ def test_robot_profile_files_validate_too() -> None:
     (["validate", "--format", "xml", "apps"], "invalid choice"),
     (["frobnicate"], "invalid choice"),
 ])
-def test_usage_errors_exit_2(argv: list[str], fragment: str, capsys: pytest.CaptureFixture[str]) -> None:
+def test_usage_errors_exit_2(argv: list[str], fragment: str,
+                             capsys: pytest.CaptureFixture[str]) -> None:
     code, _, err = run(*argv)
     assert code == 2
     assert fragment in err + capsys.readouterr().err
@@ -81,7 +82,8 @@ def test_bad_robot_profile_is_reported(tmp_path: Path) -> None:
     assert code == 1 and f"{bad}:1:1: error:" in err
 
 
-@pytest.mark.parametrize("build", [_schema.schema, _schema.verdict_schema], ids=["xmlschema", "libxml2"])
+@pytest.mark.parametrize("build", [_schema.schema, _schema.verdict_schema],
+                         ids=["xmlschema", "libxml2"])
 def test_schemas_are_built_once_per_process(build) -> None:  # type: ignore[no-untyped-def]
     folders = [str(ROOT / "apps"), str(INVALID)]
     run("validate", *folders)

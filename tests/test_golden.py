@@ -16,7 +16,8 @@ pytest_plugins = ["pytester"]
 
 def scenario(tmp_path: Path, message_at: int = 25) -> Path:
     text = (ROOT / "scenarios/examples/office-kidode.xml").read_text()
-    text = text.replace("../../apps", str(ROOT / "apps")).replace("../maps", str(ROOT / "scenarios/maps"))
+    text = text.replace("../../apps", str(ROOT / "apps"))
+    text = text.replace("../maps", str(ROOT / "scenarios/maps"))
     text = text.replace('until="240"', 'until="40"').replace('at="25"', f'at="{message_at}"')
     path = tmp_path / "office.xml"
     path.write_text(text)

@@ -10,6 +10,7 @@ import pytest
 
 from prima.cli import main
 from prima.run import Run
+from prima.mediator import DecisionKind
 from prima.trace import Kind, device_overlaps, format_jsonl, format_text
 
 ROOT = Path(__file__).parents[1]
@@ -33,18 +34,19 @@ def test_same_inputs_give_a_byte_identical_trace(office) -> None:  # type: ignor
 
 
 def test_no_two_behaviors_share_a_device_at_once(office) -> None:  # type: ignore[no-untyped-def]
-    assert [line for line in office if line.kind is Kind.START]
+    assert [line for line in office if line.kind is DecisionKind.START]
     assert device_overlaps(office) == []
 
 
 def test_overlap_checker_catches_an_overlap(office) -> None:  # type: ignore[no-untyped-def]
-    ends = [i for i, line in enumerate(office) if line.kind is Kind.END]
+    ends = [i for i, line in enumerate(office) if line.kind is DecisionKind.END]
     broken = office[: ends[0]] + office[ends[0] + 1:]  # drop one end: its device stays held
     assert device_overlaps(broken)
 
 
 def test_the_navigation_story_runs(office) -> None:  # type: ignore[no-untyped-def]
-    said = [line.text for line in office if line.kind is Kind.START and line.command == "Speak"]
+    said = [line.text for line in office
+            if line.kind is DecisionKind.START and line.command == "Speak"]
     assert said[:2] == ["Come on, let's go.", "I've just got a message."]
     assert "I've just reached the goal." in said
     reached = [line.detail.get("place") for line in office if line.kind is Kind.EVENT
@@ -81,10 +83,10 @@ def test_a_failing_application_is_unloaded_and_the_other_goes_on(tmp_path: Path)
     lines = Run(OFFICE, fa=fa, until=120).run()
     [error] = [line for line in lines if line.kind is Kind.ERROR]
     assert error.app == "broken-fa" and "by zero" in error.text and "broken.pxml:4:" in error.text
-    unload = next(line for line in lines if line.kind is Kind.UNLOAD)
+    unload = next(line for line in lines if line.kind is DecisionKind.UNLOAD)
     assert unload.app == "broken-fa" and unload.seq > error.seq
     later = [line for line in lines if line.seq > error.seq and line.app == "ea3-navigate"
-             and line.kind is Kind.START]
+             and line.kind is DecisionKind.START]
     assert later, "the EA must go on after the FA failed"
     assert not [line for line in lines if line.seq > unload.seq and line.app == "broken-fa"]
 
@@ -114,12 +116,14 @@ def test_failures_outside_mediator_callbacks_unload_too(tmp_path: Path, where: s
     body = (f"<entry>{action}</entry>" if where == "entry" else
             f'<entry><timer name="t" after="5"/></entry><on event="t">{action}</on>')
     fa = tmp_path / "broken.pxml"
-    fa.write_text(f'<pxml xmlns="urn:prima:pxml:1" kind="fa" name="broken-fa"><var name="n" expr="0"/>'
+    fa.write_text('<pxml xmlns="urn:prima:pxml:1" kind="fa" name="broken-fa">'
+                  '<var name="n" expr="0"/>'
                   f'<state id="s" initial="true">{body}</state></pxml>')
     lines = Run(OFFICE, fa=fa, until=30).run()
-    kinds = [(line.kind, line.app) for line in lines if line.kind in (Kind.ERROR, Kind.UNLOAD)]
-    assert kinds == [(Kind.ERROR, "broken-fa"), (Kind.UNLOAD, "broken-fa")]
-    assert any(line.app == "ea3-navigate" and line.kind is Kind.START for line in lines)
+    kinds = [(line.kind, line.app) for line in lines
+             if line.kind in (Kind.ERROR, DecisionKind.UNLOAD)]
+    assert kinds == [(Kind.ERROR, "broken-fa"), (DecisionKind.UNLOAD, "broken-fa")]
+    assert any(line.app == "ea3-navigate" and line.kind is DecisionKind.START for line in lines)
 
 
 def test_documents_must_fit_their_slot_and_have_distinct_names(tmp_path: Path) -> None:
@@ -130,3 +134,30 @@ def test_documents_must_fit_their_slot_and_have_distinct_names(tmp_path: Path) -
         'name="ea3-navigate"', 'name="fa2-follow"'))
     code, _, err = run_cli("run", str(OFFICE), "--ea", str(twin))
     assert code == 1 and "both named 'fa2-follow'" in err
+
+
+ZONES = Path(__file__).parent / "data" / "zones"
+
+
+def test_a_zone_loads_an_ea_and_the_next_zone_swaps_it() -> None:
+    """MISSION.md rule 7: an EA is loaded on entering its environment and replaced in
+    the next one; unloading cancels its waiting work, its running AB is never cut."""
+    lines = Run(ZONES / "swap.xml").run()
+    loads = [(line.app, line.detail["role"]) for line in lines if line.kind is DecisionKind.LOAD]
+    assert loads == [("walker", "fa"), ("hall-greeter", "ea"), ("gallery-guide", "ea")]
+    unload = next(i for i, line in enumerate(lines) if line.kind is DecisionKind.UNLOAD)
+    assert lines[unload].app == "hall-greeter" and lines[unload].reason == "unload"
+    cancelled = [line for line in lines if line.kind is DecisionKind.CANCEL]
+    assert cancelled and all(c.app == "hall-greeter" and c.reason == "unload" for c in cancelled)
+    # the head move running at the swap finishes after it, and nothing shares a device
+    running = [line.ab for line in lines[:unload] if line.kind is DecisionKind.START
+               and line.app == "hall-greeter"][-1]
+    assert any(line.kind is DecisionKind.END and line.ab == running for line in lines[unload:])
+    assert device_overlaps(lines) == []
+    # the new EA works, and the FA drives on into the gallery
+    assert any(line.kind is DecisionKind.START and line.text == "This is the gallery."
+               for line in lines[unload:])
+    reached = [line.detail.get("place") for line in lines if line.kind is Kind.EVENT
+               and line.text == "place-reached"]
+    assert reached[-1] == "gallery"
+    assert [line for line in lines if line.kind is Kind.ERROR] == []

@@ -8,20 +8,21 @@ from the trace records.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
-from typing import Callable
+from collections.abc import Callable
 
 import pytest
 
 from prima.run import Run
+from prima.mediator import DecisionKind
 from prima.trace import Kind, TraceLine, device_overlaps
 
 THESIS = Path(__file__).parents[1] / "scenarios" / "thesis"
 SCENARIOS = sorted(THESIS.glob("*.xml"))
 
 
-@lru_cache(maxsize=None)
+@cache
 def run(name: str) -> tuple[tuple[TraceLine, ...], float, float]:
     r = Run(THESIS / f"{name}.xml")
     lines = tuple(r.run())
@@ -54,7 +55,7 @@ Step = Callable[[TraceLine], bool]
 
 def start(app: str, command: str, text: str = "", **detail: object) -> Step:
     def match(line: TraceLine) -> bool:
-        return (line.kind is Kind.START and line.app == app and line.command == command
+        return (line.kind is DecisionKind.START and line.app == app and line.command == command
                 and (line.text or "").startswith(text)
                 and all(line.detail.get(k) == v for k, v in detail.items()))
     match.__doc__ = f"{app} starts {command} {text!r}"
@@ -83,7 +84,7 @@ def event(name: str, **data: object) -> Step:
     return match
 
 
-def decision(kind: Kind, app: str, command: str, reason: str | None = None) -> Step:
+def decision(kind: DecisionKind, app: str, command: str, reason: str | None = None) -> Step:
     def match(line: TraceLine) -> bool:
         return (line.kind is kind and line.app == app and line.command == command
                 and (reason is None or line.reason == reason))
@@ -116,18 +117,18 @@ def test_sample_03_follows_figure_5_3() -> None:
         start(EA3, "TopologicalMove"),                                 # 4
         user("touch"),                                                 # 6
         start(FA2, "QA", "What's the matter with you?"),               # 7 ...
-        decision(Kind.HOLD, EA3, "TopologicalMove", "keep-channel"),   # ... the robot stopped
+        decision(DecisionKind.HOLD, EA3, "TopologicalMove", "keep-channel"),  # ... it stopped
         says("Come on, follow me."),                                   # 8
         start(FA2, "ActiveSensingHuman", "Where are you?"),            # 9
         event("message", sender="host"),                               # 10
         start(EA3, "StopMoving"),                                      # 11
-        decision(Kind.SUSPEND, FA2, "ActiveSensingHuman", "reactivity"),
+        decision(DecisionKind.SUSPEND, FA2, "ActiveSensingHuman", "reactivity"),
         start(EA3, "Speak", "I've just got a message."),
         start(EA3, "Speak", "I'm Kidode"),                             # 12
         start(EA3, "QA", "Do you have a reply?"),                      # 13
         says("Yes. I see. I'll wait in your room."),                   # 14
         start(EA3, "Speak", "O.K. I'll send your message."),           # 15
-        decision(Kind.RESUME, FA2, "ActiveSensingHuman", "priority"),  # 16: CC kept
+        decision(DecisionKind.RESUME, FA2, "ActiveSensingHuman", "priority"),  # 16: CC kept
         event("human-found"),                                          # 17
         start(FA2, "Speak", "I found you, I'll start following you."),  # 18
         start(FA2, "TrackingHuman"),                                   # 19-20
@@ -135,7 +136,7 @@ def test_sample_03_follows_figure_5_3() -> None:
         start(FA2, "QA", "May I stop following you?"),                 # 24
         says("Yes."),                                                  # 25
         start(FA2, "Speak", "O.K. I'll finish following you."),        # 26
-        decision(Kind.RESUME, EA3, "TopologicalMove"),                 # 27
+        decision(DecisionKind.RESUME, EA3, "TopologicalMove"),                 # 27
         event("place-reached", place="kidode-room"),                   # 28
         start(EA3, "Speak", "I've just reached the goal."),            # 29
     ])
@@ -191,7 +192,7 @@ def test_sample_05_with_an_explicit_stream_keeps_the_video_exchange_together() -
     m = assert_in_order(lines, [
         start(EA2, "QA", "Please tell me a title or an author of a book."),
         *_video_dialogue(fa),
-        decision(Kind.HOLD, EA2, "QA", "stream-hold"),
+        decision(DecisionKind.HOLD, EA2, "QA", "stream-hold"),
         start(fa, "Speak", "The video setting succeeds."),
         start(EA2, "QA", "Please tell me a title or an author of a book."),  # resumes after
         says("The C Primer."),

@@ -4,13 +4,24 @@ One :class:`Interpreter` per loaded application; it talks to the mediator
 through the small :class:`MediatorPort` interface only.
 """
 
-from prima.interpreter.interpreter import (
+from prima.errors import AppFailure
+from prima.interpreter._interpreter import (
     MAX_RAISED,
+    MAX_TIMERS_AT_ONCE,
     MAX_TRANSITIONS,
-    AppFailure,
     Interpreter,
     MediatorPort,
     Note,
+    NoteKind,
 )
 
-__all__ = ["MAX_RAISED", "MAX_TRANSITIONS", "AppFailure", "Interpreter", "MediatorPort", "Note"]
+__all__ = [
+    "MAX_RAISED",
+    "MAX_TIMERS_AT_ONCE",
+    "MAX_TRANSITIONS",
+    "AppFailure",
+    "Interpreter",
+    "MediatorPort",
+    "Note",
+    "NoteKind",
+]

@@ -32,7 +32,8 @@ class Port:
     def close_stream(self, app: str) -> None:
         self.calls.append(("close_stream", None))
 
-    def open_block(self, app: str, *, devices: frozenset[str] | None = None, watchdog: float) -> None:
+    def open_block(self, app: str, *, devices: frozenset[str] | None = None,
+                   watchdog: float) -> None:
         self.calls.append(("open_block", (devices, watchdog)))
 
     def close_block(self, app: str) -> None:
@@ -116,7 +117,8 @@ def test_end_event_requests_follow_the_finished_command() -> None:
 ])
 def test_qa_outcomes_dispatch_to_answer_nomatch_noinput(outcome: dict, expected: str) -> None:
     interp, port, *_ = make(
-        '<var name="goal"/><grammar id="rooms"><choice value="kidode-room">Kidode</choice></grammar>'
+        '<var name="goal"/>'
+        '<grammar id="rooms"><choice value="kidode-room">Kidode</choice></grammar>'
         '<state id="s" initial="true"><entry><chain>q: QA("Where?", rooms, goal)</chain></entry>'
         '<on-answer of="q"><log text="answer {goal}"/><chain>Speak("ok")</chain></on-answer>'
         '<on-nomatch of="q"><log text="nomatch {event.utterance}"/></on-nomatch>'
@@ -134,7 +136,8 @@ def test_streams_and_blocks_open_and_close_with_their_states() -> None:
         '<state id="a" initial="true"><on event="touched"><goto state="b"/></on></state>'
         '<stream hold="12"><state id="b"><on event="touched"><goto state="c"/></on></state>'
         '<state id="c"><on event="touched"><goto state="d"/></on></state></stream>'
-        '<block watchdog="20" devices="camera"><state id="d"><on event="touched"><goto state="a"/></on></state></block>')
+        '<block watchdog="20" devices="camera">'
+        '<state id="d"><on event="touched"><goto state="a"/></on></state></block>')
     for _ in range(4):
         interp.event(Event("touched"))
     assert port.calls == [("open_stream", 12.0), ("close_stream", None),
@@ -181,12 +184,12 @@ def test_number_argument_of_the_wrong_type_is_a_runtime_error() -> None:
         interp.event(Event("touched"))
 
 
-def test_active_sensing_with_a_prompt_also_uses_the_speaker() -> None:
+def test_active_sensing_passes_its_prompt_and_the_default_turn() -> None:
     _i, port, *_ = make('<state id="s" initial="true"><entry>'
                         '<chain>ActiveSensingHuman("Where are you?"), ActiveSensingHuman()</chain>'
                         '</entry></state>')
     with_prompt, without = port.requests[0].calls
-    assert with_prompt.extra_devices == {"speaker"} and without.extra_devices == frozenset()
+    assert with_prompt.args["say"] == "Where are you?" and without.args["say"] == ""
     assert with_prompt.args["turn"] == 90.0
 
 

@@ -302,3 +302,14 @@ def test_ended_commands_are_not_kept_beyond_the_end_grace() -> None:
     h.run()
     intake = h.mediator._intake  # white box: the cache of ended Commands stays bounded
     assert len(intake._recent) <= 1 and len(intake._recent_q) <= 1
+
+
+def test_active_sensing_with_a_prompt_also_occupies_the_speaker() -> None:
+    """The catalog says which arguments add devices; the mediator books them."""
+    h = Harness(duration=5.0)
+    h.app("fa", AppKind.FA)
+    h.mediator.submit(req("fa", call("ActiveSensingHuman", say="Where are you?")))
+    h.mediator.submit(req("fa", call("ActiveSensingHuman", say="")))
+    snap = h.mediator.snapshot()
+    assert snap.running == ((1, ("human-detection", "localization", "locomotion", "speaker")),)
+    assert snap.node(2).devices == ("human-detection", "localization", "locomotion")

@@ -13,8 +13,10 @@ recording it; the run loop then unloads this application alone.
 
 from __future__ import annotations
 
+import enum
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Protocol
+from typing import Any, Protocol, get_args
 
 from prima.dsl.expr import Compiled, Scope, to_text, truthy
 from prima.dsl.model import (
@@ -35,17 +37,11 @@ from prima.dsl.model import (
     StartTimer,
     State,
 )
-from prima.errors import ExecutionError, PrimaError
-from prima.catalog import Catalog, ParamKind, Value
-from prima.mediator import (
-    PREDEFINED_EVENTS,
-    Call,
-    Clock,
-    CommandId,
-    Event,
-    Outcome,
-)
+from prima.catalog import Catalog, ParamKind
+from prima.errors import AppFailure, ExecutionError, PrimaError
+from prima.mediator import Call, Clock, CommandId, Event, Outcome
 from prima.mediator import Request as MediatorRequest
+from prima.vocab import PREDEFINED_EVENTS, Value
 
 MAX_TRANSITIONS = 100
 """State changes allowed while handling one event (a goto loop is an error)."""
@@ -71,20 +67,28 @@ class MediatorPort(Protocol):
     def close_block(self, app: str) -> None: ...
 
 
+class NoteKind(str, enum.Enum):
+    """What an interpreter tells the trace."""
+
+    LOG = "log"
+    """The document's ``<log>`` line."""
+    SEND = "send"
+    """A message the application sent to the environment's server (``detail['to']``)."""
+    STATE = "state"
+    """The application entered a state."""
+    ERROR = "error"
+    """The application failed (the message is located in the document)."""
+
+
 @dataclass(frozen=True)
 class Note:
     """Something an interpreter tells the trace: a log line, a message sent, an error."""
 
     time: float
     app: str
-    kind: str
-    """``log``, ``send``, ``state`` or ``error``."""
+    kind: NoteKind
     text: str
     detail: Mapping[str, Value] = field(default_factory=dict)
-
-
-class AppFailure(Exception):
-    """The application hit a runtime error and must be unloaded (already recorded)."""
 
 
 class _Leave(Exception):
@@ -165,7 +169,7 @@ class Interpreter:
         if self.stopped or call is None or call.label is None:
             return
         values = dict(outcome.values)
-        if call.command != "QA":
+        if not self.catalog[call.command].listens:
             self._guard(lambda: self._dispatch(HandlerKind.END, call.label or "", values,
                                                False, command_id))
             return
@@ -212,8 +216,10 @@ class Interpreter:
                 message = (f"{self.document.path}: more than {MAX_TIMERS_AT_ONCE} timers fired "
                            f"at t={now:g} s (a timer restarting itself with after=\"0\"?)")
                 self._fail(message, ExecutionError(message))
-            self._guard(lambda: self._dispatch(HandlerKind.EVENT, name, {"name": name},
-                                               timer.reactive, None))
+            self._fire(name, timer.reactive)
+
+    def _fire(self, name: str, reactive: bool) -> None:
+        self._guard(lambda: self._dispatch(HandlerKind.EVENT, name, {"name": name}, reactive, None))
 
     # ------------------------------------------------------------ handling
 
@@ -238,7 +244,7 @@ class Interpreter:
     def _fail(self, message: str, exc: Exception) -> None:
         self.stopped = True
         self._timers.clear()
-        self._note(Note(self.clock.now(), self.app, "error", message))
+        self._note(Note(self.clock.now(), self.app, NoteKind.ERROR, message))
         raise AppFailure(message) from exc
 
     def _dispatch(self, kind: HandlerKind, key: str, data: dict[str, Value],
@@ -297,7 +303,7 @@ class Interpreter:
         new = self.document.states[target]
         self._switch_groups(old, new)
         self.state = target
-        self._note(Note(self.clock.now(), self.app, "state", target))
+        self._note(Note(self.clock.now(), self.app, NoteKind.STATE, target))
         self._actions(new.entry, Scope(self.variables, None))
 
     def _switch_groups(self, old: State | None, new: State) -> None:
@@ -318,37 +324,44 @@ class Interpreter:
             self._action(action, scope)
 
     def _action(self, action: Action, scope: Scope) -> None:
-        if isinstance(action, Request):
-            self._request(action, scope)
-        elif isinstance(action, Assign):
-            self.variables[action.name] = self._eval(action.expr, action.loc, scope)
-        elif isinstance(action, If):
-            for cond, body in action.branches:
-                if truthy(self._eval(cond, action.loc, scope)):
-                    self._actions(body, scope)
-                    return
-            self._actions(action.otherwise, scope)
-        elif isinstance(action, Goto):
-            raise _Leave(action.state)
-        elif isinstance(action, Send):
-            text = to_text(self._eval(action.text, action.loc, scope))
-            self._note(Note(self.clock.now(), self.app, "send", text, {"to": action.to}))
-            self._send(self.app, action.to, text)
-        elif isinstance(action, Raise):
-            if len(self._raised) >= MAX_RAISED:
-                raise ExecutionError(f"{self._where(action.loc)}more than {MAX_RAISED} events "
-                                     "raised while handling one event")
-            self._raised.append(action.event)
-        elif isinstance(action, StartTimer):
-            after = self._number(self._eval(action.after, action.loc, scope), "after", action.loc)
-            self._timer_seq += 1
-            self._timers[action.name] = _Timer(self.clock.now() + max(0.0, float(after)),
-                                               action.reactive, self._timer_seq)
-        elif isinstance(action, CancelTimer):
-            self._timers.pop(action.name, None)
-        elif isinstance(action, Log):
-            self._note(Note(self.clock.now(), self.app, "log",
-                            to_text(self._eval(action.text, action.loc, scope))))
+        _ACTIONS[type(action)](self, action, scope)
+
+    def _assign(self, action: Assign, scope: Scope) -> None:
+        self.variables[action.name] = self._eval(action.expr, action.loc, scope)
+
+    def _if(self, action: If, scope: Scope) -> None:
+        for cond, body in action.branches:
+            if truthy(self._eval(cond, action.loc, scope)):
+                self._actions(body, scope)
+                return
+        self._actions(action.otherwise, scope)
+
+    def _goto(self, action: Goto, _scope: Scope) -> None:
+        raise _Leave(action.state)
+
+    def _send_action(self, action: Send, scope: Scope) -> None:
+        text = to_text(self._eval(action.text, action.loc, scope))
+        self._note(Note(self.clock.now(), self.app, NoteKind.SEND, text, {"to": action.to}))
+        self._send(self.app, action.to, text)
+
+    def _raise(self, action: Raise, _scope: Scope) -> None:
+        if len(self._raised) >= MAX_RAISED:
+            raise ExecutionError(f"{self._where(action.loc)}more than {MAX_RAISED} events "
+                                 "raised while handling one event")
+        self._raised.append(action.event)
+
+    def _start_timer(self, action: StartTimer, scope: Scope) -> None:
+        after = self._number(self._eval(action.after, action.loc, scope), "after", action.loc)
+        self._timer_seq += 1
+        self._timers[action.name] = _Timer(self.clock.now() + max(0.0, float(after)),
+                                           action.reactive, self._timer_seq)
+
+    def _cancel_timer(self, action: CancelTimer, _scope: Scope) -> None:
+        self._timers.pop(action.name, None)
+
+    def _log(self, action: Log, scope: Scope) -> None:
+        self._note(Note(self.clock.now(), self.app, NoteKind.LOG,
+                        to_text(self._eval(action.text, action.loc, scope))))
 
     def _request(self, request: Request, scope: Scope) -> None:
         calls = tuple(self._call(c, scope) for c in request.calls)
@@ -365,7 +378,7 @@ class Interpreter:
                 reactive=reactive, follows=follows))
         except PrimaError as exc:  # the mediator refused it (e.g. a Command the robot lacks)
             raise ExecutionError(f"{self._where(request.loc)}request refused: {exc}") from exc
-        for cid, call in zip(ids, request.calls):
+        for cid, call in zip(ids, request.calls, strict=True):
             self._commands[cid] = call
 
     def _call(self, call: CommandCall, scope: Scope) -> Call:
@@ -383,9 +396,7 @@ class Interpreter:
                     param.kind not in (ParamKind.GRAMMAR, ParamKind.VARIABLE):
                 args[param.name] = param.default
         extra = {name: self._eval(c, call.loc, scope) for name, c in call.extra.items()}
-        devices = frozenset({"speaker"}) if call.command == "ActiveSensingHuman" and args.get("say") \
-            else frozenset()
-        return Call(call.command, args, extra, call.label, devices)
+        return Call(call.command, args, extra, call.label)
 
     # ------------------------------------------------------------ values
 
@@ -402,3 +413,20 @@ class Interpreter:
 
     def _where(self, loc: Loc | None) -> str:
         return f"{self.document.path}:{loc.line}:{loc.col}: " if loc else f"{self.document.path}: "
+
+
+_ACTIONS: Mapping[type, Callable[[Interpreter, Any, Scope], None]] = {
+    Request: Interpreter._request,
+    Assign: Interpreter._assign,
+    If: Interpreter._if,
+    Goto: Interpreter._goto,
+    Send: Interpreter._send_action,
+    Raise: Interpreter._raise,
+    StartTimer: Interpreter._start_timer,
+    CancelTimer: Interpreter._cancel_timer,
+    Log: Interpreter._log,
+}
+"""How each kind of action runs: one method per action type."""
+
+if set(_ACTIONS) != set(get_args(Action)):  # pragma: no cover - a new action needs a method
+    raise TypeError(f"Interpreter has no method for {set(get_args(Action)) - set(_ACTIONS)}")

@@ -1,0 +1,138 @@
+"""The architecture, checked: packages meet only through each other's public API.
+
+Walks every import statement in ``prima/`` (including imports inside
+functions) and checks that:
+
+- a module imports another subpackage only as the package itself
+  (``from prima.mediator import Call``), never one of its modules;
+- no module imports a private name (``_name``) or a private module from
+  another package;
+- imports go in the designed direction: the mediator knows neither the DSL,
+  the interpreter nor the simulator; the simulator knows no documents; the DSL
+  knows no mediator;
+- the shared vocabulary modules import nothing heavy;
+- every subpackage names its public API in ``__all__``, and it all exists.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+import prima
+
+ROOT = Path(prima.__file__).parent
+SUBPACKAGES = sorted(p.name for p in ROOT.iterdir() if (p / "__init__.py").exists())
+NEUTRAL = ("prima.vocab", "prima.catalog", "prima.errors")
+HEAVY = {"lxml", "lark", "pymunk", "xmlschema"}
+
+FORBIDDEN: dict[str, set[str]] = {
+    "prima.mediator": {"prima.dsl", "prima.interpreter", "prima.sim", "prima.run", "prima.trace",
+                       "prima.cli", "prima.xmlio"},
+    "prima.sim": {"prima.dsl", "prima.interpreter", "prima.run", "prima.trace", "prima.cli"},
+    "prima.dsl": {"prima.mediator", "prima.interpreter", "prima.sim", "prima.run",
+                  "prima.trace", "prima.cli"},
+    "prima.interpreter": {"prima.sim", "prima.run", "prima.trace", "prima.cli"},
+}
+"""Importer unit -> PRIMA units it must not import."""
+
+ONLY: dict[str, set[str]] = {
+    "prima.vocab": set(),
+    "prima.errors": set(),
+    "prima.catalog": {"prima.vocab"},
+    "prima.xmlio": {"prima.errors"},
+}
+"""Shared modules -> the only PRIMA units they may import."""
+
+
+@dataclass(frozen=True)
+class Import:
+    importer: str
+    line: int
+    module: str
+    names: tuple[str, ...]
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports() -> list[Import]:
+    found = []
+    for path in sorted(ROOT.rglob("*.py")):
+        name = _module_name(path)
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                found += [Import(name, node.lineno, a.name, ()) for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                found.append(Import(name, node.lineno, node.module,
+                                    tuple(a.name for a in node.names)))
+    return found
+
+
+IMPORTS = _imports()
+
+
+def unit(module: str) -> str:
+    """The package a module belongs to, or the top-level module itself."""
+    parts = module.split(".")
+    if parts[0] != "prima" or len(parts) == 1:
+        return module
+    return "prima." + parts[1]
+
+
+def test_the_walk_sees_the_packages_and_their_imports() -> None:
+    assert {"dsl", "interpreter", "mediator", "sim"} <= set(SUBPACKAGES)
+    assert any(i.importer == "prima.run" and i.module == "prima.mediator" for i in IMPORTS)
+
+
+def test_packages_are_imported_only_through_their_public_api() -> None:
+    bad = []
+    for i in IMPORTS:
+        target = unit(i.module)
+        if not i.module.startswith("prima.") or target == unit(i.importer):
+            continue
+        if target.split(".")[1] in SUBPACKAGES and i.module != target:
+            bad.append(f"{i.importer}:{i.line} imports {i.module} (use {target})")
+        if any(part.startswith("_") for part in i.module.split(".")):
+            bad.append(f"{i.importer}:{i.line} imports the private module {i.module}")
+        bad += [f"{i.importer}:{i.line} imports the private name {n} from {i.module}"
+                for n in i.names if n.startswith("_")]
+    assert bad == []
+
+
+def test_imports_go_in_the_designed_direction() -> None:
+    bad = []
+    for i in IMPORTS:
+        src, target = unit(i.importer), unit(i.module)
+        if not target.startswith("prima.") or target == src:
+            continue
+        if target in FORBIDDEN.get(src, ()) or (src in ONLY and target not in ONLY[src]):
+            bad.append(f"{i.importer}:{i.line} imports {i.module}")
+    assert bad == []
+
+
+@pytest.mark.parametrize("module", sorted(NEUTRAL))
+def test_the_shared_vocabulary_imports_nothing_heavy(module: str) -> None:
+    heavy = [i for i in IMPORTS if i.importer == module and i.module.split(".")[0] in HEAVY]
+    assert heavy == []
+
+
+@pytest.mark.parametrize("package", SUBPACKAGES)
+def test_every_package_names_its_public_api(package: str) -> None:
+    module = importlib.import_module(f"prima.{package}")
+    names = getattr(module, "__all__", None)
+    assert names, f"prima.{package} has no __all__"
+    assert [n for n in names if not hasattr(module, n)] == []
+    assert [n for n in names if n.startswith("_")] == []
+
+
+def test_the_mediator_is_one_class_without_mixins() -> None:
+    from prima.mediator import Mediator
+
+    assert Mediator.__mro__ == (Mediator, object)
