@@ -17,7 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from prima.dsl.validate import collect, validate_paths
+from prima.dsl import collect, validate_paths
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = sorted((ROOT / "apps").rglob("*.pxml")) + sorted((ROOT / "tests/dsl/data/valid").glob("*.pxml"))

@@ -14,8 +14,7 @@ from pathlib import Path
 from typing import Callable, Sequence, TextIO
 
 from prima import __version__
-from prima.dsl.profile import RobotProfile, default_profile, load_profile
-from prima.dsl.validate import Checker, collect, validate_paths
+from prima.dsl import Checker, RobotProfile, collect, default_profile, load_profile, validate_paths
 from prima.errors import LocatedError, Problem
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2

@@ -17,9 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from prima.dsl.loader import load_document
-from prima.dsl.model import Document
-from prima.dsl.profile import RobotProfile, default_profile, load_profile
+from prima.dsl import Document, RobotProfile, default_profile, load_document, load_profile
 from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import AppKind, Event, Mediator, Outcome, Request

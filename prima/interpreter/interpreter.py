@@ -16,12 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Mapping, Protocol
 
-from prima.dsl.expr import Compiled, Scope, to_text, truthy
-from prima.dsl.model import (
+from prima.dsl import (
     Action,
     Assign,
     CancelTimer,
     CommandCall,
+    Compiled,
     Document,
     Goto,
     Handler,
@@ -31,9 +31,12 @@ from prima.dsl.model import (
     Log,
     Raise,
     Request,
+    Scope,
     Send,
     StartTimer,
     State,
+    to_text,
+    truthy,
 )
 from prima.errors import ExecutionError, PrimaError
 from prima.catalog import Catalog, ParamKind, Value

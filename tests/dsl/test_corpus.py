@@ -17,7 +17,7 @@ from lxml import etree
 
 from prima.xmlio import schema, verdict_schema
 from prima.xmlio import MAX_BYTES, _parser, parse_xml
-from prima.dsl.validate import check_file
+from prima.dsl import check_file
 from prima.errors import DocumentError, Problem, Severity
 
 DATA = Path(__file__).parent / "data"

@@ -6,16 +6,16 @@ import re
 
 import pytest
 
-from prima.dsl.expr import (
-    MAX_TEXT,
+from prima.dsl import (
     Scope,
-    SyntaxFault,
     compile_expression,
     compile_template,
     parse_chain,
     parser,
 )
+from prima.dsl._expr import SyntaxFault
 from prima.errors import ExecutionError
+from prima.vocab import MAX_TEXT
 
 SCOPE = Scope({"a": 2, "name": "Ann", "ch": 12, "nothing": None},
               {"name": "message", "text": "hi", "sender": "kidode"})

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from prima.dsl.loader import load_document
+from prima.dsl import load_document
 
 DOC = b"""<pxml xmlns="urn:prima:pxml:1" kind="fa" name="g">
   <grammar id="rooms">

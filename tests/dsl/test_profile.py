@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from prima.dsl.profile import default_profile, parse_profile
+from prima.dsl import default_profile, parse_profile
 from prima.errors import DocumentError
 from prima.catalog import STANDARD_DEVICES, Priority
 

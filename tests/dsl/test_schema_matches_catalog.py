@@ -6,7 +6,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from prima.dsl.commands import element_name
+from prima.dsl import element_name
 from prima.catalog import STANDARD_COMMANDS
 
 XSD = Path(__file__).parents[2] / "schemas" / "pxml.xsd"

@@ -1,6 +1,6 @@
 """The validated form of a PXML document, as the interpreter runs it.
 
-Every expression is already compiled (:class:`~prima.dsl.expr.Compiled`);
+Every expression is already compiled (:class:`~prima.dsl.Compiled`);
 every reference (states, Commands, grammars, variables, events) is known to
 exist. Objects are frozen: one loaded document can back many runs.
 """
@@ -12,7 +12,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Mapping, Union
 
-from prima.dsl.expr import Compiled
+from prima.dsl._expr import Compiled
 from prima.mediator.interface import AppKind, RunningOrder
 
 

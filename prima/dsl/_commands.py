@@ -1,6 +1,6 @@
 """Binding Command arguments, from the element form and from the chain notation.
 
-Both forms end in the same :class:`~prima.dsl.model.CommandCall`: arguments
+Both forms end in the same :class:`~prima.dsl.CommandCall`: arguments
 are compiled according to the parameter's kind (text is a template, numbers
 are literals or expressions, places and gestures are bare names or
 ``{expression}``), then checked against the Command's signature.
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Callable
 from lxml import etree
 
 from prima.xmlio import local_name
-from prima.dsl.expr import (
+from prima.dsl._expr import (
     ChainArg,
     ChainStep,
     Compiled,
@@ -27,12 +27,12 @@ from prima.dsl.expr import (
     span,
     string_literal,
 )
-from prima.dsl.model import CommandCall
+from prima.dsl._model import CommandCall
 from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
 from prima.mediator.interface import AppKind
 
 if TYPE_CHECKING:
-    from prima.dsl.loader import Builder, Spot
+    from prima.dsl._loader import Builder, Spot
 
 _COMPUTED = re.compile(r"^\{(.*)\}$", re.S)
 COMMANDS_HINT = "; see docs/pxml.md for the Commands"

@@ -15,10 +15,10 @@ from typing import Callable, Iterable, Mapping
 from lxml import etree
 
 from prima.xmlio import parse_xml, read_source
-from prima.dsl.loader import NAMESPACE as PXML_NS
-from prima.dsl.loader import check_parsed
-from prima.dsl.profile import NAMESPACE as ROBOT_NS
-from prima.dsl.profile import RobotProfile, profile_from_xml
+from prima.dsl._loader import NAMESPACE as PXML_NS
+from prima.dsl._loader import check_parsed
+from prima.dsl._profile import NAMESPACE as ROBOT_NS
+from prima.dsl._profile import RobotProfile, profile_from_xml
 from prima.errors import DocumentError, Problem, Severity
 
 

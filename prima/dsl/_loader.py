@@ -1,7 +1,7 @@
 """Loading a PXML document: secure parse, then structure (XSD), then meaning.
 
 :func:`check_document` returns every problem (errors and warnings);
-:func:`load_document` returns a :class:`~prima.dsl.model.Document` or raises
+:func:`load_document` returns a :class:`~prima.dsl.Document` or raises
 :class:`~prima.errors.DocumentError`. Every problem is located at
 ``file:line:col``; inside an expression, at the character of the fault.
 """
@@ -18,9 +18,9 @@ from lxml import etree
 
 from prima.xmlio import validate
 from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
-from prima.dsl.commands import bind_element, bind_step, compile_attribute, element_name
-from prima.dsl.expr import Compiled, SyntaxFault, compile_expression, compile_template, parse_chain
-from prima.dsl.model import (
+from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
+from prima.dsl._expr import Compiled, SyntaxFault, compile_expression, compile_template, parse_chain
+from prima.dsl._model import (
     Action,
     Assign,
     AtomicBlock,
@@ -46,7 +46,7 @@ from prima.dsl.model import (
     Variable,
     words,
 )
-from prima.dsl.profile import STANDARD_GESTURES, RobotProfile, default_profile
+from prima.dsl._profile import STANDARD_GESTURES, RobotProfile, default_profile
 from prima.errors import DocumentError, Problem, Severity
 from prima.catalog import ParamKind
 from prima.mediator.core import MediatorConfig
