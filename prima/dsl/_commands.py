@@ -29,7 +29,7 @@ from prima.dsl._expr import (
 )
 from prima.dsl._model import CommandCall
 from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
-from prima.mediator.interface import AppKind
+from prima.vocab import AppKind
 
 if TYPE_CHECKING:
     from prima.dsl._loader import Builder, Spot

@@ -18,13 +18,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from prima.errors import ExecutionError
-from prima.catalog import Value
-
-MAX_TEXT = 10_000
-"""Longest string an expression may build (untrusted documents stay bounded)."""
-
-MAX_NUMBER = 2.0 ** 53
-"""Largest magnitude of a number (beyond it, integers lose exactness anyway)."""
+from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
 
 
 class SyntaxFault(Exception):

@@ -49,12 +49,9 @@ from prima.dsl._model import (
 from prima.dsl._profile import STANDARD_GESTURES, RobotProfile, default_profile
 from prima.errors import DocumentError, Problem, Severity
 from prima.catalog import ParamKind
-from prima.mediator.core import MediatorConfig
-from prima.mediator.interface import PREDEFINED_EVENTS, AppKind, RunningOrder
+from prima.vocab import MAX_BLOCK_WATCHDOG, MAX_STREAM_HOLD, PREDEFINED_EVENTS, AppKind, RunningOrder
 
 NAMESPACE = "urn:prima:pxml:1"
-MAX_STREAM_HOLD = MediatorConfig.max_stream_hold
-MAX_BLOCK_WATCHDOG = MediatorConfig.max_block_watchdog
 _NS = f"{{{NAMESPACE}}}"
 
 Spot = Tuple[etree._Element, Optional[str], int]

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Mapping, Union
 
 from prima.dsl._expr import Compiled
-from prima.mediator.interface import AppKind, RunningOrder
+from prima.vocab import AppKind, RunningOrder
 
 
 @dataclass(frozen=True)

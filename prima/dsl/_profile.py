@@ -27,7 +27,7 @@ from prima.catalog import (
     ParamKind,
     Priority,
 )
-from prima.mediator.interface import PREDEFINED_EVENTS
+from prima.vocab import PREDEFINED_EVENTS
 
 NAMESPACE = "urn:prima:robot:1"
 DEFAULT_PROFILE = "home-robot.xml"
