@@ -2,8 +2,9 @@
 
 Nothing here calls Python's ``eval`` or ``exec``: a parse tree becomes a tree
 of small functions over a :class:`Scope`. Strings are templates
-(``"Hello {name}"``). Syntax faults raise :class:`SyntaxFault` with the
-character index of the fault, which the loader turns into ``file:line:col``.
+(``"Hello {name}"``). Syntax faults raise :class:`~prima.errors.ExpressionError`
+with the character index of the fault, which the loader turns into
+``file:line:col``.
 """
 
 from __future__ import annotations
@@ -17,17 +18,8 @@ from typing import Callable, Mapping
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from prima.errors import ExecutionError
+from prima.errors import ExecutionError, ExpressionError
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
-
-
-class SyntaxFault(Exception):
-    """A fault in an expression or chain, at a character index of its source."""
-
-    def __init__(self, index: int, message: str) -> None:
-        super().__init__(message)
-        self.index = index
-        self.message = message
 
 
 @dataclass
@@ -209,34 +201,43 @@ _OPERATORS = {"COMP_OP", "ADD_OP", "MUL_OP", "AND", "OR"}
 _VALUE_START = {"NUMBER", "STRING", "NAME", "LPAR", "MINUS", "TRUE", "FALSE", "NULL", "NOT"}
 
 
-def _syntax_fault(exc: UnexpectedInput, text: str, what: str) -> SyntaxFault:
+def _syntax_fault(exc: UnexpectedInput, text: str, what: str) -> ExpressionError:
+    """Lark's parse error as a fault in ``text``, worded for a document's author."""
     index = exc.pos_in_stream if exc.pos_in_stream is not None else len(text)
     if isinstance(exc, UnexpectedCharacters):
-        ch = text[index] if index < len(text) else ""
-        pair = text[index : index + 2]
-        if pair in ("&&", "||"):
-            hint = "and" if pair == "&&" else "or"
-            return SyntaxFault(index, f"{what}: '{pair}' is not an operator; write '{hint}'")
-        if ch == "!":
-            return SyntaxFault(index, f"{what}: '!' is not an operator; write 'not' (or '!=')")
-        if ch in "\"'":
-            return SyntaxFault(index, f"{what}: string is not closed")
-        return SyntaxFault(index, f"{what}: unexpected character {ch!r}")
-    if isinstance(exc, UnexpectedEOF) or (
+        message = _bad_character(text, index)
+    elif isinstance(exc, UnexpectedEOF) or (
         isinstance(exc, UnexpectedToken) and exc.token.type == "$END"
     ):
-        return SyntaxFault(len(text), f"{what}: ends too early; expected {_expected(exc)}")
-    if isinstance(exc, UnexpectedToken):
-        tok = exc.token
-        if tok.type == "EQUAL" and what == "expression":
-            return SyntaxFault(index, f"{what}: '=' assigns; write '==' to compare")
-        if tok.type == "NAME" and "COMMA" in exc.expected and what == "chain":
-            return SyntaxFault(index, f"{what}: missing ',' between Commands before {tok.value!r}")
-        if what == "expression" and exc.expected & _OPERATORS:
-            return SyntaxFault(index, f"{what}: unexpected {str(tok)!r} after a complete value; "
-                                      "expected an operator or the end")
-        return SyntaxFault(index, f"{what}: unexpected {str(tok)!r}; expected {_expected(exc)}")
-    return SyntaxFault(index, f"{what}: {exc}")
+        index, message = len(text), f"ends too early; expected {_expected(exc)}"
+    elif isinstance(exc, UnexpectedToken):
+        message = _bad_token(exc, what)
+    else:
+        message = str(exc)
+    return ExpressionError(index, f"{what}: {message}", text)
+
+
+def _bad_character(text: str, index: int) -> str:
+    pair = text[index : index + 2]
+    if pair in ("&&", "||"):
+        return f"'{pair}' is not an operator; write '{'and' if pair == '&&' else 'or'}'"
+    ch = text[index : index + 1]
+    if ch == "!":
+        return "'!' is not an operator; write 'not' (or '!=')"
+    if ch in "\"'":
+        return "string is not closed"
+    return f"unexpected character {ch!r}"
+
+
+def _bad_token(exc: UnexpectedToken, what: str) -> str:
+    tok = exc.token
+    if tok.type == "EQUAL" and what == "expression":
+        return "'=' assigns; write '==' to compare"
+    if tok.type == "NAME" and "COMMA" in exc.expected and what == "chain":
+        return f"missing ',' between Commands before {tok.value!r}"
+    if what == "expression" and exc.expected & _OPERATORS:
+        return f"unexpected {str(tok)!r} after a complete value; expected an operator or the end"
+    return f"unexpected {str(tok)!r}; expected {_expected(exc)}"
 
 
 def _expected(exc: UnexpectedInput) -> str:
@@ -259,15 +260,12 @@ def _parse(text: str, start: str) -> Tree:
 def compile_expression(text: str) -> Compiled:
     """Parse and compile one expression (e.g. a ``cond`` attribute)."""
     if not text.strip():
-        raise SyntaxFault(0, "expression: empty")
+        raise ExpressionError(0, "expression: empty", text)
     return _Compiler(text).compile(_parse(text, "expression"))
 
 
-def compile_template(text: str, offset: int = 0) -> Compiled:
-    """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``).
-
-    ``offset`` is added to reported fault indexes.
-    """
+def compile_template(text: str) -> Compiled:
+    """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``)."""
     parts: list[str | Compiled] = []
     i, n = 0, len(text)
     literal: list[str] = []
@@ -277,20 +275,20 @@ def compile_template(text: str, offset: int = 0) -> Compiled:
             literal.append(ch)
             i += 2
         elif ch == "}":
-            raise SyntaxFault(offset + i, "text: '}' without '{' (write '}}' for a brace)")
+            raise ExpressionError(i, "text: '}' without '{' (write '}}' for a brace)", text)
         elif ch == "{":
             end = _closing_brace(text, i + 1)
             if end < 0:
-                raise SyntaxFault(offset + i, "text: '{' is not closed (write '{{' for a brace)")
+                raise ExpressionError(i, "text: '{' is not closed (write '{{' for a brace)", text)
             if literal:
                 parts.append("".join(literal))
                 literal = []
             inner = text[i + 1 : end]
             try:
                 sub = compile_expression(inner)
-            except SyntaxFault as fault:
-                raise SyntaxFault(offset + i + 1 + fault.index, fault.message) from None
-            parts.append(_shift(sub, offset + i + 1))
+            except ExpressionError as fault:
+                raise ExpressionError(i + 1 + fault.index, fault.message, text) from None
+            parts.append(_shift(sub, i + 1))
             i = end + 1
         else:
             literal.append(ch)
@@ -364,7 +362,7 @@ class ChainStep:
 def parse_chain(text: str) -> list[ChainStep]:
     """Parse a command chain into steps; arguments are bound later."""
     if not text.strip():
-        raise SyntaxFault(0, "chain: empty")
+        raise ExpressionError(0, "chain: empty", text)
     tree = _parse(text, "chain")
     steps = []
     for step in tree.children:
@@ -461,7 +459,7 @@ class _Compiler:
         if kind == "number":
             raw = str(ch[0])
             if len(raw) > 20:
-                raise SyntaxFault(ch[0].start_pos, "expression: number too long")
+                raise ExpressionError(ch[0].start_pos, "expression: number too long", self.source)
             num: Value = float(raw) if "." in raw else int(raw)
             return (lambda _s: num), True
         if kind == "string":
@@ -481,8 +479,9 @@ class _Compiler:
         if kind == "field":
             base, attr = str(ch[0]), str(ch[1])
             if base != "event":
-                raise SyntaxFault(ch[0].start_pos,
-                                  f"expression: only 'event' has fields ('{base}.{attr}')")
+                raise ExpressionError(ch[0].start_pos,
+                                      f"expression: only 'event' has fields ('{base}.{attr}')",
+                                      self.source)
             self.events.append(ch[0].start_pos)
             return (lambda s: None if s.event is None else s.event.get(attr)), False
         if kind == "call":
@@ -503,7 +502,8 @@ class _Compiler:
             if kind == "binary":
                 return (lambda s: _arith(op, fa(s), fb(s))), False
             return (lambda s: _compare(op, fa(s), fb(s))), False
-        raise SyntaxFault(_start(node), f"expression: unsupported construct {kind!r}")
+        raise ExpressionError(_start(node), f"expression: unsupported construct {kind!r}",
+                              self.source)
 
     def _call(self, ch: list) -> tuple[Fn, bool]:
         name_tok, *arg_nodes = ch
@@ -511,12 +511,14 @@ class _Compiler:
         name = str(name_tok)
         if name not in FUNCTIONS:
             known = ", ".join(sorted(FUNCTIONS))
-            raise SyntaxFault(name_tok.start_pos, f"expression: unknown function '{name}' (known: {known})")
+            raise ExpressionError(name_tok.start_pos,
+                                  f"expression: unknown function '{name}' (known: {known})",
+                                  self.source)
         lo, hi, impl, _doc = FUNCTIONS[name]
         if not lo <= len(arg_nodes) <= hi:
             want = str(lo) if lo == hi else f"{lo} to {hi}"
-            raise SyntaxFault(name_tok.start_pos,
-                              f"expression: {name}() takes {want} argument(s), got {len(arg_nodes)}")
+            raise ExpressionError(name_tok.start_pos, f"expression: {name}() takes {want} "
+                                                      f"argument(s), got {len(arg_nodes)}", self.source)
         fns = [self._node(a)[0] for a in arg_nodes]
         return (lambda s: impl(*(f(s) for f in fns))), False
 
@@ -528,9 +530,9 @@ class _Compiler:
             decoded, index_map = body, None
         try:
             t = compile_template(decoded)
-        except SyntaxFault as fault:
+        except ExpressionError as fault:
             at = index_map[fault.index] if index_map and fault.index < len(index_map) else fault.index
-            raise SyntaxFault(start + 1 + at, fault.message) from None
+            raise ExpressionError(start + 1 + at, fault.message, self.source) from None
         shift = start + 1
         for n, i in t.names:
             self.names.add((n, shift + (index_map[i] if index_map and i < len(index_map) else i)))

@@ -19,7 +19,7 @@ from lxml import etree
 from prima.xmlio import validate
 from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
 from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
-from prima.dsl._expr import Compiled, SyntaxFault, compile_expression, compile_template, parse_chain
+from prima.dsl._expr import Compiled, compile_expression, compile_template, parse_chain
 from prima.dsl._model import (
     Action,
     Assign,
@@ -47,7 +47,7 @@ from prima.dsl._model import (
     words,
 )
 from prima.dsl._profile import STANDARD_GESTURES, RobotProfile, default_profile
-from prima.errors import DocumentError, Problem, Severity
+from prima.errors import DocumentError, ExpressionError, Problem, Severity
 from prima.catalog import ParamKind
 from prima.vocab import MAX_BLOCK_WATCHDOG, MAX_STREAM_HOLD, PREDEFINED_EVENTS, AppKind, RunningOrder
 
@@ -102,9 +102,16 @@ class Builder:
     def loc(self, spot: Spot) -> Loc:
         return Loc(*self.position(spot))
 
-    def report(self, spot: Spot, message: str, severity: Severity) -> None:
+    def report(self, spot: Spot, message: str, severity: Severity, *, caret: bool = False) -> None:
+        """A problem at ``spot``; with ``caret``, it carries its source line too."""
         line, col = self.position(spot)
-        self.problems.append(Problem(self.doc.name, line, col, severity, message))
+        source = self.doc.where.line_text(line) if caret else ""
+        self.problems.append(Problem(self.doc.name, line, col, severity, message, source))
+
+    def fault(self, spot: Spot, fault: ExpressionError) -> None:
+        """An expression's fault, located at its character in the expression written at ``spot``."""
+        el, where, base = spot
+        self.report((el, where, base + fault.index), fault.message, Severity.ERROR, caret=True)
 
     def error(self, spot: Spot, message: str) -> None:
         self.report(spot, message, Severity.ERROR)
@@ -114,12 +121,12 @@ class Builder:
 
     def compile(self, spot: Spot, make: Callable[[], Compiled]) -> Compiled | None:
         """Compile with ``make``; faults and references are located from ``spot``."""
-        el, where, base = spot
         try:
             compiled = make()
-        except SyntaxFault as fault:
-            self.error((el, where, base + fault.index), fault.message)
+        except ExpressionError as fault:
+            self.fault(spot, fault)
             return None
+        el, where, base = spot
         for name, index in compiled.names:
             self.refs.variables.append((name, (el, where, base + index)))
         if compiled.event_uses and not self.in_handler:
@@ -474,8 +481,8 @@ class Builder:
             text = el.text or ""
             try:
                 steps = parse_chain(text)
-            except SyntaxFault as fault:
-                self.error((el, "#text", fault.index), fault.message)
+            except ExpressionError as fault:
+                self.fault((el, "#text", 0), fault)
                 return None
             for step in steps:
                 call = bind_step(self, el, text, step)
