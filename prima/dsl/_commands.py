@@ -9,7 +9,7 @@ are literals or expressions, places and gestures are bare names or
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from lxml import etree
 
@@ -33,6 +33,9 @@ from prima.vocab import AppKind
 
 if TYPE_CHECKING:
     from prima.dsl._loader import Builder, Spot
+
+    Extra = tuple[str, Spot, Callable[[], Compiled | None]]
+    """An additional argument as written: its name, where, and how to compile its value."""
 
 _COMPUTED = re.compile(r"^\{(.*)\}$", re.S)
 COMMANDS_HINT = "; see docs/pxml.md for the Commands"
@@ -202,8 +205,19 @@ def _params_hint(spec: CommandSpec) -> str:
 
 def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label_spot: Spot,
             args: dict[str, Compiled], spots: dict[str, Spot],
-            extras: list[tuple[str, Spot, Callable[[], Compiled | None]]]) -> CommandCall:
+            extras: Sequence[Extra]) -> CommandCall:
     """Checks shared by both forms, then the :class:`CommandCall`."""
+    _check_signature(b, spec, where, spots)
+    extra = _extras(b, spec, extras)
+    grammar, into = _names(b, spec, args, spots)
+    call = CommandCall(spec.name, args, extra, label, b.loc(where), grammar, into)
+    if label is not None:
+        b.add_label(label, call, label_spot)
+    return call
+
+
+def _check_signature(b: Builder, spec: CommandSpec, where: Spot, spots: dict[str, Spot]) -> None:
+    """Who may use the Command, and whether the arguments it needs are given."""
     if spec.robot_specific and b.kind is AppKind.EA:
         b.error(where, f"only an FA may use the robot-specific Command '{spec.name}'")
     for param in spec.params:
@@ -214,6 +228,10 @@ def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label
         if len(present) != 1:
             got = f" (got {', '.join(present)})" if present else ""
             b.error(where, f"{spec.name} needs exactly one of {' or '.join(sorted(group))}{got}")
+
+
+def _extras(b: Builder, spec: CommandSpec, extras: Sequence[Extra]) -> dict[str, Compiled]:
+    """The additional arguments this robot's profile declares for the Command (FA only)."""
     extra: dict[str, Compiled] = {}
     declared = b.profile.extras.get(spec.name, {})
     for name, spot, make in extras:
@@ -225,21 +243,33 @@ def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label
                           f"(declared: {known})")
         else:
             _put(extra, name, make())
-    symbols = {name: str(c.evaluate(_NO_SCOPE)) for name, c in args.items()
-               if c.constant and (p := spec.param(name)) is not None and p.kind in SYMBOLIC_KINDS}
-    for name, value in symbols.items():
-        if spec.param(name).kind is ParamKind.GESTURE:  # type: ignore[union-attr]
-            b.check_gesture(value, spots[name])
-    grammar = into = None
-    if spec.name == "QA":
-        args.pop("grammar", None)
-        args.pop("into", None)
-        grammar, into = symbols.get("grammar"), symbols.get("into")
-        if grammar:
-            b.need_grammar(grammar, spots["grammar"])
-        if into:
-            b.need_variable(into, spots["into"])
-    call = CommandCall(spec.name, args, extra, label, b.loc(where), grammar, into)
-    if label is not None:
-        b.add_label(label, call, label_spot)
-    return call
+    return extra
+
+
+_DOCUMENT_NAMES = frozenset({ParamKind.GRAMMAR, ParamKind.VARIABLE})
+"""Kinds of argument that name something the document declares (a Q&A's grammar
+and variable): they are checked against the document, not passed to the robot."""
+
+
+def _names(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
+           spots: dict[str, Spot]) -> tuple[str | None, str | None]:
+    """Check the names written as arguments; take out the grammar and the variable.
+
+    A gesture must be one the robot knows; a grammar and a variable must be
+    declared in the document. Those two leave ``args``: they become the call's
+    :attr:`~CommandCall.grammar` and :attr:`~CommandCall.into`.
+    """
+    named: dict[ParamKind, str] = {}
+    for param in spec.params:
+        compiled = args.pop(param.name, None) if param.kind in _DOCUMENT_NAMES else args.get(param.name)
+        if compiled is None or not compiled.constant or param.kind not in SYMBOLIC_KINDS:
+            continue
+        value = str(compiled.evaluate(_NO_SCOPE))
+        named[param.kind] = value
+        if param.kind is ParamKind.GESTURE:
+            b.check_gesture(value, spots[param.name])
+        elif value and param.kind is ParamKind.GRAMMAR:
+            b.need_grammar(value, spots[param.name])
+        elif value and param.kind is ParamKind.VARIABLE:
+            b.need_variable(value, spots[param.name])
+    return named.get(ParamKind.GRAMMAR), named.get(ParamKind.VARIABLE)

@@ -523,7 +523,7 @@ class Builder:
             call = self.labels.get(key)
             if call is None:
                 self.error(spot, f"no Command has the id '{key}'")
-            elif kind is not HandlerKind.END and call.command != "QA":
+            elif kind is not HandlerKind.END and not self.catalog[call.command].listens:
                 self.error(spot, f"<{kind.value}> needs a Q&A, but '{key}' is a {call.command}")
 
     def _check_event(self, name: str, spot: Spot, reactive: bool | None,
