@@ -262,6 +262,8 @@ def _names(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
     named: dict[ParamKind, str] = {}
     for param in spec.params:
         compiled = args.pop(param.name, None) if param.kind in _DOCUMENT_NAMES else args.get(param.name)
+        if compiled is not None and not compiled.constant and param.kind in _DOCUMENT_NAMES:
+            b.error(spots[param.name], f"'{param.name}' must be a bare name")
         if compiled is None or not compiled.constant or param.kind not in SYMBOLIC_KINDS:
             continue
         value = str(compiled.evaluate(_NO_SCOPE))
