@@ -218,7 +218,6 @@ class Builder:
                 for used, spot in self.refs.variables[before:]:
                     if used not in out and used in self.variable_names:
                         self.error(spot, f"variable '{used}' is used before it is declared")
-                del self.refs.variables[before:]
             out[name] = Variable(name, init, self.loc((el, None, 0)))
         return out
 
