@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 from lxml import etree
 
@@ -27,7 +27,7 @@ from prima.catalog import (
     ParamKind,
     Priority,
 )
-from prima.vocab import PREDEFINED_EVENTS
+from prima.vocab import PREDEFINED_EVENTS, Value
 
 NAMESPACE = "urn:prima:robot:1"
 DEFAULT_PROFILE = "home-robot.xml"
@@ -55,8 +55,7 @@ class RobotProfile:
     gestures: Mapping[str, float]
     """Gesture name -> duration in seconds."""
     commands: tuple[CommandSpec, ...]
-    """Robot-specific Commands."""
-    command_durations: Mapping[str, float]
+    """Robot-specific Commands (with their durations, when the profile gives one)."""
     extras: Mapping[str, Mapping[str, Param]]
     """Additional arguments: Command name -> argument name -> declaration."""
     events: Mapping[str, bool]
@@ -71,15 +70,19 @@ def _num(el: etree._Element, name: str) -> float:
     return float(el.get(name, "0"))
 
 
+def _flag(el: etree._Element, name: str, default: str = "false") -> bool:
+    return el.get(name, default) in ("true", "1")
+
+
 def _param(el: etree._Element) -> Param:
     kind = ParamKind(el.get("kind"))
-    default: str | float | None = el.get("default")
-    if default is not None and kind is ParamKind.NUMBER:
+    default: Value = el.get("default")
+    if isinstance(default, str) and kind is ParamKind.NUMBER:
         try:
             default = float(default)
         except ValueError:
             default = None
-    return Param(el.get("name", ""), kind, el.get("required") in ("true", "1"),
+    return Param(el.get("name", ""), kind, _flag(el, "required"),
                  default, el.get("unit", ""), el.get("doc", ""))
 
 
@@ -96,109 +99,131 @@ def profile_from_xml(doc: XmlDocument) -> RobotProfile:
     problems = validate(doc, "robot.xsd")
     if problems:
         raise DocumentError(problems)
-    profile, problems = _build(doc)
-    if problems:
-        raise DocumentError(problems)
+    reader = _Reader(doc)
+    profile = reader.read()
+    if reader.problems:
+        raise DocumentError(reader.problems)
     return profile
 
 
-def _build(doc: XmlDocument) -> tuple[RobotProfile, list[Problem]]:
-    root = doc.root
-    problems: list[Problem] = []
-    parts = {local_name(c): c for c in root if isinstance(c.tag, str)}
-    body, head = parts["body"], parts["head"]
-    standard = Catalog.standard()
+class _Reader:
+    """Reads a schema-valid profile, one method per element kind, collecting problems."""
 
-    devices: dict[str, etree._Element] = {}
-    for dev in parts["devices"]:
-        if not isinstance(dev.tag, str):
-            continue
-        name = dev.get("name", "")
-        if name in devices:
-            problems.append(doc.problem(dev, f"device '{name}' is declared twice", attribute="name"))
-        devices[name] = dev
-    for missing in (d for d in STANDARD_DEVICES if d not in devices):
-        problems.append(doc.problem(parts["devices"],
-                                    f"a PRIMA robot needs the device '{missing}'"))
+    def __init__(self, doc: XmlDocument) -> None:
+        self.doc = doc
+        self.problems: list[Problem] = []
+        self.standard = Catalog.standard()
+        self.devices: dict[str, etree._Element] = {}
+        self.gestures: dict[str, float] = {}
+        self.commands: list[CommandSpec] = []
+        self.extras: dict[str, dict[str, Param]] = {}
+        self.events: dict[str, bool] = {}
 
-    gestures: dict[str, float] = {}
-    commands: list[CommandSpec] = []
-    durations: dict[str, float] = {}
-    extras: dict[str, dict[str, Param]] = {}
-    events: dict[str, bool] = {}
-    for el in root:
-        if not isinstance(el.tag, str):
-            continue
-        tag = local_name(el)
+    def error(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
+        self.problems.append(self.doc.problem(el, message, attribute=attribute))
+
+    def read(self) -> RobotProfile:
+        root = self.doc.root
+        parts = {local_name(c): c for c in root if isinstance(c.tag, str)}
+        self._devices(parts["devices"])
+        for el in root:
+            read = _ELEMENTS.get(local_name(el)) if isinstance(el.tag, str) else None
+            if read is not None:
+                read(self, el)
+        body, head, camera = parts["body"], parts["head"], parts["camera"]
+        self._check_ranges(head)
+        return RobotProfile(
+            name=root.get("name", ""),
+            path=self.doc.name,
+            radius=_num(body, "radius"),
+            max_speed=_num(body, "max-speed"),
+            max_accel=_num(body, "max-accel"),
+            max_turn_rate=_num(body, "max-turn-rate"),
+            speech_rate=_num(parts["speech"], "rate"),
+            camera_fov=_num(camera, "fov"),
+            camera_range=_num(camera, "range"),
+            pan_range=(_num(head, "pan-min"), _num(head, "pan-max")),
+            tilt_range=(_num(head, "tilt-min"), _num(head, "tilt-max")),
+            devices=frozenset(self.devices),
+            gestures=self.gestures,
+            commands=tuple(self.commands),
+            extras=self.extras,
+            events=self.events,
+        )
+
+    def _devices(self, parent: etree._Element) -> None:
+        for dev in parent:
+            if not isinstance(dev.tag, str):
+                continue
+            name = dev.get("name", "")
+            if name in self.devices:
+                self.error(dev, f"device '{name}' is declared twice", "name")
+            self.devices[name] = dev
+        for missing in (d for d in STANDARD_DEVICES if d not in self.devices):
+            self.error(parent, f"a PRIMA robot needs the device '{missing}'")
+
+    def gesture(self, el: etree._Element) -> None:
         name = el.get("name", "")
-        if tag == "gesture":
-            if name in gestures:
-                problems.append(doc.problem(el, f"gesture '{name}' is declared twice", attribute="name"))
-            gestures[name] = _num(el, "duration")
-        elif tag == "command":
-            if name in standard:
-                problems.append(doc.problem(el, f"'{name}' is a common Command; a robot-specific "
-                                                "Command needs a name of its own", attribute="name"))
-            elif any(c.name == name for c in commands):
-                problems.append(doc.problem(el, f"Command '{name}' is declared twice", attribute="name"))
-            used = el.get("devices", "").split()
-            for dev in used:
-                if dev not in devices:
-                    problems.append(doc.problem(el, f"Command '{name}' uses undeclared device '{dev}'",
-                                                attribute="devices"))
-            priority = el.get("priority")
-            commands.append(CommandSpec(
-                name=name,
-                devices=frozenset(used),
-                feedback=el.get("feedback") in ("true", "1"),
-                breaks_cc=el.get("breaks-cc") in ("true", "1"),
-                params=tuple(_param(p) for p in el if isinstance(p.tag, str)),
-                robot_specific=True,
-                doc=el.get("doc", ""),
-                priority_override=None if priority is None else
-                (Priority.HIGH if priority == "high" else Priority.LOW),
-            ))
-            if el.get("duration"):
-                durations[name] = _num(el, "duration")
-        elif tag == "extra":
-            command = el.get("command", "")
-            if command not in standard and not any(c.name == command for c in commands):
-                problems.append(doc.problem(el, f"additional argument for unknown Command '{command}'",
-                                            attribute="command"))
-            if name in extras.get(command, {}):
-                problems.append(doc.problem(el, f"additional argument '{name}' of {command} is "
-                                                "declared twice", attribute="name"))
-            extras.setdefault(command, {})[name] = _param(el)
-        elif tag == "event":
-            if name in PREDEFINED_EVENTS:
-                problems.append(doc.problem(el, f"'{name}' is a predefined event; a robot-specific "
-                                                "event needs a name of its own", attribute="name"))
-            events[name] = el.get("reactive", "true") in ("true", "1")
+        if name in self.gestures:
+            self.error(el, f"gesture '{name}' is declared twice", "name")
+        self.gestures[name] = _num(el, "duration")
 
-    for lo, hi, what in (("pan-min", "pan-max", "pan"), ("tilt-min", "tilt-max", "tilt")):
-        if _num(head, lo) > _num(head, hi):
-            problems.append(doc.problem(head, f"{what} range is empty: {lo} > {hi}", attribute=lo))
+    def command(self, el: etree._Element) -> None:
+        name = el.get("name", "")
+        if name in self.standard:
+            self.error(el, f"'{name}' is a common Command; a robot-specific "
+                           "Command needs a name of its own", "name")
+        elif self._own_command(name):
+            self.error(el, f"Command '{name}' is declared twice", "name")
+        used = el.get("devices", "").split()
+        for device in used:
+            if device not in self.devices:
+                self.error(el, f"Command '{name}' uses undeclared device '{device}'", "devices")
+        priority = el.get("priority")
+        self.commands.append(CommandSpec(
+            name=name,
+            devices=frozenset(used),
+            feedback=_flag(el, "feedback"),
+            breaks_cc=_flag(el, "breaks-cc"),
+            params=tuple(_param(p) for p in el if isinstance(p.tag, str)),
+            robot_specific=True,
+            doc=el.get("doc", ""),
+            priority_override=None if priority is None else
+            (Priority.HIGH if priority == "high" else Priority.LOW),
+            duration=_num(el, "duration") if el.get("duration") else None,
+        ))
 
-    profile = RobotProfile(
-        name=root.get("name", ""),
-        path=doc.name,
-        radius=_num(body, "radius"),
-        max_speed=_num(body, "max-speed"),
-        max_accel=_num(body, "max-accel"),
-        max_turn_rate=_num(body, "max-turn-rate"),
-        speech_rate=_num(parts["speech"], "rate"),
-        camera_fov=_num(parts["camera"], "fov"),
-        camera_range=_num(parts["camera"], "range"),
-        pan_range=(_num(head, "pan-min"), _num(head, "pan-max")),
-        tilt_range=(_num(head, "tilt-min"), _num(head, "tilt-max")),
-        devices=frozenset(devices),
-        gestures=gestures,
-        commands=tuple(commands),
-        command_durations=durations,
-        extras=extras,
-        events=events,
-    )
-    return profile, problems
+    def extra(self, el: etree._Element) -> None:
+        name, command = el.get("name", ""), el.get("command", "")
+        if command not in self.standard and not self._own_command(command):
+            self.error(el, f"additional argument for unknown Command '{command}'", "command")
+        if name in self.extras.get(command, {}):
+            self.error(el, f"additional argument '{name}' of {command} is declared twice", "name")
+        self.extras.setdefault(command, {})[name] = _param(el)
+
+    def event(self, el: etree._Element) -> None:
+        name = el.get("name", "")
+        if name in PREDEFINED_EVENTS:
+            self.error(el, f"'{name}' is a predefined event; a robot-specific "
+                           "event needs a name of its own", "name")
+        self.events[name] = _flag(el, "reactive", "true")
+
+    def _own_command(self, name: str) -> bool:
+        return any(c.name == name for c in self.commands)
+
+    def _check_ranges(self, head: etree._Element) -> None:
+        for lo, hi, what in (("pan-min", "pan-max", "pan"), ("tilt-min", "tilt-max", "tilt")):
+            if _num(head, lo) > _num(head, hi):
+                self.error(head, f"{what} range is empty: {lo} > {hi}", lo)
+
+
+_ELEMENTS: Mapping[str, Callable[[_Reader, etree._Element], None]] = {
+    "gesture": _Reader.gesture,
+    "command": _Reader.command,
+    "extra": _Reader.extra,
+    "event": _Reader.event,
+}
+"""How each repeatable element of a profile is read."""
 
 
 def load_profile(path: str | Path) -> RobotProfile:
