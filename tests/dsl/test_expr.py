@@ -171,3 +171,14 @@ def test_a_fault_in_a_string_inside_an_expression_points_into_the_string() -> No
     with pytest.raises(ExpressionError) as info:
         compile_expression(r"'say \"{a +}\"'")
     assert info.value.index == 11 and "ends too early" in info.value.message
+
+
+@pytest.mark.parametrize("source, index, fragment", [
+    ("-'a'", 1, "'-' needs a number, got text 'a'"),
+    ("not -null", 0, "'-' needs a number, got null"),
+])
+def test_a_constant_that_cannot_be_computed_is_a_fault(source: str, index: int,
+                                                       fragment: str) -> None:
+    with pytest.raises(ExpressionError) as info:
+        compile_expression(source)
+    assert info.value.index == index and fragment in info.value.message
