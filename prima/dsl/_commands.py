@@ -9,11 +9,14 @@ are literals or expressions, places and gestures are bare names or
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING, Callable, Sequence
+from collections.abc import Callable, Sequence
+from functools import partial
+from typing import TYPE_CHECKING
 
 from lxml import etree
 
-from prima.xmlio import local_name
+from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
+from prima.dsl._elements import children
 from prima.dsl._expr import (
     ChainArg,
     ChainStep,
@@ -28,8 +31,8 @@ from prima.dsl._expr import (
     string_literal,
 )
 from prima.dsl._model import CommandCall
-from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
 from prima.vocab import AppKind
+from prima.xmlio import local_name
 
 if TYPE_CHECKING:
     from prima.dsl._loader import Builder, Spot
@@ -47,7 +50,8 @@ def element_name(command: str) -> str:
     return re.sub(r"(?<=[a-z])(?=[A-Z])", "-", command).lower()
 
 
-def compile_attribute(b: Builder, kind: ParamKind, el: etree._Element, attr: str) -> Compiled | None:
+def compile_attribute(b: Builder, kind: ParamKind, el: etree._Element,
+                      attr: str) -> Compiled | None:
     """Compile an argument written as an attribute value, by its parameter kind."""
     raw = el.get(attr, "")
     spot: Spot = (el, attr, 0)
@@ -78,33 +82,34 @@ def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
     if generic:
-        for arg in _children(el, "arg"):
-            pname = arg.get("name", "")
-            param = spec.param(pname)
-            if param is None:
-                b.error((arg, "name", 0), f"{name} has no argument '{pname}'{_params_hint(spec)}")
-            elif pname in spots:
-                b.error((arg, "name", 0), f"argument '{pname}' is given twice")
-            else:
-                spots[pname] = (arg, "value", 0)
-                _put(args, pname, compile_attribute(b, param.kind, arg, "value"))
+        _arg_elements(b, spec, el, args, spots)
     else:
         for param in spec.params:
             if el.get(param.name) is not None:
                 spots[param.name] = (el, param.name, 0)
                 _put(args, param.name, compile_attribute(b, param.kind, el, param.name))
-    extras = [(x.get("name", ""), (x, "name", 0),
-               lambda x=x: _extra_attr(b, spec, x.get("name", ""), x)) for x in _children(el, "extra")]
-    label = el.get("id")
-    return _finish(b, spec, (el, None, 0), label, (el, "id", 0), args, spots, extras)
+    extras = [(x.get("name", ""), (x, "name", 0), partial(_extra_attr, b, spec, x))
+              for x in children(el, "extra")]
+    return _finish(b, spec, (el, None, 0), el.get("id"), (el, "id", 0), args, spots, extras)
 
 
-def _children(el: etree._Element, tag: str) -> list[etree._Element]:
-    return [c for c in el if isinstance(c.tag, str) and local_name(c) == tag]
+def _arg_elements(b: Builder, spec: CommandSpec, el: etree._Element,
+                  args: dict[str, Compiled], spots: dict[str, Spot]) -> None:
+    """The ``<arg name value>`` children of a ``<command>``."""
+    for arg in children(el, "arg"):
+        name = arg.get("name", "")
+        param = spec.param(name)
+        if param is None:
+            b.error((arg, "name", 0), f"{spec.name} has no argument '{name}'{_params_hint(spec)}")
+        elif name in spots:
+            b.error((arg, "name", 0), f"argument '{name}' is given twice")
+        else:
+            spots[name] = (arg, "value", 0)
+            _put(args, name, compile_attribute(b, param.kind, arg, "value"))
 
 
-def _extra_attr(b: Builder, spec: CommandSpec, name: str, el: etree._Element) -> Compiled | None:
-    param = b.profile.extras.get(spec.name, {}).get(name)
+def _extra_attr(b: Builder, spec: CommandSpec, el: etree._Element) -> Compiled | None:
+    param = b.profile.extras.get(spec.name, {}).get(el.get("name", ""))
     return compile_attribute(b, param.kind if param else ParamKind.TEXT, el, "value")
 
 
@@ -117,26 +122,13 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
-    seen_named = False
     for pos, arg in enumerate(step.args):
         arg_spot: Spot = (el, "#text", arg.index)
         name_spot: Spot = (el, "#text", arg.name_index) if arg.name else arg_spot
-        if arg.name is None:
-            if seen_named:
-                b.error(arg_spot, "a positional argument cannot follow a named one")
-                continue
-            if pos >= len(spec.params):
-                b.error(arg_spot, f"{spec.name} takes at most {len(spec.params)} argument(s)"
-                                  f"{_params_hint(spec)}")
-                continue
-            param = spec.params[pos]
-        else:
-            seen_named = True
-            found = spec.param(arg.name)
-            if found is None:
-                b.error(name_spot, f"{spec.name} has no argument '{arg.name}'{_params_hint(spec)}")
-                continue
-            param = found
+        after_named = any(a.name is not None for a in step.args[:pos])
+        param = _chain_param(b, spec, pos, arg, arg_spot, name_spot, after_named)
+        if param is None:
+            continue
         if param.name in spots:
             b.error(name_spot, f"argument '{param.name}' is given twice")
             continue
@@ -146,10 +138,28 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
         if param.kind is ParamKind.PLACE and name in b.variable_names:
             b.warning(arg_spot, f"'{name}' is taken as a place name; write {{{name}}} "
                                 "to use the variable")
-    extras = [(x.name or "", (el, "#text", x.name_index), lambda x=x: _extra_chain(b, spec, x, text, el))
-              for x in step.extras]
+    extras = [(x.name or "", (el, "#text", x.name_index),
+               partial(_extra_chain, b, spec, x, text, el)) for x in step.extras]
     label_spot: Spot = (el, "#text", step.label_index)
     return _finish(b, spec, where, step.label, label_spot, args, spots, extras)
+
+
+def _chain_param(b: Builder, spec: CommandSpec, pos: int, arg: ChainArg, arg_spot: Spot,
+                 name_spot: Spot, after_named: bool) -> Param | None:
+    """The parameter a chain argument is for, by its name or position; None after an error."""
+    if arg.name is not None:
+        param = spec.param(arg.name)
+        if param is None:
+            b.error(name_spot, f"{spec.name} has no argument '{arg.name}'{_params_hint(spec)}")
+        return param
+    if after_named:
+        b.error(arg_spot, "a positional argument cannot follow a named one")
+        return None
+    if pos >= len(spec.params):
+        b.error(arg_spot, f"{spec.name} takes at most {len(spec.params)} argument(s)"
+                          f"{_params_hint(spec)}")
+        return None
+    return spec.params[pos]
 
 
 def _chain_value(b: Builder, param: Param, arg: ChainArg, text: str, spot: Spot) -> Compiled | None:
@@ -261,8 +271,9 @@ def _names(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
     """
     named: dict[ParamKind, str] = {}
     for param in spec.params:
-        compiled = args.pop(param.name, None) if param.kind in _DOCUMENT_NAMES else args.get(param.name)
-        if compiled is not None and not compiled.constant and param.kind in _DOCUMENT_NAMES:
+        document_name = param.kind in _DOCUMENT_NAMES
+        compiled = args.pop(param.name, None) if document_name else args.get(param.name)
+        if compiled is not None and not compiled.constant and document_name:
             b.error(spots[param.name], f"'{param.name}' must be a bare name")
         if compiled is None or not compiled.constant or param.kind not in SYMBOLIC_KINDS:
             continue

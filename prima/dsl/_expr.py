@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import TypeGuard, TypeVar, cast
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
+from typing import TypeGuard, TypeVar, cast
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import enum
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping, Union
 
 from prima.dsl._expr import Compiled
 from prima.vocab import AppKind, RunningOrder
@@ -65,8 +65,8 @@ class Assign:
 
 @dataclass(frozen=True)
 class If:
-    branches: tuple[tuple[Compiled, tuple["Action", ...]], ...]
-    otherwise: tuple["Action", ...]
+    branches: tuple[tuple[Compiled, tuple[Action, ...]], ...]
+    otherwise: tuple[Action, ...]
     loc: Loc
 
 
@@ -113,7 +113,8 @@ class Log:
     loc: Loc
 
 
-Action = Union[Request, Assign, If, Goto, Send, Raise, StartTimer, CancelTimer, Log]
+Action = Request | Assign | If | Goto | Send | Raise | StartTimer | CancelTimer | Log
+"""What a state's entry or a handler does, in order."""
 
 
 # ---------------------------------------------------------------- handlers

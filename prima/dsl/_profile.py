@@ -8,17 +8,14 @@ robot-specific parts (MISSION.md section 4).
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
-from typing import Callable, Mapping
 
 from lxml import etree
 
-from prima.xmlio import validate
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
-from prima.errors import DocumentError, Problem
 from prima.catalog import (
     STANDARD_DEVICES,
     Catalog,
@@ -27,7 +24,10 @@ from prima.catalog import (
     ParamKind,
     Priority,
 )
+from prima.dsl._elements import elements, flag
+from prima.errors import DocumentError, Problem
 from prima.vocab import PREDEFINED_EVENTS, Value
+from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
 
 NAMESPACE = "urn:prima:robot:1"
 DEFAULT_PROFILE = "home-robot.xml"
@@ -70,10 +70,6 @@ def _num(el: etree._Element, name: str) -> float:
     return float(el.get(name, "0"))
 
 
-def _flag(el: etree._Element, name: str, default: str = "false") -> bool:
-    return el.get(name, default) in ("true", "1")
-
-
 def _param(el: etree._Element) -> Param:
     kind = ParamKind(el.get("kind"))
     default: Value = el.get("default")
@@ -82,7 +78,7 @@ def _param(el: etree._Element) -> Param:
             default = float(default)
         except ValueError:
             default = None
-    return Param(el.get("name", ""), kind, _flag(el, "required"),
+    return Param(el.get("name", ""), kind, flag(el, "required"),
                  default, el.get("unit", ""), el.get("doc", ""))
 
 
@@ -124,10 +120,10 @@ class _Reader:
 
     def read(self) -> RobotProfile:
         root = self.doc.root
-        parts = {local_name(c): c for c in root if isinstance(c.tag, str)}
+        parts = {local_name(c): c for c in elements(root)}
         self._devices(parts["devices"])
-        for el in root:
-            read = _ELEMENTS.get(local_name(el)) if isinstance(el.tag, str) else None
+        for el in elements(root):
+            read = _ELEMENTS.get(local_name(el))
             if read is not None:
                 read(self, el)
         body, head, camera = parts["body"], parts["head"], parts["camera"]
@@ -152,9 +148,7 @@ class _Reader:
         )
 
     def _devices(self, parent: etree._Element) -> None:
-        for dev in parent:
-            if not isinstance(dev.tag, str):
-                continue
+        for dev in elements(parent):
             name = dev.get("name", "")
             if name in self.devices:
                 self.error(dev, f"device '{name}' is declared twice", "name")
@@ -183,9 +177,9 @@ class _Reader:
         self.commands.append(CommandSpec(
             name=name,
             devices=frozenset(used),
-            feedback=_flag(el, "feedback"),
-            breaks_cc=_flag(el, "breaks-cc"),
-            params=tuple(_param(p) for p in el if isinstance(p.tag, str)),
+            feedback=flag(el, "feedback"),
+            breaks_cc=flag(el, "breaks-cc"),
+            params=tuple(_param(p) for p in elements(el)),
             robot_specific=True,
             doc=el.get("doc", ""),
             priority_override=None if priority is None else
@@ -206,7 +200,7 @@ class _Reader:
         if name in PREDEFINED_EVENTS:
             self.error(el, f"'{name}' is a predefined event; a robot-specific "
                            "event needs a name of its own", "name")
-        self.events[name] = _flag(el, "reactive", "true")
+        self.events[name] = flag(el, "reactive", default=True)
 
     def _own_command(self, name: str) -> bool:
         return any(c.name == name for c in self.commands)

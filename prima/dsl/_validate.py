@@ -7,19 +7,19 @@ scenarios and maps). Folders are searched for ``*.pxml`` and ``*.xml`` files.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from io import BytesIO
 from pathlib import Path
-from typing import Callable, Iterable, Mapping
 
 from lxml import etree
 
-from prima.xmlio import parse_xml, read_source
 from prima.dsl._loader import NAMESPACE as PXML_NS
 from prima.dsl._loader import check_parsed
 from prima.dsl._profile import NAMESPACE as ROBOT_NS
 from prima.dsl._profile import RobotProfile, profile_from_xml
 from prima.errors import DocumentError, Problem, Severity
+from prima.xmlio import parse_xml, read_source
 
 
 @dataclass
@@ -94,8 +94,9 @@ def check_file(path: Path, profile: RobotProfile | None = None,
     except DocumentError as exc:
         return None if skippable else list(exc.problems)
     namespace = root_namespace(data)
-    if checkers and namespace in checkers:
-        return checkers[namespace](path)
+    checker = checkers.get(namespace) if checkers and namespace is not None else None
+    if checker is not None:
+        return checker(path)
     if skippable and namespace not in (PXML_NS, ROBOT_NS):
         return None
     try:
