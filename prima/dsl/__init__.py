@@ -65,6 +65,7 @@ from prima.dsl._profile import (
 )
 from prima.dsl._validate import (
     Checker,
+    PathNotFoundError,
     Report,
     check_file,
     collect,
@@ -95,6 +96,7 @@ __all__ = [
     "If",
     "Loc",
     "Log",
+    "PathNotFoundError",
     "Pattern",
     "Raise",
     "Report",

@@ -7,7 +7,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import prima.dsl
+from prima.errors import PrimaError
 
 ROOT = Path(__file__).parents[2]
 
@@ -33,3 +36,9 @@ def test_nothing_outside_the_package_imports_its_private_modules() -> None:
                  for folder in ("prima", "tests", "bench") for path in (ROOT / folder).rglob("*.py")
                  if dsl not in path.parents and private.search(path.read_text(encoding="utf-8"))]
     assert offenders == []
+
+
+def test_a_missing_path_is_a_prima_error_and_a_file_not_found_error(tmp_path: Path) -> None:
+    with pytest.raises(PrimaError) as info:
+        prima.dsl.collect([tmp_path / "no-such-file.pxml"])
+    assert isinstance(info.value, FileNotFoundError)
