@@ -121,7 +121,8 @@ def test_template_positions() -> None:
 
 
 def test_chain_steps_labels_and_extras() -> None:
-    steps = parse_chain('Speak("Come on, let\'s go."), nav: TopologicalMove(kidode_room)[speed=0.3]')
+    steps = parse_chain('Speak("Come on, let\'s go."), '
+                        'nav: TopologicalMove(kidode_room)[speed=0.3]')
     assert [(s.label, s.command) for s in steps] == [(None, "Speak"), ("nav", "TopologicalMove")]
     assert steps[1].index == 34 and steps[1].label_index == 29
     [extra] = steps[1].extras

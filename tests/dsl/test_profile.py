@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from prima.catalog import STANDARD_DEVICES, Priority
 from prima.dsl import default_profile, parse_profile
 from prima.errors import DocumentError
-from prima.catalog import STANDARD_DEVICES, Priority
 
 
 def test_default_profile_extends_the_catalog() -> None:
