@@ -44,6 +44,10 @@ _COMPUTED = re.compile(r"^\{(.*)\}$", re.S)
 COMMANDS_HINT = "; see docs/pxml.md for the Commands"
 """Appended to an unknown Command's error."""
 
+_DOCUMENT_NAMES = frozenset({ParamKind.GRAMMAR, ParamKind.VARIABLE})
+"""Kinds of argument that name something the document declares (a Q&A's grammar
+and variable): they are checked against the document, not passed to the robot."""
+
 
 def element_name(command: str) -> str:
     """The element of a common Command: ``TopologicalMove`` -> ``topological-move``."""
@@ -173,7 +177,7 @@ def _chain_value(b: Builder, param: Param, arg: ChainArg, text: str, spot: Spot)
         if _HYPHENATED.match(written):
             b.error(spot, f"write \"{written}\" in quotes: in a chain, '-' between names "
                           "reads as a subtraction")
-        elif param.kind in (ParamKind.GRAMMAR, ParamKind.VARIABLE):
+        elif param.kind in _DOCUMENT_NAMES:
             b.error(spot, f"'{param.name}' must be a bare name")
         else:
             b.error(spot, f"'{param.name}' is a {param.kind.value}: write a bare name, "
@@ -256,11 +260,6 @@ def _extras(b: Builder, spec: CommandSpec, extras: Sequence[Extra]) -> dict[str,
     return extra
 
 
-_DOCUMENT_NAMES = frozenset({ParamKind.GRAMMAR, ParamKind.VARIABLE})
-"""Kinds of argument that name something the document declares (a Q&A's grammar
-and variable): they are checked against the document, not passed to the robot."""
-
-
 def _names(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
            spots: dict[str, Spot]) -> tuple[str | None, str | None]:
     """Check the names written as arguments; take out the grammar and the variable.
@@ -271,18 +270,20 @@ def _names(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
     """
     named: dict[ParamKind, str] = {}
     for param in spec.params:
-        document_name = param.kind in _DOCUMENT_NAMES
-        compiled = args.pop(param.name, None) if document_name else args.get(param.name)
-        if compiled is not None and not compiled.constant and document_name:
-            b.error(spots[param.name], f"'{param.name}' must be a bare name")
+        if param.kind in _DOCUMENT_NAMES:
+            compiled = args.pop(param.name, None)
+            if compiled is not None and not compiled.constant:
+                b.error(spots[param.name], f"'{param.name}' must be a bare name")
+        else:
+            compiled = args.get(param.name)
         if compiled is None or not compiled.constant or param.kind not in SYMBOLIC_KINDS:
             continue
-        value = str(compiled.evaluate(_NO_SCOPE))
-        named[param.kind] = value
+        value = named[param.kind] = str(compiled.evaluate(_NO_SCOPE))
+        spot = spots[param.name]
         if param.kind is ParamKind.GESTURE:
-            b.check_gesture(value, spots[param.name])
-        elif value and param.kind is ParamKind.GRAMMAR:
-            b.need_grammar(value, spots[param.name])
-        elif value and param.kind is ParamKind.VARIABLE:
-            b.need_variable(value, spots[param.name])
+            b.check_gesture(value, spot)
+        elif param.kind is ParamKind.GRAMMAR:
+            b.need_grammar(value, spot)
+        elif value and param.kind is ParamKind.VARIABLE:  # an empty one receives nothing
+            b.need_variable(value, spot)
     return named.get(ParamKind.GRAMMAR), named.get(ParamKind.VARIABLE)
