@@ -49,8 +49,10 @@ class Compiled:
     event_uses: tuple[int, ...] = ()
     """Indexes where ``event`` is read."""
     constant: bool = False
+    """It reads nothing: its value was computed when it was compiled."""
 
     def evaluate(self, scope: Scope) -> Value:
+        """The expression's value in ``scope``; raises ExecutionError on a bad value."""
         return self.fn(scope)
 
 
@@ -75,6 +77,7 @@ def to_text(value: Value) -> str:
 
 
 def truthy(value: Value) -> bool:
+    """Whether a value counts as true in a condition: all but null, false, 0 and ""."""
     return value not in (None, False, 0, "")
 
 

@@ -64,7 +64,6 @@ Spot = tuple[etree._Element, str | None, int]
 """Where to point: (element, None | "#text" | attribute name, character index)."""
 
 
-
 @dataclass
 class _Refs:
     """References collected during the walk, checked once everything is known."""
@@ -102,6 +101,7 @@ class Builder:
     # ------------------------------------------------------------ reporting
 
     def position(self, spot: Spot) -> tuple[int, int]:
+        """The line and column ``spot`` points at."""
         el, where, index = spot
         if where is None:
             return self.doc.where.element(el)
@@ -110,6 +110,7 @@ class Builder:
         return self.doc.where.attribute(el, where, index)
 
     def loc(self, spot: Spot) -> Loc:
+        """Where ``spot`` points, as the model records it."""
         return Loc(*self.position(spot))
 
     def loc_of(self, el: etree._Element) -> Loc:
@@ -128,9 +129,11 @@ class Builder:
         self.report((el, where, base + fault.index), fault.message, Severity.ERROR, caret=True)
 
     def error(self, spot: Spot, message: str) -> None:
+        """An error at ``spot``: the document will not load."""
         self.report(spot, message, Severity.ERROR)
 
     def warning(self, spot: Spot, message: str) -> None:
+        """A warning at ``spot``: the document loads, but probably does not do what is meant."""
         self.report(spot, message, Severity.WARNING)
 
     def compile(self, spot: Spot, make: Callable[[], Compiled]) -> Compiled | None:
@@ -149,16 +152,19 @@ class Builder:
         return compiled
 
     def expression(self, el: etree._Element, attr: str) -> Compiled | None:
+        """The expression written in attribute ``attr``, or None after a fault."""
         text = el.get(attr, "")
         return self.compile((el, attr, 0), lambda: compile_expression(text))
 
     def template(self, el: etree._Element, attr: str) -> Compiled | None:
+        """The text with ``{expression}`` parts written in attribute ``attr``, or None."""
         text = el.get(attr, "")
         return self.compile((el, attr, 0), lambda: compile_template(text))
 
     # ------------------------------------------------------------ references
 
     def check_gesture(self, name: str, spot: Spot) -> None:
+        """A gesture must be one the robot knows; an EA may use only the common ones."""
         if name not in self.profile.gestures and name not in STANDARD_GESTURES:
             known = ", ".join(sorted(self.profile.gestures))
             self.error(spot, f"unknown gesture '{name}' (this robot knows: {known})")
@@ -167,12 +173,15 @@ class Builder:
                              f"(common gestures: {', '.join(sorted(STANDARD_GESTURES))})")
 
     def need_grammar(self, name: str, spot: Spot) -> None:
+        """The document must declare this grammar (checked once all is read)."""
         self.refs.grammars.append((name, spot))
 
     def need_variable(self, name: str, spot: Spot) -> None:
+        """The document must declare this variable (checked once all is read)."""
         self.refs.variables.append((name, spot))
 
     def add_label(self, label: str, call: CommandCall, spot: Spot) -> None:
+        """Record a Command's id, which handlers refer to; ids are unique in a document."""
         if label in self.labels:
             first = self.labels[label].loc
             self.error(spot, f"duplicate Command id '{label}' (first used at line {first.line})")

@@ -58,6 +58,8 @@ class Request:
 
 @dataclass(frozen=True)
 class Assign:
+    """``<assign name expr>``: set a variable."""
+
     name: str
     expr: Compiled
     loc: Loc
@@ -65,6 +67,8 @@ class Assign:
 
 @dataclass(frozen=True)
 class If:
+    """``<if>``: the actions of the first branch whose condition holds, else ``otherwise``."""
+
     branches: tuple[tuple[Compiled, tuple[Action, ...]], ...]
     otherwise: tuple[Action, ...]
     loc: Loc
@@ -72,6 +76,8 @@ class If:
 
 @dataclass(frozen=True)
 class Goto:
+    """``<goto state>``: leave the current state for another."""
+
     state: str
     loc: Loc
 
@@ -95,6 +101,8 @@ class Raise:
 
 @dataclass(frozen=True)
 class StartTimer:
+    """``<timer name after>``: (re)start a timer; its event is posted when it fires."""
+
     name: str
     after: Compiled
     reactive: bool
@@ -103,12 +111,16 @@ class StartTimer:
 
 @dataclass(frozen=True)
 class CancelTimer:
+    """``<cancel-timer name>``: stop a timer before it fires."""
+
     name: str
     loc: Loc
 
 
 @dataclass(frozen=True)
 class Log:
+    """``<log text>``: a note in the trace."""
+
     text: Compiled
     loc: Loc
 
@@ -136,6 +148,8 @@ class HandlerKind(str, enum.Enum):
 
 @dataclass(frozen=True)
 class Handler:
+    """What to do on an event, or on a labelled Command's end or answer."""
+
     kind: HandlerKind
     key: str
     """The event name, or the label of the Command it listens to."""
@@ -172,6 +186,8 @@ def words(text: str) -> list[str]:
 
 @dataclass(frozen=True)
 class Choice:
+    """One answer of a grammar, and the phrases that mean it."""
+
     value: str
     phrases: tuple[tuple[str, ...], ...]
     """Synonyms, each a tuple of normalised words."""
@@ -225,6 +241,8 @@ def _contains(heard: list[str], phrase: tuple[str, ...]) -> bool:
 
 @dataclass(frozen=True)
 class State:
+    """A state: actions on entry, and handlers active while the application is in it."""
+
     id: str
     initial: bool
     entry: tuple[Action, ...]
@@ -259,6 +277,8 @@ class AtomicBlock:
 
 @dataclass(frozen=True)
 class Variable:
+    """A document variable, with its initial value (null without one)."""
+
     name: str
     init: Compiled | None
     loc: Loc
