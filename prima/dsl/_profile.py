@@ -71,6 +71,7 @@ def _num(el: etree._Element, name: str) -> float:
 
 
 def _param(el: etree._Element) -> Param:
+    """A ``<param>`` of a robot-specific Command, or an ``<extra>`` argument."""
     kind = ParamKind(el.get("kind"))
     default: Value = el.get("default")
     if isinstance(default, str) and kind is ParamKind.NUMBER:
@@ -109,7 +110,7 @@ class _Reader:
         self.doc = doc
         self.problems: list[Problem] = []
         self.standard = Catalog.standard()
-        self.devices: dict[str, etree._Element] = {}
+        self.devices: set[str] = set()
         self.gestures: dict[str, float] = {}
         self.commands: list[CommandSpec] = []
         self.extras: dict[str, dict[str, Param]] = {}
@@ -119,6 +120,7 @@ class _Reader:
         self.problems.append(self.doc.problem(el, message, attribute=attribute))
 
     def read(self) -> RobotProfile:
+        """The profile; problems found on the way are in :attr:`problems`."""
         root = self.doc.root
         parts = {local_name(c): c for c in elements(root)}
         self._devices(parts["devices"])
@@ -152,7 +154,7 @@ class _Reader:
             name = dev.get("name", "")
             if name in self.devices:
                 self.error(dev, f"device '{name}' is declared twice", "name")
-            self.devices[name] = dev
+            self.devices.add(name)
         for missing in (d for d in STANDARD_DEVICES if d not in self.devices):
             self.error(parent, f"a PRIMA robot needs the device '{missing}'")
 
