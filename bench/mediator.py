@@ -68,7 +68,8 @@ def _setup(n: int, device_call: Call) -> tuple[Mediator, _Driver, int]:
     driver = _Driver()
     clock = ManualClock()
     count = [0]
-    m = Mediator(Catalog.standard(), driver, clock, record=lambda d: count.__setitem__(0, count[0] + 1))
+    m = Mediator(Catalog.standard(), driver, clock,
+                 record=lambda d: count.__setitem__(0, count[0] + 1))
 
     def on_ended(cid: int, _o: Outcome) -> None:
         if cid == 2:
@@ -146,7 +147,8 @@ def bench_mixed(requests: int = 4000, seed: int = 7) -> tuple[float, int]:
     for i in range(requests):
         app = rnd.choice(("fa", "ea"))
         calls = tuple(Call(c, a) for c, a in rnd.sample(pool, rnd.randint(1, 3)))
-        r = Request(app, calls, order=RunningOrder.ASAP if rnd.random() < 0.2 else RunningOrder.AFTER_LATEST,
+        order = RunningOrder.ASAP if rnd.random() < 0.2 else RunningOrder.AFTER_LATEST
+        r = Request(app, calls, order=order,
                     reactive=rnd.random() < 0.3)
         h.at(i * 0.8, lambda r=r: h.mediator.submit(r))
     t0 = time.perf_counter()

@@ -17,10 +17,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from prima.dsl.validate import collect, validate_paths
+from prima.dsl import collect, validate_paths
 
 ROOT = Path(__file__).resolve().parents[1]
-SOURCES = sorted((ROOT / "apps").rglob("*.pxml")) + sorted((ROOT / "tests/dsl/data/valid").glob("*.pxml"))
+SOURCES = (sorted((ROOT / "apps").rglob("*.pxml"))
+           + sorted((ROOT / "tests/dsl/data/valid").glob("*.pxml")))
 
 
 def make_corpus(folder: Path, n: int = 100) -> list[Path]:
@@ -50,7 +51,8 @@ def main() -> None:
             colds.append(time.perf_counter() - start)
         cold = statistics.median(colds)
     print(f"{len(files)} documents, {lines} lines")
-    print(f"in-process (warm): {warm * 1000:.0f} ms total, {warm / len(files) * 1000:.2f} ms per document")
+    print(f"in-process (warm): {warm * 1000:.0f} ms total, "
+          f"{warm / len(files) * 1000:.2f} ms per document")
     print(f"prima validate (cold process): {cold * 1000:.0f} ms total")
 
 

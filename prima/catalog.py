@@ -18,8 +18,8 @@ A robot hardware profile extends the catalog with robot-specific Commands
 from __future__ import annotations
 
 import enum
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Mapping
 
 from prima.vocab import Value
 
@@ -175,10 +175,12 @@ _T, _N, _PL = ParamKind.TEXT, ParamKind.NUMBER, ParamKind.PLACE
 
 STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
     _spec("ActiveSensingHuman", "human-detection locomotion localization", fb=True,
-          params=[_P("say", _T, False, "", doc="said at each retry; adds the speaker to the devices",
+          params=[_P("say", _T, False, "",
+                     doc="said at each retry; adds the speaker to the devices",
                      devices=frozenset({"speaker"})),
                   _P("turn", _N, False, 90.0, "deg", "how far to turn the view after 10 s unseen")],
-          doc="Stay still until the camera sees the user; after 10 s unseen, turn the view and retry."),
+          doc="Stay still until the camera sees the user; after 10 s unseen, "
+              "turn the view and retry."),
     _spec("FaceHuman", "human-detection locomotion", doc="Turn the body to face the user."),
     _spec("QA", "speaker speech-recognition", listens=True,
           params=[_P("prompt", _T),

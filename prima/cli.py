@@ -15,8 +15,7 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import TextIO
 
 from prima import __version__
-from prima.dsl.profile import RobotProfile, default_profile, load_profile
-from prima.dsl.validate import Checker, collect, validate_paths
+from prima.dsl import Checker, RobotProfile, collect, default_profile, load_profile, validate_paths
 from prima.errors import LocatedError, PrimaError, Problem
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2

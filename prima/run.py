@@ -18,10 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from prima.dsl.loader import load_document
-from prima.dsl.model import Document
-from prima.dsl.profile import RobotProfile, default_profile, load_profile
 from prima.catalog import Catalog, ParamKind
+from prima.dsl import Document, RobotProfile, default_profile, load_document, load_profile
 from prima.errors import AppFailure, DocumentError, PrimaError, Problem, RunError, Severity
 from prima.interpreter import Interpreter, Note, NoteKind
 from prima.mediator import AppKind, Call, Decision, DecisionKind, Event, Mediator, Outcome, Request

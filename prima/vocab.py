@@ -8,8 +8,8 @@ mediator, and the mediator does not import the DSL, to learn what an EA is.
 from __future__ import annotations
 
 import enum
+from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Mapping, Union
 
 __all__ = [
     "MAX_BLOCK_WATCHDOG",
@@ -22,7 +22,7 @@ __all__ = [
     "Value",
 ]
 
-Value = Union[str, float, int, bool, None]
+Value = str | float | int | bool | None
 """A runtime value: what expressions produce and Commands take as arguments."""
 
 

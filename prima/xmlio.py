@@ -23,11 +23,12 @@ process.
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Iterator
+from typing import TYPE_CHECKING
 
 from lxml import etree
 
@@ -85,7 +86,7 @@ class SourceMap:
         self._line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
         self._elements = list(root.iter(tag=etree.Element))  # keeps proxies alive
         places = _scan_start_tags(text)
-        self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places))
+        self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places, strict=False))
 
     def position(self, offset: int) -> tuple[int, int]:
         """Line and column (both 1-based) of a character offset."""
@@ -110,7 +111,8 @@ class SourceMap:
         """Where the element's start tag begins (its ``<``)."""
         place = self._places.get(el)
         if place is None:
-            return (el.sourceline or 1, 1)
+            # lxml-stubs 0.5 leave sourceline (an int or None) untyped
+            return (el.sourceline or 1, 1)  # type: ignore[return-value]
         return self.position(place.start)
 
     def attribute(self, el: etree._Element, name: str, index: int = 0) -> tuple[int, int]:
@@ -232,7 +234,8 @@ def parse_xml(data: bytes, name: str, error: type[LocatedError]) -> XmlDocument:
         message = _syntax_message(exc)
         raise fail(max(line, 1), max(col, 1), f"malformed XML: {message}") from exc
     info = root.getroottree().docinfo
-    if info.doctype or info.internalDTD is not None:  # defence in depth: never expected here
+    # defence in depth: never expected here (lxml-stubs 0.5 lack DocInfo.doctype)
+    if info.doctype or info.internalDTD is not None:  # type: ignore[union-attr]
         raise fail(1, 1, "DOCTYPE declarations are not allowed "
                          "(no DTDs or entities in PRIMA documents)")
     encoding = info.encoding or "utf-8"
@@ -274,14 +277,14 @@ def _read(name: str) -> bytes:
     return resources.files("prima.schemas").joinpath(name).read_bytes()
 
 
-@lru_cache(maxsize=None)
+@cache
 def verdict_schema(name: str) -> etree.XMLSchema:
     """libxml2's compiled form of ``schemas/<name>``, built once per process."""
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
     return etree.XMLSchema(etree.fromstring(_read(name), parser))
 
 
-@lru_cache(maxsize=None)
+@cache
 def schema(name: str) -> xmlschema.XMLSchema:
     """xmlschema's form of ``schemas/<name>``, built once per process, on first need."""
     import xmlschema  # imported lazily: only documents with errors need it
@@ -292,7 +295,8 @@ def schema(name: str) -> xmlschema.XMLSchema:
 
 
 _NS = re.compile(r"\{[^}]*\}")
-_ATTR_VALUE = re.compile(r"^attribute (?P<name>[\w:\-]+)=(?P<value>'.*?'|\".*?\")?:? ?(?P<rest>.*)$", re.S)
+_ATTR_VALUE = re.compile(
+    r"^attribute (?P<name>[\w:\-]+)=(?P<value>'.*?'|\".*?\")?:? ?(?P<rest>.*)$", re.S)
 _NOT_ALLOWED = re.compile(r"^'(?P<name>[\w:\-]+)' attribute not allowed")
 _UNEXPECTED = re.compile(r"Unexpected child with tag '(?P<tag>[^']+)' at position (?P<pos>\d+)")
 _MISSING = re.compile(r"missing required attribute '(?P<name>[\w:\-]+)'")
@@ -311,8 +315,10 @@ def validate(doc: XmlDocument, schema_name: str, hint: Hint | None = None) -> li
     problems = list(_problems(doc, schema(schema_name), hint))
     if problems:
         return problems
-    return [Problem(doc.name, e.line, max(e.column, 1), Severity.ERROR, f"schema: {_clean(e.message)}")
-            for e in checker.error_log]
+    # lxml-stubs 0.5 declare _ErrorLog without __iter__; it yields _LogEntry objects
+    return [Problem(doc.name, e.line, max(e.column, 1), Severity.ERROR,
+                    f"schema: {_clean(e.message)}")
+            for e in checker.error_log]  # type: ignore[attr-defined]
 
 
 def _problems(doc: XmlDocument, xsd: xmlschema.XMLSchema, hint: Hint | None) -> Iterator[Problem]:

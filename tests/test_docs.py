@@ -8,7 +8,7 @@ import pytest
 from lxml import etree
 
 from prima.cli import build_parser
-from prima.dsl.commands import element_name
+from prima.dsl import element_name
 from prima.catalog import STANDARD_COMMANDS
 
 ROOT = Path(__file__).parents[1]
@@ -51,7 +51,7 @@ def test_every_cli_option_is_documented(command: str, doc: str) -> None:
 def test_readme_example_validates() -> None:
     import re
 
-    from prima.dsl.loader import check_document
+    from prima.dsl import check_document
 
     snippet = re.search(r"```xml\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
     snippet = snippet.replace('<state id="guide">', '<state id="guide" initial="true">', 1)

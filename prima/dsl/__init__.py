@@ -1,1 +1,129 @@
-"""PXML documents and robot profiles: secure loading, schemas, meaning checks."""
+"""PXML documents and robot profiles: secure loading, schemas, meaning checks.
+
+This is the package's public API; its modules (``prima.dsl._loader`` and so
+on) are private. In the direction data flows:
+
+- loading: :func:`load_document`, :func:`check_document`, :func:`check_parsed`
+  turn PXML bytes into a :class:`Document` or located problems;
+- robot profiles: :func:`load_profile`, :func:`parse_profile`,
+  :func:`profile_from_xml`, :func:`default_profile` give a :class:`RobotProfile`;
+- validation of files and folders, as ``prima validate`` does it:
+  :func:`collect`, :func:`check_file`, :func:`validate_paths` give a :class:`Report`;
+- the model the interpreter runs (:class:`Document`, :class:`State`,
+  :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`);
+- the expression language: :func:`compile_expression`, :func:`compile_template`,
+  :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`.
+"""
+
+from prima.dsl._commands import element_name
+from prima.dsl._expr import (
+    FUNCTIONS,
+    ChainArg,
+    ChainStep,
+    Compiled,
+    Scope,
+    compile_expression,
+    compile_template,
+    parse_chain,
+    parser,
+    to_text,
+    truthy,
+)
+from prima.dsl._loader import NAMESPACE, check_document, check_parsed, load_document
+from prima.dsl._model import (
+    Action,
+    Assign,
+    AtomicBlock,
+    CancelTimer,
+    Choice,
+    CommandCall,
+    Document,
+    EventDecl,
+    Goto,
+    Grammar,
+    Handler,
+    HandlerKind,
+    If,
+    Loc,
+    Log,
+    Pattern,
+    Raise,
+    Request,
+    Send,
+    StartTimer,
+    State,
+    StreamBlock,
+    Variable,
+)
+from prima.dsl._profile import (
+    STANDARD_GESTURES,
+    RobotProfile,
+    default_profile,
+    load_profile,
+    parse_profile,
+    profile_from_xml,
+)
+from prima.dsl._validate import (
+    Checker,
+    PathNotFoundError,
+    Report,
+    check_file,
+    collect,
+    root_namespace,
+    validate_paths,
+)
+
+__all__ = [
+    "FUNCTIONS",
+    "NAMESPACE",
+    "STANDARD_GESTURES",
+    "Action",
+    "Assign",
+    "AtomicBlock",
+    "CancelTimer",
+    "ChainArg",
+    "ChainStep",
+    "Checker",
+    "Choice",
+    "CommandCall",
+    "Compiled",
+    "Document",
+    "EventDecl",
+    "Goto",
+    "Grammar",
+    "Handler",
+    "HandlerKind",
+    "If",
+    "Loc",
+    "Log",
+    "PathNotFoundError",
+    "Pattern",
+    "Raise",
+    "Report",
+    "Request",
+    "RobotProfile",
+    "Scope",
+    "Send",
+    "StartTimer",
+    "State",
+    "StreamBlock",
+    "Variable",
+    "check_document",
+    "check_file",
+    "check_parsed",
+    "collect",
+    "compile_expression",
+    "compile_template",
+    "default_profile",
+    "element_name",
+    "load_document",
+    "load_profile",
+    "parse_chain",
+    "parse_profile",
+    "parser",
+    "profile_from_xml",
+    "root_namespace",
+    "to_text",
+    "truthy",
+    "validate_paths",
+]

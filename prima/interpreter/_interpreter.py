@@ -18,12 +18,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol, get_args
 
-from prima.dsl.expr import Compiled, Scope, to_text, truthy
-from prima.dsl.model import (
+from prima.dsl import (
     Action,
     Assign,
     CancelTimer,
     CommandCall,
+    Compiled,
     Document,
     Goto,
     Handler,
@@ -33,9 +33,12 @@ from prima.dsl.model import (
     Log,
     Raise,
     Request,
+    Scope,
     Send,
     StartTimer,
     State,
+    to_text,
+    truthy,
 )
 from prima.catalog import Catalog, ParamKind
 from prima.errors import AppFailure, ExecutionError, PrimaError

@@ -15,10 +15,9 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from prima.xmlio import schema, verdict_schema
-from prima.xmlio import MAX_BYTES, _parser, parse_xml
-from prima.dsl.validate import check_file
+from prima.dsl import check_file
 from prima.errors import DocumentError, Problem, Severity
+from prima.xmlio import MAX_BYTES, _parser, parse_xml, schema, verdict_schema
 
 DATA = Path(__file__).parent / "data"
 ROOT = Path(__file__).parents[2]
@@ -40,7 +39,8 @@ def _found(problems: list[Problem], severity: Severity) -> list[Problem]:
 def _assert_matches(problems: list[Problem], expected: list[tuple[int, int, str]]) -> None:
     assert expected, "the test file has no expectation comments"
     assert len(problems) == len(expected), "\n".join(str(p) for p in problems)
-    for (line, col, fragment), problem in zip(sorted(expected), sorted(problems, key=lambda p: (p.line, p.col))):
+    found = sorted(problems, key=lambda p: (p.line, p.col))
+    for (line, col, fragment), problem in zip(sorted(expected), found, strict=True):
         assert (problem.line, problem.col) == (line, col), str(problem)
         assert fragment in problem.message, str(problem)
 

@@ -6,16 +6,15 @@ import re
 
 import pytest
 
-from prima.dsl.expr import (
-    MAX_TEXT,
+from prima.dsl import (
     Scope,
-    SyntaxFault,
     compile_expression,
     compile_template,
     parse_chain,
     parser,
 )
-from prima.errors import ExecutionError
+from prima.errors import ExecutionError, ExpressionError
+from prima.vocab import MAX_TEXT
 
 SCOPE = Scope({"a": 2, "name": "Ann", "ch": 12, "nothing": None},
               {"name": "message", "text": "hi", "sender": "kidode"})
@@ -89,7 +88,7 @@ def test_constants_are_folded() -> None:
     ("", 0, "empty"),
 ])
 def test_syntax_faults_point_at_the_fault(source: str, index: int, fragment: str) -> None:
-    with pytest.raises(SyntaxFault) as info:
+    with pytest.raises(ExpressionError) as info:
         compile_expression(source)
     assert info.value.index == index
     assert fragment in info.value.message
@@ -113,16 +112,17 @@ def test_text_cannot_grow_without_bound() -> None:
         compile_expression("s + s").evaluate(big)
 
 
-def test_template_positions_include_offset() -> None:
-    t = compile_template("Hi {name}", offset=10)
-    assert t.names == {("name", 14)}
-    with pytest.raises(SyntaxFault) as info:
-        compile_template("Hi {na me}", offset=10)
-    assert info.value.index == 17
+def test_template_positions() -> None:
+    t = compile_template("Hi {name}")
+    assert t.names == {("name", 4)}
+    with pytest.raises(ExpressionError) as info:
+        compile_template("Hi {na me}")
+    assert info.value.index == 7
 
 
 def test_chain_steps_labels_and_extras() -> None:
-    steps = parse_chain('Speak("Come on, let\'s go."), nav: TopologicalMove(kidode_room)[speed=0.3]')
+    steps = parse_chain('Speak("Come on, let\'s go."), '
+                        'nav: TopologicalMove(kidode_room)[speed=0.3]')
     assert [(s.label, s.command) for s in steps] == [(None, "Speak"), ("nav", "TopologicalMove")]
     assert steps[1].index == 34 and steps[1].label_index == 29
     [extra] = steps[1].extras
@@ -135,7 +135,7 @@ def test_chain_steps_labels_and_extras() -> None:
     ("", 0, "empty"),
 ])
 def test_chain_syntax_faults(source: str, index: int, fragment: str) -> None:
-    with pytest.raises(SyntaxFault) as info:
+    with pytest.raises(ExpressionError) as info:
         parse_chain(source)
     assert info.value.index == index and fragment in info.value.message
 
@@ -153,5 +153,33 @@ def test_numbers_stay_bounded(source: str) -> None:
 
 
 def test_overlong_number_literal_is_a_syntax_fault() -> None:
-    with pytest.raises(SyntaxFault, match="number too long"):
+    with pytest.raises(ExpressionError, match="number too long"):
         compile_expression("1" * 30)
+
+
+def test_an_expression_error_on_its_own_is_located_in_its_text() -> None:
+    with pytest.raises(ExpressionError) as info:
+        compile_expression("a and\n  b = 1")
+    fault = info.value
+    assert (fault.index, fault.text) == (10, "a and\n  b = 1")
+    [problem] = fault.problems
+    assert (problem.file, problem.line, problem.col) == ("<expression>", 2, 5)
+    assert problem.source == "  b = 1" and problem.message == fault.message
+    assert problem.caret() == "      b = 1\n        ^"
+
+
+def test_a_fault_in_a_string_inside_an_expression_points_into_the_string() -> None:
+    with pytest.raises(ExpressionError) as info:
+        compile_expression(r"'say \"{a +}\"'")
+    assert info.value.index == 11 and "ends too early" in info.value.message
+
+
+@pytest.mark.parametrize("source, index, fragment", [
+    ("-'a'", 1, "'-' needs a number, got text 'a'"),
+    ("not -null", 0, "'-' needs a number, got null"),
+])
+def test_a_constant_that_cannot_be_computed_is_a_fault(source: str, index: int,
+                                                       fragment: str) -> None:
+    with pytest.raises(ExpressionError) as info:
+        compile_expression(source)
+    assert info.value.index == index and fragment in info.value.message

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
 
-from prima.dsl.loader import load_document
+from prima.dsl import Grammar, load_document
 
 DOC = b"""<pxml xmlns="urn:prima:pxml:1" kind="fa" name="g">
   <grammar id="rooms">
@@ -20,7 +21,7 @@ DOC = b"""<pxml xmlns="urn:prima:pxml:1" kind="fa" name="g">
 
 
 @pytest.fixture(scope="module")
-def grammars(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+def grammars(tmp_path_factory: pytest.TempPathFactory) -> Mapping[str, Grammar]:
     path: Path = tmp_path_factory.mktemp("g") / "g.pxml"
     path.write_bytes(DOC)
     return load_document(path).grammars
@@ -42,5 +43,6 @@ def grammars(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyp
     ("hour", "at 7 oclock", "7"),
     ("hour", "eighteen", None),
 ])
-def test_match(grammars, grammar: str, heard: str, value: str | None) -> None:  # type: ignore[no-untyped-def]
+def test_match(grammars: Mapping[str, Grammar], grammar: str, heard: str,
+               value: str | None) -> None:
     assert grammars[grammar].match(heard) == value

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from prima.dsl.profile import default_profile, parse_profile
-from prima.errors import DocumentError
 from prima.catalog import STANDARD_DEVICES, Priority
+from prima.dsl import default_profile, parse_profile
+from prima.errors import DocumentError
 
 
 def test_default_profile_extends_the_catalog() -> None:
@@ -16,6 +16,8 @@ def test_default_profile_extends_the_catalog() -> None:
     assert catalog["TakePicture"].robot_specific
     assert catalog["TakePicture"].devices == {"camera"}
     assert catalog["TakePicture"].priority is Priority.HIGH
+    assert catalog["TakePicture"].duration == 1.0
+    assert catalog["Speak"].duration is None
     assert catalog["TopologicalMove"].priority is Priority.LOW
     assert profile.events == {"touched": True}
     assert "volume" in profile.extras["Speak"]
@@ -57,3 +59,11 @@ def test_profile_errors(kwargs: dict[str, str], line: int, fragment: str) -> Non
         _load(**kwargs)
     assert any(p.line == line and fragment in p.message for p in info.value.problems), \
         info.value.problems
+
+
+def test_a_robot_specific_command_without_a_duration_has_none() -> None:
+    profile = parse_profile(PROFILE.format(
+        devices=ALL + '<device name="laser"/>', tilt="-30",
+        rest='<command name="Laser" devices="laser"/>'
+             '<command name="Blink" devices="laser" duration="0.5"/>').encode(), "r.xml")
+    assert [(c.name, c.duration) for c in profile.commands] == [("Laser", None), ("Blink", 0.5)]

@@ -6,8 +6,8 @@ from pathlib import Path
 
 from lxml import etree
 
-from prima.dsl.commands import element_name
 from prima.catalog import STANDARD_COMMANDS
+from prima.dsl import element_name
 
 XSD = Path(__file__).parents[2] / "schemas" / "pxml.xsd"
 XS = {"xs": "http://www.w3.org/2001/XMLSchema"}

@@ -6,8 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from prima.dsl.loader import check_document
-from prima.dsl.profile import default_profile
+from prima.dsl import check_document, default_profile
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import Event, ManualClock, Outcome, Request, RunningOrder
 

@@ -1,7 +1,7 @@
 """Loading a PXML document: secure parse, then structure (XSD), then meaning.
 
 :func:`check_document` returns every problem (errors and warnings);
-:func:`load_document` returns a :class:`~prima.dsl.model.Document` or raises
+:func:`load_document` returns a :class:`~prima.dsl.Document` or raises
 :class:`~prima.errors.DocumentError`. Every problem is located at
 ``file:line:col``; inside an expression, at the character of the fault.
 """
@@ -10,17 +10,17 @@ from __future__ import annotations
 
 import re
 from collections import deque
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Optional, Tuple
 
 from lxml import etree
 
-from prima.xmlio import validate
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source
-from prima.dsl.commands import bind_element, bind_step, compile_attribute, element_name
-from prima.dsl.expr import Compiled, SyntaxFault, compile_expression, compile_template, parse_chain
-from prima.dsl.model import (
+from prima.catalog import ParamKind
+from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
+from prima.dsl._elements import elements, flag
+from prima.dsl._expr import Compiled, compile_expression, compile_template, parse_chain
+from prima.dsl._model import (
     Action,
     Assign,
     AtomicBlock,
@@ -46,20 +46,22 @@ from prima.dsl.model import (
     Variable,
     words,
 )
-from prima.dsl.profile import STANDARD_GESTURES, RobotProfile, default_profile
-from prima.errors import DocumentError, Problem, Severity
-from prima.catalog import ParamKind
-from prima.mediator import MediatorConfig
-from prima.mediator import PREDEFINED_EVENTS, AppKind, RunningOrder
+from prima.dsl._profile import STANDARD_GESTURES, RobotProfile, default_profile
+from prima.errors import DocumentError, ExpressionError, Problem, Severity
+from prima.vocab import (
+    MAX_BLOCK_WATCHDOG,
+    MAX_STREAM_HOLD,
+    PREDEFINED_EVENTS,
+    AppKind,
+    RunningOrder,
+)
+from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
 
 NAMESPACE = "urn:prima:pxml:1"
-MAX_STREAM_HOLD = MediatorConfig.max_stream_hold
-MAX_BLOCK_WATCHDOG = MediatorConfig.max_block_watchdog
 _NS = f"{{{NAMESPACE}}}"
 
-Spot = Tuple[etree._Element, Optional[str], int]
+Spot = tuple[etree._Element, str | None, int]
 """Where to point: (element, None | "#text" | attribute name, character index)."""
-
 
 
 @dataclass
@@ -86,15 +88,20 @@ class Builder:
         self.kind = AppKind(doc.root.get("kind", "fa"))
         self.problems: list[Problem] = []
         self.refs = _Refs()
-        self.variable_names = {v.get("name", "") for v in self._top("var")}
+        self.variable_names = dict.fromkeys(v.get("name", "") for v in self._top("var"))
+        """Every declared variable, in document order."""
         self.labels: dict[str, CommandCall] = {}
         self.timers: dict[str, tuple[bool, Spot]] = {}
+        self.states: dict[str, State] = {}
+        self.streams: dict[str, StreamBlock] = {}
+        self.blocks: dict[str, AtomicBlock] = {}
         self._state_elements: dict[str, etree._Element] = {}
         self.in_handler = False
 
     # ------------------------------------------------------------ reporting
 
     def position(self, spot: Spot) -> tuple[int, int]:
+        """The line and column ``spot`` points at."""
         el, where, index = spot
         if where is None:
             return self.doc.where.element(el)
@@ -103,26 +110,40 @@ class Builder:
         return self.doc.where.attribute(el, where, index)
 
     def loc(self, spot: Spot) -> Loc:
+        """Where ``spot`` points, as the model records it."""
         return Loc(*self.position(spot))
 
-    def report(self, spot: Spot, message: str, severity: Severity) -> None:
+    def loc_of(self, el: etree._Element) -> Loc:
+        """Where an element's start tag begins."""
+        return self.loc((el, None, 0))
+
+    def report(self, spot: Spot, message: str, severity: Severity, *, caret: bool = False) -> None:
+        """A problem at ``spot``; with ``caret``, it carries its source line too."""
         line, col = self.position(spot)
-        self.problems.append(Problem(self.doc.name, line, col, severity, message))
+        source = self.doc.where.line_text(line) if caret else ""
+        self.problems.append(Problem(self.doc.name, line, col, severity, message, source))
+
+    def fault(self, spot: Spot, fault: ExpressionError) -> None:
+        """An expression's fault, located at its character in the expression written at ``spot``."""
+        el, where, base = spot
+        self.report((el, where, base + fault.index), fault.message, Severity.ERROR, caret=True)
 
     def error(self, spot: Spot, message: str) -> None:
+        """An error at ``spot``: the document will not load."""
         self.report(spot, message, Severity.ERROR)
 
     def warning(self, spot: Spot, message: str) -> None:
+        """A warning at ``spot``: the document loads, but probably does not do what is meant."""
         self.report(spot, message, Severity.WARNING)
 
     def compile(self, spot: Spot, make: Callable[[], Compiled]) -> Compiled | None:
         """Compile with ``make``; faults and references are located from ``spot``."""
-        el, where, base = spot
         try:
             compiled = make()
-        except SyntaxFault as fault:
-            self.error((el, where, base + fault.index), fault.message)
+        except ExpressionError as fault:
+            self.fault(spot, fault)
             return None
+        el, where, base = spot
         for name, index in compiled.names:
             self.refs.variables.append((name, (el, where, base + index)))
         if compiled.event_uses and not self.in_handler:
@@ -131,16 +152,19 @@ class Builder:
         return compiled
 
     def expression(self, el: etree._Element, attr: str) -> Compiled | None:
+        """The expression written in attribute ``attr``, or None after a fault."""
         text = el.get(attr, "")
         return self.compile((el, attr, 0), lambda: compile_expression(text))
 
     def template(self, el: etree._Element, attr: str) -> Compiled | None:
+        """The text with ``{expression}`` parts written in attribute ``attr``, or None."""
         text = el.get(attr, "")
         return self.compile((el, attr, 0), lambda: compile_template(text))
 
     # ------------------------------------------------------------ references
 
     def check_gesture(self, name: str, spot: Spot) -> None:
+        """A gesture must be one the robot knows; an EA may use only the common ones."""
         if name not in self.profile.gestures and name not in STANDARD_GESTURES:
             known = ", ".join(sorted(self.profile.gestures))
             self.error(spot, f"unknown gesture '{name}' (this robot knows: {known})")
@@ -149,12 +173,15 @@ class Builder:
                              f"(common gestures: {', '.join(sorted(STANDARD_GESTURES))})")
 
     def need_grammar(self, name: str, spot: Spot) -> None:
+        """The document must declare this grammar (checked once all is read)."""
         self.refs.grammars.append((name, spot))
 
     def need_variable(self, name: str, spot: Spot) -> None:
+        """The document must declare this variable (checked once all is read)."""
         self.refs.variables.append((name, spot))
 
     def add_label(self, label: str, call: CommandCall, spot: Spot) -> None:
+        """Record a Command's id, which handlers refer to; ids are unique in a document."""
         if label in self.labels:
             first = self.labels[label].loc
             self.error(spot, f"duplicate Command id '{label}' (first used at line {first.line})")
@@ -167,35 +194,32 @@ class Builder:
     # ------------------------------------------------------------ the walk
 
     def build(self) -> Document | None:
+        """The document, or None when it has errors (they are in :attr:`problems`)."""
         root = self.doc.root
         variables = self._variables()
         grammars = self._grammars()
         events = self._events()
         handlers: list[Handler] = []
-        states: dict[str, State] = {}
-        streams: dict[str, StreamBlock] = {}
-        blocks: dict[str, AtomicBlock] = {}
         description = ""
-        for el in root:
-            if not isinstance(el.tag, str):
-                continue
+        for el in elements(root):
             tag = local_name(el)
             if tag == "description":
                 description = " ".join((el.text or "").split())
             elif tag.startswith("on"):
                 handlers.append(self._handler(el))
             elif tag in ("state", "stream", "block"):
-                self._state_group(el, states, streams, blocks, None, None)
+                self._state_group(el, None, None)
         self._check_references(events)
-        initial = self._initial(states)
-        self._check_reachable(states, handlers, initial)
+        initial = self._initial()
+        self._check_gotos()
+        self._check_reachable(handlers, initial)
         if any(p.severity is Severity.ERROR for p in self.problems):
             return None
         return Document(
             path=self.doc.name, kind=self.kind, name=root.get("name", ""),
             description=description, variables=variables, grammars=grammars, events=events,
-            handlers=tuple(handlers), states=states, initial=initial or "",
-            streams=streams, blocks=blocks, commands=dict(self.labels),
+            handlers=tuple(handlers), states=self.states, initial=initial or "",
+            streams=self.streams, blocks=self.blocks, commands=dict(self.labels),
             timers=frozenset(self.timers),
         )
 
@@ -214,8 +238,7 @@ class Builder:
                 for used, spot in self.refs.variables[before:]:
                     if used not in out and used in self.variable_names:
                         self.error(spot, f"variable '{used}' is used before it is declared")
-                del self.refs.variables[before:]
-            out[name] = Variable(name, init, self.loc((el, None, 0)))
+            out[name] = Variable(name, init, self.loc_of(el))
         return out
 
     def _grammars(self) -> dict[str, Grammar]:
@@ -226,24 +249,25 @@ class Builder:
                 self.error((el, "id", 0), f"grammar '{gid}' is declared twice")
                 continue
             choices, patterns = [], []
-            for item in el:
-                if not isinstance(item.tag, str):
-                    continue
-                text = item.text or ""
+            for item in elements(el):
                 if local_name(item) == "choice":
-                    phrases = tuple(tuple(words(p)) for p in text.split("|") if words(p))
-                    if not phrases:
-                        self.error((item, None, 0), "a choice needs at least one phrase "
-                                                    "(synonyms separated by '|')")
-                        continue
-                    value = item.get("value") or " ".join(phrases[0])
-                    choices.append(Choice(value, phrases))
+                    choice = self._choice(item)
+                    if choice is not None:
+                        choices.append(choice)
                 else:
-                    pattern = self._pattern(item, text)
+                    pattern = self._pattern(item, item.text or "")
                     if pattern is not None:
                         patterns.append(pattern)
-            out[gid] = Grammar(gid, tuple(choices), tuple(patterns), self.loc((el, None, 0)))
+            out[gid] = Grammar(gid, tuple(choices), tuple(patterns), self.loc_of(el))
         return out
+
+    def _choice(self, el: etree._Element) -> Choice | None:
+        phrases = tuple(tuple(words(p)) for p in (el.text or "").split("|") if words(p))
+        if not phrases:
+            self.error((el, None, 0), "a choice needs at least one phrase "
+                                      "(synonyms separated by '|')")
+            return None
+        return Choice(el.get("value") or " ".join(phrases[0]), phrases)
 
     def _pattern(self, el: etree._Element, text: str) -> Pattern | None:
         tokens = text.split()
@@ -252,18 +276,16 @@ class Builder:
             return None
         parts = []
         for tok in tokens:
-            if tok == "*":
-                parts.append(r"(.*?)")
-            elif tok == "#":
-                parts.append(r"(-?[0-9]+(?:\.[0-9]+)?)")
-            else:
-                w = words(tok)
-                if len(w) != 1:
-                    self.error((el, "#text", text.find(tok)),
-                               f"pattern word {tok!r} must be one word (letters, digits, ')")
-                    return None
-                parts.append(re.escape(w[0]))
-        if sum(t in ("*", "#") for t in tokens) > 4:
+            if tok in _CAPTURES:
+                parts.append(_CAPTURES[tok])
+                continue
+            w = words(tok)
+            if len(w) != 1:
+                self.error((el, "#text", text.find(tok)),
+                           f"pattern word {tok!r} must be one word (letters, digits, ')")
+                return None
+            parts.append(re.escape(w[0]))
+        if sum(t in _CAPTURES for t in tokens) > 4:
             self.error((el, None, 0), "a pattern may capture at most 4 times ('*' or '#')")
             return None
         regex = re.compile(r"\s*" + r"\s*".join(parts) + r"\s*")
@@ -280,96 +302,114 @@ class Builder:
                 self.error(spot, f"'{name}' is already an event of the robot; pick another name")
             elif name in out:
                 self.error(spot, f"event '{name}' is declared twice")
-            out[name] = EventDecl(name, el.get("reactive") in ("true", "1"), self.loc((el, None, 0)))
+            out[name] = EventDecl(name, flag(el, "reactive"), self.loc_of(el))
         return out
 
-    def _state_group(self, el: etree._Element, states: dict[str, State],
-                     streams: dict[str, StreamBlock], blocks: dict[str, AtomicBlock],
-                     stream: etree._Element | None, block: etree._Element | None) -> list[str]:
+    # ------------------------------------------------------------ states, streams, blocks
+
+    def _state_group(self, el: etree._Element, stream: etree._Element | None,
+                     block: etree._Element | None) -> list[str]:
+        """The ids of the states ``el`` holds: a state, or a stream or block of them.
+
+        ``stream`` and ``block`` are the stream and block ``el`` is inside, if any.
+        """
         tag = local_name(el)
         if tag == "state":
-            state = self._state(el, stream, block)
-            self._state_elements.setdefault(state.id, el)
-            if state.id in states:
-                self.error((el, "id", 0), f"duplicate state id '{state.id}' "
-                                          f"(first at line {states[state.id].loc.line})")
-            else:
-                states[state.id] = state
-            return [state.id]
+            return [self._add_state(el, stream, block)]
         if tag == "stream":
-            if stream is not None:
-                self.error((el, None, 0), "stream blocks cannot nest: this <stream> is inside "
-                                          f"the <stream> at line {self.loc((stream, None, 0)).line}")
-            if block is not None:
-                self.error((el, None, 0), "a <stream> cannot be inside a <block>: the block is "
-                                          "already one atomic behavior")
-            inner_stream, inner_block = el, block
+            self._check_stream_nesting(el, stream, block)
+            members = self._members(el, el, block)
+            self._add_stream(el, members)
         else:
-            if block is not None:
-                self.error((el, None, 0), "blocks cannot nest: this <block> is inside the "
-                                          f"<block> at line {self.loc((block, None, 0)).line}")
-            inner_stream, inner_block = stream, el
-            listed = el.get("devices") or ""
-            for m in re.finditer(r"\S+", listed):
-                dev = m.group()
-                if dev not in self.catalog.devices:
-                    self.error((el, "devices", m.start()), f"unknown device '{dev}' "
-                                                   f"(devices: {', '.join(sorted(self.catalog.devices))})")
-        gid = self._group_id(el)
-        members: list[str] = []
-        for child in el:
-            if isinstance(child.tag, str):
-                members += self._state_group(child, states, streams, blocks, inner_stream, inner_block)
-        loc = self.loc((el, None, 0))
-        table: dict = streams if tag == "stream" else blocks
-        if gid in table:
-            self.error((el, "id", 0), f"duplicate {tag} id '{gid}'")
-        if tag == "stream":
-            hold = float(el.get("hold", "10"))
-            if hold > MAX_STREAM_HOLD:
-                self.warning((el, "hold", 0), f"PRIMA holds a stream for at most "
-                                              f"{MAX_STREAM_HOLD:g} s; hold={hold:g} acts as "
-                                              f"{MAX_STREAM_HOLD:g}")
-            streams[gid] = StreamBlock(gid, hold, tuple(members), loc)
-        else:
-            devices = el.get("devices")
-            watchdog = float(el.get("watchdog", "30"))
-            if watchdog > MAX_BLOCK_WATCHDOG:
-                self.warning((el, "watchdog", 0), f"PRIMA ends a block after at most "
-                                                  f"{MAX_BLOCK_WATCHDOG:g} s; watchdog={watchdog:g} "
-                                                  f"acts as {MAX_BLOCK_WATCHDOG:g}")
-            blocks[gid] = AtomicBlock(gid, watchdog,
-                                      frozenset(devices.split()) if devices else None,
-                                      tuple(members), loc)
+            self._check_block_nesting(el, block)
+            members = self._members(el, stream, el)
+            self._add_block(el, members)
         return members
+
+    def _members(self, el: etree._Element, stream: etree._Element | None,
+                 block: etree._Element | None) -> list[str]:
+        return [sid for child in elements(el) for sid in self._state_group(child, stream, block)]
+
+    def _add_state(self, el: etree._Element, stream: etree._Element | None,
+                   block: etree._Element | None) -> str:
+        state = self._state(el, stream, block)
+        self._state_elements.setdefault(state.id, el)
+        if state.id in self.states:
+            self.error((el, "id", 0), f"duplicate state id '{state.id}' "
+                                      f"(first at line {self.states[state.id].loc.line})")
+        else:
+            self.states[state.id] = state
+        return state.id
+
+    def _check_stream_nesting(self, el: etree._Element, stream: etree._Element | None,
+                              block: etree._Element | None) -> None:
+        if stream is not None:
+            self.error((el, None, 0), "stream blocks cannot nest: this <stream> is inside "
+                                      f"the <stream> at line {self.loc_of(stream).line}")
+        if block is not None:
+            self.error((el, None, 0), "a <stream> cannot be inside a <block>: the block is "
+                                      "already one atomic behavior")
+
+    def _check_block_nesting(self, el: etree._Element, block: etree._Element | None) -> None:
+        if block is not None:
+            self.error((el, None, 0), "blocks cannot nest: this <block> is inside the "
+                                      f"<block> at line {self.loc_of(block).line}")
+        for m in re.finditer(r"\S+", el.get("devices") or ""):
+            if m.group() not in self.catalog.devices:
+                known = ", ".join(sorted(self.catalog.devices))
+                self.error((el, "devices", m.start()),
+                           f"unknown device '{m.group()}' (devices: {known})")
+
+    def _add_stream(self, el: etree._Element, members: list[str]) -> None:
+        gid = self._group_id(el)
+        if gid in self.streams:
+            self.error((el, "id", 0), f"duplicate stream id '{gid}'")
+        hold = float(el.get("hold", "10"))
+        if hold > MAX_STREAM_HOLD:
+            self.warning((el, "hold", 0), f"PRIMA holds a stream for at most "
+                                          f"{MAX_STREAM_HOLD:g} s; hold={hold:g} acts as "
+                                          f"{MAX_STREAM_HOLD:g}")
+        self.streams[gid] = StreamBlock(gid, hold, tuple(members), self.loc_of(el))
+
+    def _add_block(self, el: etree._Element, members: list[str]) -> None:
+        gid = self._group_id(el)
+        if gid in self.blocks:
+            self.error((el, "id", 0), f"duplicate block id '{gid}'")
+        watchdog = float(el.get("watchdog", "30"))
+        if watchdog > MAX_BLOCK_WATCHDOG:
+            self.warning((el, "watchdog", 0), f"PRIMA ends a block after at most "
+                                              f"{MAX_BLOCK_WATCHDOG:g} s; watchdog={watchdog:g} "
+                                              f"acts as {MAX_BLOCK_WATCHDOG:g}")
+        devices = el.get("devices")
+        self.blocks[gid] = AtomicBlock(gid, watchdog,
+                                       frozenset(devices.split()) if devices else None,
+                                       tuple(members), self.loc_of(el))
 
     def _state(self, el: etree._Element, stream: etree._Element | None,
                block: etree._Element | None) -> State:
         entry: tuple[Action, ...] = ()
         handlers = []
-        for child in el:
-            if not isinstance(child.tag, str):
-                continue
+        for child in elements(el):
             if local_name(child) == "entry":
                 entry = self._actions(child)
             else:
                 handlers.append(self._handler(child))
-        sid = el.get("id", "")
-        return State(sid, el.get("initial") in ("true", "1"), entry, tuple(handlers),
-                     self.loc((el, None, 0)),
+        return State(el.get("id", ""), flag(el, "initial"), entry, tuple(handlers),
+                     self.loc_of(el),
                      stream=None if stream is None else self._group_id(stream),
                      block=None if block is None else self._group_id(block))
 
     def _group_id(self, el: etree._Element) -> str:
         """A stream's or block's id, or ``stream@LINE`` when it has none."""
-        return el.get("id") or f"{local_name(el)}@{self.loc((el, None, 0)).line}"
+        return el.get("id") or f"{local_name(el)}@{self.loc_of(el).line}"
+
+    # ------------------------------------------------------------ handlers and actions
 
     def _handler(self, el: etree._Element) -> Handler:
         kind = HandlerKind(local_name(el))
-        key = el.get("event" if kind is HandlerKind.EVENT else "of", "")
         attr = "event" if kind is HandlerKind.EVENT else "of"
-        reactive_attr = el.get("reactive")
-        reactive = None if reactive_attr is None else reactive_attr in ("true", "1")
+        key = el.get(attr, "")
+        reactive = None if el.get("reactive") is None else flag(el, "reactive")
         self.refs.handlers.append((kind, key, (el, attr, 0), reactive))
         self.in_handler = True
         try:
@@ -377,19 +417,19 @@ class Builder:
             actions = self._actions(el)
         finally:
             self.in_handler = False
-        return Handler(kind, key, cond, reactive, actions, self.loc((el, None, 0)))
+        return Handler(kind, key, cond, reactive, actions, self.loc_of(el))
 
     def _actions(self, parent: etree._Element) -> tuple[Action, ...]:
-        return self._sequence([c for c in parent if isinstance(c.tag, str)])
+        return self._sequence(elements(parent))
 
-    def _sequence(self, elements: list[etree._Element]) -> tuple[Action, ...]:
+    def _sequence(self, actions: list[etree._Element]) -> tuple[Action, ...]:
         out: list[Action] = []
         goto: etree._Element | None = None
         warned = False
-        for el in elements:
+        for el in actions:
             if goto is not None and not warned:
                 self.warning((el, None, 0), f"never runs: the <goto> at line "
-                                            f"{self.loc((goto, None, 0)).line} leaves the state first")
+                                            f"{self.loc_of(goto).line} leaves the state first")
                 warned = True
             action = self._action(el)
             if action is not None:
@@ -398,12 +438,55 @@ class Builder:
                 goto = el
         return tuple(out)
 
+    def _action(self, el: etree._Element) -> Action | None:
+        tag = local_name(el)
+        read = _ACTIONS.get(tag)
+        if read is None:
+            self.error((el, None, 0), f"<{tag}> is not an action")
+            return None
+        return read(self, el)
+
+    def _request(self, el: etree._Element) -> Request | None:
+        calls = self._request_calls(el)
+        if calls is None:
+            return None
+        grouped = flag(el, "group")
+        for call in calls if grouped else ():
+            if self.catalog[call.command].feedback:
+                self.error((el, "group", 0), f"a grouped request cannot hold the feedback "
+                                             f"Command {call.command}: each of its loop "
+                                             "iterations is an atomic behavior of its own")
+                return None
+        return Request(tuple(calls), RunningOrder(el.get("order", "after-latest")), grouped,
+                       self.loc_of(el))
+
+    def _request_calls(self, el: etree._Element) -> list[CommandCall] | None:
+        """The Commands of a request or chain; None if one of them has an error."""
+        if local_name(el) == "chain":
+            text = el.text or ""
+            try:
+                steps = parse_chain(text)
+            except ExpressionError as fault:
+                self.fault((el, "#text", 0), fault)
+                return None
+            calls = [bind_step(self, el, text, step) for step in steps]
+        else:
+            calls = [bind_element(self, child) for child in elements(el)]
+        bound = [call for call in calls if call is not None]
+        return bound if len(bound) == len(calls) else None
+
+    def _assign(self, el: etree._Element) -> Assign | None:
+        name = el.get("name", "")
+        self.need_variable(name, (el, "name", 0))
+        expr = self.expression(el, "expr")
+        return Assign(name, expr, self.loc_of(el)) if expr else None
+
     def _if(self, el: etree._Element) -> If | None:
         """``<if cond>`` actions ``<elseif cond/>`` actions ``<else/>`` actions ``</if>``."""
         conds: list[Compiled | None] = [self.expression(el, "cond")]
         bodies: list[list[etree._Element]] = [[]]
         otherwise: list[etree._Element] | None = None
-        for child in (c for c in el if isinstance(c.tag, str)):
+        for child in elements(el):
             tag = local_name(child)
             if tag == "elseif":
                 conds.append(self.expression(child, "cond"))
@@ -414,89 +497,47 @@ class Builder:
                 (bodies[-1] if otherwise is None else otherwise).append(child)
         compiled = [self._sequence(body) for body in bodies]
         rest = self._sequence(otherwise or [])
-        if any(c is None for c in conds):
+        known = [c for c in conds if c is not None]
+        if len(known) < len(conds):
             return None
-        return If(tuple(zip(conds, compiled)), rest, self.loc((el, None, 0)))  # type: ignore[arg-type]
+        return If(tuple(zip(known, compiled, strict=True)), rest, self.loc_of(el))
 
-    def _action(self, el: etree._Element) -> Action | None:
-        tag = local_name(el)
-        loc = self.loc((el, None, 0))
-        if tag in ("request", "chain"):
-            calls = self._request_calls(el)
-            if calls is None:
-                return None
-            grouped = el.get("group") in ("true", "1")
-            for call in calls if grouped else ():
-                if self.catalog[call.command].feedback:
-                    self.error((el, "group", 0), f"a grouped request cannot hold the feedback "
-                                                 f"Command {call.command}: each of its loop "
-                                                 "iterations is an atomic behavior of its own")
-                    return None
-            return Request(tuple(calls), RunningOrder(el.get("order", "after-latest")),
-                           el.get("group") in ("true", "1"), loc)
-        if tag == "assign":
-            name = el.get("name", "")
-            self.need_variable(name, (el, "name", 0))
-            expr = self.expression(el, "expr")
-            return Assign(name, expr, loc) if expr else None
-        if tag == "if":
-            return self._if(el)
-        if tag == "goto":
-            self.refs.gotos.append((el.get("state", ""), (el, "state", 0)))
-            return Goto(el.get("state", ""), loc)
-        if tag == "send":
-            text = self.template(el, "text")
-            return Send(el.get("to", ""), text, loc) if text else None
-        if tag == "raise":
-            self.refs.raises.append((el.get("event", ""), (el, "event", 0)))
-            return Raise(el.get("event", ""), loc)
-        if tag == "timer":
-            name = el.get("name", "")
-            reactive = el.get("reactive") in ("true", "1")
-            if reactive and self.kind is AppKind.EA:
-                self.error((el, "reactive", 0), "only an FA may mark its own events reactive")
-            if name in self.timers and self.timers[name][0] != reactive:
-                self.error((el, "reactive", 0), f"timer '{name}' is started elsewhere with a "
-                                                "different reactive flag")
-            self.timers.setdefault(name, (reactive, (el, "name", 0)))
-            after = compile_attribute(self, ParamKind.NUMBER, el, "after")
-            return StartTimer(name, after, reactive, loc) if after else None
-        if tag == "cancel-timer":
-            self.refs.cancels.append((el.get("name", ""), (el, "name", 0)))
-            return CancelTimer(el.get("name", ""), loc)
-        if tag == "log":
-            text = self.template(el, "text")
-            return Log(text, loc) if text else None
-        self.error((el, None, 0), f"<{tag}> is not an action")
-        return None
+    def _goto(self, el: etree._Element) -> Goto:
+        self.refs.gotos.append((el.get("state", ""), (el, "state", 0)))
+        return Goto(el.get("state", ""), self.loc_of(el))
 
-    def _request_calls(self, el: etree._Element) -> list[CommandCall] | None:
-        calls: list[CommandCall] = []
-        ok = True
-        if local_name(el) == "chain":
-            text = el.text or ""
-            try:
-                steps = parse_chain(text)
-            except SyntaxFault as fault:
-                self.error((el, "#text", fault.index), fault.message)
-                return None
-            for step in steps:
-                call = bind_step(self, el, text, step)
-                ok = ok and call is not None
-                if call is not None:
-                    calls.append(call)
-        else:
-            for child in el:
-                if isinstance(child.tag, str):
-                    call = bind_element(self, child)
-                    ok = ok and call is not None
-                    if call is not None:
-                        calls.append(call)
-        return calls if ok else None
+    def _send(self, el: etree._Element) -> Send | None:
+        text = self.template(el, "text")
+        return Send(el.get("to", ""), text, self.loc_of(el)) if text else None
+
+    def _raise(self, el: etree._Element) -> Raise:
+        self.refs.raises.append((el.get("event", ""), (el, "event", 0)))
+        return Raise(el.get("event", ""), self.loc_of(el))
+
+    def _timer(self, el: etree._Element) -> StartTimer | None:
+        name = el.get("name", "")
+        reactive = flag(el, "reactive")
+        if reactive and self.kind is AppKind.EA:
+            self.error((el, "reactive", 0), "only an FA may mark its own events reactive")
+        if name in self.timers and self.timers[name][0] != reactive:
+            self.error((el, "reactive", 0), f"timer '{name}' is started elsewhere with a "
+                                            "different reactive flag")
+        self.timers.setdefault(name, (reactive, (el, "name", 0)))
+        after = compile_attribute(self, ParamKind.NUMBER, el, "after")
+        return StartTimer(name, after, reactive, self.loc_of(el)) if after else None
+
+    def _cancel_timer(self, el: etree._Element) -> CancelTimer:
+        self.refs.cancels.append((el.get("name", ""), (el, "name", 0)))
+        return CancelTimer(el.get("name", ""), self.loc_of(el))
+
+    def _log(self, el: etree._Element) -> Log | None:
+        text = self.template(el, "text")
+        return Log(text, self.loc_of(el)) if text else None
 
     # ------------------------------------------------------------ checks
 
     def _check_references(self, events: dict[str, EventDecl]) -> None:
+        """Names used before their declaration was known: variables, grammars, events, timers."""
         for name, spot in self.refs.variables:
             if name not in self.variable_names:
                 self.error(spot, f"undefined variable '{name}'{self._hint('var', name)}")
@@ -508,10 +549,15 @@ class Builder:
             if self.kind is AppKind.EA:
                 self.error((spot[0], None, 0), "only an FA may raise its own events")
             elif name not in events:
-                self.error(spot, f"undeclared event '{name}' (declare it with <event name=\"{name}\"/>)")
+                self.error(spot, f"undeclared event '{name}' "
+                                 f"(declare it with <event name=\"{name}\"/>)")
         for name, spot in self.refs.cancels:
             if name not in self.timers:
                 self.error(spot, f"no <timer name=\"{name}\"> is ever started")
+        self._check_handlers(events)
+
+    def _check_handlers(self, events: dict[str, EventDecl]) -> None:
+        """What each handler listens to: an event, or a labelled Command's end or answer."""
         for kind, key, spot, reactive in self.refs.handlers:
             if kind is HandlerKind.EVENT:
                 self._check_event(key, spot, reactive, events)
@@ -519,7 +565,7 @@ class Builder:
             call = self.labels.get(key)
             if call is None:
                 self.error(spot, f"no Command has the id '{key}'")
-            elif kind is not HandlerKind.END and call.command != "QA":
+            elif kind is not HandlerKind.END and not self.catalog[call.command].listens:
                 self.error(spot, f"<{kind.value}> needs a Q&A, but '{key}' is a {call.command}")
 
     def _check_event(self, name: str, spot: Spot, reactive: bool | None,
@@ -542,46 +588,68 @@ class Builder:
 
     def _hint(self, what: str, name: str) -> str:
         close = [v for v in self.variable_names if _similar(v, name)]
-        return f"; did you mean '{close[0]}'?" if close else f" (declare it with <{what} name=\"{name}\"/>)"
+        if close:
+            return f"; did you mean '{close[0]}'?"
+        return f" (declare it with <{what} name=\"{name}\"/>)"
 
-    def _initial(self, states: dict[str, State]) -> str | None:
-        initial = [s for s in states.values() if s.initial]
-        if not states:
+    def _initial(self) -> str | None:
+        initial = [s for s in self.states.values() if s.initial]
+        if not self.states:
             self.error((self.doc.root, None, 0), "a document needs at least one <state>")
             return None
         if not initial:
-            self.error((self.doc.root, None, 0), 'no initial state: mark one <state initial="true">')
+            self.error((self.doc.root, None, 0),
+                       'no initial state: mark one <state initial="true">')
             return None
         for extra in initial[1:]:
-            self.error((self._state_elements[extra.id], "initial", 0), f"more than one initial state "
-                                                f"('{initial[0].id}' and '{extra.id}')")
+            self.error((self._state_elements[extra.id], "initial", 0),
+                       f"more than one initial state ('{initial[0].id}' and '{extra.id}')")
         return initial[0].id
 
-    def _check_reachable(self, states: dict[str, State], handlers: list[Handler],
-                         initial: str | None) -> None:
+    def _check_gotos(self) -> None:
         for target, spot in self.refs.gotos:
-            if target not in states:
+            if target not in self.states:
                 self.error(spot, f"no state has the id '{target}'")
+
+    def _check_reachable(self, handlers: list[Handler], initial: str | None) -> None:
         if initial is None:
             return
         everywhere = _goto_targets(a for h in handlers for a in h.actions)
         seen = {initial}
         todo = deque([initial])
         while todo:
-            state = states[todo.popleft()]
-            nexts = _goto_targets(list(state.entry) + [a for h in state.handlers for a in h.actions])
-            for target in (nexts | everywhere) & states.keys():
+            state = self.states[todo.popleft()]
+            nexts = _goto_targets([*state.entry, *(a for h in state.handlers for a in h.actions)])
+            for target in (nexts | everywhere) & self.states.keys():
                 if target not in seen:
                     seen.add(target)
                     todo.append(target)
-        for state in states.values():
+        for state in self.states.values():
             if state.id not in seen:
                 self.warning((self._state_elements[state.id], None, 0),
                              f"state '{state.id}' is unreachable from the initial state "
                              f"'{initial}'")
 
 
-def _goto_targets(actions) -> set[str]:  # type: ignore[no-untyped-def]
+_ACTIONS: Mapping[str, Callable[[Builder, etree._Element], Action | None]] = {
+    "request": Builder._request,
+    "chain": Builder._request,
+    "assign": Builder._assign,
+    "if": Builder._if,
+    "goto": Builder._goto,
+    "send": Builder._send,
+    "raise": Builder._raise,
+    "timer": Builder._timer,
+    "cancel-timer": Builder._cancel_timer,
+    "log": Builder._log,
+}
+"""How each action element is read."""
+
+_CAPTURES = {"*": r"(.*?)", "#": r"(-?[0-9]+(?:\.[0-9]+)?)"}
+"""What a pattern's ``*`` (any words) and ``#`` (a number) match."""
+
+
+def _goto_targets(actions: Iterable[Action]) -> set[str]:
     out: set[str] = set()
     for a in actions:
         if isinstance(a, Goto):
@@ -597,7 +665,7 @@ def _similar(a: str, b: str) -> bool:
     if a == b or abs(len(a) - len(b)) > 1:
         return False
     if len(a) == len(b):
-        diffs = [i for i, (x, y) in enumerate(zip(a, b)) if x != y]
+        diffs = [i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y]
         swapped = len(diffs) == 2 and diffs[1] == diffs[0] + 1 and \
             a[diffs[0]] == b[diffs[1]] and a[diffs[1]] == b[diffs[0]]
         return len(diffs) == 1 or swapped
@@ -641,8 +709,8 @@ def check_parsed(doc: XmlDocument,
     """Like :func:`check_document`, for a document already parsed securely."""
     profile = profile or default_profile()
     if doc.root.tag != _NS + "pxml":
-        return None, [doc.problem(doc.root, f"not a PXML document: the root must be "
-                                            f'<pxml xmlns="{NAMESPACE}">, not <{local_name(doc.root)}>')]
+        return None, [doc.problem(doc.root, f'not a PXML document: the root must be <pxml xmlns='
+                                            f'"{NAMESPACE}">, not <{local_name(doc.root)}>')]
     problems = validate(doc, "pxml.xsd", _hint_for(profile))
     if problems:
         return None, problems

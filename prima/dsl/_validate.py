@@ -7,19 +7,19 @@ scenarios and maps). Folders are searched for ``*.pxml`` and ``*.xml`` files.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from io import BytesIO
 from pathlib import Path
-from typing import Callable, Iterable, Mapping
 
 from lxml import etree
 
+from prima.dsl._loader import NAMESPACE as PXML_NS
+from prima.dsl._loader import check_parsed
+from prima.dsl._profile import NAMESPACE as ROBOT_NS
+from prima.dsl._profile import RobotProfile, profile_from_xml
+from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.xmlio import parse_xml, read_source
-from prima.dsl.loader import NAMESPACE as PXML_NS
-from prima.dsl.loader import check_parsed
-from prima.dsl.profile import NAMESPACE as ROBOT_NS
-from prima.dsl.profile import RobotProfile, profile_from_xml
-from prima.errors import DocumentError, Problem, Severity
 
 
 @dataclass
@@ -46,6 +46,10 @@ class Report:
         }
 
 
+class PathNotFoundError(PrimaError, FileNotFoundError):
+    """A path given to :func:`collect` does not exist."""
+
+
 Checker = Callable[[Path], list[Problem]]
 """Checks one file of some other kind (e.g. a scenario) and returns its problems."""
 
@@ -54,7 +58,7 @@ def collect(paths: Iterable[str | Path]) -> list[tuple[Path, bool]]:
     """Files to validate, each with whether it was named explicitly.
 
     Folders are searched for ``*.pxml`` and ``*.xml``. Raises
-    FileNotFoundError for a path that does not exist.
+    :class:`PathNotFoundError` (a FileNotFoundError) for a path that does not exist.
     """
     out: list[tuple[Path, bool]] = []
     for raw in paths:
@@ -65,7 +69,7 @@ def collect(paths: Iterable[str | Path]) -> list[tuple[Path, bool]]:
         elif path.exists():
             out.append((path, True))
         else:
-            raise FileNotFoundError(str(raw))
+            raise PathNotFoundError(str(raw))
     return out
 
 
@@ -94,8 +98,9 @@ def check_file(path: Path, profile: RobotProfile | None = None,
     except DocumentError as exc:
         return None if skippable else list(exc.problems)
     namespace = root_namespace(data)
-    if checkers and namespace in checkers:
-        return checkers[namespace](path)
+    checker = checkers.get(namespace) if checkers and namespace is not None else None
+    if checker is not None:
+        return checker(path)
     if skippable and namespace not in (PXML_NS, ROBOT_NS):
         return None
     try:

@@ -1,6 +1,6 @@
 """The validated form of a PXML document, as the interpreter runs it.
 
-Every expression is already compiled (:class:`~prima.dsl.expr.Compiled`);
+Every expression is already compiled (:class:`~prima.dsl.Compiled`);
 every reference (states, Commands, grammars, variables, events) is known to
 exist. Objects are frozen: one loaded document can back many runs.
 """
@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import enum
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping, Union
 
-from prima.dsl.expr import Compiled
-from prima.mediator import AppKind, RunningOrder
+from prima.dsl._expr import Compiled
+from prima.vocab import AppKind, RunningOrder
 
 
 @dataclass(frozen=True)
@@ -58,6 +58,8 @@ class Request:
 
 @dataclass(frozen=True)
 class Assign:
+    """``<assign name expr>``: set a variable."""
+
     name: str
     expr: Compiled
     loc: Loc
@@ -65,13 +67,17 @@ class Assign:
 
 @dataclass(frozen=True)
 class If:
-    branches: tuple[tuple[Compiled, tuple["Action", ...]], ...]
-    otherwise: tuple["Action", ...]
+    """``<if>``: the actions of the first branch whose condition holds, else ``otherwise``."""
+
+    branches: tuple[tuple[Compiled, tuple[Action, ...]], ...]
+    otherwise: tuple[Action, ...]
     loc: Loc
 
 
 @dataclass(frozen=True)
 class Goto:
+    """``<goto state>``: leave the current state for another."""
+
     state: str
     loc: Loc
 
@@ -95,6 +101,8 @@ class Raise:
 
 @dataclass(frozen=True)
 class StartTimer:
+    """``<timer name after>``: (re)start a timer; its event is posted when it fires."""
+
     name: str
     after: Compiled
     reactive: bool
@@ -103,17 +111,22 @@ class StartTimer:
 
 @dataclass(frozen=True)
 class CancelTimer:
+    """``<cancel-timer name>``: stop a timer before it fires."""
+
     name: str
     loc: Loc
 
 
 @dataclass(frozen=True)
 class Log:
+    """``<log text>``: a note in the trace."""
+
     text: Compiled
     loc: Loc
 
 
-Action = Union[Request, Assign, If, Goto, Send, Raise, StartTimer, CancelTimer, Log]
+Action = Request | Assign | If | Goto | Send | Raise | StartTimer | CancelTimer | Log
+"""What a state's entry or a handler does, in order."""
 
 
 # ---------------------------------------------------------------- handlers
@@ -135,6 +148,8 @@ class HandlerKind(str, enum.Enum):
 
 @dataclass(frozen=True)
 class Handler:
+    """What to do on an event, or on a labelled Command's end or answer."""
+
     kind: HandlerKind
     key: str
     """The event name, or the label of the Command it listens to."""
@@ -171,6 +186,8 @@ def words(text: str) -> list[str]:
 
 @dataclass(frozen=True)
 class Choice:
+    """One answer of a grammar, and the phrases that mean it."""
+
     value: str
     phrases: tuple[tuple[str, ...], ...]
     """Synonyms, each a tuple of normalised words."""
@@ -224,6 +241,8 @@ def _contains(heard: list[str], phrase: tuple[str, ...]) -> bool:
 
 @dataclass(frozen=True)
 class State:
+    """A state: actions on entry, and handlers active while the application is in it."""
+
     id: str
     initial: bool
     entry: tuple[Action, ...]
@@ -258,6 +277,8 @@ class AtomicBlock:
 
 @dataclass(frozen=True)
 class Variable:
+    """A document variable, with its initial value (null without one)."""
+
     name: str
     init: Compiled | None
     loc: Loc

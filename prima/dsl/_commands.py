@@ -1,6 +1,6 @@
 """Binding Command arguments, from the element form and from the chain notation.
 
-Both forms end in the same :class:`~prima.dsl.model.CommandCall`: arguments
+Both forms end in the same :class:`~prima.dsl.CommandCall`: arguments
 are compiled according to the parameter's kind (text is a template, numbers
 are literals or expressions, places and gestures are bare names or
 ``{expression}``), then checked against the Command's signature.
@@ -9,12 +9,15 @@ are literals or expressions, places and gestures are bare names or
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING, Callable
+from collections.abc import Callable, Sequence
+from functools import partial
+from typing import TYPE_CHECKING
 
 from lxml import etree
 
-from prima.xmlio import local_name
-from prima.dsl.expr import (
+from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
+from prima.dsl._elements import children
+from prima.dsl._expr import (
     ChainArg,
     ChainStep,
     Compiled,
@@ -27,16 +30,23 @@ from prima.dsl.expr import (
     span,
     string_literal,
 )
-from prima.dsl.model import CommandCall
-from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
-from prima.mediator import AppKind
+from prima.dsl._model import CommandCall
+from prima.vocab import AppKind
+from prima.xmlio import local_name
 
 if TYPE_CHECKING:
-    from prima.dsl.loader import Builder, Spot
+    from prima.dsl._loader import Builder, Spot
+
+    Extra = tuple[str, Spot, Callable[[], Compiled | None]]
+    """An additional argument as written: its name, where, and how to compile its value."""
 
 _COMPUTED = re.compile(r"^\{(.*)\}$", re.S)
 COMMANDS_HINT = "; see docs/pxml.md for the Commands"
 """Appended to an unknown Command's error."""
+
+_DOCUMENT_NAMES = frozenset({ParamKind.GRAMMAR, ParamKind.VARIABLE})
+"""Kinds of argument that name something the document declares (a Q&A's grammar
+and variable): they are checked against the document, not passed to the robot."""
 
 
 def element_name(command: str) -> str:
@@ -44,7 +54,8 @@ def element_name(command: str) -> str:
     return re.sub(r"(?<=[a-z])(?=[A-Z])", "-", command).lower()
 
 
-def compile_attribute(b: Builder, kind: ParamKind, el: etree._Element, attr: str) -> Compiled | None:
+def compile_attribute(b: Builder, kind: ParamKind, el: etree._Element,
+                      attr: str) -> Compiled | None:
     """Compile an argument written as an attribute value, by its parameter kind."""
     raw = el.get(attr, "")
     spot: Spot = (el, attr, 0)
@@ -75,33 +86,34 @@ def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
     if generic:
-        for arg in _children(el, "arg"):
-            pname = arg.get("name", "")
-            param = spec.param(pname)
-            if param is None:
-                b.error((arg, "name", 0), f"{name} has no argument '{pname}'{_params_hint(spec)}")
-            elif pname in spots:
-                b.error((arg, "name", 0), f"argument '{pname}' is given twice")
-            else:
-                spots[pname] = (arg, "value", 0)
-                _put(args, pname, compile_attribute(b, param.kind, arg, "value"))
+        _arg_elements(b, spec, el, args, spots)
     else:
         for param in spec.params:
             if el.get(param.name) is not None:
                 spots[param.name] = (el, param.name, 0)
                 _put(args, param.name, compile_attribute(b, param.kind, el, param.name))
-    extras = [(x.get("name", ""), (x, "name", 0),
-               lambda x=x: _extra_attr(b, spec, x.get("name", ""), x)) for x in _children(el, "extra")]
-    label = el.get("id")
-    return _finish(b, spec, (el, None, 0), label, (el, "id", 0), args, spots, extras)
+    extras = [(x.get("name", ""), (x, "name", 0), partial(_extra_attr, b, spec, x))
+              for x in children(el, "extra")]
+    return _finish(b, spec, (el, None, 0), el.get("id"), (el, "id", 0), args, spots, extras)
 
 
-def _children(el: etree._Element, tag: str) -> list[etree._Element]:
-    return [c for c in el if isinstance(c.tag, str) and local_name(c) == tag]
+def _arg_elements(b: Builder, spec: CommandSpec, el: etree._Element,
+                  args: dict[str, Compiled], spots: dict[str, Spot]) -> None:
+    """The ``<arg name value>`` children of a ``<command>``."""
+    for arg in children(el, "arg"):
+        name = arg.get("name", "")
+        param = spec.param(name)
+        if param is None:
+            b.error((arg, "name", 0), f"{spec.name} has no argument '{name}'{_params_hint(spec)}")
+        elif name in spots:
+            b.error((arg, "name", 0), f"argument '{name}' is given twice")
+        else:
+            spots[name] = (arg, "value", 0)
+            _put(args, name, compile_attribute(b, param.kind, arg, "value"))
 
 
-def _extra_attr(b: Builder, spec: CommandSpec, name: str, el: etree._Element) -> Compiled | None:
-    param = b.profile.extras.get(spec.name, {}).get(name)
+def _extra_attr(b: Builder, spec: CommandSpec, el: etree._Element) -> Compiled | None:
+    param = b.profile.extras.get(spec.name, {}).get(el.get("name", ""))
     return compile_attribute(b, param.kind if param else ParamKind.TEXT, el, "value")
 
 
@@ -114,26 +126,13 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
-    seen_named = False
     for pos, arg in enumerate(step.args):
         arg_spot: Spot = (el, "#text", arg.index)
         name_spot: Spot = (el, "#text", arg.name_index) if arg.name else arg_spot
-        if arg.name is None:
-            if seen_named:
-                b.error(arg_spot, "a positional argument cannot follow a named one")
-                continue
-            if pos >= len(spec.params):
-                b.error(arg_spot, f"{spec.name} takes at most {len(spec.params)} argument(s)"
-                                  f"{_params_hint(spec)}")
-                continue
-            param = spec.params[pos]
-        else:
-            seen_named = True
-            found = spec.param(arg.name)
-            if found is None:
-                b.error(name_spot, f"{spec.name} has no argument '{arg.name}'{_params_hint(spec)}")
-                continue
-            param = found
+        after_named = any(a.name is not None for a in step.args[:pos])
+        param = _chain_param(b, spec, pos, arg, arg_spot, name_spot, after_named)
+        if param is None:
+            continue
         if param.name in spots:
             b.error(name_spot, f"argument '{param.name}' is given twice")
             continue
@@ -143,10 +142,28 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
         if param.kind is ParamKind.PLACE and name in b.variable_names:
             b.warning(arg_spot, f"'{name}' is taken as a place name; write {{{name}}} "
                                 "to use the variable")
-    extras = [(x.name or "", (el, "#text", x.name_index), lambda x=x: _extra_chain(b, spec, x, text, el))
-              for x in step.extras]
+    extras = [(x.name or "", (el, "#text", x.name_index),
+               partial(_extra_chain, b, spec, x, text, el)) for x in step.extras]
     label_spot: Spot = (el, "#text", step.label_index)
     return _finish(b, spec, where, step.label, label_spot, args, spots, extras)
+
+
+def _chain_param(b: Builder, spec: CommandSpec, pos: int, arg: ChainArg, arg_spot: Spot,
+                 name_spot: Spot, after_named: bool) -> Param | None:
+    """The parameter a chain argument is for, by its name or position; None after an error."""
+    if arg.name is not None:
+        param = spec.param(arg.name)
+        if param is None:
+            b.error(name_spot, f"{spec.name} has no argument '{arg.name}'{_params_hint(spec)}")
+        return param
+    if after_named:
+        b.error(arg_spot, "a positional argument cannot follow a named one")
+        return None
+    if pos >= len(spec.params):
+        b.error(arg_spot, f"{spec.name} takes at most {len(spec.params)} argument(s)"
+                          f"{_params_hint(spec)}")
+        return None
+    return spec.params[pos]
 
 
 def _chain_value(b: Builder, param: Param, arg: ChainArg, text: str, spot: Spot) -> Compiled | None:
@@ -160,7 +177,7 @@ def _chain_value(b: Builder, param: Param, arg: ChainArg, text: str, spot: Spot)
         if _HYPHENATED.match(written):
             b.error(spot, f"write \"{written}\" in quotes: in a chain, '-' between names "
                           "reads as a subtraction")
-        elif param.kind in (ParamKind.GRAMMAR, ParamKind.VARIABLE):
+        elif param.kind in _DOCUMENT_NAMES:
             b.error(spot, f"'{param.name}' must be a bare name")
         else:
             b.error(spot, f"'{param.name}' is a {param.kind.value}: write a bare name, "
@@ -202,8 +219,19 @@ def _params_hint(spec: CommandSpec) -> str:
 
 def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label_spot: Spot,
             args: dict[str, Compiled], spots: dict[str, Spot],
-            extras: list[tuple[str, Spot, Callable[[], Compiled | None]]]) -> CommandCall:
+            extras: Sequence[Extra]) -> CommandCall:
     """Checks shared by both forms, then the :class:`CommandCall`."""
+    _check_signature(b, spec, where, spots)
+    extra = _extras(b, spec, extras)
+    grammar, into = _names(b, spec, args, spots)
+    call = CommandCall(spec.name, args, extra, label, b.loc(where), grammar, into)
+    if label is not None:
+        b.add_label(label, call, label_spot)
+    return call
+
+
+def _check_signature(b: Builder, spec: CommandSpec, where: Spot, spots: dict[str, Spot]) -> None:
+    """Who may use the Command, and whether the arguments it needs are given."""
     if spec.robot_specific and b.kind is AppKind.EA:
         b.error(where, f"only an FA may use the robot-specific Command '{spec.name}'")
     for param in spec.params:
@@ -214,6 +242,10 @@ def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label
         if len(present) != 1:
             got = f" (got {', '.join(present)})" if present else ""
             b.error(where, f"{spec.name} needs exactly one of {' or '.join(sorted(group))}{got}")
+
+
+def _extras(b: Builder, spec: CommandSpec, extras: Sequence[Extra]) -> dict[str, Compiled]:
+    """The additional arguments this robot's profile declares for the Command (FA only)."""
     extra: dict[str, Compiled] = {}
     declared = b.profile.extras.get(spec.name, {})
     for name, spot, make in extras:
@@ -225,21 +257,33 @@ def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label
                           f"(declared: {known})")
         else:
             _put(extra, name, make())
-    symbols = {name: str(c.evaluate(_NO_SCOPE)) for name, c in args.items()
-               if c.constant and (p := spec.param(name)) is not None and p.kind in SYMBOLIC_KINDS}
-    for name, value in symbols.items():
-        if spec.param(name).kind is ParamKind.GESTURE:  # type: ignore[union-attr]
-            b.check_gesture(value, spots[name])
-    grammar = into = None
-    if spec.name == "QA":
-        args.pop("grammar", None)
-        args.pop("into", None)
-        grammar, into = symbols.get("grammar"), symbols.get("into")
-        if grammar:
-            b.need_grammar(grammar, spots["grammar"])
-        if into:
-            b.need_variable(into, spots["into"])
-    call = CommandCall(spec.name, args, extra, label, b.loc(where), grammar, into)
-    if label is not None:
-        b.add_label(label, call, label_spot)
-    return call
+    return extra
+
+
+def _names(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
+           spots: dict[str, Spot]) -> tuple[str | None, str | None]:
+    """Check the names written as arguments; take out the grammar and the variable.
+
+    A gesture must be one the robot knows; a grammar and a variable must be
+    declared in the document. Those two leave ``args``: they become the call's
+    :attr:`~CommandCall.grammar` and :attr:`~CommandCall.into`.
+    """
+    named: dict[ParamKind, str] = {}
+    for param in spec.params:
+        if param.kind in _DOCUMENT_NAMES:
+            compiled = args.pop(param.name, None)
+            if compiled is not None and not compiled.constant:
+                b.error(spots[param.name], f"'{param.name}' must be a bare name")
+        else:
+            compiled = args.get(param.name)
+        if compiled is None or not compiled.constant or param.kind not in SYMBOLIC_KINDS:
+            continue
+        value = named[param.kind] = str(compiled.evaluate(_NO_SCOPE))
+        spot = spots[param.name]
+        if param.kind is ParamKind.GESTURE:
+            b.check_gesture(value, spot)
+        elif param.kind is ParamKind.GRAMMAR:
+            b.need_grammar(value, spot)
+        elif value and param.kind is ParamKind.VARIABLE:  # an empty one receives nothing
+            b.need_variable(value, spot)
+    return named.get(ParamKind.GRAMMAR), named.get(ParamKind.VARIABLE)

@@ -2,38 +2,25 @@
 
 Nothing here calls Python's ``eval`` or ``exec``: a parse tree becomes a tree
 of small functions over a :class:`Scope`. Strings are templates
-(``"Hello {name}"``). Syntax faults raise :class:`SyntaxFault` with the
-character index of the fault, which the loader turns into ``file:line:col``.
+(``"Hello {name}"``). Syntax faults raise :class:`~prima.errors.ExpressionError`
+with the character index of the fault, which the loader turns into
+``file:line:col``.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
-from typing import Callable, Mapping
+from typing import TypeGuard, TypeVar, cast
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from prima.errors import ExecutionError
-from prima.catalog import Value
-
-MAX_TEXT = 10_000
-"""Longest string an expression may build (untrusted documents stay bounded)."""
-
-MAX_NUMBER = 2.0 ** 53
-"""Largest magnitude of a number (beyond it, integers lose exactness anyway)."""
-
-
-class SyntaxFault(Exception):
-    """A fault in an expression or chain, at a character index of its source."""
-
-    def __init__(self, index: int, message: str) -> None:
-        super().__init__(message)
-        self.index = index
-        self.message = message
+from prima.errors import ExecutionError, ExpressionError
+from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
 
 
 @dataclass
@@ -45,6 +32,10 @@ class Scope:
 
 
 Fn = Callable[[Scope], Value]
+"""A compiled expression's function."""
+
+Node = Tree[Token] | Token
+"""A parse tree, or one of its tokens."""
 
 
 @dataclass(frozen=True)
@@ -58,8 +49,10 @@ class Compiled:
     event_uses: tuple[int, ...] = ()
     """Indexes where ``event`` is read."""
     constant: bool = False
+    """It reads nothing: its value was computed when it was compiled."""
 
     def evaluate(self, scope: Scope) -> Value:
+        """The expression's value in ``scope``; raises ExecutionError on a bad value."""
         return self.fn(scope)
 
 
@@ -84,6 +77,7 @@ def to_text(value: Value) -> str:
 
 
 def truthy(value: Value) -> bool:
+    """Whether a value counts as true in a condition: all but null, false, 0 and ""."""
     return value not in (None, False, 0, "")
 
 
@@ -176,19 +170,26 @@ def _compare(op: str, a: Value, b: Value) -> bool:
     if op == "!=":
         return not _compare("==", a, b)
     if _is_num(a) and _is_num(b):
-        pass
-    elif not (isinstance(a, str) and isinstance(b, str)):
-        raise ExecutionError(f"cannot order {_describe(a)} and {_describe(b)} with '{op}'")
+        return _order(op, a, b)
+    if isinstance(a, str) and isinstance(b, str):
+        return _order(op, a, b)
+    raise ExecutionError(f"cannot order {_describe(a)} and {_describe(b)} with '{op}'")
+
+
+_Ordered = TypeVar("_Ordered", float, str)
+
+
+def _order(op: str, a: _Ordered, b: _Ordered) -> bool:
     if op == "<":
-        return a < b  # type: ignore[operator]
+        return a < b
     if op == "<=":
-        return a <= b  # type: ignore[operator]
+        return a <= b
     if op == ">":
-        return a > b  # type: ignore[operator]
-    return a >= b  # type: ignore[operator]
+        return a > b
+    return a >= b
 
 
-def _is_num(v: Value) -> bool:
+def _is_num(v: Value) -> TypeGuard[int | float]:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
@@ -215,34 +216,43 @@ _OPERATORS = {"COMP_OP", "ADD_OP", "MUL_OP", "AND", "OR"}
 _VALUE_START = {"NUMBER", "STRING", "NAME", "LPAR", "MINUS", "TRUE", "FALSE", "NULL", "NOT"}
 
 
-def _syntax_fault(exc: UnexpectedInput, text: str, what: str) -> SyntaxFault:
+def _syntax_fault(exc: UnexpectedInput, text: str, what: str) -> ExpressionError:
+    """Lark's parse error as a fault in ``text``, worded for a document's author."""
     index = exc.pos_in_stream if exc.pos_in_stream is not None else len(text)
     if isinstance(exc, UnexpectedCharacters):
-        ch = text[index] if index < len(text) else ""
-        pair = text[index : index + 2]
-        if pair in ("&&", "||"):
-            hint = "and" if pair == "&&" else "or"
-            return SyntaxFault(index, f"{what}: '{pair}' is not an operator; write '{hint}'")
-        if ch == "!":
-            return SyntaxFault(index, f"{what}: '!' is not an operator; write 'not' (or '!=')")
-        if ch in "\"'":
-            return SyntaxFault(index, f"{what}: string is not closed")
-        return SyntaxFault(index, f"{what}: unexpected character {ch!r}")
-    if isinstance(exc, UnexpectedEOF) or (
+        message = _bad_character(text, index)
+    elif isinstance(exc, UnexpectedEOF) or (
         isinstance(exc, UnexpectedToken) and exc.token.type == "$END"
     ):
-        return SyntaxFault(len(text), f"{what}: ends too early; expected {_expected(exc)}")
-    if isinstance(exc, UnexpectedToken):
-        tok = exc.token
-        if tok.type == "EQUAL" and what == "expression":
-            return SyntaxFault(index, f"{what}: '=' assigns; write '==' to compare")
-        if tok.type == "NAME" and "COMMA" in exc.expected and what == "chain":
-            return SyntaxFault(index, f"{what}: missing ',' between Commands before {tok.value!r}")
-        if what == "expression" and exc.expected & _OPERATORS:
-            return SyntaxFault(index, f"{what}: unexpected {str(tok)!r} after a complete value; "
-                                      "expected an operator or the end")
-        return SyntaxFault(index, f"{what}: unexpected {str(tok)!r}; expected {_expected(exc)}")
-    return SyntaxFault(index, f"{what}: {exc}")
+        index, message = len(text), f"ends too early; expected {_expected(exc)}"
+    elif isinstance(exc, UnexpectedToken):
+        message = _bad_token(exc, what)
+    else:
+        message = str(exc)
+    return ExpressionError(index, f"{what}: {message}", text)
+
+
+def _bad_character(text: str, index: int) -> str:
+    pair = text[index : index + 2]
+    if pair in ("&&", "||"):
+        return f"'{pair}' is not an operator; write '{'and' if pair == '&&' else 'or'}'"
+    ch = text[index : index + 1]
+    if ch == "!":
+        return "'!' is not an operator; write 'not' (or '!=')"
+    if ch in "\"'":
+        return "string is not closed"
+    return f"unexpected character {ch!r}"
+
+
+def _bad_token(exc: UnexpectedToken, what: str) -> str:
+    tok = exc.token
+    if tok.type == "EQUAL" and what == "expression":
+        return "'=' assigns; write '==' to compare"
+    if tok.type == "NAME" and "COMMA" in exc.expected and what == "chain":
+        return f"missing ',' between Commands before {tok.value!r}"
+    if what == "expression" and exc.expected & _OPERATORS:
+        return f"unexpected {str(tok)!r} after a complete value; expected an operator or the end"
+    return f"unexpected {str(tok)!r}; expected {_expected(exc)}"
 
 
 def _expected(exc: UnexpectedInput) -> str:
@@ -255,7 +265,7 @@ def _expected(exc: UnexpectedInput) -> str:
     return " or ".join(names) if names else "something else"
 
 
-def _parse(text: str, start: str) -> Tree:
+def _parse(text: str, start: str) -> Tree[Token]:
     try:
         return parser().parse(text, start=start)
     except UnexpectedInput as exc:
@@ -265,15 +275,12 @@ def _parse(text: str, start: str) -> Tree:
 def compile_expression(text: str) -> Compiled:
     """Parse and compile one expression (e.g. a ``cond`` attribute)."""
     if not text.strip():
-        raise SyntaxFault(0, "expression: empty")
+        raise ExpressionError(0, "expression: empty", text)
     return _Compiler(text).compile(_parse(text, "expression"))
 
 
-def compile_template(text: str, offset: int = 0) -> Compiled:
-    """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``).
-
-    ``offset`` is added to reported fault indexes.
-    """
+def compile_template(text: str) -> Compiled:
+    """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``)."""
     parts: list[str | Compiled] = []
     i, n = 0, len(text)
     literal: list[str] = []
@@ -283,20 +290,20 @@ def compile_template(text: str, offset: int = 0) -> Compiled:
             literal.append(ch)
             i += 2
         elif ch == "}":
-            raise SyntaxFault(offset + i, "text: '}' without '{' (write '}}' for a brace)")
+            raise ExpressionError(i, "text: '}' without '{' (write '}}' for a brace)", text)
         elif ch == "{":
             end = _closing_brace(text, i + 1)
             if end < 0:
-                raise SyntaxFault(offset + i, "text: '{' is not closed (write '{{' for a brace)")
+                raise ExpressionError(i, "text: '{' is not closed (write '{{' for a brace)", text)
             if literal:
                 parts.append("".join(literal))
                 literal = []
             inner = text[i + 1 : end]
             try:
                 sub = compile_expression(inner)
-            except SyntaxFault as fault:
-                raise SyntaxFault(offset + i + 1 + fault.index, fault.message) from None
-            parts.append(_shift(sub, offset + i + 1))
+            except ExpressionError as fault:
+                raise ExpressionError(i + 1 + fault.index, fault.message, text) from None
+            parts.append(_shift(sub, i + 1))
             i = end + 1
         else:
             literal.append(ch)
@@ -331,8 +338,9 @@ def _shift(c: Compiled, by: int) -> Compiled:
 def _join(source: str, parts: list[str | Compiled]) -> Compiled:
     names = frozenset().union(*(p.names for p in parts if isinstance(p, Compiled)))
     events = tuple(i for p in parts if isinstance(p, Compiled) for i in p.event_uses)
-    if all(isinstance(p, str) for p in parts):
-        return constant("".join(parts), source)  # type: ignore[arg-type]
+    texts = [p for p in parts if isinstance(p, str)]
+    if len(texts) == len(parts):
+        return constant("".join(texts), source)
     pieces = [(p, None) if isinstance(p, str) else ("", p.fn) for p in parts]
 
     def fn(scope: Scope) -> Value:
@@ -348,7 +356,7 @@ class ChainArg:
     """One argument of a chain step, not yet bound to a Command's parameter."""
 
     name: str | None
-    tree: Tree | Token
+    tree: Node
     index: int
     computed: bool = False
     name_index: int = -1
@@ -370,53 +378,71 @@ class ChainStep:
 def parse_chain(text: str) -> list[ChainStep]:
     """Parse a command chain into steps; arguments are bound later."""
     if not text.strip():
-        raise SyntaxFault(0, "chain: empty")
-    tree = _parse(text, "chain")
-    steps = []
-    for step in tree.children:
-        label, name, *rest = step.children
-        extras_tree = rest[-1] if rest and isinstance(rest[-1], Tree) and rest[-1].data == "extras" else None
-        args = [a for a in rest if a is not extras_tree and a is not None]
-        steps.append(ChainStep(
-            label=str(label) if label is not None else None,
-            command=str(name),
-            index=name.start_pos,
-            args=tuple(_chain_arg(a) for a in args),
-            extras=tuple(_chain_arg(a) for a in (extras_tree.children if extras_tree else ()) if a is not None),
-            label_index=label.start_pos if label is not None else name.start_pos,
-        ))
-    return steps
+        raise ExpressionError(0, "chain: empty", text)
+    return [_step(_tree(step)) for step in _parse(text, "chain").children]
 
 
-def _chain_arg(node: Tree) -> ChainArg:
+def _step(step: Tree[Token]) -> ChainStep:
+    # [label ":"] Name "(" [arguments] ")" [extras]; an absent optional part is None
+    label, name, *rest = step.children
+    extras: list[Node] = []
+    last = rest[-1] if rest else None
+    if isinstance(last, Tree) and last.data == "extras":
+        extras, rest = last.children, rest[:-1]
+    index = _pos(_token(name))
+    return ChainStep(
+        label=None if label is None else str(label),
+        command=str(name),
+        index=index,
+        args=tuple(_chain_arg(_tree(a)) for a in rest if a is not None),
+        extras=tuple(_chain_arg(_tree(x)) for x in extras if x is not None),
+        label_index=index if label is None else _pos(_token(label)),
+    )
+
+
+def _chain_arg(node: Tree[Token]) -> ChainArg:
     if node.data == "named":
         name, value = node.children
         return ChainArg(str(name), *_value(value), computed=_is_computed(value),
-                        name_index=name.start_pos)
+                        name_index=_pos(_token(name)))
     value = node.children[0]
     return ChainArg(None, *_value(value), computed=_is_computed(value))
 
 
-def _is_computed(value: Tree | Token) -> bool:
+def _is_computed(value: Node) -> bool:
     return isinstance(value, Tree) and value.data == "computed"
 
 
-def _value(value: Tree | Token) -> tuple[Tree | Token, int]:
+def _value(value: Node) -> tuple[Node, int]:
     if isinstance(value, Tree) and value.data == "computed":
         inner = value.children[0]
         return inner, _start(inner)
     return value, _start(value)
 
 
-def _tokens(node: Tree | Token) -> list[Token]:
+def _token(node: Node) -> Token:
+    """A child the grammar makes a token (a name, a number, a string)."""
+    return cast(Token, node)
+
+
+def _tree(node: Node) -> Tree[Token]:
+    """A child the grammar makes a subtree (a step, an argument)."""
+    return cast("Tree[Token]", node)
+
+
+def _pos(token: Token) -> int:
+    return token.start_pos or 0
+
+
+def _tokens(node: Node) -> list[Token]:
     if isinstance(node, Token):
         return [node]
-    return [t for t in node.scan_values(lambda v: isinstance(v, Token))]
+    return list(node.scan_values(lambda v: isinstance(v, Token)))
 
 
-def _start(node: Tree | Token) -> int:
+def _start(node: Node) -> int:
     tokens = _tokens(node)
-    return min(t.start_pos or 0 for t in tokens) if tokens else 0
+    return min(_pos(t) for t in tokens) if tokens else 0
 
 
 def bare_name(arg: ChainArg) -> str | None:
@@ -444,104 +470,166 @@ def compile_chain_arg(arg: ChainArg, source: str) -> Compiled:
 
 _ESCAPES = {"n": "\n", "t": "\t", "\\": "\\", '"': '"', "'": "'"}
 
+Part = tuple[Fn, bool]
+"""A compiled subtree: its function, and whether it is a constant."""
+
+
+def _const(value: Value) -> Part:
+    return (lambda _s: value), True
+
 
 class _Compiler:
-    """Turns a lark tree into a :class:`Compiled` closure tree."""
+    """Turns a lark tree into a :class:`Compiled` closure tree.
+
+    As in a lark ``Transformer``, each grammar rule has its own method, found
+    by the rule's name in :data:`_RULES`; it compiles the rule's children.
+    """
 
     def __init__(self, source: str) -> None:
         self.source = source
         self.names: set[tuple[str, int]] = set()
         self.events: list[int] = []
 
-    def compile(self, tree: Tree | Token) -> Compiled:
-        fn, const = self._node(tree)
+    def compile(self, tree: Node) -> Compiled:
+        fn, const = self.node(tree)
         start, end = span(tree, self.source)
         text = self.source[start:end]
-        if const:
-            return constant(fn(Scope({})), text)
-        return Compiled(text, fn, frozenset(self.names), tuple(self.events))
+        if not const:
+            return Compiled(text, fn, frozenset(self.names), tuple(self.events))
+        try:
+            value = fn(Scope({}))
+        except ExecutionError as exc:  # a constant that cannot be computed: -'a'
+            raise ExpressionError(start, f"expression: {exc}", self.source) from None
+        return constant(value, text)
 
-    def _node(self, node: Tree | Token) -> tuple[Fn, bool]:
-        kind = node.data
-        ch = node.children
-        if kind == "number":
-            raw = str(ch[0])
-            if len(raw) > 20:
-                raise SyntaxFault(ch[0].start_pos, "expression: number too long")
-            num: Value = float(raw) if "." in raw else int(raw)
-            return (lambda _s: num), True
-        if kind == "string":
-            tok = ch[0]
-            t = self._string(str(tok), tok.start_pos)
-            return t.fn, t.constant
-        if kind in ("true", "false", "null"):
-            v: Value = {"true": True, "false": False, "null": None}[kind]
-            return (lambda _s: v), True
-        if kind == "var":
-            name = str(ch[0])
-            if name == "event":
-                self.events.append(ch[0].start_pos)
-                return (lambda s: None if s.event is None else dict(s.event).get("name")), False
-            self.names.add((name, ch[0].start_pos))
-            return (lambda s: s.variables.get(name)), False
-        if kind == "field":
-            base, attr = str(ch[0]), str(ch[1])
-            if base != "event":
-                raise SyntaxFault(ch[0].start_pos,
-                                  f"expression: only 'event' has fields ('{base}.{attr}')")
-            self.events.append(ch[0].start_pos)
-            return (lambda s: None if s.event is None else s.event.get(attr)), False
-        if kind == "call":
-            return self._call(ch)
-        if kind == "neg":
-            f, c = self._node(ch[0])
-            return (lambda s: -_number(f(s), "'-'")), c
-        if kind == "not_":
-            f, c = self._node(ch[0])
-            return (lambda s: not truthy(f(s))), c
-        if kind in ("and_", "or_"):
-            (fa, ca), (fb, cb) = self._node(ch[0]), self._node(ch[1])
-            if kind == "and_":
-                return (lambda s: truthy(fa(s)) and truthy(fb(s))), ca and cb
-            return (lambda s: truthy(fa(s)) or truthy(fb(s))), ca and cb
-        if kind in ("binary", "compare"):
-            (fa, ca), op, (fb, cb) = self._node(ch[0]), str(ch[1]), self._node(ch[2])
-            if kind == "binary":
-                return (lambda s: _arith(op, fa(s), fb(s))), False
-            return (lambda s: _compare(op, fa(s), fb(s))), False
-        raise SyntaxFault(_start(node), f"expression: unsupported construct {kind!r}")
+    def node(self, node: Node) -> Part:
+        """Compile a subtree with its rule's method."""
+        kind = node.data if isinstance(node, Tree) else node.type
+        rule = _RULES.get(kind)
+        if rule is None or not isinstance(node, Tree):
+            raise ExpressionError(_start(node), f"expression: unsupported construct {kind!r}",
+                                  self.source)
+        return rule(self, node.children)
 
-    def _call(self, ch: list) -> tuple[Fn, bool]:
-        name_tok, *arg_nodes = ch
-        arg_nodes = [a for a in arg_nodes if a is not None]
+    def fault(self, token: Token, message: str) -> ExpressionError:
+        """A fault at ``token``."""
+        return ExpressionError(_pos(token), f"expression: {message}", self.source)
+
+    # ------------------------------------------------------------ one per rule
+
+    def number(self, ch: list[Node]) -> Part:
+        tok = _token(ch[0])
+        raw = str(tok)
+        if len(raw) > 20:
+            raise self.fault(tok, "number too long")
+        return _const(float(raw) if "." in raw else int(raw))
+
+    def string(self, ch: list[Node]) -> Part:
+        tok = _token(ch[0])
+        t = self._template(str(tok), _pos(tok))
+        return t.fn, t.constant
+
+    def true(self, ch: list[Node]) -> Part:
+        return _const(True)
+
+    def false(self, ch: list[Node]) -> Part:
+        return _const(False)
+
+    def null(self, ch: list[Node]) -> Part:
+        return _const(None)
+
+    def var(self, ch: list[Node]) -> Part:
+        tok = _token(ch[0])
+        name = str(tok)
+        if name == "event":
+            self.events.append(_pos(tok))
+            return (lambda s: None if s.event is None else dict(s.event).get("name")), False
+        self.names.add((name, _pos(tok)))
+        return (lambda s: s.variables.get(name)), False
+
+    def field(self, ch: list[Node]) -> Part:
+        tok = _token(ch[0])
+        base, attr = str(tok), str(ch[1])
+        if base != "event":
+            raise self.fault(tok, f"only 'event' has fields ('{base}.{attr}')")
+        self.events.append(_pos(tok))
+        return (lambda s: None if s.event is None else s.event.get(attr)), False
+
+    def call(self, ch: list[Node]) -> Part:
+        tok, *given = ch
+        name_tok = _token(tok)
+        args = [a for a in given if a is not None]
         name = str(name_tok)
         if name not in FUNCTIONS:
-            known = ", ".join(sorted(FUNCTIONS))
-            raise SyntaxFault(name_tok.start_pos, f"expression: unknown function '{name}' (known: {known})")
+            raise self.fault(name_tok, f"unknown function '{name}' "
+                                       f"(known: {', '.join(sorted(FUNCTIONS))})")
         lo, hi, impl, _doc = FUNCTIONS[name]
-        if not lo <= len(arg_nodes) <= hi:
+        if not lo <= len(args) <= hi:
             want = str(lo) if lo == hi else f"{lo} to {hi}"
-            raise SyntaxFault(name_tok.start_pos,
-                              f"expression: {name}() takes {want} argument(s), got {len(arg_nodes)}")
-        fns = [self._node(a)[0] for a in arg_nodes]
+            raise self.fault(name_tok, f"{name}() takes {want} argument(s), got {len(args)}")
+        fns = [self.node(a)[0] for a in args]
         return (lambda s: impl(*(f(s) for f in fns))), False
 
-    def _string(self, raw: str, start: int) -> Compiled:
+    def neg(self, ch: list[Node]) -> Part:
+        f, c = self.node(ch[0])
+        return (lambda s: -_number(f(s), "'-'")), c
+
+    def not_(self, ch: list[Node]) -> Part:
+        f, c = self.node(ch[0])
+        return (lambda s: not truthy(f(s))), c
+
+    def and_(self, ch: list[Node]) -> Part:
+        (fa, ca), (fb, cb) = self.node(ch[0]), self.node(ch[1])
+        return (lambda s: truthy(fa(s)) and truthy(fb(s))), ca and cb
+
+    def or_(self, ch: list[Node]) -> Part:
+        (fa, ca), (fb, cb) = self.node(ch[0]), self.node(ch[1])
+        return (lambda s: truthy(fa(s)) or truthy(fb(s))), ca and cb
+
+    def binary(self, ch: list[Node]) -> Part:
+        fa, op, fb = self.node(ch[0])[0], str(ch[1]), self.node(ch[2])[0]
+        return (lambda s: _arith(op, fa(s), fb(s))), False
+
+    def compare(self, ch: list[Node]) -> Part:
+        fa, op, fb = self.node(ch[0])[0], str(ch[1]), self.node(ch[2])[0]
+        return (lambda s: _compare(op, fa(s), fb(s))), False
+
+    # ------------------------------------------------------------ helpers
+
+    def _template(self, raw: str, start: int) -> Compiled:
+        """A string literal: a template, its faults and names located in the source."""
         body = raw[1:-1]
-        if "\\" in body:
-            decoded, index_map = _unescape(body)
-        else:
-            decoded, index_map = body, None
+        decoded, index_map = _unescape(body) if "\\" in body else (body, [])
+
+        def at(i: int) -> int:  # where decoded character i is written
+            return start + 1 + (index_map[i] if i < len(index_map) else i)
+
         try:
             t = compile_template(decoded)
-        except SyntaxFault as fault:
-            at = index_map[fault.index] if index_map and fault.index < len(index_map) else fault.index
-            raise SyntaxFault(start + 1 + at, fault.message) from None
-        shift = start + 1
-        for n, i in t.names:
-            self.names.add((n, shift + (index_map[i] if index_map and i < len(index_map) else i)))
-        self.events.extend(shift + i for i in t.event_uses)
+        except ExpressionError as fault:
+            raise ExpressionError(at(fault.index), fault.message, self.source) from None
+        self.names.update((n, at(i)) for n, i in t.names)
+        self.events.extend(at(i) for i in t.event_uses)
         return t
+
+
+_RULES: Mapping[str, Callable[[_Compiler, list[Node]], Part]] = {
+    "number": _Compiler.number,
+    "string": _Compiler.string,
+    "true": _Compiler.true,
+    "false": _Compiler.false,
+    "null": _Compiler.null,
+    "var": _Compiler.var,
+    "field": _Compiler.field,
+    "call": _Compiler.call,
+    "neg": _Compiler.neg,
+    "not_": _Compiler.not_,
+    "and_": _Compiler.and_,
+    "or_": _Compiler.or_,
+    "binary": _Compiler.binary,
+    "compare": _Compiler.compare,
+}
+"""How each rule of ``pxml.lark``'s expressions compiles."""
 
 
 def _unescape(body: str) -> tuple[str, list[int]]:
@@ -560,12 +648,12 @@ def _unescape(body: str) -> tuple[str, list[int]]:
     return "".join(out), where
 
 
-def span(node: Tree | Token, source: str) -> tuple[int, int]:
+def span(node: Node, source: str) -> tuple[int, int]:
     """Where a subtree is written; closing parentheses (not kept as tokens) included."""
     tokens = _tokens(node)
     if not tokens:
         return 0, len(source)
-    start = min(t.start_pos or 0 for t in tokens)
+    start = min(_pos(t) for t in tokens)
     end = max(t.end_pos or 0 for t in tokens)
     depth = source.count("(", start, end) - source.count(")", start, end)
     while depth > 0 and end < len(source):
