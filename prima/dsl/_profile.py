@@ -9,7 +9,7 @@ robot-specific parts (MISSION.md section 4).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -60,10 +60,16 @@ class RobotProfile:
     """Additional arguments: Command name -> argument name -> declaration."""
     events: Mapping[str, bool]
     """Robot-specific events -> whether they are reactive."""
+    _catalog: Catalog = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        # built once: every document loaded against the profile asks for it
+        object.__setattr__(self, "_catalog",
+                           Catalog.standard().extended(self.commands, self.devices))
 
     def catalog(self) -> Catalog:
         """The common Commands plus this robot's own."""
-        return Catalog.standard().extended(self.commands, self.devices)
+        return self._catalog
 
 
 def _num(el: etree._Element, name: str) -> float:
