@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Mapping
+from dataclasses import dataclass
 from types import MappingProxyType
 
 __all__ = [
@@ -18,6 +19,7 @@ __all__ = [
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
     "AppKind",
+    "Budgets",
     "RunningOrder",
     "Value",
 ]
@@ -66,3 +68,36 @@ MAX_TEXT = 10_000
 
 MAX_NUMBER = 2.0 ** 53
 """Largest magnitude of a number (beyond it, integers lose exactness anyway)."""
+
+
+@dataclass(frozen=True)
+class Budgets:
+    """What one application may consume; a robot profile's ``<budgets>`` sets them.
+
+    An EA is written by a stranger, so every resource an application can use is
+    bounded. Exceeding a budget is a trace line with its reason; the other
+    application goes on. Every field has a documented default (docs/robot-profile.md).
+    """
+
+    text: int = MAX_TEXT
+    """Longest text one application may say, send or log (characters), literal
+    or computed; at most :data:`MAX_TEXT`. Longer: the application fails."""
+    sends_per_second: float = 5.0
+    """Messages an application may send to the environment's servers per simulated
+    second (counted over the last second). More: the message is dropped."""
+    waiting: int = 200
+    """Commands one application may have in working memory, not yet ended. More:
+    the application fails."""
+    longest_ab: float = 60.0
+    """Longest single atomic behavior (s): an utterance, a Q&A's wait for an
+    answer, one motion. Longer: the Command ends at once with an error."""
+    wait_share: float = 30.0
+    """Seconds, within any ``wait_window``, that an application's running behaviors,
+    holds, blocks and streams may keep another application's ready behaviors
+    waiting (priority aside). Beyond it, the application loses its precedence for
+    one window: its holds are released and its behaviors rank after the others'."""
+    wait_window: float = 60.0
+    """The window of ``wait_share`` (s)."""
+    starts_per_instant: int = 100
+    """Atomic behaviors one application may start at one simulated instant
+    (Commands that take no time, requested again and again). More: it fails."""
