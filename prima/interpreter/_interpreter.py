@@ -356,7 +356,7 @@ class Interpreter:
     def _start_timer(self, action: StartTimer, scope: Scope) -> None:
         after = self._number(self._eval(action.after, action.loc, scope), "after", action.loc)
         self._timer_seq += 1
-        self._timers[action.name] = _Timer(self.clock.now() + max(0.0, float(after)),
+        self._timers[action.name] = _Timer(self.clock.after(max(0.0, float(after))),
                                            action.reactive, self._timer_seq)
 
     def _cancel_timer(self, action: CancelTimer, _scope: Scope) -> None:

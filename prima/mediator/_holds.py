@@ -26,7 +26,7 @@ from collections.abc import Mapping
 from prima.catalog import Catalog, Priority
 from prima.errors import MediationError
 from prima.mediator._decisions import DecisionKind, Rule
-from prima.mediator._interface import AbId, CommandId
+from prima.mediator._interface import AbId, Clock, CommandId
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._state import App, Node, NodeState, Tree
@@ -82,8 +82,9 @@ class Holds:
     """Streams, blocks, the channel rule, parked ABs and their deadlines."""
 
     def __init__(self, apps: Mapping[str, App], wm: WorkingMemory, log: DecisionLog,
-                 catalog: Catalog) -> None:
+                 catalog: Catalog, clock: Clock) -> None:
         self._apps = apps
+        self._clock = clock
         self._wm = wm
         self._log = log
         self._catalog = catalog
@@ -180,7 +181,7 @@ class Holds:
         if blk is not None and not blk.expired:
             blk.tree = tree
 
-    def started(self, node: Node, now: float) -> None:
+    def started(self, node: Node) -> None:
         """An AB started: a block's first AB arms its watchdog; a stream learns devices."""
         self._channel_held.discard(node.id)
         app = node.app
@@ -188,7 +189,7 @@ class Holds:
         if (blk is not None and not blk.started and not blk.expired
                 and node.commands[0].id >= blk.first_command):
             blk.started = True
-            blk.deadline = now + blk.watchdog
+            blk.deadline = self._clock.after(blk.watchdog)
         st = self._streams.get(app.name)
         if st is not None:
             st.devices.update(node.devices)
@@ -212,7 +213,7 @@ class Holds:
             if app.active == 0:
                 if not st.armed and not st.lapsed and st.devices:
                     st.armed = True
-                    st.deadline = app.idle_since + st.hold
+                    st.deadline = self._clock.after(st.hold, since=app.idle_since)
                     st.held = set()
             else:
                 st.lapsed = False

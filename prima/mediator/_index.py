@@ -2,24 +2,24 @@
 
 Selection asks, for a device, which waiting AB that needs it ranks best
 (:mod:`._ranking`). The index answers from the parts of the rank that do not
-change every round, split by scope as the criteria list says:
+change every round, split by the criteria's scopes:
 
-- ``head``: the NODE criteria before the first TREE criterion (priority,
-  reactivity): ABs with equal head keys form a *group*;
-- ``tree``: the TREE criteria (the suspended-stream order): within a group,
-  each tree's ABs form a *slot*, ranked by the tree's key;
-- ``tail``: the NODE criteria after them (the oldest request): the order
-  within a slot.
+- ``head``: the NODE criteria before the first TREE criterion (priority): ABs
+  with equal head keys form a *group*;
+- within a group, each tree's ABs form a *slot*, ranked by the stable key of
+  its best AB (the TREE criteria, which are the same for every AB of a tree,
+  and the NODE criteria after the head);
+- within a slot, ABs are ordered by those NODE criteria alone.
 
-Each device keeps a heap of groups, each group a heap of slots keyed by (tree
-key, the slot's best tail key), each slot a heap of its ABs. Suspending or
-resuming a tree re-ranks its slots (a few per device), never its ABs one by
-one. Entries are removed lazily: an AB's entries go stale when it leaves the
-waiting list or its ``version`` changes (it was parked); a slot's entry goes
-stale when the slot's ``version`` changes. Stale entries are dropped when they
-reach a heap's top; :meth:`WaitIndex.compact` rebuilds everything when they
-outnumber the live ones. Every operation costs a few heap operations per
-device, whatever the number of waiting ABs.
+Each device keeps a heap of groups, each group a heap of slots, each slot a
+heap of its ABs. When a tree's keys change (it is suspended or resumed, its
+application loses or regains its precedence), its slots are re-ranked, a few
+per device, never its ABs one by one. Entries are removed lazily: an AB's
+entries go stale when it leaves the waiting list or its ``version`` changes
+(it was parked); a slot's entry goes stale when the slot's ``version`` changes.
+Stale entries are dropped when they reach a heap's top; :meth:`WaitIndex.compact`
+rebuilds everything when they outnumber the live ones. Every operation costs a
+few heap operations per device, whatever the number of waiting ABs.
 
 ROUND criteria (parent just finished) are not in the index: selection ranks
 the ABs a round names against the index's answer (see ``_rounds``).
@@ -36,55 +36,52 @@ from prima.mediator._state import Node, NodeState, Tree
 
 __all__ = ["WaitIndex"]
 
+Keys = tuple[Key, ...]
+
 
 def _split(criteria: tuple[Criterion, ...]) -> tuple[tuple[Criterion, ...], ...]:
-    """The head, tree and tail criteria; ROUND criteria are left out."""
-    scopes = [c.scope for c in criteria if c.scope is not Scope.ROUND]
-    first_tree = scopes.index(Scope.TREE) if Scope.TREE in scopes else len(scopes)
+    """The head criteria, the rest (ROUND left out), and the NODE criteria of the rest."""
     stable = [c for c in criteria if c.scope is not Scope.ROUND]
-    head = tuple(stable[:first_tree])
-    rest = stable[first_tree:]
-    tree = tuple(c for c in rest if c.scope is Scope.TREE)
-    tail = tuple(c for c in rest if c.scope is Scope.NODE)
-    if rest and any(c.scope is Scope.TREE for c in rest[len(tree):]):
-        raise TypeError("the waiting index needs the TREE criteria in one run; "
-                        "reorder CRITERIA")
-    return head, tree, tail
+    first_tree = next((i for i, c in enumerate(stable) if c.scope is Scope.TREE), len(stable))
+    rest = tuple(stable[first_tree:])
+    return tuple(stable[:first_tree]), rest, tuple(c for c in rest if c.scope is Scope.NODE)
 
 
-_HEAD, _TREE, _TAIL = _split(CRITERIA)
+_HEAD, _REST, _NODE_REST = _split(CRITERIA)
 _NO_ROUND: tuple[int, ...] = ()
 
 
-def _keys(node: Node, criteria: tuple[Criterion, ...]) -> tuple[Key, ...]:
+def _keys(node: Node, criteria: tuple[Criterion, ...]) -> Keys:
     return tuple(c.key(node, _NO_ROUND) for c in criteria)
 
 
 class _Slot:
     """One tree's waiting ABs in one group: a heap by tail key."""
 
-    __slots__ = ("tree", "group", "device", "heap", "version")
+    __slots__ = ("tree", "group", "device", "heap", "version", "ranked_by")
 
     def __init__(self, tree: Tree, group: _Group, device: str) -> None:
         self.tree = tree
         self.group = group
         self.device = device
-        self.heap: list[tuple[tuple[Key, ...], int, int, Node]] = []
+        self.heap: list[tuple[Keys, int, int, Node]] = []
         self.version = 0
+        self.ranked_by: Node | None = None
+        """The AB whose keys the slot's live entry in its group carries."""
 
-    def top(self, index: WaitIndex) -> tuple[tuple[Key, ...], Node] | None:
-        """The slot's best live AB with its tail key, dropping stale entries."""
+    def top(self, index: WaitIndex) -> Node | None:
+        """The slot's best live AB, dropping stale entries."""
         heap = self.heap
         while heap:
-            tail, _ab, version, node = heap[0]
+            _keys_, _ab, version, node = heap[0]
             if node.state is NodeState.WAITING and node.version == version:
-                return tail, node
+                return node
             heapq.heappop(heap)
             index.entries -= 1
         return None
 
 
-_SlotEntry = tuple[tuple[Key, ...], tuple[Key, ...], int, int, _Slot]
+_SlotEntry = tuple[Keys, int, int, _Slot]
 
 
 class _Group:
@@ -92,7 +89,7 @@ class _Group:
 
     __slots__ = ("head", "slots", "heap")
 
-    def __init__(self, head: tuple[Key, ...]) -> None:
+    def __init__(self, head: Keys) -> None:
         self.head = head
         self.slots: dict[int, _Slot] = {}
         self.heap: list[_SlotEntry] = []
@@ -102,8 +99,8 @@ class _Device:
     __slots__ = ("groups", "heap")
 
     def __init__(self) -> None:
-        self.groups: dict[tuple[Key, ...], _Group] = {}
-        self.heap: list[tuple[tuple[Key, ...], int, _Group]] = []
+        self.groups: dict[Keys, _Group] = {}
+        self.heap: list[tuple[Keys, int, _Group]] = []
 
 
 class WaitIndex:
@@ -121,14 +118,13 @@ class WaitIndex:
         """File a waiting AB (again, after it was parked: its old entries go stale)."""
         node.version += 1
         head = _keys(node, _HEAD)
-        tail = _keys(node, _TAIL)
+        order = _keys(node, _NODE_REST)
         for d in node.sorted_devices:
             slot = self._slot(d, head, node.tree)
-            heapq.heappush(slot.heap, (tail, node.id, node.version, node))
+            heapq.heappush(slot.heap, (order, node.id, node.version, node))
             self.entries += 1
-            best = slot.top(self)
-            if best is not None and best[1] is node:
-                self._push_slot(slot, tail, node)
+            if slot.top(self) is node:
+                self._push_slot(slot, node)
 
     def rerank(self, tree: Tree) -> set[str]:
         """The tree's TREE keys changed (suspended, resumed): re-rank its slots.
@@ -144,7 +140,7 @@ class WaitIndex:
             if best is None:
                 self._drop_slot(slot)
             else:
-                self._push_slot(slot, *best)
+                self._push_slot(slot, best)
                 devices.add(slot.device)
         self._tree_slots[tree.id] = [s for s in slots if s.group.slots.get(tree.id) is s]
         return devices
@@ -180,7 +176,7 @@ class WaitIndex:
             self.add(node)
 
     # -------------------------------------------------------------- internals
-    def _slot(self, device: str, head: tuple[Key, ...], tree: Tree) -> _Slot:
+    def _slot(self, device: str, head: Keys, tree: Tree) -> _Slot:
         dev = self._devices.get(device)
         if dev is None:
             dev = self._devices[device] = _Device()
@@ -195,11 +191,11 @@ class WaitIndex:
             self._tree_slots.setdefault(tree.id, []).append(slot)
         return slot
 
-    def _push_slot(self, slot: _Slot, tail: tuple[Key, ...], best: Node) -> None:
-        """(Re-)rank a slot by its tree's key (read from its best AB) and its best tail."""
+    def _push_slot(self, slot: _Slot, best: Node) -> None:
+        """(Re-)rank a slot by the stable key of its best AB."""
         slot.version += 1
-        entry = (_keys(best, _TREE), tail, slot.tree.id, slot.version, slot)
-        heapq.heappush(slot.group.heap, entry)
+        slot.ranked_by = best
+        heapq.heappush(slot.group.heap, (_keys(best, _REST), slot.tree.id, slot.version, slot))
         self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
@@ -210,7 +206,7 @@ class WaitIndex:
     def _group_top(self, group: _Group) -> Node | None:
         heap = group.heap
         while heap:
-            _tree_key, tail, _tid, version, slot = heap[0]
+            _keys_, _tid, version, slot = heap[0]
             if version != slot.version:
                 heapq.heappop(heap)
                 self.entries -= 1
@@ -221,10 +217,10 @@ class WaitIndex:
                 self.entries -= 1
                 self._drop_slot(slot)
                 continue
-            if best[0] != tail:  # its recorded best left the waiting list
+            if best is not slot.ranked_by:  # the AB it was ranked by left the waiting list
                 heapq.heappop(heap)
                 self.entries -= 1
-                self._push_slot(slot, *best)
+                self._push_slot(slot, best)
                 continue
-            return best[1]
+            return best
         return None

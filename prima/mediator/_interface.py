@@ -125,6 +125,15 @@ class Clock(Protocol):
 
     def now(self) -> float: ...
 
+    def after(self, seconds: float, since: float | None = None) -> float:
+        """The instant ``seconds`` after ``since`` (default: now), on the clock's grid.
+
+        A clock that steps (the simulator) rounds the duration to the nearest
+        step, and a positive duration to at least one step, so that every
+        deadline is an instant the clock reaches exactly, once.
+        """
+        ...
+
 
 class ManualClock:
     """A clock that moves only when told to; for tests and the run loop."""
@@ -134,6 +143,10 @@ class ManualClock:
 
     def now(self) -> float:
         return self._t
+
+    def after(self, seconds: float, since: float | None = None) -> float:
+        """Continuous time: exactly ``seconds`` after ``since`` (default: now)."""
+        return (self._t if since is None else since) + seconds
 
     def set(self, t: float) -> None:
         if t < self._t:

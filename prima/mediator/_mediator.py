@@ -99,7 +99,7 @@ class Mediator:
         self._app_order = 0
         self._wm = WorkingMemory()
         self._log = DecisionLog(clock, record)
-        self._holds = Holds(self._apps, self._wm, self._log, catalog)
+        self._holds = Holds(self._apps, self._wm, self._log, catalog, clock)
         self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
                               config.end_grace)
         self._selector = Selector(self._wm, self._holds, self._log, driver, clock)

@@ -166,7 +166,7 @@ class Selector:
         x_rank = view.rank(x)
         self._wm.start(x)
         started.append(x)
-        self._holds.started(x, self._clock.now())
+        self._holds.started(x)
         # Who did it beat? The best remaining waiting AB on each of its devices.
         losers = [b for d in x.sorted_devices if (b := view.best(d)) is not None]
         rule = Rule.FREE_DEVICES

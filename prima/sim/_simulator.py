@@ -161,6 +161,13 @@ class Simulator:
         """Simulated time (s); during a callback, the time of what is reported."""
         return self.kernel.tick / self.kernel.hz
 
+    def after(self, seconds: float, since: float | None = None) -> float:
+        """The tick ``seconds`` after ``since`` (default: now): the duration rounded to
+        the nearest tick, a positive one to at least one tick (``1 / rate`` seconds)."""
+        k = self.kernel
+        start = k.tick if since is None else round(since * k.hz)
+        return (start + k.ticks(seconds)) / k.hz
+
     # ---- Driver ----------------------------------------------------------------
 
     def start(self, ab: AtomicBehavior) -> None:
