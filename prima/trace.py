@@ -108,6 +108,7 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     DecisionKind.HOLD: _describe_hold,
     DecisionKind.RELEASE: lambda line: f"releases its hold ({line.reason})",
     DecisionKind.FAILURE: lambda line: f"ERROR: {line.text}",
+    DecisionKind.BUDGET: lambda line: f"budget: {line.text}",
     Kind.EVENT: _describe_event,
     Kind.USER: lambda line: _describe_user(line),
     Kind.ERROR: lambda line: f"ERROR: {line.text}",
@@ -117,7 +118,7 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
 """How each kind of line reads in the text trace (None: not shown there)."""
 
 _REASON_SHOWN = frozenset({DecisionKind.START, DecisionKind.CANCEL, DecisionKind.SUSPEND,
-                           DecisionKind.RESUME, DecisionKind.HOLD})
+                           DecisionKind.RESUME, DecisionKind.HOLD, DecisionKind.BUDGET})
 """Kinds whose text line ends with the mediation rule in brackets."""
 
 

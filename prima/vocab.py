@@ -18,6 +18,7 @@ __all__ = [
     "MAX_STREAM_HOLD",
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
+    "DEFAULT_BUDGETS",
     "AppKind",
     "Budgets",
     "RunningOrder",
@@ -101,3 +102,12 @@ class Budgets:
     starts_per_instant: int = 100
     """Atomic behaviors one application may start at one simulated instant
     (Commands that take no time, requested again and again). More: it fails."""
+
+
+DEFAULT_BUDGETS: Mapping[AppKind, Budgets] = MappingProxyType({
+    AppKind.FA: Budgets(wait_share=300.0, wait_window=360.0),
+    AppKind.EA: Budgets(),
+})
+"""The budgets of each role when the robot profile sets none. The EA, written by a
+stranger, may keep the FA waiting 30 s a minute; the FA, the robot's own acting
+for its user (following them, say), five minutes out of six."""

@@ -161,3 +161,9 @@ def test_a_zone_loads_an_ea_and_the_next_zone_swaps_it() -> None:
                and line.text == "place-reached"]
     assert reached[-1] == "gallery"
     assert [line for line in lines if line.kind is Kind.ERROR] == []
+
+
+def test_every_record_kind_reads_in_the_text_trace() -> None:
+    from prima.trace import _DESCRIBE  # white box: the text form covers every kind
+
+    assert set(_DESCRIBE) == set(Kind) | set(DecisionKind)

@@ -41,7 +41,11 @@ class DecisionKind(str, enum.Enum):
     RELEASE = "release"
     """A stream hold or a block reservation ended."""
     FAILURE = "failure"
-    """An application's callback raised; the application is removed."""
+    """An application failed (its callback raised, or it overran a budget that
+    fails it); the application is removed."""
+    BUDGET = "budget"
+    """An application's share of the others' waiting ran out (it loses its
+    precedence for a while), or came back."""
 
 
 class Rule(str, enum.Enum):
@@ -97,6 +101,15 @@ class Rule(str, enum.Enum):
     """The application was unloaded: its waiting work is cancelled, holds freed."""
     APP_FAILURE = "app-failure"
     """The application's callback raised; it is unloaded, the other app goes on."""
+    # --- budgets (the robot profile's <budgets>) -------------------------------
+    WAIT_SHARE = "wait-share"
+    """The application kept the others waiting beyond its wait share: it loses its
+    precedence for one window (its ABs rank after the others', its holds hold
+    nothing); or it regains it. As a start's reason: the AB won because the other
+    application had lost its precedence."""
+    STARTS_PER_INSTANT = "starts-per-instant"
+    """The application started more ABs at one instant than its budget allows
+    (Commands that take no time, requested again and again): it is unloaded."""
 
 
 class Decision(NamedTuple):

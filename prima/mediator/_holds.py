@@ -13,10 +13,13 @@ Three things hold an AB back, and this module owns all their state:
   ``close_block``, the watchdog, or unloading.
 - **The channel rule** (thesis Sec. 3.3). A Command that breaks the
   Communication Channel (moving away) does not start while another
-  application talks with the user; it stays ranked and waits.
+  application talks with the user.
 
-An AB held by another app's stream hold or block is *parked*: out of its
-devices' ranking, so it reserves nothing against the holder.
+A held AB is *parked*: out of its devices' ranking, so it reserves nothing
+while it cannot start. Parked ABs take their places again when a hold ends,
+lapses or loses its force, or when a talk ends; one still held is parked again
+in the next round. An application that lost its precedence (the wait-share
+budget, :mod:`._fairness`) holds nothing with its streams and blocks.
 """
 
 from __future__ import annotations
@@ -93,8 +96,15 @@ class Holds:
         self._streams: dict[str, Stream] = {}
         self._blocks: dict[str, Block] = {}
         self._parked: list[Node] = []
+        """ABs parked by streams and blocks."""
+        self._talk_parked: list[Node] = []
+        """ABs parked by the channel rule: they take their places again at every end."""
         self._channel_held: set[AbId] = set()
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
+        self._kept: dict[AbId, str] = {}
+        """ABs parked by a stream hold or block -> the holder's name."""
+        self.keeping: dict[str, int] = {}
+        """Holder's name -> how many other apps' ABs its streams and blocks park now."""
 
     # ------------------------------------------------------------------ queries
     def open(self) -> bool:
@@ -124,7 +134,7 @@ class Holds:
         if not self.open():
             return None
         for other in self._apps.values():
-            if other is node.app:
+            if other is node.app or other.demoted:
                 continue
             blk = self._blocks.get(other.name)
             if blk is not None and blk.reserving and not node.devices.isdisjoint(blk.devices):
@@ -195,12 +205,17 @@ class Holds:
             st.devices.update(node.devices)
 
     def ended(self, node: Node) -> None:
-        """An AB ended: if it talked, CC-breaking ABs held by the channel rule may go."""
+        """An AB ended: what the channel rule parked may go (a talk ended, or it freed
+        a device they wait for); those still held are parked again."""
         if self._channel_held and not node.devices.isdisjoint(self._talk):
             self._wm.dirty.update(self._channel_devices)
+        parked, self._talk_parked = self._talk_parked, []
+        for n in parked:
+            self._wm.refile(n)
 
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
+        self._unkeep(node)
 
     def update(self) -> None:
         """Arm a stream hold when its app goes idle; let it lapse when it is busy again."""
@@ -222,18 +237,34 @@ class Holds:
                     self._release(st.devices)
 
     # ----------------------------------------------------------- held ABs
-    def park(self, node: Node) -> None:
-        """Take a held AB out of its devices' ranking, so it does not reserve them
-        against the holder's own ABs (the block or stream goes on meanwhile)."""
-        self._wm.park(node)
+    def park(self, node: Node, rule: Rule, holder: App) -> None:
+        """Take a held AB out of its devices' ranking, so it reserves nothing while it
+        cannot start (the holder's block, stream or talk goes on meanwhile)."""
+        self._wm.park(node, holder)
+        if rule is Rule.KEEP_CHANNEL:
+            self._talk_parked.append(node)
+            return
         self._parked.append(node)
+        self._kept[node.id] = holder.name
+        self.keeping[holder.name] = self.keeping.get(holder.name, 0) + 1
 
     def unpark_all(self) -> None:
-        """A hold or block ended: re-file the parked ABs (a hold still in force parks
-        them again in the next round)."""
-        parked, self._parked = self._parked, []
+        """A hold, block or talk ended or lost its force: re-file the parked ABs (one
+        still held is parked again in the next round)."""
+        parked, self._parked = self._parked + self._talk_parked, []
+        self._talk_parked = []
         for node in parked:
+            self._unkeep(node)
             self._wm.refile(node)
+
+    def _unkeep(self, node: Node) -> None:
+        holder = self._kept.pop(node.id, None)
+        if holder is not None:
+            left = self.keeping[holder] - 1
+            if left:
+                self.keeping[holder] = left
+            else:
+                del self.keeping[holder]
 
     def note(self, node: Node, rule: Rule, holder: App) -> None:
         """Record that ``holder`` keeps ``node`` waiting (once per hold)."""

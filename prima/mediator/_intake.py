@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from prima.catalog import Catalog, CommandSpec, Priority
 from prima.errors import MediationError
@@ -29,6 +30,9 @@ from prima.mediator._interface import CommandId, Driver, Request
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
+
+if TYPE_CHECKING:
+    from prima.mediator._mediator import MediatorConfig
 from prima.vocab import AppKind, RunningOrder
 
 __all__ = ["Intake", "Link"]
@@ -54,14 +58,14 @@ class Intake:
     """Checks requests, links them into working memory, and cancels what they replace."""
 
     def __init__(self, catalog: Catalog, apps: Mapping[str, App], wm: WorkingMemory,
-                 holds: Holds, log: DecisionLog, driver: Driver, end_grace: float) -> None:
+                 holds: Holds, log: DecisionLog, driver: Driver, config: MediatorConfig) -> None:
         self._catalog = catalog
         self._apps = apps
         self._wm = wm
         self._holds = holds
         self._log = log
         self._driver = driver
-        self._end_grace = end_grace
+        self._end_grace = config.end_grace
         self.next_command: CommandId = 1
         """The id the next requested Command will get."""
         self._next_seq = 1
@@ -78,6 +82,11 @@ class Intake:
             raise MediationError(f"{request.app}: a request needs at least one Command")
         if not isinstance(request.order, RunningOrder):
             raise MediationError(f"{request.app}: unknown running order {request.order!r}")
+        needed = 1 if request.group else len(request.calls)
+        if app.live + needed > app.budgets.waiting:
+            raise MediationError(
+                f"{request.app}: more than {app.budgets.waiting} behaviors would be waiting "
+                "or running (its waiting budget)")
         out: Specs = []
         for call in request.calls:
             spec = self._catalog.get(call.command)

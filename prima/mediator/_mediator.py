@@ -5,6 +5,7 @@
 - :class:`~._intake.Intake`: checks requests and links them (rules 3, 6);
 - :class:`~._holds.Holds`: explicit streams, blocks and the channel rule;
 - :class:`~._rounds.Selector`: selection rounds (rule 4), suspend and resume;
+- :class:`~._fairness.Fairness`: the wait-share budget;
 - :class:`~._log.DecisionLog`: numbers and records every decision.
 
 Every public method is one *operation*. Operations may nest: an
@@ -16,13 +17,14 @@ more can start, so the result does not depend on how callbacks nest.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from types import TracebackType
 
 from prima.catalog import Catalog
 from prima.errors import MediationError
 from prima.mediator._decisions import Decision, DecisionKind, Rule
+from prima.mediator._fairness import Fairness
 from prima.mediator._holds import Holds
 from prima.mediator._intake import Intake
 from prima.mediator._interface import (
@@ -40,7 +42,13 @@ from prima.mediator._memory import WorkingMemory
 from prima.mediator._rounds import Selector
 from prima.mediator._snapshot import Snapshot, take
 from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
-from prima.vocab import MAX_BLOCK_WATCHDOG, MAX_STREAM_HOLD, AppKind
+from prima.vocab import (
+    DEFAULT_BUDGETS,
+    MAX_BLOCK_WATCHDOG,
+    MAX_STREAM_HOLD,
+    AppKind,
+    Budgets,
+)
 
 __all__ = ["Mediator", "MediatorConfig"]
 
@@ -61,6 +69,11 @@ class MediatorConfig:
     max_block_watchdog: float = MAX_BLOCK_WATCHDOG
     """Upper bound on a begin/end block's watchdog, whatever the document asks:
     a runaway block cannot starve the other application (rule 3)."""
+
+    budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
+    """What one application of each role may consume (the robot profile's
+    ``<budgets>``): the mediator enforces ``waiting``, ``starts_per_instant`` and
+    the wait share."""
 
 
 class _Operation:
@@ -101,8 +114,10 @@ class Mediator:
         self._log = DecisionLog(clock, record)
         self._holds = Holds(self._apps, self._wm, self._log, catalog, clock)
         self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
-                              config.end_grace)
-        self._selector = Selector(self._wm, self._holds, self._log, driver, clock)
+                              config)
+        self._selector = Selector(self._wm, self._holds, self._log, driver, clock,
+                                  self._overrun)
+        self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
 
@@ -143,7 +158,8 @@ class Mediator:
                     f"(one FA, at most one EA; unregister {other.name!r} first)")
         with self._operation():
             self._app_order += 1
-            self._apps[app] = App(app, kind, listener, self._app_order)
+            self._apps[app] = App(app, kind, listener, self._app_order,
+                                  self._config.budgets.get(kind, DEFAULT_BUDGETS[kind]))
             self._log.emit(DecisionKind.LOAD, Rule.REGISTER, app=app, detail=kind.name)
 
     def unregister(self, app: str) -> None:
@@ -166,6 +182,13 @@ class Mediator:
         self._holds.close_stream(app, Rule.UNLOAD)
         self._holds.close_block(app, Rule.UNLOAD)
         self._log.emit(DecisionKind.UNLOAD, rule, app=app.name)
+
+    def _overrun(self, app: App, detail: str) -> None:
+        """An app overran a budget that fails it (called between selection rounds)."""
+        if app.alive:
+            self._log.emit(DecisionKind.FAILURE, Rule.STARTS_PER_INSTANT, app=app.name,
+                           detail=detail)
+            self._unload(app, Rule.STARTS_PER_INSTANT)
 
     def _app(self, name: str) -> App:
         app = self._apps.get(name)
@@ -317,13 +340,15 @@ class Mediator:
 
     # ============================================================== deadlines
     def next_deadline(self) -> float | None:
-        """The earliest pending hold timeout or watchdog, if any."""
-        return self._holds.next_deadline()
+        """The earliest pending hold timeout, watchdog or budget deadline, if any."""
+        times = (self._holds.next_deadline(), self._fairness.next_deadline())
+        return min((t for t in times if t is not None), default=None)
 
     def advance(self) -> None:
         """Handle every deadline that has passed, then run selection."""
         with self._operation():
             self._holds.expire(self._clock.now())
+            self._fairness.expire()
 
     # ================================================================ plumbing
     def _operation(self) -> _Operation:
@@ -333,5 +358,7 @@ class Mediator:
         self._settling = True
         try:
             self._selector.settle()
+            while self._fairness.observe():  # a precedence changed: others may start
+                self._selector.settle()
         finally:
             self._settling = False

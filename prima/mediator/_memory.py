@@ -42,6 +42,8 @@ class WorkingMemory:
         """Devices whose best waiting AB may have changed since the last round."""
         self.suspended: dict[TreeId, Tree] = {}
         """The suspended-stream stack (``Tree.suspended`` orders it)."""
+        self.ranked: dict[str, dict[tuple[str, Priority], int]] = {}
+        """Device -> (app, priority) -> how many of its waiting, unparked ABs need it."""
         self._next_ab = 1
         self._next_tree = 0
         self._next_susp = 1
@@ -61,6 +63,7 @@ class WorkingMemory:
         self.nodes[node.id] = node
         tree.nodes[node.id] = node
         tree.live += 1
+        app.live += 1
         self.trees[tree.id] = tree
         app.trees[tree.id] = tree
         for c in commands:
@@ -76,31 +79,48 @@ class WorkingMemory:
             parent.children.append(child)
 
     # ------------------------------------------------------------------ changes
+    def _rank(self, node: Node, delta: int) -> None:
+        """Count a waiting AB in (or out of) its devices' rankings."""
+        key = (node.app.name, node.priority)
+        for d in node.sorted_devices:
+            counts = self.ranked.setdefault(d, {})
+            n = counts.get(key, 0) + delta
+            if n:
+                counts[key] = n
+            else:
+                del counts[key]
+
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
         node.state = NodeState.WAITING
         node.app.active += 1
         self.waiting += 1
         self.index.add(node)
+        self._rank(node, 1)
         self.new.append(node)
         if parent_finished:
             self.pjf[node.id] = node
 
     def refile(self, node: Node) -> None:
         """A parked AB takes its place in the ranking again."""
-        node.parked = False
+        if node.parked is None:
+            return
+        node.parked = None
         if node.state is NodeState.WAITING:
             self.index.add(node)
+            self._rank(node, 1)
             self.dirty.update(node.devices)
 
-    def park(self, node: Node) -> None:
+    def park(self, node: Node, holder: App) -> None:
         """Take a waiting AB out of its devices' ranking (its index entries go stale)."""
-        node.parked = True
+        node.parked = holder
         node.version += 1
+        self._rank(node, -1)
         self.dirty.update(node.devices)
 
     def start(self, node: Node) -> None:
         node.state = NodeState.RUNNING
+        self._rank(node, -1)
         self.waiting -= 1
         for d in node.sorted_devices:
             self.busy[d] = node
@@ -125,6 +145,8 @@ class WorkingMemory:
         node.state = NodeState.CANCELLED
         node.children = []
         if was_waiting:
+            if node.parked is None:
+                self._rank(node, -1)
             self.waiting -= 1
             self.dirty.update(node.devices)
             self._inactive(node.app, now)
@@ -137,6 +159,7 @@ class WorkingMemory:
         if tree.nodes.pop(node.id, None) is None:
             return
         tree.live -= 1
+        tree.app.live -= 1
         if tree.live == 0:
             self.trees.pop(tree.id, None)
             tree.app.trees.pop(tree.id, None)
@@ -169,6 +192,11 @@ class WorkingMemory:
         self.suspended.pop(tree.id, None)
         self.dirty.update(self.index.rerank(tree))
 
+    def rerank_app(self, app: App) -> None:
+        """The app's precedence changed: re-rank its trees."""
+        for tree in app.trees.values():
+            self.dirty.update(self.index.rerank(tree))
+
     # ------------------------------------------------------------------ queries
     @staticmethod
     def waiting_in(tree: Tree) -> Iterator[Node]:
@@ -182,4 +210,4 @@ class WorkingMemory:
         """Drop stale index entries once they outnumber live ones."""
         if self.index.entries > 4 * (self.waiting * 3 + 64):
             self.index.compact(n for n in self.nodes.values()
-                               if n.state is NodeState.WAITING and not n.parked)
+                               if n.state is NodeState.WAITING and n.parked is None)

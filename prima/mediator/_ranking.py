@@ -10,8 +10,9 @@ A criterion's :class:`Scope` says when its key can change while the AB waits,
 which is all the index needs to know:
 
 - ``NODE``: fixed from the moment the AB enters the waiting list;
-- ``TREE``: a property of the AB's tree that can change (suspension); the
-  index re-ranks the tree, not each of its ABs;
+- ``TREE``: a property of the AB's tree or application that can change
+  (suspension, a spent wait share); the index re-ranks the tree, not each of
+  its ABs;
 - ``ROUND``: true for one selection round only (parent just finished). Such a
   key must be ``(0,)`` for the ABs the round names and ``(1,)`` for all others.
 """
@@ -37,7 +38,7 @@ class Scope(str, enum.Enum):
     NODE = "node"
     """Never: fixed when the AB enters the waiting list."""
     TREE = "tree"
-    """When the AB's tree changes (it is suspended or resumed)."""
+    """When the AB's tree or application changes (suspended, resumed, demoted)."""
     ROUND = "round"
     """Every selection round (the ABs whose parent just finished)."""
 
@@ -56,6 +57,10 @@ class Criterion:
 
 def _priority(node: Node, _pjf: Collection[int]) -> Key:
     return (-int(node.priority),)
+
+
+def _wait_share(node: Node, _pjf: Collection[int]) -> Key:
+    return (1,) if node.app.demoted else (0,)
 
 
 def _reactivity(node: Node, _pjf: Collection[int]) -> Key:
@@ -78,6 +83,8 @@ def _oldest(node: Node, _pjf: Collection[int]) -> Key:
 CRITERIA: tuple[Criterion, ...] = (
     Criterion(Rule.PRIORITY, Scope.NODE, _priority),
     # 1. HIGH (keeps the Communication Channel) before LOW (breaks it).
+    Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share),
+    # (budget) an app that kept the others waiting beyond its share ranks after them.
     Criterion(Rule.REACTIVITY, Scope.NODE, _reactivity),
     # 2. reactive ABs first, the latest reactive first (response speed).
     Criterion(Rule.PARENT_FINISHED, Scope.ROUND, _parent_finished),

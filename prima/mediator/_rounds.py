@@ -16,7 +16,7 @@ is suspended; when an AB of a suspended tree starts, the tree resumes.
 from __future__ import annotations
 
 import heapq
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from prima.catalog import Priority
 from prima.mediator._decisions import DecisionKind, Rule
@@ -26,7 +26,7 @@ from prima.mediator._interface import AbId, AtomicBehavior, Clock, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._ranking import Rank, rank, separating_rule
-from prima.mediator._state import Node, NodeState, Tree
+from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
 
@@ -79,7 +79,7 @@ class _Round:
         found = heaps.get(device)
         while found:
             node = found[0][1]
-            if node.state is NodeState.WAITING and not node.parked:
+            if node.state is NodeState.WAITING and node.parked is None:
                 return node
             heapq.heappop(found)
         return None
@@ -89,12 +89,16 @@ class Selector:
     """Runs selection rounds and hands the ABs they start to the driver."""
 
     def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
-                 clock: Clock) -> None:
+                 clock: Clock, overrun: Callable[[App, str], None]) -> None:
         self._wm = wm
         self._holds = holds
         self._log = log
         self._driver = driver
         self._clock = clock
+        self._overrun = overrun
+        self._instant = -1.0
+        self._starts: dict[str, int] = {}
+        """Starts per app at ``_instant`` (the starts-per-instant budget)."""
 
     def settle(self) -> None:
         """Run rounds until nothing more can start."""
@@ -116,9 +120,13 @@ class Selector:
         view = _Round(pjf, wm.index)
         started: list[Node] = []
         later: list[tuple[bool, Tree]] = []
+        overrun: dict[str, App] = {}
         for x in self._candidates(new, dirty, view):
             if x.state is NodeState.WAITING and self._startable(x, view):
-                self._start(x, view, started, later)
+                if self._counted(x.app):
+                    self._start(x, view, started, later)
+                else:
+                    overrun[x.app.name] = x.app
         for is_suspend, tree in later:
             if is_suspend:
                 wm.suspend(tree)
@@ -128,7 +136,23 @@ class Selector:
         for n in pjf.values():
             if n.state is NodeState.WAITING:
                 wm.dirty.update(n.devices)
+        for app in overrun.values():
+            self._overrun(app, f"started {app.budgets.starts_per_instant} atomic behaviors at "
+                               f"t={self._instant:g} s and asked for more (Commands that take "
+                               "no time, requested again and again?)")
         return started
+
+    def _counted(self, app: App) -> bool:
+        """Count one more start of ``app`` at this instant; False past its budget."""
+        now = self._clock.now()
+        if now != self._instant:
+            self._instant = now
+            self._starts = {}
+        n = self._starts.get(app.name, 0) + 1
+        if n > app.budgets.starts_per_instant:
+            return False
+        self._starts[app.name] = n
+        return True
 
     @staticmethod
     def _candidates(new: Iterable[Node], dirty: set[str], view: _Round) -> list[Node]:
@@ -146,20 +170,16 @@ class Selector:
     def _startable(self, x: Node, view: _Round) -> bool:
         holds = self._holds
         held = holds.holder(x) if holds.open() or x.priority is Priority.LOW else None
-        if held is not None and held[0] is not Rule.KEEP_CHANNEL:
-            # Held by another app's block or stream hold: out of the ranking at
-            # once, busy devices or not, so it reserves nothing meanwhile.
+        ready = all(d not in self._wm.busy and view.best(d) is x for d in x.sorted_devices)
+        if held is None:
+            return ready
+        # Held by another app's block, stream hold or talk: out of the ranking at
+        # once, so it reserves nothing meanwhile. The channel rule is noted only
+        # when the talk is what keeps it (its devices are free and it ranks best).
+        if ready or held[0] is not Rule.KEEP_CHANNEL:
             holds.note(x, *held)
-            holds.park(x)
-            return False
-        busy = self._wm.busy
-        for d in x.sorted_devices:
-            if d in busy or view.best(d) is not x:
-                return False
-        if held is not None:  # the channel rule: it waits, still ranked
-            holds.note(x, *held)
-            return False
-        return True
+        holds.park(x, *held)
+        return False
 
     def _start(self, x: Node, view: _Round, started: list[Node],
                later: list[tuple[bool, Tree]]) -> None:

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from prima.catalog import CommandSpec, Priority
 from prima.mediator._interface import AbId, Call, CommandId, TreeId
-from prima.vocab import AppKind
+from prima.vocab import AppKind, Budgets
 
 if TYPE_CHECKING:
     from prima.mediator._interface import AppListener
@@ -49,11 +49,14 @@ class App:
     """One registration of an application."""
 
     __slots__ = ("name", "kind", "listener", "alive", "order", "latest", "active",
-                 "idle_since", "trees")
+                 "idle_since", "trees", "live", "demoted", "budgets")
 
-    def __init__(self, name: str, kind: AppKind, listener: AppListener, order: int) -> None:
+    def __init__(self, name: str, kind: AppKind, listener: AppListener, order: int,
+                 budgets: Budgets) -> None:
         self.name = name
         self.kind = kind
+        self.budgets = budgets
+        """What it may consume (its role's budgets)."""
         self.listener = listener
         self.alive = True
         self.order = order
@@ -66,6 +69,10 @@ class App:
         """When ``active`` last dropped to zero."""
         self.trees: dict[TreeId, Tree] = {}
         """Its trees in working memory."""
+        self.live = 0
+        """Its ABs in working memory (pending, waiting or running): the waiting budget."""
+        self.demoted = False
+        """It kept others waiting beyond its wait-share budget: it has lost its precedence."""
 
 
 class Command:
@@ -146,8 +153,8 @@ class Node:
         """The request's sequence number: smaller is older."""
         self.version = 0
         """Bumped whenever its waiting-index entries go stale."""
-        self.parked = False
-        """Held by another app's block or stream hold: out of the device ranking."""
+        self.parked: App | None = None
+        """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
         self.calls: tuple[Call, ...] = tuple(c.call for c in commands)
         self.command_ids: tuple[CommandId, ...] = tuple(c.id for c in commands)
         if len(commands) == 1:

@@ -193,8 +193,26 @@ def test_a_documents_watchdog_and_hold_are_capped() -> None:
     m = h.mediator
     m.open_block("ea", watchdog=1_000_000.0)
     m.submit(req("ea", speak("hog")))
-    h.at(2.0, lambda: m.submit(req("fa", speak("let me talk"), reactive=True)))
     h.run(until=1000)
     [release] = [d for d in h.decisions if d.kind is DecisionKind.RELEASE]
     assert (release.rule, release.t) == (Rule.WATCHDOG, 60.0)
-    assert [d.t for d in h.decisions if d.kind is DecisionKind.START][-1] == 60.0
+
+
+def test_a_block_keeps_the_other_app_waiting_only_for_its_wait_share() -> None:
+    """The wait-share budget: a block that parks the other app's speech loses its force
+    after 30 s of keeping it waiting (the default share), long before its watchdog."""
+    from prima.mediator import AppKind, DecisionKind, Rule
+    from prima.mediator.testing import Harness
+    from tests.mediator.helpers import req, speak
+
+    h = Harness(duration=1.0)
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m = h.mediator
+    m.open_block("ea", watchdog=1_000_000.0)
+    m.submit(req("ea", speak("hog")))
+    h.at(2.0, lambda: m.submit(req("fa", speak("let me talk"), reactive=True)))
+    h.run(until=1000)
+    budget = [d for d in h.decisions if d.kind is DecisionKind.BUDGET]
+    assert [(d.app, d.rule, d.t) for d in budget][0] == ("ea", Rule.WAIT_SHARE, 32.0)
+    assert [d.t for d in h.decisions if d.kind is DecisionKind.START][-1] == 32.0

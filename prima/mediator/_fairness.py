@@ -1,0 +1,155 @@
+"""The wait-share budget: how long an application may keep the others waiting.
+
+An application *keeps another waiting* while, on some device, another
+application has a waiting AB whose priority is not lower than that of the
+application's AB that holds the device (the AB running on it, or, on a free
+device, the best-ranked waiting AB, which reserves it), or while one of its
+stream holds or blocks parks another application's AB. Priority aside: an AB
+that breaks the Communication Channel waiting for one that keeps it is the
+channel rule at work, not a budget matter.
+
+An application may keep the others waiting for at most ``wait_share``
+seconds within any ``wait_window`` (the robot profile's budgets). Beyond it,
+it loses its precedence for one window: its streams and blocks hold nothing,
+and its ABs rank after the others' of the same priority (criterion
+``wait-share``). However it combines running ABs, end-handler chains, stream
+holds re-armed after every request and blocks left and re-entered, an
+application cannot keep another's ready AB waiting longer than its share plus
+one atomic behavior.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Mapping
+
+from prima.mediator._decisions import DecisionKind, Rule
+from prima.mediator._holds import Holds
+from prima.mediator._interface import Clock
+from prima.mediator._log import DecisionLog
+from prima.mediator._memory import WorkingMemory
+from prima.mediator._state import App
+
+__all__ = ["Fairness"]
+
+
+class _Share:
+    """One application's record of keeping the others waiting."""
+
+    __slots__ = ("intervals", "since", "demoted_until", "check_at")
+
+    def __init__(self) -> None:
+        self.intervals: deque[tuple[float, float]] = deque()
+        """Closed intervals, oldest first, within the last window."""
+        self.since: float | None = None
+        """When the current interval began, if the app keeps others waiting now."""
+        self.demoted_until: float | None = None
+        self.check_at: float | None = None
+        """When its share could next run out (a deadline)."""
+
+    def total(self, now: float, window: float) -> float:
+        """Seconds spent keeping others waiting within ``[now - window, now]``."""
+        start = now - window
+        while self.intervals and self.intervals[0][1] <= start:
+            self.intervals.popleft()
+        total = sum(end - max(begin, start) for begin, end in self.intervals)
+        if self.since is not None:
+            total += now - max(self.since, start)
+        return total
+
+
+class Fairness:
+    """Measures each application's wait share and takes its precedence when it is spent."""
+
+    def __init__(self, apps: Mapping[str, App], wm: WorkingMemory, holds: Holds,
+                 log: DecisionLog, clock: Clock) -> None:
+        self._apps = apps
+        self._wm = wm
+        self._holds = holds
+        self._log = log
+        self._clock = clock
+        self._shares: dict[str, _Share] = {}
+
+    # ---------------------------------------------------------------- observing
+    def observe(self) -> bool:
+        """After every operation: who keeps the others waiting now; a spent share
+        takes the app's precedence at once. True if some precedence changed."""
+        now = self._clock.now()
+        keeping = self._keeping()
+        for name in list(self._shares.keys() | keeping):
+            share = self._shares.setdefault(name, _Share())
+            if name in keeping and share.since is None:
+                share.since = now
+            elif name not in keeping and share.since is not None:
+                if now > share.since:
+                    share.intervals.append((share.since, now))
+                share.since = None
+        return self._settle_shares(now)
+
+    def _keeping(self) -> set[str]:
+        """The apps that keep another app's ready AB waiting now."""
+        wm = self._wm
+        out = set(self._holds.keeping)
+        for device, counts in wm.ranked.items():
+            if not counts:
+                continue
+            holder = wm.busy.get(device) or wm.index.top(device)
+            if holder is None or holder.app.name in out:
+                continue
+            name, prio = holder.app.name, holder.priority
+            if any(app != name and p >= prio for app, p in counts):
+                out.add(name)
+        return out
+
+    def _settle_shares(self, now: float) -> bool:
+        changed = False
+        for name, share in self._shares.items():
+            app = self._apps.get(name)
+            if app is None:
+                continue
+            limit, window = app.budgets.wait_share, app.budgets.wait_window
+            if share.demoted_until is not None and share.demoted_until <= now:
+                share.demoted_until = None
+                changed |= self._set(app, False, "regains its precedence")
+            used = share.total(now, window)
+            if share.since is not None and used >= limit and share.demoted_until is None:
+                share.demoted_until = self._clock.after(window)
+                changed |= self._set(
+                    app, True, f"kept other applications waiting {used:g} s within "
+                               f"{window:g} s: it loses its precedence until "
+                               f"t={share.demoted_until:g} s")
+            share.check_at = (self._clock.after(limit - used)
+                              if share.since is not None and used < limit else None)
+        self._forget_idle(now)
+        return changed
+
+    def _set(self, app: App, demoted: bool, detail: str) -> bool:
+        if app.demoted is demoted:
+            return False
+        app.demoted = demoted
+        self._wm.rerank_app(app)
+        if demoted:
+            self._holds.unpark_all()  # its holds hold nothing now
+        self._log.emit(DecisionKind.BUDGET, Rule.WAIT_SHARE, app=app.name, detail=detail)
+        return True
+
+    def _forget_idle(self, now: float) -> None:
+        """Drop the records of apps gone, or idle for a whole window."""
+        gone = [name for name, s in self._shares.items()
+                if name not in self._apps or (
+                    s.since is None and s.demoted_until is None
+                    and s.total(now, self._apps[name].budgets.wait_window) == 0)]
+        for name in gone:
+            del self._shares[name]
+
+    # ---------------------------------------------------------------- deadlines
+    def next_deadline(self) -> float | None:
+        """When a share could run out, or a lost precedence comes back."""
+        times = [t for s in self._shares.values() for t in (s.demoted_until, s.check_at)
+                 if t is not None]
+        return min(times, default=None)
+
+    def expire(self) -> bool:
+        """Handle what fell due; True if some precedence changed."""
+        return self._settle_shares(self._clock.now())
+
