@@ -7,7 +7,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -17,8 +19,9 @@ from typing import TextIO
 from prima import __version__
 from prima.dsl import Checker, RobotProfile, collect, default_profile, load_profile, validate_paths
 from prima.errors import LocatedError, PrimaError, Problem
+from prima.vocab import MAX_RUN_TIME
 
-EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -94,6 +97,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return EXIT_ERRORS
+    except KeyboardInterrupt:  # Ctrl-C: what was written so far stays written
+        print(f"prima {args.command}: interrupted", file=err)
+        return EXIT_INTERRUPTED
 
 
 def _report(problems: Iterable[Problem], to: TextIO) -> None:
@@ -149,22 +155,54 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_ERRORS if report.errors else EXIT_OK
 
 
-def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.run import Run
-    from prima.trace import format_text, format_jsonl
-
-    if args.until is not None and args.until <= 0:
-        return _usage("run", "--until must be positive", err)
+def _run_usage(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``prima run``'s options, checked before anything runs."""
+    until = args.until
+    if until is not None and not (math.isfinite(until) and 0 < until <= MAX_RUN_TIME):
+        return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
     for path in (args.scenario, args.fa, args.ea, args.robot):
         if path is not None and not Path(path).is_file():
-            return _usage("run", f"no such file: {path}", err)
-    lines = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
-                seed=args.seed, until=args.until).run()
-    text = format_text(lines) if args.format == "text" else format_jsonl(lines)
+            return f"no such file: {path}"
     if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
-    else:
-        out.write(text)
+        target = Path(args.out)
+        if target.is_dir():
+            return f"--out {args.out} is a folder"
+        if not target.parent.is_dir():
+            return f"--out {args.out}: no such folder {target.parent}"
+    return None
+
+
+def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.run import Run
+    from prima.trace import TextTrace, TraceLine, jsonl_row
+
+    problem = _run_usage(args)
+    if problem:
+        return _usage("run", problem, err)
+    # Everything is loaded and checked before the output is opened; then each trace
+    # line is written as the run makes it (``write`` is defined below, before the run).
+    run = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
+              seed=args.seed, until=args.until, sink=lambda line: write(line))
+    with contextlib.ExitStack() as files:
+        to = files.enter_context(open(args.out, "w", encoding="utf-8")) if args.out else out
+        if args.format == "text":
+            print(TextTrace.HEADER, file=to)
+            text = TextTrace()
+
+            def write(line: TraceLine) -> None:
+                row = text.row(line)
+                if row is not None:
+                    to.write(row + "\n")
+        else:
+            def write(line: TraceLine) -> None:
+                to.write(jsonl_row(line))
+        try:
+            run.run()
+        except KeyboardInterrupt:
+            to.flush()
+            print(f"prima run: interrupted at t={run.sim.now():g} s; the trace up to then "
+                  f"is written{' to ' + args.out if args.out else ''}", file=err)
+            return EXIT_INTERRUPTED
     return EXIT_OK
 
 
@@ -183,6 +221,10 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             result = check(scenario, update=args.update)
         except LocatedError as exc:
             _report(exc.problems, err)
+            failed += 1
+            continue
+        except Exception as exc:  # noqa: BLE001 - report it, and test the other scenarios
+            print(f"error     {scenario}: {type(exc).__name__}: {exc}", file=out)
             failed += 1
             continue
         print(f"{result.status.value:9} {scenario}", file=out)

@@ -13,19 +13,29 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from prima.catalog import Catalog, ParamKind
 from prima.dsl import Document, RobotProfile, default_profile, load_document, load_profile
-from prima.errors import AppFailure, DocumentError, PrimaError, Problem, RunError, Severity
+from prima.errors import AppFailure, DocumentError, LocatedError, Problem, RunError, Severity
 from prima.interpreter import Interpreter, Note, NoteKind
-from prima.mediator import AppKind, Call, Decision, DecisionKind, Event, Mediator, Outcome, Request
+from prima.mediator import (
+    AppKind,
+    Call,
+    Decision,
+    DecisionKind,
+    Event,
+    Mediator,
+    MediatorConfig,
+    Outcome,
+    Request,
+)
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
-from prima.vocab import Value
+from prima.vocab import DEFAULT_BUDGETS, Budgets, Value
 
 __all__ = ["MAX_IDLE_ROUNDS", "Run", "spec_from_profile"]
 
@@ -86,11 +96,17 @@ class _Port:
 
 
 class Run:
-    """One simulated run of a scenario with its FA and EA."""
+    """One simulated run of a scenario with its FA and EA.
+
+    The trace goes to ``sink`` line by line as the run goes, if one is given
+    (then :attr:`lines` stays empty and memory stays flat however long the run);
+    otherwise it is kept in :attr:`lines`.
+    """
 
     def __init__(self, scenario: str | Path, *, fa: str | Path | None = None,
                  ea: str | Path | None = None, robot: str | Path | None = None,
-                 seed: int | None = None, until: float | None = None) -> None:
+                 seed: int | None = None, until: float | None = None,
+                 sink: Callable[[TraceLine], None] | None = None) -> None:
         loaded = load_scenario(scenario)
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
@@ -111,12 +127,16 @@ class Run:
                                          f"the FA and the EA are both named '{names[0]}'; "
                                          "each application needs a name of its own")])
         self.lines: list[TraceLine] = []
+        self._sink = sink or self.lines.append
+        self._count = 0
+        self.budgets: Mapping[AppKind, Budgets] = DEFAULT_BUDGETS
         self.apps: dict[str, _App] = {}
         self._outcomes: dict[int, Outcome] = {}
         self.catalog = self.profile.catalog()
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
                                            catalog=self.catalog)
-        self.mediator = Mediator(self.catalog, self.sim, self.sim, record=self._decision)
+        self.mediator = Mediator(self.catalog, self.sim, self.sim, record=self._decision,
+                                 config=MediatorConfig(budgets=self.budgets))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
         self.sim.on_user = self._user
@@ -152,15 +172,19 @@ class Run:
 
     def _load(self, path: Path, role: AppKind) -> None:
         document = self._documents.get(path) or _check_slot(load_document(path, self.profile), role)
+        self._documents[path] = document
         name = document.name
         if name in self.apps:
             raise DocumentError([Problem(str(path), 1, 1, Severity.ERROR,
                                          f"an application named '{name}' is already loaded; "
                                          "each application needs a name of its own")])
+        budgets = self.budgets[role]
         interpreter = Interpreter(document, name, self._port, self.sim,
                                   catalog=self.catalog, robot_events=self.profile.events,
+                                  gestures=self.profile.gestures, budgets=budgets,
                                   note=self._note,
                                   send=lambda _app, to, text: self.sim.send(to, text))
+        self.sim.longest[name] = budgets.longest_ab
         app = _App(name, role, interpreter)
         self._loading = path
         self.mediator.register(name, role, interpreter)  # its load decision is traced
@@ -195,19 +219,24 @@ class Run:
         self.ea_path = path
         try:
             self._load(path, AppKind.EA)
-        except PrimaError as exc:
-            self._line(Kind.ERROR, text=str(exc).splitlines()[0], detail={"zone": entry.zone})
+        except LocatedError as exc:  # a bad EA in the building: the run goes on without it
+            self._line(Kind.ERROR, text=str(exc.problems[0]), detail={"zone": entry.zone})
+        except Exception as exc:  # noqa: BLE001 - whatever a stranger's file does
+            self._line(Kind.ERROR, text=f"{path}: cannot load: {type(exc).__name__}: {exc}",
+                       detail={"zone": entry.zone})
 
     # ------------------------------------------------------------ recording
 
     def _line(self, kind: RecordKind, **fields: Any) -> None:
-        self.lines.append(TraceLine(self.sim.now(), len(self.lines), kind, **fields))
+        self._sink(TraceLine(self.sim.now(), self._count, kind, **fields))
+        self._count += 1
 
     def _decision(self, d: Decision) -> None:
         if d.kind is DecisionKind.FAILURE:
             app = self.apps.get(d.app or "")
             if app is None or not app.failed:  # not an error the interpreter already reported
-                self._line(Kind.ERROR, app=d.app, text=d.detail, reason=d.rule.value)
+                self._line(Kind.ERROR, app=d.app, text=self._located(app, d.detail),
+                           reason=d.rule.value)
             if app is not None:
                 self._fail(app)
         elif d.kind is DecisionKind.LOAD:
@@ -225,6 +254,8 @@ class Run:
             outcome = self._outcomes.pop(d.ab, None)
             if outcome is not None and outcome.values:
                 detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
+                if "error" in outcome.values:
+                    detail["error"] = outcome.values["error"]
         spoken = [words for c in d.calls for words in self.catalog[c.command].spoken(c.args)]
         text = " / ".join(spoken) if spoken else None
         others = [arg for c in d.calls for arg in _shown_args(self.catalog, c)]
@@ -240,6 +271,14 @@ class Run:
                    devices=tuple(d.devices) if d.devices else None,
                    reactive=d.reactive if d.ab is not None else None,
                    reason=d.rule.value, detail=detail)
+
+    @staticmethod
+    def _located(app: _App | None, message: str) -> str:
+        """A failure the mediator found, located at the app's latest request."""
+        loc = app.interpreter.last_request if app is not None else None
+        if app is None or loc is None:
+            return message
+        return f"{app.interpreter.document.path}:{loc.line}:{loc.col}: {message}"
 
     def _finished(self, ab: int, outcome: Outcome) -> None:
         self._outcomes[ab] = outcome

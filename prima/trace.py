@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 from prima.mediator import DecisionKind
 from prima.vocab import Value
 
-__all__ = ["Kind", "RecordKind", "TraceLine", "device_overlaps", "format_jsonl", "format_text"]
+__all__ = ["Kind", "RecordKind", "TextTrace", "TraceLine", "device_overlaps", "format_jsonl",
+           "format_text", "jsonl_row"]
 
 
 class Kind(str, enum.Enum):
@@ -91,6 +92,12 @@ def _describe_event(line: TraceLine) -> str:
     return f"event {line.text}" + (f": {data}" if data else "")
 
 
+def _describe_send(line: TraceLine) -> str:
+    said = f'sends to {line.detail.get("to")}: "{line.text}"'
+    dropped = line.detail.get("dropped")
+    return f"{said} (dropped: {dropped})" if dropped else said
+
+
 def _describe_hold(line: TraceLine) -> str:
     return f"holds {line.command} back ({line.text})" if line.text else f"holds {line.command} back"
 
@@ -101,7 +108,8 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     DecisionKind.UNLOAD: lambda line: f"unloads the application ({line.reason})",
     DecisionKind.REQUEST: lambda _line: None,  # requests and ends: in the jsonl trace only
     DecisionKind.START: lambda line: _describe_start(line),
-    DecisionKind.END: lambda _line: None,
+    DecisionKind.END: lambda line: (f"{line.command} fails: {line.detail['error']}"
+                                    if "error" in line.detail else None),
     DecisionKind.CANCEL: lambda line: f"cancels {line.command}",
     DecisionKind.SUSPEND: lambda line: f"suspends its stream at {line.command}",
     DecisionKind.RESUME: lambda line: f"resumes its stream at {line.command}",
@@ -112,7 +120,7 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     Kind.EVENT: _describe_event,
     Kind.USER: lambda line: _describe_user(line),
     Kind.ERROR: lambda line: f"ERROR: {line.text}",
-    Kind.SEND: lambda line: f'sends to {line.detail.get("to")}: "{line.text}"',
+    Kind.SEND: lambda line: _describe_send(line),
     Kind.LOG: lambda line: f"log: {line.text}",
 }
 """How each kind of line reads in the text trace (None: not shown there)."""
@@ -147,33 +155,62 @@ def _describe_user(line: TraceLine) -> str:
 
 def format_jsonl(lines: Iterable[TraceLine]) -> str:
     """One JSON object per line, keys in a stable order."""
-    return "".join(json.dumps(line.to_dict(), ensure_ascii=False) + "\n" for line in lines)
+    return "".join(map(jsonl_row, lines))
 
 
-def format_text(lines: Iterable[TraceLine]) -> str:
-    """The trace as a table like the thesis' figures (one behavior per row)."""
-    rows = ["  No.     time  R/U  app          behavior"]
-    n = 0
-    last_start: dict[str | None, object] = {}
-    for line in lines:
+_CONTROL = {c: f"\\x{c:02x}" for c in (*range(0x20), 0x7F, 0x85)}
+_CONTROL.update({ord("\n"): "\\n", ord("\r"): "\\r", ord("\t"): "\\t",
+                 0x2028: "\\u2028", 0x2029: "\\u2029"})
+
+
+def _escape(row: str) -> str:
+    """Control characters (a newline in a Speak text, an escape sequence) as escapes:
+    a document cannot forge a row of the text trace or drive the terminal."""
+    return row.translate(_CONTROL)
+
+
+class TextTrace:
+    """The text form of a trace, one row at a time: a run streams through it."""
+
+    HEADER = "  No.     time  R/U  app          behavior"
+
+    def __init__(self) -> None:
+        self._n = 0
+        self._last_start: dict[str | None, object] = {}
+
+    def row(self, line: TraceLine) -> str | None:
+        """The row for ``line``, or None if the text form does not show it."""
         text = _describe(line)
         if text is None:
-            continue
+            return None
         if line.kind is DecisionKind.START:
             # A feedback loop's iterations show once, and again after an interruption.
             command_id = line.detail.get("command_id")
-            repeat = line.detail.get("iteration") and last_start.get(line.app) == command_id
-            last_start[line.app] = command_id
+            repeat = line.detail.get("iteration") and self._last_start.get(line.app) == command_id
+            self._last_start[line.app] = command_id
             if repeat:
-                continue
+                return None
         who = "U" if line.kind is Kind.USER else "R"
         reactive_start = line.kind is DecisionKind.START and line.reactive
         mark = " (o)" if line.kind is Kind.EVENT or reactive_start else ""
         why = f"  [{line.reason}]" if line.reason and line.kind in _REASON_SHOWN else ""
         app = line.app or ""
-        rows.append(f"{n:5d} {line.t:8.2f}   {who}   {app:<12} {text}{mark}{why}")
-        n += 1
+        row = f"{self._n:5d} {line.t:8.2f}   {who}   {app:<12} {text}{mark}{why}"
+        self._n += 1
+        return _escape(row)
+
+
+def format_text(lines: Iterable[TraceLine]) -> str:
+    """The trace as a table like the thesis' figures (one behavior per row)."""
+    trace = TextTrace()
+    rows = [TextTrace.HEADER]
+    rows += [row for row in map(trace.row, lines) if row is not None]
     return "\n".join(rows) + "\n"
+
+
+def jsonl_row(line: TraceLine) -> str:
+    """One line of the jsonl form (with its newline)."""
+    return json.dumps(line.to_dict(), ensure_ascii=False) + "\n"
 
 
 def device_overlaps(lines: Iterable[TraceLine]) -> list[str]:

@@ -15,6 +15,7 @@ from types import MappingProxyType
 __all__ = [
     "MAX_BLOCK_WATCHDOG",
     "MAX_NUMBER",
+    "MAX_RUN_TIME",
     "MAX_STREAM_HOLD",
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
@@ -66,6 +67,9 @@ runaway block cannot starve the other application (rule 3)."""
 
 MAX_TEXT = 10_000
 """Longest text an application may build or say (characters)."""
+
+MAX_RUN_TIME = 1_000_000.0
+"""Longest simulated run (s, about eleven and a half days): a scenario's ``until``."""
 
 MAX_NUMBER = 2.0 ** 53
 """Largest magnitude of a number (beyond it, integers lose exactness anyway)."""

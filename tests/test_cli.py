@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import io
 import json
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -14,6 +16,7 @@ from prima import xmlio as _schema
 from prima.cli import main
 
 ROOT = Path(__file__).parents[1]
+OFFICE = ROOT / "scenarios" / "examples" / "office-kidode.xml"
 INVALID = ROOT / "tests" / "dsl" / "data" / "invalid"
 
 
@@ -124,3 +127,49 @@ def test_unknown_xml_in_a_folder_is_skipped_but_named_is_an_error(tmp_path: Path
     assert code == 0 and "1 file checked" in err
     code, out, _ = run("validate", str(other))
     assert code == 1 and "not a PXML document" in out
+
+
+@pytest.mark.parametrize("until", ["inf", "nan", "0", "-5", "1e999", "2000000"])
+def test_run_refuses_an_until_that_is_not_a_sensible_time(until: str) -> None:
+    code, out, err = run("run", str(OFFICE), "--until", until)
+    assert code == 2 and "--until must be" in err and out == ""
+
+
+def test_run_checks_its_output_path_before_running(tmp_path: Path) -> None:
+    code, _, err = run("run", str(OFFICE), "--out", str(tmp_path / "missing" / "trace.txt"))
+    assert code == 2 and "no such folder" in err
+    code, _, err = run("run", str(OFFICE), "--out", str(tmp_path))
+    assert code == 2 and "is a folder" in err
+
+
+def test_ctrl_c_ends_a_run_with_130_and_keeps_the_trace_so_far(tmp_path: Path) -> None:
+    out = tmp_path / "trace.jsonl"
+    proc = subprocess.Popen([sys.executable, "-m", "prima", "run", str(OFFICE), "--until",
+                             "900000", "--format", "jsonl", "--out", str(out)],
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and (not out.exists() or out.stat().st_size < 4096):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "interrupted at t=" in err and "Traceback" not in err
+    lines = out.read_text().splitlines()
+    assert lines and all(json.loads(line)["seq"] == i for i, line in enumerate(lines[:-1]))
+
+
+def test_prima_test_reports_every_scenario_even_after_a_broken_one(tmp_path: Path) -> None:
+    broken = tmp_path / "a-broken.xml"
+    broken.write_text('<scenario xmlns="urn:prima:scenario:1" name="x" until="5">'
+                      '<map href="nowhere.xml"/><robot x="0" y="0"/></scenario>')
+    (tmp_path / "a-broken.golden.txt").write_text("")
+    good = tmp_path / "b-good.xml"
+    text = (ROOT / "scenarios/examples/office-kidode.xml").read_text()
+    text = text.replace("../../apps", str(ROOT / "apps"))
+    text = text.replace("../maps", str(ROOT / "scenarios/maps"))
+    good.write_text(text.replace('until="240"', 'until="5"'))
+    assert run("test", str(good), "--update")[0] == 0
+    code, out, err = run("test", str(tmp_path))
+    assert code == 1
+    assert "same      " + str(good) in out and "not found" in err
+    assert "2 scenario(s): 1 failed" in err

@@ -14,11 +14,14 @@ recording it; the run loop then unloads this application alone.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Mapping
+from collections import deque
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol, get_args
 
+from prima.catalog import Catalog, ParamKind
 from prima.dsl import (
+    STANDARD_GESTURES,
     Action,
     Assign,
     CancelTimer,
@@ -40,11 +43,10 @@ from prima.dsl import (
     to_text,
     truthy,
 )
-from prima.catalog import Catalog, ParamKind
 from prima.errors import AppFailure, ExecutionError, PrimaError
 from prima.mediator import Call, Clock, CommandId, Event, Outcome
 from prima.mediator import Request as MediatorRequest
-from prima.vocab import PREDEFINED_EVENTS, Value
+from prima.vocab import DEFAULT_BUDGETS, PREDEFINED_EVENTS, AppKind, Budgets, Value
 
 MAX_TRANSITIONS = 100
 """State changes allowed while handling one event (a goto loop is an error)."""
@@ -122,6 +124,7 @@ class Interpreter:
 
     def __init__(self, document: Document, app: str, port: MediatorPort, clock: Clock, *,
                  catalog: Catalog, robot_events: Mapping[str, bool] | None = None,
+                 gestures: Collection[str] | None = None, budgets: Budgets | None = None,
                  note: Callable[[Note], None] | None = None,
                  send: Callable[[str, str, str], None] | None = None) -> None:
         self.document = document
@@ -130,6 +133,12 @@ class Interpreter:
         self.clock = clock
         self.catalog = catalog
         self.robot_events = dict(robot_events or {})
+        self.gestures = frozenset(gestures) if gestures is not None else None
+        """The robot's gestures (None: not checked here); an EA may use the common ones."""
+        self.budgets = budgets or DEFAULT_BUDGETS[document.kind]
+        self.last_request: Loc | None = None
+        """Where the latest request was written (for failures found later)."""
+        self._sent: deque[float] = deque()
         self._note = note or (lambda _n: None)
         self._send = send or (lambda _app, _to, _text: None)
         self.variables: dict[str, Value] = {}
@@ -343,8 +352,19 @@ class Interpreter:
         raise _Leave(action.state)
 
     def _send_action(self, action: Send, scope: Scope) -> None:
-        text = to_text(self._eval(action.text, action.loc, scope))
-        self._note(Note(self.clock.now(), self.app, NoteKind.SEND, text, {"to": action.to}))
+        text = self._text(self._eval(action.text, action.loc, scope), "a message", action.loc)
+        now = self.clock.now()
+        sent = self._sent
+        while sent and sent[0] <= now - 1.0:
+            sent.popleft()
+        detail: dict[str, Value] = {"to": action.to}
+        if len(sent) >= self.budgets.sends_per_second:
+            detail["dropped"] = (f"more than {self.budgets.sends_per_second:g} messages in one "
+                                 "second (its budget)")
+            self._note(Note(now, self.app, NoteKind.SEND, text, detail))
+            return
+        sent.append(now)
+        self._note(Note(now, self.app, NoteKind.SEND, text, detail))
         self._send(self.app, action.to, text)
 
     def _raise(self, action: Raise, _scope: Scope) -> None:
@@ -363,10 +383,11 @@ class Interpreter:
         self._timers.pop(action.name, None)
 
     def _log(self, action: Log, scope: Scope) -> None:
-        self._note(Note(self.clock.now(), self.app, NoteKind.LOG,
-                        to_text(self._eval(action.text, action.loc, scope))))
+        text = self._text(self._eval(action.text, action.loc, scope), "a log line", action.loc)
+        self._note(Note(self.clock.now(), self.app, NoteKind.LOG, text))
 
     def _request(self, request: Request, scope: Scope) -> None:
+        self.last_request = request.loc
         calls = tuple(self._call(c, scope) for c in request.calls)
         handling = self._handling
         # Both flags go on the first request of a handling only (MISSION.md rules 5
@@ -390,10 +411,13 @@ class Interpreter:
         for name, compiled in call.args.items():
             param = spec.param(name)
             value = self._eval(compiled, call.loc, scope)
+            what = f"{call.command} '{name}'"
             if param is not None and param.kind is ParamKind.NUMBER:
-                args[name] = self._number(value, f"{call.command} '{name}'", call.loc)
+                args[name] = self._number(value, what, call.loc)
             else:
-                args[name] = to_text(value)
+                args[name] = self._text(value, what, call.loc)
+            if param is not None and param.kind is ParamKind.GESTURE:
+                self._check_gesture(str(args[name]), call.loc)
         for param in spec.params:
             if param.name not in args and param.default is not None and \
                     param.kind not in (ParamKind.GRAMMAR, ParamKind.VARIABLE):
@@ -401,7 +425,24 @@ class Interpreter:
         extra = {name: self._eval(c, call.loc, scope) for name, c in call.extra.items()}
         return Call(call.command, args, extra, call.label)
 
+    def _check_gesture(self, name: str, loc: Loc) -> None:
+        """A gesture computed at run time passes the checks a literal one passes."""
+        if self.gestures is not None and name not in self.gestures:
+            raise ExecutionError(f"{self._where(loc)}unknown gesture {name!r} "
+                                 f"(this robot knows: {', '.join(sorted(self.gestures))})")
+        if self.document.kind is AppKind.EA and name not in STANDARD_GESTURES:
+            raise ExecutionError(f"{self._where(loc)}gesture {name!r} is robot-specific; "
+                                 "only an FA may use it")
+
     # ------------------------------------------------------------ values
+
+    def _text(self, value: Value, what: str, loc: Loc) -> str:
+        """A value as text, within the application's text budget."""
+        text = to_text(value)
+        if len(text) > self.budgets.text:
+            raise ExecutionError(f"{self._where(loc)}{what} is {len(text)} characters long; "
+                                 f"the limit is {self.budgets.text} (its text budget)")
+        return text
 
     def _eval(self, compiled: Compiled, loc: Loc, scope: Scope | None = None) -> Value:
         try:

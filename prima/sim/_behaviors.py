@@ -272,7 +272,8 @@ def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     picture = Picture(sim.now(), round(pose.x, 3), round(pose.y, 3), heading, seen,
                       round(distance, 3) if seen else None)
     sim.pictures.append(picture)
-    return {"saw_user": seen, "heading": heading, "picture": len(sim.pictures)}, True
+    sim.picture_count += 1
+    return {"saw_user": seen, "heading": heading, "picture": sim.picture_count}, True
 
 
 # ---- feedback loops --------------------------------------------------------------------------
@@ -478,6 +479,51 @@ BEHAVIORS: Mapping[str, Behavior] = {
 """Every Command the simulated robot performs (the standard ones plus TakePicture)."""
 
 
+# ---- planned durations (the longest-AB budget) ---------------------------------------
+
+def _said(sim: Simulator, call: Call, name: str) -> float:
+    text = _text(sim, call, name)
+    return sim.spec.speech_duration(text) if text else 0.0
+
+
+def _turning(sim: Simulator, degrees: float) -> float:
+    return abs(degrees) / sim.spec.max_turn_rate
+
+
+def _gesture_time(sim: Simulator, call: Call) -> float:
+    return sim.spec.gestures.get(_text(sim, call, "name"), 0.0)
+
+
+def _search_time(sim: Simulator, call: Call) -> float:
+    look = max(sim.spec.search_time, _said(sim, call, "say"))
+    return look + _turning(sim, _req(sim, call, "turn"))
+
+
+PLANNED: Mapping[str, Callable[[Simulator, Call], float]] = {
+    "Speak": lambda sim, call: _said(sim, call, "text"),
+    "QA": lambda sim, call: _said(sim, call, "prompt") + max(0.0, _req(sim, call, "timeout")),
+    "FaceHumanAndSpeak": lambda sim, call: _turning(sim, 180.0) + _said(sim, call, "text"),
+    "TurnAndSpeak": lambda sim, call: max(_turning(sim, _req(sim, call, "angle")),
+                                          _said(sim, call, "text")),
+    "Turn": lambda sim, call: _turning(sim, _req(sim, call, "angle")),
+    "SetSpeedAndTime": lambda sim, call: _req(sim, call, "time"),
+    "Gesture": lambda sim, call: _gesture_time(sim, call),
+    "ActiveSensingHuman": lambda sim, call: _search_time(sim, call),
+}
+"""How long a Command whose length depends on its arguments will take, at least
+(s); a robot-specific Command takes its catalog duration; the others are bounded
+by the robot itself (a leg of a move, a head turn)."""
+
+
+def planned(sim: Simulator, call: Call) -> float:
+    """How long performing ``call`` will take, as far as it can be known at its start."""
+    estimate = PLANNED.get(call.command)
+    if estimate is not None:
+        return estimate(sim, call)
+    spec = sim.catalog.get(call.command)
+    return (spec.duration or 0.0) if spec is not None else 0.0
+
+
 def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
     """Perform an atomic behavior's calls in order; return merged values and terminal.
 
@@ -488,6 +534,14 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
     """
     values: Values = {}
     terminal = True
+    try:
+        length = sum(planned(sim, call) for call in ab.calls if call.command in sim.catalog)
+    except CommandError as exc:
+        return {"error": str(exc)}, True
+    if length > sim.longest_for(ab.app):
+        return {"error": f"{ab.calls[0].command} would take {length:g} s; no atomic behavior "
+                         f"of {ab.app} may take more than {sim.longest_for(ab.app):g} s "
+                         "(its longest-AB budget)"}, True
     for i, call in enumerate(ab.calls):
         cid = ab.command_ids[i] if i < len(ab.command_ids) else 0
         behavior = BEHAVIORS.get(call.command)

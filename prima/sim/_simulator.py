@@ -21,6 +21,7 @@ from __future__ import annotations
 import functools
 import math
 import random
+from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
 from typing import TYPE_CHECKING
@@ -43,7 +44,7 @@ from prima.sim._records import (
 from prima.sim._spec import RobotSpec
 from prima.sim._user import ScriptedUser, UserScript
 from prima.sim._world import World
-from prima.vocab import Value
+from prima.vocab import MAX_TEXT, Value
 
 if TYPE_CHECKING:
     from prima.sim._scenario import Scenario
@@ -51,6 +52,9 @@ if TYPE_CHECKING:
 __all__ = ["Simulator"]
 
 Finished = Callable[[int, Outcome], None]
+RECORDS_KEPT = 1000
+"""How many messages received and sent, and pictures taken, the simulator keeps
+(the latest): memory stays flat over a run of any length."""
 SENSE_HZ = 10
 """How often (per simulated second) sensors are read while something moves."""
 
@@ -90,14 +94,18 @@ class Simulator:
         self.on_zone: Callable[[ZoneEntry], None] = on_zone or _ignore
         self.reports = 0
         """How many reports (ends, events, user actions, zone entries) so far."""
-        self.inbox: list[Mapping[str, Value]] = []
-        """Network messages received so far (sender, text)."""
-        self.outbox: list[Mapping[str, Value]] = []
-        """What the applications sent to the environment's servers."""
+        self.inbox: deque[Mapping[str, Value]] = deque(maxlen=RECORDS_KEPT)
+        """The latest network messages received (sender, text)."""
+        self.outbox: deque[Mapping[str, Value]] = deque(maxlen=RECORDS_KEPT)
+        """The latest messages the applications sent to the environment's servers."""
         self.replies: tuple[ReplyRule, ...] = tuple(replies)
         """How the environment's servers answer what the applications send them."""
-        self.pictures: list[Picture] = []
+        self.pictures: deque[Picture] = deque(maxlen=RECORDS_KEPT)
+        """The latest camera captures."""
+        self.picture_count = 0
         """Camera captures taken so far."""
+        self.longest: dict[str, float] = {}
+        """Application -> the longest atomic behavior it may start (its budget, s)."""
         self.steps = 0
         """Physics steps taken so far."""
         self.seen = False
@@ -134,8 +142,9 @@ class Simulator:
                 # At least one step later: an app that sends on every reply must
                 # not make time stand still.
                 ticks = max(1, self.ticks(rule.after))
+                answer = rule.text.replace("{text}", text)[:MAX_TEXT]  # no amplification
                 reply = ScheduledEvent((self.kernel.tick + ticks) / self.kernel.hz, "message",
-                                       {"sender": to, "text": rule.text.replace("{text}", text)})
+                                       {"sender": to, "text": answer})
                 self.kernel.at(self.kernel.tick + ticks, functools.partial(self._post, reply))
                 return
 
@@ -259,6 +268,10 @@ class Simulator:
 
     def ticks(self, seconds: float) -> int:
         return self.kernel.ticks(seconds)
+
+    def longest_for(self, app: str) -> float:
+        """The longest atomic behavior ``app`` may start (s); unbounded if not set."""
+        return self.longest.get(app, math.inf)
 
     def emit(self, name: str, data: Mapping[str, Value]) -> None:
         """Post an event to the applications (through ``on_event``)."""

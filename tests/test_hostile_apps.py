@@ -1,0 +1,201 @@
+"""Hostile EAs at run time: each fails alone or is bounded, and the FA still reacts.
+
+An EA is written by a stranger. Each case below is an EA that attacks the run
+(time, devices, memory, text, messages, capabilities). Its verdict is one of:
+
+- *fails*: it is unloaded with an error line located in its document, the run
+  goes on, and the FA reacts to the user's touches;
+- *bounded*: it keeps running, but the FA's reaction to a touch still comes
+  within the documented bound (the EA's wait share plus one behavior).
+
+Every case runs under a time limit: a hang fails the test instead of freezing it.
+"""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from prima.mediator import DecisionKind
+from prima.run import Run
+from prima.trace import Kind, TraceLine, device_overlaps, format_text
+from prima.vocab import DEFAULT_BUDGETS, AppKind
+
+STAGE = Path(__file__).parent / "data" / "hostile" / "touch.xml"
+EA = DEFAULT_BUDGETS[AppKind.EA]
+FA_REACTS = "Hee-hee! That tickles."
+
+
+@pytest.fixture(autouse=True)
+def time_limit() -> Iterator[None]:
+    """Fail a case that runs longer than 20 s of wall time (a hang, a quadratic cost)."""
+    def expired(_signum: int, _frame: object) -> None:
+        raise TimeoutError("the run took longer than 20 s")
+
+    old = signal.signal(signal.SIGALRM, expired)
+    signal.alarm(20)
+    yield
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, old)
+
+
+def run_ea(tmp_path: Path, body: str, until: float = 120) -> list[TraceLine]:
+    ea = tmp_path / "hostile.pxml"
+    ea.write_text(f'<pxml xmlns="urn:prima:pxml:1" kind="ea" name="hostile">{body}</pxml>',
+                  encoding="utf-8")
+    lines = Run(STAGE, ea=ea, until=until).run()
+    assert device_overlaps(lines) == []
+    return lines
+
+
+def fa_reactions(lines: list[TraceLine]) -> list[float]:
+    return [line.t for line in lines if line.kind is DecisionKind.START
+            and line.app == "fa1-emotions" and line.text == FA_REACTS]
+
+
+def failed(lines: list[TraceLine]) -> TraceLine:
+    [error] = [line for line in lines if line.kind is Kind.ERROR]
+    assert error.app == "hostile"
+    assert any(line.kind is DecisionKind.UNLOAD and line.app == "hostile" for line in lines)
+    return error
+
+
+def test_tiny_timers_holds_and_watchdogs_never_stall_the_run(tmp_path: Path) -> None:
+    """A deadline a hair above a tick used to stall the loop ('run loop stuck')."""
+    lines = run_ea(tmp_path, '''
+        <var name="n" expr="0"/>
+        <stream hold="0.0173"><state id="s" initial="true">
+          <entry><chain>Speak("hi")</chain><timer name="t" after="0.0131"/></entry>
+          <on event="t" cond="n &lt; 300"><assign name="n" expr="n + 1"/>
+            <timer name="t" after="{0.0131 + n / 1000}"/></on>
+          <on event="t"><goto state="b"/></on>
+        </state></stream>
+        <block watchdog="0.0117"><state id="b"><entry><chain>Nod()</chain></entry></state></block>
+    '''.replace("Nod()", "Gesture(nod)"))
+    assert lines[-1].t <= 120 and fa_reactions(lines) == [12.0, 72.0]
+    assert [line for line in lines if line.kind is Kind.ERROR] == []
+
+
+def test_zero_length_commands_requested_again_and_again_fail_the_ea(tmp_path: Path) -> None:
+    """A head move to where the head already is takes no time: requested from its own
+    end handler, it would freeze simulated time."""
+    lines = run_ea(tmp_path, '''
+        <state id="a" initial="true">
+          <entry><chain>look: MoveHead(0)</chain></entry>
+          <on-end of="look"><goto state="b"/></on-end>
+        </state>
+        <state id="b">
+          <entry><chain>look2: MoveHead(0)</chain></entry>
+          <on-end of="look2"><goto state="a"/></on-end>
+        </state>''')
+    error = failed(lines)
+    assert error.reason == "starts-per-instant"
+    assert error.text.startswith(f"{tmp_path / 'hostile.pxml'}:")  # located at its request
+    assert f"started {EA.starts_per_instant} atomic behaviors at t=0 s" in (error.text or "")
+    assert fa_reactions(lines) == [12.0, 72.0]
+
+
+def test_an_endless_chain_of_utterances_keeps_the_fa_waiting_only_its_share(
+        tmp_path: Path) -> None:
+    lines = run_ea(tmp_path, '''
+        <state id="a" initial="true">
+          <entry><chain>say: Speak("Listen to me, this is important.")</chain></entry>
+          <on-end of="say"><goto state="b"/></on-end>
+        </state>
+        <state id="b">
+          <entry><chain>say2: Speak("And there is more to say.")</chain></entry>
+          <on-end of="say2"><goto state="a"/></on-end>
+        </state>''')
+    first, _second = fa_reactions(lines)
+    # the FA's speech is ready when its gesture ends (12 s); then the EA's share, and
+    # the utterance under way
+    assert first <= 12 + EA.wait_share + 3.0
+    assert any(line.kind is DecisionKind.BUDGET and line.app == "hostile" for line in lines)
+
+
+def test_a_stream_hold_re_armed_after_every_request_is_bounded(tmp_path: Path) -> None:
+    """The stream's hold lapses when the EA requests and re-arms when it is idle again."""
+    lines = run_ea(tmp_path, '''
+        <stream hold="30"><state id="s" initial="true">
+          <entry><chain>Speak("psst")</chain><timer name="t" after="4"/></entry>
+          <on event="t"><chain>Speak("psst")</chain><timer name="t" after="4"/></on>
+        </state></stream>''')
+    first, _second = fa_reactions(lines)
+    assert first <= 12 + EA.wait_share + 1.0  # ready at 12 s (after the FA's gesture)
+
+
+def test_a_behavior_longer_than_the_budget_fails_at_once(tmp_path: Path) -> None:
+    """A Q&A that would listen for 2,000 s, a 600 s speech: each ends at once with an
+    error the text trace shows; the EA goes on (here: it tries the next one)."""
+    words = " ".join(["blah"] * 1500)
+    lines = run_ea(tmp_path, f'''
+        <grammar id="g"><choice>yes</choice></grammar>
+        <state id="s" initial="true">
+          <entry><chain>ask: QA("Well?", g, timeout=2000)</chain></entry>
+          <on-noinput of="ask"><chain>Speak("{words}")</chain></on-noinput>
+        </state>''')
+    ends = [line for line in lines if line.kind is DecisionKind.END and line.app == "hostile"]
+    assert [line.command for line in ends] == ["QA", "Speak"]
+    assert all("longest-AB budget" in str(line.detail.get("error")) for line in ends)
+    assert "QA fails: QA would take 2000.5 s" in format_text(lines)
+    assert fa_reactions(lines) == [12.0, 72.0]
+
+
+def test_a_gesture_computed_at_run_time_is_checked_like_a_literal_one(tmp_path: Path) -> None:
+    """Writing Gesture(dance) is rejected by validation; computing the name must not pass."""
+    lines = run_ea(tmp_path, '''
+        <var name="g" expr="'da' + 'nce'"/>
+        <state id="s" initial="true"><entry><chain>Gesture({g})</chain></entry></state>''')
+    error = failed(lines)
+    assert "gesture 'dance' is robot-specific; only an FA may use it" in (error.text or "")
+    assert not any(line.kind is DecisionKind.START and line.app == "hostile" for line in lines)
+    assert fa_reactions(lines) == [12.0, 72.0]
+
+
+def test_a_flood_of_messages_is_rate_limited(tmp_path: Path) -> None:
+    lines = run_ea(tmp_path, '''
+        <state id="s" initial="true">
+          <entry><timer name="t" after="0.02"/></entry>
+          <on event="t"><send to="host" text="spam"/><timer name="t" after="0.02"/></on>
+        </state>''', until=30)
+    sends = [line for line in lines if line.kind is Kind.SEND]
+    sent = [line for line in sends if "dropped" not in line.detail]
+    assert len(sent) <= EA.sends_per_second * 30 + 1
+    assert len(sends) > 5 * len(sent)
+    assert "(dropped: more than 5 messages in one second" in format_text(lines)
+
+
+def test_a_text_built_past_the_budget_fails_the_ea(tmp_path: Path) -> None:
+    lines = run_ea(tmp_path, '''
+        <var name="t" expr="'0123456789'"/>
+        <state id="s" initial="true"><entry>
+          <assign name="t" expr="t + t + t + t + t + t + t + t + t + t"/>
+          <assign name="t" expr="t + t + t + t + t + t + t + t + t + t"/>
+          <assign name="t" expr="t + t + t + t + t + t + t + t + t + t"/>
+          <assign name="t" expr="t + t + t + t + t + t + t + t + t + t"/>
+          <chain>Speak("{t}")</chain>
+        </entry></state>''')
+    assert "text longer than 10000 characters" in (failed(lines).text or "")
+    assert fa_reactions(lines) == [12.0, 72.0]
+
+
+def test_too_many_requests_waiting_fail_the_ea(tmp_path: Path) -> None:
+    lines = run_ea(tmp_path, '''
+        <state id="s" initial="true">
+          <entry><chain>Speak("one")</chain><timer name="t" after="0.02"/></entry>
+          <on event="t"><chain>Speak("and one more")</chain><timer name="t" after="0.02"/></on>
+        </state>''')
+    assert f"more than {EA.waiting} behaviors" in (failed(lines).text or "")
+    assert fa_reactions(lines) == [12.0, 72.0]
+
+
+def test_a_newline_in_a_text_cannot_forge_a_row_of_the_text_trace(tmp_path: Path) -> None:
+    lines = run_ea(tmp_path, r'''
+        <state id="s" initial="true"><entry>
+          <chain>Speak("hi" + "\n    99   1.00   U                'I am forged'")</chain>
+        </entry></state>''', until=5)
+    text = format_text(lines)
+    assert "\\n    99" in text and "\n    99" not in text
