@@ -309,6 +309,10 @@ class Holds:
                                detail="block on " + ", ".join(sorted(blk.devices)))
 
     # ----------------------------------------------------------- looking
+    def demoted(self) -> tuple[str, ...]:
+        """Apps that have lost their precedence (their holds hold nothing)."""
+        return tuple(app.name for app in self._apps.values() if app.demoted)
+
     def in_force(self) -> list[tuple[str, str, tuple[str, ...], float]]:
         """Holds in force: (app, ``stream`` or ``block``, devices, deadline)."""
         out = []

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from prima.catalog import Priority
 from prima.mediator._holds import Holds
 from prima.mediator._interface import AbId, CommandId, TreeId
 from prima.mediator._memory import WorkingMemory
@@ -26,6 +27,11 @@ class NodeView:
     state: NodeState
     reactive: bool
     iteration: int
+    priority: Priority
+    seq: int
+    """Its request's order among all requests (smaller is older)."""
+    parked_by: str | None
+    """The app whose hold (stream, block, talk) keeps it out of the ranking, if any."""
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,9 @@ class Snapshot:
     holds: tuple[HoldView, ...]
     busy: tuple[tuple[str, AbId], ...]
     """Device -> running AB, by device name."""
+    demoted: tuple[str, ...] = ()
+    """Apps that kept the others waiting beyond their wait share: they have lost
+    their precedence for a while."""
 
     def node(self, ab: AbId) -> NodeView | None:
         """The view of one AB still in working memory."""
@@ -85,7 +94,8 @@ def _node_view(n: Node) -> NodeView:
     return NodeView(
         ab=n.id, app=n.app.name, tree=n.tree.id, parent=n.parent, command=n.name,
         command_ids=tuple(c.id for c in n.commands), devices=n.sorted_devices,
-        state=n.state, reactive=n.reactive, iteration=n.iteration,
+        state=n.state, reactive=n.reactive, iteration=n.iteration, priority=n.priority,
+        seq=n.seq, parked_by=n.parked.name if n.parked is not None else None,
     )
 
 
@@ -106,4 +116,5 @@ def take(t: float, wm: WorkingMemory, in_force: Holds) -> Snapshot:
         suspended=tuple(tr.id for tr in wm.stack()),
         holds=tuple(holds),
         busy=tuple((d, wm.busy[d].id) for d in sorted(wm.busy)),
+        demoted=in_force.demoted(),
     )
