@@ -108,7 +108,8 @@ class WaitIndex:
 
     def __init__(self) -> None:
         self._devices: dict[str, _Device] = {}
-        self._tree_slots: dict[int, list[_Slot]] = {}
+        self._tree_slots: dict[int, dict[tuple[str, Keys], _Slot]] = {}
+        """Tree id -> its live slots, by (device, group head): a few per tree."""
         self._serial = itertools.count()
         self.entries = 0
         """Heap entries held, live and stale."""
@@ -135,19 +136,18 @@ class WaitIndex:
         if not slots:
             return set()
         devices = set()
-        for slot in slots:
+        for slot in list(slots.values()):
             best = slot.top(self)
             if best is None:
                 self._drop_slot(slot)
             else:
                 self._push_slot(slot, best)
                 devices.add(slot.device)
-        self._tree_slots[tree.id] = [s for s in slots if s.group.slots.get(tree.id) is s]
         return devices
 
     def forget(self, tree: Tree) -> None:
         """The tree left working memory: drop its slots."""
-        for slot in self._tree_slots.pop(tree.id, ()):
+        for slot in list(self._tree_slots.get(tree.id, {}).values()):
             self._drop_slot(slot)
 
     def top(self, device: str) -> Node | None:
@@ -188,7 +188,7 @@ class WaitIndex:
         slot = group.slots.get(tree.id)
         if slot is None:
             slot = group.slots[tree.id] = _Slot(tree, group, device)
-            self._tree_slots.setdefault(tree.id, []).append(slot)
+            self._tree_slots.setdefault(tree.id, {})[device, head] = slot
         return slot
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
@@ -200,8 +200,14 @@ class WaitIndex:
 
     def _drop_slot(self, slot: _Slot) -> None:
         slot.version += 1
-        if slot.group.slots.get(slot.tree.id) is slot:
-            del slot.group.slots[slot.tree.id]
+        tid = slot.tree.id
+        if slot.group.slots.get(tid) is slot:
+            del slot.group.slots[tid]
+        slots = self._tree_slots.get(tid)
+        if slots is not None and slots.get((slot.device, slot.group.head)) is slot:
+            del slots[slot.device, slot.group.head]
+            if not slots:
+                del self._tree_slots[tid]
 
     def _group_top(self, group: _Group) -> Node | None:
         heap = group.heap
