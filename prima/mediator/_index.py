@@ -65,7 +65,8 @@ class _Slot:
         self.group = group
         self.device = device
         self.heap: list[tuple[Keys, int, int, Node]] = []
-        self.version = 0
+        self.version = -1
+        """The serial of its one live entry in its group's heap (-1: none)."""
         self.ranked_by: Node | None = None
         """The AB whose keys the slot's live entry in its group carries."""
 
@@ -81,7 +82,8 @@ class _Slot:
         return None
 
 
-_SlotEntry = tuple[Keys, int, int, _Slot]
+_SlotEntry = tuple[Keys, int, _Slot]
+"""(keys of the slot's best AB, a serial unique over all entries, the slot)."""
 
 
 class _Group:
@@ -192,14 +194,14 @@ class WaitIndex:
         return slot
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
-        """(Re-)rank a slot by the stable key of its best AB."""
-        slot.version += 1
+        """(Re-)rank a slot by the stable key of its best AB; its older entries go stale."""
+        slot.version = next(self._serial)  # unique: two entries never tie up to the slot
         slot.ranked_by = best
-        heapq.heappush(slot.group.heap, (_keys(best, _REST), slot.tree.id, slot.version, slot))
+        heapq.heappush(slot.group.heap, (_keys(best, _REST), slot.version, slot))
         self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
-        slot.version += 1
+        slot.version = -1
         tid = slot.tree.id
         if slot.group.slots.get(tid) is slot:
             del slot.group.slots[tid]
@@ -212,7 +214,7 @@ class WaitIndex:
     def _group_top(self, group: _Group) -> Node | None:
         heap = group.heap
         while heap:
-            _keys_, _tid, version, slot = heap[0]
+            _keys_, version, slot = heap[0]
             if version != slot.version:
                 heapq.heappop(heap)
                 self.entries -= 1

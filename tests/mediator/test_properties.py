@@ -280,3 +280,23 @@ def test_found_by_hypothesis_a_held_ab_on_a_busy_device_reserves_nothing() -> No
                        act(0.25, "fa", "submit", "FaceHumanAndSpeak")),
                  durations=(0.5,), iterations=(1,), follow_every=1, fail_on_event=0,
                  immediate=False))
+
+
+def test_a_dropped_slot_and_its_successor_never_tie_in_the_index() -> None:
+    """Found by a long search: a tree's slot dropped and made again on a device had an
+    entry equal, up to the slot object, to the old one's stale entry; the heap then
+    compared two slots and raised TypeError."""
+    def a(t: float, app: str, kind: str, commands: tuple[str, ...], asap: bool = False,
+          reactive: bool = False) -> Act:
+        return Act(t=t, app=app, kind=kind, commands=commands, asap=asap, reactive=reactive,
+                   group=False, follows_latest=False, hold=0.0)
+
+    acts = (a(0.0, "fa", "event", ("Speak",)), a(0.0, "fa", "event", ("Speak",)),
+            a(0.0, "fa", "submit", ("Speak", "Speak")), a(0.0, "fa", "submit", ("Speak",), True),
+            a(0.0, "fa", "stream", ("Speak",)), a(0.0, "fa", "block", ("Speak",)),
+            a(0.0, "fa", "submit", ("Speak", "Speak")),
+            a(0.0, "ea", "submit", ("TopologicalMove", "Speak"), True),
+            a(0.0, "fa", "submit", ("Speak", "Speak", "Speak")),
+            a(0.25, "fa", "submit", ("Turn",)), a(0.25, "fa", "submit", ("Speak",)))
+    h, _apps, _unloaded = run(Scenario(acts, (0.5, 0.0), (1,), 1, 0, True))
+    assert h.starts()
