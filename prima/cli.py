@@ -63,6 +63,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--format", choices=("text", "jsonl"), default="text",
                      help="trace format (default: text)")
     run.add_argument("--out", metavar="FILE", help="write the trace to FILE instead of stdout")
+    run.add_argument("--pose-rate", type=float, default=2.0, metavar="HZ",
+                     help="pose samples per simulated second in the jsonl trace "
+                          "(default: 2; 0: none)")
     test = commands.add_parser(
         "test",
         help="run scenarios and compare their traces with golden traces",
@@ -160,6 +163,8 @@ def _run_usage(args: argparse.Namespace) -> str | None:
     until = args.until
     if until is not None and not (math.isfinite(until) and 0 < until <= MAX_RUN_TIME):
         return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
+    if not (math.isfinite(args.pose_rate) and 0 <= args.pose_rate <= 100):
+        return "--pose-rate must be a number of samples per second from 0 to 100"
     for path in (args.scenario, args.fa, args.ea, args.robot):
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
@@ -182,7 +187,8 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     # Everything is loaded and checked before the output is opened; then each trace
     # line is written as the run makes it (``write`` is defined below, before the run).
     run = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
-              seed=args.seed, until=args.until, sink=lambda line: write(line))
+              seed=args.seed, until=args.until, sink=lambda line: write(line),
+              pose_rate=args.pose_rate)
     with contextlib.ExitStack() as files:
         to = files.enter_context(open(args.out, "w", encoding="utf-8")) if args.out else out
         if args.format == "text":

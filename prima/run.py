@@ -37,10 +37,16 @@ from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, loa
 from prima.trace import Kind, RecordKind, TraceLine
 from prima.vocab import DEFAULT_BUDGETS, Budgets, Value
 
-__all__ = ["MAX_IDLE_ROUNDS", "Run", "spec_from_profile"]
+__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
 
 MAX_IDLE_ROUNDS = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
+
+POSE_RATE = 2.0
+"""Pose samples per simulated second in the trace, by default."""
+
+_POSED = frozenset({DecisionKind.START, DecisionKind.END, Kind.USER, Kind.EVENT, Kind.POSE})
+"""Lines that carry the robot's and the user's poses."""
 
 
 def _check_slot(document: Document, role: AppKind) -> Document:
@@ -106,7 +112,8 @@ class Run:
     def __init__(self, scenario: str | Path, *, fa: str | Path | None = None,
                  ea: str | Path | None = None, robot: str | Path | None = None,
                  seed: int | None = None, until: float | None = None,
-                 sink: Callable[[TraceLine], None] | None = None) -> None:
+                 sink: Callable[[TraceLine], None] | None = None,
+                 pose_rate: float = POSE_RATE) -> None:
         loaded = load_scenario(scenario)
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
@@ -141,16 +148,19 @@ class Run:
         self.sim.on_event = self._event
         self.sim.on_user = self._user
         self.sim.on_zone = self._zone
+        self.sim.sample_poses(pose_rate, lambda: self._line(Kind.POSE))
         self._port = _Port(self)
 
     # ------------------------------------------------------------ the loop
 
     def run(self) -> list[TraceLine]:
-        """Run to the end; returns the trace."""
+        """Run to the end; returns the trace (empty when it went to a sink)."""
         if self.fa_path is not None:
             self._load(self.fa_path, AppKind.FA)
         if self.ea_path is not None:
             self._load(self.ea_path, AppKind.EA)
+        if self.sim.sample_every:
+            self._line(Kind.POSE)  # where everyone starts; the samples follow
         sim, hz = self.sim, self.sim.kernel.hz
         idle, last = 0, -1.0
         while sim.now() < self.until:
@@ -228,6 +238,11 @@ class Run:
     # ------------------------------------------------------------ recording
 
     def _line(self, kind: RecordKind, **fields: Any) -> None:
+        if kind in _POSED:
+            robot = self.sim.robot_pose()
+            user = self.sim.user_pose()
+            fields["robot"] = (robot.x, robot.y, robot.heading)
+            fields["user"] = None if user is None else (user.x, user.y, user.heading)
         self._sink(TraceLine(self.sim.now(), self._count, kind, **fields))
         self._count += 1
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 from prima.mediator import DecisionKind
 from prima.vocab import Value
 
-__all__ = ["Kind", "RecordKind", "TextTrace", "TraceLine", "device_overlaps", "format_jsonl",
-           "format_text", "jsonl_row"]
+__all__ = ["Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "device_overlaps",
+           "format_jsonl", "format_text", "jsonl_row"]
 
 
 class Kind(str, enum.Enum):
@@ -37,10 +37,15 @@ class Kind(str, enum.Enum):
     """An application sent a message to the environment's server."""
     LOG = "log"
     """An application's ``<log>`` line."""
+    POSE = "pose"
+    """Where the robot and the user are, sampled at a fixed rate (jsonl only)."""
 
 
 RecordKind = Kind | DecisionKind
 """The kind of a trace line: the run's own, or a mediator decision's."""
+
+Pose = tuple[float, float, float]
+"""x and y (m) on the map, heading (degrees, 0 = east, 90 = north)."""
 
 
 @dataclass(frozen=True)
@@ -60,6 +65,11 @@ class TraceLine:
     reason: str | None = None
     action: str | None = None
     detail: Mapping[str, Value] = field(default_factory=dict)
+    robot: Pose | None = None
+    """The robot's pose (x, y in metres, heading in degrees) at the line's time, on
+    start, end, user, event and pose lines."""
+    user: Pose | None = None
+    """The user's pose, likewise (None in a scenario without a user)."""
 
     def to_dict(self) -> dict[str, object]:
         out: dict[str, object] = {"t": round(self.t, 3), "seq": self.seq, "kind": self.kind.value}
@@ -71,6 +81,10 @@ class TraceLine:
             out["devices"] = list(self.devices)
         if self.detail:
             out["detail"] = dict(sorted(self.detail.items()))
+        for name, pose in (("robot", self.robot), ("user", self.user)):
+            if pose is not None:
+                out[name] = {"x": round(pose[0], 3), "y": round(pose[1], 3),
+                             "heading": round(pose[2], 1)}
         return out
 
 
@@ -122,6 +136,7 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     Kind.ERROR: lambda line: f"ERROR: {line.text}",
     Kind.SEND: lambda line: _describe_send(line),
     Kind.LOG: lambda line: f"log: {line.text}",
+    Kind.POSE: lambda _line: None,
 }
 """How each kind of line reads in the text trace (None: not shown there)."""
 

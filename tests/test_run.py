@@ -11,7 +11,7 @@ import pytest
 from prima.cli import main
 from prima.run import Run
 from prima.mediator import DecisionKind
-from prima.trace import Kind, device_overlaps, format_jsonl, format_text
+from prima.trace import Kind, TraceLine, device_overlaps, format_jsonl, format_text
 
 ROOT = Path(__file__).parents[1]
 OFFICE = ROOT / "scenarios" / "examples" / "office-kidode.xml"
@@ -167,3 +167,23 @@ def test_every_record_kind_reads_in_the_text_trace() -> None:
     from prima.trace import _DESCRIBE  # white box: the text form covers every kind
 
     assert set(_DESCRIBE) == set(Kind) | set(DecisionKind)
+
+
+def test_the_jsonl_trace_carries_poses_at_a_fixed_rate(office) -> None:  # type: ignore[no-untyped-def]
+    poses = [line for line in office if line.kind is Kind.POSE]
+    assert [line.t for line in poses[:5]] == [0.0, 0.5, 1.0, 1.5, 2.0]
+    assert len(poses) == 2 * 120 + 1
+    posed = [line for line in office if line.kind in (DecisionKind.START, DecisionKind.END,
+                                                     Kind.USER, Kind.EVENT, Kind.POSE)]
+    assert all(line.robot is not None and line.user is not None for line in posed)
+    record = json.loads(format_jsonl(poses[:1]))
+    assert set(record["robot"]) == {"x", "y", "heading"}
+
+
+def test_pose_samples_change_nothing_else() -> None:
+    def without_poses(lines: list[TraceLine]) -> list[tuple[object, ...]]:
+        return [(line.t, line.kind, line.app, line.text, line.reason) for line in lines
+                if line.kind is not Kind.POSE]
+
+    assert without_poses(Run(OFFICE, until=60, pose_rate=10).run()) == \
+        without_poses(Run(OFFICE, until=60, pose_rate=0).run())

@@ -106,6 +106,9 @@ class Simulator:
         """Camera captures taken so far."""
         self.longest: dict[str, float] = {}
         """Application -> the longest atomic behavior it may start (its budget, s)."""
+        self.sample_every = 0
+        """Call ``on_sample`` every this many ticks (0: never); see :meth:`sample_poses`."""
+        self.on_sample: Callable[[], None] = _ignore
         self.steps = 0
         """Physics steps taken so far."""
         self.seen = False
@@ -217,6 +220,7 @@ class Simulator:
             raise SimulationError(f"cannot go back from {self.now()} to {t}")
         world = self.world
         every = self._sense_every
+        sample = self.sample_every
         heap = k._heap
         before = self.reports if stop_on_report else -1
         while True:
@@ -232,6 +236,8 @@ class Simulator:
                         done()
                     if k.tick % every == 0:
                         self._sense()
+                    if sample and k.tick % sample == 0:
+                        self.on_sample()
                     if (k.tick >= target or (heap and heap[0][0] <= k.tick)
                             or (stop_on_report and self.reports != before)
                             or not (world.mode or world.human_moving
@@ -239,15 +245,21 @@ class Simulator:
                         break
             else:
                 nxt = k.next_tick()
-                k.tick = target if nxt is None or nxt > target else max(nxt, k.tick)
+                jump = target if nxt is None or nxt > target else max(nxt, k.tick)
+                if sample:  # nothing moves: the samples on the way see the same poses
+                    for tick in range((k.tick // sample + 1) * sample, jump + 1, sample):
+                        k.tick = tick
+                        self.on_sample()
+                k.tick = jump
 
     # ---- state -------------------------------------------------------------------
 
     def robot_pose(self) -> Pose:
         return self.world.robot_pose()
 
-    def user_pose(self) -> Pose:
-        return self.world.user_pose()
+    def user_pose(self) -> Pose | None:
+        """Where the user is, or None in a scenario without a user."""
+        return self.world.user_pose() if self.world.has_user else None
 
     def localize(self) -> Pose:
         """The robot's pose as its localization reports it (with seeded noise, if any)."""
@@ -268,6 +280,13 @@ class Simulator:
 
     def ticks(self, seconds: float) -> int:
         return self.kernel.ticks(seconds)
+
+    def sample_poses(self, rate: float, on_sample: Callable[[], None]) -> None:
+        """Call ``on_sample`` ``rate`` times per simulated second (rounded to whole
+        ticks), at fixed instants, whether or not anything moves; ``rate`` 0: never.
+        Sampling never changes what happens."""
+        self.on_sample = on_sample
+        self.sample_every = max(1, round(self.kernel.hz / rate)) if rate > 0 else 0
 
     def longest_for(self, app: str) -> float:
         """The longest atomic behavior ``app`` may start (s); unbounded if not set."""
