@@ -200,6 +200,7 @@ class Holds:
                 and node.commands[0].id >= blk.first_command):
             blk.started = True
             blk.deadline = self._clock.after(blk.watchdog)
+            self._wm.dirty.update(blk.devices)  # what it holds now must step aside
         st = self._streams.get(app.name)
         if st is not None:
             st.devices.update(node.devices)
@@ -230,6 +231,7 @@ class Holds:
                     st.armed = True
                     st.deadline = self._clock.after(st.hold, since=app.idle_since)
                     st.held = set()
+                    self._wm.dirty.update(st.devices)  # what it holds now must step aside
             else:
                 st.lapsed = False
                 if st.armed:
@@ -309,6 +311,14 @@ class Holds:
                                detail="block on " + ", ".join(sorted(blk.devices)))
 
     # ----------------------------------------------------------- looking
+    def regained(self, app: App) -> None:
+        """The app regained its precedence: its holds are in force again."""
+        st, blk = self._streams.get(app.name), self._blocks.get(app.name)
+        if st is not None and st.armed:
+            self._wm.dirty.update(st.devices)
+        if blk is not None and blk.reserving:
+            self._wm.dirty.update(blk.devices)
+
     def demoted(self) -> tuple[str, ...]:
         """Apps that have lost their precedence (their holds hold nothing)."""
         return tuple(app.name for app in self._apps.values() if app.demoted)

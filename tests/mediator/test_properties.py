@@ -300,3 +300,21 @@ def test_a_dropped_slot_and_its_successor_never_tie_in_the_index() -> None:
             a(0.25, "fa", "submit", ("Turn",)), a(0.25, "fa", "submit", ("Speak",)))
     h, _apps, _unloaded = run(Scenario(acts, (0.5, 0.0), (1,), 1, 0, True))
     assert h.starts()
+
+
+def test_a_block_that_starts_reserving_makes_what_it_holds_step_aside() -> None:
+    """Found by a long search: the EA's block began to reserve every device when its
+    first AB started; the FA's waiting AB it now held was not re-examined, kept
+    reserving the free speaker, and the EA's own speech waited behind it."""
+    def a(t: float, app: str, kind: str, commands: tuple[str, ...],
+          asap: bool = False) -> Act:
+        return Act(t=t, app=app, kind=kind, commands=commands, asap=asap, reactive=False,
+                   group=False, follows_latest=False, hold=0.0)
+
+    acts = (a(0.0, "fa", "submit", ("Speak",)),
+            a(0.0, "fa", "submit", ("Speak", "TrackingHuman")),
+            a(0.25, "fa", "submit", ("Speak",)), a(2.0, "ea", "submit", ("Turn",)),
+            a(2.0, "ea", "block", ("Speak",)), a(3.0, "fa", "submit", ("FaceHumanAndSpeak",)),
+            a(4.5, "ea", "submit", ("MoveHead",), asap=True))
+    h, _apps, _unloaded = run(Scenario(acts, (1.0,), (2,), 1, 0, False))  # plain_scan checks
+    assert [d.t for d in h.starts() if d.app == "ea" and d.command == "Speak"][0] == 4.5
