@@ -21,7 +21,7 @@ from typing import Any
 from prima.catalog import Catalog, ParamKind
 from prima.dsl import Document, RobotProfile, default_profile, load_document, load_profile
 from prima.errors import AppFailure, DocumentError, LocatedError, Problem, RunError, Severity
-from prima.interpreter import Interpreter, Note, NoteKind
+from prima.interpreter import Interpreter, Note
 from prima.mediator import (
     AppKind,
     Call,
@@ -218,6 +218,7 @@ class Run:
         self.apps.pop(app.name, None)
 
     def _zone(self, entry: ZoneEntry) -> None:
+        self._line(Kind.ZONE, text=entry.zone, detail={"ea": entry.ea})
         path = self.scenario.resolve(entry.ea)
         current = next((a for a in self.apps.values() if a.role is AppKind.EA), None)
         if current is not None and self.ea_path == path:
@@ -312,15 +313,11 @@ class Run:
         self._line(Kind.USER, action=action.action.value, text=action.text, detail=detail)
 
     def _note(self, note: Note) -> None:
-        if note.kind is NoteKind.ERROR:
+        if note.kind is Kind.ERROR:
             app = self.apps.get(note.app)
             if app is not None:
                 app.failed = True  # the mediator's own failure decision adds nothing
-            self._line(Kind.ERROR, app=note.app, text=note.text)
-        elif note.kind is NoteKind.SEND:
-            self._line(Kind.SEND, app=note.app, text=note.text, detail=dict(note.detail))
-        elif note.kind is NoteKind.LOG:
-            self._line(Kind.LOG, app=note.app, text=note.text)
+        self._line(note.kind, app=note.app, text=note.text, detail=dict(note.detail))
 
 
 def _shown_args(catalog: Catalog, call: Call) -> list[str]:

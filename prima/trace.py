@@ -9,36 +9,20 @@ one per line); :func:`format_text` renders them like the thesis' own tables
 
 from __future__ import annotations
 
-import enum
 import json
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 from prima.mediator import DecisionKind
-from prima.vocab import Value
+from prima.vocab import TraceKind, Value
 
 __all__ = ["Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "device_overlaps",
            "format_jsonl", "format_text", "jsonl_row"]
 
 
-class Kind(str, enum.Enum):
-    """What the run itself records. The mediator's decisions are recorded with
-    their own :class:`~prima.mediator.DecisionKind` (``load``, ``unload``,
-    ``request``, ``start``, ``end``, ``cancel``, ``suspend``, ``resume``,
-    ``hold``, ``release``)."""
-
-    EVENT = "event"
-    """PRIMA posted an event to the applications (a reactive cause)."""
-    USER = "user"
-    """The user did something (``action``: say, touch, walk, ...)."""
-    ERROR = "error"
-    """An application failed; it is unloaded, the other goes on."""
-    SEND = "send"
-    """An application sent a message to the environment's server."""
-    LOG = "log"
-    """An application's ``<log>`` line."""
-    POSE = "pose"
-    """Where the robot and the user are, sampled at a fixed rate (jsonl only)."""
+Kind = TraceKind
+"""What the run itself records (:class:`prima.vocab.TraceKind`); the mediator's
+decisions are recorded with their own :class:`~prima.mediator.DecisionKind`."""
 
 
 RecordKind = Kind | DecisionKind
@@ -136,7 +120,13 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     Kind.ERROR: lambda line: f"ERROR: {line.text}",
     Kind.SEND: lambda line: _describe_send(line),
     Kind.LOG: lambda line: f"log: {line.text}",
-    Kind.POSE: lambda _line: None,
+    Kind.POSE: lambda _line: None,  # the records below are in the jsonl trace only
+    Kind.STATE: lambda _line: None,
+    Kind.HANDLER: lambda _line: None,
+    Kind.TIMER: lambda _line: None,
+    Kind.STREAM: lambda _line: None,
+    Kind.BLOCK: lambda _line: None,
+    Kind.ZONE: lambda _line: None,
 }
 """How each kind of line reads in the text trace (None: not shown there)."""
 

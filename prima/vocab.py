@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 __all__ = [
+    "TraceKind",
     "MAX_BLOCK_WATCHDOG",
     "MAX_NUMBER",
     "MAX_RUN_TIME",
@@ -37,6 +38,38 @@ class AppKind(str, enum.Enum):
     """Familiarity-oriented: the robot's own, resident application."""
     EA = "ea"
     """Environment-oriented: loaded from the building the robot visits."""
+
+
+class TraceKind(str, enum.Enum):
+    """What a run records besides the mediator's decisions (which keep their own
+    kinds: load, unload, request, start, end, cancel, suspend, resume, hold,
+    release, failure, budget). Applications report some of these through their
+    interpreter (state, handler, timer, stream, block, send, log, error)."""
+
+    EVENT = "event"
+    """PRIMA posted an event to the applications (a reactive cause)."""
+    USER = "user"
+    """The user did something (``action``: say, touch, walk, ...)."""
+    ERROR = "error"
+    """An application failed; it is unloaded, the others go on."""
+    SEND = "send"
+    """An application sent a message to the environment's server."""
+    LOG = "log"
+    """An application's ``<log>`` line."""
+    POSE = "pose"
+    """Where the robot and the user are, sampled at a fixed rate."""
+    STATE = "state"
+    """An application entered a state."""
+    HANDLER = "handler"
+    """One of an application's handlers ran (which, and where it is written)."""
+    TIMER = "timer"
+    """One of an application's timers fired."""
+    STREAM = "stream"
+    """An application entered (``open``) or left (``close``) an explicit stream."""
+    BLOCK = "block"
+    """An application entered (``open``) or left (``close``) a begin/end block."""
+    ZONE = "zone"
+    """The robot entered a zone of the scenario (which loads its EA)."""
 
 
 class RunningOrder(str, enum.Enum):

@@ -12,7 +12,6 @@ from prima.interpreter._interpreter import (
     Interpreter,
     MediatorPort,
     Note,
-    NoteKind,
 )
 
 __all__ = [
@@ -23,5 +22,4 @@ __all__ = [
     "Interpreter",
     "MediatorPort",
     "Note",
-    "NoteKind",
 ]

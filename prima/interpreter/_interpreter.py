@@ -13,7 +13,6 @@ recording it; the run loop then unloads this application alone.
 
 from __future__ import annotations
 
-import enum
 from collections import deque
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
@@ -46,7 +45,7 @@ from prima.dsl import (
 from prima.errors import AppFailure, ExecutionError, PrimaError
 from prima.mediator import Call, Clock, CommandId, Event, Outcome
 from prima.mediator import Request as MediatorRequest
-from prima.vocab import DEFAULT_BUDGETS, PREDEFINED_EVENTS, AppKind, Budgets, Value
+from prima.vocab import DEFAULT_BUDGETS, PREDEFINED_EVENTS, AppKind, Budgets, TraceKind, Value
 
 MAX_TRANSITIONS = 100
 """State changes allowed while handling one event (a goto loop is an error)."""
@@ -72,26 +71,14 @@ class MediatorPort(Protocol):
     def close_block(self, app: str) -> None: ...
 
 
-class NoteKind(str, enum.Enum):
-    """What an interpreter tells the trace."""
-
-    LOG = "log"
-    """The document's ``<log>`` line."""
-    SEND = "send"
-    """A message the application sent to the environment's server (``detail['to']``)."""
-    STATE = "state"
-    """The application entered a state."""
-    ERROR = "error"
-    """The application failed (the message is located in the document)."""
-
-
 @dataclass(frozen=True)
 class Note:
     """Something an interpreter tells the trace: a log line, a message sent, an error."""
 
     time: float
     app: str
-    kind: NoteKind
+    kind: TraceKind
+    """What it records: log, send, state, handler, timer, stream, block or error."""
     text: str
     detail: Mapping[str, Value] = field(default_factory=dict)
 
@@ -231,6 +218,7 @@ class Interpreter:
             self._fire(name, timer.reactive)
 
     def _fire(self, name: str, reactive: bool) -> None:
+        self._note(Note(self.clock.now(), self.app, TraceKind.TIMER, name))
         self._guard(lambda: self._dispatch(HandlerKind.EVENT, name, {"name": name}, reactive, None))
 
     # ------------------------------------------------------------ handling
@@ -256,7 +244,7 @@ class Interpreter:
     def _fail(self, message: str, exc: Exception) -> None:
         self.stopped = True
         self._timers.clear()
-        self._note(Note(self.clock.now(), self.app, NoteKind.ERROR, message))
+        self._note(Note(self.clock.now(), self.app, TraceKind.ERROR, message))
         raise AppFailure(message) from exc
 
     def _dispatch(self, kind: HandlerKind, key: str, data: dict[str, Value],
@@ -284,6 +272,9 @@ class Interpreter:
             return
         if kind is HandlerKind.EVENT and handler.reactive is not None:
             self._handling.reactive = handler.reactive
+        self._note(Note(self.clock.now(), self.app, TraceKind.HANDLER, f"<{kind.value}> {key}",
+                        {"handler": kind.value, "key": key, "state": self.state,
+                         "line": handler.loc.line, "col": handler.loc.col}))
         scope = Scope(self.variables, data)
         try:
             self._actions(handler.actions, scope)
@@ -315,19 +306,27 @@ class Interpreter:
         new = self.document.states[target]
         self._switch_groups(old, new)
         self.state = target
-        self._note(Note(self.clock.now(), self.app, NoteKind.STATE, target))
+        self._note(Note(self.clock.now(), self.app, TraceKind.STATE, target,
+                        {"line": new.loc.line, "col": new.loc.col}))
         self._actions(new.entry, Scope(self.variables, None))
 
     def _switch_groups(self, old: State | None, new: State) -> None:
         if old is not None and old.block is not None and old.block != new.block:
+            self._group_note(TraceKind.BLOCK, "close", old.block)
             self.port.close_block(self.app)
         if old is not None and old.stream is not None and old.stream != new.stream:
+            self._group_note(TraceKind.STREAM, "close", old.stream)
             self.port.close_stream(self.app)
         if new.stream is not None and (old is None or old.stream != new.stream):
+            self._group_note(TraceKind.STREAM, "open", new.stream)
             self.port.open_stream(self.app, self.document.streams[new.stream].hold)
         if new.block is not None and (old is None or old.block != new.block):
+            self._group_note(TraceKind.BLOCK, "open", new.block)
             block = self.document.blocks[new.block]
             self.port.open_block(self.app, devices=block.devices, watchdog=block.watchdog)
+
+    def _group_note(self, kind: TraceKind, what: str, group: str) -> None:
+        self._note(Note(self.clock.now(), self.app, kind, what, {"id": group}))
 
     # ------------------------------------------------------------ actions
 
@@ -361,10 +360,10 @@ class Interpreter:
         if len(sent) >= self.budgets.sends_per_second:
             detail["dropped"] = (f"more than {self.budgets.sends_per_second:g} messages in one "
                                  "second (its budget)")
-            self._note(Note(now, self.app, NoteKind.SEND, text, detail))
+            self._note(Note(now, self.app, TraceKind.SEND, text, detail))
             return
         sent.append(now)
-        self._note(Note(now, self.app, NoteKind.SEND, text, detail))
+        self._note(Note(now, self.app, TraceKind.SEND, text, detail))
         self._send(self.app, action.to, text)
 
     def _raise(self, action: Raise, _scope: Scope) -> None:
@@ -384,7 +383,7 @@ class Interpreter:
 
     def _log(self, action: Log, scope: Scope) -> None:
         text = self._text(self._eval(action.text, action.loc, scope), "a log line", action.loc)
-        self._note(Note(self.clock.now(), self.app, NoteKind.LOG, text))
+        self._note(Note(self.clock.now(), self.app, TraceKind.LOG, text))
 
     def _request(self, request: Request, scope: Scope) -> None:
         self.last_request = request.loc
