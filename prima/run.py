@@ -243,7 +243,9 @@ class Run:
             robot = self.sim.robot_pose()
             user = self.sim.user_pose()
             fields["robot"] = (robot.x, robot.y, robot.heading)
-            fields["user"] = None if user is None else (user.x, user.y, user.heading)
+            if user is not None:
+                fields["user"] = (user.x, user.y, user.heading)
+                fields["detectable"] = self.sim.user_detectable()
         self._sink(TraceLine(self.sim.now(), self._count, kind, **fields))
         self._count += 1
 
@@ -286,7 +288,8 @@ class Run:
         self._line(kind, app=d.app, ab=d.ab, tree=d.tree, command=d.command, text=text,
                    devices=tuple(d.devices) if d.devices else None,
                    reactive=d.reactive if d.ab is not None else None,
-                   reason=d.rule.value, detail=detail)
+                   reason=d.rule.value, detail=detail, before=d.before,
+                   command_ids=d.command_ids if len(d.command_ids) > 1 else None)
 
     @staticmethod
     def _located(app: _App | None, message: str) -> str:

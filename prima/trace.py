@@ -49,11 +49,18 @@ class TraceLine:
     reason: str | None = None
     action: str | None = None
     detail: Mapping[str, Value] = field(default_factory=dict)
+    command_ids: tuple[int, ...] | None = None
+    """All the Commands of a request, or of a grouped AB (the first is ``detail.command_id``)."""
+    before: int | None = None
+    """A request: the AB its first Command follows, if any."""
     robot: Pose | None = None
     """The robot's pose (x, y in metres, heading in degrees) at the line's time, on
     start, end, user, event and pose lines."""
     user: Pose | None = None
     """The user's pose, likewise (None in a scenario without a user)."""
+    detectable: bool | None = None
+    """With ``user``: whether the robot could see the user now if it looked their way
+    (in camera range, nothing in between)."""
 
     def to_dict(self) -> dict[str, object]:
         out: dict[str, object] = {"t": round(self.t, 3), "seq": self.seq, "kind": self.kind.value}
@@ -63,13 +70,24 @@ class TraceLine:
                 out[name] = value
         if self.devices is not None:
             out["devices"] = list(self.devices)
+        if self.command_ids is not None:
+            out["command_ids"] = list(self.command_ids)
+        if self.before is not None:
+            out["before"] = self.before
         if self.detail:
             out["detail"] = dict(sorted(self.detail.items()))
-        for name, pose in (("robot", self.robot), ("user", self.user)):
-            if pose is not None:
-                out[name] = {"x": round(pose[0], 3), "y": round(pose[1], 3),
-                             "heading": round(pose[2], 1)}
+        if self.robot is not None:
+            out["robot"] = _pose(self.robot)
+        if self.user is not None:
+            user: dict[str, object] = dict(_pose(self.user))
+            if self.detectable is not None:
+                user["detectable"] = self.detectable
+            out["user"] = user
         return out
+
+
+def _pose(pose: Pose) -> dict[str, float]:
+    return {"x": round(pose[0], 3), "y": round(pose[1], 3), "heading": round(pose[2], 1)}
 
 
 def _describe_start(line: TraceLine) -> str:

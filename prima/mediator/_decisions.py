@@ -140,7 +140,10 @@ class Decision(NamedTuple):
     """The author's label of the (first) Command, if any."""
     detail: str = ""
     calls: tuple[Call, ...] = ()
-    """The AB's Commands with their arguments (not part of ``to_dict``)."""
+    """The AB's Commands with their arguments (a request: all its Commands); not part
+    of ``to_dict``."""
+    before: AbId | None = None
+    """A request: the AB its root follows (its before node), if any."""
 
     def to_dict(self) -> dict[str, object]:
         """A JSON-ready dict with a stable key order."""

@@ -137,7 +137,8 @@ class Intake:
             before = f"before AB{link.parent.id}" if link.parent is not None else "roots the tree"
             grouped = "as one AB " if request.group else ""
             detail = f"{len(cmds)} Command(s) {grouped}{before}"
-        self._log.emit(DecisionKind.REQUEST, link.rule, root, detail=detail)
+        self._log.emit(DecisionKind.REQUEST, link.rule, root, detail=detail, request=cmds,
+                       before=link.parent.id if link.parent is not None else None)
         if link.enter_now:
             self._wm.enter_waiting(root, parent_finished=link.parent_finished)
         return tuple(c.id for c in cmds), cancelled

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._interface import Clock
@@ -30,8 +30,10 @@ class DecisionLog:
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
              app: str | None = None, command: Command | None = None,
-             detail: str = "", tree: int | None = None) -> None:
-        """Record one decision about ``node`` (one of its Commands), or about an app."""
+             detail: str = "", tree: int | None = None,
+             request: Sequence[Command] = (), before: int | None = None) -> None:
+        """Record one decision about ``node`` (one of its Commands, or all the Commands of
+        the ``request`` it roots), or about an app."""
         self.count += 1
         if self._record is None:
             return
@@ -40,7 +42,7 @@ class DecisionLog:
             decision = Decision(t=now, seq=self.count, kind=kind, rule=rule, app=app, tree=tree,
                                 detail=detail)
         else:
-            commands = node.commands if command is None else (command,)
+            commands = tuple(request) or (node.commands if command is None else (command,))
             first = commands[0]
             decision = Decision(
                 t=now, seq=self.count, kind=kind, rule=rule, app=node.app.name, ab=node.id,
@@ -48,5 +50,5 @@ class DecisionLog:
                 command_id=first.id, command_ids=tuple(c.id for c in commands),
                 devices=node.sorted_devices, reactive=node.reactive, iteration=node.iteration,
                 label=node.commands[0].call.label if command is None else first.call.label,
-                detail=detail, calls=tuple(c.call for c in commands))
+                detail=detail, calls=tuple(c.call for c in commands), before=before)
         self._record(decision)

@@ -257,6 +257,11 @@ class Simulator:
     def robot_pose(self) -> Pose:
         return self.world.robot_pose()
 
+    def user_detectable(self) -> bool:
+        """Whether human detection could see the user now, if the robot looked their
+        way (in camera range, nothing in between)."""
+        return self.world.sees_user(self.kernel.tick, any_direction=True)[0]
+
     def user_pose(self) -> Pose | None:
         """Where the user is, or None in a scenario without a user."""
         return self.world.user_pose() if self.world.has_user else None
