@@ -76,7 +76,62 @@ def build_parser() -> argparse.ArgumentParser:
     test.add_argument("paths", nargs="+", metavar="PATH", help="scenario files or folders")
     test.add_argument("--update", action="store_true",
                       help="rewrite the golden traces with this run's traces")
+    judge = commands.add_parser(
+        "judge",
+        help="measure the naturalness of runs: reactions, facing, splits, silences",
+        description="Measure what a user would notice in runs (docs/judging.md): reaction "
+                    "latency, talking unfaced, leaving while talking, split exchanges, "
+                    "silences, stuck applications. PATH is a jsonl trace (*.jsonl), a "
+                    "scenario (*.xml, run in-process; nothing is written) or a folder "
+                    "searched for scenarios. Exit status 1 when a threshold is exceeded.",
+    )
+    judge.add_argument("paths", nargs="+", metavar="PATH",
+                       help="jsonl traces, scenario files or folders")
+    judge.add_argument("--format", choices=("text", "json"), default="text",
+                       help="output format (default: text)")
+    add_threshold_options(judge)
     return parser
+
+
+_THRESHOLD_OPTIONS = (
+    ("--max-late", "max_late", int, "N", "late reactions allowed (default 0)"),
+    ("--max-unfaced", "max_unfaced", int, "N", "utterances unfaced allowed (default 0)"),
+    ("--max-leaving", "max_leaving", int, "N", "leavings while talking allowed (default 0)"),
+    ("--max-splits", "max_splits", int, "N", "split exchanges allowed (default 0)"),
+    ("--max-silences", "max_silences", int, "N", "silences after an answer allowed (default 0)"),
+    ("--max-stuck", "max_stuck", int, "N", "stuck applications allowed (default 0)"),
+    ("--reaction-slack", "reaction_slack", float, "SECONDS",
+     "a reaction's first start may come this long after the residual (default 0.2)"),
+    ("--utterance-slack", "utterance_slack", float, "SECONDS",
+     "and its first utterance this much later still (default 1.0)"),
+    ("--react-within", "react_within", float, "SECONDS",
+     "a fixed bound for the first start instead of residual + slack (e.g. 0.2)"),
+    ("--face-tolerance", "face_tolerance", float, "DEGREES",
+     "largest angle to the user still counted as facing (default 30)"),
+    ("--leave-distance", "leave_distance", float, "METRES",
+     "how far the robot may move away from the user while talking (default 0.3)"),
+    ("--silence", "silence", float, "SECONDS",
+     "longest pause without output after an answer (default 2)"),
+    ("--stuck-after", "stuck_after", float, "SECONDS",
+     "how long a Command may wait before its application is stuck (default 60)"),
+)
+"""The thresholds of ``prima judge`` and ``prima sweep``: option, field, type, metavar, help."""
+
+
+def add_threshold_options(parser: argparse.ArgumentParser) -> None:
+    """The threshold options (a field of :class:`prima.judge.Thresholds` each)."""
+    group = parser.add_argument_group("thresholds")
+    for option, dest, kind, metavar, help_text in _THRESHOLD_OPTIONS:
+        group.add_argument(option, dest=dest, type=kind, metavar=metavar, help=help_text)
+
+
+def thresholds_from(args: argparse.Namespace) -> object:
+    """The :class:`prima.judge.Thresholds` the options ask for; ValueError if one is bad."""
+    from prima.judge import Thresholds
+
+    given = {dest: getattr(args, dest) for _, dest, *_ in _THRESHOLD_OPTIONS
+             if getattr(args, dest) is not None}
+    return Thresholds(**given)
 
 
 def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
@@ -241,9 +296,73 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_ERRORS if failed else EXIT_OK
 
 
+def _thresholds(command: str, args: argparse.Namespace, err: TextIO) -> object:
+    """The thresholds asked for, or None after a usage error's message."""
+    try:
+        return thresholds_from(args)
+    except ValueError as exc:
+        field, _, rest = str(exc).partition(" ")
+        _usage(command, f"--{field.replace('_', '-')} {rest}", err)
+        return None
+
+
+def _judge_inputs(paths: Sequence[str]) -> list[Path] | str:
+    """The files ``prima judge`` reads, or what is wrong with its arguments."""
+    from prima.judge import find_scenarios
+
+    inputs: list[Path] = []
+    for raw in paths:
+        path = Path(raw)
+        if path.is_dir():
+            found = find_scenarios(path)
+            if not found:
+                return f"no scenario in {raw}"
+            inputs += found
+        elif not path.is_file():
+            return f"no such file or folder: {raw}"
+        elif path.suffix not in (".jsonl", ".xml"):
+            return f"{raw}: give a trace (*.jsonl), a scenario (*.xml) or a folder"
+        else:
+            inputs.append(path)
+    return inputs
+
+
+def _judge(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.judge import Report, Thresholds, format_table, judge_file
+
+    thresholds = _thresholds("judge", args, err)
+    if not isinstance(thresholds, Thresholds):
+        return EXIT_USAGE
+    inputs = _judge_inputs(args.paths)
+    if isinstance(inputs, str):
+        return _usage("judge", inputs, err)
+    reports: list[Report] = []
+    failed = 0
+    for path in inputs:
+        try:
+            reports.append(judge_file(path, thresholds=thresholds))
+        except LocatedError as exc:
+            _report(exc.problems, err)
+            failed += 1
+        except Exception as exc:  # noqa: BLE001 - report it, and judge the other runs
+            print(f"prima judge: error: {path}: {type(exc).__name__}: {exc}", file=err)
+            failed += 1
+    if args.format == "json":
+        json.dump({"runs": [r.to_dict() for r in reports], "errors": failed,
+                   "ok": not failed and all(r.ok for r in reports)}, out, indent=2)
+        out.write("\n")
+    elif reports:
+        out.write(format_table(reports))
+    breached = sum(not r.ok for r in reports)
+    print(f"{len(reports)} run(s) judged: {breached} exceeded a threshold"
+          + (f", {failed} could not be judged" if failed else ""), file=err)
+    return EXIT_ERRORS if failed or breached else EXIT_OK
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
     "test": _test,
+    "judge": _judge,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

@@ -6,7 +6,8 @@ Every exception PRIMA raises on purpose derives from :class:`PrimaError`::
     ├── LocatedError (ValueError)   an input file is unusable; carries Problems
     │   ├── DocumentError           a PXML document or robot profile
     │   │   └── ExpressionError     an expression or command chain inside one
-    │   └── ScenarioError           a scenario or map file
+    │   ├── ScenarioError           a scenario or map file
+    │   └── TraceError              a jsonl trace file (``prima judge``)
     ├── ExecutionError              a running application did something impossible
     │   ├── AppFailure              ... and was stopped (the failure is already reported)
     │   └── CommandError            a Command's argument the robot cannot use
@@ -42,6 +43,7 @@ __all__ = [
     "ScenarioError",
     "Severity",
     "SimulationError",
+    "TraceError",
 ]
 
 
@@ -132,6 +134,11 @@ class ExpressionError(DocumentError):
 
 class ScenarioError(LocatedError):
     """A scenario or map file is malformed, invalid or meaningless."""
+
+
+class TraceError(LocatedError):
+    """A jsonl trace file cannot be read: a line is not JSON, or lacks what a trace
+    line has (``t``, ``seq``, ``kind``), or its time goes backwards."""
 
 
 class ExecutionError(PrimaError):

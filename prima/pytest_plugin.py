@@ -1,4 +1,4 @@
-"""pytest plugin: pin your own applications' behaviour with golden traces.
+"""pytest plugin: pin your own applications' behaviour with golden traces, and judge it.
 
 Installed with PRIMA (entry point ``pytest11``). In a test::
 
@@ -11,6 +11,12 @@ the test file that asks, not from where pytest was started. Run
 ``pytest --prima-update-goldens`` to rewrite the golden files after reviewing
 the change.
 
+The ``prima_judge`` fixture measures a run's naturalness (``docs/judging.md``)
+and fails with the report when a threshold is exceeded::
+
+    def test_my_guide_is_natural(prima_judge):
+        prima_judge("scenarios/my-guide.xml", max_unfaced=2)
+
 The plugin is loaded by every pytest run in an environment where PRIMA is
 installed, so it imports nothing of PRIMA until a test uses the fixture.
 """
@@ -19,8 +25,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import pytest
+
+if TYPE_CHECKING:  # the fixtures import PRIMA only when a test uses them
+    from prima.judge import Report
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -47,3 +57,24 @@ def prima_golden(request: pytest.FixtureRequest) -> Callable[[str | Path], None]
                         pytrace=False)
 
     return compare
+
+
+@pytest.fixture
+def prima_judge(request: pytest.FixtureRequest) -> Callable[..., Report]:
+    """Judge a scenario's run (or a jsonl trace); fails with the report past a threshold.
+
+    Keyword arguments override :class:`prima.judge.Thresholds` (``max_splits=1``,
+    ``react_within=0.2``, ...). Returns the :class:`prima.judge.Report`.
+    """
+    from prima.judge import Thresholds, format_table, judge_file  # only now
+
+    here = Path(request.path).parent
+
+    def check(path: str | Path, **thresholds: Any) -> Report:
+        report = judge_file(here / path, thresholds=Thresholds(**thresholds), name=str(path))
+        if not report.ok:
+            pytest.fail(f"{path}: {'; '.join(report.breaches())}\n\n{format_table([report])}",
+                        pytrace=False)
+        return report
+
+    return check
