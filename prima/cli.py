@@ -90,6 +90,28 @@ def build_parser() -> argparse.ArgumentParser:
     judge.add_argument("--format", choices=("text", "json"), default="text",
                        help="output format (default: text)")
     add_threshold_options(judge)
+    sweep = commands.add_parser(
+        "sweep",
+        help="re-run a scenario with its timings jittered and judge every run",
+        description="Run a scenario N times with its user's actions, answer delays and "
+                    "scheduled messages shifted by seeded random offsets in +-jitter, judge "
+                    "each run (docs/judging.md), print the spread of every measure and "
+                    "write the worst runs as scenario files that replay them exactly. "
+                    "Exit status 1 when a run exceeded a threshold.",
+    )
+    sweep.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
+    sweep.add_argument("--runs", type=int, required=True, metavar="N", help="how many runs")
+    sweep.add_argument("--jitter", type=float, required=True, metavar="SECONDS",
+                       help="largest shift of a timing, either way")
+    sweep.add_argument("--seed", type=int, default=0, metavar="S",
+                       help="seed of the shifts (default 0); run i uses (S, i)")
+    sweep.add_argument("--jobs", type=int, metavar="J",
+                       help="parallel processes (default: every core)")
+    sweep.add_argument("--out", metavar="DIR",
+                       help="where to write the worst runs (default: sweep-<scenario name>/)")
+    sweep.add_argument("--worst", type=int, default=3, metavar="K",
+                       help="how many of the worst runs to write (default 3; 0: none)")
+    add_threshold_options(sweep)
     return parser
 
 
@@ -359,10 +381,65 @@ def _judge(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_ERRORS if failed or breached else EXIT_OK
 
 
+def _sweep_usage(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``prima sweep``'s options, checked before anything runs."""
+    if not Path(args.scenario).is_file():
+        return f"no such file: {args.scenario}"
+    if not 1 <= args.runs <= 100_000:
+        return "--runs must be a whole number from 1 to 100000"
+    if not (math.isfinite(args.jitter) and 0 <= args.jitter <= MAX_RUN_TIME):
+        return f"--jitter must be a number of seconds from 0 to {MAX_RUN_TIME:g}"
+    if args.jobs is not None and not 1 <= args.jobs <= 1024:
+        return "--jobs must be a whole number from 1 to 1024"
+    if args.worst < 0:
+        return "--worst must be a whole number from 0 up"
+    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
+        return f"--out {args.out} is a file"
+    return None
+
+
+def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.judge import Thresholds
+    from prima.sweep import format_sweep, progress_bar, sweep
+
+    problem = _sweep_usage(args)
+    if problem:
+        return _usage("sweep", problem, err)
+    thresholds = _thresholds("sweep", args, err)
+    if not isinstance(thresholds, Thresholds):
+        return EXIT_USAGE
+
+    def show(text: str) -> None:
+        err.write(text)
+        err.flush()
+
+    result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
+                   jobs=args.jobs, thresholds=thresholds, progress=progress_bar(show))
+    out.write(format_sweep(result))
+    if result.interrupted:
+        if result.runs:
+            err.write("\n")  # after the progress bar
+        print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
+              file=err)
+        return EXIT_INTERRUPTED
+    if args.worst:
+        folder = Path(args.out or f"sweep-{result.name}")
+        worst = result.worst(args.worst)
+        paths = result.write_worst(args.worst, folder)
+        print(f"worst {len(paths)} run(s), written to {folder}/:", file=out)
+        for run, path in zip(worst, paths, strict=True):
+            report = run.report
+            exceeded = ", ".join(report.exceeded()) or "no threshold exceeded"
+            print(f"  {path}  {exceeded}; worst lateness {report.worst_lateness():.2f} s",
+                  file=out)
+    return EXIT_ERRORS if result.breached else EXIT_OK
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
     "test": _test,
     "judge": _judge,
+    "sweep": _sweep,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

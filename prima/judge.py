@@ -300,6 +300,10 @@ class Report:
                 out.append(f"{name}: {n} > {limit} (seq {seqs}{more})")
         return out
 
+    def exceeded(self) -> list[str]:
+        """Each threshold exceeded, briefly (``late reactions 2 > 0``)."""
+        return [b.split(" (seq")[0].replace(":", "") for b in self.breaches()]
+
     @property
     def ok(self) -> bool:
         """No threshold exceeded."""
@@ -968,8 +972,7 @@ def _block(report: Report) -> list[str]:
 def format_summary(report: Report, width: int = 0) -> str:
     """One line: the run's counts and whether it passes (``width``: pad the name to it)."""
     counts = "  ".join(f"{key} {n:<2}" for key, n in report.counts().items())
-    verdict = "ok" if report.ok else "FAIL: " + ", ".join(
-        b.split(" (seq")[0].replace(":", "") for b in report.breaches())
+    verdict = "ok" if report.ok else "FAIL: " + ", ".join(report.exceeded())
     return f"{report.name:<{width}}  reactions {len(report.reactions):<3} {counts}  {verdict}"
 
 

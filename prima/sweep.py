@@ -1,0 +1,315 @@
+"""Sweep a scenario: run it many times with its timings jittered, judge every run.
+
+A scenario is one situation at fixed times; the user and the building would
+never keep them to the tenth of a second. :func:`sweep` re-runs a scenario N
+times, each time with its user's timed actions (``at``), its answer rules'
+delays (``after``) and its scheduled messages, sounds and events (``at``)
+shifted by random offsets uniform in ±jitter, and judges each run
+(:mod:`prima.judge`). The order the scenario gives is kept: a shifted user
+action is never earlier than the previous shifted one (messages likewise among
+themselves), no time goes below 0 and an answer's delay stays at least 0.1 s.
+
+Run ``i``'s offsets come from ``random.Random`` seeded with the sweep's seed and
+``i``, so results are the same whatever the number of parallel jobs. Each
+variant is an ordinary scenario file (:func:`write_variant`): the worst runs can
+be written out and replayed with ``prima run`` or ``prima judge``.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import multiprocessing
+import os
+import random
+import signal
+import statistics
+import tempfile
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+from prima.errors import ScenarioError
+from prima.judge import Report, Thresholds, judge
+from prima.sim import load_scenario
+from prima.xmlio import local_name, parse_xml, read_source
+
+__all__ = ["MIN_ANSWER_DELAY", "Sweep", "SweepRun", "format_sweep", "progress_bar", "sweep",
+           "write_variant"]
+
+MIN_ANSWER_DELAY = 0.1
+"""The shortest delay (s) an answer rule keeps after jitter."""
+
+_TIMED = frozenset({"say", "touch", "walk", "leave", "follow", "stop"})
+"""The user's timed actions (children of ``<user>`` with ``at``)."""
+_SCHEDULED = frozenset({"message", "sound", "event"})
+"""The environment's scheduled inputs (children of ``<scenario>`` with ``at``)."""
+_PATHS = {"map": ("href",), "apps": ("fa", "ea"), "robot": ("profile",), "zone": ("ea",)}
+"""Attributes that name files, relative to the scenario file."""
+
+
+# ---------------------------------------------------------------------------- variants
+
+def _number(value: float) -> str:
+    """A time as the scenario writes it: to the millisecond, no trailing zeros."""
+    text = f"{value:.3f}".rstrip("0").rstrip(".")
+    return "0" if text in ("", "-0") else text
+
+
+def _jitter(root: etree._Element, rng: random.Random, jitter: float) -> None:
+    """Jitter a scenario's timings in place: one draw per timed element, in document
+    order; a shifted action is never earlier than the one before it."""
+    user = next((c for c in root if isinstance(c.tag, str) and local_name(c) == "user"), None)
+    last = 0.0
+    for el in user if user is not None else ():
+        if not isinstance(el.tag, str):
+            continue
+        if local_name(el) == "answer":
+            after = float(el.get("after", "1.0")) + rng.uniform(-jitter, jitter)
+            el.set("after", _number(max(after, MIN_ANSWER_DELAY)))
+        elif local_name(el) in _TIMED:
+            last = max(last, float(el.get("at", "0")) + rng.uniform(-jitter, jitter))
+            el.set("at", _number(last))
+    last = 0.0
+    for el in root:
+        if isinstance(el.tag, str) and local_name(el) in _SCHEDULED:
+            last = max(last, float(el.get("at", "0")) + rng.uniform(-jitter, jitter))
+            el.set("at", _number(last))
+
+
+def _repath(root: etree._Element, source: Path, relative_to: Path | None) -> None:
+    """File paths made absolute, or relative to ``relative_to``."""
+    for el in root:
+        if not isinstance(el.tag, str):
+            continue
+        for attribute in _PATHS.get(local_name(el), ()):
+            value = el.get(attribute)
+            if value is None:
+                continue
+            target = (source.parent / value).resolve()
+            if relative_to is not None:
+                el.set(attribute, Path(os.path.relpath(target, relative_to.resolve())).as_posix())
+            else:
+                el.set(attribute, str(target))
+
+
+def _rng(seed: int, index: int) -> random.Random:
+    return random.Random(f"prima-sweep:{seed}:{index}")
+
+
+def write_variant(scenario: str | Path, path: str | Path, *, seed: int, index: int,
+                  jitter: float, absolute: bool = False) -> Path:
+    """Write run ``index`` of a sweep of ``scenario`` as a scenario file at ``path``.
+
+    Its file paths are relative to ``path``'s folder (or absolute, with ``absolute``),
+    so ``prima run`` replays it exactly.
+    """
+    source, path = Path(scenario), Path(path)
+    doc = parse_xml(read_source(source, ScenarioError), str(source), ScenarioError)
+    root = copy.deepcopy(doc.root.getroottree()).getroot()
+    _jitter(root, _rng(seed, index), jitter)
+    _repath(root, source, None if absolute else path.parent)
+    before = [etree.tostring(c, encoding="unicode") for c in root.itersiblings(preceding=True)]
+    note = (f"<!-- prima sweep: run {index} of {source.name} (seed {seed}, jitter "
+            f"{_number(jitter)} s): the user's actions, answer delays and scheduled inputs "
+            "shifted -->")
+    text = "\n".join(['<?xml version="1.0" encoding="UTF-8"?>', *reversed(before), note,
+                      etree.tostring(root, encoding="unicode")])
+    path.write_text(text + "\n", encoding="utf-8")
+    return path
+
+
+# ---------------------------------------------------------------------------- runs
+
+@dataclass(frozen=True)
+class SweepRun:
+    """One run of a sweep, judged."""
+
+    index: int
+    report: Report
+
+    @property
+    def breaches(self) -> int:
+        """How many thresholds it exceeded."""
+        return len(self.report.breaches())
+
+
+@dataclass(frozen=True)
+class _Task:
+    scenario: Path
+    folder: Path
+    seed: int
+    index: int
+    jitter: float
+    thresholds: Thresholds
+
+
+def _work(task: _Task) -> SweepRun:
+    """Write one variant, run it, judge it (in a worker process, or in this one)."""
+    from prima.run import Run
+
+    path = write_variant(task.scenario, task.folder / f"run-{task.index}.xml", seed=task.seed,
+                         index=task.index, jitter=task.jitter, absolute=True)
+    report = judge(Run(path).run(), thresholds=task.thresholds, name=f"run {task.index}")
+    path.unlink()
+    return SweepRun(task.index, report)
+
+
+def _quiet() -> None:
+    """Workers leave Ctrl-C to the parent, which stops the pool."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _results(tasks: list[_Task], jobs: int) -> Iterator[SweepRun]:
+    if jobs <= 1 or len(tasks) <= 1:
+        yield from map(_work, tasks)
+        return
+    pool = multiprocessing.get_context().Pool(jobs, initializer=_quiet)
+    try:
+        yield from pool.imap_unordered(_work, tasks)
+        pool.close()
+    finally:
+        pool.terminate()
+        pool.join()
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A sweep's runs, in run order (fewer than asked if it was interrupted)."""
+
+    scenario: Path
+    name: str
+    """The scenario's name."""
+    asked: int
+    jitter: float
+    seed: int
+    thresholds: Thresholds
+    runs: tuple[SweepRun, ...] = ()
+    interrupted: bool = False
+
+    @property
+    def breached(self) -> int:
+        """How many runs exceeded a threshold."""
+        return sum(1 for run in self.runs if run.breaches)
+
+    def worst(self, k: int) -> list[SweepRun]:
+        """The ``k`` worst runs: most thresholds exceeded, then latest reaction."""
+        ranked = sorted(self.runs, key=lambda r: (-r.breaches, -r.report.worst_lateness(),
+                                                  r.index))
+        return ranked[:k]
+
+    def write_worst(self, k: int, folder: str | Path) -> list[Path]:
+        """Write the ``k`` worst runs as scenario files in ``folder`` (created if need be)."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        width = len(str(max(self.asked - 1, 0)))
+        return [write_variant(self.scenario, folder / (f"{self.scenario.stem}-run"
+                                                       f"{run.index:0{width}d}-seed{self.seed}.xml"),
+                              seed=self.seed, index=run.index, jitter=self.jitter)
+                for run in self.worst(k)]
+
+
+def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
+          jobs: int | None = None, thresholds: Thresholds = Thresholds(),
+          progress: Callable[[int, int], None] | None = None) -> Sweep:
+    """Run ``scenario`` ``runs`` times with its timings jittered by up to ±``jitter`` s.
+
+    Runs go in parallel on ``jobs`` processes (default: every core); ``progress(done,
+    runs)`` is called after each. Ctrl-C stops the pool: the result then holds the runs
+    done so far, with ``interrupted`` set. Raises ScenarioError for a bad scenario.
+    """
+    if runs < 1 or not (math.isfinite(jitter) and jitter >= 0):
+        raise ValueError("runs must be 1 or more and jitter a number of seconds from 0 up")
+    source = Path(scenario)
+    name = load_scenario(source).name  # a bad scenario stops here, located
+    jobs = jobs or os.cpu_count() or 1
+    done: dict[int, SweepRun] = {}
+    interrupted = False
+    with tempfile.TemporaryDirectory(prefix="prima-sweep-") as folder:
+        tasks = [_Task(source, Path(folder), seed, i, jitter, thresholds) for i in range(runs)]
+        try:
+            for result in _results(tasks, jobs):
+                done[result.index] = result
+                if progress is not None:
+                    progress(len(done), runs)
+        except KeyboardInterrupt:
+            interrupted = True
+    return Sweep(source, name, runs, jitter, seed, thresholds,
+                 tuple(done[i] for i in sorted(done)), interrupted)
+
+
+# ---------------------------------------------------------------------------- the summary
+
+def _p95(values: list[float]) -> float:
+    """The 95th percentile, nearest rank."""
+    ordered = sorted(values)
+    return ordered[max(math.ceil(0.95 * len(ordered)) - 1, 0)]
+
+
+def _cell(value: float, seconds: bool) -> str:
+    if math.isinf(value):
+        return "never"
+    return f"{value:.2f}" if seconds else f"{value:g}"
+
+
+@dataclass(frozen=True)
+class _Measure:
+    name: str
+    value: Callable[[Report], float]
+    seconds: bool = False
+    limit: Callable[[Thresholds], float] | None = None
+
+
+_MEASURES = (
+    _Measure("worst lateness (s)", Report.worst_lateness, seconds=True),
+    _Measure("worst first start (s)", Report.worst_latency, seconds=True),
+    _Measure("late reactions", lambda r: len(r.late), limit=lambda t: t.max_late),
+    _Measure("talking unfaced", lambda r: len(r.unfaced), limit=lambda t: t.max_unfaced),
+    _Measure("leaving while talking", lambda r: len(r.leaving), limit=lambda t: t.max_leaving),
+    _Measure("split exchanges", lambda r: len(r.splits), limit=lambda t: t.max_splits),
+    _Measure("silences", lambda r: len(r.silences), limit=lambda t: t.max_silences),
+    _Measure("stuck", lambda r: len(r.stuck), limit=lambda t: t.max_stuck),
+)
+
+
+@dataclass
+class _Table:
+    rows: list[str] = field(default_factory=list)
+
+    def add(self, *cells: str) -> None:
+        name, *numbers = cells
+        self.rows.append(f"  {name:<22}" + "".join(f"{c:>9}" for c in numbers))
+
+
+def format_sweep(result: Sweep) -> str:
+    """Min / median / p95 / max of each measure over the runs, and how many breached."""
+    head = (f"{result.scenario}: {len(result.runs)} of {result.asked} runs, jitter "
+            f"±{_number(result.jitter)} s, seed {result.seed}")
+    if result.interrupted:
+        head += " (interrupted)"
+    if not result.runs:
+        return head + "\n"
+    table = _Table()
+    table.add("measure", "min", "median", "p95", "max", "over max")
+    reports = [run.report for run in result.runs]
+    for m in _MEASURES:
+        values = [float(m.value(r)) for r in reports]
+        over = "" if m.limit is None else str(sum(v > m.limit(result.thresholds) for v in values))
+        table.add(m.name, *(_cell(f(values), m.seconds) for f in
+                            (min, statistics.median, _p95, max)), over)
+    rows = [head, "", *table.rows, "",
+            f"runs exceeding a threshold: {result.breached} of {len(result.runs)}"]
+    return "\n".join(rows) + "\n"
+
+
+def progress_bar(out: Callable[[str], object], width: int = 30) -> Callable[[int, int], None]:
+    """A text progress bar redrawn in place (``\\r``), through ``out``."""
+
+    def draw(done: int, total: int) -> None:
+        filled = width * done // max(total, 1)
+        end = "\n" if done >= total else ""
+        out(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} runs{end}")
+
+    return draw

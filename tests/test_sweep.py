@@ -1,0 +1,185 @@
+"""prima sweep: jittered variants keep the scenario's order, runs are deterministic
+whatever the parallelism, and a written worst run replays exactly."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Any
+
+import pytest
+from lxml import etree
+
+import prima.sweep
+from prima.cli import main
+from prima.judge import judge_file
+from prima.sim import load_scenario
+from prima.sweep import MIN_ANSWER_DELAY, format_sweep, sweep, write_variant
+
+ROOT = Path(__file__).parents[1]
+THESIS = ROOT / "scenarios" / "thesis"
+SHORT = THESIS / "fig5-7.xml"
+"""A 60-second scenario: a run takes a fraction of a second."""
+BUSY = ROOT / "scenarios" / "examples" / "office-kidode.xml"
+"""A scenario with many user actions, answers and a message."""
+NS = {"s": "urn:prima:scenario:1"}
+
+
+def cli(*argv: str) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    code = main(list(argv), out=out, err=err)
+    return code, out.getvalue(), err.getvalue()
+
+
+def timings(path: Path) -> dict[str, list[float]]:
+    root = etree.parse(str(path)).getroot()
+    user = root.find("s:user", NS)
+    assert user is not None
+    return {
+        "actions": [float(e.get("at", "0")) for e in user if e.tag != f"{{{NS['s']}}}answer"
+                    and isinstance(e.tag, str)],
+        "answers": [float(e.get("after", "1.0")) for e in user.findall("s:answer", NS)],
+        "scheduled": [float(e.get("at", "0")) for e in root
+                      if isinstance(e.tag, str) and etree.QName(e).localname in
+                      ("message", "sound", "event")],
+    }
+
+
+def test_a_variant_keeps_the_order_and_the_bounds(tmp_path: Path) -> None:
+    path = write_variant(BUSY, tmp_path / "v.xml", seed=1, index=0, jitter=50.0)
+    got = timings(path)
+    assert got["actions"] == sorted(got["actions"]) and min(got["actions"]) >= 0
+    assert got["scheduled"] == sorted(got["scheduled"]) and min(got["scheduled"]) >= 0
+    assert min(got["answers"]) >= MIN_ANSWER_DELAY
+    assert got != timings(BUSY)
+    assert load_scenario(path).map.name == "office"  # paths relative to the new file
+
+
+def test_no_jitter_no_change(tmp_path: Path) -> None:
+    path = write_variant(BUSY, tmp_path / "v.xml", seed=1, index=0, jitter=0.0)
+    assert timings(path) == timings(BUSY)
+
+
+def test_the_offsets_depend_on_the_seed_and_the_run_only(tmp_path: Path) -> None:
+    def variant(name: str, seed: int, index: int) -> str:
+        out = write_variant(BUSY, tmp_path / name, seed=seed, index=index, jitter=3.0)
+        return "\n".join(out.read_text(encoding="utf-8").splitlines()[1:])  # no comment line
+
+    assert variant("a.xml", 1, 2) == variant("b.xml", 1, 2)
+    assert variant("a.xml", 1, 2) != variant("c.xml", 1, 3)
+    assert variant("a.xml", 1, 2) != variant("d.xml", 2, 2)
+
+
+def test_variant_paths_are_relative_to_the_written_file(tmp_path: Path) -> None:
+    folder = tmp_path / "deep" / "er"
+    folder.mkdir(parents=True)
+    path = write_variant(SHORT, folder / "v.xml", seed=0, index=0, jitter=1.0)
+    root = etree.parse(str(path)).getroot()
+    href = root.find("s:map", NS).get("href")  # type: ignore[union-attr]
+    assert not Path(href).is_absolute()
+    assert (folder / href).resolve() == (THESIS.parent / "maps" / "office.xml").resolve()
+
+
+def test_same_seed_same_output_whatever_the_jobs(tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    args = ["sweep", str(SHORT), "--runs", "4", "--jitter", "3", "--seed", "7", "--worst", "2"]
+    one = cli(*args, "--jobs", "1", "--out", "one")
+    two = cli(*args, "--jobs", "2", "--out", "two")
+    assert one[0] == two[0]
+    assert one[1].replace("one", "X") == two[1].replace("two", "X")
+    assert "4 of 4 runs, jitter ±3 s, seed 7" in one[1]
+    assert "4/4 runs" in one[2]  # the progress bar
+    assert sorted(p.name for p in (tmp_path / "one").iterdir()) == sorted(
+        p.name for p in (tmp_path / "two").iterdir())
+    for name in (p.name for p in (tmp_path / "one").iterdir()):
+        assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes()
+
+
+def test_a_written_worst_run_replays_its_measures(tmp_path: Path) -> None:
+    result = sweep(THESIS / "sample-05.xml", runs=3, jitter=4.0, seed=3, jobs=1)
+    (worst,) = result.worst(1)
+    (path,) = result.write_worst(1, tmp_path / "out")
+    assert path.name == f"sample-05-run{worst.index}-seed3.xml"
+
+    def measures(d: dict[str, Any]) -> dict[str, Any]:
+        return {k: v for k, v in d.items() if k != "name"}
+
+    assert measures(judge_file(path).to_dict()) == measures(worst.report.to_dict())
+    code, out, _ = cli("judge", str(path))
+    assert code == (1 if worst.breaches else 0)
+
+
+def test_the_summary_lists_every_measure() -> None:
+    result = sweep(SHORT, runs=2, jitter=1.0, jobs=1)
+    text = format_sweep(result)
+    for name in ("worst lateness (s)", "worst first start (s)", "late reactions",
+                 "talking unfaced", "leaving while talking", "split exchanges", "silences",
+                 "stuck", "runs exceeding a threshold: 0 of 2"):
+        assert name in text
+
+
+def test_an_interrupted_sweep_keeps_what_was_done() -> None:
+    def stop(done: int, total: int) -> None:
+        if done == 1:
+            raise KeyboardInterrupt
+
+    result = sweep(SHORT, runs=3, jitter=1.0, jobs=1, progress=stop)
+    assert result.interrupted and len(result.runs) == 1
+    assert "1 of 3 runs" in format_sweep(result) and "(interrupted)" in format_sweep(result)
+
+
+def test_ctrl_c_prints_what_was_done_and_exits_130(tmp_path: Path,
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    def bar(_out: Any) -> Any:
+        def draw(done: int, total: int) -> None:
+            if done == 2:
+                raise KeyboardInterrupt
+        return draw
+
+    monkeypatch.setattr(prima.sweep, "progress_bar", bar)
+    monkeypatch.chdir(tmp_path)
+    code, out, err = cli("sweep", str(SHORT), "--runs", "5", "--jitter", "1", "--jobs", "1")
+    assert code == 130
+    assert "2 of 5 runs" in out and "interrupted after 2 of 5 runs" in err
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_a_breach_exits_1_and_the_worst_runs_go_to_the_default_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    code, out, _ = cli("sweep", str(THESIS / "sample-05.xml"), "--runs", "2", "--jitter", "0",
+                       "--worst", "1", "--jobs", "1")
+    assert code == 1
+    assert "runs exceeding a threshold: 2 of 2" in out
+    assert [p.name for p in (tmp_path / "sweep-sample-05").iterdir()] == [
+        "sample-05-run0-seed0.xml"]
+    assert "split exchanges 1 > 0" in out
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["sweep", "no/such.xml", "--runs", "2", "--jitter", "1"], "no such file"),
+    (["sweep", str(SHORT), "--runs", "0", "--jitter", "1"], "--runs must be"),
+    (["sweep", str(SHORT), "--runs", "2", "--jitter", "-1"], "--jitter must be"),
+    (["sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--jobs", "0"], "--jobs must be"),
+    (["sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--worst", "-1"], "--worst must"),
+    (["sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--out", str(SHORT)], "is a file"),
+    (["sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--max-stuck", "-2"],
+     "--max-stuck must be"),
+    (["sweep", str(SHORT), "--jitter", "1"], "required"),
+])
+def test_sweep_usage_errors_exit_2(argv: list[str], fragment: str,
+                                   capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = cli(*argv)
+    assert code == 2
+    assert fragment in err + capsys.readouterr().err
+
+
+def test_a_bad_scenario_is_located(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<scenario xmlns="urn:prima:scenario:1" name="x" until="10">\n'
+                   '  <map href="nowhere.xml"/>\n  <robot x="0" y="0"/>\n</scenario>\n',
+                   encoding="utf-8")
+    code, _, err = cli("sweep", str(bad), "--runs", "2", "--jitter", "1")
+    assert code == 1
+    assert f"{bad}:2:" in err and "Traceback" not in err
