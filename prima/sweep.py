@@ -280,7 +280,8 @@ class _Table:
 
     def add(self, *cells: str) -> None:
         name, *numbers = cells
-        self.rows.append(f"  {name:<22}" + "".join(f"{c:>9}" for c in numbers))
+        row = f"  {name:<22}" + "".join(f"{c:>9}" for c in numbers)
+        self.rows.append(row.rstrip())
 
 
 def format_sweep(result: Sweep) -> str:
