@@ -37,7 +37,8 @@ def test_every_command_is_documented_in_both_forms() -> None:
 
 
 @pytest.mark.parametrize("command, doc", [("validate", "pxml.md"), ("run", "running.md"),
-                                          ("test", "running.md")])
+                                          ("test", "running.md"), ("judge", "judging.md"),
+                                          ("sweep", "judging.md")])
 def test_every_cli_option_is_documented(command: str, doc: str) -> None:
     text = (ROOT / "docs" / doc).read_text()
     assert f"prima {command}" in text
@@ -58,3 +59,14 @@ def test_readme_example_validates() -> None:
     source = f'<pxml xmlns="urn:prima:pxml:1" kind="ea" name="readme">{snippet}</pxml>'
     document, problems = check_document(source.encode(), "README.md")
     assert document is not None and problems == [], [str(p) for p in problems]
+
+
+def test_the_judging_example_is_a_real_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    import io
+
+    from prima.cli import main
+
+    monkeypatch.chdir(ROOT)
+    out = io.StringIO()
+    assert main(["judge", "scenarios/thesis/sample-05.xml"], out=out, err=io.StringIO()) == 1
+    assert out.getvalue() in (ROOT / "docs" / "judging.md").read_text()
