@@ -403,7 +403,7 @@ def load_trace(path: str | Path) -> list[dict[str, Any]]:
     """Read a jsonl trace file (``prima run --format jsonl``).
 
     Raises :class:`~prima.errors.TraceError` with every bad line located as
-    ``file:line:col`` (at most 20; blank lines are skipped).
+    ``file:line:col`` (at most 20; blank lines are skipped), or for an empty file.
     """
     path = Path(path)
     name = str(path)
@@ -435,6 +435,8 @@ def load_trace(path: str | Path) -> list[dict[str, Any]]:
             rows.append(row)
         if len(problems) >= 20:
             break
+    if not rows and not problems:
+        problems.append(Problem(name, 1, 1, Severity.ERROR, "the trace has no lines"))
     if problems:
         raise TraceError(problems)
     return rows

@@ -524,6 +524,13 @@ def test_load_trace_locates_every_bad_line(tmp_path: Path) -> None:
     ]
 
 
+def test_an_empty_trace_is_an_error(tmp_path: Path) -> None:
+    path = tmp_path / "empty.jsonl"
+    path.write_text("\n", encoding="utf-8")
+    with pytest.raises(TraceError, match="empty.jsonl:1:1: error: the trace has no lines"):
+        load_trace(path)
+
+
 def test_a_trace_line_and_its_jsonl_are_judged_alike(tmp_path: Path) -> None:
     from prima.run import Run
     from prima.trace import jsonl_row
