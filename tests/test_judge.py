@@ -435,6 +435,18 @@ def test_an_app_behind_its_own_endless_loop_is_stuck() -> None:
     assert counts(search_loop(until=60.0).judge()) == {}  # 60 s, not more
 
 
+def test_the_loop_must_run_back_to_back_for_the_whole_wait() -> None:
+    """A pause in the search (its next iteration waited 5 s) starts the 60 s afresh."""
+    tr = search_loop(until=110.0)
+    for row in tr.rows:
+        if row["t"] >= 30.0 and not (row["kind"] == "end" and row["t"] == 30.0):
+            row["t"] += 5.0  # iterations from the 4th on start at 35, 45, ...
+    report = tr.judge()
+    assert [(s.kind, s.t) for s in report.stuck] == [("loop", 95.0)]
+    tr.rows = [r for r in tr.rows if r["t"] <= 95.0]
+    assert [(s.kind, s.t) for s in tr.judge().stuck] == [("end", 60.0)]
+
+
 def test_waiting_for_another_apps_loop_is_not_stuck_while_the_run_goes_on() -> None:
     tr = search_loop(until=80.0, other_app=True)
     tr.speak(80.0, "ea", 100, 2, "Found you.", tree=1, request=False)
