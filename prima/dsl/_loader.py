@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
@@ -55,10 +56,13 @@ from prima.vocab import (
     AppKind,
     RunningOrder,
 )
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
+from prima.xmlio import XmlDocument, limit, local_name, parse_xml, read_source, validate
 
 NAMESPACE = "urn:prima:pxml:1"
 _NS = f"{{{NAMESPACE}}}"
+
+MAX_CARET_LINE = 1_000
+"""Longest source line shown under a problem with a caret (characters)."""
 
 Spot = tuple[etree._Element, str | None, int]
 """Where to point: (element, None | "#text" | attribute name, character index)."""
@@ -97,6 +101,7 @@ class Builder:
         self.blocks: dict[str, AtomicBlock] = {}
         self._state_elements: dict[str, etree._Element] = {}
         self.in_handler = False
+        self._carets: set[int] = set()
 
     # ------------------------------------------------------------ reporting
 
@@ -118,10 +123,24 @@ class Builder:
         return self.loc((el, None, 0))
 
     def report(self, spot: Spot, message: str, severity: Severity, *, caret: bool = False) -> None:
-        """A problem at ``spot``; with ``caret``, it carries its source line too."""
+        """A problem at ``spot``; with ``caret``, it will carry its source line too.
+
+        The source line is added only to the problems reported (see :meth:`reported`):
+        a long line copied into each of thousands of problems would cost quadratic time.
+        """
         line, col = self.position(spot)
-        source = self.doc.where.line_text(line) if caret else ""
-        self.problems.append(Problem(self.doc.name, line, col, severity, message, source))
+        problem = Problem(self.doc.name, line, col, severity, message)
+        self.problems.append(problem)
+        if caret:
+            self._carets.add(id(problem))
+
+    def reported(self) -> list[Problem]:
+        """The problems in source order, at most MAX_PROBLEMS of them (then a line counting
+        the rest); those inside an expression carry their source line, if it is not too long."""
+        kept = limit(sorted(self.problems, key=lambda p: (p.line, p.col)), self.doc.name)
+        return [dataclasses.replace(p, source=self.doc.where.line_text(p.line))
+                if id(p) in self._carets and self.doc.where.line_length(p.line) <= MAX_CARET_LINE
+                else p for p in kept]
 
     def fault(self, spot: Spot, fault: ExpressionError) -> None:
         """An expression's fault, located at its character in the expression written at ``spot``."""
@@ -716,7 +735,7 @@ def check_parsed(doc: XmlDocument,
         return None, problems
     builder = Builder(doc, profile)
     document = builder.build()
-    return document, sorted(builder.problems, key=lambda p: (p.line, p.col))
+    return document, builder.reported()
 
 
 def load_document(path: str | Path, profile: RobotProfile | None = None) -> Document:

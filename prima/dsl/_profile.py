@@ -27,7 +27,7 @@ from prima.catalog import (
 from prima.dsl._elements import elements, flag
 from prima.errors import DocumentError, Problem
 from prima.vocab import PREDEFINED_EVENTS, Value
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
+from prima.xmlio import XmlDocument, limit, local_name, parse_xml, read_source, validate
 
 NAMESPACE = "urn:prima:robot:1"
 DEFAULT_PROFILE = "home-robot.xml"
@@ -105,7 +105,7 @@ def profile_from_xml(doc: XmlDocument) -> RobotProfile:
     reader = _Reader(doc)
     profile = reader.read()
     if reader.problems:
-        raise DocumentError(reader.problems)
+        raise DocumentError(limit(reader.problems, doc.name))
     return profile
 
 

@@ -22,7 +22,7 @@ from prima.errors import Problem, ScenarioError
 from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
+from prima.xmlio import XmlDocument, limit, local_name, parse_xml, read_source, validate
 
 __all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
 
@@ -171,7 +171,7 @@ def load_map(path: str | Path) -> WorldMap:
             continue
         edges.append((a, b))
     if problems:
-        raise ScenarioError(sorted(problems))
+        raise ScenarioError(limit(sorted(problems), str(path)))
     name = doc.root.get("name", path.stem)
     return WorldMap(name, tuple(walls), tuple(places), tuple(edges), tuple(areas),
                     source=str(path))
@@ -258,7 +258,7 @@ class _Loader:
         user = self.user(kids["user"]) if "user" in kids else None
         events, zones = self.environment(root)
         if self.problems:
-            raise ScenarioError(sorted(self.problems))
+            raise ScenarioError(limit(sorted(self.problems), str(self.path)))
         return Scenario(
             name=root.get("name", self.path.stem), source=str(self.path), map=self.map,
             robot=robot, until=float(root.get("until", "0")), seed=int(root.get("seed", "0")),
