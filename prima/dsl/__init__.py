@@ -10,7 +10,8 @@ on) are private. In the direction data flows:
 - validation of files and folders, as ``prima validate`` does it:
   :func:`collect`, :func:`check_file`, :func:`validate_paths` give a :class:`Report`;
 - the model the interpreter runs (:class:`Document`, :class:`State`,
-  :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`);
+  :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`, with
+  :func:`words` and :func:`match_pattern` for its answers);
 - the expression language: :func:`compile_expression`, :func:`compile_template`,
   :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`.
 """
@@ -54,6 +55,8 @@ from prima.dsl._model import (
     State,
     StreamBlock,
     Variable,
+    match_pattern,
+    words,
 )
 from prima.dsl._profile import (
     STANDARD_GESTURES,
@@ -118,6 +121,7 @@ __all__ = [
     "element_name",
     "load_document",
     "load_profile",
+    "match_pattern",
     "parse_chain",
     "parse_profile",
     "parser",
@@ -126,4 +130,5 @@ __all__ = [
     "to_text",
     "truthy",
     "validate_paths",
+    "words",
 ]

@@ -22,6 +22,10 @@ from prima.dsl._commands import bind_element, bind_step, compile_attribute, elem
 from prima.dsl._elements import elements, flag
 from prima.dsl._expr import Compiled, compile_expression, compile_template, parse_chain
 from prima.dsl._model import (
+    MAX_PATTERN_CAPTURES,
+    MAX_PATTERN_ITEMS,
+    MAX_PATTERNS,
+    MAX_PHRASE_WORDS,
     Action,
     Assign,
     AtomicBlock,
@@ -267,12 +271,17 @@ class Builder:
             if gid in out:
                 self.error((el, "id", 0), f"grammar '{gid}' is declared twice")
                 continue
-            choices, patterns = [], []
+            choices: list[Choice] = []
+            patterns: list[Pattern] = []
             for item in elements(el):
                 if local_name(item) == "choice":
                     choice = self._choice(item)
                     if choice is not None:
                         choices.append(choice)
+                elif len(patterns) == MAX_PATTERNS:
+                    self.error((item, None, 0), f"a grammar may hold at most {MAX_PATTERNS} "
+                                                "patterns")
+                    break
                 else:
                     pattern = self._pattern(item, item.text or "")
                     if pattern is not None:
@@ -286,29 +295,33 @@ class Builder:
             self.error((el, None, 0), "a choice needs at least one phrase "
                                       "(synonyms separated by '|')")
             return None
+        if max(len(p) for p in phrases) > MAX_PHRASE_WORDS:
+            self.error((el, None, 0), f"a synonym may have at most {MAX_PHRASE_WORDS} words")
+            return None
         return Choice(el.get("value") or " ".join(phrases[0]), phrases)
 
     def _pattern(self, el: etree._Element, text: str) -> Pattern | None:
         tokens = text.split()
-        if not tokens or len(tokens) > 20:
-            self.error((el, None, 0), "a pattern needs 1 to 20 words, '*' or '#'")
+        if not tokens or len(tokens) > MAX_PATTERN_ITEMS:
+            self.error((el, None, 0), f"a pattern needs 1 to {MAX_PATTERN_ITEMS} words, "
+                                      "'*' or '#'")
             return None
-        parts = []
+        items = []
         for tok in tokens:
-            if tok in _CAPTURES:
-                parts.append(_CAPTURES[tok])
+            if tok in ("*", "#"):
+                items.append(tok)
                 continue
             w = words(tok)
             if len(w) != 1:
                 self.error((el, "#text", text.find(tok)),
                            f"pattern word {tok!r} must be one word (letters, digits, ')")
                 return None
-            parts.append(re.escape(w[0]))
-        if sum(t in _CAPTURES for t in tokens) > 4:
-            self.error((el, None, 0), "a pattern may capture at most 4 times ('*' or '#')")
+            items.append(w[0])
+        if sum(t in ("*", "#") for t in tokens) > MAX_PATTERN_CAPTURES:
+            self.error((el, None, 0), f"a pattern may capture at most {MAX_PATTERN_CAPTURES} "
+                                      "times ('*' or '#')")
             return None
-        regex = re.compile(r"\s*" + r"\s*".join(parts) + r"\s*")
-        return Pattern(text.strip(), regex)
+        return Pattern(text.strip(), tuple(items))
 
     def _events(self) -> dict[str, EventDecl]:
         out: dict[str, EventDecl] = {}
@@ -663,10 +676,6 @@ _ACTIONS: Mapping[str, Callable[[Builder, etree._Element], Action | None]] = {
     "log": Builder._log,
 }
 """How each action element is read."""
-
-_CAPTURES = {"*": r"(.*?)", "#": r"(-?[0-9]+(?:\.[0-9]+)?)"}
-"""What a pattern's ``*`` (any words) and ``#`` (a number) match."""
-
 
 def _goto_targets(actions: Iterable[Action]) -> set[str]:
     out: set[str] = set()
