@@ -20,7 +20,13 @@ from lxml import etree
 from prima.catalog import ParamKind
 from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
 from prima.dsl._elements import elements, flag
-from prima.dsl._expr import Compiled, compile_expression, compile_template, parse_chain
+from prima.dsl._expr import (
+    MAX_CHAIN_COMMANDS,
+    Compiled,
+    compile_expression,
+    compile_template,
+    parse_chain,
+)
 from prima.dsl._model import (
     MAX_PATTERN_CAPTURES,
     MAX_PATTERN_ITEMS,
@@ -55,12 +61,21 @@ from prima.dsl._profile import STANDARD_GESTURES, RobotProfile, default_profile
 from prima.errors import DocumentError, ExpressionError, Problem, Severity
 from prima.vocab import (
     MAX_BLOCK_WATCHDOG,
+    MAX_NUMBER,
     MAX_STREAM_HOLD,
     PREDEFINED_EVENTS,
     AppKind,
     RunningOrder,
 )
-from prima.xmlio import XmlDocument, limit, local_name, parse_xml, read_source, validate
+from prima.xmlio import (
+    MAX_PROBLEMS,
+    XmlDocument,
+    limit,
+    local_name,
+    parse_xml,
+    read_source,
+    validate,
+)
 
 NAMESPACE = "urn:prima:pxml:1"
 _NS = f"{{{NAMESPACE}}}"
@@ -91,6 +106,8 @@ class Builder:
         self.doc = doc
         self.profile = profile
         self.catalog = profile.catalog()
+        self.max_text = profile.budgets.text
+        """Longest literal text (characters): the robot's budget, at most MAX_TEXT."""
         self.element_commands = {element_name(c.name): c.name for c in self.catalog
                                  if not c.robot_specific}
         self.kind = AppKind(doc.root.get("kind", "fa"))
@@ -106,6 +123,8 @@ class Builder:
         self._state_elements: dict[str, etree._Element] = {}
         self.in_handler = False
         self._carets: set[int] = set()
+        self._hints = 0
+        self._known: dict[str, str] = {}
 
     # ------------------------------------------------------------ reporting
 
@@ -177,19 +196,27 @@ class Builder:
     def expression(self, el: etree._Element, attr: str) -> Compiled | None:
         """The expression written in attribute ``attr``, or None after a fault."""
         text = el.get(attr, "")
-        return self.compile((el, attr, 0), lambda: compile_expression(text))
+        return self.compile((el, attr, 0),
+                            lambda: compile_expression(text, max_text=self.max_text))
 
     def template(self, el: etree._Element, attr: str) -> Compiled | None:
         """The text with ``{expression}`` parts written in attribute ``attr``, or None."""
         text = el.get(attr, "")
-        return self.compile((el, attr, 0), lambda: compile_template(text))
+        return self.compile((el, attr, 0), lambda: compile_template(text, max_text=self.max_text))
+
+    def known(self, what: str, names: Callable[[], Iterable[str]]) -> str:
+        """``names``, sorted and joined, computed once per ``what``: an error message lists
+        them, and a document may make that error many times."""
+        if what not in self._known:
+            self._known[what] = ", ".join(sorted(names()))
+        return self._known[what]
 
     # ------------------------------------------------------------ references
 
     def check_gesture(self, name: str, spot: Spot) -> None:
         """A gesture must be one the robot knows; an EA may use only the common ones."""
         if name not in self.profile.gestures and name not in STANDARD_GESTURES:
-            known = ", ".join(sorted(self.profile.gestures))
+            known = self.known("gestures", lambda: self.profile.gestures)
             self.error(spot, f"unknown gesture '{name}' (this robot knows: {known})")
         elif name not in STANDARD_GESTURES and self.kind is AppKind.EA:
             self.error(spot, f"gesture '{name}' is robot-specific; only an FA may use it "
@@ -388,7 +415,7 @@ class Builder:
                                       f"<block> at line {self.loc_of(block).line}")
         for m in re.finditer(r"\S+", el.get("devices") or ""):
             if m.group() not in self.catalog.devices:
-                known = ", ".join(sorted(self.catalog.devices))
+                known = self.known("devices", lambda: self.catalog.devices)
                 self.error((el, "devices", m.start()),
                            f"unknown device '{m.group()}' (devices: {known})")
 
@@ -396,7 +423,7 @@ class Builder:
         gid = self._group_id(el)
         if gid in self.streams:
             self.error((el, "id", 0), f"duplicate stream id '{gid}'")
-        hold = float(el.get("hold", "10"))
+        hold = self._seconds(el, "hold", 10.0)
         if hold > MAX_STREAM_HOLD:
             self.warning((el, "hold", 0), f"PRIMA holds a stream for at most "
                                           f"{MAX_STREAM_HOLD:g} s; hold={hold:g} acts as "
@@ -407,7 +434,7 @@ class Builder:
         gid = self._group_id(el)
         if gid in self.blocks:
             self.error((el, "id", 0), f"duplicate block id '{gid}'")
-        watchdog = float(el.get("watchdog", "30"))
+        watchdog = self._seconds(el, "watchdog", 30.0)
         if watchdog > MAX_BLOCK_WATCHDOG:
             self.warning((el, "watchdog", 0), f"PRIMA ends a block after at most "
                                               f"{MAX_BLOCK_WATCHDOG:g} s; watchdog={watchdog:g} "
@@ -416,6 +443,18 @@ class Builder:
         self.blocks[gid] = AtomicBlock(gid, watchdog,
                                        frozenset(devices.split()) if devices else None,
                                        tuple(members), self.loc_of(el))
+
+    def _seconds(self, el: etree._Element, attr: str, default: float) -> float:
+        """A positive duration (the schema's decimal), which must stay positive and finite as a
+        float: a hold of 1 and 400 zeros is infinite, 0. and 400 zeros is 0."""
+        raw = el.get(attr)
+        value = default if raw is None else float(raw)
+        if not 0 < value <= MAX_NUMBER:
+            shown = raw if raw is None or len(raw) <= 20 else raw[:17] + "..."
+            self.error((el, attr, 0), f"{attr}={shown!r} is not a usable number of seconds "
+                                      "(it must be more than 0, and finite)")
+            return default
+        return value
 
     def _state(self, el: etree._Element, stream: etree._Element | None,
                block: etree._Element | None) -> State:
@@ -503,7 +542,12 @@ class Builder:
                 return None
             calls = [bind_step(self, el, text, step) for step in steps]
         else:
-            calls = [bind_element(self, child) for child in elements(el)]
+            children = elements(el)
+            if len(children) > MAX_CHAIN_COMMANDS:
+                self.error((children[MAX_CHAIN_COMMANDS], None, 0),
+                           f"a request may hold at most {MAX_CHAIN_COMMANDS} Commands")
+                return None
+            calls = [bind_element(self, child) for child in children]
         bound = [call for call in calls if call is not None]
         return bound if len(bound) == len(calls) else None
 
@@ -614,12 +658,17 @@ class Builder:
             if reactive and self.kind is AppKind.EA:
                 self.error((spot[0], "reactive", 0), "only an FA may mark its own events reactive")
             return
-        known = sorted(set(PREDEFINED_EVENTS) | set(events) | set(self.timers)
-                       | (set(self.profile.events) if self.kind is AppKind.FA else set()))
-        self.error(spot, f"unknown event '{name}' (known: {', '.join(known)})")
+        known = self.known("events", lambda: set(PREDEFINED_EVENTS) | set(events)
+                           | set(self.timers)
+                           | (set(self.profile.events) if self.kind is AppKind.FA else set()))
+        self.error(spot, f"unknown event '{name}' (known: {known})")
 
     def _hint(self, what: str, name: str) -> str:
-        close = [v for v in self.variable_names if _similar(v, name)]
+        # Looking for a similar name costs a pass over the variables: only for as many
+        # undefined names as a file reports, so that thousands of them stay linear.
+        self._hints += 1
+        close = [v for v in self.variable_names if _similar(v, name)] \
+            if self._hints <= MAX_PROBLEMS else []
         if close:
             return f"; did you mean '{close[0]}'?"
         return f" (declare it with <{what} name=\"{name}\"/>)"
@@ -646,13 +695,15 @@ class Builder:
     def _check_reachable(self, handlers: list[Handler], initial: str | None) -> None:
         if initial is None:
             return
+        # document-scope handlers can go anywhere from any state: reachable from the initial one
         everywhere = _goto_targets(a for h in handlers for a in h.actions)
         seen = {initial}
-        todo = deque([initial])
+        todo = deque([initial, *(t for t in everywhere if t in self.states and t != initial)])
+        seen.update(todo)
         while todo:
             state = self.states[todo.popleft()]
             nexts = _goto_targets([*state.entry, *(a for h in state.handlers for a in h.actions)])
-            for target in (nexts | everywhere) & self.states.keys():
+            for target in nexts & self.states.keys():
                 if target not in seen:
                     seen.add(target)
                     todo.append(target)
@@ -676,6 +727,7 @@ _ACTIONS: Mapping[str, Callable[[Builder, etree._Element], Action | None]] = {
     "log": Builder._log,
 }
 """How each action element is read."""
+
 
 def _goto_targets(actions: Iterable[Action]) -> set[str]:
     out: set[str] = set()
