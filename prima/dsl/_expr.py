@@ -455,8 +455,23 @@ def compile_expression(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -
     """
     if not text.strip():
         raise ExpressionError(0, "expression: empty", text)
+    bare = _BARE_NAME.fullmatch(text)
+    if bare and bare.group(1) not in _KEYWORDS:  # {name}: the common case, without lark
+        return _variable(bare.group(1), bare.start(1))
     measure(text, "expression", depth)
     return _Compiler(text, max_text, depth).compile(_parse(text, "expression"))
+
+
+_BARE_NAME = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*")
+_KEYWORDS = frozenset({"and", "or", "not", "true", "false", "null"})
+
+
+def _variable(name: str, index: int) -> Compiled:
+    """A bare variable name (or ``event``) at ``index``, compiled as the grammar would."""
+    if name == "event":
+        return Compiled(name, lambda s: None if s.event is None else s.event.get("name"),
+                        event_uses=(index,))
+    return Compiled(name, lambda s: s.variables.get(name), frozenset({(name, index)}))
 
 
 def compile_template(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -> Compiled:
