@@ -50,15 +50,19 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MAX_ATTRIBUTES",
+    "MAX_DIGITS",
     "MAX_BYTES",
     "MAX_DEPTH",
     "MAX_PROBLEMS",
     "XMLSCHEMA_NODES",
+    "Bound",
     "Hint",
     "SourceMap",
     "XmlDocument",
+    "integer",
     "limit",
     "local_name",
+    "number",
     "parse_xml",
     "read_source",
     "schema",
@@ -268,6 +272,69 @@ class XmlDocument:
         else:
             line, col = self.where.attribute(el, attribute, index)
         return Problem(self.name, line, col, severity, message)
+
+
+@dataclass(frozen=True)
+class Bound:
+    """The range a number written in an attribute must lie in, and its unit."""
+
+    high: float
+    unit: str = ""
+    low: float = 0.0
+    """The lowest value; with ``positive``, values must be greater than it."""
+    positive: bool = True
+
+
+MAX_DIGITS = 18
+"""Most digits of an integer attribute (a seed, a rate, a count) that is read."""
+
+
+def _shown(raw: str) -> str:
+    return repr(raw if len(raw) <= 20 else raw[:17] + "...")
+
+
+def number(doc: XmlDocument, el: etree._Element, name: str, bound: Bound,
+           default: float) -> float | Problem:
+    """Attribute ``name`` (a decimal the schema accepted) as a float within ``bound``,
+    or the problem at the attribute; ``default`` when it is absent.
+
+    A decimal can still be infinite or zero as a float (``1`` and 400 zeros,
+    ``0.`` and 400 zeros), and would crash a run that validated.
+    """
+    raw = el.get(name)
+    if raw is None:
+        return default
+    try:
+        value = float(raw)
+    except ValueError:
+        return doc.problem(el, f"{name}={_shown(raw)} is not a number", attribute=name)
+    unit = f" {bound.unit}" if bound.unit else ""
+    if not value <= bound.high:  # also NaN
+        return doc.problem(el, f"{name}={_shown(raw)} is too large: at most {bound.high:,g}{unit}",
+                           attribute=name)
+    if bound.positive and value <= bound.low:
+        return doc.problem(el, f"{name}={_shown(raw)} must be greater than {bound.low:g}"
+                               + (" (a value this small counts as 0)" if value == bound.low
+                                  and raw.strip("+-0.") else ""), attribute=name)
+    if value < bound.low:
+        return doc.problem(el, f"{name}={_shown(raw)} is too small: at least {bound.low:,g}{unit}",
+                           attribute=name)
+    return value
+
+
+def integer(doc: XmlDocument, el: etree._Element, name: str, high: int,
+            default: int) -> int | Problem:
+    """Attribute ``name`` (a non-negative integer the schema accepted) at most ``high``,
+    or the problem at the attribute; ``default`` when it is absent. Its digits are
+    counted before it is converted (Python refuses more than 4,300 of them)."""
+    raw = el.get(name)
+    if raw is None:
+        return default
+    digits = raw.strip().lstrip("+").lstrip("0") or "0"
+    if not digits.isdigit() or len(digits) > MAX_DIGITS or int(digits) > high:
+        return doc.problem(el, f"{name}={_shown(raw)} is too large: at most {high:,}",
+                           attribute=name)
+    return int(digits)
 
 
 def limit(problems: Iterable[Problem], name: str, total: int | None = None) -> list[Problem]:

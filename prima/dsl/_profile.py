@@ -34,7 +34,16 @@ from prima.catalog import (
 from prima.dsl._elements import elements, flag
 from prima.errors import DocumentError, Problem
 from prima.vocab import MAX_NUMBER, MAX_TEXT, PREDEFINED_EVENTS, Budgets, Value
-from prima.xmlio import XmlDocument, limit, local_name, parse_xml, read_source, validate
+from prima.xmlio import (
+    Bound,
+    XmlDocument,
+    limit,
+    local_name,
+    number,
+    parse_xml,
+    read_source,
+    validate,
+)
 
 NAMESPACE = "urn:prima:robot:1"
 DEFAULT_PROFILE = "home-robot.xml"
@@ -79,17 +88,6 @@ class RobotProfile:
     def catalog(self) -> Catalog:
         """The common Commands plus this robot's own."""
         return self._catalog
-
-
-@dataclass(frozen=True)
-class Bound:
-    """The range a profile's number must lie in, and its unit."""
-
-    high: float
-    unit: str = ""
-    low: float = 0.0
-    """The lowest value; with ``positive``, values must be greater than it."""
-    positive: bool = True
 
 
 MAX_SECONDS = 1_000_000.0
@@ -185,23 +183,11 @@ class _Reader:
         Out of range (infinite, zero where it must be positive, too large):
         a problem at the attribute, and ``default`` so that reading goes on.
         """
-        raw = el.get(name)
-        if raw is None:
+        value = number(self.doc, el, name, FIGURES[(local_name(el), name)], default)
+        if isinstance(value, Problem):
+            self.problems.append(value)
             return default
-        bound = FIGURES[(local_name(el), name)]
-        value = _float(raw)
-        shown = raw if len(raw) <= 20 else raw[:17] + "..."
-        unit = f" {bound.unit}" if bound.unit else ""
-        if value is None or value > bound.high:
-            self.error(el, f"{name}={shown!r} is too large: at most {bound.high:,g}{unit}", name)
-        elif bound.positive and value <= bound.low:
-            self.error(el, f"{name}={shown!r} must be greater than {bound.low:g} "
-                           "(a value this small counts as 0)", name)
-        elif value < bound.low:
-            self.error(el, f"{name}={shown!r} is too small: at least {bound.low:,g}{unit}", name)
-        else:
-            return value
-        return default
+        return value
 
     def read(self) -> RobotProfile:
         """The profile; problems found on the way are in :attr:`problems`."""

@@ -2,16 +2,24 @@
 
 Loading is two-stage, like documents: the XSD checks structure, then the
 meaning checks look at what the schema cannot (unknown places, a wall across a
-graph edge, actions out of time order, a bad regular expression). Every problem
-is a :class:`~prima.errors.Problem` with ``file:line:col``; all of a file's
-problems are raised together as one :class:`~prima.errors.ScenarioError`.
+graph edge, actions out of time order, an answer pattern outside the safe
+subset, a number the simulator cannot use). Every problem is a
+:class:`~prima.errors.Problem` with ``file:line:col``; all of a file's
+problems (at most 50, then a line counting the rest) are raised together as
+one :class:`~prima.errors.ScenarioError`.
+
+Every number is checked as the simulator will use it: a decimal the schema
+accepts can be infinite or zero as a float (``1`` and 400 zeros), and times,
+sizes, speeds and coordinates have the documented ranges of :data:`BOUNDS`.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import re
-from collections.abc import Iterable, Iterator
+import stat
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,12 +30,57 @@ from prima.errors import Problem, ScenarioError
 from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
-from prima.xmlio import XmlDocument, limit, local_name, parse_xml, read_source, validate
+from prima.sim._simulator import SENSE_HZ
+from prima.xmlio import (
+    Bound,
+    XmlDocument,
+    integer,
+    limit,
+    local_name,
+    number,
+    parse_xml,
+    read_source,
+    validate,
+)
 
 __all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
 
 MAP_NS = "urn:prima:map:1"
 SCENARIO_NS = "urn:prima:scenario:1"
+
+MAX_UNTIL = 1_000_000.0
+"""Longest run (s); every time in a scenario is at most this."""
+
+MAX_RATE = 1_000
+"""Most physics steps per simulated second (a multiple of 10)."""
+
+MAX_SEED = 2**63 - 1
+"""Largest random seed."""
+
+MAX_NTH = 1_000_000
+"""Largest ``nth`` of an answer rule."""
+
+MAX_MATCHES = 200
+"""Longest answer pattern (``matches``, characters)."""
+
+_TIME = Bound(MAX_UNTIL, "s", positive=False)
+_COORDINATE = Bound(10_000.0, "m", -10_000.0, positive=False)
+_HEADING = Bound(360.0, "deg", -360.0, positive=False)
+_SPEED = Bound(100.0, "m/s")
+_SIZE = Bound(10_000.0, "m")
+
+BOUNDS: Mapping[str, Bound] = {
+    "until": Bound(MAX_UNTIL, "s"),
+    "at": _TIME, "after": _TIME,
+    "x": _COORDINATE, "y": _COORDINATE,
+    "x1": _COORDINATE, "y1": _COORDINATE, "x2": _COORDINATE, "y2": _COORDINATE,
+    "heading": _HEADING, "facing": _HEADING,
+    "speed": _SPEED,
+    "distance": _SIZE, "thickness": Bound(100.0, "m"),
+    "noise": Bound(100.0, "m", positive=False),
+    "heading-noise": Bound(360.0, "deg", positive=False),
+}
+"""The range of every number of a scenario or map, by attribute name."""
 
 
 @dataclass(frozen=True)
@@ -96,13 +149,41 @@ def _children(el: etree._Element) -> Iterator[etree._Element]:
     return (c for c in el if isinstance(c.tag, str))
 
 
-def _num(el: etree._Element, name: str, default: float | None = None) -> float | None:
-    value = el.get(name)
-    return default if value is None else float(value)
+class _Numbers:
+    """Reads the numbers of a scenario or map file, collecting their problems."""
+
+    def __init__(self, doc: XmlDocument) -> None:
+        self.doc = doc
+        self.problems: list[Problem] = []
+
+    def get(self, el: etree._Element, name: str, default: float = 0.0) -> float:
+        """Attribute ``name`` within its :data:`BOUNDS` range; ``default`` if absent or bad."""
+        value = number(self.doc, el, name, BOUNDS[name], default)
+        if isinstance(value, Problem):
+            self.problems.append(value)
+            return default
+        return value
+
+    def maybe(self, el: etree._Element, name: str) -> float | None:
+        """Like :meth:`get`, or None when the attribute is absent."""
+        return None if el.get(name) is None else self.get(el, name)
+
+    def whole(self, el: etree._Element, name: str, high: int, default: int) -> int:
+        """A whole number at most ``high``; ``default`` if absent or bad."""
+        value = integer(self.doc, el, name, high, default)
+        if isinstance(value, Problem):
+            self.problems.append(value)
+            return default
+        return value
 
 
-def _f(el: etree._Element, name: str) -> float:
-    return float(el.get(name, "0"))
+def _unusable(path: Path) -> str | None:
+    """Why a file a scenario names cannot be read (missing, not a regular file), or None."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return "not found"
+    return None if stat.S_ISREG(mode) else "is not a regular file"
 
 
 def _text(el: etree._Element) -> str:
@@ -119,15 +200,16 @@ def load_map(path: str | Path) -> WorldMap:
     places: list[Place] = []
     edges: list[tuple[str, str]] = []
     areas: list[Area] = []
-    problems: list[Problem] = []
+    num = _Numbers(doc)
+    problems = num.problems
     place_at: dict[str, etree._Element] = {}
     area_names: set[str] = set()
     edge_els: list[etree._Element] = []
     for el in _children(doc.root):
         tag = local_name(el)
         if tag == "wall":
-            walls.append(Wall(_f(el, "x1"), _f(el, "y1"), _f(el, "x2"), _f(el, "y2"),
-                              float(el.get("thickness", "0.1"))))
+            walls.append(Wall(num.get(el, "x1"), num.get(el, "y1"), num.get(el, "x2"),
+                              num.get(el, "y2"), num.get(el, "thickness", 0.1)))
         elif tag == "place":
             name = el.get("name", "")
             if name in place_at:
@@ -136,8 +218,8 @@ def load_map(path: str | Path) -> WorldMap:
                                             attribute="name"))
                 continue
             place_at[name] = el
-            places.append(Place(name, PlaceKind(el.get("kind", "point")), _f(el, "x"),
-                                _f(el, "y"), _num(el, "facing")))
+            places.append(Place(name, PlaceKind(el.get("kind", "point")), num.get(el, "x"),
+                                num.get(el, "y"), num.maybe(el, "facing")))
         elif tag == "edge":
             edge_els.append(el)
         elif tag == "area":
@@ -147,7 +229,7 @@ def load_map(path: str | Path) -> WorldMap:
                                             attribute="name"))
                 continue
             area_names.add(name)
-            areas.append(Area(name, _f(el, "x1"), _f(el, "y1"), _f(el, "x2"), _f(el, "y2")))
+            areas.append(Area(name, *(num.get(el, a) for a in ("x1", "y1", "x2", "y2"))))
     space = _wall_space(walls)
     by_name = {p.name: p for p in places}
     for el in edge_els:
@@ -205,7 +287,8 @@ class _Loader:
         self.replies: list[ReplyRule] = []
         self.doc = doc
         self.path = path
-        self.problems: list[Problem] = []
+        self.num = _Numbers(doc)
+        self.problems = self.num.problems
         self.map: WorldMap | None = None
 
     def bad(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
@@ -231,10 +314,10 @@ class _Loader:
             self.bad(el, f"<{local_name(el)}> needs '{attribute}' or both 'x' and 'y'")
             return Pose(0.0, 0.0)
         place = self.place(el, attribute)
-        heading = _num(el, "heading")
+        heading = self.num.maybe(el, "heading")
         if place is not None:
             return Pose(place.x, place.y, heading if heading is not None else place.facing or 0.0)
-        return Pose(_f(el, "x"), _f(el, "y"), heading or 0.0)
+        return Pose(self.num.get(el, "x"), self.num.get(el, "y"), heading or 0.0)
 
     def load(self) -> Scenario:
         root = self.doc.root
@@ -242,8 +325,9 @@ class _Loader:
         map_el = kids["map"]
         href = map_el.get("href", "")
         map_path = self.path.parent / href
-        if not map_path.is_file():
-            self.bad(map_el, f"map file {href!r} not found (looked for {map_path})", "href")
+        unusable = _unusable(map_path)
+        if unusable is not None:
+            self.bad(map_el, f"map file {href!r} {unusable} (looked for {map_path})", "href")
             raise ScenarioError(self.problems)
         self.map = load_map(map_path)
         robot_el = kids["robot"]
@@ -257,13 +341,15 @@ class _Loader:
             self.exists(zone_el, "ea")
         user = self.user(kids["user"]) if "user" in kids else None
         events, zones = self.environment(root)
+        until, seed, rate = self.num.get(root, "until", 1.0), self.seed(root), self.rate(root)
+        noise = self.num.get(robot_el, "noise")
+        heading_noise = self.num.get(robot_el, "heading-noise")
         if self.problems:
             raise ScenarioError(limit(sorted(self.problems), str(self.path)))
         return Scenario(
             name=root.get("name", self.path.stem), source=str(self.path), map=self.map,
-            robot=robot, until=float(root.get("until", "0")), seed=int(root.get("seed", "0")),
-            rate=self.rate(root), noise=float(robot_el.get("noise", "0")),
-            heading_noise=float(robot_el.get("heading-noise", "0")),
+            robot=robot, until=until, seed=seed, rate=rate, noise=noise,
+            heading_noise=heading_noise,
             profile=robot_el.get("profile"),
             fa=apps.get("fa") if apps is not None else None,
             ea=apps.get("ea") if apps is not None else None,
@@ -271,21 +357,31 @@ class _Loader:
             description=_text(kids["description"]) if "description" in kids else "")
 
     def exists(self, el: etree._Element, attribute: str) -> None:
-        """A file the scenario names (a document, a profile) must exist; it is not opened."""
+        """A file the scenario names (a document, a profile) must be a regular file; it is not
+        opened here (``prima validate`` checks it too)."""
         value = el.get(attribute)
-        if value is not None and not (self.path.parent / value).is_file():
-            self.bad(el, f"file {value!r} not found (looked for {self.path.parent / value})",
+        if value is None:
+            return
+        unusable = _unusable(self.path.parent / value)
+        if unusable is not None:
+            self.bad(el, f"file {value!r} {unusable} (looked for {self.path.parent / value})",
                      attribute)
 
+    def seed(self, root: etree._Element) -> int:
+        return self.num.whole(root, "seed", MAX_SEED, 0)
+
     def rate(self, root: etree._Element) -> int:
-        rate = int(root.get("rate", "50"))
-        if rate % 10:
-            self.bad(root, f"rate must be a multiple of 10 steps per second, not {rate}", "rate")
+        """Steps per second: a multiple of the simulator's sensing rate, at most MAX_RATE."""
+        rate = self.num.whole(root, "rate", MAX_RATE, 50)
+        if rate % SENSE_HZ or rate <= 0:
+            self.bad(root, f"rate must be a multiple of {SENSE_HZ} steps per second, not {rate}",
+                     "rate")
+            return 50
         return rate
 
     def user(self, el: etree._Element) -> UserScript:
         start = self.where(el)
-        speed = float(el.get("speed", "0.3"))
+        speed = self.num.get(el, "speed", 0.3)
         actions: list[TimedAction] = []
         answers: list[AnswerRule] = []
         last = -math.inf
@@ -294,7 +390,7 @@ class _Loader:
             if tag == "answer":
                 answers.append(self.answer(child))
                 continue
-            at = float(child.get("at", "0"))
+            at = self.num.get(child, "at")
             if at < last:
                 self.bad(child, f"<{tag}> at {at:g} s comes after an action at {last:g} s; "
                                 "list the user's actions in time order", "at")
@@ -309,10 +405,11 @@ class _Loader:
                     self.bad(child, f"<{tag}> needs 'to' (a place) or both 'x' and 'y'")
                 found = self.place(child, "to")
                 place = found.name if found is not None else None
+            num = self.num
             actions.append(TimedAction(
                 at=at, action=kind, text=child.get("text"), place=place,
-                x=_num(child, "x"), y=_num(child, "y"), speed=_num(child, "speed"),
-                distance=float(child.get("distance", "1.0"))))
+                x=num.maybe(child, "x"), y=num.maybe(child, "y"), speed=num.maybe(child, "speed"),
+                distance=num.get(child, "distance", 1.0)))
         return UserScript(start, speed, tuple(actions), tuple(answers))
 
     def answer(self, el: etree._Element) -> AnswerRule:
@@ -320,15 +417,20 @@ class _Loader:
         if contains is not None and pattern is not None:
             self.bad(el, "give either 'contains' or 'matches', not both", "matches")
         if pattern is not None:
-            try:
-                re.compile(pattern)
-            except re.error as exc:
-                self.bad(el, f"bad regular expression: {exc.msg}", "matches")
+            fault = safe_pattern(pattern)
+            if fault is None:
+                try:  # never expected: the subset is made of valid regular expressions
+                    re.compile(pattern)
+                except re.error as exc:
+                    fault = 0, f"matches: bad regular expression: {exc.msg}"
+            if fault is not None:
+                index, message = fault
+                self.problems.append(self.doc.problem(el, message, attribute="matches",
+                                                      index=index))
                 pattern = None
-        nth = el.get("nth")
+        nth = self.num.whole(el, "nth", MAX_NTH, 1) if el.get("nth") is not None else None
         return AnswerRule(say=el.get("say"), contains=contains, pattern=pattern,
-                          after=float(el.get("after", "1.0")),
-                          nth=int(nth) if nth is not None else None)
+                          after=self.num.get(el, "after", 1.0), nth=nth)
 
     def environment(self, root: etree._Element) -> tuple[tuple[ScheduledEvent, ...],
                                                           tuple[Zone, ...]]:
@@ -339,7 +441,7 @@ class _Loader:
         for el in _children(root):
             tag = local_name(el)
             if tag in ("message", "sound", "event"):
-                at = float(el.get("at", "0"))
+                at = self.num.get(el, "at")
                 if at < last:
                     self.bad(el, f"<{tag}> at {at:g} s comes after one at {last:g} s; list "
                                  "messages, sounds and events in time order", "at")
@@ -354,7 +456,7 @@ class _Loader:
                     events.append(ScheduledEvent(at, el.get("name", ""), data))
             elif tag == "reply":
                 self.replies.append(ReplyRule(el.get("to", ""), el.get("text", ""),
-                                              float(el.get("after", "1.0")), el.get("contains")))
+                                              self.num.get(el, "after", 1.0), el.get("contains")))
             elif tag == "zone":
                 zone = self.zone(el)
                 if zone is not None:
@@ -381,7 +483,46 @@ class _Loader:
         if any(v is None for v in rect):
             self.bad(el, "a zone needs 'area' or all of x1, y1, x2, y2")
             return None
-        return Zone(name, ea, Area(name, *(float(v or 0) for v in rect)))
+        return Zone(name, ea, Area(name, *(self.num.get(el, a) for a in ("x1", "y1", "x2", "y2"))))
+
+
+_FORBIDDEN = {"*": "repetition", "+": "repetition", "?": "repetition", "{": "repetition",
+              "}": "repetition", "(": "a group", ")": "a group", "[": "a character class",
+              "]": "a character class"}
+
+
+def safe_pattern(pattern: str) -> tuple[int, str] | None:
+    """Where and why ``pattern`` is outside the safe subset of regular expressions, or None.
+
+    The subset: alternatives separated by ``|``, each literal text in which
+    ``.`` is any character, ``\\b`` a word boundary, ``\\d`` ``\\w`` ``\\s`` a digit,
+    word character or space, a backslash escapes punctuation, and ``^`` and
+    ``$`` anchor at the start and end of an alternative. With no repetition,
+    groups or classes, each alternative matches a fixed number of characters
+    and ``re.search`` never backtracks: its cost is the prompt's length times
+    the pattern's, at most :data:`MAX_MATCHES` characters.
+    """
+    if len(pattern) > MAX_MATCHES:
+        return MAX_MATCHES, f"matches: longer than {MAX_MATCHES} characters"
+    i, n, first = 0, len(pattern), True
+    while i < n:
+        ch = pattern[i]
+        if ch == "\\":
+            escaped = pattern[i + 1 : i + 2]
+            if not escaped or (escaped.isalnum() and escaped not in "bdws"):
+                return i, ("matches: a backslash must escape punctuation or be \\b, \\d, \\w "
+                           "or \\s")
+            i, first = i + 2, False
+            continue
+        if ch in _FORBIDDEN:
+            return i, (f"matches: {_FORBIDDEN[ch]} ({ch!r}) is not in the safe subset of "
+                       "regular expressions (docs/scenarios.md)")
+        if (ch == "^" and not first) or (ch == "$" and pattern[i + 1 : i + 2] not in ("", "|")):
+            return i, f"matches: {ch!r} anchors only at the start ('^') or end ('$') of an " \
+                      "alternative"
+        first = ch == "|"
+        i += 1
+    return None
 
 
 def load_scenario(path: str | Path) -> Scenario:
