@@ -15,8 +15,16 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import TextIO
 
 from prima import __version__
-from prima.dsl import Checker, RobotProfile, collect, default_profile, load_profile, validate_paths
-from prima.errors import LocatedError, PrimaError, Problem
+from prima.dsl import (
+    Checker,
+    Header,
+    RobotProfile,
+    Validation,
+    collect,
+    default_profile,
+    load_profile,
+)
+from prima.errors import LocatedError, PrimaError, Problem, Severity
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
 
@@ -110,20 +118,77 @@ def _usage(command: str, message: str, err: TextIO) -> int:
     return EXIT_USAGE
 
 
-def _scenario_checkers() -> dict[str, Checker]:
-    """Scenario and map files are the simulator's; the CLI joins both worlds."""
+def _problems(load: Callable[[Path], object], path: Path) -> list[Problem]:
+    try:
+        load(path)
+    except LocatedError as exc:
+        return list(exc.problems)
+    return []
+
+
+def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker]:
+    """Scenario and map files are the simulator's; the CLI joins both worlds.
+
+    A scenario's check also checks every file it names, each once in the whole
+    validation: its map, its robot profile, and its FA, EA and zone EAs against
+    that profile (``robot``: the ``--robot`` profile instead, as ``prima run``
+    does), and that each application runs in its slot.
+    """
     from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
-    def checker(load: Callable[[Path], object]) -> Checker:
-        def check(path: Path) -> list[Problem]:
-            try:
-                load(path)
-            except LocatedError as exc:
-                return list(exc.problems)
-            return []
-        return check
+    def check_scenario(path: Path) -> list[Problem]:
+        problems = _problems(load_scenario, path)
+        own = [p for p in problems if Path(p.file).resolve() == path.resolve()]
+        return own + _check_named(validation, path, robot)  # the map's problems: its own check
 
-    return {SCENARIO_NS: checker(load_scenario), MAP_NS: checker(load_map)}
+    return {SCENARIO_NS: check_scenario, MAP_NS: lambda path: _problems(load_map, path)}
+
+
+_SLOTS = {"fa": "fa", "ea": "ea", "zone": "ea"}
+"""A scenario's reference role -> the kind of application that runs there."""
+
+
+def _check_named(validation: Validation, scenario: Path, robot: bool) -> list[Problem]:
+    """Check the files ``scenario`` names; the problems of the scenario itself (an
+    application in the wrong slot, two applications of one name) are returned."""
+    from prima.sim import scenario_references
+
+    refs = [r for r in scenario_references(scenario) if r.path.is_file()]  # else: not found
+    profile = validation.profile
+    for ref in refs:
+        if ref.role == "map":
+            validation.add(ref.path)
+        elif ref.role == "profile":
+            named = validation.robot(ref.path)
+            if not robot:
+                profile = named
+    if profile is None:  # the named profile has errors: its documents wait until it is fixed
+        return []
+    out: list[Problem] = []
+    fa_name: str | None = None
+    for ref in (r for r in refs if r.role in _SLOTS):
+        header = validation.document(ref.path, profile)
+        if header is None:
+            continue
+        message = _slot_fault(ref.role, ref.value, header, fa_name)
+        if message:
+            out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR, message))
+        elif ref.role == "fa":
+            fa_name = header.name
+    return out
+
+
+def _slot_fault(role: str, written: str, header: Header, fa_name: str | None) -> str | None:
+    """What ``prima run`` would refuse about this application in this slot, if anything."""
+    slot = _SLOTS[role]
+    if header.kind in _SLOTS.values() and header.kind != slot:
+        return (f"'{written}' is an {header.kind.upper()} (kind=\"{header.kind}\"); "
+                f"it cannot run as the {slot.upper()}")
+    if role != "fa" and header.name == fa_name:
+        whose = "the EA" if role == "ea" else "this zone's EA"
+        return (f"the FA and {whose} are both named '{header.name}'; each application "
+                "needs a name of its own")
+    return None
 
 
 def _profile(path: str | None) -> RobotProfile:
@@ -135,7 +200,9 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         files = collect(args.paths)
     except FileNotFoundError as exc:
         return _usage("validate", f"no such file or folder: {exc}", err)
-    report = validate_paths(files, _profile(args.robot), _scenario_checkers())
+    validation = Validation(_profile(args.robot))
+    validation.checkers.update(_scenario_checkers(validation, robot=args.robot is not None))
+    report = validation.run(files)
     if not report.files:
         return _usage("validate", f"no PRIMA files in {' '.join(args.paths)}", err)
     if args.format == "json":

@@ -8,7 +8,8 @@ on) are private. In the direction data flows:
 - robot profiles: :func:`load_profile`, :func:`parse_profile`,
   :func:`profile_from_xml`, :func:`default_profile` give a :class:`RobotProfile`;
 - validation of files and folders, as ``prima validate`` does it:
-  :func:`collect`, :func:`check_file`, :func:`validate_paths` give a :class:`Report`;
+  :func:`collect`, :func:`check_file`, :func:`validate_paths` and
+  :class:`Validation` (each file once) give a :class:`Report`;
 - the model the interpreter runs (:class:`Document`, :class:`State`,
   :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`, with
   :func:`words` and :func:`match_pattern` for its answers);
@@ -68,8 +69,10 @@ from prima.dsl._profile import (
 )
 from prima.dsl._validate import (
     Checker,
+    Header,
     PathNotFoundError,
     Report,
+    Validation,
     check_file,
     collect,
     root_namespace,
@@ -96,6 +99,7 @@ __all__ = [
     "Grammar",
     "Handler",
     "HandlerKind",
+    "Header",
     "If",
     "Loc",
     "Log",
@@ -110,6 +114,7 @@ __all__ = [
     "StartTimer",
     "State",
     "StreamBlock",
+    "Validation",
     "Variable",
     "check_document",
     "check_file",

@@ -43,7 +43,8 @@ from prima.xmlio import (
     validate,
 )
 
-__all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
+__all__ = ["MAP_NS", "SCENARIO_NS", "Reference", "Scenario", "load_map", "load_scenario",
+           "scenario_references"]
 
 MAP_NS = "urn:prima:map:1"
 SCENARIO_NS = "urn:prima:scenario:1"
@@ -523,6 +524,47 @@ def safe_pattern(pattern: str) -> tuple[int, str] | None:
         first = ch == "|"
         i += 1
     return None
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A file a scenario names, and where it names it."""
+
+    role: str
+    """``map``, ``profile``, ``fa``, ``ea`` (the EA from the start) or ``zone`` (a zone's EA)."""
+    path: Path
+    """The file: the scenario's folder joined with ``value`` (normalised, not resolved)."""
+    value: str
+    """The path as the scenario writes it."""
+    line: int
+    col: int
+    """Where the attribute's value is written in the scenario file."""
+
+
+_REFERENCES = (("map", "href", "map"), ("robot", "profile", "profile"), ("apps", "fa", "fa"),
+               ("apps", "ea", "ea"), ("zone", "ea", "zone"))
+"""(element, attribute, role) of every file a scenario may name."""
+
+
+def scenario_references(path: str | Path) -> list[Reference]:
+    """The files a scenario names, in document order; read from its XML alone, so that
+    they can be checked even when the scenario itself has errors. Empty if it cannot be
+    read or parsed, or is not a scenario."""
+    path = Path(path)
+    try:
+        doc = parse_xml(read_source(path, ScenarioError), str(path), ScenarioError)
+    except ScenarioError:
+        return []
+    if etree.QName(doc.root).namespace != SCENARIO_NS:
+        return []
+    found = []
+    for el in _children(doc.root):
+        for tag, attribute, role in _REFERENCES:
+            value = el.get(attribute)
+            if local_name(el) == tag and value:
+                named = Path(os.path.normpath(path.parent / value))
+                found.append(Reference(role, named, value, *doc.where.attribute(el, attribute)))
+    return found
 
 
 def load_scenario(path: str | Path) -> Scenario:
