@@ -15,11 +15,12 @@ sizes, speeds and coordinates have the documented ranges of :data:`BOUNDS`.
 
 from __future__ import annotations
 
+import heapq
 import math
 import os
 import re
 import stat
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -233,12 +234,13 @@ def load_map(path: str | Path) -> WorldMap:
             areas.append(Area(name, *(num.get(el, a) for a in ("x1", "y1", "x2", "y2"))))
     space = _wall_space(walls)
     by_name = {p.name: p for p in places}
+    known = _known(by_name)  # once: a map may name thousands of unknown places
     for el in edge_els:
         a, b = el.get("from", ""), el.get("to", "")
         bad = False
         for attr, name in (("from", a), ("to", b)):
             if name not in by_name:
-                problems.append(doc.problem(el, f"unknown place {name!r}{_known(by_name)}",
+                problems.append(doc.problem(el, f"unknown place {name!r}{known}",
                                             attribute=attr))
                 bad = True
         if bad:
@@ -269,7 +271,7 @@ def _wall_space(walls: list[Wall]) -> pymunk.Space:
 
 def _known(names: Iterable[str]) -> str:
     """A hint listing up to 12 of ``names`` (empty if there are none)."""
-    shown = sorted(names)
+    shown = heapq.nsmallest(13, names)
     if not shown:
         return ""
     more = "" if len(shown) <= 12 else ", ..."
@@ -291,6 +293,23 @@ class _Loader:
         self.num = _Numbers(doc)
         self.problems = self.num.problems
         self.map: WorldMap | None = None
+        self._hints: dict[str, str] = {}
+        self._areas: dict[str, Area] | None = None
+
+    def hint(self, what: str, names: Callable[[], Iterable[str]]) -> str:
+        """:func:`_known` of ``names``, computed once per ``what`` (a scenario may name
+        thousands of unknown places)."""
+        if what not in self._hints:
+            self._hints[what] = _known(names())
+        return self._hints[what]
+
+    def area(self, name: str) -> Area | None:
+        """The map's first area called ``name`` (looked up, not searched)."""
+        if self._areas is None:
+            self._areas = {}
+            for a in self.map.areas if self.map is not None else ():
+                self._areas.setdefault(a.name, a)
+        return self._areas.get(name)
 
     def bad(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
         self.problems.append(self.doc.problem(el, message, attribute=attribute))
@@ -301,9 +320,9 @@ class _Loader:
             return None
         place = self.map.place(name)
         if place is None:
-            known = (p.name for p in self.map.places)
-            self.bad(el, f"unknown place {name!r} on map {self.map.name!r}{_known(known)}",
-                     attribute)
+            places = self.map.places
+            known = self.hint("places", lambda: (p.name for p in places))
+            self.bad(el, f"unknown place {name!r} on map {self.map.name!r}{known}", attribute)
         return place
 
     def where(self, el: etree._Element, attribute: str = "place") -> Pose:
@@ -475,10 +494,11 @@ class _Loader:
             if any(v is not None for v in rect):
                 self.bad(el, "give either 'area' or x1, y1, x2, y2, not both", "area")
                 return None
-            area = self.map.area(area_name) if self.map is not None else None
+            area = self.area(area_name)
             if area is None:
-                known = [a.name for a in self.map.areas] if self.map is not None else []
-                self.bad(el, f"unknown area {area_name!r}{_known(known)}", "area")
+                areas = self.map.areas if self.map is not None else ()
+                known = self.hint("areas", lambda: (a.name for a in areas))
+                self.bad(el, f"unknown area {area_name!r}{known}", "area")
                 return None
             return Zone(name, ea, area)
         if any(v is None for v in rect):
