@@ -15,6 +15,7 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import TextIO
 
 from prima import __version__
+from prima.dsl import NAMESPACE as PXML_NS
 from prima.dsl import (
     Checker,
     Header,
@@ -181,6 +182,8 @@ def _check_named(validation: Validation, scenario: Path, robot: bool) -> list[Pr
 def _slot_fault(role: str, written: str, header: Header, fa_name: str | None) -> str | None:
     """What ``prima run`` would refuse about this application in this slot, if anything."""
     slot = _SLOTS[role]
+    if header.namespace != PXML_NS:
+        return f"'{written}' is not a PXML document (its root is in {header.namespace!r})"
     if header.kind in _SLOTS.values() and header.kind != slot:
         return (f"'{written}' is an {header.kind.upper()} (kind=\"{header.kind}\"); "
                 f"it cannot run as the {slot.upper()}")

@@ -197,6 +197,8 @@ def test_each_file_is_checked_once_however_it_is_named(tmp_path: Path) -> None:
      "the FA and the EA are both named 'fa'; each application needs a name of its own"),
     ('<apps fa="fa.pxml"/>', '<zone name="z" ea="twin.pxml" x1="0" y1="0" x2="1" y2="1"/>', 22,
      "the FA and this zone's EA are both named 'fa'"),
+    ('<apps fa="map.xml"/>', "", 13,
+     "'map.xml' is not a PXML document (its root is in 'urn:prima:map:1')"),
 ])
 def test_applications_must_fit_their_slots(tmp_path: Path, apps: str, zones: str, col: int,
                                            message: str) -> None:

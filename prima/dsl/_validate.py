@@ -88,10 +88,12 @@ def root_namespace(data: bytes) -> str | None:
 
 
 class Header(NamedTuple):
-    """What a PXML document's root says: its ``kind`` and ``name`` (as written)."""
+    """What a file's root says: its namespace and, for a PXML document, its ``kind`` and
+    ``name`` (as written; empty otherwise)."""
 
-    kind: str
-    name: str
+    namespace: str
+    kind: str = ""
+    name: str = ""
 
 
 def check_file(path: Path, profile: RobotProfile | None = None,
@@ -107,27 +109,28 @@ def check_file(path: Path, profile: RobotProfile | None = None,
 
 def _check(path: Path, profile: RobotProfile | None, checkers: Mapping[str, Checker] | None,
            skip_unknown: bool) -> tuple[list[Problem] | None, Header | None]:
-    """:func:`check_file`, and the document's header when it is a PXML document."""
+    """:func:`check_file`, and the file's header when its root element could be read."""
     skippable = skip_unknown and path.suffix != ".pxml"
     try:
         data = read_source(path, DocumentError)
     except DocumentError as exc:
         return (None if skippable else list(exc.problems)), None
     namespace = root_namespace(data)
+    header = None if namespace is None else Header(namespace)
     checker = checkers.get(namespace) if checkers and namespace is not None else None
     if checker is not None:
-        return checker(path), None
+        return checker(path), header
     if skippable and namespace not in (PXML_NS, ROBOT_NS):
         return None, None
     try:
         doc = parse_xml(data, str(path), DocumentError)
         if namespace == ROBOT_NS:
             profile_from_xml(doc)
-            return [], None
+            return [], header
     except DocumentError as exc:
-        return list(exc.problems), None
-    header = Header(doc.root.get("kind", ""), doc.root.get("name", "")) \
-        if namespace == PXML_NS else None
+        return list(exc.problems), header
+    if namespace == PXML_NS:
+        header = Header(namespace, doc.root.get("kind", ""), doc.root.get("name", ""))
     return check_parsed(doc, profile)[1], header
 
 
@@ -178,7 +181,7 @@ class Validation:
         self.report.problems[problems_at:problems_at] = problems
 
     def document(self, path: Path, profile: RobotProfile | None = None) -> Header | None:
-        """Check a document another file names (once); its header, if it is a PXML document."""
+        """Check a document another file names (once); its header, if its root could be read."""
         self.add(path, profile=profile)
         return self._headers.get(_key(path))
 
@@ -195,6 +198,8 @@ class Validation:
             if self.claim(path):
                 self.report.problems.extend(problems)
             self._robots[key] = robot
+            if robot is not None:
+                self._headers.setdefault(key, Header(ROBOT_NS))
         return self._robots[key]
 
     def run(self, paths: Iterable[tuple[Path, bool] | Path]) -> Report:
