@@ -16,6 +16,7 @@ from typing import TextIO
 
 from prima import __version__
 from prima.dsl import NAMESPACE as PXML_NS
+from prima.dsl import ROBOT_NAMESPACE as ROBOT_NS
 from prima.dsl import (
     Checker,
     Header,
@@ -24,8 +25,10 @@ from prima.dsl import (
     collect,
     default_profile,
     load_profile,
+    root_namespace,
 )
-from prima.errors import LocatedError, PrimaError, Problem, Severity
+from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
+from prima.xmlio import read_source
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
 
@@ -133,14 +136,16 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
     A scenario's check also checks every file it names, each once in the whole
     validation: its map, its robot profile, and its FA, EA and zone EAs against
     that profile (``robot``: the ``--robot`` profile instead, as ``prima run``
-    does), and that each application runs in its slot.
+    does), and that each names the right kind of file and each application
+    fits its slot.
     """
     from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
     def check_scenario(path: Path) -> list[Problem]:
+        # problems loading the scenario found in its map are the map's own check's
         problems = _problems(load_scenario, path)
         own = [p for p in problems if Path(p.file).resolve() == path.resolve()]
-        return own + _check_named(validation, path, robot)  # the map's problems: its own check
+        return own + _check_named(validation, path, robot, MAP_NS)
 
     return {SCENARIO_NS: check_scenario, MAP_NS: lambda path: _problems(load_map, path)}
 
@@ -149,41 +154,57 @@ _SLOTS = {"fa": "fa", "ea": "ea", "zone": "ea"}
 """A scenario's reference role -> the kind of application that runs there."""
 
 
-def _check_named(validation: Validation, scenario: Path, robot: bool) -> list[Problem]:
-    """Check the files ``scenario`` names; the problems of the scenario itself (an
-    application in the wrong slot, two applications of one name) are returned."""
+def _check_named(validation: Validation, scenario: Path, robot: bool,
+                 map_ns: str) -> list[Problem]:
+    """Check the files ``scenario`` names; the problems of the scenario itself (a file of
+    the wrong kind, an application in the wrong slot, two applications of one name) are
+    returned, located at the attribute that names the file."""
     from prima.sim import scenario_references
 
-    refs = [r for r in scenario_references(scenario) if r.path.is_file()]  # else: not found
+    expected = {"map": (map_ns, "map"), "profile": (ROBOT_NS, "robot profile")}
+    out: list[Problem] = []
+    refs = []
+    for ref in scenario_references(scenario):
+        if not ref.path.is_file():  # the scenario's own check says it is not found
+            continue
+        namespace, what = expected.get(ref.role, (PXML_NS, "PXML document"))
+        found = _namespace(ref.path)
+        if found is not None and found != namespace:
+            out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR,
+                               f"'{ref.value}' is not a {what} (its root is in {found!r})"))
+        else:
+            refs.append(ref)
     profile = validation.profile
     for ref in refs:
         if ref.role == "map":
             validation.add(ref.path)
         elif ref.role == "profile":
             named = validation.robot(ref.path)
-            if not robot:
-                profile = named
+            profile = profile if robot else named
     if profile is None:  # the named profile has errors: its documents wait until it is fixed
-        return []
-    out: list[Problem] = []
+        return out
     fa_name: str | None = None
     for ref in (r for r in refs if r.role in _SLOTS):
         header = validation.document(ref.path, profile)
-        if header is None:
-            continue
-        message = _slot_fault(ref.role, ref.value, header, fa_name)
+        message = None if header is None else _slot_fault(ref.role, ref.value, header, fa_name)
         if message:
             out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR, message))
-        elif ref.role == "fa":
+        elif header is not None and ref.role == "fa":
             fa_name = header.name
     return out
+
+
+def _namespace(path: Path) -> str | None:
+    """The namespace of a file's root element, or None if it cannot be read or parsed."""
+    try:
+        return root_namespace(read_source(path, DocumentError))
+    except DocumentError:
+        return None
 
 
 def _slot_fault(role: str, written: str, header: Header, fa_name: str | None) -> str | None:
     """What ``prima run`` would refuse about this application in this slot, if anything."""
     slot = _SLOTS[role]
-    if header.namespace != PXML_NS:
-        return f"'{written}' is not a PXML document (its root is in {header.namespace!r})"
     if header.kind in _SLOTS.values() and header.kind != slot:
         return (f"'{written}' is an {header.kind.upper()} (kind=\"{header.kind}\"); "
                 f"it cannot run as the {slot.upper()}")

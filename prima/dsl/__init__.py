@@ -59,6 +59,7 @@ from prima.dsl._model import (
     match_pattern,
     words,
 )
+from prima.dsl._profile import NAMESPACE as ROBOT_NAMESPACE
 from prima.dsl._profile import (
     STANDARD_GESTURES,
     RobotProfile,
@@ -82,6 +83,7 @@ from prima.dsl._validate import (
 __all__ = [
     "FUNCTIONS",
     "NAMESPACE",
+    "ROBOT_NAMESPACE",
     "STANDARD_GESTURES",
     "Action",
     "Assign",

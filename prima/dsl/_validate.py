@@ -149,13 +149,16 @@ class Validation:
         self.checkers: dict[str, Checker] = dict(checkers or {})
         self.report = Report()
         self._seen: set[Path] = set()
+        self._checking: set[Path] = set()
+        """Files being checked: a file that names itself (a scenario as its own map) is
+        not checked again from inside its own check."""
         self._headers: dict[Path, Header] = {}
         self._robots: dict[Path, RobotProfile | None] = {}
 
     def claim(self, path: Path) -> bool:
         """Whether ``path`` is still to be checked; if so, it is now counted as checked."""
         key = _key(path)
-        if key in self._seen:
+        if key in self._seen or key in self._checking:
             return False
         self._seen.add(key)
         self.report.files.append(str(path))
@@ -166,12 +169,16 @@ class Validation:
         """Check ``path`` (unless it was already checked); a file found in a folder
         (not ``explicit``) that is not a PRIMA file is skipped."""
         key = _key(path)
-        if key in self._seen:
+        if key in self._seen or key in self._checking:
             return
         # a checker may check the files this one names: this one is reported before them
         files_at, problems_at = len(self.report.files), len(self.report.problems)
-        problems, header = _check(path, profile or self.profile, self.checkers,
-                                  skip_unknown=not explicit)
+        self._checking.add(key)
+        try:
+            problems, header = _check(path, profile or self.profile, self.checkers,
+                                      skip_unknown=not explicit)
+        finally:
+            self._checking.discard(key)
         if problems is None or key in self._seen:
             return
         if header is not None:

@@ -432,6 +432,18 @@ SCENARIOS = [
                   extra=lambda folder: (folder / "zone.pxml").write_text(
                       '<!DOCTYPE p [<!ENTITY a "aaaa">]>' + pxml(STATE))),
          Rejected("DOCTYPE declarations are not allowed", (1, 1), file="zone.pxml")),
+    Case("self-reference", "a scenario naming itself as its map, profile and EA",
+         write("s.xml", '<scenario xmlns="urn:prima:scenario:1" name="s" until="10">\n'
+                        '  <map href="s.xml"/>\n  <apps ea="s.xml"/>\n'
+                        '  <robot x="0" y="0" profile="s.xml"/>\n</scenario>\n'),
+         Rejected("expected a <map> element in namespace 'urn:prima:map:1'", (1, 1))),
+    Case("mutual-reference", "two scenarios naming each other as their maps",
+         write("a.xml", '<scenario xmlns="urn:prima:scenario:1" name="a" until="10">\n'
+                        '  <map href="b.xml"/>\n  <robot x="0" y="0"/>\n</scenario>\n',
+               lambda folder: (folder / "b.xml").write_text(
+                   '<scenario xmlns="urn:prima:scenario:1" name="b" until="10">\n'
+                   '  <map href="a.xml"/>\n  <robot x="0" y="0"/>\n</scenario>\n')),
+         Rejected("'b.xml' is not a map (its root is in 'urn:prima:scenario:1')", 'b.xml"')),
     Case("ea-in-fa-slot", "an EA named as the FA",
          scenario(apps='<apps fa="ea.pxml"/>', extra=app("ea.pxml")),
          Rejected("'ea.pxml' is an EA (kind=\"ea\"); it cannot run as the FA", "ea.pxml")),
