@@ -17,9 +17,21 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import TextIO
 
 from prima import __version__
-from prima.dsl import Checker, RobotProfile, collect, default_profile, load_profile, validate_paths
-from prima.errors import LocatedError, PrimaError, Problem
+from prima.dsl import NAMESPACE as PXML_NS
+from prima.dsl import ROBOT_NAMESPACE as ROBOT_NS
+from prima.dsl import (
+    Checker,
+    Header,
+    RobotProfile,
+    Validation,
+    collect,
+    default_profile,
+    load_profile,
+    root_namespace,
+)
+from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
 from prima.vocab import MAX_RUN_TIME
+from prima.xmlio import read_source
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -196,20 +208,97 @@ def _usage(command: str, message: str, err: TextIO) -> int:
     return EXIT_USAGE
 
 
-def _scenario_checkers() -> dict[str, Checker]:
-    """Scenario and map files are the simulator's; the CLI joins both worlds."""
+def _problems(load: Callable[[Path], object], path: Path) -> list[Problem]:
+    try:
+        load(path)
+    except LocatedError as exc:
+        return list(exc.problems)
+    return []
+
+
+def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker]:
+    """Scenario and map files are the simulator's; the CLI joins both worlds.
+
+    A scenario's check also checks every file it names, each once in the whole
+    validation: its map, its robot profile, and its FA, EA and zone EAs against
+    that profile (``robot``: the ``--robot`` profile instead, as ``prima run``
+    does), and that each names the right kind of file and each application
+    fits its slot.
+    """
     from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
-    def checker(load: Callable[[Path], object]) -> Checker:
-        def check(path: Path) -> list[Problem]:
-            try:
-                load(path)
-            except LocatedError as exc:
-                return list(exc.problems)
-            return []
-        return check
+    def check_scenario(path: Path) -> list[Problem]:
+        # problems loading the scenario found in its map are the map's own check's
+        problems = _problems(load_scenario, path)
+        own = [p for p in problems if Path(p.file).resolve() == path.resolve()]
+        return own + _check_named(validation, path, robot, MAP_NS)
 
-    return {SCENARIO_NS: checker(load_scenario), MAP_NS: checker(load_map)}
+    return {SCENARIO_NS: check_scenario, MAP_NS: lambda path: _problems(load_map, path)}
+
+
+_SLOTS = {"fa": "fa", "ea": "ea", "zone": "ea"}
+"""A scenario's reference role -> the kind of application that runs there."""
+
+
+def _check_named(validation: Validation, scenario: Path, robot: bool,
+                 map_ns: str) -> list[Problem]:
+    """Check the files ``scenario`` names; the problems of the scenario itself (a file of
+    the wrong kind, an application in the wrong slot, two applications of one name) are
+    returned, located at the attribute that names the file."""
+    from prima.sim import scenario_references
+
+    expected = {"map": (map_ns, "map"), "profile": (ROBOT_NS, "robot profile")}
+    out: list[Problem] = []
+    refs = []
+    for ref in scenario_references(scenario):
+        if not ref.path.is_file():  # the scenario's own check says it is not found
+            continue
+        namespace, what = expected.get(ref.role, (PXML_NS, "PXML document"))
+        found = _namespace(ref.path)
+        if found is not None and found != namespace:
+            out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR,
+                               f"'{ref.value}' is not a {what} (its root is in {found!r})"))
+        else:
+            refs.append(ref)
+    profile = validation.profile
+    for ref in refs:
+        if ref.role == "map":
+            validation.add(ref.path)
+        elif ref.role == "profile":
+            named = validation.robot(ref.path)
+            profile = profile if robot else named
+    if profile is None:  # the named profile has errors: its documents wait until it is fixed
+        return out
+    fa_name: str | None = None
+    for ref in (r for r in refs if r.role in _SLOTS):
+        header = validation.document(ref.path, profile)
+        message = None if header is None else _slot_fault(ref.role, ref.value, header, fa_name)
+        if message:
+            out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR, message))
+        elif header is not None and ref.role == "fa":
+            fa_name = header.name
+    return out
+
+
+def _namespace(path: Path) -> str | None:
+    """The namespace of a file's root element, or None if it cannot be read or parsed."""
+    try:
+        return root_namespace(read_source(path, DocumentError))
+    except DocumentError:
+        return None
+
+
+def _slot_fault(role: str, written: str, header: Header, fa_name: str | None) -> str | None:
+    """What ``prima run`` would refuse about this application in this slot, if anything."""
+    slot = _SLOTS[role]
+    if header.kind in _SLOTS.values() and header.kind != slot:
+        return (f"'{written}' is an {header.kind.upper()} (kind=\"{header.kind}\"); "
+                f"it cannot run as the {slot.upper()}")
+    if role != "fa" and header.name == fa_name:
+        whose = "the EA" if role == "ea" else "this zone's EA"
+        return (f"the FA and {whose} are both named '{header.name}'; each application "
+                "needs a name of its own")
+    return None
 
 
 def _profile(path: str | None) -> RobotProfile:
@@ -221,7 +310,9 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         files = collect(args.paths)
     except FileNotFoundError as exc:
         return _usage("validate", f"no such file or folder: {exc}", err)
-    report = validate_paths(files, _profile(args.robot), _scenario_checkers())
+    validation = Validation(_profile(args.robot))
+    validation.checkers.update(_scenario_checkers(validation, robot=args.robot is not None))
+    report = validation.run(files)
     if not report.files:
         return _usage("validate", f"no PRIMA files in {' '.join(args.paths)}", err)
     if args.format == "json":

@@ -3,11 +3,13 @@
 Shared by every loader (documents, robot profiles, scenarios, maps).
 
 Documents come from strangers (an EA is loaded from the building the robot
-visits), so parsing is locked down: no DOCTYPE at all (hence no DTD, no
-external or internal entities, no entity-expansion bombs), no network, a size
-limit and a depth limit. After a successful parse, :class:`SourceMap` scans the
-raw text once to learn where every start tag, attribute value and text content
-begins; lxml itself only knows the line on which a start tag *ends*.
+visits), so parsing is locked down: UTF-8 only, no DOCTYPE at all (hence no
+DTD, no external or internal entities, no entity-expansion bombs), no network,
+only regular files, a size limit and a depth limit. After a successful parse,
+:class:`SourceMap` scans the raw text once to learn where every start tag,
+attribute value and text content begins (lxml itself only knows the line on
+which a start tag *ends*); a lookup costs a binary search, so locating every
+problem of a large file stays linear.
 
 Schema validation (:func:`validate`): libxml2 (through lxml) decides in
 microseconds whether a document is valid; xmlschema, pure Python and about a
@@ -16,14 +18,23 @@ its thorough diagnostics. Each of its errors becomes one line located at the
 element, attribute or unexpected child it is about. Both validators read the
 same shipped schemas, and the test suite checks that they agree on every
 document of the corpus; should they ever disagree, libxml2's own located
-errors are reported, so nothing invalid passes. Each schema is built once per
-process.
+errors are reported, so nothing invalid passes. xmlschema builds every error
+of a document before it yields the first, at about a tenth of a millisecond
+each, so it only diagnoses documents of at most :data:`XMLSCHEMA_NODES`
+elements and attributes; larger ones get libxml2's errors, reworded the same
+way. Each schema is built once per process.
+
+A file reports at most :data:`MAX_PROBLEMS` problems, then one line counting
+the rest (:func:`limit`).
 """
 
 from __future__ import annotations
 
+import os
 import re
-from collections.abc import Callable, Iterator
+import stat
+from bisect import bisect_right
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -38,12 +49,20 @@ if TYPE_CHECKING:
     import xmlschema
 
 __all__ = [
+    "MAX_ATTRIBUTES",
+    "MAX_DIGITS",
     "MAX_BYTES",
     "MAX_DEPTH",
+    "MAX_PROBLEMS",
+    "XMLSCHEMA_NODES",
+    "Bound",
     "Hint",
     "SourceMap",
     "XmlDocument",
+    "integer",
+    "limit",
     "local_name",
+    "number",
     "parse_xml",
     "read_source",
     "schema",
@@ -57,11 +76,24 @@ MAX_BYTES = 1 << 20
 MAX_DEPTH = 64
 """Deepest element nesting accepted."""
 
+MAX_PROBLEMS = 50
+"""Most problems reported for one file; one more line counts the rest."""
+
+MAX_ATTRIBUTES = 64
+"""Most attributes xmlschema is shown on one element (a document with more goes to libxml2)."""
+
+XMLSCHEMA_NODES = 2_000
+"""Largest document (elements plus attributes) xmlschema diagnoses; the largest
+shipped application has about 300."""
+
 _DOCTYPE = re.compile(rb"<!DOCTYPE", re.IGNORECASE)
+_DECLARED = re.compile(rb"""\A(?:\xef\xbb\xbf)?<\?xml[^>]*?\sencoding\s*=\s*["']([^"']*)["']""")
+_UTF8 = frozenset({"utf-8", "utf8"})
 
 
 def _parser() -> etree.XMLParser:
     return etree.XMLParser(
+        encoding="utf-8",
         resolve_entities=False,
         load_dtd=False,
         dtd_validation=False,
@@ -71,15 +103,66 @@ def _parser() -> etree.XMLParser:
     )
 
 
+# ---------------------------------------------------------------- source positions
+
+class _Offsets:
+    """Where each decoded character of an attribute value or a text is written.
+
+    A value reads the same as it is written except at an entity or character
+    reference (``&amp;``: one character, several written), a CR LF line end
+    (one character, two written) and a CDATA section's markup (none written
+    as characters). Only those breaks are kept, so a lookup is a binary search.
+    """
+
+    __slots__ = ("decoded", "raw")
+
+    def __init__(self, text: str, start: int, end: int) -> None:
+        self.decoded = [0]
+        self.raw = [start]
+        done = 0  # decoded characters before ``at``
+        at = start
+        for m in _BREAKS.finditer(text, start, end):
+            done += m.start() - at
+            token = m.group()
+            if token == "<":  # the first child element or comment: the text ends
+                break
+            if token.startswith("<![CDATA["):
+                self._add(done, m.start() + 9)
+                done += len(token) - 12
+            else:
+                done += 1
+            at = m.end()
+            self._add(done, at)
+
+    def _add(self, decoded: int, raw: int) -> None:
+        self.decoded.append(decoded)
+        self.raw.append(raw)
+
+    def offset(self, index: int) -> int:
+        """The offset in the file of decoded character ``index``."""
+        i = bisect_right(self.decoded, index) - 1
+        return self.raw[i] + index - self.decoded[i]
+
+
+_BREAKS = re.compile(r"&[^;<]*;|\r\n|<!\[CDATA\[.*?\]\]>|<", re.S)
+
+
 @dataclass
 class _Place:
     start: int
-    attrs: dict[str, tuple[int, str]] = field(default_factory=dict)
+    attrs: dict[str, tuple[int, int]] = field(default_factory=dict)
+    """Attribute name -> where its raw value starts and ends."""
     content: int = -1
+    offsets: dict[str, _Offsets] = field(default_factory=dict)
+    """Decoded-offset maps, built on first use (attribute name, or "" for the text)."""
 
 
 class SourceMap:
-    """Maps elements, attribute values and text content to 1-based line:col."""
+    """Maps elements, attribute values and text content to 1-based line:col.
+
+    Built in one pass over the text; every lookup is a dictionary access and a
+    binary search, so a file with many problems is located in linear time.
+    """
 
     def __init__(self, text: str, root: etree._Element) -> None:
         self._text = text
@@ -87,17 +170,15 @@ class SourceMap:
         self._elements = list(root.iter(tag=etree.Element))  # keeps proxies alive
         places = _scan_start_tags(text)
         self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places, strict=False))
+        self.nodes = len(places) + sum(len(p.attrs) for p in places)
+        """Elements plus attributes: what schema diagnostics cost."""
+        self.most_attributes = max((len(p.attrs) for p in places), default=0)
+        """The most attributes one element carries."""
 
     def position(self, offset: int) -> tuple[int, int]:
         """Line and column (both 1-based) of a character offset."""
-        lo, hi = 0, len(self._line_starts) - 1
-        while lo < hi:
-            mid = (lo + hi + 1) // 2
-            if self._line_starts[mid] <= offset:
-                lo = mid
-            else:
-                hi = mid - 1
-        return lo + 1, offset - self._line_starts[lo] + 1
+        line = bisect_right(self._line_starts, offset) - 1
+        return line + 1, offset - self._line_starts[line] + 1
 
     def line_text(self, line: int) -> str:
         """The text of a 1-based source line (without its line break)."""
@@ -106,6 +187,13 @@ class SourceMap:
         start = self._line_starts[line - 1]
         end = self._line_starts[line] - 1 if line < len(self._line_starts) else len(self._text)
         return self._text[start:end].rstrip("\r")
+
+    def line_length(self, line: int) -> int:
+        """How many characters a 1-based source line has (without its line break)."""
+        if not 1 <= line <= len(self._line_starts):
+            return 0
+        end = self._line_starts[line] - 1 if line < len(self._line_starts) else len(self._text)
+        return end - self._line_starts[line - 1]
 
     def element(self, el: etree._Element) -> tuple[int, int]:
         """Where the element's start tag begins (its ``<``)."""
@@ -120,31 +208,20 @@ class SourceMap:
         place = self._places.get(el)
         if place is None or name not in place.attrs:
             return self.element(el)
-        start, raw = place.attrs[name]
-        return self.position(start + _raw_index(raw, index))
+        offsets = place.offsets.get(name)
+        if offsets is None:
+            offsets = place.offsets[name] = _Offsets(self._text, *place.attrs[name])
+        return self.position(offsets.offset(index))
 
     def text(self, el: etree._Element, index: int = 0) -> tuple[int, int]:
         """Where character ``index`` of the element's text content is."""
         place = self._places.get(el)
         if place is None or place.content < 0:
             return self.element(el)
-        end = self._text.find("<", place.content)
-        raw = self._text[place.content : end if end >= 0 else len(self._text)]
-        return self.position(place.content + _raw_index(raw, index))
-
-
-def _raw_index(raw: str, index: int) -> int:
-    """Offset in ``raw`` of decoded character ``index`` (entity refs count as one)."""
-    decoded = 0
-    i = 0
-    while i < len(raw) and decoded < index:
-        if raw[i] == "&":
-            end = raw.find(";", i)
-            i = end + 1 if end >= 0 else i + 1
-        else:
-            i += 1
-        decoded += 1
-    return i
+        offsets = place.offsets.get("")
+        if offsets is None:
+            offsets = place.offsets[""] = _Offsets(self._text, place.content, len(self._text))
+        return self.position(offsets.offset(index))
 
 
 _MARKUP = re.compile(
@@ -162,12 +239,12 @@ def _scan_start_tags(text: str) -> list[_Place]:
         if m.group("name") is None:
             continue
         place = _Place(start=m.start(), content=-1 if m.group("empty") else m.end())
-        base = m.start("attrs")
-        for a in _ATTRIBUTE.finditer(m.group("attrs")):
+        for a in _ATTRIBUTE.finditer(text, m.start("attrs"), m.end("attrs")):
             raw_name = a.group(1)
-            name = raw_name.rpartition(":")[2] if not raw_name.startswith("xmlns") else raw_name
+            if raw_name.startswith("xmlns"):  # a namespace declaration, not an attribute
+                continue
             group = 2 if a.group(2) is not None else 3
-            place.attrs[name] = (base + a.start(group), a.group(group))
+            place.attrs[raw_name.rpartition(":")[2]] = (a.start(group), a.end(group))
         places.append(place)
     return places
 
@@ -197,17 +274,129 @@ class XmlDocument:
         return Problem(self.name, line, col, severity, message)
 
 
-def read_source(path: Path, error: type[LocatedError]) -> bytes:
-    """Read a file's bytes, turning OS errors and oversize files into problems."""
+@dataclass(frozen=True)
+class Bound:
+    """The range a number written in an attribute must lie in, and its unit."""
+
+    high: float
+    unit: str = ""
+    low: float = 0.0
+    """The lowest value; with ``positive``, values must be greater than it."""
+    positive: bool = True
+
+
+MAX_DIGITS = 18
+"""Most digits of an integer attribute (a seed, a rate, a count) that is read."""
+
+
+def _shown(raw: str) -> str:
+    return repr(raw if len(raw) <= 20 else raw[:17] + "...")
+
+
+def number(doc: XmlDocument, el: etree._Element, name: str, bound: Bound,
+           default: float) -> float | Problem:
+    """Attribute ``name`` (a decimal the schema accepted) as a float within ``bound``,
+    or the problem at the attribute; ``default`` when it is absent.
+
+    A decimal can still be infinite or zero as a float (``1`` and 400 zeros,
+    ``0.`` and 400 zeros), and would crash a run that validated.
+    """
+    raw = el.get(name)
+    if raw is None:
+        return default
     try:
-        size = path.stat().st_size
-        if size > MAX_BYTES:
-            raise error([Problem(str(path), 1, 1, Severity.ERROR,
-                                 f"file is {size} bytes; the limit is {MAX_BYTES}")])
-        return path.read_bytes()
+        value = float(raw)
+    except ValueError:
+        return doc.problem(el, f"{name}={_shown(raw)} is not a number", attribute=name)
+    unit = f" {bound.unit}" if bound.unit else ""
+    if not value <= bound.high:  # also NaN
+        return doc.problem(el, f"{name}={_shown(raw)} is too large: at most {bound.high:,g}{unit}",
+                           attribute=name)
+    if bound.positive and value <= bound.low:
+        return doc.problem(el, f"{name}={_shown(raw)} must be greater than {bound.low:g}"
+                               + (" (a value this small counts as 0)" if value == bound.low
+                                  and raw.strip("+-0.") else ""), attribute=name)
+    if value < bound.low:
+        return doc.problem(el, f"{name}={_shown(raw)} is too small: at least {bound.low:,g}{unit}",
+                           attribute=name)
+    return value
+
+
+def integer(doc: XmlDocument, el: etree._Element, name: str, high: int,
+            default: int) -> int | Problem:
+    """Attribute ``name`` (a non-negative integer the schema accepted) at most ``high``,
+    or the problem at the attribute; ``default`` when it is absent. Its digits are
+    counted before it is converted (Python refuses more than 4,300 of them)."""
+    raw = el.get(name)
+    if raw is None:
+        return default
+    digits = raw.strip().lstrip("+").lstrip("0") or "0"
+    if not digits.isdigit() or len(digits) > MAX_DIGITS or int(digits) > high:
+        return doc.problem(el, f"{name}={_shown(raw)} is too large: at most {high:,}",
+                           attribute=name)
+    return int(digits)
+
+
+def limit(problems: Iterable[Problem], name: str, total: int | None = None) -> list[Problem]:
+    """At most :data:`MAX_PROBLEMS` of ``problems``, then one line counting the rest.
+
+    ``total`` is how many there are when ``problems`` holds only the first ones
+    (at least ``MAX_PROBLEMS + 1`` of them); the counting line is at ``name:1:1``.
+    """
+    found = list(problems)
+    total = len(found) if total is None else max(total, len(found))
+    if total <= MAX_PROBLEMS:
+        return found
+    rest = found[MAX_PROBLEMS:]
+    errors = any(p.severity is Severity.ERROR for p in rest) or len(found) < total
+    more = total - MAX_PROBLEMS
+    return [*found[:MAX_PROBLEMS], Problem(
+        name, 1, 1, Severity.ERROR if errors else Severity.WARNING,
+        f"... and {more:,} more problem{'s' if more != 1 else ''} "
+        f"(a file reports at most {MAX_PROBLEMS})")]
+
+
+# ---------------------------------------------------------------- reading and parsing
+
+def _kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a directory"
+    if stat.S_ISFIFO(mode):
+        return "a named pipe"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    return "not a regular file"
+
+
+def read_source(path: Path, error: type[LocatedError]) -> bytes:
+    """Read a regular file's bytes, at most :data:`MAX_BYTES` of them.
+
+    A named pipe, a device or a directory is refused before it is opened (and
+    it is opened without blocking, should it change in between), and no more
+    than the limit plus one byte is read, so a file that grows cannot get past
+    the limit. Every failure is a problem at ``path:1:1``.
+    """
+    def fail(message: str) -> LocatedError:
+        return error([Problem(str(path), 1, 1, Severity.ERROR, message)])
+
+    try:
+        info = os.stat(path)
+        if not stat.S_ISREG(info.st_mode):
+            raise fail(f"{_kind(info.st_mode)}: PRIMA reads only regular files")
+        if info.st_size > MAX_BYTES:
+            raise fail(f"file is {info.st_size} bytes; the limit is {MAX_BYTES}")
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+        with os.fdopen(fd, "rb") as f:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+                raise fail("not a regular file: PRIMA reads only regular files")
+            data = f.read(MAX_BYTES + 1)
     except OSError as exc:
-        raise error([Problem(str(path), 1, 1, Severity.ERROR,
-                             f"cannot read file: {exc.strerror or exc}")]) from exc
+        raise fail(f"cannot read file: {exc.strerror or exc}") from exc
+    if len(data) > MAX_BYTES:
+        raise fail(f"file is more than {MAX_BYTES} bytes; the limit is {MAX_BYTES}")
+    return data
 
 
 def parse_xml(data: bytes, name: str, error: type[LocatedError]) -> XmlDocument:
@@ -220,6 +409,11 @@ def parse_xml(data: bytes, name: str, error: type[LocatedError]) -> XmlDocument:
         raise fail(1, 1, f"document is {len(data)} bytes; the limit is {MAX_BYTES}")
     if data.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in data[:4]:
         raise fail(1, 1, "PRIMA documents must be UTF-8 (this one looks like UTF-16 or UTF-32)")
+    declared = _DECLARED.match(data)
+    if declared and declared.group(1).decode("ascii", "replace").lower() not in _UTF8:
+        col = declared.start(1) + 1 - (3 if data.startswith(b"\xef\xbb\xbf") else 0)
+        raise fail(1, col, "PRIMA documents must be UTF-8, not "
+                           f"{declared.group(1).decode('ascii', 'replace')!r}")
     doctype = _DOCTYPE.search(data)
     if doctype:
         before = data[: doctype.start()]
@@ -238,11 +432,10 @@ def parse_xml(data: bytes, name: str, error: type[LocatedError]) -> XmlDocument:
     if info.doctype or info.internalDTD is not None:  # type: ignore[union-attr]
         raise fail(1, 1, "DOCTYPE declarations are not allowed "
                          "(no DTDs or entities in PRIMA documents)")
-    encoding = info.encoding or "utf-8"
     try:
-        text = data.decode(encoding)
-    except (LookupError, UnicodeDecodeError) as exc:
-        raise fail(1, 1, f"cannot decode document as {encoding}") from exc
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:  # lxml accepted it, so never expected
+        raise fail(1, 1, "cannot decode document as UTF-8") from exc
     doc = XmlDocument(name=name, root=root, where=SourceMap(text, root))
     _check_depth(doc, lambda el, msg: error([doc.problem(el, msg)]))
     return doc
@@ -308,53 +501,139 @@ def _clean(text: str) -> str:
 
 
 def validate(doc: XmlDocument, schema_name: str, hint: Hint | None = None) -> list[Problem]:
-    """Every schema violation of ``doc`` as a located problem."""
+    """Every schema violation of ``doc`` as a located problem (at most :data:`MAX_PROBLEMS`,
+    then one line counting the rest)."""
     checker = verdict_schema(schema_name)
     if checker.validate(doc.root.getroottree()):
         return []
-    problems = list(_problems(doc, schema(schema_name), hint))
-    if problems:
-        return problems
-    # lxml-stubs 0.5 declare _ErrorLog without __iter__; it yields _LogEntry objects
-    return [Problem(doc.name, e.line, max(e.column, 1), Severity.ERROR,
-                    f"schema: {_clean(e.message)}")
-            for e in checker.error_log]  # type: ignore[attr-defined]
+    # lxml-stubs 0.5 declare _ErrorLog without __iter__ or __len__; it holds _LogEntry objects
+    log: Sequence[etree._LogEntry] = checker.error_log  # type: ignore[assignment]
+    small = doc.where.nodes <= XMLSCHEMA_NODES and doc.where.most_attributes <= MAX_ATTRIBUTES
+    if small:
+        problems = list(_problems(doc, schema(schema_name), hint))
+        if problems:
+            return limit(problems, doc.name)
+    return _libxml2_problems(doc, log, hint)
 
 
 def _problems(doc: XmlDocument, xsd: xmlschema.XMLSchema, hint: Hint | None) -> Iterator[Problem]:
+    children: dict[etree._Element, list[etree._Element]] = {}
     for err in xsd.iter_errors(doc.root):
         el = err.elem if isinstance(err.elem, etree._Element) else doc.root
-        tag = f"<{local_name(el)}>"
         reason = _clean(err.reason or str(err))
-        m = _ATTR_VALUE.match(reason)
-        if m:
-            name = m.group("name")
-            value = el.get(name, "")
-            better = hint(el, name, value) if hint else None
-            message = better or _clean(m.group("rest")) or "invalid value"
-            yield doc.problem(el, f"{tag}: attribute {name}={value!r}: {message}", attribute=name)
-            continue
-        m = _NOT_ALLOWED.match(reason)
-        if m:
-            yield doc.problem(el, f"{tag}: attribute '{m.group('name')}' is not allowed here",
-                              attribute=m.group("name"))
-            continue
-        m = _MISSING.search(reason)
-        if m:
-            yield doc.problem(el, f"{tag}: missing required attribute '{m.group('name')}'")
-            continue
         m = _UNEXPECTED.search(reason)
         if m:
-            children = [c for c in el if isinstance(c.tag, str)]
-            pos = int(m.group("pos")) - 1
-            child = children[pos] if 0 <= pos < len(children) else el
-            child_tag = local_name(child) if child is not el else _clean(m.group("tag"))
-            where = "at the top of the document" if el is doc.root else f"inside {tag}"
-            yield doc.problem(child, f"<{child_tag}> is not allowed {where}")
+            if el not in children:
+                children[el] = [c for c in el if isinstance(c.tag, str)]
+            yield _unexpected(doc, el, children[el], int(m.group("pos")) - 1,
+                              _clean(m.group("tag")))
             continue
-        if "is not complete" in reason:
-            expected = re.search(r"Tag (.*) expected", reason)
-            wanted = f": expected {expected.group(1)}" if expected else ""
-            yield doc.problem(el, f"{tag} is incomplete{wanted}")
+        yield _reworded(doc, el, reason, hint)
+
+
+def _unexpected(doc: XmlDocument, parent: etree._Element, children: list[etree._Element],
+                pos: int, tag: str) -> Problem:
+    """A child element the parent's content does not allow."""
+    child = children[pos] if 0 <= pos < len(children) else parent
+    child_tag = local_name(child) if child is not parent else tag
+    where = "at the top of the document" if parent is doc.root else \
+        f"inside <{local_name(parent)}>"
+    return doc.problem(child, f"<{child_tag}> is not allowed {where}")
+
+
+def _reworded(doc: XmlDocument, el: etree._Element, reason: str, hint: Hint | None) -> Problem:
+    """One of xmlschema's reasons about ``el`` (its attributes or its content), reworded."""
+    tag = f"<{local_name(el)}>"
+    m = _ATTR_VALUE.match(reason)
+    if m:
+        return _bad_value(doc, el, m.group("name"), _clean(m.group("rest")), hint)
+    m = _NOT_ALLOWED.match(reason)
+    if m:
+        return doc.problem(el, f"{tag}: attribute '{m.group('name')}' is not allowed here",
+                           attribute=m.group("name"))
+    m = _MISSING.search(reason)
+    if m:
+        return doc.problem(el, f"{tag}: missing required attribute '{m.group('name')}'")
+    if "is not complete" in reason:
+        expected = re.search(r"Tag (.*) expected", reason)
+        wanted = f": expected {expected.group(1)}" if expected else ""
+        return doc.problem(el, f"{tag} is incomplete{wanted}")
+    return doc.problem(el, f"{tag}: {reason}")
+
+
+def _bad_value(doc: XmlDocument, el: etree._Element, name: str, reason: str,
+               hint: Hint | None) -> Problem:
+    value = el.get(name, "")
+    better = hint(el, name, value) if hint else None
+    shown = value if len(value) <= 60 else value[:57] + "..."
+    return doc.problem(el, f"<{local_name(el)}>: attribute {name}={shown!r}: "
+                           f"{better or reason or 'invalid value'}", attribute=name)
+
+
+# libxml2's wording, e.g. "Element '{urn:prima:pxml:1}state', attribute 'x': The
+# attribute 'x' is not allowed." (the element is found from the entry's path)
+_LIBXML2 = re.compile(r"^Element '(?P<tag>[^']*)'(?:, attribute '(?P<attr>[^']*)')?: (?P<rest>.*)$",
+                      re.S)
+_LIBXML2_MISSING = re.compile(r"The attribute '(?P<name>[^']+)' is required but missing")
+_LIBXML2_EXPECTED = re.compile(r"Expected is (?:one of )?\( (?P<tags>.*?) \)")
+_STEP = re.compile(r"(?P<name>[^/\[]+)(?:\[(?P<pos>\d+)\])?")
+
+
+def _libxml2_problems(doc: XmlDocument, log: Sequence[etree._LogEntry],
+                      hint: Hint | None) -> list[Problem]:
+    """libxml2's own errors, located and worded like xmlschema's (large documents)."""
+    found = [_from_libxml2(doc, entry, hint) for entry in log[: MAX_PROBLEMS + 1]]
+    return limit(found, doc.name, len(log))
+
+
+def _from_libxml2(doc: XmlDocument, entry: etree._LogEntry, hint: Hint | None) -> Problem:
+    el = _at_path(doc.root, entry.path or "")
+    m = _LIBXML2.match(_clean(entry.message or ""))
+    if el is None or m is None:
+        return Problem(doc.name, max(entry.line, 1), max(entry.column, 1), Severity.ERROR,
+                       f"schema: {_clean(entry.message or '')}")
+    attr, rest = m.group("attr"), m.group("rest")
+    if attr is not None and "is not allowed" in rest:
+        return doc.problem(el, f"<{local_name(el)}>: attribute '{attr}' is not allowed here",
+                           attribute=attr)
+    if attr is not None:
+        return _bad_value(doc, el, attr, rest.rstrip("."), hint)
+    missing = _LIBXML2_MISSING.search(rest)
+    if missing:
+        return doc.problem(el, f"<{local_name(el)}>: missing required attribute "
+                               f"'{missing.group('name')}'")
+    expected = _LIBXML2_EXPECTED.search(rest)
+    if "This element is not expected" in rest:
+        parent = el.getparent()
+        if parent is not None:
+            return _unexpected(doc, parent, [el], 0, local_name(el))
+    if "Missing child element" in rest and expected:
+        return doc.problem(el, f"<{local_name(el)}> is incomplete: expected "
+                               f"{expected.group('tags')}")
+    return doc.problem(el, f"<{local_name(el)}>: {rest}")
+
+
+def _at_path(root: etree._Element, path: str) -> etree._Element | None:
+    """The element libxml2 names by ``path`` (``/*/*[3]``, ``/p:pxml/p:state[2]``), or None.
+
+    libxml2 writes ``*`` for an element in a default namespace, counting every
+    element sibling; a name (``p:state``) counts the siblings of that name.
+    """
+    steps = path.split("/")[1:]
+    if not steps:
+        return None
+    el: etree._Element | None = root
+    for depth, step in enumerate(steps):
+        m = _STEP.fullmatch(step)
+        if m is None or el is None:
+            return None
+        pos = int(m.group("pos") or 1) - 1
+        if depth == 0:
+            if pos:
+                return None
             continue
-        yield doc.problem(el, f"{tag}: {reason}")
+        name = m.group("name").rpartition(":")[2]
+        same = (c for c in el if isinstance(c.tag, str)
+                and (name == "*" or local_name(c) == name))
+        el = next((c for i, c in enumerate(same) if i == pos), None)
+    return el

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -173,3 +174,120 @@ def test_prima_test_reports_every_scenario_even_after_a_broken_one(tmp_path: Pat
     assert code == 1
     assert "same      " + str(good) in out and "not found" in err
     assert "2 scenario(s): 1 failed" in err
+
+
+# ---------------------------------------------------------------- hostile paths, named files
+
+def _scenario(folder: Path, apps: str = "", robot: str = "", zones: str = "") -> Path:
+    (folder / "map.xml").write_text(
+        '<map xmlns="urn:prima:map:1" name="m"><place name="a" x="0" y="0"/></map>\n')
+    path = folder / "s.xml"
+    path.write_text('<scenario xmlns="urn:prima:scenario:1" name="s" until="10">\n'
+                    '  <map href="map.xml"/>\n'
+                    f'  {apps}\n'
+                    f'  <robot place="a"{robot}/>\n'
+                    f'  {zones}\n'
+                    '</scenario>\n')
+    return path
+
+
+def _pxml(folder: Path, name: str, kind: str, body: str = "") -> Path:
+    path = folder / f"{name}.pxml"
+    path.write_text(f'<pxml xmlns="urn:prima:pxml:1" kind="{kind}" name="{name}">\n'
+                    f'  <state id="s" initial="true">{body}</state>\n</pxml>\n')
+    return path
+
+
+def test_a_named_pipe_is_a_located_error_not_a_hang(tmp_path: Path) -> None:
+    fifo = tmp_path / "app.pxml"
+    os.mkfifo(fifo)
+    result = subprocess.run([sys.executable, "-m", "prima", "validate", str(fifo)],
+                            capture_output=True, text=True, check=False, timeout=20)
+    assert result.returncode == 1
+    assert result.stdout == f"{fifo}:1:1: error: a named pipe: PRIMA reads only regular files\n"
+
+
+def test_a_folder_given_as_the_robot_profile_is_a_located_error(tmp_path: Path) -> None:
+    code, _, err = run("validate", "--robot", str(tmp_path), str(ROOT / "apps"))
+    assert code == 1
+    assert f"{tmp_path}:1:1: error: a directory: PRIMA reads only regular files" in err
+
+
+def test_a_scenario_is_checked_with_every_file_it_names(tmp_path: Path) -> None:
+    _pxml(tmp_path, "fa", "fa", '<entry><goto state="nowhere"/></entry>')
+    _pxml(tmp_path, "ea", "ea")
+    _pxml(tmp_path, "zone", "ea", '<entry><raise event="x"/></entry>')
+    path = _scenario(tmp_path, '<apps fa="fa.pxml" ea="ea.pxml"/>',
+                     zones='<zone name="z" ea="zone.pxml" x1="0" y1="0" x2="1" y2="1"/>')
+    code, out, err = run("validate", str(path))
+    assert code == 1
+    assert out.splitlines() == [
+        f"{tmp_path / 'fa.pxml'}:2:52: error: no state has the id 'nowhere'",
+        f"{tmp_path / 'zone.pxml'}:2:39: error: only an FA may raise its own events",
+    ]
+    assert "5 files checked: 2 error(s)" in err
+
+
+def test_each_file_is_checked_once_however_it_is_named(tmp_path: Path) -> None:
+    path = _scenario(tmp_path)
+    (tmp_path / "map.xml").write_text(
+        '<map xmlns="urn:prima:map:1" name="m"><place name="a" x="0" y="0" kind="x"/></map>\n')
+    code, out, err = run("validate", str(tmp_path / "map.xml"), str(path), str(tmp_path))
+    assert code == 1
+    assert [line.split(": error:")[0] for line in out.splitlines()] == [
+        f"{tmp_path / 'map.xml'}:1:73"]  # once, though loading the scenario loads the map
+    assert "2 files checked" in err
+
+
+@pytest.mark.parametrize("apps, zones, col, message", [
+    ('<apps fa="ea.pxml"/>', "", 13, "'ea.pxml' is an EA (kind=\"ea\"); it cannot run as the FA"),
+    ('<apps ea="fa.pxml"/>', "", 13, "'fa.pxml' is an FA (kind=\"fa\"); it cannot run as the EA"),
+    ('<apps fa="fa.pxml" ea="twin.pxml"/>', "", 26,
+     "the FA and the EA are both named 'fa'; each application needs a name of its own"),
+    ('<apps fa="fa.pxml"/>', '<zone name="z" ea="twin.pxml" x1="0" y1="0" x2="1" y2="1"/>', 22,
+     "the FA and this zone's EA are both named 'fa'"),
+    ('<apps fa="map.xml"/>', "", 13,
+     "'map.xml' is not a PXML document (its root is in 'urn:prima:map:1')"),
+])
+def test_applications_must_fit_their_slots(tmp_path: Path, apps: str, zones: str, col: int,
+                                           message: str) -> None:
+    _pxml(tmp_path, "fa", "fa")
+    _pxml(tmp_path, "ea", "ea")
+    (tmp_path / "twin.pxml").write_text(
+        '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="fa"><state id="s" initial="true"/>'
+        "</pxml>\n")
+    path = _scenario(tmp_path, apps, zones=zones)
+    code, out, _ = run("validate", str(path))
+    line = 3 if not zones else 5
+    [found] = out.splitlines()
+    assert code == 1 and found.startswith(f"{path}:{line}:{col}: error: {message}")
+
+
+def _robot_with_gesture(folder: Path, gesture: str = "flip", broken: bool = False) -> Path:
+    xml = (ROOT / "robots" / "home-robot.xml").read_text().replace(
+        '<gesture name="sleep" duration="1.5"/>',
+        f'<gesture name="{gesture}" duration="{0 if broken else 1}"/>')
+    path = folder / "robot.xml"
+    path.write_text(xml)
+    return path
+
+
+def test_the_documents_are_checked_against_the_profile_the_scenario_names(tmp_path: Path) -> None:
+    _pxml(tmp_path, "fa", "fa", '<entry><chain>Gesture(flip)</chain></entry>')
+    _robot_with_gesture(tmp_path)
+    with_profile = _scenario(tmp_path, '<apps fa="fa.pxml"/>', robot=' profile="robot.xml"')
+    assert run("validate", str(with_profile))[:2] == (0, "")
+    # --robot wins over the scenario's profile, as in prima run
+    code, out, _ = run("validate", "--robot", str(ROOT / "robots" / "home-robot.xml"),
+                       str(with_profile))
+    assert code == 1 and "unknown gesture 'flip'" in out
+
+
+def test_a_broken_named_profile_is_reported_and_its_documents_wait(tmp_path: Path) -> None:
+    _pxml(tmp_path, "fa", "fa", '<entry><chain>Gesture(flip)</chain></entry>')
+    robot = _robot_with_gesture(tmp_path, broken=True)
+    path = _scenario(tmp_path, '<apps fa="fa.pxml"/>', robot=' profile="robot.xml"')
+    code, out, _ = run("validate", str(path))
+    assert code == 1
+    assert [line.split(": error:")[0].rsplit(":", 2)[0] for line in out.splitlines()] == [
+        str(robot)]

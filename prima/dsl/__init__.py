@@ -8,9 +8,11 @@ on) are private. In the direction data flows:
 - robot profiles: :func:`load_profile`, :func:`parse_profile`,
   :func:`profile_from_xml`, :func:`default_profile` give a :class:`RobotProfile`;
 - validation of files and folders, as ``prima validate`` does it:
-  :func:`collect`, :func:`check_file`, :func:`validate_paths` give a :class:`Report`;
+  :func:`collect`, :func:`check_file`, :func:`validate_paths` and
+  :class:`Validation` (each file once) give a :class:`Report`;
 - the model the interpreter runs (:class:`Document`, :class:`State`,
-  :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`);
+  :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`, with
+  :func:`words` and :func:`match_pattern` for its answers);
 - the expression language: :func:`compile_expression`, :func:`compile_template`,
   :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`.
 """
@@ -54,7 +56,10 @@ from prima.dsl._model import (
     State,
     StreamBlock,
     Variable,
+    match_pattern,
+    words,
 )
+from prima.dsl._profile import NAMESPACE as ROBOT_NAMESPACE
 from prima.dsl._profile import (
     STANDARD_GESTURES,
     RobotProfile,
@@ -65,8 +70,10 @@ from prima.dsl._profile import (
 )
 from prima.dsl._validate import (
     Checker,
+    Header,
     PathNotFoundError,
     Report,
+    Validation,
     check_file,
     collect,
     root_namespace,
@@ -76,6 +83,7 @@ from prima.dsl._validate import (
 __all__ = [
     "FUNCTIONS",
     "NAMESPACE",
+    "ROBOT_NAMESPACE",
     "STANDARD_GESTURES",
     "Action",
     "Assign",
@@ -93,6 +101,7 @@ __all__ = [
     "Grammar",
     "Handler",
     "HandlerKind",
+    "Header",
     "If",
     "Loc",
     "Log",
@@ -107,6 +116,7 @@ __all__ = [
     "StartTimer",
     "State",
     "StreamBlock",
+    "Validation",
     "Variable",
     "check_document",
     "check_file",
@@ -118,6 +128,7 @@ __all__ = [
     "element_name",
     "load_document",
     "load_profile",
+    "match_pattern",
     "parse_chain",
     "parse_profile",
     "parser",
@@ -126,4 +137,5 @@ __all__ = [
     "to_text",
     "truthy",
     "validate_paths",
+    "words",
 ]

@@ -31,7 +31,7 @@ from prima.dsl._expr import (
     string_literal,
 )
 from prima.dsl._model import CommandCall
-from prima.vocab import AppKind
+from prima.vocab import MAX_NUMBER, AppKind
 from prima.xmlio import local_name
 
 if TYPE_CHECKING:
@@ -60,18 +60,29 @@ def compile_attribute(b: Builder, kind: ParamKind, el: etree._Element,
     raw = el.get(attr, "")
     spot: Spot = (el, attr, 0)
     if kind is ParamKind.TEXT:
-        return b.compile(spot, lambda: compile_template(raw))
+        return b.compile(spot, lambda: compile_template(raw, max_text=b.max_text))
     m = _COMPUTED.match(raw)
     if m:
-        return b.compile((el, attr, 1), lambda: compile_expression(m.group(1)))
+        return b.compile((el, attr, 1),
+                         lambda: compile_expression(m.group(1), max_text=b.max_text))
     if kind is ParamKind.NUMBER:
-        try:
-            value = float(raw)
-        except ValueError:
-            b.error(spot, f"'{raw}' is not a number (write a number, or {{expression}})")
-            return None
-        return constant(int(value) if value.is_integer() and "." not in raw else value, raw)
+        return _number(b, spot, raw)
     return constant(raw, raw)
+
+
+def _number(b: Builder, spot: Spot, raw: str) -> Compiled | None:
+    """A number written as an attribute value; like a number in an expression, it must
+    be finite and at most MAX_NUMBER in size (1 and 400 zeros is a decimal, but no number)."""
+    shown = raw if len(raw) <= 20 else raw[:17] + "..."
+    try:
+        value = float(raw)
+    except ValueError:
+        b.error(spot, f"'{shown}' is not a number (write a number, or {{expression}})")
+        return None
+    if not abs(value) <= MAX_NUMBER:
+        b.error(spot, f"'{shown}' is too large a number (the limit is {MAX_NUMBER:.0f})")
+        return None
+    return constant(int(value) if value.is_integer() and "." not in raw else value, raw)
 
 
 def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
@@ -126,11 +137,12 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
+    after_named = False
     for pos, arg in enumerate(step.args):
         arg_spot: Spot = (el, "#text", arg.index)
         name_spot: Spot = (el, "#text", arg.name_index) if arg.name else arg_spot
-        after_named = any(a.name is not None for a in step.args[:pos])
         param = _chain_param(b, spec, pos, arg, arg_spot, name_spot, after_named)
+        after_named = after_named or arg.name is not None
         if param is None:
             continue
         if param.name in spots:
@@ -183,7 +195,8 @@ def _chain_value(b: Builder, param: Param, arg: ChainArg, text: str, spot: Spot)
             b.error(spot, f"'{param.name}' is a {param.kind.value}: write a bare name, "
                           "or {expression} to compute it")
         return None
-    return b.compile((spot[0], "#text", 0), lambda: compile_chain_arg(arg, text))
+    return b.compile((spot[0], "#text", 0),
+                     lambda: compile_chain_arg(arg, text, max_text=b.max_text))
 
 
 _HYPHENATED = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\s*-\s*[A-Za-z0-9_]+)+$")
@@ -200,7 +213,7 @@ def _extra_chain(b: Builder, spec: CommandSpec, x: ChainArg, text: str,
     name = bare_name(x)
     if param is not None and param.kind in SYMBOLIC_KINDS and name is not None:
         return constant(name, name)
-    return b.compile((el, "#text", 0), lambda: compile_chain_arg(x, text))
+    return b.compile((el, "#text", 0), lambda: compile_chain_arg(x, text, max_text=b.max_text))
 
 
 _NO_SCOPE = Scope({})

@@ -5,11 +5,20 @@ of small functions over a :class:`Scope`. Strings are templates
 (``"Hello {name}"``). Syntax faults raise :class:`~prima.errors.ExpressionError`
 with the character index of the fault, which the loader turns into
 ``file:line:col``.
+
+Every input is bounded before lark sees it: an expression is at most
+:data:`MAX_EXPRESSION` characters, a chain :data:`MAX_CHAIN` characters and
+:data:`MAX_CHAIN_COMMANDS` Commands, and a linear pre-scan (:func:`measure`)
+refuses anything nested deeper than :data:`MAX_NESTING` levels, at the
+character where the limit is crossed. So neither the compiler's recursion nor
+the compiled closures' can be exhausted by a document, and a literal text is at
+most :data:`~prima.vocab.MAX_TEXT` characters (or a robot's smaller budget).
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -21,6 +30,20 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from prima.errors import ExecutionError, ExpressionError
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
+
+MAX_NESTING = 50
+"""Deepest nesting of an expression or chain: each bracket, operator and function
+call on the way from the whole to its innermost part counts one level, and so
+does each string template inside another."""
+
+MAX_EXPRESSION = 10_000
+"""Longest expression (characters): a ``cond``, an ``expr``, one ``{...}``."""
+
+MAX_CHAIN = 100_000
+"""Longest command chain (characters)."""
+
+MAX_CHAIN_COMMANDS = 100
+"""Most Commands one chain (or ``<request>``) may hold."""
 
 
 @dataclass
@@ -265,6 +288,157 @@ def _expected(exc: UnexpectedInput) -> str:
     return " or ".join(names) if names else "something else"
 
 
+# ---------------------------------------------------------------- bounds
+
+_SCAN = re.compile(r"""
+    (?P<string>"(?:[^"\\\n]|\\.)*"?|'(?:[^'\\\n]|\\.)*'?)
+  | (?P<atom>[0-9]+(?:\.[0-9]+)?|[A-Za-z_][A-Za-z0-9_]*(?:\s*\.\s*[A-Za-z_][A-Za-z0-9_]*)?)
+  | (?P<op>==|!=|<=|>=|[<>+\-*/%])
+  | (?P<open>[(\[{])
+  | (?P<close>[)\]}])
+  | (?P<sep>[,:=])
+""", re.X)
+_PRECEDENCE = {"or": 1, "and": 2, "not": 3, "==": 4, "!=": 4, "<": 4, "<=": 4, ">": 4,
+               ">=": 4, "+": 5, "-": 5, "*": 6, "/": 6, "%": 6, "neg": 7}
+_PREFIX = frozenset({"not", "neg"})
+
+
+class _Frame:
+    """One bracket level of :class:`_Measure`: pending operators and operand depths."""
+
+    __slots__ = ("ops", "operands", "best")
+
+    def __init__(self) -> None:
+        self.ops: list[tuple[int, int]] = []  # (precedence, arity)
+        self.operands: list[int] = []
+        self.best = 0
+
+
+class _Measure:
+    """How deep an expression's tree will be, from its tokens, in one linear pass.
+
+    An operator-precedence (shunting-yard) scan that builds no tree: it keeps
+    the depth of each operand and the operators still waiting for their right
+    operand. Those, and the open brackets, are all ancestors of the next token,
+    so the depth is known as soon as it exceeds the limit.
+    """
+
+    def __init__(self, text: str, what: str, depth: int) -> None:
+        self.text = text
+        self.what = what
+        self.frames = [_Frame()]
+        self.pending = depth  # open brackets and waiting operators, all levels
+        self.commands = 1
+        self.after_value = False
+
+    def run(self) -> None:
+        for m in _SCAN.finditer(self.text):
+            kind = m.lastgroup or ""
+            _STEPS[kind](self, m)
+        self.reduce_all(self.frames[-1], len(self.text))
+
+    def fault(self, index: int) -> ExpressionError:
+        return ExpressionError(index, f"{self.what}: nested more than {MAX_NESTING} levels "
+                                      "deep (brackets, operators and calls)", self.text)
+
+    def operand(self, depth: int, index: int) -> None:
+        if depth + self.pending > MAX_NESTING:
+            raise self.fault(index)
+        self.frames[-1].operands.append(depth)
+        self.after_value = True
+
+    def push(self, precedence: int, arity: int, index: int) -> None:
+        frame = self.frames[-1]
+        if arity == 2:
+            while frame.ops and frame.ops[-1][0] >= precedence:
+                self.reduce(frame, index)
+        frame.ops.append((precedence, arity))
+        self.pending += 1
+        if self.pending > MAX_NESTING:
+            raise self.fault(index)
+        self.after_value = False
+
+    def reduce(self, frame: _Frame, index: int) -> None:
+        _prec, arity = frame.ops.pop()
+        self.pending -= 1
+        depths = [frame.operands.pop() if frame.operands else 0 for _ in range(arity)]
+        self.operand(max(depths) + 1, index)
+
+    def reduce_all(self, frame: _Frame, index: int) -> int:
+        while frame.ops:
+            self.reduce(frame, index)
+        deepest = max([frame.best, *frame.operands])
+        frame.operands.clear()
+        frame.best = deepest
+        return deepest
+
+    def string(self, m: re.Match[str]) -> None:
+        self.operand(1, m.start())
+
+    def atom(self, m: re.Match[str]) -> None:
+        word = m.group()
+        if word in ("and", "or"):
+            self.push(_PRECEDENCE[word], 2, m.start())
+        elif word == "not":
+            self.push(_PRECEDENCE[word], 1, m.start())
+        else:
+            self.operand(1, m.start())
+
+    def op(self, m: re.Match[str]) -> None:
+        if m.group() == "-" and not self.after_value:
+            self.push(_PRECEDENCE["neg"], 1, m.start())
+        else:
+            self.push(_PRECEDENCE[m.group()], 2, m.start())
+
+    def open(self, m: re.Match[str]) -> None:
+        self.frames.append(_Frame())
+        self.pending += 1
+        if self.pending > MAX_NESTING:
+            raise self.fault(m.start())
+        self.after_value = False
+
+    def close(self, m: re.Match[str]) -> None:
+        if len(self.frames) == 1:  # unbalanced: the parser says so
+            return
+        inner = self.reduce_all(self.frames.pop(), m.start())
+        self.pending -= 1
+        self.operand(inner + 1, m.start())
+
+    def sep(self, m: re.Match[str]) -> None:
+        self.reduce_all(self.frames[-1], m.start())
+        self.after_value = False
+        if m.group() == "," and len(self.frames) == 1:
+            self.commands += 1
+            if self.commands > MAX_CHAIN_COMMANDS:
+                raise ExpressionError(_next_token(self.text, m.end()),
+                                      f"{self.what}: more than {MAX_CHAIN_COMMANDS} Commands "
+                                      "in one chain", self.text)
+
+
+_STEPS: Mapping[str, Callable[[_Measure, re.Match[str]], None]] = {
+    "string": _Measure.string, "atom": _Measure.atom, "op": _Measure.op,
+    "open": _Measure.open, "close": _Measure.close, "sep": _Measure.sep,
+}
+
+
+def _next_token(text: str, i: int) -> int:
+    while i < len(text) and text[i].isspace():
+        i += 1
+    return i
+
+
+def measure(text: str, what: str = "expression", depth: int = 0) -> None:
+    """Refuse ``text`` if it is too long or nests too deep; raise ExpressionError.
+
+    ``what`` is ``expression`` or ``chain``; ``depth`` is how deep the text
+    already is (a template inside a string inside another expression).
+    """
+    longest = MAX_CHAIN if what == "chain" else MAX_EXPRESSION
+    if len(text) > longest:
+        raise ExpressionError(longest, f"{what}: longer than {longest:,} characters", text)
+    _Measure(text, what, depth).run()
+
+
 def _parse(text: str, start: str) -> Tree[Token]:
     try:
         return parser().parse(text, start=start)
@@ -272,20 +446,50 @@ def _parse(text: str, start: str) -> Tree[Token]:
         raise _syntax_fault(exc, text, start) from None
 
 
-def compile_expression(text: str) -> Compiled:
-    """Parse and compile one expression (e.g. a ``cond`` attribute)."""
+def compile_expression(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -> Compiled:
+    """Parse and compile one expression (e.g. a ``cond`` attribute).
+
+    ``max_text`` bounds its literal texts (a robot profile's budget may be
+    smaller than :data:`~prima.vocab.MAX_TEXT`); ``depth`` is how deeply it
+    is already nested (inside a template).
+    """
     if not text.strip():
         raise ExpressionError(0, "expression: empty", text)
-    return _Compiler(text).compile(_parse(text, "expression"))
+    bare = _BARE_NAME.fullmatch(text)
+    if bare and bare.group(1) not in _KEYWORDS:  # {name}: the common case, without lark
+        return _variable(bare.group(1), bare.start(1))
+    measure(text, "expression", depth)
+    return _Compiler(text, max_text, depth).compile(_parse(text, "expression"))
 
 
-def compile_template(text: str) -> Compiled:
-    """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``)."""
+_BARE_NAME = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*")
+_KEYWORDS = frozenset({"and", "or", "not", "true", "false", "null"})
+
+
+def _variable(name: str, index: int) -> Compiled:
+    """A bare variable name (or ``event``) at ``index``, compiled as the grammar would."""
+    if name == "event":
+        return Compiled(name, lambda s: None if s.event is None else s.event.get("name"),
+                        event_uses=(index,))
+    return Compiled(name, lambda s: s.variables.get(name), frozenset({(name, index)}))
+
+
+def compile_template(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -> Compiled:
+    """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``).
+
+    Its literal characters are at most ``max_text``: more, and the fault is at
+    the first character beyond the limit.
+    """
     parts: list[str | Compiled] = []
     i, n = 0, len(text)
     literal: list[str] = []
+    written = 0  # literal characters so far, over every part
     while i < n:
         ch = text[i]
+        if ch not in "{}" or text.startswith(ch * 2, i):
+            written += 1
+            if written > max_text:
+                raise ExpressionError(i, f"text: longer than {max_text:,} characters", text)
         if ch in "{}" and text.startswith(ch * 2, i):
             literal.append(ch)
             i += 2
@@ -300,7 +504,7 @@ def compile_template(text: str) -> Compiled:
                 literal = []
             inner = text[i + 1 : end]
             try:
-                sub = compile_expression(inner)
+                sub = compile_expression(inner, max_text=max_text, depth=depth + 1)
             except ExpressionError as fault:
                 raise ExpressionError(i + 1 + fault.index, fault.message, text) from None
             parts.append(_shift(sub, i + 1))
@@ -379,6 +583,7 @@ def parse_chain(text: str) -> list[ChainStep]:
     """Parse a command chain into steps; arguments are bound later."""
     if not text.strip():
         raise ExpressionError(0, "chain: empty", text)
+    measure(text, "chain")
     return [_step(_tree(step)) for step in _parse(text, "chain").children]
 
 
@@ -461,9 +666,9 @@ def string_literal(arg: ChainArg) -> str | None:
     return None
 
 
-def compile_chain_arg(arg: ChainArg, source: str) -> Compiled:
-    """Compile a chain argument as an expression."""
-    return _Compiler(source).compile(arg.tree)
+def compile_chain_arg(arg: ChainArg, source: str, *, max_text: int = MAX_TEXT) -> Compiled:
+    """Compile a chain argument as an expression (the chain was measured when parsed)."""
+    return _Compiler(source, max_text).compile(arg.tree)
 
 
 # ---------------------------------------------------------------- compiler
@@ -485,8 +690,13 @@ class _Compiler:
     by the rule's name in :data:`_RULES`; it compiles the rule's children.
     """
 
-    def __init__(self, source: str) -> None:
+    def __init__(self, source: str, max_text: int = MAX_TEXT, depth: int = 0) -> None:
         self.source = source
+        self.max_text = max_text
+        self.depth = depth
+        """How deep the source is already nested (a template inside a string)."""
+        self.level = 0
+        """How deep the subtree being compiled is (at most MAX_NESTING: measured)."""
         self.names: set[tuple[str, int]] = set()
         self.events: list[int] = []
 
@@ -500,6 +710,9 @@ class _Compiler:
             value = fn(Scope({}))
         except ExecutionError as exc:  # a constant that cannot be computed: -'a'
             raise ExpressionError(start, f"expression: {exc}", self.source) from None
+        if isinstance(value, str) and len(value) > self.max_text:
+            raise ExpressionError(start, f"expression: text longer than {self.max_text:,} "
+                                         "characters", self.source)
         return constant(value, text)
 
     def node(self, node: Node) -> Part:
@@ -509,7 +722,11 @@ class _Compiler:
         if rule is None or not isinstance(node, Tree):
             raise ExpressionError(_start(node), f"expression: unsupported construct {kind!r}",
                                   self.source)
-        return rule(self, node.children)
+        self.level += 1
+        try:
+            return rule(self, node.children)
+        finally:
+            self.level -= 1
 
     def fault(self, token: Token, message: str) -> ExpressionError:
         """A fault at ``token``."""
@@ -522,7 +739,10 @@ class _Compiler:
         raw = str(tok)
         if len(raw) > 20:
             raise self.fault(tok, "number too long")
-        return _const(float(raw) if "." in raw else int(raw))
+        value = float(raw) if "." in raw else int(raw)
+        if value > MAX_NUMBER:
+            raise self.fault(tok, f"number too large (the limit is {MAX_NUMBER:.0f})")
+        return _const(value)
 
     def string(self, ch: list[Node]) -> Part:
         tok = _token(ch[0])
@@ -605,7 +825,7 @@ class _Compiler:
             return start + 1 + (index_map[i] if i < len(index_map) else i)
 
         try:
-            t = compile_template(decoded)
+            t = compile_template(decoded, max_text=self.max_text, depth=self.depth + self.level)
         except ExpressionError as fault:
             raise ExpressionError(at(fault.index), fault.message, self.source) from None
         self.names.update((n, at(i)) for n, i in t.names)

@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
@@ -19,8 +20,18 @@ from lxml import etree
 from prima.catalog import ParamKind
 from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
 from prima.dsl._elements import elements, flag
-from prima.dsl._expr import Compiled, compile_expression, compile_template, parse_chain
+from prima.dsl._expr import (
+    MAX_CHAIN_COMMANDS,
+    Compiled,
+    compile_expression,
+    compile_template,
+    parse_chain,
+)
 from prima.dsl._model import (
+    MAX_PATTERN_CAPTURES,
+    MAX_PATTERN_ITEMS,
+    MAX_PATTERNS,
+    MAX_PHRASE_WORDS,
     Action,
     Assign,
     AtomicBlock,
@@ -50,15 +61,27 @@ from prima.dsl._profile import STANDARD_GESTURES, RobotProfile, default_profile
 from prima.errors import DocumentError, ExpressionError, Problem, Severity
 from prima.vocab import (
     MAX_BLOCK_WATCHDOG,
+    MAX_NUMBER,
     MAX_STREAM_HOLD,
     PREDEFINED_EVENTS,
     AppKind,
     RunningOrder,
 )
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
+from prima.xmlio import (
+    MAX_PROBLEMS,
+    XmlDocument,
+    limit,
+    local_name,
+    parse_xml,
+    read_source,
+    validate,
+)
 
 NAMESPACE = "urn:prima:pxml:1"
 _NS = f"{{{NAMESPACE}}}"
+
+MAX_CARET_LINE = 1_000
+"""Longest source line shown under a problem with a caret (characters)."""
 
 Spot = tuple[etree._Element, str | None, int]
 """Where to point: (element, None | "#text" | attribute name, character index)."""
@@ -83,6 +106,8 @@ class Builder:
         self.doc = doc
         self.profile = profile
         self.catalog = profile.catalog()
+        self.max_text = profile.budgets.text
+        """Longest literal text (characters): the robot's budget, at most MAX_TEXT."""
         self.element_commands = {element_name(c.name): c.name for c in self.catalog
                                  if not c.robot_specific}
         self.kind = AppKind(doc.root.get("kind", "fa"))
@@ -97,6 +122,9 @@ class Builder:
         self.blocks: dict[str, AtomicBlock] = {}
         self._state_elements: dict[str, etree._Element] = {}
         self.in_handler = False
+        self._carets: set[int] = set()
+        self._hints = 0
+        self._known: dict[str, str] = {}
 
     # ------------------------------------------------------------ reporting
 
@@ -118,10 +146,24 @@ class Builder:
         return self.loc((el, None, 0))
 
     def report(self, spot: Spot, message: str, severity: Severity, *, caret: bool = False) -> None:
-        """A problem at ``spot``; with ``caret``, it carries its source line too."""
+        """A problem at ``spot``; with ``caret``, it will carry its source line too.
+
+        The source line is added only to the problems reported (see :meth:`reported`):
+        a long line copied into each of thousands of problems would cost quadratic time.
+        """
         line, col = self.position(spot)
-        source = self.doc.where.line_text(line) if caret else ""
-        self.problems.append(Problem(self.doc.name, line, col, severity, message, source))
+        problem = Problem(self.doc.name, line, col, severity, message)
+        self.problems.append(problem)
+        if caret:
+            self._carets.add(id(problem))
+
+    def reported(self) -> list[Problem]:
+        """The problems in source order, at most MAX_PROBLEMS of them (then a line counting
+        the rest); those inside an expression carry their source line, if it is not too long."""
+        kept = limit(sorted(self.problems, key=lambda p: (p.line, p.col)), self.doc.name)
+        return [dataclasses.replace(p, source=self.doc.where.line_text(p.line))
+                if id(p) in self._carets and self.doc.where.line_length(p.line) <= MAX_CARET_LINE
+                else p for p in kept]
 
     def fault(self, spot: Spot, fault: ExpressionError) -> None:
         """An expression's fault, located at its character in the expression written at ``spot``."""
@@ -154,19 +196,27 @@ class Builder:
     def expression(self, el: etree._Element, attr: str) -> Compiled | None:
         """The expression written in attribute ``attr``, or None after a fault."""
         text = el.get(attr, "")
-        return self.compile((el, attr, 0), lambda: compile_expression(text))
+        return self.compile((el, attr, 0),
+                            lambda: compile_expression(text, max_text=self.max_text))
 
     def template(self, el: etree._Element, attr: str) -> Compiled | None:
         """The text with ``{expression}`` parts written in attribute ``attr``, or None."""
         text = el.get(attr, "")
-        return self.compile((el, attr, 0), lambda: compile_template(text))
+        return self.compile((el, attr, 0), lambda: compile_template(text, max_text=self.max_text))
+
+    def known(self, what: str, names: Callable[[], Iterable[str]]) -> str:
+        """``names``, sorted and joined, computed once per ``what``: an error message lists
+        them, and a document may make that error many times."""
+        if what not in self._known:
+            self._known[what] = ", ".join(sorted(names()))
+        return self._known[what]
 
     # ------------------------------------------------------------ references
 
     def check_gesture(self, name: str, spot: Spot) -> None:
         """A gesture must be one the robot knows; an EA may use only the common ones."""
         if name not in self.profile.gestures and name not in STANDARD_GESTURES:
-            known = ", ".join(sorted(self.profile.gestures))
+            known = self.known("gestures", lambda: self.profile.gestures)
             self.error(spot, f"unknown gesture '{name}' (this robot knows: {known})")
         elif name not in STANDARD_GESTURES and self.kind is AppKind.EA:
             self.error(spot, f"gesture '{name}' is robot-specific; only an FA may use it "
@@ -248,12 +298,17 @@ class Builder:
             if gid in out:
                 self.error((el, "id", 0), f"grammar '{gid}' is declared twice")
                 continue
-            choices, patterns = [], []
+            choices: list[Choice] = []
+            patterns: list[Pattern] = []
             for item in elements(el):
                 if local_name(item) == "choice":
                     choice = self._choice(item)
                     if choice is not None:
                         choices.append(choice)
+                elif len(patterns) == MAX_PATTERNS:
+                    self.error((item, None, 0), f"a grammar may hold at most {MAX_PATTERNS} "
+                                                "patterns")
+                    break
                 else:
                     pattern = self._pattern(item, item.text or "")
                     if pattern is not None:
@@ -267,29 +322,33 @@ class Builder:
             self.error((el, None, 0), "a choice needs at least one phrase "
                                       "(synonyms separated by '|')")
             return None
+        if max(len(p) for p in phrases) > MAX_PHRASE_WORDS:
+            self.error((el, None, 0), f"a synonym may have at most {MAX_PHRASE_WORDS} words")
+            return None
         return Choice(el.get("value") or " ".join(phrases[0]), phrases)
 
     def _pattern(self, el: etree._Element, text: str) -> Pattern | None:
         tokens = text.split()
-        if not tokens or len(tokens) > 20:
-            self.error((el, None, 0), "a pattern needs 1 to 20 words, '*' or '#'")
+        if not tokens or len(tokens) > MAX_PATTERN_ITEMS:
+            self.error((el, None, 0), f"a pattern needs 1 to {MAX_PATTERN_ITEMS} words, "
+                                      "'*' or '#'")
             return None
-        parts = []
+        items = []
         for tok in tokens:
-            if tok in _CAPTURES:
-                parts.append(_CAPTURES[tok])
+            if tok in ("*", "#"):
+                items.append(tok)
                 continue
             w = words(tok)
             if len(w) != 1:
                 self.error((el, "#text", text.find(tok)),
                            f"pattern word {tok!r} must be one word (letters, digits, ')")
                 return None
-            parts.append(re.escape(w[0]))
-        if sum(t in _CAPTURES for t in tokens) > 4:
-            self.error((el, None, 0), "a pattern may capture at most 4 times ('*' or '#')")
+            items.append(w[0])
+        if sum(t in ("*", "#") for t in tokens) > MAX_PATTERN_CAPTURES:
+            self.error((el, None, 0), f"a pattern may capture at most {MAX_PATTERN_CAPTURES} "
+                                      "times ('*' or '#')")
             return None
-        regex = re.compile(r"\s*" + r"\s*".join(parts) + r"\s*")
-        return Pattern(text.strip(), regex)
+        return Pattern(text.strip(), tuple(items))
 
     def _events(self) -> dict[str, EventDecl]:
         out: dict[str, EventDecl] = {}
@@ -356,7 +415,7 @@ class Builder:
                                       f"<block> at line {self.loc_of(block).line}")
         for m in re.finditer(r"\S+", el.get("devices") or ""):
             if m.group() not in self.catalog.devices:
-                known = ", ".join(sorted(self.catalog.devices))
+                known = self.known("devices", lambda: self.catalog.devices)
                 self.error((el, "devices", m.start()),
                            f"unknown device '{m.group()}' (devices: {known})")
 
@@ -364,7 +423,7 @@ class Builder:
         gid = self._group_id(el)
         if gid in self.streams:
             self.error((el, "id", 0), f"duplicate stream id '{gid}'")
-        hold = float(el.get("hold", "10"))
+        hold = self._seconds(el, "hold", 10.0)
         if hold > MAX_STREAM_HOLD:
             self.warning((el, "hold", 0), f"PRIMA holds a stream for at most "
                                           f"{MAX_STREAM_HOLD:g} s; hold={hold:g} acts as "
@@ -375,7 +434,7 @@ class Builder:
         gid = self._group_id(el)
         if gid in self.blocks:
             self.error((el, "id", 0), f"duplicate block id '{gid}'")
-        watchdog = float(el.get("watchdog", "30"))
+        watchdog = self._seconds(el, "watchdog", 30.0)
         if watchdog > MAX_BLOCK_WATCHDOG:
             self.warning((el, "watchdog", 0), f"PRIMA ends a block after at most "
                                               f"{MAX_BLOCK_WATCHDOG:g} s; watchdog={watchdog:g} "
@@ -384,6 +443,18 @@ class Builder:
         self.blocks[gid] = AtomicBlock(gid, watchdog,
                                        frozenset(devices.split()) if devices else None,
                                        tuple(members), self.loc_of(el))
+
+    def _seconds(self, el: etree._Element, attr: str, default: float) -> float:
+        """A positive duration (the schema's decimal), which must stay positive and finite as a
+        float: a hold of 1 and 400 zeros is infinite, 0. and 400 zeros is 0."""
+        raw = el.get(attr)
+        value = default if raw is None else float(raw)
+        if not 0 < value <= MAX_NUMBER:
+            shown = raw if raw is None or len(raw) <= 20 else raw[:17] + "..."
+            self.error((el, attr, 0), f"{attr}={shown!r} is not a usable number of seconds "
+                                      "(it must be more than 0, and finite)")
+            return default
+        return value
 
     def _state(self, el: etree._Element, stream: etree._Element | None,
                block: etree._Element | None) -> State:
@@ -471,7 +542,12 @@ class Builder:
                 return None
             calls = [bind_step(self, el, text, step) for step in steps]
         else:
-            calls = [bind_element(self, child) for child in elements(el)]
+            children = elements(el)
+            if len(children) > MAX_CHAIN_COMMANDS:
+                self.error((children[MAX_CHAIN_COMMANDS], None, 0),
+                           f"a request may hold at most {MAX_CHAIN_COMMANDS} Commands")
+                return None
+            calls = [bind_element(self, child) for child in children]
         bound = [call for call in calls if call is not None]
         return bound if len(bound) == len(calls) else None
 
@@ -582,12 +658,17 @@ class Builder:
             if reactive and self.kind is AppKind.EA:
                 self.error((spot[0], "reactive", 0), "only an FA may mark its own events reactive")
             return
-        known = sorted(set(PREDEFINED_EVENTS) | set(events) | set(self.timers)
-                       | (set(self.profile.events) if self.kind is AppKind.FA else set()))
-        self.error(spot, f"unknown event '{name}' (known: {', '.join(known)})")
+        known = self.known("events", lambda: set(PREDEFINED_EVENTS) | set(events)
+                           | set(self.timers)
+                           | (set(self.profile.events) if self.kind is AppKind.FA else set()))
+        self.error(spot, f"unknown event '{name}' (known: {known})")
 
     def _hint(self, what: str, name: str) -> str:
-        close = [v for v in self.variable_names if _similar(v, name)]
+        # Looking for a similar name costs a pass over the variables: only for as many
+        # undefined names as a file reports, so that thousands of them stay linear.
+        self._hints += 1
+        close = [v for v in self.variable_names if _similar(v, name)] \
+            if self._hints <= MAX_PROBLEMS else []
         if close:
             return f"; did you mean '{close[0]}'?"
         return f" (declare it with <{what} name=\"{name}\"/>)"
@@ -614,13 +695,15 @@ class Builder:
     def _check_reachable(self, handlers: list[Handler], initial: str | None) -> None:
         if initial is None:
             return
+        # document-scope handlers can go anywhere from any state: reachable from the initial one
         everywhere = _goto_targets(a for h in handlers for a in h.actions)
         seen = {initial}
-        todo = deque([initial])
+        todo = deque([initial, *(t for t in everywhere if t in self.states and t != initial)])
+        seen.update(todo)
         while todo:
             state = self.states[todo.popleft()]
             nexts = _goto_targets([*state.entry, *(a for h in state.handlers for a in h.actions)])
-            for target in (nexts | everywhere) & self.states.keys():
+            for target in nexts & self.states.keys():
                 if target not in seen:
                     seen.add(target)
                     todo.append(target)
@@ -644,9 +727,6 @@ _ACTIONS: Mapping[str, Callable[[Builder, etree._Element], Action | None]] = {
     "log": Builder._log,
 }
 """How each action element is read."""
-
-_CAPTURES = {"*": r"(.*?)", "#": r"(-?[0-9]+(?:\.[0-9]+)?)"}
-"""What a pattern's ``*`` (any words) and ``#`` (a number) match."""
 
 
 def _goto_targets(actions: Iterable[Action]) -> set[str]:
@@ -716,7 +796,7 @@ def check_parsed(doc: XmlDocument,
         return None, problems
     builder = Builder(doc, profile)
     document = builder.build()
-    return document, sorted(builder.problems, key=lambda p: (p.line, p.col))
+    return document, builder.reported()
 
 
 def load_document(path: str | Path, profile: RobotProfile | None = None) -> Document:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import enum
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from prima.dsl._expr import Compiled
 from prima.vocab import AppKind, RunningOrder
@@ -195,10 +195,27 @@ class Choice:
 
 @dataclass(frozen=True)
 class Pattern:
-    """A pattern: words, ``*`` (any words, captured) and ``#`` (a number, captured)."""
+    """A pattern: words, ``*`` (any words, captured) and ``#`` (a number, captured).
+
+    ``items`` are the normalised words, ``"*"`` and ``"#"``. Matching works on
+    the answer's words, in time linear in their number (:func:`match_pattern`).
+    """
 
     source: str
-    regex: re.Pattern[str] = field(compare=False)
+    items: tuple[str, ...]
+
+
+MAX_PATTERN_ITEMS = 20
+"""Most words, ``*`` and ``#`` in one pattern."""
+
+MAX_PATTERN_CAPTURES = 4
+"""Most ``*`` and ``#`` in one pattern."""
+
+MAX_PATTERNS = 50
+"""Most patterns in one grammar."""
+
+MAX_PHRASE_WORDS = 20
+"""Most words in one synonym of a choice."""
 
 
 @dataclass(frozen=True)
@@ -217,24 +234,86 @@ class Grammar:
         as whole words; the first matching choice wins. A pattern matches the
         whole utterance; its value is what ``*`` and ``#`` captured (or the
         utterance's words if it captures nothing).
+
+        The cost is linear in the utterance's words (at most MAX_UTTERANCE
+        characters of it are heard) times the grammar's size: one set lookup
+        per synonym, and one pass per pattern item.
         """
         heard = words(utterance)
+        grams = _Grams(heard)
         for choice in self.choices:
-            for phrase in choice.phrases:
-                if _contains(heard, phrase):
-                    return choice.value
-        joined = " ".join(heard)
+            if any(grams.has(phrase) for phrase in choice.phrases):
+                return choice.value
         for pattern in self.patterns:
-            m = pattern.regex.fullmatch(joined)
-            if m:
-                captured = [g.strip() for g in m.groups() if g and g.strip()]
-                return " ".join(captured) if captured else joined
+            captured = match_pattern(pattern.items, heard)
+            if captured is not None:
+                return " ".join(c for c in captured if c) or " ".join(heard)
         return None
 
 
-def _contains(heard: list[str], phrase: tuple[str, ...]) -> bool:
-    n = len(phrase)
-    return n > 0 and any(tuple(heard[i : i + n]) == phrase for i in range(len(heard) - n + 1))
+class _Grams:
+    """The runs of consecutive words of an utterance, by length, built on first need."""
+
+    def __init__(self, heard: list[str]) -> None:
+        self.heard = heard
+        self.by_length: dict[int, frozenset[tuple[str, ...]]] = {}
+
+    def has(self, phrase: tuple[str, ...]) -> bool:
+        n = len(phrase)
+        if n == 0 or n > len(self.heard):
+            return False
+        runs = self.by_length.get(n)
+        if runs is None:
+            h = self.heard
+            runs = self.by_length[n] = frozenset(tuple(h[i : i + n])
+                                                 for i in range(len(h) - n + 1))
+        return phrase in runs
+
+
+def _is_number(word: str) -> bool:
+    return word.isascii() and word.isdigit()
+
+
+def match_pattern(items: tuple[str, ...], heard: list[str]) -> list[str] | None:
+    """What ``*`` and ``#`` captured when ``items`` match all of ``heard``, or None.
+
+    A word item matches that word, ``#`` one number, ``*`` any words, as few as
+    possible (the first ``*`` takes the fewest words that still let the rest
+    match, then the next). ``ends[i]`` holds, for every position, whether the
+    items from ``i`` on can match the words from that position to the end: one
+    backward pass per item, then one forward pass picks the captures, so the
+    cost is linear in the number of words (times the at most 20 items).
+    """
+    n = len(heard)
+    ends: list[list[bool]] = [[False] * (n + 1) for _ in range(len(items) + 1)]
+    ends[len(items)][n] = True
+    for i in range(len(items) - 1, -1, -1):
+        item, after, here = items[i], ends[i + 1], ends[i]
+        if item == "*":
+            later = False
+            for j in range(n, -1, -1):
+                later = later or after[j]
+                here[j] = later
+        else:
+            for j in range(n):
+                here[j] = after[j + 1] and (_is_number(heard[j]) if item == "#"
+                                            else heard[j] == item)
+    if not ends[0][0]:
+        return None
+    captured: list[str] = []
+    j = 0
+    for i, item in enumerate(items):
+        if item == "*":
+            k = j
+            while not ends[i + 1][k]:
+                k += 1
+            captured.append(" ".join(heard[j:k]))
+            j = k
+        else:
+            if item == "#":
+                captured.append(heard[j])
+            j += 1
+    return captured
 
 
 # ---------------------------------------------------------------- structure

@@ -1,13 +1,20 @@
 """Robot hardware profiles: what a robot has and what its FA may use beyond the common interface.
 
 A profile (``schemas/robot.xsd``) lists the robot's devices and physical
-figures, its gestures, robot-specific Commands, additional arguments of
-common Commands, and robot-specific events. Only an FA may use the
-robot-specific parts (MISSION.md section 4).
+figures, what one application may consume (its budgets), its gestures,
+robot-specific Commands, additional arguments of common Commands, and
+robot-specific events. Only an FA may use the robot-specific parts
+(MISSION.md section 4).
+
+Every number is checked as the run will use it: a decimal the schema accepts
+can still be infinite or zero once it is a float (``1`` followed by 400
+zeros, ``0.`` followed by 400 zeros), so each figure must be finite and within
+the range docs/robot-profile.md gives, or the profile has a located error.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -26,8 +33,17 @@ from prima.catalog import (
 )
 from prima.dsl._elements import elements, flag
 from prima.errors import DocumentError, Problem
-from prima.vocab import PREDEFINED_EVENTS, Value
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
+from prima.vocab import MAX_NUMBER, MAX_TEXT, PREDEFINED_EVENTS, Budgets, Value
+from prima.xmlio import (
+    Bound,
+    XmlDocument,
+    limit,
+    local_name,
+    number,
+    parse_xml,
+    read_source,
+    validate,
+)
 
 NAMESPACE = "urn:prima:robot:1"
 DEFAULT_PROFILE = "home-robot.xml"
@@ -60,6 +76,8 @@ class RobotProfile:
     """Additional arguments: Command name -> argument name -> declaration."""
     events: Mapping[str, bool]
     """Robot-specific events -> whether they are reactive."""
+    budgets: Budgets = field(default_factory=Budgets)
+    """What one application may consume on this robot (``<budgets>``, else the defaults)."""
     _catalog: Catalog = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -72,21 +90,55 @@ class RobotProfile:
         return self._catalog
 
 
-def _num(el: etree._Element, name: str) -> float:
-    return float(el.get(name, "0"))
+MAX_SECONDS = 1_000_000.0
+"""Longest duration a budget may give (s)."""
 
+MAX_COUNT = 1_000_000
+"""Largest count a budget may give."""
+
+FIGURES: Mapping[tuple[str, str], Bound] = {
+    ("body", "radius"): Bound(10.0, "m"),
+    ("body", "max-speed"): Bound(100.0, "m/s"),
+    ("body", "max-accel"): Bound(1_000.0, "m/s²"),
+    ("body", "max-turn-rate"): Bound(3_600.0, "deg/s"),
+    ("speech", "rate"): Bound(100.0, "words/s"),
+    ("camera", "fov"): Bound(360.0, "deg"),
+    ("camera", "range"): Bound(10_000.0, "m"),
+    ("head", "pan-min"): Bound(360.0, "deg", -360.0, positive=False),
+    ("head", "pan-max"): Bound(360.0, "deg", -360.0, positive=False),
+    ("head", "tilt-min"): Bound(360.0, "deg", -360.0, positive=False),
+    ("head", "tilt-max"): Bound(360.0, "deg", -360.0, positive=False),
+    ("gesture", "duration"): Bound(3_600.0, "s"),
+    ("command", "duration"): Bound(3_600.0, "s"),
+    ("budgets", "text"): Bound(MAX_TEXT, "characters"),
+    ("budgets", "sends-per-second"): Bound(MAX_COUNT, "messages/s"),
+    ("budgets", "waiting"): Bound(MAX_COUNT, "Commands"),
+    ("budgets", "longest-ab"): Bound(MAX_SECONDS, "s"),
+    ("budgets", "wait-share"): Bound(MAX_SECONDS, "s"),
+    ("budgets", "wait-window"): Bound(MAX_SECONDS, "s"),
+    ("budgets", "starts-per-instant"): Bound(MAX_COUNT, "behaviors"),
+}
+"""The range of every number of a profile: (element, attribute) -> bound."""
 
 def _param(el: etree._Element) -> Param:
-    """A ``<param>`` of a robot-specific Command, or an ``<extra>`` argument."""
+    """A ``<param>`` of a robot-specific Command, or an ``<extra>`` argument (its default is
+    checked by :meth:`_Reader.param`)."""
     kind = ParamKind(el.get("kind"))
     default: Value = el.get("default")
     if isinstance(default, str) and kind is ParamKind.NUMBER:
-        try:
-            default = float(default)
-        except ValueError:
-            default = None
+        number = _float(default)
+        default = number if number is not None and abs(number) <= MAX_NUMBER else None
     return Param(el.get("name", ""), kind, flag(el, "required"),
                  default, el.get("unit", ""), el.get("doc", ""))
+
+
+def _float(text: str) -> float | None:
+    """``text`` as a finite float, or None."""
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
 
 
 def parse_profile(data: bytes, name: str) -> RobotProfile:
@@ -105,7 +157,7 @@ def profile_from_xml(doc: XmlDocument) -> RobotProfile:
     reader = _Reader(doc)
     profile = reader.read()
     if reader.problems:
-        raise DocumentError(reader.problems)
+        raise DocumentError(limit(reader.problems, doc.name))
     return profile
 
 
@@ -125,6 +177,18 @@ class _Reader:
     def error(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
         self.problems.append(self.doc.problem(el, message, attribute=attribute))
 
+    def number(self, el: etree._Element, name: str, default: float = 1.0) -> float:
+        """A number of the profile, checked against its :data:`FIGURES` bound.
+
+        Out of range (infinite, zero where it must be positive, too large):
+        a problem at the attribute, and ``default`` so that reading goes on.
+        """
+        value = number(self.doc, el, name, FIGURES[(local_name(el), name)], default)
+        if isinstance(value, Problem):
+            self.problems.append(value)
+            return default
+        return value
+
     def read(self) -> RobotProfile:
         """The profile; problems found on the way are in :attr:`problems`."""
         root = self.doc.root
@@ -139,21 +203,42 @@ class _Reader:
         return RobotProfile(
             name=root.get("name", ""),
             path=self.doc.name,
-            radius=_num(body, "radius"),
-            max_speed=_num(body, "max-speed"),
-            max_accel=_num(body, "max-accel"),
-            max_turn_rate=_num(body, "max-turn-rate"),
-            speech_rate=_num(parts["speech"], "rate"),
-            camera_fov=_num(camera, "fov"),
-            camera_range=_num(camera, "range"),
-            pan_range=(_num(head, "pan-min"), _num(head, "pan-max")),
-            tilt_range=(_num(head, "tilt-min"), _num(head, "tilt-max")),
+            radius=self.number(body, "radius"),
+            max_speed=self.number(body, "max-speed"),
+            max_accel=self.number(body, "max-accel"),
+            max_turn_rate=self.number(body, "max-turn-rate"),
+            speech_rate=self.number(parts["speech"], "rate"),
+            camera_fov=self.number(camera, "fov"),
+            camera_range=self.number(camera, "range"),
+            pan_range=(self.number(head, "pan-min", 0.0), self.number(head, "pan-max", 0.0)),
+            tilt_range=(self.number(head, "tilt-min", 0.0), self.number(head, "tilt-max", 0.0)),
             devices=frozenset(self.devices),
             gestures=self.gestures,
             commands=tuple(self.commands),
             extras=self.extras,
             events=self.events,
+            budgets=self._budgets(parts.get("budgets")),
         )
+
+    def _budgets(self, el: etree._Element | None) -> Budgets:
+        """The ``<budgets>`` element's values over the defaults."""
+        d = Budgets()
+        if el is None:
+            return d
+        budgets = Budgets(
+            text=int(self.number(el, "text", d.text)),
+            sends_per_second=self.number(el, "sends-per-second", d.sends_per_second),
+            waiting=int(self.number(el, "waiting", d.waiting)),
+            longest_ab=self.number(el, "longest-ab", d.longest_ab),
+            wait_share=self.number(el, "wait-share", d.wait_share),
+            wait_window=self.number(el, "wait-window", d.wait_window),
+            starts_per_instant=int(self.number(el, "starts-per-instant", d.starts_per_instant)),
+        )
+        if budgets.wait_share > budgets.wait_window:
+            self.error(el, f"wait-share={budgets.wait_share:g} s is longer than its window "
+                           f"(wait-window={budgets.wait_window:g} s)",
+                       "wait-share" if el.get("wait-share") is not None else "wait-window")
+        return budgets
 
     def _devices(self, parent: etree._Element) -> None:
         for dev in elements(parent):
@@ -168,7 +253,7 @@ class _Reader:
         name = el.get("name", "")
         if name in self.gestures:
             self.error(el, f"gesture '{name}' is declared twice", "name")
-        self.gestures[name] = _num(el, "duration")
+        self.gestures[name] = self.number(el, "duration")
 
     def command(self, el: etree._Element) -> None:
         name = el.get("name", "")
@@ -187,12 +272,12 @@ class _Reader:
             devices=frozenset(used),
             feedback=flag(el, "feedback"),
             breaks_cc=flag(el, "breaks-cc"),
-            params=tuple(_param(p) for p in elements(el)),
+            params=tuple(self.param(p) for p in elements(el)),
             robot_specific=True,
             doc=el.get("doc", ""),
             priority_override=None if priority is None else
             (Priority.HIGH if priority == "high" else Priority.LOW),
-            duration=_num(el, "duration") if el.get("duration") else None,
+            duration=self.number(el, "duration") if el.get("duration") else None,
         ))
 
     def extra(self, el: etree._Element) -> None:
@@ -201,7 +286,17 @@ class _Reader:
             self.error(el, f"additional argument for unknown Command '{command}'", "command")
         if name in self.extras.get(command, {}):
             self.error(el, f"additional argument '{name}' of {command} is declared twice", "name")
-        self.extras.setdefault(command, {})[name] = _param(el)
+        self.extras.setdefault(command, {})[name] = self.param(el)
+
+    def param(self, el: etree._Element) -> Param:
+        """A ``<param>`` or ``<extra>``; a number's default must be a finite number."""
+        param = _param(el)
+        raw = el.get("default")
+        if raw is not None and param.kind is ParamKind.NUMBER and param.default is None:
+            shown = raw if len(raw) <= 20 else raw[:17] + "..."
+            self.error(el, f"default={shown!r} is not a number a Command can take "
+                           f"(finite, at most {MAX_NUMBER:.0f} in size)", "default")
+        return param
 
     def event(self, el: etree._Element) -> None:
         name = el.get("name", "")
@@ -215,7 +310,8 @@ class _Reader:
 
     def _check_ranges(self, head: etree._Element) -> None:
         for lo, hi, what in (("pan-min", "pan-max", "pan"), ("tilt-min", "tilt-max", "tilt")):
-            if _num(head, lo) > _num(head, hi):
+            low, high = _float(head.get(lo, "0")), _float(head.get(hi, "0"))
+            if low is not None and high is not None and low > high:
                 self.error(head, f"{what} range is empty: {lo} > {hi}", lo)
 
 

@@ -3,6 +3,8 @@
 Each file is dispatched on its root element's namespace: a PXML document, a
 robot profile, or another kind the caller knows how to check (the CLI adds
 scenarios and maps). Folders are searched for ``*.pxml`` and ``*.xml`` files.
+A :class:`Validation` checks each file once, however many times it is given
+or named (a scenario names its map, robot profile and applications).
 """
 
 from __future__ import annotations
@@ -11,13 +13,14 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from io import BytesIO
 from pathlib import Path
+from typing import NamedTuple
 
 from lxml import etree
 
 from prima.dsl._loader import NAMESPACE as PXML_NS
 from prima.dsl._loader import check_parsed
 from prima.dsl._profile import NAMESPACE as ROBOT_NS
-from prima.dsl._profile import RobotProfile, profile_from_xml
+from prima.dsl._profile import RobotProfile, default_profile, load_profile, profile_from_xml
 from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.xmlio import parse_xml, read_source
 
@@ -84,6 +87,15 @@ def root_namespace(data: bytes) -> str | None:
     return None
 
 
+class Header(NamedTuple):
+    """What a file's root says: its namespace and, for a PXML document, its ``kind`` and
+    ``name`` (as written; empty otherwise)."""
+
+    namespace: str
+    kind: str = ""
+    name: str = ""
+
+
 def check_file(path: Path, profile: RobotProfile | None = None,
                checkers: Mapping[str, Checker] | None = None, *,
                skip_unknown: bool = False) -> list[Problem] | None:
@@ -92,36 +104,128 @@ def check_file(path: Path, profile: RobotProfile | None = None,
     With ``skip_unknown`` (a file found in a folder), an ``.xml`` file of no
     known kind, or one that cannot be read, gives None: it is not ours.
     """
+    return _check(path, profile, checkers, skip_unknown)[0]
+
+
+def _check(path: Path, profile: RobotProfile | None, checkers: Mapping[str, Checker] | None,
+           skip_unknown: bool) -> tuple[list[Problem] | None, Header | None]:
+    """:func:`check_file`, and the file's header when its root element could be read."""
     skippable = skip_unknown and path.suffix != ".pxml"
     try:
         data = read_source(path, DocumentError)
     except DocumentError as exc:
-        return None if skippable else list(exc.problems)
+        return (None if skippable else list(exc.problems)), None
     namespace = root_namespace(data)
+    header = None if namespace is None else Header(namespace)
     checker = checkers.get(namespace) if checkers and namespace is not None else None
     if checker is not None:
-        return checker(path)
+        return checker(path), header
     if skippable and namespace not in (PXML_NS, ROBOT_NS):
-        return None
+        return None, None
     try:
         doc = parse_xml(data, str(path), DocumentError)
         if namespace == ROBOT_NS:
             profile_from_xml(doc)
-            return []
+            return [], header
     except DocumentError as exc:
-        return list(exc.problems)
-    return check_parsed(doc, profile)[1]
+        return list(exc.problems), header
+    if namespace == PXML_NS:
+        header = Header(namespace, doc.root.get("kind", ""), doc.root.get("name", ""))
+    return check_parsed(doc, profile)[1], header
+
+
+class Validation:
+    """Checks files into one :class:`Report`, each file once (by its resolved path).
+
+    ``checkers`` check other kinds of file (the CLI adds scenarios and maps);
+    a checker may call back into the validation to check the files its file
+    names (:meth:`document`, :meth:`robot`, :meth:`claim`).
+    """
+
+    def __init__(self, profile: RobotProfile | None = None,
+                 checkers: Mapping[str, Checker] | None = None) -> None:
+        self.profile = profile
+        """The robot profile documents are checked against, unless one is named for them."""
+        self.checkers: dict[str, Checker] = dict(checkers or {})
+        self.report = Report()
+        self._seen: set[Path] = set()
+        self._checking: set[Path] = set()
+        """Files being checked: a file that names itself (a scenario as its own map) is
+        not checked again from inside its own check."""
+        self._headers: dict[Path, Header] = {}
+        self._robots: dict[Path, RobotProfile | None] = {}
+
+    def claim(self, path: Path) -> bool:
+        """Whether ``path`` is still to be checked; if so, it is now counted as checked."""
+        key = _key(path)
+        if key in self._seen or key in self._checking:
+            return False
+        self._seen.add(key)
+        self.report.files.append(str(path))
+        return True
+
+    def add(self, path: Path, *, explicit: bool = True,
+            profile: RobotProfile | None = None) -> None:
+        """Check ``path`` (unless it was already checked); a file found in a folder
+        (not ``explicit``) that is not a PRIMA file is skipped."""
+        key = _key(path)
+        if key in self._seen or key in self._checking:
+            return
+        # a checker may check the files this one names: this one is reported before them
+        files_at, problems_at = len(self.report.files), len(self.report.problems)
+        self._checking.add(key)
+        try:
+            problems, header = _check(path, profile or self.profile, self.checkers,
+                                      skip_unknown=not explicit)
+        finally:
+            self._checking.discard(key)
+        if problems is None or key in self._seen:
+            return
+        if header is not None:
+            self._headers[key] = header
+        self._seen.add(key)
+        self.report.files.insert(files_at, str(path))
+        self.report.problems[problems_at:problems_at] = problems
+
+    def document(self, path: Path, profile: RobotProfile | None = None) -> Header | None:
+        """Check a document another file names (once); its header, if its root could be read."""
+        self.add(path, profile=profile)
+        return self._headers.get(_key(path))
+
+    def robot(self, path: Path) -> RobotProfile | None:
+        """Check a robot profile another file names (once); the profile, or None if it has
+        errors (they are reported in the profile's own file)."""
+        key = _key(path)
+        if key not in self._robots:
+            try:
+                robot: RobotProfile | None = load_profile(path)
+                problems: list[Problem] = []
+            except DocumentError as exc:
+                robot, problems = None, list(exc.problems)
+            if self.claim(path):
+                self.report.problems.extend(problems)
+            self._robots[key] = robot
+            if robot is not None:
+                self._headers.setdefault(key, Header(ROBOT_NS))
+        return self._robots[key]
+
+    def run(self, paths: Iterable[tuple[Path, bool] | Path]) -> Report:
+        """Check every path (``(path, explicit)`` pairs from :func:`collect`, or paths)."""
+        for item in paths:
+            path, explicit = item if isinstance(item, tuple) else (item, True)
+            self.add(path, explicit=explicit)
+        return self.report
+
+
+def _key(path: Path) -> Path:
+    try:
+        return path.resolve()
+    except (OSError, RuntimeError):  # a symlink loop: the path itself will fail to read
+        return path.absolute()
 
 
 def validate_paths(paths: Iterable[tuple[Path, bool] | Path], profile: RobotProfile | None = None,
                    checkers: Mapping[str, Checker] | None = None) -> Report:
-    """Validate every file; files found in folders are skipped unless they are known kinds."""
-    report = Report()
-    for item in paths:
-        path, explicit = item if isinstance(item, tuple) else (item, True)
-        problems = check_file(path, profile, checkers, skip_unknown=not explicit)
-        if problems is None:
-            continue
-        report.files.append(str(path))
-        report.problems.extend(problems)
-    return report
+    """Validate every file, each once; files found in folders are skipped unless they are
+    known kinds."""
+    return Validation(profile or default_profile(), checkers).run(paths)

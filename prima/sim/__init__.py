@@ -23,7 +23,15 @@ from prima.sim._records import (
     ZoneEntry,
 )
 from prima.sim._runner import CommandRunner, EntryKind, TraceEntry
-from prima.sim._scenario import MAP_NS, SCENARIO_NS, Scenario, load_map, load_scenario
+from prima.sim._scenario import (
+    MAP_NS,
+    SCENARIO_NS,
+    Reference,
+    Scenario,
+    load_map,
+    load_scenario,
+    scenario_references,
+)
 from prima.sim._simulator import Simulator
 from prima.sim._spec import DEFAULT_GESTURES, RobotSpec
 from prima.sim._user import AnswerRule, ScriptedUser, TimedAction, UserScript
@@ -41,6 +49,7 @@ __all__ = [
     "Place",
     "PlaceKind",
     "Pose",
+    "Reference",
     "ReplyRule",
     "RobotSpec",
     "Scenario",
@@ -59,4 +68,5 @@ __all__ = [
     "load_map",
     "load_scenario",
     "main",
+    "scenario_references",
 ]

@@ -2,16 +2,25 @@
 
 Loading is two-stage, like documents: the XSD checks structure, then the
 meaning checks look at what the schema cannot (unknown places, a wall across a
-graph edge, actions out of time order, a bad regular expression). Every problem
-is a :class:`~prima.errors.Problem` with ``file:line:col``; all of a file's
-problems are raised together as one :class:`~prima.errors.ScenarioError`.
+graph edge, actions out of time order, an answer pattern outside the safe
+subset, a number the simulator cannot use). Every problem is a
+:class:`~prima.errors.Problem` with ``file:line:col``; all of a file's
+problems (at most 50, then a line counting the rest) are raised together as
+one :class:`~prima.errors.ScenarioError`.
+
+Every number is checked as the simulator will use it: a decimal the schema
+accepts can be infinite or zero as a float (``1`` and 400 zeros), and times,
+sizes, speeds and coordinates have the documented ranges of :data:`BOUNDS`.
 """
 
 from __future__ import annotations
 
+import heapq
 import math
+import os
 import re
-from collections.abc import Iterable, Iterator
+import stat
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,12 +31,58 @@ from prima.errors import Problem, ScenarioError
 from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
-from prima.xmlio import XmlDocument, local_name, parse_xml, read_source, validate
+from prima.sim._simulator import SENSE_HZ
+from prima.xmlio import (
+    Bound,
+    XmlDocument,
+    integer,
+    limit,
+    local_name,
+    number,
+    parse_xml,
+    read_source,
+    validate,
+)
 
-__all__ = ["MAP_NS", "SCENARIO_NS", "Scenario", "load_map", "load_scenario"]
+__all__ = ["MAP_NS", "SCENARIO_NS", "Reference", "Scenario", "load_map", "load_scenario",
+           "scenario_references"]
 
 MAP_NS = "urn:prima:map:1"
 SCENARIO_NS = "urn:prima:scenario:1"
+
+MAX_UNTIL = 1_000_000.0
+"""Longest run (s); every time in a scenario is at most this."""
+
+MAX_RATE = 1_000
+"""Most physics steps per simulated second (a multiple of 10)."""
+
+MAX_SEED = 2**63 - 1
+"""Largest random seed."""
+
+MAX_NTH = 1_000_000
+"""Largest ``nth`` of an answer rule."""
+
+MAX_MATCHES = 200
+"""Longest answer pattern (``matches``, characters)."""
+
+_TIME = Bound(MAX_UNTIL, "s", positive=False)
+_COORDINATE = Bound(10_000.0, "m", -10_000.0, positive=False)
+_HEADING = Bound(360.0, "deg", -360.0, positive=False)
+_SPEED = Bound(100.0, "m/s")
+_SIZE = Bound(10_000.0, "m")
+
+BOUNDS: Mapping[str, Bound] = {
+    "until": Bound(MAX_UNTIL, "s"),
+    "at": _TIME, "after": _TIME,
+    "x": _COORDINATE, "y": _COORDINATE,
+    "x1": _COORDINATE, "y1": _COORDINATE, "x2": _COORDINATE, "y2": _COORDINATE,
+    "heading": _HEADING, "facing": _HEADING,
+    "speed": _SPEED,
+    "distance": _SIZE, "thickness": Bound(100.0, "m"),
+    "noise": Bound(100.0, "m", positive=False),
+    "heading-noise": Bound(360.0, "deg", positive=False),
+}
+"""The range of every number of a scenario or map, by attribute name."""
 
 
 @dataclass(frozen=True)
@@ -96,13 +151,41 @@ def _children(el: etree._Element) -> Iterator[etree._Element]:
     return (c for c in el if isinstance(c.tag, str))
 
 
-def _num(el: etree._Element, name: str, default: float | None = None) -> float | None:
-    value = el.get(name)
-    return default if value is None else float(value)
+class _Numbers:
+    """Reads the numbers of a scenario or map file, collecting their problems."""
+
+    def __init__(self, doc: XmlDocument) -> None:
+        self.doc = doc
+        self.problems: list[Problem] = []
+
+    def get(self, el: etree._Element, name: str, default: float = 0.0) -> float:
+        """Attribute ``name`` within its :data:`BOUNDS` range; ``default`` if absent or bad."""
+        value = number(self.doc, el, name, BOUNDS[name], default)
+        if isinstance(value, Problem):
+            self.problems.append(value)
+            return default
+        return value
+
+    def maybe(self, el: etree._Element, name: str) -> float | None:
+        """Like :meth:`get`, or None when the attribute is absent."""
+        return None if el.get(name) is None else self.get(el, name)
+
+    def whole(self, el: etree._Element, name: str, high: int, default: int) -> int:
+        """A whole number at most ``high``; ``default`` if absent or bad."""
+        value = integer(self.doc, el, name, high, default)
+        if isinstance(value, Problem):
+            self.problems.append(value)
+            return default
+        return value
 
 
-def _f(el: etree._Element, name: str) -> float:
-    return float(el.get(name, "0"))
+def _unusable(path: Path) -> str | None:
+    """Why a file a scenario names cannot be read (missing, not a regular file), or None."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return "not found"
+    return None if stat.S_ISREG(mode) else "is not a regular file"
 
 
 def _text(el: etree._Element) -> str:
@@ -119,15 +202,16 @@ def load_map(path: str | Path) -> WorldMap:
     places: list[Place] = []
     edges: list[tuple[str, str]] = []
     areas: list[Area] = []
-    problems: list[Problem] = []
+    num = _Numbers(doc)
+    problems = num.problems
     place_at: dict[str, etree._Element] = {}
     area_names: set[str] = set()
     edge_els: list[etree._Element] = []
     for el in _children(doc.root):
         tag = local_name(el)
         if tag == "wall":
-            walls.append(Wall(_f(el, "x1"), _f(el, "y1"), _f(el, "x2"), _f(el, "y2"),
-                              float(el.get("thickness", "0.1"))))
+            walls.append(Wall(num.get(el, "x1"), num.get(el, "y1"), num.get(el, "x2"),
+                              num.get(el, "y2"), num.get(el, "thickness", 0.1)))
         elif tag == "place":
             name = el.get("name", "")
             if name in place_at:
@@ -136,8 +220,8 @@ def load_map(path: str | Path) -> WorldMap:
                                             attribute="name"))
                 continue
             place_at[name] = el
-            places.append(Place(name, PlaceKind(el.get("kind", "point")), _f(el, "x"),
-                                _f(el, "y"), _num(el, "facing")))
+            places.append(Place(name, PlaceKind(el.get("kind", "point")), num.get(el, "x"),
+                                num.get(el, "y"), num.maybe(el, "facing")))
         elif tag == "edge":
             edge_els.append(el)
         elif tag == "area":
@@ -147,15 +231,16 @@ def load_map(path: str | Path) -> WorldMap:
                                             attribute="name"))
                 continue
             area_names.add(name)
-            areas.append(Area(name, _f(el, "x1"), _f(el, "y1"), _f(el, "x2"), _f(el, "y2")))
+            areas.append(Area(name, *(num.get(el, a) for a in ("x1", "y1", "x2", "y2"))))
     space = _wall_space(walls)
     by_name = {p.name: p for p in places}
+    known = _known(by_name)  # once: a map may name thousands of unknown places
     for el in edge_els:
         a, b = el.get("from", ""), el.get("to", "")
         bad = False
         for attr, name in (("from", a), ("to", b)):
             if name not in by_name:
-                problems.append(doc.problem(el, f"unknown place {name!r}{_known(by_name)}",
+                problems.append(doc.problem(el, f"unknown place {name!r}{known}",
                                             attribute=attr))
                 bad = True
         if bad:
@@ -171,7 +256,7 @@ def load_map(path: str | Path) -> WorldMap:
             continue
         edges.append((a, b))
     if problems:
-        raise ScenarioError(sorted(problems))
+        raise ScenarioError(limit(sorted(problems), str(path)))
     name = doc.root.get("name", path.stem)
     return WorldMap(name, tuple(walls), tuple(places), tuple(edges), tuple(areas),
                     source=str(path))
@@ -186,7 +271,7 @@ def _wall_space(walls: list[Wall]) -> pymunk.Space:
 
 def _known(names: Iterable[str]) -> str:
     """A hint listing up to 12 of ``names`` (empty if there are none)."""
-    shown = sorted(names)
+    shown = heapq.nsmallest(13, names)
     if not shown:
         return ""
     more = "" if len(shown) <= 12 else ", ..."
@@ -205,8 +290,26 @@ class _Loader:
         self.replies: list[ReplyRule] = []
         self.doc = doc
         self.path = path
-        self.problems: list[Problem] = []
+        self.num = _Numbers(doc)
+        self.problems = self.num.problems
         self.map: WorldMap | None = None
+        self._hints: dict[str, str] = {}
+        self._areas: dict[str, Area] | None = None
+
+    def hint(self, what: str, names: Callable[[], Iterable[str]]) -> str:
+        """:func:`_known` of ``names``, computed once per ``what`` (a scenario may name
+        thousands of unknown places)."""
+        if what not in self._hints:
+            self._hints[what] = _known(names())
+        return self._hints[what]
+
+    def area(self, name: str) -> Area | None:
+        """The map's first area called ``name`` (looked up, not searched)."""
+        if self._areas is None:
+            self._areas = {}
+            for a in self.map.areas if self.map is not None else ():
+                self._areas.setdefault(a.name, a)
+        return self._areas.get(name)
 
     def bad(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
         self.problems.append(self.doc.problem(el, message, attribute=attribute))
@@ -217,9 +320,9 @@ class _Loader:
             return None
         place = self.map.place(name)
         if place is None:
-            known = (p.name for p in self.map.places)
-            self.bad(el, f"unknown place {name!r} on map {self.map.name!r}{_known(known)}",
-                     attribute)
+            places = self.map.places
+            known = self.hint("places", lambda: (p.name for p in places))
+            self.bad(el, f"unknown place {name!r} on map {self.map.name!r}{known}", attribute)
         return place
 
     def where(self, el: etree._Element, attribute: str = "place") -> Pose:
@@ -231,10 +334,10 @@ class _Loader:
             self.bad(el, f"<{local_name(el)}> needs '{attribute}' or both 'x' and 'y'")
             return Pose(0.0, 0.0)
         place = self.place(el, attribute)
-        heading = _num(el, "heading")
+        heading = self.num.maybe(el, "heading")
         if place is not None:
             return Pose(place.x, place.y, heading if heading is not None else place.facing or 0.0)
-        return Pose(_f(el, "x"), _f(el, "y"), heading or 0.0)
+        return Pose(self.num.get(el, "x"), self.num.get(el, "y"), heading or 0.0)
 
     def load(self) -> Scenario:
         root = self.doc.root
@@ -242,8 +345,9 @@ class _Loader:
         map_el = kids["map"]
         href = map_el.get("href", "")
         map_path = self.path.parent / href
-        if not map_path.is_file():
-            self.bad(map_el, f"map file {href!r} not found (looked for {map_path})", "href")
+        unusable = _unusable(map_path)
+        if unusable is not None:
+            self.bad(map_el, f"map file {href!r} {unusable} (looked for {map_path})", "href")
             raise ScenarioError(self.problems)
         self.map = load_map(map_path)
         robot_el = kids["robot"]
@@ -257,13 +361,15 @@ class _Loader:
             self.exists(zone_el, "ea")
         user = self.user(kids["user"]) if "user" in kids else None
         events, zones = self.environment(root)
+        until, seed, rate = self.num.get(root, "until", 1.0), self.seed(root), self.rate(root)
+        noise = self.num.get(robot_el, "noise")
+        heading_noise = self.num.get(robot_el, "heading-noise")
         if self.problems:
-            raise ScenarioError(sorted(self.problems))
+            raise ScenarioError(limit(sorted(self.problems), str(self.path)))
         return Scenario(
             name=root.get("name", self.path.stem), source=str(self.path), map=self.map,
-            robot=robot, until=float(root.get("until", "0")), seed=int(root.get("seed", "0")),
-            rate=self.rate(root), noise=float(robot_el.get("noise", "0")),
-            heading_noise=float(robot_el.get("heading-noise", "0")),
+            robot=robot, until=until, seed=seed, rate=rate, noise=noise,
+            heading_noise=heading_noise,
             profile=robot_el.get("profile"),
             fa=apps.get("fa") if apps is not None else None,
             ea=apps.get("ea") if apps is not None else None,
@@ -271,21 +377,31 @@ class _Loader:
             description=_text(kids["description"]) if "description" in kids else "")
 
     def exists(self, el: etree._Element, attribute: str) -> None:
-        """A file the scenario names (a document, a profile) must exist; it is not opened."""
+        """A file the scenario names (a document, a profile) must be a regular file; it is not
+        opened here (``prima validate`` checks it too)."""
         value = el.get(attribute)
-        if value is not None and not (self.path.parent / value).is_file():
-            self.bad(el, f"file {value!r} not found (looked for {self.path.parent / value})",
+        if value is None:
+            return
+        unusable = _unusable(self.path.parent / value)
+        if unusable is not None:
+            self.bad(el, f"file {value!r} {unusable} (looked for {self.path.parent / value})",
                      attribute)
 
+    def seed(self, root: etree._Element) -> int:
+        return self.num.whole(root, "seed", MAX_SEED, 0)
+
     def rate(self, root: etree._Element) -> int:
-        rate = int(root.get("rate", "50"))
-        if rate % 10:
-            self.bad(root, f"rate must be a multiple of 10 steps per second, not {rate}", "rate")
+        """Steps per second: a multiple of the simulator's sensing rate, at most MAX_RATE."""
+        rate = self.num.whole(root, "rate", MAX_RATE, 50)
+        if rate % SENSE_HZ or rate <= 0:
+            self.bad(root, f"rate must be a multiple of {SENSE_HZ} steps per second, not {rate}",
+                     "rate")
+            return 50
         return rate
 
     def user(self, el: etree._Element) -> UserScript:
         start = self.where(el)
-        speed = float(el.get("speed", "0.3"))
+        speed = self.num.get(el, "speed", 0.3)
         actions: list[TimedAction] = []
         answers: list[AnswerRule] = []
         last = -math.inf
@@ -294,7 +410,7 @@ class _Loader:
             if tag == "answer":
                 answers.append(self.answer(child))
                 continue
-            at = float(child.get("at", "0"))
+            at = self.num.get(child, "at")
             if at < last:
                 self.bad(child, f"<{tag}> at {at:g} s comes after an action at {last:g} s; "
                                 "list the user's actions in time order", "at")
@@ -309,10 +425,11 @@ class _Loader:
                     self.bad(child, f"<{tag}> needs 'to' (a place) or both 'x' and 'y'")
                 found = self.place(child, "to")
                 place = found.name if found is not None else None
+            num = self.num
             actions.append(TimedAction(
                 at=at, action=kind, text=child.get("text"), place=place,
-                x=_num(child, "x"), y=_num(child, "y"), speed=_num(child, "speed"),
-                distance=float(child.get("distance", "1.0"))))
+                x=num.maybe(child, "x"), y=num.maybe(child, "y"), speed=num.maybe(child, "speed"),
+                distance=num.get(child, "distance", 1.0)))
         return UserScript(start, speed, tuple(actions), tuple(answers))
 
     def answer(self, el: etree._Element) -> AnswerRule:
@@ -320,15 +437,20 @@ class _Loader:
         if contains is not None and pattern is not None:
             self.bad(el, "give either 'contains' or 'matches', not both", "matches")
         if pattern is not None:
-            try:
-                re.compile(pattern)
-            except re.error as exc:
-                self.bad(el, f"bad regular expression: {exc.msg}", "matches")
+            fault = safe_pattern(pattern)
+            if fault is None:
+                try:  # never expected: the subset is made of valid regular expressions
+                    re.compile(pattern)
+                except re.error as exc:
+                    fault = 0, f"matches: bad regular expression: {exc.msg}"
+            if fault is not None:
+                index, message = fault
+                self.problems.append(self.doc.problem(el, message, attribute="matches",
+                                                      index=index))
                 pattern = None
-        nth = el.get("nth")
+        nth = self.num.whole(el, "nth", MAX_NTH, 1) if el.get("nth") is not None else None
         return AnswerRule(say=el.get("say"), contains=contains, pattern=pattern,
-                          after=float(el.get("after", "1.0")),
-                          nth=int(nth) if nth is not None else None)
+                          after=self.num.get(el, "after", 1.0), nth=nth)
 
     def environment(self, root: etree._Element) -> tuple[tuple[ScheduledEvent, ...],
                                                           tuple[Zone, ...]]:
@@ -339,7 +461,7 @@ class _Loader:
         for el in _children(root):
             tag = local_name(el)
             if tag in ("message", "sound", "event"):
-                at = float(el.get("at", "0"))
+                at = self.num.get(el, "at")
                 if at < last:
                     self.bad(el, f"<{tag}> at {at:g} s comes after one at {last:g} s; list "
                                  "messages, sounds and events in time order", "at")
@@ -354,7 +476,7 @@ class _Loader:
                     events.append(ScheduledEvent(at, el.get("name", ""), data))
             elif tag == "reply":
                 self.replies.append(ReplyRule(el.get("to", ""), el.get("text", ""),
-                                              float(el.get("after", "1.0")), el.get("contains")))
+                                              self.num.get(el, "after", 1.0), el.get("contains")))
             elif tag == "zone":
                 zone = self.zone(el)
                 if zone is not None:
@@ -372,16 +494,97 @@ class _Loader:
             if any(v is not None for v in rect):
                 self.bad(el, "give either 'area' or x1, y1, x2, y2, not both", "area")
                 return None
-            area = self.map.area(area_name) if self.map is not None else None
+            area = self.area(area_name)
             if area is None:
-                known = [a.name for a in self.map.areas] if self.map is not None else []
-                self.bad(el, f"unknown area {area_name!r}{_known(known)}", "area")
+                areas = self.map.areas if self.map is not None else ()
+                known = self.hint("areas", lambda: (a.name for a in areas))
+                self.bad(el, f"unknown area {area_name!r}{known}", "area")
                 return None
             return Zone(name, ea, area)
         if any(v is None for v in rect):
             self.bad(el, "a zone needs 'area' or all of x1, y1, x2, y2")
             return None
-        return Zone(name, ea, Area(name, *(float(v or 0) for v in rect)))
+        return Zone(name, ea, Area(name, *(self.num.get(el, a) for a in ("x1", "y1", "x2", "y2"))))
+
+
+_FORBIDDEN = {"*": "repetition", "+": "repetition", "?": "repetition", "{": "repetition",
+              "}": "repetition", "(": "a group", ")": "a group", "[": "a character class",
+              "]": "a character class"}
+
+
+def safe_pattern(pattern: str) -> tuple[int, str] | None:
+    """Where and why ``pattern`` is outside the safe subset of regular expressions, or None.
+
+    The subset: alternatives separated by ``|``, each literal text in which
+    ``.`` is any character, ``\\b`` a word boundary, ``\\d`` ``\\w`` ``\\s`` a digit,
+    word character or space, a backslash escapes punctuation, and ``^`` and
+    ``$`` anchor at the start and end of an alternative. With no repetition,
+    groups or classes, each alternative matches a fixed number of characters
+    and ``re.search`` never backtracks: its cost is the prompt's length times
+    the pattern's, at most :data:`MAX_MATCHES` characters.
+    """
+    if len(pattern) > MAX_MATCHES:
+        return MAX_MATCHES, f"matches: longer than {MAX_MATCHES} characters"
+    i, n, first = 0, len(pattern), True
+    while i < n:
+        ch = pattern[i]
+        if ch == "\\":
+            escaped = pattern[i + 1 : i + 2]
+            if not escaped or (escaped.isalnum() and escaped not in "bdws"):
+                return i, ("matches: a backslash must escape punctuation or be \\b, \\d, \\w "
+                           "or \\s")
+            i, first = i + 2, False
+            continue
+        if ch in _FORBIDDEN:
+            return i, (f"matches: {_FORBIDDEN[ch]} ({ch!r}) is not in the safe subset of "
+                       "regular expressions (docs/scenarios.md)")
+        if (ch == "^" and not first) or (ch == "$" and pattern[i + 1 : i + 2] not in ("", "|")):
+            return i, f"matches: {ch!r} anchors only at the start ('^') or end ('$') of an " \
+                      "alternative"
+        first = ch == "|"
+        i += 1
+    return None
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A file a scenario names, and where it names it."""
+
+    role: str
+    """``map``, ``profile``, ``fa``, ``ea`` (the EA from the start) or ``zone`` (a zone's EA)."""
+    path: Path
+    """The file: the scenario's folder joined with ``value`` (normalised, not resolved)."""
+    value: str
+    """The path as the scenario writes it."""
+    line: int
+    col: int
+    """Where the attribute's value is written in the scenario file."""
+
+
+_REFERENCES = (("map", "href", "map"), ("robot", "profile", "profile"), ("apps", "fa", "fa"),
+               ("apps", "ea", "ea"), ("zone", "ea", "zone"))
+"""(element, attribute, role) of every file a scenario may name."""
+
+
+def scenario_references(path: str | Path) -> list[Reference]:
+    """The files a scenario names, in document order; read from its XML alone, so that
+    they can be checked even when the scenario itself has errors. Empty if it cannot be
+    read or parsed, or is not a scenario."""
+    path = Path(path)
+    try:
+        doc = parse_xml(read_source(path, ScenarioError), str(path), ScenarioError)
+    except ScenarioError:
+        return []
+    if etree.QName(doc.root).namespace != SCENARIO_NS:
+        return []
+    found = []
+    for el in _children(doc.root):
+        for tag, attribute, role in _REFERENCES:
+            value = el.get(attribute)
+            if local_name(el) == tag and value:
+                named = Path(os.path.normpath(path.parent / value))
+                found.append(Reference(role, named, value, *doc.where.attribute(el, attribute)))
+    return found
 
 
 def load_scenario(path: str | Path) -> Scenario:

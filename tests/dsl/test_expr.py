@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import re
+import time
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from prima.dsl import (
     Scope,
@@ -183,3 +186,114 @@ def test_a_constant_that_cannot_be_computed_is_a_fault(source: str, index: int,
     with pytest.raises(ExpressionError) as info:
         compile_expression(source)
     assert info.value.index == index and fragment in info.value.message
+
+
+# ---------------------------------------------------------------- bounds
+
+DEEP = "expression: nested more than 50 levels deep"
+
+
+@pytest.mark.parametrize("source, index", [
+    ("-" * 100 + "1", 50),                         # the 51st unary minus
+    ("not " * 60 + "x", 200),                      # the 51st 'not'
+    ("(" * 100 + "1" + ")" * 100, 50),             # the 51st bracket
+    ("+".join(["1"] * 60), 101),                   # the 51st '+' of a chain of sums
+    ("min(" * 60 + "1" + ", 2)" * 60, 200),        # the 51st call
+    ("(" * 30 + "a or " * 25 + "b" + ")" * 30, 132),  # brackets and operators add up
+])
+def test_nesting_is_bounded_at_the_character_that_crosses_it(source: str, index: int) -> None:
+    with pytest.raises(ExpressionError) as info:
+        compile_expression(source)
+    assert info.value.index == index
+    assert info.value.message.startswith(DEEP)
+
+
+@pytest.mark.parametrize("source", [
+    " or ".join(f"x == {i}" for i in range(25)),   # 25 alternatives: 25 levels
+    "+".join(["1"] * 50),
+    "-" * 49 + "1",
+    "a * b + c * d - e / f % g < 3 and not (x or y)",
+])
+def test_ordinary_expressions_stay_within_the_bound(source: str) -> None:
+    compile_expression(source)
+
+
+def test_a_string_template_counts_as_a_level() -> None:
+    # 45 '-' outside the string, then the string and its template: the fourth '-' inside
+    # the template is the 51st level
+    inner = '"{' + "-" * 5 + '1}"'
+    with pytest.raises(ExpressionError) as info:
+        compile_expression("-" * 45 + inner)
+    assert info.value.message.startswith(DEEP)
+    assert info.value.index == 45 + 2 + 3
+    compile_expression("-" * 40 + inner)
+
+
+@pytest.mark.parametrize("size", [300_000, 10_001])
+def test_a_huge_expression_is_refused_quickly(size: int) -> None:
+    start = time.perf_counter()
+    for source in ("(" * size + "1" + ")" * size, "-" * size + "1", "+".join(["1"] * size)):
+        with pytest.raises(ExpressionError) as info:
+            compile_expression(source)
+        assert (info.value.index, info.value.message) == (
+            10_000, "expression: longer than 10,000 characters")
+    assert time.perf_counter() - start < 0.5
+
+
+def test_a_deep_expression_within_the_length_is_refused_quickly() -> None:
+    start = time.perf_counter()
+    with pytest.raises(ExpressionError, match="nested more than"):
+        compile_expression("(" * 4_999 + "1" + ")" * 4_999)
+    assert time.perf_counter() - start < 0.1
+
+
+@given(st.text(alphabet="()[]{}-+*/%<=!,:'\"\\ ab1notrd.", max_size=300))
+def test_no_input_exhausts_the_compiler(source: str) -> None:
+    for compile_ in (compile_expression, compile_template, parse_chain):
+        try:
+            compile_(source)
+        except ExpressionError:
+            pass
+        except ExecutionError:  # a constant's fault is reported as an ExpressionError
+            raise
+
+
+def test_a_chain_holds_at_most_100_commands() -> None:
+    parse_chain(", ".join(["StopMoving()"] * 100))
+    source = ", ".join(["StopMoving()"] * 101)
+    with pytest.raises(ExpressionError) as info:
+        parse_chain(source)
+    assert info.value.index == 100 * len("StopMoving(), ")
+    assert info.value.message == "chain: more than 100 Commands in one chain"
+
+
+def test_a_chain_is_at_most_100_000_characters() -> None:
+    with pytest.raises(ExpressionError) as info:
+        parse_chain('Speak("' + "a" * 100_000 + '")')
+    assert (info.value.index, info.value.message) == (100_000,
+                                                      "chain: longer than 100,000 characters")
+
+
+def test_number_literals_are_bounded() -> None:
+    compile_expression("9007199254740992")
+    with pytest.raises(ExpressionError, match="number too large"):
+        compile_expression("9007199254740993")
+
+
+@pytest.mark.parametrize("fits, source, max_text, index", [
+    ("a" * MAX_TEXT, "a" * (MAX_TEXT + 1), MAX_TEXT, MAX_TEXT),
+    ("abc{x}de", "abc{x}def", 5, 8),   # literal parts add up; the sixth is 'f'
+    ("{{" * 5, "{{" * 6, 5, 10),       # an escaped brace is one character
+])
+def test_literal_text_is_bounded(fits: str, source: str, max_text: int, index: int) -> None:
+    compile_template(fits, max_text=max_text)
+    with pytest.raises(ExpressionError) as info:
+        compile_template(source, max_text=max_text)
+    assert info.value.index == index
+    assert info.value.message == f"text: longer than {max_text:,} characters"
+
+
+def test_a_string_literal_is_bounded_by_the_budget() -> None:
+    compile_expression("'abcde'", max_text=5)
+    with pytest.raises(ExpressionError, match="text: longer than 5 characters"):
+        compile_expression("'abcdef'", max_text=5)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import pytest
 
 from prima.catalog import STANDARD_DEVICES, Priority
-from prima.dsl import default_profile, parse_profile
+from prima.dsl import RobotProfile, default_profile, parse_profile
 from prima.errors import DocumentError
+from prima.vocab import Budgets
 
 
 def test_default_profile_extends_the_catalog() -> None:
@@ -67,3 +68,81 @@ def test_a_robot_specific_command_without_a_duration_has_none() -> None:
         rest='<command name="Laser" devices="laser"/>'
              '<command name="Blink" devices="laser" duration="0.5"/>').encode(), "r.xml")
     assert [(c.name, c.duration) for c in profile.commands] == [("Laser", None), ("Blink", 0.5)]
+
+
+def _profile(body: str = 'radius="0.2" max-speed="0.4"', rest: str = "",
+             budgets: str = "") -> RobotProfile:
+    return parse_profile(_profile_text(body, rest, budgets).encode(), "r.xml")
+
+
+def _problems(**kwargs: str) -> list[tuple[str, int, str]]:
+    """Each problem's source line (stripped), column and message."""
+    with pytest.raises(DocumentError) as info:
+        _profile(**kwargs)
+    lines = _profile_text(**kwargs).splitlines()
+    return [(lines[p.line - 1].strip(), p.col, p.message) for p in info.value.problems]
+
+
+def _profile_text(body: str = 'radius="0.2" max-speed="0.4"', rest: str = "",
+                  budgets: str = "") -> str:
+    text = PROFILE.format(devices=ALL, rest=rest, tilt="-30").replace(
+        'radius="0.2" max-speed="0.4"', body)
+    if budgets:
+        text = text.replace("  </devices>\n", f"  </devices>\n  <budgets {budgets}/>\n")
+    return text
+
+
+def test_budgets_default_without_the_element() -> None:
+    assert default_profile().budgets == Budgets()
+    assert _profile().budgets == Budgets()
+
+
+def test_budgets_are_read() -> None:
+    profile = _profile(budgets='text="2000" sends-per-second="0.5" waiting="10" longest-ab="20" '
+                               'wait-share="5" wait-window="10" starts-per-instant="7"')
+    assert profile.budgets == Budgets(text=2000, sends_per_second=0.5, waiting=10,
+                                      longest_ab=20.0, wait_share=5.0, wait_window=10.0,
+                                      starts_per_instant=7)
+    assert isinstance(profile.budgets.text, int) and isinstance(profile.budgets.waiting, int)
+    assert _profile(budgets='waiting="3"').budgets == Budgets(waiting=3)
+
+
+HUGE = "1" + "0" * 400
+TINY = "0." + "0" * 400 + "1"
+
+
+@pytest.mark.parametrize("kwargs, col, fragment", [
+    ({"budgets": 'text="10001"'}, 18, "text='10001' is too large: at most 10,000 characters"),
+    ({"budgets": f'longest-ab="{HUGE}"'}, 24, "is too large: at most 1e+06 s"),
+    ({"budgets": f'sends-per-second="{TINY}"'}, 30, "must be greater than 0"),
+    ({"budgets": 'wait-share="90"'}, 24, "wait-share=90 s is longer than its window"),
+    ({"budgets": 'wait-window="10"'}, 25, "(wait-window=10 s)"),
+    ({"body": f'radius="{TINY}" max-speed="0.4"'}, 17, "radius='0.000000000000000...' must be"),
+    ({"body": f'radius="0.2" max-speed="{HUGE}"'}, 33, "max-speed='10000000000000000...' is too"),
+    ({"body": 'radius="11" max-speed="0.4"'}, 17, "radius='11' is too large: at most 10 m"),
+])
+def test_numbers_out_of_range_are_located(kwargs: dict[str, str], col: int,
+                                          fragment: str) -> None:
+    [(line, found_col, message)] = _problems(**kwargs)
+    assert line.startswith(("<budgets", "<body")) and found_col == col, message
+    assert fragment in message
+
+
+@pytest.mark.parametrize("rest, fragment", [
+    (f'<gesture name="g" duration="{TINY}"/>', "duration="),
+    ('<gesture name="g" duration="3601"/>', "at most 3,600 s"),
+    (f'<command name="Zap" devices="arm" duration="{HUGE}"/>', "duration="),
+    ('<extra command="Speak" name="v" kind="number" default="nan"/>',
+     "default='nan' is not a number a Command can take"),
+    ('<extra command="Speak" name="v" kind="number" default="1e999"/>',
+     "default='1e999' is not a number"),
+])
+def test_durations_and_defaults_must_be_usable(rest: str, fragment: str) -> None:
+    [(_line, _col, message)] = _problems(rest=rest)
+    assert fragment in message
+
+
+def test_a_number_default_that_is_not_a_number_at_all_is_reported() -> None:
+    [(_l, _c, message)] = _problems(rest='<extra command="Speak" name="v" kind="number" '
+                                          'default="loud"/>')
+    assert "default='loud'" in message

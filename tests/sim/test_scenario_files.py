@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import io
+import os
 import shutil
 import subprocess
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -101,7 +103,7 @@ def test_several_problems_are_reported_together(tmp_path: Path) -> None:
     assert [line for line, _ in lines] == [4, 7, 8, 10, 10]
     assert "unknown place 'lobby'" in found[0][2]
     assert "comes after an action at 5 s" in found[1][2]
-    assert "bad regular expression" in found[2][2]
+    assert "a group ('(') is not in the safe subset" in found[2][2]
     assert {"file 'e.pxml' not found", "unknown area 'garden'"} == {
         m.split(" (")[0] for _, _, m in found[3:]}
 
@@ -188,3 +190,116 @@ def test_xmllint_accepts_the_schemas_and_the_shipped_files(schema: str, path: Pa
     result = subprocess.run([XMLLINT, "--noout", "--schema", str(SCHEMAS / schema), str(path)],
                             capture_output=True, text=True, check=False)
     assert result.returncode == 0, result.stderr
+
+
+# ---------------------------------------------------------------- numbers the run can use
+
+HUGE = "1" + "0" * 400   # a decimal the schema accepts; infinite as a float
+TINY = "0." + "0" * 400 + "1"  # positive as a decimal; 0 as a float
+ROBOT = '  <robot place="entrance"/>\n'
+
+
+UNTIL = 'name="t" until="10"'
+
+
+@pytest.mark.parametrize("attrs, body, where, fragment", [
+    (f'name="t" until="{HUGE}"', ROBOT, (2, "until"),
+     "until='10000000000000000...' is too large: at most 1e+06 s"),
+    (f'name="t" until="{TINY}"', ROBOT, (2, "until"),
+     "until='0.000000000000000...' must be greater than 0"),
+    ('name="t" until="1000001"', ROBOT, (2, "until"),
+     "until='1000001' is too large: at most 1e+06 s"),
+    (f'{UNTIL} rate="15"', ROBOT, (2, "rate"), "rate must be a multiple of 10"),
+    (f'{UNTIL} rate="1010"', ROBOT, (2, "rate"), "rate='1010' is too large: at most 1,000"),
+    (f'{UNTIL} rate="{HUGE}"', ROBOT, (2, "rate"), "rate='10000000000000000...' is too"),
+    (f'{UNTIL} seed="{"9" * 5000}"', ROBOT, (2, "seed"), "seed='99999999999999999...' is"),
+    (UNTIL, '  <robot x="0" y="20000"/>\n', (4, "y"), "y='20000' is too large"),
+    (UNTIL, f'  <robot x="0" y="0" heading="{HUGE}"/>\n', (4, "heading"), "heading="),
+    (UNTIL, '  <robot x="0" y="0" noise="101"/>\n', (4, "noise"), "noise='101' is too"),
+    (UNTIL, ROBOT + f'  <user x="0" y="0" speed="{TINY}"/>\n', (5, "speed"),
+     "speed='0.000000000000000...' must be greater than 0"),
+    (UNTIL, ROBOT + f'  <user x="0" y="0"><say at="{HUGE}" text="x"/></user>\n',
+     (5, "at"), "at='10000000000000000...' is too large"),
+    (UNTIL, ROBOT + f'  <user x="0" y="0"><follow at="1" distance="{TINY}"/></user>\n',
+     (5, "distance"), "distance="),
+    (UNTIL, ROBOT + f'  <user x="0" y="0"><walk at="1" x="{HUGE}" y="0"/></user>\n',
+     (5, 'walk at="1" x'), "x="),
+    (UNTIL, ROBOT + f'  <user x="0" y="0"><answer after="{HUGE}"/></user>\n',
+     (5, "after"), "after="),
+    (UNTIL, ROBOT + f'  <user x="0" y="0"><answer nth="{HUGE}"/></user>\n',
+     (5, "nth"), "nth='10000000000000000...' is too large: at most 1,000,000"),
+    (UNTIL, ROBOT + f'  <message at="{HUGE}" sender="s" text="t"/>\n', (5, "at"), "at="),
+    (UNTIL, ROBOT + f'  <reply to="v" after="{HUGE}" text="t"/>\n', (5, "after"), "after="),
+    (UNTIL, ROBOT + f'  <zone name="z" ea="s.xml" x1="0" y1="0" x2="{HUGE}" y2="1"/>\n',
+     (5, "x2"), "x2="),
+])
+def test_numbers_the_simulator_cannot_use_are_located(
+        tmp_path: Path, attrs: str, body: str, where: tuple[int, str], fragment: str) -> None:
+    path = scenario_file(tmp_path, MAP_REF + body, attrs=attrs)
+    found = problems(path)
+    line, attr = where
+    text = path.read_text().splitlines()[line - 1]
+    col = text.index(f'{attr}="') + len(f'{attr}="') + 1  # where the value starts
+    assert [(line_, col_) for line_, col_, _ in found] == [(line, col)], found
+    assert fragment in found[0][2]
+
+
+def test_map_numbers_are_located(tmp_path: Path) -> None:
+    path = tmp_path / "m.xml"
+    path.write_text(HEAD + '<map xmlns="urn:prima:map:1" name="m">\n'
+                    f'  <wall x1="0" y1="0" x2="{HUGE}" y2="0" thickness="{TINY}"/>\n'
+                    f'  <place name="a" x="0" y="0" facing="{HUGE}"/>\n'
+                    '  <area name="r" x1="0" y1="0" x2="1" y2="-10001"/>\n'
+                    '</map>\n')
+    found = problems(path, load_map)
+    assert [(line, col) for line, col, _ in found] == [(3, 27), (3, 448), (4, 39), (5, 43)]
+    kinds = [next(f for f in ("too large", "must be greater than 0", "too small") if f in m)
+             for _, _, m in found]
+    assert kinds == ["too large", "must be greater than 0", "too large", "too small"]
+
+
+@pytest.mark.parametrize("pattern, col, fragment", [
+    ("(a+)+$", 1, "a group ('(') is not in the safe subset"),
+    ("yes|no*", 7, "repetition ('*')"),
+    ("[abc]", 1, "a character class ('[')"),
+    ("a^b", 2, "'^' anchors only at the start"),
+    ("a$b", 2, "'$' anchors only"),
+    ("\\1", 1, "a backslash must escape punctuation"),
+    ("x" * 201, 201, "matches: longer than 200 characters"),
+])
+def test_an_answer_pattern_outside_the_safe_subset_is_located(
+        tmp_path: Path, pattern: str, col: int, fragment: str) -> None:
+    path = scenario_file(tmp_path, MAP_REF + ROBOT +
+                         f'  <user x="0" y="0"><answer matches="{pattern}" say="x"/></user>\n')
+    [(line, found_col, message)] = problems(path)
+    assert (line, found_col) == (5, 38 + col - 1) and fragment in message
+
+
+@pytest.mark.parametrize("pattern", ["channel|station", "^yes$|^no$", "\\bok\\b", "a.c\\?",
+                                     "\\d\\d:\\d\\d", "^|$"])
+def test_safe_answer_patterns_load(tmp_path: Path, pattern: str) -> None:
+    path = scenario_file(tmp_path, MAP_REF + ROBOT +
+                         f'  <user x="0" y="0"><answer matches="{pattern}" say="x"/></user>\n')
+    [rule] = load_scenario(path).user.answers  # type: ignore[union-attr]
+    assert rule.pattern == pattern
+
+
+def test_a_safe_pattern_searches_a_long_prompt_quickly(tmp_path: Path) -> None:
+    pattern = "|".join(["a" * 19 + "b"] * 9)  # 9 alternatives of 20 characters: 188
+    path = scenario_file(tmp_path, MAP_REF + ROBOT +
+                         f'  <user x="0" y="0"><answer matches="{pattern}" say="x"/></user>\n')
+    [rule] = load_scenario(path).user.answers  # type: ignore[union-attr]
+    start = time.perf_counter()
+    assert not rule.matches("a" * 10_000)
+    assert time.perf_counter() - start < 0.5
+
+
+def test_a_named_file_that_is_not_a_regular_file_is_located(tmp_path: Path) -> None:
+    os.mkfifo(tmp_path / "ea.pxml")
+    (tmp_path / "maps").mkdir()
+    path = scenario_file(tmp_path, '  <map href="maps"/>\n' + ROBOT)
+    [(line, col, message)] = problems(path)
+    assert (line, col) == (3, 14) and "map file 'maps' is not a regular file" in message
+    path = scenario_file(tmp_path, MAP_REF + '  <apps ea="ea.pxml"/>\n' + ROBOT)
+    [(line, col, message)] = problems(path)
+    assert (line, col) == (4, 13) and "file 'ea.pxml' is not a regular file" in message

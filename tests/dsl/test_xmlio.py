@@ -1,0 +1,172 @@
+"""Secure loading: exact positions in linear time, bounded reports, regular files only."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from prima.dsl import check_document, check_file
+from prima.errors import DocumentError, Problem, Severity
+from prima.xmlio import (
+    MAX_BYTES,
+    MAX_PROBLEMS,
+    XMLSCHEMA_NODES,
+    limit,
+    parse_xml,
+    read_source,
+)
+
+HEAD = '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t">\n'
+
+
+def _doc(text: str) -> tuple[object, list[Problem]]:
+    return check_document(text.encode(), "t.pxml")
+
+
+# ---------------------------------------------------------------- positions
+
+@pytest.mark.parametrize("raw, index, col", [
+    ("abc", 2, 9),
+    ("&amp;&lt;x", 2, 16),          # an entity reference is one character
+    ("&#x41;&#66;x", 2, 18),        # so is a character reference
+    ("&quot;", 1, 13),              # just past the end
+])
+def test_attribute_positions_count_references_as_one_character(raw: str, index: int,
+                                                               col: int) -> None:
+    doc = parse_xml(f'<a v="{raw}"/>'.encode(), "x", DocumentError)
+    assert doc.where.attribute(doc.root, "v", index) == (1, col)
+
+
+def test_text_positions_skip_cdata_markup_and_crlf() -> None:
+    data = b"<a>x&amp;<![CDATA[<&>]]>\r\nyz<b/></a>"
+    doc = parse_xml(data, "x", DocumentError)
+    assert doc.root.text == "x&<&>\nyz"
+    assert doc.where.text(doc.root, 0) == (1, 4)   # x
+    assert doc.where.text(doc.root, 2) == (1, 19)  # < inside the CDATA section
+    assert doc.where.text(doc.root, 6) == (2, 1)   # y, after the CR LF
+    assert doc.where.text(doc.root, 7) == (2, 2)   # z
+
+
+def test_locating_many_faults_in_one_long_text_is_linear() -> None:
+    # 20,000 faults in one chain-like text: each lookup is a binary search,
+    # not a walk from the start of the text.
+    steps = ", ".join("Speak(x)" for _ in range(100))
+    body = "".join(f"<chain>{steps}</chain>" for _ in range(200))
+    text = f'{HEAD}<state id="s" initial="true"><entry>{body}</entry></state></pxml>'
+    start = time.perf_counter()
+    _doc_, problems = _doc(text)
+    assert time.perf_counter() - start < 10
+    assert len(problems) == MAX_PROBLEMS + 1
+    assert problems[-1].message == "... and 19,950 more problems (a file reports at most 50)"
+
+
+def test_a_problem_on_a_very_long_line_has_no_caret_line() -> None:
+    filler = "x" * 2_000
+    _d, [problem] = _doc(f'{HEAD}<state id="s" initial="true"><entry>'
+                         f'<log text="{filler}{{1 +}}"/></entry></state></pxml>')
+    assert "ends too early" in problem.message and problem.source == ""
+    _d, [problem] = _doc(f'{HEAD}<state id="s" initial="true"><entry>\n'
+                         '<log text="{1 +}"/></entry></state></pxml>')
+    assert problem.source == '<log text="{1 +}"/></entry></state></pxml>'
+
+
+# ---------------------------------------------------------------- bounded reports
+
+def test_limit_keeps_the_first_problems_and_counts_the_rest() -> None:
+    found = [Problem("f", i, 1, Severity.WARNING, "w") for i in range(1, 61)]
+    kept = limit(found, "f")
+    assert kept[:MAX_PROBLEMS] == found[:MAX_PROBLEMS]
+    assert str(kept[-1]) == "f:1:1: warning: ... and 10 more problems (a file reports at most 50)"
+    assert limit(found[:MAX_PROBLEMS], "f") == found[:MAX_PROBLEMS]
+    assert limit(found[:51], "f", total=12_345)[-1].message.startswith("... and 12,295 more")
+    assert limit(found[:51], "f", total=12_345)[-1].severity is Severity.ERROR
+
+
+def test_schema_faults_of_a_large_document_are_reported_by_libxml2_quickly() -> None:
+    attrs = " ".join(f'a{i}="x"' for i in range(40_000))
+    start = time.perf_counter()
+    _d, problems = _doc(f'{HEAD}<state id="s" initial="true" {attrs}/></pxml>')
+    assert time.perf_counter() - start < 5
+    assert len(problems) == MAX_PROBLEMS + 1
+    assert problems[0].message == "<state>: attribute 'a0' is not allowed here"
+    assert (problems[0].line, problems[0].col) == (2, 34)
+    assert problems[-1].message.startswith("... and 39,950 more problems")
+
+
+def test_large_documents_get_the_same_wording_as_small_ones() -> None:
+    # Above XMLSCHEMA_NODES, libxml2's errors are reworded like xmlschema's.
+    filler = '<var name="v"/>\n' * XMLSCHEMA_NODES
+    faults = ('<var name="1x"/>\n<state id="s" initial="maybe" bogus="1"/>\n'
+              '<state id="t"><entry><zz/></entry></state>\n<state/>\n')
+    small = _doc(f"{HEAD}{faults}</pxml>")[1]
+    large = _doc(f"{HEAD}{filler}{faults}</pxml>")[1]
+    shift = XMLSCHEMA_NODES
+    assert [(p.line, p.col, p.message) for p in small] == [
+        (2, 12, "<var>: attribute name='1x': value doesn't match any pattern of "
+                "['[A-Za-z_][A-Za-z0-9_]*']"),
+        (3, 24, "<state>: attribute initial='maybe': 'maybe' is not a boolean value"),
+        (3, 38, "<state>: attribute 'bogus' is not allowed here"),
+        (4, 22, "<zz> is not allowed inside <entry>"),
+        (5, 1, "<state>: missing required attribute 'id'"),
+    ]
+    assert [(p.line - shift, p.col, p.message.split(":")[0]) for p in large] == [
+        (line, col, message.split(":")[0]) for line, col, message in
+        [(p.line, p.col, p.message) for p in small]]
+
+
+def test_fifty_thousand_unknown_elements_are_quick() -> None:
+    body = "<unknown/>\n" * 50_000
+    start = time.perf_counter()
+    _d, problems = _doc(f'{HEAD}<state id="s" initial="true"/>\n{body}</pxml>')
+    assert time.perf_counter() - start < 5
+    assert [p.message for p in problems] == ["<unknown> is not allowed at the top of the document"]
+
+
+# ---------------------------------------------------------------- reading
+
+def test_a_named_pipe_is_refused_without_blocking(tmp_path: Path) -> None:
+    fifo = tmp_path / "app.pxml"
+    os.mkfifo(fifo)
+    [problem] = check_file(fifo)
+    assert (problem.line, problem.col) == (1, 1)
+    assert problem.message == "a named pipe: PRIMA reads only regular files"
+
+
+def test_a_directory_or_device_is_refused(tmp_path: Path) -> None:
+    with pytest.raises(DocumentError, match="a directory: PRIMA reads only regular files"):
+        read_source(tmp_path, DocumentError)
+    with pytest.raises(DocumentError, match="a device: PRIMA reads only regular files"):
+        read_source(Path(os.devnull), DocumentError)
+
+
+def test_reading_stops_after_the_limit(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A file that grows after its size was checked is still cut at the limit.
+    path = tmp_path / "big.pxml"
+    path.write_bytes(b" " * (MAX_BYTES + 100))
+    real_stat = os.stat
+
+    def small_stat(p: object, *args: object, **kwargs: object) -> os.stat_result:
+        info = real_stat(p)  # type: ignore[arg-type]
+        return os.stat_result((info.st_mode, *info[1:6], 10, *info[7:]))
+
+    monkeypatch.setattr(os, "stat", small_stat)
+    with pytest.raises(DocumentError, match="file is more than 1048576 bytes"):
+        read_source(path, DocumentError)
+
+
+@pytest.mark.parametrize("declared", ["ISO-8859-1", "UTF-16", "cp500"])
+def test_only_utf8_is_read(declared: str) -> None:
+    data = f'<?xml version="1.0" encoding="{declared}"?>\n<pxml/>'.encode()
+    with pytest.raises(DocumentError) as info:
+        parse_xml(data, "x", DocumentError)
+    [problem] = info.value.problems
+    assert (problem.line, problem.col) == (1, 31)
+    assert problem.message == f"PRIMA documents must be UTF-8, not {declared!r}"
+
+
+def test_a_utf8_byte_order_mark_does_not_shift_columns() -> None:
+    doc = parse_xml(b'\xef\xbb\xbf<a v="x"/>', "x", DocumentError)
+    assert doc.where.attribute(doc.root, "v") == (1, 7)

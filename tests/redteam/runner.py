@@ -1,0 +1,130 @@
+"""Runs one red-team case in a forked child, under a time and a memory limit.
+
+A case writes its input (a document, scenario, map, profile, a named pipe...)
+into a folder, then the child runs ``prima validate`` on it exactly as the
+command line does, optionally followed by more work on an accepted input
+(matching an answer, say). The parent kills a child that overruns its time
+limit, so a hang (a blocked FIFO, a backtracking regex in C) fails the case
+instead of the test run; the child's address space is capped with
+``RLIMIT_AS``, so an entity bomb or a quadratic blow-up fails with a
+MemoryError instead of taking the machine down.
+"""
+
+from __future__ import annotations
+
+import io
+import multiprocessing
+import os
+import resource
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from multiprocessing.connection import Connection
+from pathlib import Path
+
+from prima.cli import main
+
+Make = Callable[[Path], Path]
+"""Writes a case's input into a folder and returns the path to validate."""
+
+
+@dataclass(frozen=True)
+class Rejected:
+    """Validation fails; its first error is at ``at`` in ``file`` and says ``fragment``.
+
+    ``at`` is a (line, col), or a piece of the file's text whose first character
+    is where the error points (``offset`` characters later).
+    """
+
+    fragment: str
+    at: str | tuple[int, int] = (1, 1)
+    file: str | None = None
+    """The file the error is in, relative to the case's folder (default: the input)."""
+    offset: int = 0
+
+
+@dataclass(frozen=True)
+class Accepted:
+    """Validation passes (warnings allowed)."""
+
+
+Verdict = Rejected | Accepted
+
+
+@dataclass(frozen=True)
+class Case:
+    """One hostile input and what must become of it."""
+
+    id: str
+    attack: str
+    """What it attacks."""
+    make: Make
+    expect: Verdict
+    argv: tuple[str, ...] = ()
+    """More ``prima validate`` options (``--robot``...); ``{dir}`` is the case's folder."""
+    seconds: float = 2.0
+    megabytes: int = 512
+    then: Callable[[Path], object] | None = None
+    """More work on an accepted input, inside the same limits."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    code: int
+    out: str
+    err: str
+    seconds: float
+    crash: str = ""
+
+
+def _vm_bytes() -> int:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmSize:"):
+            return int(line.split()[1]) * 1024
+    return 0
+
+
+def _child(case: Case, path: Path, conn: Connection) -> None:
+    try:
+        cap = _vm_bytes() + case.megabytes * 1024 * 1024
+        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+        argv = [a.replace("{dir}", str(path.parent)) for a in case.argv]
+        out, err = io.StringIO(), io.StringIO()
+        start = time.perf_counter()
+        code = main(["validate", *argv, str(path)], out=out, err=err)
+        if case.then is not None and code == 0:
+            case.then(path)
+        conn.send(Outcome(code, out.getvalue(), err.getvalue(), time.perf_counter() - start))
+    except BaseException:  # noqa: BLE001 - everything is a failure of the case, reported
+        conn.send(Outcome(-1, "", "", 0.0, traceback.format_exc()))
+    finally:
+        conn.close()
+        os._exit(0)
+
+
+def run_case(case: Case, folder: Path) -> tuple[Path, Outcome]:
+    """Make the case's input in ``folder`` and validate it in a child: the input and what
+    became of it. A child that overruns is killed, and that is an AssertionError."""
+    path = case.make(folder)
+    receive, send = multiprocessing.Pipe(duplex=False)
+    child = multiprocessing.get_context("fork").Process(target=_child, args=(case, path, send))
+    child.start()
+    send.close()
+    grace = case.seconds * 2 + 1  # the child reports its own time; this only stops a hang
+    if not receive.poll(grace):
+        child.kill()
+        child.join()
+        raise AssertionError(f"{case.id}: no verdict within {grace:g} s (a hang)")
+    outcome: Outcome = receive.recv()
+    child.join()
+    return path, outcome
+
+
+def position(text: str, at: str | tuple[int, int], offset: int = 0) -> tuple[int, int]:
+    """The line and column ``at`` designates in ``text``."""
+    if isinstance(at, tuple):
+        return at
+    index = text.index(at) + offset
+    line = text.count("\n", 0, index) + 1
+    return line, index - (text.rfind("\n", 0, index) + 1) + 1

@@ -1,0 +1,80 @@
+"""Every red-team case gets its verdict, in time, within its memory, without a traceback."""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from pathlib import Path
+
+import pytest
+
+from prima.dsl import default_profile, parser
+from prima.xmlio import schema, verdict_schema
+from tests.redteam.cases import CASES, STATE, pxml, write
+from tests.redteam.runner import Accepted, Case, position, run_case
+
+_PROBLEM = re.compile(r"^(?P<file>.*):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.*)$")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _built_once() -> None:
+    """Build the schemas, the parser and the default profile before the cases fork."""
+    for name in ("pxml.xsd", "robot.xsd", "scenario.xsd", "map.xsd"):
+        verdict_schema(name)
+        schema(name)
+    parser()
+    default_profile()
+
+
+def test_the_corpus_is_large_and_each_case_says_what_it_attacks() -> None:
+    assert len(CASES) >= 60
+    assert len({c.id for c in CASES}) == len(CASES)
+    assert all(c.attack for c in CASES)
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: c.id)
+def test_case(case: Case, tmp_path: Path) -> None:
+    path, outcome = run_case(case, tmp_path)
+    assert not outcome.crash, outcome.crash
+    shown = outcome.out + outcome.err
+    assert "Traceback" not in shown, shown
+    assert outcome.seconds <= case.seconds, f"{outcome.seconds:.2f} s"
+    errors = [m for m in map(_PROBLEM.match, shown.splitlines()) if m]
+    if isinstance(case.expect, Accepted):
+        assert (outcome.code, errors) == (0, []), shown[:2000]
+        return
+    assert outcome.code == 1 and errors, shown[:2000]
+    expect = case.expect
+    first = errors[0]
+    if expect.file is not None:  # a file the input names, or (".") the case's folder
+        path = tmp_path / expect.file
+    text = path.read_bytes().decode("utf-8", "replace") if path.is_file() else ""
+    assert os.path.normpath(first.group("file")) == os.path.normpath(path)
+    assert (int(first.group("line")), int(first.group("col"))) == \
+        position(text, expect.at, expect.offset), first.group(0)[:300]
+    assert expect.fragment in first.group("message"), first.group(0)[:300]
+
+
+
+def _allocate(_path: Path) -> None:
+    bytearray(4 << 30)
+
+
+def _hang(_path: Path) -> None:
+    time.sleep(30)
+
+
+def test_the_runner_enforces_its_limits(tmp_path: Path) -> None:
+    # the harness itself: a case that allocates 4 GiB fails, one that hangs is killed
+    greedy = Case("greedy", "memory", write("t.pxml", pxml(STATE)), Accepted(), then=_allocate)
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    _path, outcome = run_case(greedy, tmp_path / "a")
+    assert "MemoryError" in outcome.crash
+    stuck = Case("stuck", "time", write("t.pxml", pxml(STATE)), Accepted(), then=_hang,
+                 seconds=0.2)
+    start = time.perf_counter()
+    with pytest.raises(AssertionError, match="no verdict within 1.4 s"):
+        run_case(stuck, tmp_path / "b")
+    assert time.perf_counter() - start < 5
