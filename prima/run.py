@@ -35,7 +35,7 @@ from prima.mediator import (
 )
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
-from prima.vocab import DEFAULT_BUDGETS, Budgets, Value
+from prima.vocab import Budgets, Value
 
 __all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
 
@@ -136,7 +136,7 @@ class Run:
         self.lines: list[TraceLine] = []
         self._sink = sink or self.lines.append
         self._count = 0
-        self.budgets: Mapping[AppKind, Budgets] = DEFAULT_BUDGETS
+        self.budgets: Mapping[AppKind, Budgets] = self.profile.budgets
         self.apps: dict[str, _App] = {}
         self._outcomes: dict[int, Outcome] = {}
         self.catalog = self.profile.catalog()

@@ -168,6 +168,27 @@ def test_a_flood_of_messages_is_rate_limited(tmp_path: Path) -> None:
     assert "(dropped: more than 5 messages in one second" in format_text(lines)
 
 
+def test_the_robot_profile_sets_each_roles_budgets_for_the_run(tmp_path: Path) -> None:
+    """A robot whose profile allows an EA one message a second: the run drops more."""
+    robot = (Path(__file__).parents[1] / "robots" / "home-robot.xml").read_text(encoding="utf-8")
+    (tmp_path / "robot.xml").write_text(robot.replace(
+        "  </devices>\n", '  </devices>\n  <budgets role="ea" sends-per-second="1"/>\n', 1),
+        encoding="utf-8")
+    stage = STAGE.read_text(encoding="utf-8").replace("../../../", f"{STAGE.parents[2].parent}/")
+    (tmp_path / "stage.xml").write_text(stage.replace(
+        '<robot place="entrance"', '<robot profile="robot.xml" place="entrance"'), encoding="utf-8")
+    ea = tmp_path / "hostile.pxml"
+    ea.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="hostile"><state id="s" '
+                  'initial="true"><entry><timer name="t" after="0.2"/></entry><on event="t">'
+                  '<send to="host" text="hi"/><timer name="t" after="0.2"/></on></state></pxml>',
+                  encoding="utf-8")
+    run = Run(tmp_path / "stage.xml", ea=ea, until=30)
+    assert run.budgets[AppKind.EA].sends_per_second == 1
+    assert run.budgets[AppKind.FA] == DEFAULT_BUDGETS[AppKind.FA]
+    sent = [line for line in run.run() if line.kind is Kind.SEND and "dropped" not in line.detail]
+    assert 25 <= len(sent) <= 31
+
+
 def test_a_text_built_past_the_budget_fails_the_ea(tmp_path: Path) -> None:
     lines = run_ea(tmp_path, '''
         <var name="t" expr="'0123456789'"/>

@@ -106,11 +106,11 @@ class Builder:
         self.doc = doc
         self.profile = profile
         self.catalog = profile.catalog()
-        self.max_text = profile.budgets.text
-        """Longest literal text (characters): the robot's budget, at most MAX_TEXT."""
         self.element_commands = {element_name(c.name): c.name for c in self.catalog
                                  if not c.robot_specific}
         self.kind = AppKind(doc.root.get("kind", "fa"))
+        self.max_text = profile.budgets[self.kind].text
+        """Longest literal text (characters): the robot's budget, at most MAX_TEXT."""
         self.problems: list[Problem] = []
         self.refs = _Refs()
         self.variable_names = dict.fromkeys(v.get("name", "") for v in self._top("var"))

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
+from typing import Any
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -33,7 +35,16 @@ from prima.catalog import (
 )
 from prima.dsl._elements import elements, flag
 from prima.errors import DocumentError, Problem
-from prima.vocab import MAX_NUMBER, MAX_TEXT, PREDEFINED_EVENTS, Budgets, Value
+from prima.vocab import (
+    DEFAULT_BUDGETS,
+    MAX_NUMBER,
+    MAX_RUN_TIME,
+    MAX_TEXT,
+    PREDEFINED_EVENTS,
+    AppKind,
+    Budgets,
+    Value,
+)
 from prima.xmlio import (
     Bound,
     XmlDocument,
@@ -76,8 +87,9 @@ class RobotProfile:
     """Additional arguments: Command name -> argument name -> declaration."""
     events: Mapping[str, bool]
     """Robot-specific events -> whether they are reactive."""
-    budgets: Budgets = field(default_factory=Budgets)
-    """What one application may consume on this robot (``<budgets>``, else the defaults)."""
+    budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
+    """What one application of each role may consume on this robot (its
+    ``<budgets>`` elements over :data:`~prima.vocab.DEFAULT_BUDGETS`)."""
     _catalog: Catalog = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -90,7 +102,10 @@ class RobotProfile:
         return self._catalog
 
 
-MAX_SECONDS = 1_000_000.0
+_BUDGET_COUNTS = ("text", "waiting", "starts-per-instant")
+_BUDGET_SECONDS = ("sends-per-second", "longest-ab", "wait-share", "wait-window")
+
+MAX_SECONDS = MAX_RUN_TIME
 """Longest duration a budget may give (s)."""
 
 MAX_COUNT = 1_000_000
@@ -217,28 +232,47 @@ class _Reader:
             commands=tuple(self.commands),
             extras=self.extras,
             events=self.events,
-            budgets=self._budgets(parts.get("budgets")),
+            budgets=self._role_budgets([el for el in elements(root)
+                                        if local_name(el) == "budgets"]),
         )
 
-    def _budgets(self, el: etree._Element | None) -> Budgets:
-        """The ``<budgets>`` element's values over the defaults."""
-        d = Budgets()
-        if el is None:
-            return d
-        budgets = Budgets(
-            text=int(self.number(el, "text", d.text)),
-            sends_per_second=self.number(el, "sends-per-second", d.sends_per_second),
-            waiting=int(self.number(el, "waiting", d.waiting)),
-            longest_ab=self.number(el, "longest-ab", d.longest_ab),
-            wait_share=self.number(el, "wait-share", d.wait_share),
-            wait_window=self.number(el, "wait-window", d.wait_window),
-            starts_per_instant=int(self.number(el, "starts-per-instant", d.starts_per_instant)),
-        )
-        if budgets.wait_share > budgets.wait_window:
-            self.error(el, f"wait-share={budgets.wait_share:g} s is longer than its window "
-                           f"(wait-window={budgets.wait_window:g} s)",
-                       "wait-share" if el.get("wait-share") is not None else "wait-window")
-        return budgets
+    def _role_budgets(self, found: list[etree._Element]) -> Mapping[AppKind, Budgets]:
+        """Each role's budgets: a ``<budgets>`` without ``role`` sets both roles',
+        then ``<budgets role="fa|ea">`` sets that role's, over its defaults."""
+        budgets = dict(DEFAULT_BUDGETS)
+        seen: set[str] = set()
+        for el in sorted(found, key=lambda e: e.get("role") is not None):
+            role = el.get("role", "")
+            if role in seen:
+                self.error(el, f"a second <budgets{f' role={role!r}' if role else ''}>: "
+                               "give each role's budgets once", "role" if role else None)
+                continue
+            seen.add(role)
+            given = self._budget_values(el)
+            kinds = [AppKind(role)] if role else list(AppKind)
+            for kind in kinds:
+                budgets[kind] = replace(budgets[kind], **given)
+            self._check_share(el, {kind: budgets[kind] for kind in kinds})
+        return MappingProxyType(budgets)
+
+    def _budget_values(self, el: etree._Element) -> dict[str, Any]:
+        """The attributes ``el`` gives, by :class:`Budgets` field name."""
+        given: dict[str, Any] = {}
+        for attribute in _BUDGET_COUNTS + _BUDGET_SECONDS:
+            if el.get(attribute) is not None:
+                value = self.number(el, attribute)
+                given[attribute.replace("-", "_")] = (
+                    int(value) if attribute in _BUDGET_COUNTS else value)  # schema: integers
+        return given
+
+    def _check_share(self, el: etree._Element, set_here: Mapping[AppKind, Budgets]) -> None:
+        """One problem at ``el`` if a role's wait share it sets outlasts its window."""
+        for kind, budgets in set_here.items():
+            if budgets.wait_share > budgets.wait_window:
+                self.error(el, f"wait-share={budgets.wait_share:g} s is longer than its window "
+                               f"(wait-window={budgets.wait_window:g} s) for the {kind.name}",
+                           "wait-share" if el.get("wait-share") is not None else "wait-window")
+                return
 
     def _devices(self, parent: etree._Element) -> None:
         for dev in elements(parent):

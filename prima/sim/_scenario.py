@@ -32,6 +32,7 @@ from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
 from prima.sim._simulator import SENSE_HZ
+from prima.vocab import MAX_RUN_TIME
 from prima.xmlio import (
     Bound,
     XmlDocument,
@@ -50,7 +51,7 @@ __all__ = ["MAP_NS", "SCENARIO_NS", "Reference", "Scenario", "load_map", "load_s
 MAP_NS = "urn:prima:map:1"
 SCENARIO_NS = "urn:prima:scenario:1"
 
-MAX_UNTIL = 1_000_000.0
+MAX_UNTIL = MAX_RUN_TIME
 """Longest run (s); every time in a scenario is at most this."""
 
 MAX_RATE = 1_000

@@ -9,7 +9,7 @@ import pytest
 
 from prima.dsl import RobotProfile, check_document, parse_profile
 from prima.errors import Problem
-from prima.vocab import MAX_TEXT
+from prima.vocab import MAX_TEXT, AppKind
 
 HEAD = '<pxml xmlns="urn:prima:pxml:1" kind="fa" name="t">\n'
 ENTRY = '<state id="s" initial="true"><entry>'
@@ -35,7 +35,7 @@ def test_a_literal_text_longer_than_the_limit_is_located_at_the_first_extra_char
 
 def test_the_robot_profile_budget_bounds_literal_texts() -> None:
     profile = _small_text_budget()
-    assert profile.budgets.text == 20
+    assert profile.budgets[AppKind.FA].text == profile.budgets[AppKind.EA].text == 20
     body = (f'{ENTRY}<request><speak text="{"b" * 21}"/></request>\n'
             f'<chain>Speak("{"c" * 20}"), Speak("{"d" * 21}")</chain></entry></state>')
     problems = _check(body, profile)

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from prima.catalog import STANDARD_DEVICES, Priority
 from prima.dsl import RobotProfile, default_profile, parse_profile
 from prima.errors import DocumentError
-from prima.vocab import Budgets
+from prima.vocab import DEFAULT_BUDGETS, AppKind, Budgets
 
 
 def test_default_profile_extends_the_catalog() -> None:
@@ -93,18 +95,34 @@ def _profile_text(body: str = 'radius="0.2" max-speed="0.4"', rest: str = "",
 
 
 def test_budgets_default_without_the_element() -> None:
-    assert default_profile().budgets == Budgets()
-    assert _profile().budgets == Budgets()
+    assert default_profile().budgets == DEFAULT_BUDGETS
+    assert _profile().budgets == DEFAULT_BUDGETS
 
 
-def test_budgets_are_read() -> None:
+def test_budgets_without_a_role_are_every_applications() -> None:
     profile = _profile(budgets='text="2000" sends-per-second="0.5" waiting="10" longest-ab="20" '
                                'wait-share="5" wait-window="10" starts-per-instant="7"')
-    assert profile.budgets == Budgets(text=2000, sends_per_second=0.5, waiting=10,
-                                      longest_ab=20.0, wait_share=5.0, wait_window=10.0,
-                                      starts_per_instant=7)
-    assert isinstance(profile.budgets.text, int) and isinstance(profile.budgets.waiting, int)
-    assert _profile(budgets='waiting="3"').budgets == Budgets(waiting=3)
+    expected = Budgets(text=2000, sends_per_second=0.5, waiting=10, longest_ab=20.0,
+                       wait_share=5.0, wait_window=10.0, starts_per_instant=7)
+    assert profile.budgets == {AppKind.FA: expected, AppKind.EA: expected}
+    ea = profile.budgets[AppKind.EA]
+    assert isinstance(ea.text, int) and isinstance(ea.waiting, int)
+    assert _profile(budgets='waiting="3"').budgets == {
+        kind: replace(DEFAULT_BUDGETS[kind], waiting=3) for kind in AppKind}
+
+
+def test_a_roles_budgets_go_over_the_role_less_ones_and_its_defaults() -> None:
+    profile = _profile(budgets='waiting="3"/>\n  <budgets role="ea" wait-share="10"/>\n'
+                               '  <budgets role="fa" waiting="50"')
+    assert profile.budgets[AppKind.EA] == Budgets(waiting=3, wait_share=10.0)
+    assert profile.budgets[AppKind.FA] == replace(DEFAULT_BUDGETS[AppKind.FA], waiting=50)
+
+
+def test_a_role_given_budgets_twice_is_an_error() -> None:
+    with pytest.raises(DocumentError) as caught:
+        _profile(budgets='role="ea" waiting="3"/>\n  <budgets role="ea" waiting="4"')
+    [problem] = caught.value.problems
+    assert "a second <budgets role='ea'>" in problem.message
 
 
 HUGE = "1" + "0" * 400
