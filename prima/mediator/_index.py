@@ -192,14 +192,18 @@ class WaitIndex:
         return slot
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
-        """(Re-)rank a slot by the stable key of its best AB."""
-        slot.version += 1
+        """(Re-)rank a slot by the stable key of its best AB.
+
+        Slot versions come from one counter for the whole index: a tree's slot that
+        was dropped and made again in the same group must not tie with its stale
+        entries (the heap would then compare the slots themselves)."""
+        slot.version = next(self._serial)
         slot.ranked_by = best
         heapq.heappush(slot.group.heap, (_keys(best, _REST), slot.tree.id, slot.version, slot))
         self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
-        slot.version += 1
+        slot.version = next(self._serial)
         if slot.group.slots.get(slot.tree.id) is slot:
             del slot.group.slots[slot.tree.id]
 
