@@ -130,6 +130,8 @@ class Fairness:
         self._wm.rerank_app(app)
         if demoted:
             self._holds.unpark_all()  # its holds hold nothing now
+        else:
+            self._holds.took_force(app)  # they hold again
         self._log.emit(DecisionKind.BUDGET, Rule.WAIT_SHARE, app=app.name, detail=detail)
         return True
 

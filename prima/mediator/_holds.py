@@ -200,6 +200,7 @@ class Holds:
                 and node.commands[0].id >= blk.first_command):
             blk.started = True
             blk.deadline = self._clock.after(blk.watchdog)
+            self.took_force(app, blk.devices)
         st = self._streams.get(app.name)
         if st is not None:
             st.devices.update(node.devices)
@@ -237,6 +238,21 @@ class Holds:
                     self._release(st.devices)
 
     # ----------------------------------------------------------- held ABs
+    def took_force(self, app: App, devices: frozenset[str] | None = None) -> None:
+        """A block of ``app`` took force (or ``app`` regained its precedence): the
+        other apps' waiting ABs it now holds step aside at once, not when one of their
+        devices next frees. Their devices are marked dirty, so the next round looks at
+        them and parks them. (A stream hold needs none of this: it is armed only while
+        its app has nothing waiting, so there is nothing to reserve against.)"""
+        for other in self._apps.values():
+            if other is app:
+                continue
+            for tree in other.trees.values():
+                for n in tree.nodes.values():
+                    if (n.state is NodeState.WAITING and n.parked is None
+                            and (devices is None or not n.devices.isdisjoint(devices))):
+                        self._wm.dirty.update(n.devices)
+
     def park(self, node: Node, rule: Rule, holder: App) -> None:
         """Take a held AB out of its devices' ranking, so it reserves nothing while it
         cannot start (the holder's block, stream or talk goes on meanwhile)."""

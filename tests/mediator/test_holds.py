@@ -216,3 +216,23 @@ def test_a_block_keeps_the_other_app_waiting_only_for_its_wait_share() -> None:
     budget = [d for d in h.decisions if d.kind is DecisionKind.BUDGET]
     assert [(d.app, d.rule, d.t) for d in budget][0] == ("ea", Rule.WAIT_SHARE, 32.0)
     assert [d.t for d in h.decisions if d.kind is DecisionKind.START][-1] == 32.0
+
+
+def test_found_by_the_random_driver_an_ab_steps_aside_as_soon_as_a_block_holds_it() -> None:
+    """The EA's FaceHumanAndSpeak waits for the wheels and so reserves the free
+    speaker. The FA's block on the wheels then takes force (its first AB starts):
+    the EA's AB is held and must step aside at once, not when the wheels free up,
+    so the FA's own utterance starts now (seed 11446 of bench/random_driver.py)."""
+    h = Harness(duration={"Turn": 1.0, "*": 0.5})
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(req("fa", call("Turn", angle=90.0)))                   # AB1: the wheels
+    m.submit(req("ea", call("FaceHumanAndSpeak", text="look")))     # AB2: waits, reserves
+    m.open_block("fa", devices=frozenset({"locomotion"}), watchdog=10.0)
+    m.submit(req("fa", call("PointByHand", angle=10.0), asap=True))  # AB3: the block starts
+    m.submit(req("fa", speak("here"), asap=True))                   # AB4: the free speaker
+    assert [(d.ab, d.t) for d in h.starts()] == [(1, 0.0), (3, 0.0), (4, 0.0)]
+    [held] = h.kinds(DecisionKind.HOLD)
+    assert (held.ab, held.rule, held.t) == (2, Rule.BLOCK, 0.0)
+
