@@ -92,6 +92,8 @@ def main(argv: list[str] | None = None) -> int:
     step = max(1, len(chunks) // 20)
     with multiprocessing.Pool(args.jobs) as pool:
         for i, t in enumerate(pool.imap(run_range, chunks), 1):
+            for seed, v in t.violations[:3]:
+                print(f"  VIOLATION seed {seed}: {v}", flush=True)
             total.add(t)
             if i % step == 0 or i == len(chunks):
                 print(f"  {total.scenarios:>9} scenarios  {total.decisions:>11} decisions  "

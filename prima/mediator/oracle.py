@@ -401,8 +401,9 @@ class Oracle:
 
     def _contention(self, prev: _View, v: _View, new: Sequence[Decision]) -> None:
         """Note the ABs started in this operation while no other app's AB that wanted
-        one of their devices (with a priority not lower) was waiting."""
-        rivals = list(prev.waiting)
+        one of their devices (with a priority not lower) was waiting, apart from moves
+        the channel rule held back (that rule is not a budget matter)."""
+        rivals = [n for n in prev.waiting if not prev.channel_held(n)]
         entered: set[AbId] = set()
         ended: set[AbId] = set()
         for d in new:
@@ -411,7 +412,8 @@ class Oracle:
             elif d.kind is DecisionKind.END and d.ab is not None:
                 ended.add(d.ab)
             elif d.kind is DecisionKind.START and d.ab is not None:
-                fresh = [n for n in v.waiting if n.ab in entered or n.parent in ended]
+                fresh = [n for n in v.waiting if (n.ab in entered or n.parent in ended)
+                         and not v.channel_held(n)]
                 prio = self._priority(d)
                 devices = set(d.devices)
                 if not any(n.app != d.app and n.priority >= prio and devices & set(n.devices)
@@ -453,9 +455,10 @@ class Oracle:
         - windows in which another app had lost its precedence (from L before): once
           both apps have overrun their shares, neither has precedence, and both cannot
           be held to their bounds while they contend;
-        - waits for an AB that started while no other app's AB wanted its devices: a
-          demoted app may still use idle devices, and a request that comes later
-          waits for that AB (at most L each time, but several times in one window).
+        - waits for an AB that started while no other app's AB wanted its devices
+          (but for moves the channel rule held back): a demoted app may still use
+          idle devices, and a request that comes later waits for that AB (at most L
+          each time, but several times in one window).
         """
         budget = self.budgets(app)
         bound = budget.wait_share + self._longest + self._tolerance
