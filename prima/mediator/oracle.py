@@ -70,7 +70,7 @@ FEEDBACK_STOPPED = "feedback loop stopped between iterations"
 TALK = frozenset({"speaker", "speech-recognition"})
 
 _RankKey = tuple[int, int, tuple[int, int], tuple[int, int], int, int]
-_RankKeyFn = Callable[["NodeView"], _RankKey]
+_RankKeyFn = Callable[[NodeView], _RankKey]
 
 
 # ---------------------------------------------------------------- the model
