@@ -5,10 +5,11 @@ from __future__ import annotations
 import pytest
 
 from prima.errors import MediationError
-from prima.mediator import AppKind, DecisionKind, Rule
+from prima.mediator import AppKind, DecisionKind, MediatorConfig, Rule
 from prima.mediator.testing import Harness
+from prima.vocab import Budgets
 
-from tests.mediator.helpers import call, req, speak, start_of
+from tests.mediator.helpers import call, ghost, req, speak, start_of
 
 
 def _h(**kw) -> Harness:
@@ -236,3 +237,27 @@ def test_found_by_the_random_driver_an_ab_steps_aside_as_soon_as_a_block_holds_i
     [held] = h.kinds(DecisionKind.HOLD)
     assert (held.ab, held.rule, held.t) == (2, Rule.BLOCK, 0.0)
 
+
+
+def test_an_ab_steps_aside_again_when_the_blocks_app_regains_its_precedence() -> None:
+    """The FA's block holds the EA's group, until the FA overruns its wait share
+    (t=1): its block then holds nothing, and the group takes its place again,
+    waiting for the arm (a ghost's). When the FA regains its precedence (t=4), its
+    block holds the group again, which must step aside at once: the FA's utterance
+    at t=4.5 must not wait for the arm."""
+    budgets = {AppKind.FA: Budgets(wait_share=1.0, wait_window=3.0), AppKind.EA: Budgets()}
+    h = Harness(duration={"PointByHand": 20.0, "*": 0.5},
+                config=MediatorConfig(budgets=budgets))
+    m = h.mediator
+    ghost(h, call("PointByHand", angle=1.0))                         # AB1: the arm, 0-20
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.open_block("fa", devices=frozenset({"locomotion"}), watchdog=50.0)
+    m.submit(req("fa", call("Turn", angle=1.0)))                      # AB2: the block starts
+    m.submit(req("ea", call("Gesture", name="bow"), speak("x"), call("Turn", angle=1.0),
+                 group=True))                                        # AB3: held
+    h.at(4.5, lambda: m.submit(req("fa", speak("mine"), asap=True)))  # AB4
+    h.run(until=5.0)
+    budget = [(d.t, d.detail) for d in h.kinds(DecisionKind.BUDGET)]
+    assert [t for t, _ in budget][:2] == [1.0, 4.0]
+    assert start_of(h, 4).t == 4.5
