@@ -406,19 +406,26 @@ class Oracle:
         rivals = [n for n in prev.waiting if not prev.channel_held(n)]
         entered: set[AbId] = set()
         ended: set[AbId] = set()
+        gone: set[AbId] = set()
+        """Started or cancelled earlier in this operation: no rival any more."""
         for d in new:
-            if d.kind is DecisionKind.REQUEST and d.ab is not None:
+            if d.ab is None:
+                continue
+            if d.kind is DecisionKind.REQUEST:
                 entered.add(d.ab)
-            elif d.kind is DecisionKind.END and d.ab is not None:
+            elif d.kind is DecisionKind.END:
                 ended.add(d.ab)
-            elif d.kind is DecisionKind.START and d.ab is not None:
+            elif d.kind is DecisionKind.CANCEL:
+                gone.add(d.ab)
+            elif d.kind is DecisionKind.START:
                 fresh = [n for n in v.waiting if (n.ab in entered or n.parent in ended)
                          and not v.channel_held(n)]
                 prio = self._priority(d)
                 devices = set(d.devices)
                 if not any(n.app != d.app and n.priority >= prio and devices & set(n.devices)
-                           for n in rivals + fresh):
+                           and n.ab not in gone for n in rivals + fresh):
                     self._uncontended.add(d.ab)
+                gone.add(d.ab)
 
     def _priority(self, d: Decision) -> Priority:
         return min(self._catalog[c].priority for c in (d.command or "").split("+"))
