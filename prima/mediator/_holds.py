@@ -231,6 +231,7 @@ class Holds:
                     st.armed = True
                     st.deadline = self._clock.after(st.hold, since=app.idle_since)
                     st.held = set()
+                    self.took_force(app, st.devices)
             else:
                 st.lapsed = False
                 if st.armed:
@@ -238,12 +239,12 @@ class Holds:
                     self._release(st.devices)
 
     # ----------------------------------------------------------- held ABs
-    def took_force(self, app: App, devices: frozenset[str] | None = None) -> None:
-        """A block of ``app`` took force (or ``app`` regained its precedence): the
-        other apps' waiting ABs it now holds step aside at once, not when one of their
-        devices next frees. Their devices are marked dirty, so the next round looks at
-        them and parks them. (A stream hold needs none of this: it is armed only while
-        its app has nothing waiting, so there is nothing to reserve against.)"""
+    def took_force(self, app: App, devices: set[str] | frozenset[str] | None = None) -> None:
+        """A block of ``app`` took force, its stream hold was armed, or ``app`` regained
+        its precedence: the other apps' waiting ABs it now holds step aside at once, not
+        when one of their devices next frees (until then they would reserve their free
+        devices against the holder's next ABs, or their own app's). Their devices are
+        marked dirty, so the next round looks at them and parks them."""
         for other in self._apps.values():
             if other is app:
                 continue

@@ -161,3 +161,13 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
 
     monkeypatch.setattr(holds_module.Holds, "holder", holder)
     assert any("block held" in v for v in caught())
+
+
+@pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195])
+def test_seeds_that_once_failed(seed: int) -> None:
+    """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
+    newly reserving block still reserved a free device; 127444: the same for a newly
+    armed stream hold (all three fixed in the mediator). 49640, 161195: overruns of the
+    literal wait-share bound that no mediator can avoid (the channel rule; a start that
+    no rival was waiting for any more), now notes."""
+    assert play(seed).violations == []
