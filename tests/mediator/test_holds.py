@@ -5,10 +5,11 @@ from __future__ import annotations
 import pytest
 
 from prima.errors import MediationError
-from prima.mediator import AppKind, DecisionKind, Rule
+from prima.mediator import AppKind, DecisionKind, MediatorConfig, Rule
 from prima.mediator.testing import Harness
+from prima.vocab import Budgets
 
-from tests.mediator.helpers import call, req, speak, start_of
+from tests.mediator.helpers import call, ghost, req, speak, start_of
 
 
 def _h(**kw) -> Harness:
@@ -216,3 +217,47 @@ def test_a_block_keeps_the_other_app_waiting_only_for_its_wait_share() -> None:
     budget = [d for d in h.decisions if d.kind is DecisionKind.BUDGET]
     assert [(d.app, d.rule, d.t) for d in budget][0] == ("ea", Rule.WAIT_SHARE, 32.0)
     assert [d.t for d in h.decisions if d.kind is DecisionKind.START][-1] == 32.0
+
+
+def test_found_by_the_random_driver_an_ab_steps_aside_as_soon_as_a_block_holds_it() -> None:
+    """The EA's FaceHumanAndSpeak waits for the wheels and so reserves the free
+    speaker. The FA's block on the wheels then takes force (its first AB starts):
+    the EA's AB is held and must step aside at once, not when the wheels free up,
+    so the FA's own utterance starts now (seed 11446 of bench/random_driver.py)."""
+    h = Harness(duration={"Turn": 1.0, "*": 0.5})
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(req("fa", call("Turn", angle=90.0)))                   # AB1: the wheels
+    m.submit(req("ea", call("FaceHumanAndSpeak", text="look")))     # AB2: waits, reserves
+    m.open_block("fa", devices=frozenset({"locomotion"}), watchdog=10.0)
+    m.submit(req("fa", call("PointByHand", angle=10.0), asap=True))  # AB3: the block starts
+    m.submit(req("fa", speak("here"), asap=True))                   # AB4: the free speaker
+    assert [(d.ab, d.t) for d in h.starts()] == [(1, 0.0), (3, 0.0), (4, 0.0)]
+    [held] = h.kinds(DecisionKind.HOLD)
+    assert (held.ab, held.rule, held.t) == (2, Rule.BLOCK, 0.0)
+
+
+
+def test_an_ab_steps_aside_again_when_the_blocks_app_regains_its_precedence() -> None:
+    """The FA's block holds the EA's group, until the FA overruns its wait share
+    (t=1): its block then holds nothing, and the group takes its place again,
+    waiting for the arm (a ghost's). When the FA regains its precedence (t=4), its
+    block holds the group again, which must step aside at once: the FA's utterance
+    at t=4.5 must not wait for the arm."""
+    budgets = {AppKind.FA: Budgets(wait_share=1.0, wait_window=3.0), AppKind.EA: Budgets()}
+    h = Harness(duration={"PointByHand": 20.0, "*": 0.5},
+                config=MediatorConfig(budgets=budgets))
+    m = h.mediator
+    ghost(h, call("PointByHand", angle=1.0))                         # AB1: the arm, 0-20
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.open_block("fa", devices=frozenset({"locomotion"}), watchdog=50.0)
+    m.submit(req("fa", call("Turn", angle=1.0)))                      # AB2: the block starts
+    m.submit(req("ea", call("Gesture", name="bow"), speak("x"), call("Turn", angle=1.0),
+                 group=True))                                        # AB3: held
+    h.at(4.5, lambda: m.submit(req("fa", speak("mine"), asap=True)))  # AB4
+    h.run(until=5.0)
+    budget = [(d.t, d.detail) for d in h.kinds(DecisionKind.BUDGET)]
+    assert [t for t, _ in budget][:2] == [1.0, 4.0]
+    assert start_of(h, 4).t == 4.5

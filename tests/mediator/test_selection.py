@@ -207,3 +207,33 @@ def test_an_app_may_talk_while_it_moves_itself() -> None:
     h.run(until=10.0)
     assert start_time(h, 2) == 0.0
     assert not [d for d in h.decisions if d.kind is DecisionKind.HOLD]
+
+
+def test_found_by_the_random_driver_a_remade_slot_never_ties_with_its_stale_entries() -> None:
+    """Seed 2102 of ``bench/random_driver.py``: a tree's slot in the waiting index was
+    dropped and made again on the same device and group, and the new slot's entry tied
+    with the old slot's stale one on (keys, tree, version): the heap compared the two
+    slots and ``finish`` raised a TypeError (slot versions now come from one counter)."""
+    h = Harness(duration=lambda ab: 0.25 if ab.id % 2 else 1.5)
+    m = h.mediator
+    gesture = call("Gesture", name="bow")
+
+    def fa_ended(cid: int, _o: object) -> None:
+        if cid == 2:  # the FA's Turn: a follow-up 0.25 s later, within the end grace
+            h.at(h.clock.now() + 0.25, lambda: m.submit(
+                req("fa", call("FaceHumanAndSpeak", text="x"), follows=cid)))
+
+    def ea_ended(cid: int, _o: object) -> None:
+        if cid % 2 == 0:  # the EA's Q&A, then each utterance: a follow-up at once
+            m.submit(req("ea", speak(), follows=cid))
+
+    h.app("fa", AppKind.FA, on_ended=fa_ended)
+    h.app("ea", AppKind.EA, on_ended=ea_ended)
+    m.submit(req("ea", call("TurnAndSpeak", angle=1.0, text="x")))
+    h.at(0.5, lambda: m.submit(req("fa", call("Turn", angle=1.0),
+                                   call("SetPosition", x=1.0, y=1.0), reactive=True)))
+    h.at(0.5, lambda: m.submit(req("ea", call("QA", prompt="?", grammar="g"), gesture)))
+    h.at(3.0, lambda: m.submit(req("ea", gesture, asap=True)))
+    h.run(until=4.0)
+    assert start_time(h, 7) == 3.75  # the FA's FaceHumanAndSpeak resumes its tree
+    assert plain_scan(m) == []

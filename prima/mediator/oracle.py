@@ -1,0 +1,506 @@
+"""An independent oracle for the mediator: the rules of docs/mediator.md as a plain model.
+
+It looks only at what anyone outside the mediator can see: the :class:`Decision`
+records (the ``record=`` callback), :meth:`Mediator.snapshot` at quiescent
+points (after every outermost operation), the catalog, the configuration, and
+what the caller tells it (the Commands it requested, the callbacks its apps
+got, the longest AB it scripted). It imports no private module of the mediator
+and reuses none of its ranking or hold code: each rule is written again here,
+the slow, obvious way.
+
+Checked after every operation (:meth:`Oracle.observe`):
+
+- *devices*: no two running ABs share a device, from the decisions and from
+  the snapshot, and the two agree;
+- *never cut*: an AB starts at most once, never after it was cancelled, ends
+  at most once and only while running; a ``cancel`` names a started AB only
+  for a feedback loop stopped between iterations, after that AB ended;
+- *holds respected*: no AB started while another, non-demoted app's block (or,
+  for a non-reactive AB, its armed stream hold) was in force on one of its
+  devices all along, nor, for a Command that breaks the channel, while another
+  app talked all along;
+- *nothing startable waits*: a plain walk of the waiting list in rank order
+  (:func:`left_waiting`) finds nothing the mediator should have started;
+- *callbacks*: a Command gets at most one ended/cancelled callback, and none
+  once its app is unloaded.
+
+Over the whole run: the time each app keeps the others waiting
+(:func:`keeping`) stays within its wait share plus the longest AB in any
+window of its budget (:meth:`Oracle.conclude`), except where no mediator that
+never cuts an AB could promise it (see ``Oracle._check_share``: windows in
+which the app kept waiting had itself lost its precedence, and waits for an AB
+that started with no rival; such overruns of the literal bound are kept in
+:attr:`Oracle.notes`); at the end every started AB ended, working memory is
+empty, and every Command of an app still loaded got exactly one callback.
+
+Where the model differs from :func:`prima.mediator.testing.plain_scan` (which
+reuses the mediator's ranking and hold code): it ranks from the snapshot alone
+(no "parent just finished": at a quiescent point it is empty); an AB held by
+the channel rule reserves nothing, like one held by a block or stream hold; it
+also checks holds over each operation, the two device books against each
+other, the callbacks, and the wait share.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Collection, Iterable, Sequence
+from dataclasses import dataclass, field
+
+from prima.mediator import (
+    AbId,
+    AppKind,
+    Catalog,
+    CommandId,
+    Decision,
+    DecisionKind,
+    HoldView,
+    MediatorConfig,
+    NodeView,
+    Priority,
+    Snapshot,
+)
+from prima.vocab import DEFAULT_BUDGETS, Budgets
+
+__all__ = ["FEEDBACK_STOPPED", "Oracle", "keeping", "left_waiting", "rank_key",
+           "window_peak"]
+
+FEEDBACK_STOPPED = "feedback loop stopped between iterations"
+"""The one ``cancel`` that may name an AB that ran (docs: ASAP, unloading)."""
+
+TALK = frozenset({"speaker", "speech-recognition"})
+
+_RankKey = tuple[int, int, tuple[int, int], tuple[int, int], int, int]
+_RankKeyFn = Callable[[NodeView], _RankKey]
+
+
+# ---------------------------------------------------------------- the model
+@dataclass(frozen=True)
+class _View:
+    """What one snapshot says, indexed for the model."""
+
+    snap: Snapshot
+    nodes: dict[AbId, NodeView]
+    waiting: list[NodeView]
+    """Waiting ABs, best-ranked first."""
+    busy: dict[str, NodeView]
+    talkers: frozenset[str]
+    """Apps running an AB on a talk device."""
+
+    @classmethod
+    def of(cls, snap: Snapshot, talk: frozenset[str] = TALK) -> _View:
+        nodes = {n.ab: n for tree in snap.trees for n in tree.nodes}
+        busy = {d: nodes[ab] for d, ab in snap.busy}
+        talkers = frozenset(n.app for d, n in busy.items() if d in talk)
+        waiting = sorted((nodes[ab] for ab in snap.waiting), key=rank_key(snap))
+        return cls(snap, nodes, waiting, busy, talkers)
+
+    def channel_held(self, n: NodeView) -> bool:
+        """A Command that breaks the channel waits while another app talks."""
+        return n.priority is Priority.LOW and bool(self.talkers - {n.app})
+
+    def holders(self, n: NodeView) -> list[str]:
+        """Other, non-demoted apps whose block or armed stream hold keeps ``n``."""
+        return [h.app for h in self.snap.holds if _applies(h, n, self.snap.demoted)]
+
+    def held(self, n: NodeView) -> bool:
+        return self.channel_held(n) or bool(self.holders(n))
+
+
+def _applies(h: HoldView, n: NodeView, demoted: Iterable[str]) -> bool:
+    if h.app == n.app or h.app in demoted or not set(h.devices) & set(n.devices):
+        return False
+    return h.kind == "block" or not n.reactive  # a stream hold lets reactive ABs by
+
+
+def rank_key(snap: Snapshot) -> _RankKeyFn:
+    """Rule 4 at a quiescent point (nothing's parent *just* finished): HIGH first;
+    apps that lost their precedence after the others; reactive first, the latest
+    first; suspended trees, the most recently suspended first; the oldest
+    request; the lowest AB id."""
+    order = {tree: i for i, tree in enumerate(snap.suspended)}  # top of the stack first
+    demoted = set(snap.demoted)
+
+    def key(n: NodeView) -> _RankKey:
+        return (
+            0 if n.priority is Priority.HIGH else 1,
+            1 if n.app in demoted else 0,
+            (0, -n.seq) if n.reactive else (1, 0),
+            (0, order[n.tree]) if n.tree in order else (1, 0),
+            n.seq,
+            n.ab,
+        )
+    return key
+
+
+def left_waiting(snap: Snapshot, talk: frozenset[str] = TALK) -> list[AbId]:
+    """Waiting ABs a plain rank-order walk would start now (must be none).
+
+    A held AB (another app's block or, unless reactive, stream hold; or, for a
+    Command that breaks the channel, another app talking) reserves nothing. Any
+    other AB whose devices are free and not reserved by a better-ranked waiting
+    AB should be running; one that cannot start reserves its devices.
+    """
+    return _left_waiting(_View.of(snap, talk))
+
+
+def _left_waiting(v: _View) -> list[AbId]:
+    reserved: set[str] = set()
+    out: list[AbId] = []
+    for n in v.waiting:
+        if v.held(n):
+            continue
+        devices = set(n.devices)
+        if not devices & reserved and not any(d in v.busy for d in devices):
+            out.append(n.ab)
+        reserved |= devices
+    return out
+
+
+def keeping(snap: Snapshot, talk: frozenset[str] = TALK,
+            uncontended: Collection[AbId] = ()) -> set[str]:
+    """The apps that keep another app waiting now (the wait-share definition)."""
+    return _keeping(_View.of(snap, talk), uncontended)
+
+
+def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
+    """App A keeps another waiting when, on some device, another app has a waiting,
+    unparked AB whose priority is not lower than that of A's AB holding the device
+    (running on it or, on a free device, the best-ranked waiting unparked AB), or
+    when A's stream hold or block parks another app's AB (the channel rule at work
+    is not a budget matter). A running AB in ``uncontended`` (it started while no
+    other app's AB wanted its devices) keeps nobody: waiting for it is first come,
+    first served, not a precedence taken."""
+    out: set[str] = set()
+    wanting: dict[str, list[NodeView]] = {}
+    for n in v.waiting:
+        if n.parked_by is None:
+            for d in n.devices:
+                wanting.setdefault(d, []).append(n)
+        elif not v.channel_held(n):
+            out.update(v.holders(n))
+    for d, ws in wanting.items():
+        holder = v.busy.get(d) or ws[0]
+        if holder.ab in uncontended:
+            continue
+        if any(w.app != holder.app and w.priority >= holder.priority for w in ws):
+            out.add(holder.app)
+    return out
+
+
+Spans = list[tuple[float, float]]
+
+
+def window_peak(intervals: Sequence[tuple[float, float]], window: float,
+                exempt: Callable[[float, float], bool] | None = None) -> tuple[float, float]:
+    """The most time that disjoint ``intervals`` cover within any window of length
+    ``window`` (leaving out the windows ``exempt(lo, hi)`` names); returns (that
+    time, where such a window starts)."""
+    best, where = 0.0, 0.0
+    # A best window starts where an interval starts, or ends where one ends.
+    for lo in [b for b, _ in intervals] + [e - window for _, e in intervals]:
+        hi = lo + window
+        total = sum(min(e, hi) - max(b, lo) for b, e in intervals if b < hi and e > lo)
+        if total > best and (exempt is None or not exempt(lo, hi)):
+            best, where = total, lo
+    return best, where
+
+
+class _Timeline:
+    """When each app was in some state (keeping others waiting, demoted), from the
+    quiescent points: a state seen at one lasts until the next."""
+
+    def __init__(self) -> None:
+        self.spans: dict[str, Spans] = {}
+        self._since: dict[str, float] = {}
+
+    def update(self, now: float, active: Iterable[str]) -> None:
+        active = set(active)
+        for app in [a for a in self._since if a not in active]:
+            self._close(app, now)
+        for app in active:
+            self._since.setdefault(app, now)
+
+    def close(self, now: float) -> None:
+        self.update(now, ())
+
+    def _close(self, app: str, now: float) -> None:
+        begin = self._since.pop(app)
+        if now <= begin:
+            return
+        spans = self.spans.setdefault(app, [])
+        if spans and spans[-1][1] >= begin:
+            spans[-1] = (spans[-1][0], now)
+        else:
+            spans.append((begin, now))
+
+    def during(self, app: str, lo: float, hi: float) -> bool:
+        """Was ``app`` in the state at some time within [lo, hi]?"""
+        return any(b <= hi and e >= lo for b, e in self.spans.get(app, ()))
+
+
+# ---------------------------------------------------------------- the oracle
+@dataclass
+class _Books:
+    """What the decisions told so far."""
+
+    kinds: dict[str, AppKind] = field(default_factory=dict)
+    unloaded: set[str] = field(default_factory=set)
+    started: set[AbId] = field(default_factory=set)
+    ended: set[AbId] = field(default_factory=set)
+    cancelled: set[AbId] = field(default_factory=set)
+    running: dict[AbId, tuple[str, ...]] = field(default_factory=dict)
+    occupied: dict[str, AbId] = field(default_factory=dict)
+
+
+class Oracle:
+    """Checks one run of a mediator, from outside. Call :meth:`observe` after every
+    operation, :meth:`requested` and :meth:`callback` as they happen, and
+    :meth:`conclude` at the end; :attr:`violations` says what went wrong."""
+
+    def __init__(self, catalog: Catalog, config: MediatorConfig, *, longest: float,
+                 tolerance: float = 1e-6, limit: int = 5) -> None:
+        self._catalog = catalog
+        self._config = config
+        self._talk = catalog.talk_devices
+        self._longest = longest
+        self._tolerance = tolerance
+        self._limit = limit
+        self.violations: list[str] = []
+        self.books = _Books()
+        self._seen = 0
+        self._prev: _View | None = None
+        self._kept = _Timeline()
+        """When each app kept another waiting (the literal definition)."""
+        self._took = _Timeline()
+        """... not counting waits for ABs that started with no rival (first come)."""
+        self.notes: list[str] = []
+        """Overruns of the literal bound that the checked one excuses (by design)."""
+        self._demoted = _Timeline()
+        """When each app had lost its precedence."""
+        self._uncontended: set[AbId] = set()
+        """Running ABs that started while no other app wanted their devices."""
+        self._requested: dict[CommandId, str] = {}
+        self._callbacks: dict[CommandId, int] = {}
+
+    # ------------------------------------------------------------ reporting
+    def fail(self, what: str) -> None:
+        if len(self.violations) < self._limit:
+            self.violations.append(what)
+
+    # ------------------------------------------------------------ the app side
+    def requested(self, app: str, ids: Iterable[CommandId]) -> None:
+        for c in ids:
+            self._requested[c] = app
+
+    def callback(self, app: str, command: CommandId, what: str, loaded: bool) -> None:
+        """An app was told its Command ``what`` (ended/cancelled); ``loaded``: the
+        app is registered at that moment."""
+        n = self._callbacks.get(command, 0) + 1
+        self._callbacks[command] = n
+        if n > 1:
+            self.fail(f"Command {command} of {app} got a second callback ({what})")
+        if not loaded:
+            self.fail(f"{app} was told Command {command} {what} after it was unloaded")
+        if self._requested.get(command, app) != app:
+            self.fail(f"{app} was told about Command {command} of {self._requested[command]}")
+
+    # ------------------------------------------------------------ each operation
+    def observe(self, decisions: Sequence[Decision], snap: Snapshot) -> None:
+        """After an operation: read the new decisions, then check the snapshot."""
+        new = decisions[self._seen:]
+        self._seen = len(decisions)
+        for d in new:
+            self._decision(d)
+        v = _View.of(snap, self._talk)
+        self._check_running(v)
+        if self._prev is not None:
+            self._check_holds(self._prev, v, new)
+            self._contention(self._prev, v, new)
+        left = _left_waiting(v)
+        if left:
+            self.fail(f"t={snap.t:g}: AB{left[0]} could start but waits "
+                      f"({self._describe(v, left[0])})")
+        self._account(v)
+        self._prev = v
+
+    def _decision(self, d: Decision) -> None:
+        b = self.books
+        if d.kind is DecisionKind.LOAD and d.app is not None:
+            b.kinds[d.app] = AppKind[d.detail]
+        elif d.kind is DecisionKind.UNLOAD and d.app is not None:
+            b.unloaded.add(d.app)
+        elif d.kind is DecisionKind.START and d.ab is not None:
+            self._start(d.ab, d)
+        elif d.kind is DecisionKind.END and d.ab is not None:
+            if d.ab not in b.running:
+                self.fail(f"t={d.t:g}: AB{d.ab} ended but was not running")
+                return
+            b.ended.add(d.ab)
+            for dev in b.running.pop(d.ab):
+                b.occupied.pop(dev, None)
+        elif d.kind is DecisionKind.CANCEL and d.ab is not None:
+            if d.ab not in b.started:
+                b.cancelled.add(d.ab)
+            elif d.detail != FEEDBACK_STOPPED or d.ab not in b.ended:
+                self.fail(f"t={d.t:g}: AB{d.ab} was cancelled after it started "
+                          f"({d.rule.value}: {d.detail or 'no detail'})")
+
+    def _start(self, ab: AbId, d: Decision) -> None:
+        b = self.books
+        if ab in b.started:
+            self.fail(f"t={d.t:g}: AB{ab} started twice")
+        if ab in b.cancelled:
+            self.fail(f"t={d.t:g}: AB{ab} started after it was cancelled")
+        for dev in d.devices:
+            other = b.occupied.get(dev)
+            if other is not None:
+                self.fail(f"t={d.t:g}: AB{ab} started on {dev}, held by running AB{other}")
+            b.occupied[dev] = ab
+        b.started.add(ab)
+        b.running[ab] = d.devices
+
+    def _check_running(self, v: _View) -> None:
+        snap = v.snap
+        mine = {ab: tuple(sorted(devs)) for ab, devs in self.books.running.items()}
+        theirs = {ab: tuple(sorted(devs)) for ab, devs in snap.running}
+        if mine != theirs:
+            self.fail(f"t={snap.t:g}: running ABs per decisions {sorted(mine)} "
+                      f"!= per snapshot {sorted(theirs)}")
+        owners: dict[str, AbId] = {}
+        for ab, devs in snap.running:
+            for dev in devs:
+                if dev in owners:
+                    self.fail(f"t={snap.t:g}: AB{ab} and AB{owners[dev]} both run on {dev}")
+                owners[dev] = ab
+        if owners != dict(snap.busy):
+            self.fail(f"t={snap.t:g}: device occupancy {dict(snap.busy)} != running ABs")
+
+    def _check_holds(self, prev: _View, v: _View, new: Sequence[Decision]) -> None:
+        """No AB started in this operation while a hold was in force all along."""
+        starts = [d for d in new if d.kind is DecisionKind.START]
+        if not starts:
+            return
+        busy_apps = {d.app for d in new if d.kind in (DecisionKind.REQUEST, DecisionKind.START,
+                                                      DecisionKind.END, DecisionKind.CANCEL)}
+        lasting = [h for h in prev.snap.holds if h in v.snap.holds
+                   and h.app not in busy_apps and h.app not in v.snap.demoted]
+        ended = {d.ab for d in new if d.kind is DecisionKind.END}
+        talkers = {n.app for dev, n in prev.busy.items()
+                   if dev in self._talk and n.ab not in ended}
+        for d in starts:
+            prio = self._priority(d)
+            for h in lasting:
+                if (h.app != d.app and h.app not in prev.snap.demoted
+                        and set(h.devices) & set(d.devices)
+                        and (h.kind == "block" or not d.reactive)):
+                    self.fail(f"t={d.t:g}: AB{d.ab} ({d.app} {d.command}) started while "
+                              f"{h.app}'s {h.kind} held {', '.join(h.devices)}")
+            if prio is Priority.LOW and talkers - {d.app}:
+                self.fail(f"t={d.t:g}: AB{d.ab} ({d.app} {d.command}) breaks the channel "
+                          f"but started while {sorted(talkers - {d.app})} talked")
+
+    def _contention(self, prev: _View, v: _View, new: Sequence[Decision]) -> None:
+        """Note the ABs started in this operation while no other app's AB that wanted
+        one of their devices (with a priority not lower) was waiting, apart from moves
+        the channel rule held back (that rule is not a budget matter)."""
+        rivals = [n for n in prev.waiting if not prev.channel_held(n)]
+        entered: set[AbId] = set()
+        ended: set[AbId] = set()
+        gone: set[AbId] = set()
+        """Started or cancelled earlier in this operation: no rival any more."""
+        for d in new:
+            if d.ab is None:
+                continue
+            if d.kind is DecisionKind.REQUEST:
+                entered.add(d.ab)
+            elif d.kind is DecisionKind.END:
+                ended.add(d.ab)
+            elif d.kind is DecisionKind.CANCEL:
+                gone.add(d.ab)
+            elif d.kind is DecisionKind.START:
+                fresh = [n for n in v.waiting if (n.ab in entered or n.parent in ended)
+                         and not v.channel_held(n)]
+                prio = self._priority(d)
+                devices = set(d.devices)
+                if not any(n.app != d.app and n.priority >= prio and devices & set(n.devices)
+                           and n.ab not in gone for n in rivals + fresh):
+                    self._uncontended.add(d.ab)
+                gone.add(d.ab)
+
+    def _priority(self, d: Decision) -> Priority:
+        return min(self._catalog[c].priority for c in (d.command or "").split("+"))
+
+    def _describe(self, v: _View, ab: AbId) -> str:
+        n = v.nodes[ab]
+        return (f"{n.app} {n.command} on {', '.join(n.devices)}, prio {n.priority.name}, "
+                f"seq {n.seq}, parked by {n.parked_by}; busy {sorted(v.busy)}; "
+                f"holds {[(h.app, h.kind, h.devices) for h in v.snap.holds]}")
+
+    # ------------------------------------------------------------ the wait share
+    def _account(self, v: _View) -> None:
+        running = {ab for ab, _ in v.snap.running}
+        self._uncontended &= running
+        self._kept.update(v.snap.t, _keeping(v))
+        self._took.update(v.snap.t, _keeping(v, self._uncontended))
+        self._demoted.update(v.snap.t, v.snap.demoted)
+
+    def budgets(self, app: str) -> Budgets:
+        kind = self.books.kinds.get(app, AppKind.EA)
+        return self._config.budgets.get(kind, DEFAULT_BUDGETS[kind])
+
+    def kept(self, app: str) -> list[tuple[float, float]]:
+        """When ``app`` kept the others waiting (closed intervals so far)."""
+        return list(self._kept.spans.get(app, []))
+
+    def _check_share(self, app: str) -> None:
+        """Within any window of its budget, ``app`` keeps the others waiting at most its
+        wait share plus one AB (L).
+
+        Two waits cannot be bounded so, by any mediator that never cuts an AB, and are
+        left out of the check (each becomes a note when the literal bound is overrun):
+
+        - windows in which another app had lost its precedence (from L before): once
+          both apps have overrun their shares, neither has precedence, and both cannot
+          be held to their bounds while they contend;
+        - waits for an AB that started while no other app's AB wanted its devices
+          (but for moves the channel rule held back): a demoted app may still use
+          idle devices, and a request that comes later waits for that AB (at most L
+          each time, but several times in one window).
+        """
+        budget = self.budgets(app)
+        bound = budget.wait_share + self._longest + self._tolerance
+        others = [a for a in self._demoted.spans if a != app]
+
+        def exempt(lo: float, hi: float) -> bool:
+            return any(self._demoted.during(a, lo - self._longest, hi) for a in others)
+
+        peak, at = window_peak(self._took.spans.get(app, []), budget.wait_window, exempt)
+        what = (f"{app} kept others waiting {{:g}} s within the {budget.wait_window:g} s "
+                f"from t={{:g}} (share {budget.wait_share:g} s + longest AB "
+                f"{self._longest:g} s)")
+        if peak > bound:
+            self.fail(what.format(peak, at))
+            return
+        peak, at = window_peak(self._kept.spans.get(app, []), budget.wait_window)
+        if peak > bound:
+            self.notes.append(what.format(peak, at))
+
+    # ------------------------------------------------------------ the end
+    def conclude(self, snap: Snapshot, loaded: Iterable[str]) -> None:
+        """After the run: shares, drained memory, every AB ended, every Command told."""
+        for timeline in (self._kept, self._took, self._demoted):
+            timeline.close(snap.t)
+        for app in self._kept.spans:
+            self._check_share(app)
+        if snap.trees or snap.waiting or snap.running:
+            self.fail(f"t={snap.t:g}: working memory did not drain: waiting {snap.waiting}, "
+                      f"running {[ab for ab, _ in snap.running]}, "
+                      f"{len(snap.trees)} tree(s)")
+        b = self.books
+        if b.started != b.ended:
+            self.fail(f"ABs started but never ended: {sorted(b.started - b.ended)}")
+        alive = set(loaded)
+        missing = sorted(c for c, app in self._requested.items()
+                         if app in alive and c not in self._callbacks)
+        if missing:
+            self.fail(f"Commands {missing} of a loaded app never ended nor were cancelled")
