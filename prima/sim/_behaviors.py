@@ -11,6 +11,7 @@ a robot-specific Command's duration.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Generator, Mapping
 from typing import TYPE_CHECKING, Any
@@ -20,7 +21,7 @@ from prima.mediator import AtomicBehavior, Call
 from prima.sim._kernel import Wait, signal, sleep, until
 from prima.sim._maps import Place
 from prima.sim._records import Picture
-from prima.sim._world import wrap_angle
+from prima.sim._world import World, wrap_angle
 from prima.vocab import Value
 
 if TYPE_CHECKING:
@@ -103,19 +104,56 @@ def _face(sim: Simulator, heading: float) -> Generator[Wait, Any, None]:
     yield from _turn(sim, wrap_angle(heading - sim.world.robot.angle))
 
 
-def _go(sim: Simulator, x: float, y: float) -> Generator[Wait, Any, bool]:
-    """Turn toward (x, y), drive there; False if something blocked the way."""
-    world = sim.world
-    if world.mode:
-        yield from _stop(sim)
-    px, py = world.robot.position
-    if math.hypot(x - px, y - py) < 1e-6:
-        return True
-    delta = wrap_angle(math.atan2(y - py, x - px) - world.robot.angle)
-    if abs(delta) > math.radians(1.0):
-        yield from _turn(sim, delta)
-    arrived = yield signal(lambda wake: world.drive_to(x, y, wake))
-    return bool(arrived)
+ARRIVED, UNDER_WAY, BLOCKED = "arrived", "under way", "blocked"
+
+
+def _period_toward(sim: Simulator, x: float, y: float) -> Generator[Wait, Any, str]:
+    """One control period of going to (x, y): turn toward it, then drive straight.
+
+    A turn or a drive toward it that is already running goes on (a feedback
+    Command's iterations flow into each other, without stopping). When the period
+    is over, the motion is left running: the next iteration continues it, and if
+    none follows at once, the simulator stops the wheels. Returns ``ARRIVED``,
+    ``UNDER_WAY`` (the period ended first) or ``BLOCKED`` (something in the way).
+    """
+    world, k = sim.world, sim.kernel
+    end = k.tick + sim.ticks(sim.spec.control_period)
+    while True:
+        px, py = world.robot.position
+        if math.hypot(x - px, y - py) < 1e-6:
+            return ARRIVED
+        bearing = math.atan2(y - py, x - px)
+        target = world.heading_to()
+        turning = world.turning_to()
+        if target is not None and math.hypot(target[0] - x, target[1] - y) < 1e-9:
+            ended = yield signal(functools.partial(_rewake, world), end - k.tick)
+            if ended is None:
+                return UNDER_WAY
+            return ARRIVED if ended else BLOCKED
+        if turning is not None and abs(wrap_angle(turning - bearing)) < 1e-6:
+            turned = yield signal(functools.partial(_rewake, world), end - k.tick)
+        else:
+            if world.mode:
+                yield from _stop(sim)
+            delta = wrap_angle(bearing - world.robot.angle)
+            if abs(delta) > math.radians(1.0):
+                turned = yield signal(functools.partial(_turn_by, world, delta), end - k.tick)
+            else:
+                ended = yield signal(lambda wake: world.drive_to(x, y, wake), end - k.tick)
+                if ended is None:
+                    return UNDER_WAY
+                return ARRIVED if ended else BLOCKED
+        if turned is None or k.tick >= end:
+            return UNDER_WAY
+
+
+def _turn_by(world: World, delta: float, wake: Callable[..., None]) -> bool:
+    return world.turn_by(delta, wake)
+
+
+def _rewake(world: World, wake: Callable[..., None]) -> bool:
+    world.when_done(wake)
+    return True
 
 
 def _heading_to(sim: Simulator, place: Place) -> float | None:
@@ -319,7 +357,7 @@ def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
             yield from _stop(sim)
             sim.end_loop(cid)
             return {"lost": True}, True
-    end = k.tick + sim.ticks(sim.spec.tracking_interval)
+    end = k.tick + sim.ticks(sim.spec.control_period)
     period = k.hz // 10
     dead = sim.spec.tracking_band / 6
     distance = world.user_distance()
@@ -339,13 +377,14 @@ def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def topological_move(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    """One iteration: at most ``leg_length`` metres toward the next place on the route.
+    """One iteration: one control period of going to the next place on the route.
 
-    Short iterations keep the robot responsive (another application's reaction
-    can start between any two). A blocked iteration (someone in the way) waits
-    a second and ends non-terminal, so the loop tries again; after
-    ``MAX_BLOCKED`` blocked iterations in a row it gives up. While it runs, the
-    simulator leaves reporting the places reached to it (``sim.navigating``).
+    Short iterations keep the robot responsive (another application can act
+    between any two, and a held move stops within one period). A blocked
+    iteration (someone in the way) waits a second and ends non-terminal, so the
+    loop tries again; after ``MAX_BLOCKED`` blocked iterations in a row it gives
+    up. While it runs, the simulator leaves reporting the places reached to it
+    (``sim.navigating``).
     """
     sim.navigating += 1
     try:
@@ -369,9 +408,8 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
         sim.end_loop(cid)
         return {"error": f"no route to {goal.name!r}"}, True
     nxt = path[0]
-    x, y = sim.world.robot.position
-    tx, ty, partial = _toward(sim, x, y, nxt.x, nxt.y)
-    if not (yield from _go(sim, tx, ty)):
+    outcome = yield from _period_toward(sim, nxt.x, nxt.y)
+    if outcome is BLOCKED:
         blocked = int(state.get("blocked") or 0) + 1
         state["blocked"] = blocked
         if blocked >= MAX_BLOCKED:
@@ -380,7 +418,7 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
         yield sleep(sim.ticks(1.0))
         return {"blocked": True, "toward": nxt.name, "goal": goal.name, **_pose(sim)}, False
     state["blocked"] = 0
-    if partial:
+    if outcome is UNDER_WAY:
         state["toward"] = nxt.name
         state["x"], state["y"] = sim.world.robot.position
         return {"toward": nxt.name, "goal": goal.name, "remaining": len(path)}, False
@@ -395,17 +433,20 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
 
 def _route(sim: Simulator, goal: Place,
            state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
-    """The places still to visit; mid-leg, keep heading for the same place.
+    """The places still to visit; on the way to one, keep heading for it.
 
-    Replanning from scratch only when the robot is not where this loop left
-    it (another application moved it): otherwise a place visible further on
-    would make the robot skip, and not report, the places on its way.
+    Replanning from scratch only when the robot is not near where this loop left
+    it (another application moved it; stopping the wheels between two iterations
+    slides it a little): otherwise a place visible further on would make the
+    robot skip, and not report, the places on its way.
     """
     toward = sim.map.place(str(state.get("toward") or ""))
     if toward is not None:
         x, y = sim.world.robot.position
         lx, ly = state.get("x"), state.get("y")
-        if isinstance(lx, float) and isinstance(ly, float) and math.hypot(x - lx, y - ly) < 0.05:
+        moving_on = sim.world.heading_to() == (toward.x, toward.y)
+        if moving_on or (isinstance(lx, float) and isinstance(ly, float)
+                         and math.hypot(x - lx, y - ly) < KEEP_COURSE):
             names = sim.map.shortest_path({toward.name: 0.0}, {goal.name: 0.0})
             places = [p for p in (sim.map.place(n) for n in names) if p is not None]
             if places:
@@ -416,14 +457,9 @@ def _route(sim: Simulator, goal: Place,
 MAX_BLOCKED = 30
 """Blocked iterations in a row after which a move gives up (about 30 s of waiting)."""
 
-
-def _toward(sim: Simulator, x: float, y: float, tx: float, ty: float) -> tuple[float, float, bool]:
-    """The end of this iteration's leg toward (tx, ty), and whether it stops short."""
-    leg = sim.spec.leg_length
-    seg = math.hypot(tx - x, ty - y)
-    if seg <= leg + sim.spec.place_tolerance:
-        return tx, ty, False
-    return x + (tx - x) * leg / seg, y + (ty - y) * leg / seg, True
+KEEP_COURSE = 0.3
+"""A move keeps heading for the same place when the robot is this close (m) to where
+its last iteration left it (the wheels stopping in between slide it a little)."""
 
 
 def _set_position(sim: Simulator, call: Call, cid: int,
@@ -436,8 +472,7 @@ def _set_position(sim: Simulator, call: Call, cid: int,
         points = sim.route(x, y, tx, ty, spec.radius / 2)
         if not points:
             return {"error": f"no route to ({tx:g}, {ty:g})"}, True
-        nx, ny, _partial = _toward(sim, x, y, *points[0])
-        if not (yield from _go(sim, nx, ny)):
+        if (yield from _period_toward(sim, *points[0])) is BLOCKED:
             return {"error": "blocked", **_pose(sim)}, True
         x, y = world.robot.position
     reached = math.hypot(tx - x, ty - y) <= tol

@@ -459,12 +459,16 @@ class Simulator:
         del self._running[ab.id]
         if "human-detection" in ab.devices:
             self._sensing -= 1
-            if not self._sensing:
-                self._unseen_since = None
+            if not self._sensing:  # forget how long the user was unseen, unless sensing
+                self.kernel.at(self.kernel.tick + 1, self._sensing_stopped)  # goes on at once
         if "locomotion" in ab.devices and self.world.mode:
             self.kernel.at(self.kernel.tick + 1, self._hold_still)
         self.reports += 1
         self.finished(ab.id, Outcome(MappingProxyType(values), terminal))
+
+    def _sensing_stopped(self) -> None:
+        if not self._sensing:
+            self._unseen_since = None
 
     def _hold_still(self) -> None:
         """Stop the wheels unless a running atomic behavior drives them."""

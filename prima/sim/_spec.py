@@ -76,10 +76,10 @@ class RobotSpec:
     while no Topological Move reports its own route (e.g. while tracking)."""
     position_tolerance: float = 0.05
     """Set Position is done within this distance of its target (m)."""
-    leg_length: float = 1.5
-    """Longest leg of one Set Position iteration (m)."""
-    tracking_interval: float = 1.0
-    """Length of one Tracking Human iteration (s)."""
+    control_period: float = 0.5
+    """One iteration of a feedback Command (Topological Move, Set Position, Tracking
+    Human): at most this long of motion (s), so that another application can act
+    between any two, and a held motion stops within it."""
     tracking_band: float = 0.3
     """Tracking keeps the user within +-band of the wanted distance (m)."""
     search_time: float = 10.0
@@ -88,7 +88,7 @@ class RobotSpec:
     def __post_init__(self) -> None:
         positive = ("radius", "max_speed", "max_accel", "max_turn_rate", "turn_accel",
                     "speech_rate", "camera_fov", "camera_range", "head_rate", "arm_rate",
-                    "tracking_interval", "search_time", "leg_length")
+                    "control_period", "search_time")
         for name in positive:
             value = getattr(self, name)
             if not value > 0:

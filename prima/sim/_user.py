@@ -102,6 +102,9 @@ class UserScript:
 
 
 _FOLLOW_PERIOD = 0.1
+_STEP_ASIDE = 0.6
+"""A following user steps out of the robot's way when it comes this close (a fraction
+of the following distance) heading their way: people do not stand in a robot's path."""
 _APPROACH_GAP = 0.15
 
 
@@ -218,9 +221,27 @@ class ScriptedUser:
                 wx, wy = self._toward_robot(hx, hy, rx, ry)
                 w = math.hypot(wx - hx, wy - hy)
                 self._set_velocity((wx - hx) / w * v, (wy - hy) / w * v)
+            elif d < distance * _STEP_ASIDE and self._in_the_way(rx, ry, hx, hy, d):
+                self._step_aside(rx, ry, hx, hy, d, speed)
             elif world.human_moving:
                 self._set_velocity(0.0, 0.0)
             yield sleep(period)
+
+    def _in_the_way(self, rx: float, ry: float, hx: float, hy: float, d: float) -> bool:
+        """The robot heads toward the user (within 45 degrees)."""
+        angle = self._sim.world.robot.angle
+        ahead = ((hx - rx) * math.cos(angle) + (hy - ry) * math.sin(angle)) / d
+        return ahead > math.cos(math.radians(45))
+
+    def _step_aside(self, rx: float, ry: float, hx: float, hy: float, d: float,
+                    speed: float) -> None:
+        """Step sideways out of the robot's way, to the side the user already leans to
+        (left of the robot's heading when squarely in front: people keep right)."""
+        angle = self._sim.world.robot.angle
+        fx, fy = math.cos(angle), math.sin(angle)
+        side = fx * (hy - ry) - fy * (hx - rx)  # > 0: the user is left of the robot's path
+        sign = 1.0 if side >= 0 else -1.0
+        self._set_velocity(-fy * sign * speed, fx * sign * speed)
 
     def _toward_robot(self, hx: float, hy: float, rx: float, ry: float) -> tuple[float, float]:
         """Where to head for to reach the robot: straight, or over the place graph."""

@@ -37,6 +37,12 @@ HUMAN_RADIUS = 0.25
 
 _IDLE, _LINEAR, _ANGULAR, _VELOCITY = 0, 1, 2, 3
 
+_CHECK_EVERY = 5
+"""A straight drive compares its real progress with its plan every this many steps
+(reading the body's position costs more than a physics step)."""
+_BLOCKED_LAG = 0.1
+"""A straight drive that lags this far (m) behind its plan is blocked: it ends at once."""
+
 Done = Callable[[bool], None]
 """Called when a profile motion ends; the flag is True if it arrived, False if blocked."""
 
@@ -117,6 +123,8 @@ class World:
         self._len = 0.0
         self._ux = self._uy = 0.0
         self._tx = self._ty = self._ta = 0.0
+        self._x0 = self._y0 = 0.0
+        self._steps = 0
         self._cmd_v = self._cmd_w = 0.0
         self._w = 0.0
         self._a_dt = spec.max_accel * self.dt
@@ -176,6 +184,18 @@ class World:
 
     # ---- robot wheel commands --------------------------------------------------
 
+    def heading_to(self) -> tuple[float, float] | None:
+        """Where the running straight drive goes, if one runs."""
+        return (self._tx, self._ty) if self.mode == _LINEAR else None
+
+    def turning_to(self) -> float | None:
+        """The body angle the running turn ends at (radians), if one runs."""
+        return self._ta if self.mode == _ANGULAR else None
+
+    def when_done(self, done: Done) -> None:
+        """Call ``done`` instead when the running drive or turn ends (it goes on as is)."""
+        self._done = done
+
     def drive_to(self, x: float, y: float, done: Done) -> bool:
         """Drive straight to (x, y) from standstill. False if already there."""
         px, py = self.robot.position
@@ -186,7 +206,9 @@ class World:
         self._ux = (x - px) / length
         self._uy = (y - py) / length
         self._tx, self._ty = x, y
+        self._x0, self._y0 = px, py
         self._len, self._s, self._v = length, 0.0, 0.0
+        self._steps = 0
         self._done = done
         self.mode = _LINEAR
         return True
@@ -260,6 +282,9 @@ class World:
             self._s += v * dt
             if last:
                 return self._finish_linear()
+            self._steps += 1
+            if self._steps % _CHECK_EVERY == 0 and self._lagging():
+                return self._finish(False)  # blocked: someone or something in the way
             return None
         if mode == _ANGULAR:
             rem = self._len - self._s
@@ -312,6 +337,12 @@ class World:
                         f()
                 return report
         return None
+
+    def _lagging(self) -> bool:
+        """The drive is well behind its plan: the body does not get where it is driven."""
+        x, y = self.robot.position
+        made = (x - self._x0) * self._ux + (y - self._y0) * self._uy
+        return self._s - made > _BLOCKED_LAG
 
     def _finish_linear(self) -> Callable[[], None] | None:
         body = self.robot
