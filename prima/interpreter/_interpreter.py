@@ -398,7 +398,7 @@ class Interpreter:
         try:
             ids = self.port.submit(MediatorRequest(
                 app=self.app, calls=calls, order=request.order, group=request.group,
-                reactive=reactive, follows=follows))
+                reactive=reactive, reaction=handling.reactive, follows=follows))
         except PrimaError as exc:  # the mediator refused it (e.g. a Command the robot lacks)
             raise ExecutionError(f"{self._where(request.loc)}request refused: {exc}") from exc
         for cid, call in zip(ids, request.calls, strict=True):

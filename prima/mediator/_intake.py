@@ -129,6 +129,8 @@ class Intake:
         all_devices = frozenset().union(*(d for _s, d in specs))
         link, cancelled = self._link(app, request, all_devices, now)
         tree = link.tree if link.tree is not None else self._wm.new_tree(app)
+        if (request.reactive or request.reaction) and link.reactive_allowed:
+            self._wm.react(tree, seq)  # before its nodes are filed: they rank as its reaction
         root = self._build(app, tree, request, cmds, specs, link, seq)
         app.latest = cmds[-1]
         self._holds.requested(app, tree)

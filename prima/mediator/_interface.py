@@ -76,7 +76,11 @@ class Request:
     group: bool = False
     """Run the whole chain as one atomic behavior (thesis 4.1 (2))."""
     reactive: bool = False
-    """The first Commands requested while handling a reactive event (rule 5)."""
+    """The first Commands requested while handling a reactive event (rule 5); such a
+    request also starts a reaction (see ``reaction``)."""
+    reaction: bool = False
+    """Requested while handling a reactive event (MISSION.md 7.1): its tree takes over
+    as a reaction, and keeps its precedence until it leaves working memory."""
     follows: CommandId | None = None
     """Made while handling this Command's end event or Q&A answer (rule 6a/6b):
     the request stays in that Command's tree and carries no reactivity."""

@@ -120,6 +120,7 @@ class WorkingMemory:
 
     def start(self, node: Node) -> None:
         node.state = NodeState.RUNNING
+        node.tree.started = True
         self._rank(node, -1)
         self.waiting -= 1
         for d in node.sorted_devices:
@@ -191,6 +192,12 @@ class WorkingMemory:
         tree.suspended = None
         self.suspended.pop(tree.id, None)
         self.dirty.update(self.index.rerank(tree))
+
+    def react(self, tree: Tree, reaction: int) -> None:
+        """The tree takes over as (a later) reaction: re-rank it."""
+        if tree.reaction is None or tree.reaction < reaction:
+            tree.reaction = reaction
+            self.dirty.update(self.index.rerank(tree))
 
     def rerank_app(self, app: App) -> None:
         """The app's precedence changed: re-rank its trees."""

@@ -64,7 +64,8 @@ def _wait_share(node: Node, _pjf: Collection[int]) -> Key:
 
 
 def _reactivity(node: Node, _pjf: Collection[int]) -> Key:
-    return (0, -node.seq) if node.reactive else (1, 0)
+    reaction = node.tree.reaction
+    return (1, 0) if reaction is None else (0, -reaction)
 
 
 def _parent_finished(node: Node, pjf: Collection[int]) -> Key:
@@ -85,8 +86,9 @@ CRITERIA: tuple[Criterion, ...] = (
     # 1. HIGH (keeps the Communication Channel) before LOW (breaks it).
     Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share),
     # (budget) an app that kept the others waiting beyond its share ranks after them.
-    Criterion(Rule.REACTIVITY, Scope.NODE, _reactivity),
-    # 2. reactive ABs first, the latest reactive first (response speed).
+    Criterion(Rule.REACTIVITY, Scope.TREE, _reactivity),
+    # 2. ABs of a reaction first, the latest reaction first (response speed; MISSION.md
+    #    7.1: a reaction takes over as a stream until its trees leave working memory).
     Criterion(Rule.PARENT_FINISHED, Scope.ROUND, _parent_finished),
     # 3. ABs whose before node just finished (keep the active stream).
     Criterion(Rule.RESUME_STREAM, Scope.TREE, _resume_stream),

@@ -97,7 +97,8 @@ class Command:
 class Tree:
     """One AB tree (one Communication Stream)."""
 
-    __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "version")
+    __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "version", "reaction",
+                 "started")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -111,6 +112,11 @@ class Tree:
         """Nodes in working memory, in creation order."""
         self.version = 0
         """Bumped whenever the waiting index must re-rank the tree (suspend, resume)."""
+        self.reaction: int | None = None
+        """The sequence number of the reaction it belongs to (MISSION.md 7.1: a reaction
+        takes over as a stream), larger is later; None if it is no reaction."""
+        self.started = False
+        """Some AB of it has started: it is a stream under way, not a new one."""
 
 
 _SORTED: dict[frozenset[str], tuple[str, ...]] = {}

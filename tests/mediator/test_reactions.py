@@ -1,0 +1,148 @@
+"""MISSION.md 7.1 and 7.2: a reaction takes over as a stream; a stream hold never
+splits a question from its reply, nor holds back a reaction."""
+
+from __future__ import annotations
+
+from prima.mediator import AppKind, Event, Outcome, Request
+from prima.mediator.testing import Harness
+from tests.mediator.helpers import call, req, speak
+
+
+def starts(h: Harness) -> list[tuple[float, str, str]]:
+    return [(d.t, d.app or "", d.command or "") for d in h.starts()]
+
+
+def start_of(h: Harness, app: str, text: str) -> float:
+    return next(d.t for d in h.starts()
+                if d.app == app and d.calls and d.calls[0].args.get("text") == text)
+
+
+def dialogue(h: Harness, app: str, turns: int) -> None:
+    """``app`` talks on and on: each utterance follows the last one's end (rule 6a)."""
+    m = h.mediator
+    count = [0]
+
+    def more(cid: int, _o: Outcome) -> None:
+        if count[0] < turns:
+            count[0] += 1
+            m.submit(Request(app, (speak(f"and then {count[0]}"),), follows=cid))
+
+    h.app(app, AppKind.EA, on_ended=more)
+
+
+def test_a_reaction_keeps_its_precedence_after_its_first_command() -> None:
+    """7.1: the reaction's first Command (a StopMoving on free wheels) starts at once;
+    its speech must still take over at the EA's next IU boundary, not wait for the
+    EA's whole dialogue (sample-04: the host's message waited 13.7 s)."""
+    h = Harness(duration={"StopMoving": 0.2, "*": 2.0})
+    m = h.mediator
+    dialogue(h, "ea", turns=10)
+
+    def react(_e: Event) -> None:
+        m.submit(Request("fa", (call("StopMoving"), speak("What's the matter?")),
+                         reactive=True, reaction=True))
+
+    h.app("fa", AppKind.FA, on_event=react)
+    m.submit(req("ea", speak("let me explain")))
+    h.at(3.0, lambda: m.post(Event("touched")))
+    h.run(until=60.0)
+    assert start_of(h, "fa", "What's the matter?") == 4.0  # the EA's utterance under way ends
+    assert start_of(h, "ea", "and then 2") > 4.0
+
+
+def test_what_a_reaction_chains_from_its_end_handlers_keeps_its_precedence() -> None:
+    """7.1: the reaction's Q&A (1-5 s) is answered while the EA looks around (head moves
+    on the neck, each following the last); the nod the reaction chains from its answer
+    needs the neck. When the EA's head move under way ends (6 s), the EA's next one
+    'just had its parent finish', yet the reaction's nod takes the neck."""
+    h = Harness(duration={"QA": 4.0, "Gesture": 1.0, "MoveHead": 2.0})
+    m = h.mediator
+    asked: list[int] = []
+
+    def look_again(cid: int, _o: Outcome) -> None:
+        m.submit(Request("ea", (call("MoveHead", pan=10.0),), follows=cid))
+
+    def react(_e: Event) -> None:
+        asked.extend(m.submit(Request("fa", (call("QA", prompt="What?", grammar="g"),),
+                                      reactive=True, reaction=True)))
+
+    def nod(cid: int, _o: Outcome) -> None:
+        if cid in asked:
+            m.submit(Request("fa", (call("Gesture", name="nod"),), follows=cid))
+
+    h.app("ea", AppKind.EA, on_ended=look_again)
+    h.app("fa", AppKind.FA, on_event=react, on_ended=nod)
+    m.submit(req("ea", call("MoveHead", pan=10.0)))
+    h.at(1.0, lambda: m.post(Event("touched")))
+    h.run(until=9.0)
+    assert [(t, app, c) for t, app, c in starts(h) if 5.0 <= t < 7.0] == [
+        (6.0, "fa", "Gesture")]
+
+
+def test_of_two_reactions_the_latest_wins() -> None:
+    h = Harness(duration=2.0)
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(req("ea", speak("busy")))                                       # 0-2
+    m.submit(Request("fa", (speak("first reaction"), speak("first, more")),
+                     reactive=True, reaction=True))
+    m.submit(Request("ea", (speak("second reaction"), speak("second, more")),
+                     reactive=True, reaction=True))
+    h.run(until=20.0)
+    order = [d.calls[0].args["text"] for d in h.starts()]
+    assert order == ["busy", "second reaction", "second, more", "first reaction",
+                     "first, more"]
+
+
+def test_a_stream_hold_never_splits_a_question_from_its_reply() -> None:
+    """7.2: the EA's Q&A was asked before the FA's stream hold armed (on the arm and
+    the neck its gesture used); the EA's reply to the answer (a nod, then words)
+    continues the EA's stream under way: the hold does not delay it."""
+    h = Harness(duration={"QA": 4.0, "*": 1.0})
+    m = h.mediator
+    asked: list[int] = []
+
+    def reply(cid: int, _o: Outcome) -> None:
+        if cid in asked:
+            m.submit(Request("ea", (call("Gesture", name="nod"), speak("Here it is.")),
+                             follows=cid))
+
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA, on_ended=reply)
+    asked.extend(m.submit(req("ea", call("QA", prompt="Which book?", grammar="g"))))  # 0-4
+    m.open_stream("fa", hold=20.0)
+    m.submit(req("fa", call("Gesture", name="wave")))  # 0-1; then the FA waits: hold on
+    h.run(until=60.0)
+    assert next(d.t for d in h.starts() if d.app == "ea" and d.command == "Gesture") == 4.0
+    assert h.mediator.snapshot().holds == ()  # (its hold timed out at 21 s, long after)
+
+
+def test_a_stream_hold_never_holds_back_a_reaction_past_its_first_command() -> None:
+    """7.2: every AB of the reaction passes the hold, not only its first."""
+    h = Harness(duration=1.0)
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+
+    def react(_e: Event) -> None:
+        m.submit(Request("ea", (call("Gesture", name="nod"), speak("A message for you.")),
+                         reactive=True, reaction=True))
+
+    h.app("ea", AppKind.EA, on_event=react)
+    m.open_stream("fa", hold=20.0)
+    m.submit(req("fa", speak("Connecting...")))  # 0-1, then the FA waits: the hold arms
+    h.at(2.0, lambda: m.post(Event("message")))
+    h.run(until=60.0)
+    assert start_of(h, "ea", "A message for you.") == 3.0
+
+
+def test_a_stream_hold_still_delays_the_other_apps_new_stream() -> None:
+    h = Harness(duration=1.0)
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.open_stream("fa", hold=10.0)
+    m.submit(req("fa", speak("Connecting...")))   # 0-1; then the hold arms until 11
+    h.at(2.0, lambda: m.submit(req("ea", speak("Please tell me a title."))))
+    h.run(until=60.0)
+    assert start_of(h, "ea", "Please tell me a title.") == 11.0
