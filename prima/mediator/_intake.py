@@ -129,8 +129,11 @@ class Intake:
         all_devices = frozenset().union(*(d for _s, d in specs))
         link, cancelled = self._link(app, request, all_devices, now)
         tree = link.tree if link.tree is not None else self._wm.new_tree(app)
-        if (request.reactive or request.reaction) and link.reactive_allowed:
-            self._wm.react(tree, seq)  # before its nodes are filed: they rank as its reaction
+        # before its nodes are filed, so that they rank as its reaction
+        if ((request.reactive or request.reaction) and link.reactive_allowed
+                and self._wm.react(tree, seq)
+                and any(n.parked is not None for n in tree.nodes.values())):
+            self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
         root = self._build(app, tree, request, cmds, specs, link, seq)
         app.latest = cmds[-1]
         self._holds.requested(app, tree)

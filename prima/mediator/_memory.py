@@ -193,11 +193,14 @@ class WorkingMemory:
         self.suspended.pop(tree.id, None)
         self.dirty.update(self.index.rerank(tree))
 
-    def react(self, tree: Tree, reaction: int) -> None:
-        """The tree takes over as (a later) reaction: re-rank it."""
-        if tree.reaction is None or tree.reaction < reaction:
+    def react(self, tree: Tree, reaction: int) -> bool:
+        """The tree takes over as (a later) reaction: re-rank it. Whether it was no
+        reaction before."""
+        before = tree.reaction
+        if before is None or before < reaction:
             tree.reaction = reaction
             self.dirty.update(self.index.rerank(tree))
+        return before is None
 
     def rerank_app(self, app: App) -> None:
         """The app's precedence changed: re-rank its trees."""

@@ -16,9 +16,9 @@ Checked after every operation (:meth:`Oracle.observe`):
   at most once and only while running; a ``cancel`` names a started AB only
   for a feedback loop stopped between iterations, after that AB ended;
 - *holds respected*: no AB started while another, non-demoted app's block (or,
-  for a non-reactive AB, its armed stream hold) was in force on one of its
-  devices all along, nor, for a Command that breaks the channel, while another
-  app talked all along;
+  for the first AB of a new stream that is no reaction, its armed stream hold)
+  was in force on one of its devices all along, nor, for a Command that breaks
+  the channel, while another app talked all along;
 - *nothing startable waits*: a plain walk of the waiting list in rank order
   (:func:`left_waiting`) finds nothing the mediator should have started;
 - *callbacks*: a Command gets at most one ended/cancelled callback, and none
@@ -32,6 +32,13 @@ which the app kept waiting had itself lost its precedence, and waits for an AB
 that started with no rival; such overruns of the literal bound are kept in
 :attr:`Oracle.notes`); at the end every started AB ended, working memory is
 empty, and every Command of an app still loaded got exactly one callback.
+
+Which trees are reactions (MISSION.md 7.1) and which streams are under way
+(7.2) the oracle works out itself (:class:`Streams`): a tree is a reaction
+from the moment a request the caller made while handling a reactive event
+(:meth:`Oracle.requested` with ``reaction=True``) files into it, unless that
+request follows an end (it then only continues its tree); the latest such
+request ranks first. A tree is under way once any of its ABs started.
 
 Where the model differs from :func:`prima.mediator.testing.plain_scan` (which
 reuses the mediator's ranking and hold code): it ranks from the snapshot alone
@@ -48,6 +55,7 @@ from dataclasses import dataclass, field
 
 from prima.mediator import (
     AbId,
+    TreeId,
     AppKind,
     Catalog,
     CommandId,
@@ -57,11 +65,12 @@ from prima.mediator import (
     MediatorConfig,
     NodeView,
     Priority,
+    Rule,
     Snapshot,
 )
 from prima.vocab import DEFAULT_BUDGETS, Budgets
 
-__all__ = ["FEEDBACK_STOPPED", "Oracle", "keeping", "left_waiting", "rank_key",
+__all__ = ["FEEDBACK_STOPPED", "Oracle", "Streams", "keeping", "left_waiting", "rank_key",
            "window_peak"]
 
 FEEDBACK_STOPPED = "feedback loop stopped between iterations"
@@ -74,6 +83,20 @@ _RankKeyFn = Callable[[NodeView], _RankKey]
 
 
 # ---------------------------------------------------------------- the model
+@dataclass
+class Streams:
+    """What the oracle knows of each tree, worked out from the decisions."""
+
+    reaction: dict[TreeId, int] = field(default_factory=dict)
+    """Reaction trees -> the order of their latest reaction request (larger: later)."""
+    started: set[TreeId] = field(default_factory=set)
+    """Trees some AB of which started: streams under way."""
+
+    def held_by_stream(self, tree: TreeId) -> bool:
+        """A stream hold delays only new streams that are no reaction (7.1, 7.2)."""
+        return tree not in self.reaction and tree not in self.started
+
+
 @dataclass(frozen=True)
 class _View:
     """What one snapshot says, indexed for the model."""
@@ -85,14 +108,15 @@ class _View:
     busy: dict[str, NodeView]
     talkers: frozenset[str]
     """Apps running an AB on a talk device."""
+    streams: Streams
 
     @classmethod
-    def of(cls, snap: Snapshot, talk: frozenset[str] = TALK) -> _View:
+    def of(cls, snap: Snapshot, talk: frozenset[str], streams: Streams) -> _View:
         nodes = {n.ab: n for tree in snap.trees for n in tree.nodes}
         busy = {d: nodes[ab] for d, ab in snap.busy}
         talkers = frozenset(n.app for d, n in busy.items() if d in talk)
-        waiting = sorted((nodes[ab] for ab in snap.waiting), key=rank_key(snap))
-        return cls(snap, nodes, waiting, busy, talkers)
+        waiting = sorted((nodes[ab] for ab in snap.waiting), key=rank_key(snap, streams))
+        return cls(snap, nodes, waiting, busy, talkers, streams)
 
     def channel_held(self, n: NodeView) -> bool:
         """A Command that breaks the channel waits while another app talks."""
@@ -100,31 +124,33 @@ class _View:
 
     def holders(self, n: NodeView) -> list[str]:
         """Other, non-demoted apps whose block or armed stream hold keeps ``n``."""
-        return [h.app for h in self.snap.holds if _applies(h, n, self.snap.demoted)]
+        return [h.app for h in self.snap.holds
+                if _applies(h, n, self.snap.demoted, self.streams)]
 
     def held(self, n: NodeView) -> bool:
         return self.channel_held(n) or bool(self.holders(n))
 
 
-def _applies(h: HoldView, n: NodeView, demoted: Iterable[str]) -> bool:
+def _applies(h: HoldView, n: NodeView, demoted: Iterable[str], streams: Streams) -> bool:
     if h.app == n.app or h.app in demoted or not set(h.devices) & set(n.devices):
         return False
-    return h.kind == "block" or not n.reactive  # a stream hold lets reactive ABs by
+    return h.kind == "block" or streams.held_by_stream(n.tree)
 
 
-def rank_key(snap: Snapshot) -> _RankKeyFn:
+def rank_key(snap: Snapshot, streams: Streams) -> _RankKeyFn:
     """Rule 4 at a quiescent point (nothing's parent *just* finished): HIGH first;
-    apps that lost their precedence after the others; reactive first, the latest
-    first; suspended trees, the most recently suspended first; the oldest
-    request; the lowest AB id."""
+    apps that lost their precedence after the others; the ABs of reactions
+    first, the latest reaction first; suspended trees, the most recently
+    suspended first; the oldest request; the lowest AB id."""
     order = {tree: i for i, tree in enumerate(snap.suspended)}  # top of the stack first
     demoted = set(snap.demoted)
+    reaction = streams.reaction
 
     def key(n: NodeView) -> _RankKey:
         return (
             0 if n.priority is Priority.HIGH else 1,
             1 if n.app in demoted else 0,
-            (0, -n.seq) if n.reactive else (1, 0),
+            (0, -reaction[n.tree]) if n.tree in reaction else (1, 0),
             (0, order[n.tree]) if n.tree in order else (1, 0),
             n.seq,
             n.ab,
@@ -132,15 +158,16 @@ def rank_key(snap: Snapshot) -> _RankKeyFn:
     return key
 
 
-def left_waiting(snap: Snapshot, talk: frozenset[str] = TALK) -> list[AbId]:
+def left_waiting(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK) -> list[AbId]:
     """Waiting ABs a plain rank-order walk would start now (must be none).
 
-    A held AB (another app's block or, unless reactive, stream hold; or, for a
+    A held AB (another app's block or, for a new stream that is no reaction,
+    stream hold; or, for a
     Command that breaks the channel, another app talking) reserves nothing. Any
     other AB whose devices are free and not reserved by a better-ranked waiting
     AB should be running; one that cannot start reserves its devices.
     """
-    return _left_waiting(_View.of(snap, talk))
+    return _left_waiting(_View.of(snap, talk, streams))
 
 
 def _left_waiting(v: _View) -> list[AbId]:
@@ -156,10 +183,10 @@ def _left_waiting(v: _View) -> list[AbId]:
     return out
 
 
-def keeping(snap: Snapshot, talk: frozenset[str] = TALK,
+def keeping(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,
             uncontended: Collection[AbId] = ()) -> set[str]:
     """The apps that keep another app waiting now (the wait-share definition)."""
-    return _keeping(_View.of(snap, talk), uncontended)
+    return _keeping(_View.of(snap, talk, streams), uncontended)
 
 
 def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
@@ -280,6 +307,12 @@ class Oracle:
         self._uncontended: set[AbId] = set()
         """Running ABs that started while no other app wanted their devices."""
         self._requested: dict[CommandId, str] = {}
+        self.streams = Streams()
+        self._reactions: set[CommandId] = set()
+        """First Commands of the requests made while handling a reactive event."""
+        self._requests = 0
+        self._exempt: set[AbId] = set()
+        """ABs that started in a reaction or a stream under way (no stream hold applies)."""
         self._callbacks: dict[CommandId, int] = {}
 
     # ------------------------------------------------------------ reporting
@@ -288,9 +321,13 @@ class Oracle:
             self.violations.append(what)
 
     # ------------------------------------------------------------ the app side
-    def requested(self, app: str, ids: Iterable[CommandId]) -> None:
+    def requested(self, app: str, ids: Sequence[CommandId], reaction: bool = False) -> None:
+        """``app`` requested the Commands ``ids``; ``reaction``: while handling a
+        reactive event (the caller set ``Request.reactive`` or ``reaction``)."""
         for c in ids:
             self._requested[c] = app
+        if reaction and ids:
+            self._reactions.add(ids[0])
 
     def callback(self, app: str, command: CommandId, what: str, loaded: bool) -> None:
         """An app was told its Command ``what`` (ended/cancelled); ``loaded``: the
@@ -311,7 +348,7 @@ class Oracle:
         self._seen = len(decisions)
         for d in new:
             self._decision(d)
-        v = _View.of(snap, self._talk)
+        v = _View.of(snap, self._talk, self.streams)
         self._check_running(v)
         if self._prev is not None:
             self._check_holds(self._prev, v, new)
@@ -329,6 +366,11 @@ class Oracle:
             b.kinds[d.app] = AppKind[d.detail]
         elif d.kind is DecisionKind.UNLOAD and d.app is not None:
             b.unloaded.add(d.app)
+        elif d.kind is DecisionKind.REQUEST:
+            self._requests += 1
+            if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
+                    and d.tree is not None):
+                self.streams.reaction[d.tree] = self._requests
         elif d.kind is DecisionKind.START and d.ab is not None:
             self._start(d.ab, d)
         elif d.kind is DecisionKind.END and d.ab is not None:
@@ -358,6 +400,10 @@ class Oracle:
             b.occupied[dev] = ab
         b.started.add(ab)
         b.running[ab] = d.devices
+        if d.tree is not None:
+            if not self.streams.held_by_stream(d.tree):
+                self._exempt.add(ab)
+            self.streams.started.add(d.tree)
 
     def _check_running(self, v: _View) -> None:
         snap = v.snap
@@ -392,7 +438,7 @@ class Oracle:
             for h in lasting:
                 if (h.app != d.app and h.app not in prev.snap.demoted
                         and set(h.devices) & set(d.devices)
-                        and (h.kind == "block" or not d.reactive)):
+                        and (h.kind == "block" or d.ab not in self._exempt)):
                     self.fail(f"t={d.t:g}: AB{d.ab} ({d.app} {d.command}) started while "
                               f"{h.app}'s {h.kind} held {', '.join(h.devices)}")
             if prio is Priority.LOW and talkers - {d.app}:

@@ -6,7 +6,8 @@ an FA and an EA (a second EA may be swapped in) that request single Commands,
 chains, groups, ASAP and reactive requests, requests that follow their latest
 ended Command; end handlers that request follow-ups, at once or a little later
 (inside or past the end grace), some endlessly; posted events their handlers
-react to; streams with holds, blocks with watchdogs, EA swaps, listeners that
+react to (a first, reactive request and a second that is part of the same
+reaction); streams with holds, blocks with watchdogs, EA swaps, listeners that
 raise, zero-length ABs that end from inside ``driver.start``, feedback Commands
 with random iteration counts, and budgets that are sometimes tiny.
 
@@ -263,9 +264,15 @@ class _Listener:
         self._maybe_raise("event")
         s = self.script
         if s.react and self.run.live():
-            self.run.submit(Request(self.name, tuple(call(c) for c in s.react), reactive=True,
+            # like a handler with two chains: the first is reactive, the second is
+            # part of the same reaction (MISSION.md 7.1)
+            first, rest = (s.react, ()) if s.react_asap else (s.react[:1], s.react[1:])
+            self.run.submit(Request(self.name, tuple(call(c) for c in first), reactive=True,
                                     order=RunningOrder.ASAP if s.react_asap
                                     else RunningOrder.AFTER_LATEST))
+            if rest:
+                self.run.submit(Request(self.name, tuple(call(c) for c in rest),
+                                        reaction=True))
 
     def command_ended(self, command_id: CommandId, _outcome: Outcome) -> None:
         self.run.told(self.name, command_id, "ended")
@@ -320,7 +327,8 @@ class _Run:
 
     def submit(self, request: Request) -> None:
         """Submit (errors go to the caller: inside a handler, they fail the app)."""
-        self.oracle.requested(request.app, self.m.submit(request))
+        self.oracle.requested(request.app, self.m.submit(request),
+                              reaction=request.reactive or request.reaction)
 
     def guarded(self, request: Request) -> None:
         """Submit from the scenario: a refused request is fine (nothing changes)."""

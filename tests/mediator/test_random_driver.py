@@ -171,3 +171,40 @@ def test_seeds_that_once_failed(seed: int) -> None:
     literal wait-share bound that no mediator can avoid (the channel rule; a start that
     no rival was waiting for any more), now notes."""
     assert play(seed).violations == []
+
+
+def test_the_oracle_catches_a_reaction_that_loses_its_precedence(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """MISSION.md 7.1 undone: only a reaction's first AB ranks as reactive (the rule
+    before 7.1), so its later ABs wait behind the other app's."""
+    def reactivity(node: ranking_module.Node, _pjf: object) -> tuple[int, int]:
+        return (0, -node.seq) if node.reactive else (1, 0)
+
+    criteria = tuple(ranking_module.Criterion(c.rule, ranking_module.Scope.NODE, reactivity)
+                     if c.rule is Rule.REACTIVITY else c for c in ranking_module.CRITERIA)
+    monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
+    for name, value in zip(("_HEAD", "_REST", "_NODE_REST"), index_module._split(criteria),
+                           strict=True):
+        monkeypatch.setattr(index_module, name, value)
+    assert any("could start but waits" in v for v in caught())
+
+
+def test_the_oracle_catches_a_stream_hold_that_splits_a_stream_under_way(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """MISSION.md 7.2 undone: a stream hold keeps every AB of the other apps but the
+    reactive ones, even those of a stream under way."""
+    original = holds_module.Holds.holder
+
+    def holder(self: holds_module.Holds, node: holds_module.Node
+               ) -> tuple[Rule, holds_module.App] | None:
+        found = original(self, node)
+        if found is None and not node.reactive:
+            for other in self._apps.values():
+                st = self._streams.get(other.name)
+                if (other is not node.app and st is not None and st.armed
+                        and not node.devices.isdisjoint(st.devices)):
+                    return Rule.STREAM_HOLD, other
+        return found
+
+    monkeypatch.setattr(holds_module.Holds, "holder", holder)
+    assert any("could start but waits" in v and "parked by" in v for v in caught())

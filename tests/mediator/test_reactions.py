@@ -146,3 +146,25 @@ def test_a_stream_hold_still_delays_the_other_apps_new_stream() -> None:
     h.at(2.0, lambda: m.submit(req("ea", speak("Please tell me a title."))))
     h.run(until=60.0)
     assert start_of(h, "ea", "Please tell me a title.") == 11.0
+
+
+def test_a_reaction_behind_a_held_ab_takes_it_along() -> None:
+    """7.1 and 7.2 (found by the random driver): the EA's new stream is held by the FA's
+    stream hold; a reaction the EA then requests joins that stream (after its latest),
+    so the whole tree becomes a reaction and the held AB goes at once, the reaction
+    right after it, instead of both waiting out the hold."""
+    h = Harness(duration=1.0)
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+
+    def react(_e: Event) -> None:
+        m.submit(Request("ea", (speak("A message for you."),), reactive=True, reaction=True))
+
+    h.app("ea", AppKind.EA, on_event=react)
+    m.open_stream("fa", hold=20.0)
+    m.submit(req("fa", speak("Connecting...")))  # 0-1, then the FA waits: the hold arms
+    h.at(2.0, lambda: m.submit(req("ea", speak("Welcome."))))  # held: a new stream
+    h.at(3.0, lambda: m.post(Event("message")))
+    h.run(until=60.0)
+    assert start_of(h, "ea", "Welcome.") == 3.0
+    assert start_of(h, "ea", "A message for you.") == 4.0
