@@ -13,7 +13,8 @@ measures the same things on every jsonl trace (MISSION.md section 8):
 - **split exchanges**: another application's utterance between a Q&A's answer
   and the reply to it, or inside an explicit stream;
 - **silences**: more than 2 s without any robot output after a user's answer;
-- **stuck**: an application whose waiting Commands cannot start.
+- **stuck**: an application whose waiting Commands cannot start, or that
+  searches for a user it never sees.
 
 Every definition is in ``docs/judging.md``. One pass over the trace, plus work
 proportional to the reactions and Commands it holds: the cost is linear in
@@ -41,6 +42,10 @@ __all__ = ["Leaving", "Reaction", "Report", "Silence", "Split", "Stuck", "Thresh
            "load_trace"]
 
 _EPS = 1e-6
+
+SEARCH_DEVICE = "human-detection"
+"""A feedback Command on this device looks for the user: iterating on and on
+while the user is never detectable, its application is stuck (kind ``search``)."""
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
 
 _ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
@@ -241,8 +246,10 @@ class Stuck:
     since: float
     """When that Command was requested."""
     kind: str
-    """``loop``: behind its own feedback Command iterating on and on; ``end``: still
-    waiting when the trace ended."""
+    """``loop``: behind its own feedback Command iterating on and on; ``search``:
+    its search for the user iterated on and on while the user was never
+    detectable (``command_id``: the search; ``since``: when it last saw the user
+    or the search began); ``end``: still waiting when the trace ended."""
 
     def to_dict(self) -> dict[str, object]:
         return dataclasses.asdict(self)
@@ -581,6 +588,8 @@ class _Judge:
         self.runs: dict[int, _Running] = {}
         self.checks: list[tuple[float, int, int]] = []
         self.stuck: dict[str, Stuck] = {}
+        self.last_seen = 0.0
+        """The latest time a posed line showed the user detectable."""
 
     # -------------------------------------------------------------- the pass
 
@@ -596,6 +605,8 @@ class _Judge:
         if isinstance(ab, int) and isinstance(cid, int):
             self.ab_command.setdefault(ab, cid)
         if row.get("robot") is not None and row.get("user") is not None:
+            if row["user"].get("detectable") is True:
+                self.last_seen = t
             self._posed(row)
         handler = _HANDLERS.get(kind)
         if handler is not None:
@@ -825,9 +836,20 @@ class _Judge:
                         heapq.heappush(self.checks, (due, command.seq, waiter))
             if iteration:
                 run.iterated = True
+                if SEARCH_DEVICE in (row.get("devices") or ()):
+                    self._searching(row, cid, run)
             ab = row.get("ab")
             if isinstance(ab, int):
                 run.running.add(ab)
+
+    def _searching(self, row: Row, cid: int, run: _Running) -> None:
+        """A search iterates: has it gone on without a sight of the user too long?"""
+        app = str(row.get("app") or "")
+        since = max(run.streak, self.last_seen)
+        t = float(row["t"])
+        if app not in self.stuck and t - since > self.th.stuck_after + _EPS:
+            self.stuck[app] = Stuck(app, round(since + self.th.stuck_after, 3),
+                                    int(row["seq"]), cid, round(since, 3), "search")
 
     def _check_stuck(self, before: float) -> None:
         """Every Command due for a check before ``before``: is its app stuck behind a loop?"""

@@ -447,6 +447,47 @@ def test_the_loop_must_run_back_to_back_for_the_whole_wait() -> None:
     assert [(s.kind, s.t) for s in tr.judge().stuck] == [("end", 60.0)]
 
 
+def lone_search(until: float, command: str = "ActiveSensingHuman",
+                devices: tuple[str, ...] = ("human-detection", "locomotion", "speaker"),
+                seen_at: float | None = None) -> Trace:
+    """The FA's search (nothing behind it), iterating every 0.5 s from 0 s, while the
+    user stands out of sight (seen once at ``seen_at``, if given)."""
+    tr = Trace()
+    tr.user["detectable"] = False
+    tr.request(0.0, "fa", 1, 1, command=command, devices=devices)
+    t, ab = 0.0, 1
+    while t < until:
+        if seen_at is not None and abs(t - seen_at) < 1e-9:
+            tr.pose(t)
+            tr.rows[-1]["user"] = dict(tr.user, detectable=True)
+        tr.start(t, "fa", ab, 1, command=command, devices=devices, iteration=ab - 1)
+        tr.end(t + 0.5, "fa", ab, 1, command=command, devices=devices, iteration=ab - 1)
+        t, ab = t + 0.5, ab + 1
+    return tr
+
+
+def test_a_search_that_never_sees_the_user_is_stuck() -> None:
+    """sample-07 before issue 10: EA1 searched for its visitor to the end of the run."""
+    report = lone_search(until=70.0).judge()
+    assert counts(report) == {"stuck": 1}
+    (s,) = report.stuck
+    assert (s.app, s.kind, s.t, s.since, s.command_id) == ("fa", "search", 60.0, 0.0, 1)
+    assert counts(lone_search(until=60.0).judge()) == {}  # 60 s, not more
+
+
+def test_a_sight_of_the_user_starts_the_search_afresh() -> None:
+    assert counts(lone_search(until=85.0, seen_at=30.0).judge()) == {}
+    [s] = lone_search(until=95.0, seen_at=30.0).judge().stuck
+    assert (s.kind, s.t, s.since) == ("search", 90.0, 30.0)
+
+
+def test_a_long_motion_out_of_the_users_sight_is_no_search() -> None:
+    """A navigation leads a user who walks behind the robot, out of its camera's view."""
+    tr = lone_search(until=120.0, command="TopologicalMove",
+                     devices=("localization", "locomotion"))
+    assert counts(tr.judge()) == {}
+
+
 def test_waiting_for_another_apps_loop_is_not_stuck_while_the_run_goes_on() -> None:
     tr = search_loop(until=80.0, other_app=True)
     tr.speak(80.0, "ea", 100, 2, "Found you.", tree=1, request=False)

@@ -52,6 +52,8 @@ class Scope:
 
     variables: Mapping[str, Value]
     event: Mapping[str, Value] | None = None
+    now: float = 0.0
+    """The simulated time (s since the run began): ``now()``."""
 
 
 Fn = Callable[[Scope], Value]
@@ -157,7 +159,13 @@ FUNCTIONS: Mapping[str, tuple[int, int, Callable[..., Value], str]] = {
     "startswith": (2, 2, lambda s, t: to_text(s).lower().startswith(to_text(t).lower()),
                    "whether the first text starts with the second (ignoring case)"),
 }
-"""The only functions an expression may call: name -> (min args, max args, fn, doc)."""
+"""The only functions of values an expression may call: name -> (min args, max args,
+fn, doc)."""
+
+CLOCK_FUNCTIONS: Mapping[str, tuple[Fn, str]] = {
+    "now": (lambda s: s.now, "the simulated time: seconds since the run began"),
+}
+"""Functions of no argument that read the running application's situation."""
 
 
 def _arith(op: str, a: Value, b: Value) -> Value:
@@ -780,9 +788,13 @@ class _Compiler:
         name_tok = _token(tok)
         args = [a for a in given if a is not None]
         name = str(name_tok)
+        if name in CLOCK_FUNCTIONS:
+            if args:
+                raise self.fault(name_tok, f"{name}() takes no argument, got {len(args)}")
+            return CLOCK_FUNCTIONS[name][0], False  # never a constant
         if name not in FUNCTIONS:
-            raise self.fault(name_tok, f"unknown function '{name}' "
-                                       f"(known: {', '.join(sorted(FUNCTIONS))})")
+            known = ", ".join(sorted([*FUNCTIONS, *CLOCK_FUNCTIONS]))
+            raise self.fault(name_tok, f"unknown function '{name}' (known: {known})")
         lo, hi, impl, _doc = FUNCTIONS[name]
         if not lo <= len(args) <= hi:
             want = str(lo) if lo == hi else f"{lo} to {hi}"

@@ -275,7 +275,7 @@ class Interpreter:
         self._note(Note(self.clock.now(), self.app, TraceKind.HANDLER, f"<{kind.value}> {key}",
                         {"handler": kind.value, "key": key, "state": self.state,
                          "line": handler.loc.line, "col": handler.loc.col}))
-        scope = Scope(self.variables, data)
+        scope = self._scope(data)
         try:
             self._actions(handler.actions, scope)
         except _Leave as leave:
@@ -284,7 +284,7 @@ class Interpreter:
     def _find(self, kind: HandlerKind, key: str, data: dict[str, Value]) -> Handler | None:
         state = self.document.states.get(self.state or "")
         handlers = (state.handlers if state else ()) + self.document.handlers
-        scope = Scope(self.variables, data)
+        scope = self._scope(data)
         for handler in handlers:
             if handler.kind is kind and handler.key == key and (
                     handler.cond is None or truthy(self._eval(handler.cond, handler.loc, scope))):
@@ -308,7 +308,7 @@ class Interpreter:
         self.state = target
         self._note(Note(self.clock.now(), self.app, TraceKind.STATE, target,
                         {"line": new.loc.line, "col": new.loc.col}))
-        self._actions(new.entry, Scope(self.variables, None))
+        self._actions(new.entry, self._scope(None))
 
     def _switch_groups(self, old: State | None, new: State) -> None:
         if old is not None and old.block is not None and old.block != new.block:
@@ -443,9 +443,13 @@ class Interpreter:
                                  f"the limit is {self.budgets.text} (its text budget)")
         return text
 
+    def _scope(self, event: Mapping[str, Value] | None) -> Scope:
+        """What an expression sees now: the variables, the event, the time (to the ms)."""
+        return Scope(self.variables, event, round(self.clock.now(), 3))
+
     def _eval(self, compiled: Compiled, loc: Loc, scope: Scope | None = None) -> Value:
         try:
-            return compiled.evaluate(scope or Scope(self.variables, None))
+            return compiled.evaluate(scope or self._scope(None))
         except ExecutionError as exc:
             raise ExecutionError(f"{self._where(loc)}{exc} (in {compiled.source!r})") from exc
 

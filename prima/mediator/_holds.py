@@ -4,9 +4,10 @@ Three things hold an AB back, and this module owns all their state:
 
 - **Explicit stream blocks** (rule 6c). A stream's hold is *armed* when its
   app has nothing waiting or running inside the open stream: the other apps'
-  *new* streams (trees none of whose ABs has started) that need the stream's
-  devices wait; a reaction, and a stream under way (a reply to the app's own
-  Q&A, MISSION.md 7.2), do not. It lapses as soon as
+  *new* streams that need the stream's devices wait (trees none of whose ABs
+  has started, and suspended ones: resuming an interrupted dialogue is taking
+  the floor anew); a reaction, and a stream under way (a reply to the app's
+  own Q&A, MISSION.md 7.2), do not. It lapses as soon as
   the app is busy again (its own ABs then compete as usual, the stream's
   continuation ranking as "parent just finished"), and is released by
   ``close_stream``, by the hold timeout, or by unloading the app.
@@ -142,8 +143,8 @@ class Holds:
             if blk is not None and blk.reserving and not node.devices.isdisjoint(blk.devices):
                 return Rule.BLOCK, other
             st = self._streams.get(other.name)
-            if (st is not None and st.armed and node.tree.reaction is None
-                    and not node.tree.started and not node.devices.isdisjoint(st.devices)):
+            if (st is not None and st.armed and _new_stream(node.tree)
+                    and not node.devices.isdisjoint(st.devices)):
                 return Rule.STREAM_HOLD, other
         return None
 
@@ -335,3 +336,8 @@ class Holds:
             if blk is not None and blk.reserving:
                 out.append((app.name, "block", tuple(sorted(blk.devices)), blk.deadline))
         return out
+
+
+def _new_stream(tree: Tree) -> bool:
+    """A stream hold delays this tree: no reaction, and not under way (MISSION.md 7.2)."""
+    return tree.reaction is None and (not tree.started or tree.suspended is not None)

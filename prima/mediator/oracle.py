@@ -38,7 +38,8 @@ Which trees are reactions (MISSION.md 7.1) and which streams are under way
 from the moment a request the caller made while handling a reactive event
 (:meth:`Oracle.requested` with ``reaction=True``) files into it, unless that
 request follows an end (it then only continues its tree); the latest such
-request ranks first. A tree is under way once any of its ABs started.
+request ranks first. A tree is under way once any of its ABs started, unless it is suspended
+(resuming an interrupted stream is taking the floor anew).
 
 Where the model differs from :func:`prima.mediator.testing.plain_scan` (which
 reuses the mediator's ranking and hold code): it ranks from the snapshot alone
@@ -92,9 +93,10 @@ class Streams:
     started: set[TreeId] = field(default_factory=set)
     """Trees some AB of which started: streams under way."""
 
-    def held_by_stream(self, tree: TreeId) -> bool:
-        """A stream hold delays only new streams that are no reaction (7.1, 7.2)."""
-        return tree not in self.reaction and tree not in self.started
+    def held_by_stream(self, tree: TreeId, suspended: Collection[TreeId]) -> bool:
+        """A stream hold delays only new streams that are no reaction (7.1, 7.2): trees
+        none of whose ABs started, or ``suspended`` ones (resuming is starting anew)."""
+        return tree not in self.reaction and (tree not in self.started or tree in suspended)
 
 
 @dataclass(frozen=True)
@@ -125,16 +127,17 @@ class _View:
     def holders(self, n: NodeView) -> list[str]:
         """Other, non-demoted apps whose block or armed stream hold keeps ``n``."""
         return [h.app for h in self.snap.holds
-                if _applies(h, n, self.snap.demoted, self.streams)]
+                if _applies(h, n, self.snap.demoted, self.streams, self.snap.suspended)]
 
     def held(self, n: NodeView) -> bool:
         return self.channel_held(n) or bool(self.holders(n))
 
 
-def _applies(h: HoldView, n: NodeView, demoted: Iterable[str], streams: Streams) -> bool:
+def _applies(h: HoldView, n: NodeView, demoted: Iterable[str], streams: Streams,
+             suspended: Collection[TreeId]) -> bool:
     if h.app == n.app or h.app in demoted or not set(h.devices) & set(n.devices):
         return False
-    return h.kind == "block" or streams.held_by_stream(n.tree)
+    return h.kind == "block" or streams.held_by_stream(n.tree, suspended)
 
 
 def rank_key(snap: Snapshot, streams: Streams) -> _RankKeyFn:
@@ -346,8 +349,9 @@ class Oracle:
         """After an operation: read the new decisions, then check the snapshot."""
         new = decisions[self._seen:]
         self._seen = len(decisions)
+        suspended = self._prev.snap.suspended if self._prev is not None else ()
         for d in new:
-            self._decision(d)
+            self._decision(d, suspended)
         v = _View.of(snap, self._talk, self.streams)
         self._check_running(v)
         if self._prev is not None:
@@ -360,7 +364,7 @@ class Oracle:
         self._account(v)
         self._prev = v
 
-    def _decision(self, d: Decision) -> None:
+    def _decision(self, d: Decision, suspended: Collection[TreeId]) -> None:
         b = self.books
         if d.kind is DecisionKind.LOAD and d.app is not None:
             b.kinds[d.app] = AppKind[d.detail]
@@ -372,7 +376,7 @@ class Oracle:
                     and d.tree is not None):
                 self.streams.reaction[d.tree] = self._requests
         elif d.kind is DecisionKind.START and d.ab is not None:
-            self._start(d.ab, d)
+            self._start(d.ab, d, suspended)
         elif d.kind is DecisionKind.END and d.ab is not None:
             if d.ab not in b.running:
                 self.fail(f"t={d.t:g}: AB{d.ab} ended but was not running")
@@ -387,7 +391,7 @@ class Oracle:
                 self.fail(f"t={d.t:g}: AB{d.ab} was cancelled after it started "
                           f"({d.rule.value}: {d.detail or 'no detail'})")
 
-    def _start(self, ab: AbId, d: Decision) -> None:
+    def _start(self, ab: AbId, d: Decision, suspended: Collection[TreeId]) -> None:
         b = self.books
         if ab in b.started:
             self.fail(f"t={d.t:g}: AB{ab} started twice")
@@ -401,7 +405,7 @@ class Oracle:
         b.started.add(ab)
         b.running[ab] = d.devices
         if d.tree is not None:
-            if not self.streams.held_by_stream(d.tree):
+            if not self.streams.held_by_stream(d.tree, suspended):
                 self._exempt.add(ab)
             self.streams.started.add(d.tree)
 

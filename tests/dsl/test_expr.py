@@ -83,6 +83,8 @@ def test_constants_are_folded() -> None:
     ("1 2", 2, "after a complete value"),
     ("foo(1)", 0, "unknown function 'foo'"),
     ("len(1, 2)", 0, "len() takes 1 argument(s), got 2"),
+    ("now(1)", 0, "now() takes no argument, got 1"),
+    ("nowt()", 0, "(known: abs, contains, len, lower, max, min, now, number,"),
     ("'abc", 0, "string is not closed"),
     ("x.y", 0, "only 'event' has fields"),
     ("'{a +}'", 5, "ends too early"),
@@ -297,3 +299,10 @@ def test_a_string_literal_is_bounded_by_the_budget() -> None:
     compile_expression("'abcde'", max_text=5)
     with pytest.raises(ExpressionError, match="text: longer than 5 characters"):
         compile_expression("'abcdef'", max_text=5)
+
+
+def test_now_is_the_scopes_time_and_never_a_constant() -> None:
+    compiled = compile_expression("now() + 5")
+    assert not compiled.constant
+    assert compiled.evaluate(Scope({}, None, 12.5)) == 17.5
+    assert compile_template("at {now()} s").evaluate(Scope({}, None, 3.0)) == "at 3 s"

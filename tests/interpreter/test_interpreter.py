@@ -67,6 +67,21 @@ def test_initial_state_entry_runs_and_variables_initialise() -> None:
     assert interp.state == "s"
 
 
+def test_now_is_the_simulated_time_when_the_expression_runs() -> None:
+    """An app schedules by the clock: a reminder 40 s after it learnt of it."""
+    interp, port, clock, *_ = make(
+        '<var name="due" expr="null"/><state id="s" initial="true">'
+        '<on event="message"><assign name="due" expr="now() + 40"/>'
+        '<timer name="remind" after="{due - now()}"/></on>'
+        '<on event="remind"><chain>Speak("Due at {due} s; now {now()} s.")</chain></on></state>')
+    clock.set(7.25)
+    interp.event(Event("message", {"sender": "x", "text": "y"}))
+    assert interp.variables["due"] == 47.25 and interp.next_deadline() == 47.25
+    clock.set(47.25)
+    interp.advance()
+    assert texts(port) == [["Due at 47.25 s; now 47.25 s."]]
+
+
 def test_first_request_of_a_reactive_event_is_reactive_and_only_the_first() -> None:
     interp, port, *_ = make(
         '<state id="s" initial="true"><on event="touched"><chain order="asap">StopMoving()</chain>'

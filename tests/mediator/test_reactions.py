@@ -168,3 +168,24 @@ def test_a_reaction_behind_a_held_ab_takes_it_along() -> None:
     h.run(until=60.0)
     assert start_of(h, "ea", "Welcome.") == 3.0
     assert start_of(h, "ea", "A message for you.") == 4.0
+
+
+def test_a_stream_hold_delays_the_resumption_of_a_suspended_stream() -> None:
+    """7.2 and Fig. 5.9's fix (sample-05-stream): the EA's dialogue was suspended by the
+    FA's reaction; while the FA waits inside its explicit stream (for the video server),
+    the EA resuming its dialogue would take the floor anew, so the hold delays it."""
+    h = Harness(duration=1.0)
+    m = h.mediator
+    h.app("ea", AppKind.EA)
+
+    def react(_e: Event) -> None:
+        m.open_stream("fa", hold=10.0)
+        m.submit(Request("fa", (speak("Connecting the video server."),), reactive=True,
+                         reaction=True))
+
+    h.app("fa", AppKind.FA, on_event=react)
+    m.submit(req("ea", speak("Please tell me"), speak("a title.")))  # 0-1, 1-2 ...
+    h.at(0.5, lambda: m.post(Event("touched")))  # the FA's reaction suspends it at 1
+    h.run(until=60.0)
+    assert start_of(h, "fa", "Connecting the video server.") == 1.0
+    assert start_of(h, "ea", "a title.") == 12.0  # the hold armed at 2 for 10 s
