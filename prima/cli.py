@@ -148,6 +148,8 @@ _THRESHOLD_OPTIONS = (
      "longest pause without output after an answer (default 2)"),
     ("--stuck-after", "stuck_after", float, "SECONDS",
      "how long a Command may wait before its application is stuck (default 60)"),
+    ("--search-after", "search_after", float, "SECONDS",
+     "how long a search may go on without a sight of the user (default 90)"),
 )
 """The thresholds of ``prima judge`` and ``prima sweep``: option, field, type, metavar, help."""
 

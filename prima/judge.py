@@ -43,9 +43,18 @@ __all__ = ["Leaving", "Reaction", "Report", "Silence", "Split", "Stuck", "Thresh
 
 _EPS = 1e-6
 
+UNMEASURED_EVENTS = frozenset({"place-reached"})
+"""Reactive events whose reactions are not measured: the robot's own motion
+arriving, which nobody waits on the robot for (MISSION.md section 8 lists touch,
+heard speech, messages, the user found or lost)."""
+
+TALK_DEVICES = ("speaker", "speech-recognition")
+"""Where an utterance runs: what a reaction's first utterance waits for."""
+
 SEARCH_DEVICE = "human-detection"
 """A feedback Command on this device looks for the user: iterating on and on
-while the user is never detectable, its application is stuck (kind ``search``)."""
+while the user is never detectable (``search_after``), its application is stuck
+(kind ``search``)."""
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
 
 _ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
@@ -92,6 +101,11 @@ class Thresholds:
     """Seconds without robot output after an answer that count as a silence."""
     stuck_after: float = 60.0
     """Seconds a Command may wait before its application counts as stuck."""
+    search_after: float = 90.0
+    """Seconds a search may go on without a sight of the user before its application
+    counts as stuck: one full turn of the thesis' Turn-and-Search (ten-second looks,
+    60 degrees at a time) takes about 67 s, so a bounded search that gives up after
+    one turn is not stuck."""
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -129,7 +143,11 @@ class Reaction:
     devices: tuple[str, ...]
     """The devices of its first request."""
     residual: float
-    """How long the other applications' ABs on those devices still ran at ``t``."""
+    """How long the ABs running on those devices at ``t`` (any application's: a
+    started AB is never cut) still ran: the running IU's residual."""
+    talk_residual: float = 0.0
+    """The same on the talk devices (speaker, speech recognition): what its first
+    utterance had to wait for."""
     first_start: float | None = None
     first_start_seq: int | None = None
     first_utterance: float | None = None
@@ -156,6 +174,7 @@ class Reaction:
             "text": self.text, "request_seq": self.request_seq,
             "commands": list(self.commands), "trees": list(self.trees),
             "devices": list(self.devices), "residual": self.residual,
+            "talk_residual": self.talk_residual,
             "first_start": self.first_start, "first_start_seq": self.first_start_seq,
             "latency": self.latency, "first_utterance": self.first_utterance,
             "first_utterance_seq": self.first_utterance_seq,
@@ -349,8 +368,10 @@ class Report:
 
 def _bounds(r: Reaction, th: Thresholds) -> tuple[float, float]:
     """How long a reaction may take to its first start, and to its first utterance."""
-    start = th.react_within if th.react_within is not None else r.residual + th.reaction_slack
-    return start, start + th.utterance_slack
+    if th.react_within is not None:
+        return th.react_within, th.react_within + th.utterance_slack
+    start = r.residual + th.reaction_slack
+    return start, max(start, r.talk_residual + th.reaction_slack) + th.utterance_slack
 
 
 def _lateness(r: Reaction, th: Thresholds) -> float:
@@ -507,7 +528,15 @@ class _Reaction:
     trees: list[int] = field(default_factory=list)
     devices: tuple[str, ...] = ()
     residual: float = 0.0
-    """So far: when the other applications' ABs running on ``devices`` at ``t`` ended."""
+    """So far: when the ABs running on ``devices`` at ``t`` ended."""
+    talk_residual: float = 0.0
+    """So far: when the ABs running on the talk devices at ``t`` ended."""
+
+    def grow(self, talk: bool, residual: float) -> None:
+        if talk:
+            self.talk_residual = max(self.talk_residual, residual)
+        else:
+            self.residual = max(self.residual, residual)
     first_start: Row | None = None
     first_utterance: Row | None = None
 
@@ -568,7 +597,7 @@ class _Judge:
         self.ab_command: dict[int, int] = {}
         self.on_device: dict[str, dict[int, str]] = {}
         """Device -> the ABs running on it, and their apps."""
-        self.watched: dict[int, list[_Reaction]] = {}
+        self.watched: dict[int, list[tuple[_Reaction, bool]]] = {}
         """AB -> the reactions whose residual its end sets."""
         # findings
         self.unfaced: list[Unfaced] = []
@@ -615,10 +644,12 @@ class _Judge:
     def _close_instant(self) -> None:
         """The instant is over: what ran on each reaction's devices is now known."""
         for r in self.instant:
-            running = {ab for d in r.devices for ab, app in self.on_device.get(d, {}).items()
-                       if app != r.app}
-            for ab in running:
-                self.watched.setdefault(ab, []).append(r)
+            own = set(r.commands)
+            for talk, devices in ((False, r.devices), (True, TALK_DEVICES)):
+                running = {ab for d in devices for ab in self.on_device.get(d, {})
+                           if self.ab_command.get(ab) not in own}
+                for ab in running:
+                    self.watched.setdefault(ab, []).append((r, talk))
         self.instant = []
         self.window = None
         self.heard = None
@@ -626,7 +657,11 @@ class _Judge:
     # -------------------------------------------------------------- kinds
 
     def _event(self, row: Row) -> None:
-        self.window = _Window(str(row.get("text") or ""), float(row["t"]), int(row["seq"]))
+        name = str(row.get("text") or "")
+        if name in UNMEASURED_EVENTS:
+            self.window = None
+            return
+        self.window = _Window(name, float(row["t"]), int(row["seq"]))
 
     def _user(self, row: Row) -> None:
         self.window = None
@@ -680,8 +715,8 @@ class _Judge:
             t = float(row["t"])
             for d in row.get("devices") or ():
                 self.on_device.get(d, {}).pop(ab, None)
-            for r in self.watched.pop(ab, ()):
-                r.residual = max(r.residual, t - r.t)
+            for r, talk in self.watched.pop(ab, ()):
+                r.grow(talk, t - r.t)
             self.talking.pop(ab, None)
             cid = self.ab_command.get(ab)
             run = self.runs.get(cid) if cid is not None else None
@@ -732,7 +767,7 @@ class _Judge:
         start, utter = r.first_start, r.first_utterance
         found = Reaction(
             r.event, r.t, r.seq, r.app, r.request_seq, tuple(r.commands), tuple(r.trees),
-            r.devices, residual,
+            r.devices, residual, round(r.talk_residual, 3),
             first_start=None if start is None else float(start["t"]),
             first_start_seq=None if start is None else int(start["seq"]),
             first_utterance=None if utter is None else float(utter["t"]),
@@ -847,8 +882,8 @@ class _Judge:
         app = str(row.get("app") or "")
         since = max(run.streak, self.last_seen)
         t = float(row["t"])
-        if app not in self.stuck and t - since > self.th.stuck_after + _EPS:
-            self.stuck[app] = Stuck(app, round(since + self.th.stuck_after, 3),
+        if app not in self.stuck and t - since > self.th.search_after + _EPS:
+            self.stuck[app] = Stuck(app, round(since + self.th.search_after, 3),
                                     int(row["seq"]), cid, round(since, 3), "search")
 
     def _check_stuck(self, before: float) -> None:
@@ -875,8 +910,8 @@ class _Judge:
         self._close_instant()
         self._check_stuck(before=end)
         for reactions in self.watched.values():  # ABs still running: to the end
-            for r in reactions:
-                r.residual = max(r.residual, end - r.t)
+            for r, talk in reactions:
+                r.grow(talk, end - r.t)
         for app, waiting in self.waiting.items():
             late = [c for c in waiting.values()
                     if not c.done and end - c.t > self.th.stuck_after + _EPS]
@@ -944,12 +979,13 @@ def _short(text: str, width: int) -> str:
 def _reaction_rows(report: Report) -> list[str]:
     width = max([len(r.app) for r in report.reactions] + [3])
     rows = [f"  {'time':>7}  {'event':<22} {'app':<{width}} {'start':>6} {'utter':>6} "
-            f"{'resid':>6}  late"]
+            f"{'resid':>6} {'talk':>6}  late"]
     for r in report.reactions:
         cause = f'speech "{_short(r.text, 13)}"' if r.event == "speech" else r.event
         late = f"LATE: {r.why}" if r.late else ""
         rows.append(f"  {r.t:7.2f}  {_short(cause, 22):<22} {r.app:<{width}} "
-                    f"{_num(r.latency):>6} {_num(r.utterance_latency):>6} {r.residual:6.2f}  "
+                    f"{_num(r.latency):>6} {_num(r.utterance_latency):>6} {r.residual:6.2f} "
+                    f"{r.talk_residual:6.2f}  "
                     f"{late}".rstrip())
     return rows
 
