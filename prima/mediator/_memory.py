@@ -168,6 +168,7 @@ class WorkingMemory:
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
+                tree.started = False  # a request joining it takes the floor anew (7.2)
 
     @staticmethod
     def _inactive(app: App, now: float) -> None:

@@ -132,6 +132,8 @@ class Selector:
                 wm.suspend(tree)
             else:
                 wm.resume(tree)
+                if self._holds.open():
+                    self._holds.unpark_all()  # a stream under way again: no hold keeps it
         # "Parent just finished" lasts one round: others may now rank above.
         for n in pjf.values():
             if n.state is NodeState.WAITING:

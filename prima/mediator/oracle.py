@@ -349,9 +349,15 @@ class Oracle:
         """After an operation: read the new decisions, then check the snapshot."""
         new = decisions[self._seen:]
         self._seen = len(decisions)
-        suspended = self._prev.snap.suspended if self._prev is not None else ()
+        before = set(self._prev.snap.suspended) if self._prev is not None else set()
+        suspended = set(before)  # what this operation's starts resume leaves it
         for d in new:
             self._decision(d, suspended)
+        # A suspended tree that left the stack without resuming left working memory:
+        # a request that joins it again takes the floor anew (7.2).
+        starts = {d.tree for d in new if d.kind is DecisionKind.START}
+        for tree in before - set(snap.suspended) - starts:
+            self.streams.started.discard(tree)
         v = _View.of(snap, self._talk, self.streams)
         self._check_running(v)
         if self._prev is not None:
@@ -364,7 +370,7 @@ class Oracle:
         self._account(v)
         self._prev = v
 
-    def _decision(self, d: Decision, suspended: Collection[TreeId]) -> None:
+    def _decision(self, d: Decision, suspended: set[TreeId]) -> None:
         b = self.books
         if d.kind is DecisionKind.LOAD and d.app is not None:
             b.kinds[d.app] = AppKind[d.detail]
@@ -391,7 +397,7 @@ class Oracle:
                 self.fail(f"t={d.t:g}: AB{d.ab} was cancelled after it started "
                           f"({d.rule.value}: {d.detail or 'no detail'})")
 
-    def _start(self, ab: AbId, d: Decision, suspended: Collection[TreeId]) -> None:
+    def _start(self, ab: AbId, d: Decision, suspended: set[TreeId]) -> None:
         b = self.books
         if ab in b.started:
             self.fail(f"t={d.t:g}: AB{ab} started twice")
@@ -408,6 +414,7 @@ class Oracle:
             if not self.streams.held_by_stream(d.tree, suspended):
                 self._exempt.add(ab)
             self.streams.started.add(d.tree)
+            suspended.discard(d.tree)  # resumed: a stream under way again
 
     def _check_running(self, v: _View) -> None:
         snap = v.snap

@@ -163,13 +163,16 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
     assert any("block held" in v for v in caught())
 
 
-@pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195])
+@pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
     armed stream hold (all three fixed in the mediator). 49640, 161195: overruns of the
     literal wait-share bound that no mediator can avoid (the channel rule; a start that
-    no rival was waiting for any more), now notes."""
+    no rival was waiting for any more), now notes. 14252: a suspended stream whose
+    waiting ABs an asap request cancelled was rejoined by that request as a stream
+    under way, past the other app's stream hold; 20281: a stream that resumed through
+    one AB kept its other ABs parked by a stream hold (both fixed in the mediator)."""
     assert play(seed).violations == []
 
 
