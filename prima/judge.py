@@ -589,6 +589,8 @@ class _Judge:
         self.window: _Window | None = None
         self.heard: tuple[float, int, str] | None = None
         self.reactions: list[_Reaction] = []
+        self.by_cause: dict[int, list[_Reaction]] = {}
+        """Reactions by their cause's line (several apps may react to one event)."""
         self.instant: list[_Reaction] = []
         self.awaiting: dict[int, list[_Reaction]] = {}
         """Command id -> reactions waiting for it to start."""
@@ -685,6 +687,7 @@ class _Judge:
                           devices=tuple(row.get("devices") or ()))
             w.reactions[app] = r
             self.reactions.append(r)
+            self.by_cause.setdefault(r.seq, []).append(r)
             self.instant.append(r)
         tree = row.get("tree")
         if isinstance(tree, int) and tree not in r.trees:
@@ -753,14 +756,28 @@ class _Judge:
     # -------------------------------------------------------------- reactions
 
     def _reacted(self, row: Row, ids: tuple[int, ...]) -> None:
-        """A start of some reactions' Command: their first start, maybe their first utterance."""
+        """A start of some reactions' Command: their first start, maybe their first
+        utterance. Another app's reaction to the same cause that has not started yet
+        waits for this first AB too, where they share devices (of two reactions, one
+        goes first): it is part of that reaction's residual."""
         utterance = _is_utterance(row)
+        ab = row.get("ab")
         for cid in ids:
             for r in self.awaiting.pop(cid, ()):
                 if r.first_start is None:
                     r.first_start = row
+                    if isinstance(ab, int):
+                        self._others_wait(r, ab, frozenset(row.get("devices") or ()))
                 if utterance and r.first_utterance is None:
                     r.first_utterance = row
+
+    def _others_wait(self, first: _Reaction, ab: int, devices: frozenset[str]) -> None:
+        for r in self.by_cause.get(first.seq, ()):
+            if r.app == first.app or r.first_start is not None:
+                continue
+            for talk, wanted in ((False, r.devices), (True, TALK_DEVICES)):
+                if not devices.isdisjoint(wanted):
+                    self.watched.setdefault(ab, []).append((r, talk))
 
     def _reaction(self, r: _Reaction) -> Reaction:
         residual = round(r.residual, 3)

@@ -276,6 +276,9 @@ class Run:
                     detail["error"] = outcome.values["error"]
         spoken = [words for c in d.calls for words in self.catalog[c.command].spoken(c.args)]
         text = " / ".join(spoken) if spoken else None
+        if (kind is DecisionKind.START and d.iteration and d.command_id is not None
+                and self.sim.quiet(d.command_id)):
+            text = None  # an iteration that says nothing (a search's watch)
         others = [arg for c in d.calls for arg in _shown_args(self.catalog, c)]
         if others:
             detail["args"] = " ".join(others)

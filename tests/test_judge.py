@@ -207,6 +207,33 @@ def test_the_reactions_own_first_ab_is_no_residual() -> None:
     assert (r.latency, r.residual, r.talk_residual) == (0.0, 0.0, 0.0)
 
 
+def test_of_two_reactions_to_one_event_the_second_may_wait_for_the_firsts_ab() -> None:
+    """sample-07 swept: the user comes into view and both apps react once the EA's
+    utterance under way ends (0.3 s); the FA's words go first (3 s), so the EA's,
+    which need the speaker too, wait for them: not late. An AB of the first reaction
+    that shares no device with the second is no wait."""
+    def found(fa_devices: tuple[str, ...]) -> Report:
+        tr = Trace()
+        tr.speak(9.0, "ea", 1, 1, "Hm.", lasts=1.3, tree=1)
+        tr.event(10.0, "human-found")
+        tr.request(10.0, "fa", 2, 2, text="I found you.", reactive=True,
+                   devices=fa_devices)
+        tr.request(10.0, "ea", 3, 3, text="Here you are.", reactive=True, tree=1)
+        tr.rows.sort(key=lambda r: r["t"])
+        for seq, row in enumerate(tr.rows):
+            row["seq"] = seq
+        tr.start(10.3, "fa", 2, 2, text="I found you.", devices=fa_devices)
+        tr.end(13.3, "fa", 2, 2, devices=fa_devices)
+        tr.start(13.3, "ea", 3, 3, text="Here you are.", tree=1)
+        return tr.judge()
+
+    fa, ea = found(("speaker",)).reactions
+    assert (fa.residual, ea.latency, ea.residual) == (0.3, 3.3, 3.3)
+    assert not ea.late
+    _fa, ea = found(("arm",)).reactions
+    assert ea.late and ea.residual == 0.3
+
+
 def test_the_first_utterance_may_wait_for_the_talk_residual() -> None:
     """sample-08: the FA's gesture starts at once on the free arm; its words wait for the
     EA's explanation under way (2 s), then may take the slack and a second more."""

@@ -239,3 +239,23 @@ def test_sample_10_follows_figure_5_12() -> None:
     ])
     explanation, touch, matter = m[5], m[6], m[7]
     assert explanation.t < touch.t < matter.t  # touched while Explanation-1-1 was spoken
+
+
+def test_a_search_says_its_words_once_per_retry() -> None:
+    """ActiveSensingHuman iterates once per control period; only the first iteration
+    of each retry (a watch, then a turn) says ``say``, and only it shows the words."""
+    lines, *_ = run("sample-03")
+    previous: dict[object, str] = {}  # command id -> its last iteration's result
+    said = quiet = 0
+    for ln in lines:
+        if ln.app != FA2 or ln.command != "ActiveSensingHuman":
+            continue
+        detail = ln.detail or {}
+        cid = detail.get("command_id")
+        if ln.kind is DecisionKind.END:
+            previous[cid] = str(detail.get("result"))
+        elif ln.kind is DecisionKind.START:
+            retry = cid not in previous or "turned" in previous[cid]
+            assert ln.text == ("Where are you?" if retry else None), ln
+            said, quiet = said + retry, quiet + (not retry)
+    assert said >= 2 and quiet >= 10 * said

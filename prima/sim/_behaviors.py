@@ -317,17 +317,42 @@ def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 # ---- feedback loops --------------------------------------------------------------------------
 
 def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    """One iteration: one control period of watching for the user with the view
+    still or, once the user has stayed unseen for ``search_time``, one turn of the
+    view (Turn-and-Search; it stops as soon as the user comes into view).
+
+    Short iterations keep the robot responsive: another application's reaction
+    can take the robot between any two (a search is mostly waiting). A retry
+    (a watch then a turn) says ``say`` at its start; that iteration lasts until
+    the words are said, and the trace shows the words on that iteration only
+    (:meth:`Simulator.quiet`).
+    """
     say = _text(sim, call, "say")
     angle = _req(sim, call, "turn")
     k = sim.kernel
-    speech_end = k.tick + (sim.ticks(sim.spec.speech_duration(say)) if say else 0)
-    sim.search()
-    found = yield until(lambda: sim.seen, sim.ticks(sim.spec.search_time))
-    if speech_end > k.tick:
-        yield sleep(speech_end - k.tick)
-    if found:
-        sim.end_loop(cid)
-        return {"found": True, "distance": round(sim.world.user_distance(), 3)}, True
+    state = sim.loop_state(cid)
+    watched = int(state.get("watched") or 0)
+    search = sim.ticks(sim.spec.search_time)
+    if watched < search:
+        speech_end = k.tick
+        if watched == 0:
+            sim.search()
+            if say:
+                speech_end += sim.ticks(sim.spec.speech_duration(say))
+        period = min(sim.ticks(sim.spec.control_period), search - watched)
+        start = k.tick
+        found = yield until(lambda: sim.seen, period)
+        if speech_end > k.tick:
+            yield sleep(speech_end - k.tick)
+        if found:
+            sim.end_loop(cid)
+            return {"found": True, "distance": round(sim.world.user_distance(), 3)}, True
+        watched += k.tick - start
+        state["watched"] = watched
+        state["quiet"] = True  # the retry goes on: its next iterations say nothing
+        return {"found": False, "unseen": round(watched / k.hz, 3)}, False
+    state["watched"] = 0
+    state["quiet"] = False  # the next retry says its words again
     # Turn the view; stop as soon as the user comes into view (Turn-and-Search).
     world = sim.world
     if world.mode:

@@ -313,6 +313,11 @@ class Simulator:
     def end_loop(self, command_id: int) -> None:
         self._loops.pop(command_id, None)
 
+    def quiet(self, command_id: int) -> bool:
+        """The next iteration of this feedback Command says none of its words (a
+        search says ``say`` once per retry, in the retry's first iteration)."""
+        return bool(self._loops.get(command_id, {}).get("quiet"))
+
     def ask(self, prompt: str) -> None:
         """The robot finished asking ``prompt`` and starts listening."""
         if self.user is not None:
