@@ -25,6 +25,7 @@ alike (a TraceLine is judged as the jsonl line it writes).
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import heapq
 import json
@@ -532,7 +533,11 @@ class _Reaction:
     talk_residual: float = 0.0
     """So far: when the ABs running on the talk devices at ``t`` ended."""
 
+    blocking: int = 0
+    """ABs in its residual still running (it cannot have started yet)."""
+
     def grow(self, talk: bool, residual: float) -> None:
+        self.blocking -= 1
         if talk:
             self.talk_residual = max(self.talk_residual, residual)
         else:
@@ -589,8 +594,9 @@ class _Judge:
         self.window: _Window | None = None
         self.heard: tuple[float, int, str] | None = None
         self.reactions: list[_Reaction] = []
-        self.by_cause: dict[int, list[_Reaction]] = {}
-        """Reactions by their cause's line (several apps may react to one event)."""
+        self.pending: dict[str, collections.deque[_Reaction]] = {}
+        """Each app's latest reactions that have not started yet (a few: older ones
+        are late anyway)."""
         self.instant: list[_Reaction] = []
         self.awaiting: dict[int, list[_Reaction]] = {}
         """Command id -> reactions waiting for it to start."""
@@ -652,6 +658,7 @@ class _Judge:
                            if self.ab_command.get(ab) not in own}
                 for ab in running:
                     self.watched.setdefault(ab, []).append((r, talk))
+                    r.blocking += 1
         self.instant = []
         self.window = None
         self.heard = None
@@ -687,7 +694,7 @@ class _Judge:
                           devices=tuple(row.get("devices") or ()))
             w.reactions[app] = r
             self.reactions.append(r)
-            self.by_cause.setdefault(r.seq, []).append(r)
+            self.pending.setdefault(app, collections.deque(maxlen=16)).append(r)
             self.instant.append(r)
         tree = row.get("tree")
         if isinstance(tree, int) and tree not in r.trees:
@@ -757,9 +764,10 @@ class _Judge:
 
     def _reacted(self, row: Row, ids: tuple[int, ...]) -> None:
         """A start of some reactions' Command: their first start, maybe their first
-        utterance. Another app's reaction to the same cause that has not started yet
-        waits for this first AB too, where they share devices (of two reactions, one
-        goes first): it is part of that reaction's residual."""
+        utterance. Another app's reaction to the same or an earlier cause that has not
+        started yet waits for this first AB too, where they share devices (of two
+        reactions, the latest wins, rule 4.2): it is part of that reaction's
+        residual."""
         utterance = _is_utterance(row)
         ab = row.get("ab")
         for cid in ids:
@@ -767,17 +775,28 @@ class _Judge:
                 if r.first_start is None:
                     r.first_start = row
                     if isinstance(ab, int):
-                        self._others_wait(r, ab, frozenset(row.get("devices") or ()))
+                        self._others_wait(r, ab, frozenset(row.get("devices") or ()),
+                                          float(row["t"]))
                 if utterance and r.first_utterance is None:
                     r.first_utterance = row
 
-    def _others_wait(self, first: _Reaction, ab: int, devices: frozenset[str]) -> None:
-        for r in self.by_cause.get(first.seq, ()):
-            if r.app == first.app or r.first_start is not None:
+    def _others_wait(self, first: _Reaction, ab: int, devices: frozenset[str],
+                     t: float) -> None:
+        """Only while ``r`` still waited for its residual, or was within its slack: a
+        reaction already late is not excused by what started after its bound."""
+        for app, pending in self.pending.items():
+            if app == first.app:
                 continue
-            for talk, wanted in ((False, r.devices), (True, TALK_DEVICES)):
-                if not devices.isdisjoint(wanted):
-                    self.watched.setdefault(ab, []).append((r, talk))
+            for r in pending:
+                if r.first_start is not None or r.seq > first.seq:
+                    continue
+                bound = r.t + max(r.residual, r.talk_residual) + self.th.reaction_slack
+                if r.blocking <= 0 and t > bound + _EPS:
+                    continue
+                for talk, wanted in ((False, r.devices), (True, TALK_DEVICES)):
+                    if not devices.isdisjoint(wanted):
+                        self.watched.setdefault(ab, []).append((r, talk))
+                        r.blocking += 1
 
     def _reaction(self, r: _Reaction) -> Reaction:
         residual = round(r.residual, 3)
