@@ -234,25 +234,32 @@ def test_of_two_reactions_to_one_event_the_second_may_wait_for_the_firsts_ab() -
     assert ea.late and ea.residual == 0.3
 
 
-def test_a_later_reaction_of_another_app_goes_first() -> None:
-    """sample-08 swept: the EA reacts to human-found at 10 s but waits 0.3 s for its
-    own search iteration; the user touches the robot at 10.2 s and the FA's reaction,
-    the latest, takes the speaker first (rule 4.2): the EA's words wait for it."""
+def _found_then_touched(touched_at: float) -> Report:
+    """The EA reacts to human-found at 10 s and waits 0.3 s for its own search
+    iteration; the user touches the robot at ``touched_at`` and the FA's reaction (the
+    latest) takes the speaker at once for 2.4 s; the EA speaks right after it."""
     tr = Trace()
     tr.start(9.8, "ea", 1, 1, command="ActiveSensingHuman", devices=("locomotion",))
     tr.event(10.0, "human-found")
     tr.request(10.0, "ea", 2, 2, text="Here you are.", reactive=True,
                devices=("speaker", "locomotion"))
     tr.end(10.3, "ea", 1, 1, command="ActiveSensingHuman", devices=("locomotion",))
-    tr.event(10.2, "touched")
-    tr.request(10.2, "fa", 3, 3, text="Hee-hee!", reactive=True, tree=1)
+    tr.event(touched_at, "touched")
+    tr.request(touched_at, "fa", 3, 3, text="Hee-hee!", reactive=True, tree=1)
     tr.rows.sort(key=lambda r: r["t"])
     for seq, row in enumerate(tr.rows):
         row["seq"] = seq
-    tr.start(10.2, "fa", 3, 3, text="Hee-hee!", tree=1)
-    tr.end(12.6, "fa", 3, 3, tree=1)
-    tr.start(12.6, "ea", 2, 2, text="Here you are.", devices=("speaker", "locomotion"))
-    ea, fa = tr.judge().reactions
+    tr.start(touched_at, "fa", 3, 3, text="Hee-hee!", tree=1)
+    tr.end(touched_at + 2.4, "fa", 3, 3, tree=1)
+    tr.start(touched_at + 2.4, "ea", 2, 2, text="Here you are.",
+             devices=("speaker", "locomotion"))
+    return tr.judge()
+
+
+def test_a_later_reaction_of_another_app_goes_first() -> None:
+    """sample-08 swept: the touch comes at 10.2 s, while the EA still waits for its
+    residual: the FA's reaction goes first (rule 4.2), the EA's words wait for it."""
+    ea, fa = _found_then_touched(10.2).reactions
     assert (ea.app, ea.latency, ea.residual, ea.late) == ("ea", 2.6, 2.6, False)
     assert (fa.latency, fa.late) == (0.0, False)
 
@@ -260,21 +267,7 @@ def test_a_later_reaction_of_another_app_goes_first() -> None:
 def test_a_later_reaction_does_not_excuse_one_already_late() -> None:
     """The EA could have spoken at 10.3 s (allowed until 10.5 s) but did not; the FA's
     reaction to a touch at 11 s then takes the speaker: the EA's wait is still late."""
-    tr = Trace()
-    tr.start(9.8, "ea", 1, 1, command="ActiveSensingHuman", devices=("locomotion",))
-    tr.event(10.0, "human-found")
-    tr.request(10.0, "ea", 2, 2, text="Here you are.", reactive=True,
-               devices=("speaker", "locomotion"))
-    tr.end(10.3, "ea", 1, 1, command="ActiveSensingHuman", devices=("locomotion",))
-    tr.event(11.0, "touched")
-    tr.request(11.0, "fa", 3, 3, text="Hee-hee!", reactive=True, tree=1)
-    tr.rows.sort(key=lambda r: r["t"])
-    for seq, row in enumerate(tr.rows):
-        row["seq"] = seq
-    tr.start(11.0, "fa", 3, 3, text="Hee-hee!", tree=1)
-    tr.end(13.4, "fa", 3, 3, tree=1)
-    tr.start(13.4, "ea", 2, 2, text="Here you are.", devices=("speaker", "locomotion"))
-    ea, _fa = tr.judge().reactions
+    ea, _fa = _found_then_touched(11.0).reactions
     assert (ea.residual, ea.late, ea.why) == (0.3, True, "started after 3.4 s (allowed 0.5 s)")
 
 
