@@ -30,7 +30,7 @@ from prima.dsl import (
     root_namespace,
 )
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
-from prima.vocab import MAX_RUN_TIME
+from prima.vocab import MAX_RUN_TIME, POLICIES
 from prima.xmlio import read_source
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -78,6 +78,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--pose-rate", type=float, default=2.0, metavar="HZ",
                      help="pose samples per simulated second in the jsonl trace "
                           "(default: 2; 0: none)")
+    run.add_argument("--policy", action="append", default=[], metavar="NAME=on|off",
+                     help="switch a mediation policy, over the profile's and the scenario's "
+                          f"(repeatable; NAME: all, {', '.join(POLICIES)}; "
+                          "docs/mediator.md, Policies)")
     test = commands.add_parser(
         "test",
         help="run scenarios and compare their traces with golden traces",
@@ -335,6 +339,10 @@ def _run_usage(args: argparse.Namespace) -> str | None:
         return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
     if not (math.isfinite(args.pose_rate) and 0 <= args.pose_rate <= 100):
         return "--pose-rate must be a number of samples per second from 0 to 100"
+    switches = _policies(args.policy)
+    if isinstance(switches, str):
+        return switches
+    args.policy = switches
     for path in (args.scenario, args.fa, args.ea, args.robot):
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
@@ -345,6 +353,22 @@ def _run_usage(args: argparse.Namespace) -> str | None:
         if not target.parent.is_dir():
             return f"--out {args.out}: no such folder {target.parent}"
     return None
+
+
+def _policies(given: list[str]) -> dict[str, bool] | str:
+    """``--policy NAME=on|off`` switches, in order (a later one wins), or what is wrong."""
+    out: dict[str, bool] = {}
+    for text in given:
+        name, _, state = text.partition("=")
+        if name not in POLICIES and name != "all":
+            return (f"--policy {text}: no policy {name!r} "
+                    f"(known: all, {', '.join(POLICIES)})")
+        if state not in ("on", "off"):
+            return f"--policy {text}: say {name}=on or {name}=off"
+        if name == "all":
+            out.clear()
+        out[name] = state == "on"
+    return out
 
 
 def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -358,7 +382,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     # line is written as the run makes it (``write`` is defined below, before the run).
     run = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
               seed=args.seed, until=args.until, sink=lambda line: write(line),
-              pose_rate=args.pose_rate)
+              pose_rate=args.pose_rate, policies=args.policy)
     with contextlib.ExitStack() as files:
         to = files.enter_context(open(args.out, "w", encoding="utf-8")) if args.out else out
         if args.format == "text":

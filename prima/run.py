@@ -35,7 +35,7 @@ from prima.mediator import (
 )
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
-from prima.vocab import Budgets, Value
+from prima.vocab import Budgets, Value, policy_settings
 
 __all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
 
@@ -79,26 +79,33 @@ class _App:
 
 
 class _Port:
-    """What an interpreter may ask of the mediator, and nothing more."""
+    """What an interpreter may ask of the mediator, and nothing more. With the
+    ``streams`` policy off, explicit stream and begin/end blocks are plain
+    sequences: the mediator never hears of them (the thesis' PRIMA)."""
 
     def __init__(self, run: Run) -> None:
         self._run = run
+        self._streams = run.policies["streams"]
 
     def submit(self, request: Request) -> tuple[int, ...]:
         return self._run.mediator.submit(request)
 
     def open_stream(self, app: str, hold: float) -> None:
-        self._run.mediator.open_stream(app, hold)
+        if self._streams:
+            self._run.mediator.open_stream(app, hold)
 
     def close_stream(self, app: str) -> None:
-        self._run.mediator.close_stream(app)
+        if self._streams:
+            self._run.mediator.close_stream(app)
 
     def open_block(self, app: str, *, devices: frozenset[str] | None = None,
                    watchdog: float) -> None:
-        self._run.mediator.open_block(app, devices=devices, watchdog=watchdog)
+        if self._streams:
+            self._run.mediator.open_block(app, devices=devices, watchdog=watchdog)
 
     def close_block(self, app: str) -> None:
-        self._run.mediator.close_block(app)
+        if self._streams:
+            self._run.mediator.close_block(app)
 
 
 class Run:
@@ -113,7 +120,8 @@ class Run:
                  ea: str | Path | None = None, robot: str | Path | None = None,
                  seed: int | None = None, until: float | None = None,
                  sink: Callable[[TraceLine], None] | None = None,
-                 pose_rate: float = POSE_RATE) -> None:
+                 pose_rate: float = POSE_RATE,
+                 policies: Mapping[str, bool] | None = None) -> None:
         loaded = load_scenario(scenario)
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
@@ -121,6 +129,10 @@ class Run:
         self.until = loaded.until if until is None else until
         profile_path = robot or (loaded.resolve(loaded.profile) if loaded.profile else None)
         self.profile = load_profile(profile_path) if profile_path else default_profile()
+        self.policies: Mapping[str, bool] = policy_settings(
+            self.profile.policies, loaded.policies, policies or {})
+        """Every mediation policy's state: the defaults, switched by the profile, the
+        scenario and the caller, in that order (MISSION.md 7.3)."""
         self.fa_path = Path(fa) if fa else (loaded.resolve(loaded.fa) if loaded.fa else None)
         self.ea_path = Path(ea) if ea else (loaded.resolve(loaded.ea) if loaded.ea else None)
         # Load every document up front: a broken one stops the run before it starts.

@@ -21,8 +21,11 @@ __all__ = [
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
     "DEFAULT_BUDGETS",
+    "POLICIES",
     "AppKind",
     "Budgets",
+    "Policy",
+    "policy_settings",
     "RunningOrder",
     "Value",
 ]
@@ -148,3 +151,33 @@ DEFAULT_BUDGETS: Mapping[AppKind, Budgets] = MappingProxyType({
 """The budgets of each role when the robot profile sets none. The EA, written by a
 stranger, may keep the FA waiting 30 s a minute; the FA, the robot's own acting
 for its user (following them, say), five minutes out of six."""
+
+
+@dataclass(frozen=True)
+class Policy:
+    """A mediation policy (MISSION.md 7.3): one of the thesis' future functions,
+    switched by the robot profile, the scenario and ``prima run --policy``."""
+
+    name: str
+    default: bool
+    """On unless switched off."""
+    summary: str
+
+
+POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
+    Policy("streams", True, "explicit stream and begin/end blocks in the applications' "
+                            "documents hold the robot's devices (thesis Sec. 5.3 (3))"),
+)})
+"""Every policy, by name. ``all`` names them together in a switch."""
+
+
+def policy_settings(*layers: Mapping[str, bool]) -> dict[str, bool]:
+    """Every policy's state: the defaults, then each layer of switches in turn (a
+    profile's, a scenario's, the command line's); ``all`` in a layer switches every
+    policy before that layer's named ones. Names are checked where they are read."""
+    out = {name: p.default for name, p in POLICIES.items()}
+    for layer in layers:
+        if "all" in layer:
+            out = dict.fromkeys(out, layer["all"])
+        out.update((name, on) for name, on in layer.items() if name in out)
+    return out

@@ -90,6 +90,9 @@ class RobotProfile:
     budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
     """What one application of each role may consume on this robot (its
     ``<budgets>`` elements over :data:`~prima.vocab.DEFAULT_BUDGETS`)."""
+    policies: Mapping[str, bool] = field(default_factory=dict)
+    """The mediation policies this robot switches (``all`` switches every one first);
+    a scenario and ``prima run --policy`` switch over them."""
     _catalog: Catalog = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -188,6 +191,7 @@ class _Reader:
         self.commands: list[CommandSpec] = []
         self.extras: dict[str, dict[str, Param]] = {}
         self.events: dict[str, bool] = {}
+        self.policies: dict[str, bool] = {}
 
     def error(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
         self.problems.append(self.doc.problem(el, message, attribute=attribute))
@@ -234,6 +238,7 @@ class _Reader:
             events=self.events,
             budgets=self._role_budgets([el for el in elements(root)
                                         if local_name(el) == "budgets"]),
+            policies=MappingProxyType(self.policies),
         )
 
     def _role_budgets(self, found: list[etree._Element]) -> Mapping[AppKind, Budgets]:
@@ -282,6 +287,12 @@ class _Reader:
             self.devices.add(name)
         for missing in (d for d in STANDARD_DEVICES if d not in self.devices):
             self.error(parent, f"a PRIMA robot needs the device '{missing}'")
+
+    def policy(self, el: etree._Element) -> None:
+        name = el.get("name", "")
+        if name in self.policies:
+            self.error(el, f"a second <policy name={name!r}>: switch each policy once", "name")
+        self.policies[name] = el.get("state") == "on"
 
     def gesture(self, el: etree._Element) -> None:
         name = el.get("name", "")
@@ -354,6 +365,7 @@ _ELEMENTS: Mapping[str, Callable[[_Reader, etree._Element], None]] = {
     "command": _Reader.command,
     "extra": _Reader.extra,
     "event": _Reader.event,
+    "policy": _Reader.policy,
 }
 """How each repeatable element of a profile is read."""
 

@@ -21,8 +21,9 @@ import os
 import re
 import stat
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 
 import pymunk
 from lxml import etree
@@ -115,6 +116,9 @@ class Scenario:
     """How the environment's servers answer what the applications send them."""
     zones: tuple[Zone, ...] = ()
     description: str = ""
+    policies: Mapping[str, bool] = field(default_factory=dict)
+    """Mediation policies the scenario switches (``all`` first), over the robot
+    profile's; the run joins them (the simulator itself has no use for them)."""
 
     def resolve(self, path: str) -> Path:
         """A path written in the scenario, relative to the scenario file's folder."""
@@ -130,6 +134,7 @@ class Scenario:
             "events": [e.to_dict() for e in self.events],
             "replies": [r.to_dict() for r in self.replies],
             "zones": [z.to_dict() for z in self.zones],
+            "policies": dict(self.policies),
         }
 
 
@@ -363,6 +368,7 @@ class _Loader:
         user = self.user(kids["user"]) if "user" in kids else None
         events, zones = self.environment(root)
         until, seed, rate = self.num.get(root, "until", 1.0), self.seed(root), self.rate(root)
+        policies = self.policies(root)
         noise = self.num.get(robot_el, "noise")
         heading_noise = self.num.get(robot_el, "heading-noise")
         if self.problems:
@@ -375,7 +381,8 @@ class _Loader:
             fa=apps.get("fa") if apps is not None else None,
             ea=apps.get("ea") if apps is not None else None,
             user=user, events=events, replies=tuple(self.replies), zones=zones,
-            description=_text(kids["description"]) if "description" in kids else "")
+            description=_text(kids["description"]) if "description" in kids else "",
+            policies=policies)
 
     def exists(self, el: etree._Element, attribute: str) -> None:
         """A file the scenario names (a document, a profile) must be a regular file; it is not
@@ -387,6 +394,15 @@ class _Loader:
         if unusable is not None:
             self.bad(el, f"file {value!r} {unusable} (looked for {self.path.parent / value})",
                      attribute)
+
+    def policies(self, root: etree._Element) -> Mapping[str, bool]:
+        out: dict[str, bool] = {}
+        for el in (c for c in _children(root) if local_name(c) == "policy"):
+            name = el.get("name", "")
+            if name in out:
+                self.bad(el, f"a second <policy name={name!r}>: switch each policy once", "name")
+            out[name] = el.get("state") == "on"
+        return MappingProxyType(out)
 
     def seed(self, root: etree._Element) -> int:
         return self.num.whole(root, "seed", MAX_SEED, 0)

@@ -1,0 +1,155 @@
+"""Mediation policies (MISSION.md 7.3): their switches in the robot profile, the
+scenario and ``prima run --policy``, and what each one does to a run."""
+
+from __future__ import annotations
+
+import io
+import re
+from pathlib import Path
+
+import pytest
+
+from prima.catalog import STANDARD_DEVICES
+from prima.cli import main
+from prima.dsl import parse_profile
+from prima.errors import DocumentError, ScenarioError
+from prima.judge import judge
+from prima.run import Run
+from prima.sim import load_scenario
+from prima.vocab import POLICIES, policy_settings
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLE_05_STREAM = ROOT / "scenarios" / "thesis" / "sample-05-stream.xml"
+
+PROFILE = """<robot xmlns="urn:prima:robot:1" name="r">
+  <body radius="0.2" max-speed="0.4" max-accel="0.5" max-turn-rate="90"/>
+  <speech rate="2.5"/>
+  <camera fov="60" range="4"/>
+  <head pan-min="-90" pan-max="90" tilt-min="-30" tilt-max="30"/>
+  <devices>
+    {devices}
+  </devices>
+  {policies}
+</robot>"""
+DEVICES = "\n    ".join(f'<device name="{d}"/>' for d in STANDARD_DEVICES)
+
+
+def _profile(policies: str) -> dict[str, bool]:
+    text = PROFILE.format(devices=DEVICES, policies=policies)
+    return dict(parse_profile(text.encode(), "r.xml").policies)
+
+
+def test_every_policy_has_a_default_and_all_switches_every_one() -> None:
+    assert policy_settings() == {name: p.default for name, p in POLICIES.items()}
+    assert set(policy_settings({"all": False}).values()) == {False}
+    # ``all`` first in its layer, then that layer's named ones; later layers win
+    assert policy_settings({"all": False, "streams": True}) == {"streams": True}
+    assert policy_settings({"streams": False}, {"all": True}) == {"streams": True}
+    assert policy_settings({"no-such-policy": False}) == policy_settings()
+
+
+@pytest.mark.parametrize("schema", ["robot.xsd", "scenario.xsd"])
+def test_the_schemas_know_exactly_the_policies(schema: str) -> None:
+    text = (ROOT / "schemas" / schema).read_text()
+    block = text[text.index('<xs:simpleType name="PolicyName">'):]
+    block = block[:block.index("</xs:simpleType>")]
+    assert set(re.findall(r'<xs:enumeration value="([^"]+)"/>', block)) == {"all", *POLICIES}
+
+
+def test_a_robot_profile_switches_policies() -> None:
+    assert _profile("") == {}
+    assert _profile('<policy name="streams" state="off"/>') == {"streams": False}
+    assert _profile('<policy name="all" state="off"/><policy name="streams" state="on"/>') \
+        == {"all": False, "streams": True}
+
+
+@pytest.mark.parametrize("policies, fragment", [
+    ('<policy name="teleport" state="on"/>', "teleport"),
+    ('<policy name="streams" state="maybe"/>', "maybe"),
+    ('<policy name="streams" state="on"/><policy name="streams" state="off"/>',
+     "a second <policy name='streams'>"),
+])
+def test_a_bad_policy_switch_in_a_profile_is_located(policies: str, fragment: str) -> None:
+    with pytest.raises(DocumentError) as info:
+        _profile(policies)
+    assert any(p.line == 15 and fragment in p.message for p in info.value.problems), \
+        info.value.problems
+
+
+def _scenario(tmp_path: Path, policies: str) -> Path:
+    text = SAMPLE_05_STREAM.read_text()
+    text = re.sub(r'(<robot [^>]*/>)', lambda m: m.group(1) + policies, text, count=1)
+    text = text.replace('href="../', f'href="{SAMPLE_05_STREAM.parent.parent}/')
+    text = re.sub(r'(fa|ea)="\.\./\.\./', lambda m: f'{m.group(1)}="{ROOT}/', text)
+    path = tmp_path / "s.xml"
+    path.write_text(text)
+    return path
+
+
+def test_a_scenario_switches_policies(tmp_path: Path) -> None:
+    path = _scenario(tmp_path, '<policy name="streams" state="off"/>')
+    assert dict(load_scenario(path).policies) == {"streams": False}
+    path = _scenario(tmp_path, '<policy name="streams" state="off"/>'
+                               '<policy name="streams" state="on"/>')
+    with pytest.raises(ScenarioError, match="a second <policy name='streams'>"):
+        load_scenario(path)
+
+
+def _splits(policies: dict[str, bool] | None = None) -> int:
+    return len(judge(Run(SAMPLE_05_STREAM, policies=policies).run()).splits)
+
+
+def test_streams_off_is_the_thesis_prima(tmp_path: Path) -> None:
+    """Fig. 5.9's fix: FA5's video-server exchange inside an explicit stream keeps the
+    robot from splitting EA2's question from its reply. With the policy off, the
+    stream is a plain sequence again and the thesis' split comes back; a scenario
+    and the run's caller switch it alike, the caller last."""
+    assert _splits() == 0
+    assert _splits(policies={"streams": False}) > 0
+    assert _splits(policies={"all": False}) > 0
+    off = _scenario(tmp_path, '<policy name="streams" state="off"/>')
+    assert len(judge(Run(off).run()).splits) > 0
+    assert len(judge(Run(off, policies={"streams": True}).run()).splits) == 0
+
+
+@pytest.mark.parametrize("switch, message", [
+    ("teleport=on", "--policy teleport=on: no policy 'teleport' (known: all, streams)"),
+    ("streams=maybe", "--policy streams=maybe: say streams=on or streams=off"),
+    ("streams", "--policy streams: say streams=on or streams=off"),
+])
+def test_prima_run_checks_its_policy_switches(switch: str, message: str) -> None:
+    err = io.StringIO()
+    assert main(["run", str(SAMPLE_05_STREAM), "--policy", switch],
+                out=io.StringIO(), err=err) == 2
+    assert message in err.getvalue()
+
+
+def test_prima_run_switches_policies_in_order() -> None:
+    def trace(*switches: str) -> str:
+        out = io.StringIO()
+        args = ["run", str(SAMPLE_05_STREAM)]
+        for s in switches:
+            args += ["--policy", s]
+        assert main(args, out=out, err=io.StringIO()) == 0
+        return out.getvalue()
+
+    on = trace()
+    assert "stream-hold" in on
+    assert "stream-hold" not in trace("streams=off")
+    assert trace("streams=off", "all=on") == on
+    assert "stream-hold" not in trace("all=on", "streams=off")
+
+
+POLICY_SCENARIOS = sorted((ROOT / "scenarios" / "policies").glob("*.xml"))
+
+
+@pytest.mark.parametrize("scenario", POLICY_SCENARIOS, ids=lambda p: p.stem)
+def test_a_policy_scenario_matches_its_reviewed_golden(  # type: ignore[no-untyped-def]
+        scenario: Path, prima_golden) -> None:
+    prima_golden(scenario)
+
+
+def test_streams_off_shows_the_split_the_stream_prevents() -> None:
+    off = judge(Run(ROOT / "scenarios" / "policies" / "streams-off.xml").run())
+    on = judge(Run(SAMPLE_05_STREAM).run())
+    assert (len(off.splits), len(on.splits)) == (2, 0)
