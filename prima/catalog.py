@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from prima.vocab import Value
 
 __all__ = [
+    "BODY_DEVICE",
+    "CONNECT_COMMAND",
     "STANDARD_COMMANDS",
     "STANDARD_DEVICES",
     "SYMBOLIC_KINDS",
@@ -49,6 +51,12 @@ STANDARD_DEVICES: tuple[str, ...] = (
 TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
 """Devices through which the robot talks with its user: while another application
 uses them, a Command that breaks the Communication Channel waits (thesis Sec. 3.3)."""
+
+BODY_DEVICE = "locomotion"
+"""The wheels: a Command that uses them turns or moves the robot's body."""
+
+CONNECT_COMMAND = "FaceHuman"
+"""The Command the connect-channel policy runs before an utterance."""
 
 
 class Priority(enum.IntEnum):
@@ -121,6 +129,17 @@ class CommandSpec:
     silence (``<on-answer>``, ``<on-nomatch>``, ``<on-noinput>``)."""
     duration: float | None = None
     """For a robot-specific Command: how long it keeps its devices (s)."""
+    aims: bool = False
+    """It aims the robot, its head or its arm at something on purpose (a Turn, a
+    PointByHand): an utterance that follows it in its stream is about that, so the
+    connect-channel policy does not turn the robot back to the user before it."""
+
+    @property
+    def orients(self) -> bool:
+        """It turns the robot's body or aims it on purpose: an utterance in the same
+        atomic behavior (FaceHumanAndSpeak, a Speak grouped with a PointByHand) is
+        spoken the way it turns."""
+        return self.aims or BODY_DEVICE in self.devices
 
     @property
     def priority(self) -> Priority:
@@ -157,7 +176,8 @@ class CommandSpec:
 
 def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
           listens: bool = False, params: Iterable[Param] = (),
-          one_of: Iterable[Iterable[str]] = (), doc: str = "") -> CommandSpec:
+          one_of: Iterable[Iterable[str]] = (), doc: str = "",
+          aims: bool = False) -> CommandSpec:
     return CommandSpec(
         name=name,
         devices=frozenset(devices.split()),
@@ -167,6 +187,7 @@ def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
         one_of=tuple(frozenset(g) for g in one_of),
         doc=doc,
         listens=listens,
+        aims=aims,
     )
 
 
@@ -200,9 +221,10 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
     _spec("SetDirection", "locomotion localization",
           params=[_P("heading", _N, False, unit="deg", doc="map heading, 0 = east, 90 = north"),
                   _P("toward", _PL, False, doc="a place to face")],
-          one_of=[("heading", "toward")], doc="Turn to a map heading or toward a place."),
+          one_of=[("heading", "toward")], doc="Turn to a map heading or toward a place.",
+          aims=True),
     _spec("Turn", "locomotion", params=[_P("angle", _N, unit="deg", doc="counter-clockwise")],
-          doc="Turn the body in place by an angle."),
+          doc="Turn the body in place by an angle.", aims=True),
     _spec("SetSpeedAndTime", "locomotion",
           params=[_P("speed", _N, unit="m/s"), _P("time", _N, unit="s"),
                   _P("spin", _N, False, 0.0, "deg/s", "turning rate while moving")],
@@ -211,11 +233,11 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
     _spec("Speak", "speaker", params=[_P("text", _T)], doc="Say an utterance."),
     _spec("MoveHead", "neck",
           params=[_P("pan", _N, unit="deg"), _P("tilt", _N, False, 0.0, "deg")],
-          doc="Point the head (pan left/right, tilt up/down)."),
+          doc="Point the head (pan left/right, tilt up/down).", aims=True),
     _spec("PointByHand", "arm",
           params=[_P("toward", _PL, False, doc="a place to point at"),
                   _P("angle", _N, False, unit="deg", doc="direction relative to the body")],
-          one_of=[("toward", "angle")], doc="Point the arm at a place or a direction."),
+          one_of=[("toward", "angle")], doc="Point the arm at a place or a direction.", aims=True),
     _spec("Gesture", "arm neck",
           params=[_P("name", ParamKind.GESTURE, doc="a gesture the robot profile declares")],
           doc="Play a named gesture with the arm and the head."),
@@ -228,7 +250,7 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
     _spec("SetPositionAndDirection", "locomotion localization", fb=True, breaks=True,
           params=[_P("x", _N, unit="m"), _P("y", _N, unit="m"),
                   _P("heading", _N, unit="deg")],
-          doc="Drive to map coordinates, then turn to a heading."),
+          doc="Drive to map coordinates, then turn to a heading.", aims=True),
 )
 
 

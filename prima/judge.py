@@ -37,6 +37,8 @@ from pathlib import Path
 from typing import Any
 
 from prima.errors import Problem, Severity, TraceError
+from prima.catalog import BODY_DEVICE, STANDARD_COMMANDS
+from prima.vocab import FACE_TOLERANCE
 
 __all__ = ["Leaving", "Reaction", "Report", "Silence", "Split", "Stuck", "Thresholds",
            "Unfaced", "find_scenarios", "format_summary", "format_table", "judge", "judge_file",
@@ -94,7 +96,7 @@ class Thresholds:
     react_within: float | None = None
     """If set, a fixed bound (s) for the first start instead of residual + slack
     (what the interrupt policy promises: 0.2 s)."""
-    face_tolerance: float = 30.0
+    face_tolerance: float = FACE_TOLERANCE
     """Degrees between the robot's heading and the user's bearing still counted as facing."""
     leave_distance: float = 0.3
     """Metres the robot may move away from the user during an utterance."""
@@ -511,6 +513,20 @@ def _off_heading(robot: Mapping[str, float], user: Mapping[str, float]) -> float
     return abs((bearing - robot["heading"] + 180.0) % 360.0 - 180.0)
 
 
+_AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
+
+
+def _about_something_else(row: Row, before: str | None) -> bool:
+    """An utterance that is not for the user's face: its AB turns or points the robot
+    itself (FaceHumanAndSpeak, a Speak grouped with a PointByHand), or the AB before
+    it in its stream aimed the robot at something on purpose (a Turn, a PointByHand):
+    the words are about that."""
+    if BODY_DEVICE in (row.get("devices") or ()) \
+            or not _AIMING.isdisjoint(str(row.get("command")).split("+")):
+        return True
+    return before is not None and not _AIMING.isdisjoint(before.split("+"))
+
+
 def _is_utterance(row: Row) -> bool:
     return bool(row.get("text"))
 
@@ -610,6 +626,8 @@ class _Judge:
         # findings
         self.unfaced: list[Unfaced] = []
         self.talking: dict[int, tuple[Row, tuple[float, float]]] = {}
+        self.last_command: dict[int, str] = {}
+        """Tree -> the Command (``A+B`` for a group) of its latest AB started."""
         self.leaving: list[Leaving] = []
         self.answers: dict[str, tuple[Row, Row | None]] = {}
         """App -> its answered Q&A's end line, and the first other app's utterance since."""
@@ -681,6 +699,10 @@ class _Judge:
     def _request(self, row: Row) -> None:
         app = str(row.get("app") or "")
         self._track_request(row, app)
+        precedes = (row.get("detail") or {}).get("precedes")
+        if isinstance(precedes, int):
+            self._policy_request(row, precedes)
+            return
         w = self.window
         if w is None:
             return
@@ -703,6 +725,19 @@ class _Judge:
             r.commands.append(cid)
             self.awaiting.setdefault(cid, []).append(r)
             self.reaction_commands.setdefault(app, set()).add(cid)
+
+    def _policy_request(self, row: Row, precedes: int) -> None:
+        """A policy's AB put before a Command (a turn to the user before an utterance):
+        the reactions waiting for that Command start with it, and their words may
+        wait for it as for a talk residual."""
+        ab = row.get("ab")
+        for waiting in list(self.awaiting.get(precedes, ())):
+            for cid in _command_ids(row):
+                self.awaiting.setdefault(cid, []).append(waiting)
+                waiting.commands.append(cid)
+            if isinstance(ab, int):
+                self.watched.setdefault(ab, []).append((waiting, True))
+                waiting.blocking += 1
 
     def _start(self, row: Row) -> None:
         app = str(row.get("app") or "")
@@ -788,12 +823,15 @@ class _Judge:
             if app == first.app:
                 continue
             for r in pending:
-                if r.first_start is not None or r.seq > first.seq:
+                if r.first_utterance is not None or r.seq > first.seq:
                     continue
                 bound = r.t + max(r.residual, r.talk_residual) + self.th.reaction_slack
                 if r.blocking <= 0 and t > bound + _EPS:
                     continue
-                for talk, wanted in ((False, r.devices), (True, TALK_DEVICES)):
+                # not started yet: its residual; started but not yet spoken: its talk
+                wants = ((False, r.devices), (True, TALK_DEVICES)) if r.first_start is None \
+                    else ((True, TALK_DEVICES),)
+                for talk, wanted in wants:
                     if not devices.isdisjoint(wanted):
                         self.watched.setdefault(ab, []).append((r, talk))
                         r.blocking += 1
@@ -814,7 +852,11 @@ class _Judge:
     # -------------------------------------------------------------- poses
 
     def _unfaced(self, row: Row, app: str) -> None:
-        if not _is_utterance(row) or "FaceHumanAndSpeak" in str(row.get("command")).split("+"):
+        tree = row.get("tree")
+        before = self.last_command.get(tree) if isinstance(tree, int) else None
+        if isinstance(tree, int):
+            self.last_command[tree] = str(row.get("command"))
+        if not _is_utterance(row) or _about_something_else(row, before):
             return
         robot, user = row.get("robot"), row.get("user")
         if robot is None or user is None or user.get("detectable") is not True:

@@ -35,7 +35,7 @@ from prima.mediator import (
 )
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
-from prima.vocab import Budgets, Value, policy_settings
+from prima.vocab import FACE_TOLERANCE, Budgets, Value, policy_settings
 
 __all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
 
@@ -78,10 +78,21 @@ class _App:
     failed: bool = False
 
 
+class _Channel:
+    """The connect-channel policy's question, answered by the simulator."""
+
+    def __init__(self, sim: Simulator) -> None:
+        self._sim = sim
+
+    def unfaced(self) -> bool:
+        return self._sim.user_unfaced(FACE_TOLERANCE)
+
+
 class _Port:
     """What an interpreter may ask of the mediator, and nothing more. With the
-    ``streams`` policy off, explicit stream and begin/end blocks are plain
-    sequences: the mediator never hears of them (the thesis' PRIMA)."""
+    ``streams`` policy off, explicit stream blocks are plain sequences: the mediator
+    never hears of them (the thesis' PRIMA, which had begin/end blocks of an AB,
+    thesis Sec. 4.1 (2), but no explicit Communication Streams)."""
 
     def __init__(self, run: Run) -> None:
         self._run = run
@@ -100,12 +111,10 @@ class _Port:
 
     def open_block(self, app: str, *, devices: frozenset[str] | None = None,
                    watchdog: float) -> None:
-        if self._streams:
-            self._run.mediator.open_block(app, devices=devices, watchdog=watchdog)
+        self._run.mediator.open_block(app, devices=devices, watchdog=watchdog)
 
     def close_block(self, app: str) -> None:
-        if self._streams:
-            self._run.mediator.close_block(app)
+        self._run.mediator.close_block(app)
 
 
 class Run:
@@ -154,8 +163,10 @@ class Run:
         self.catalog = self.profile.catalog()
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
                                            catalog=self.catalog)
-        self.mediator = Mediator(self.catalog, self.sim, self.sim, record=self._decision,
-                                 config=MediatorConfig(budgets=self.budgets))
+        self.mediator = Mediator(
+            self.catalog, self.sim, self.sim, record=self._decision,
+            config=MediatorConfig(budgets=self.budgets),
+            channel=_Channel(self.sim) if self.policies["connect-channel"] else None)
         self.sim.finished = self._finished
         self.sim.on_event = self._event
         self.sim.on_user = self._user
@@ -298,6 +309,8 @@ class Run:
             detail["label"] = d.calls[0].label
         if d.iteration:
             detail["iteration"] = d.iteration
+        if d.precedes is not None:
+            detail["precedes"] = d.precedes
         if d.detail and kind not in (DecisionKind.START, DecisionKind.REQUEST, DecisionKind.END):
             text = d.detail
         self._line(kind, app=d.app, ab=d.ab, tree=d.tree, command=d.command, text=text,

@@ -21,6 +21,7 @@ __all__ = [
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
     "DEFAULT_BUDGETS",
+    "FACE_TOLERANCE",
     "POLICIES",
     "AppKind",
     "Budgets",
@@ -165,9 +166,16 @@ class Policy:
 
 
 POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
-    Policy("streams", True, "explicit stream and begin/end blocks in the applications' "
-                            "documents hold the robot's devices (thesis Sec. 5.3 (3))"),
+    Policy("streams", True, "explicit stream blocks in the applications' documents keep "
+                            "a Communication Stream together (thesis Sec. 5.3 (3))"),
+    Policy("connect-channel", True, "before an utterance would start facing away from a "
+                                    "detectable user, the robot turns to them first "
+                                    "(thesis Sec. 5.3 (4))"),
 )})
+
+FACE_TOLERANCE = 30.0
+"""Degrees between the robot's heading and its bearing to the user beyond which it
+does not face them (the connect-channel policy, and the judge's talking unfaced)."""
 """Every policy, by name. ``all`` names them together in a switch."""
 
 

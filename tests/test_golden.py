@@ -32,7 +32,7 @@ def test_check_is_missing_then_updated_then_same_then_different(tmp_path: Path) 
     scenario(tmp_path, message_at=27)
     result = check(path)
     assert result.status == "different"
-    assert "-    " in result.diff and "27.00" in result.diff and "25.00" in result.diff
+    assert "\n-" in result.diff and "27.00" in result.diff and "25.00" in result.diff
 
 
 def test_prima_test_cli(tmp_path: Path) -> None:

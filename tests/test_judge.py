@@ -376,19 +376,38 @@ def test_requests_that_are_not_reactive_are_no_reaction() -> None:
 
 # ------------------------------------------------------------------ talking unfaced
 
+def test_words_after_an_aiming_command_are_about_what_it_aims_at() -> None:
+    """FA4 turns the way its user said, then asks "May I take a picture?": the words
+    are about what the robot aims at, not unfaced; after a Gesture they are."""
+    def after(command: str) -> int:
+        tr = Trace()
+        tr.user = {"x": 0.0, "y": 1.0, "heading": 0.0, "detectable": True}
+        tr.start(0.0, "fa", 1, 1, command=command, devices=("locomotion",))
+        tr.end(1.0, "fa", 1, 1, command=command, devices=("locomotion",))
+        tr.start(1.0, "fa", 2, 2, text="May I take a picture?")
+        tr.end(2.0, "fa", 2, 2)
+        return len(tr.judge().unfaced)
+
+    assert (after("Turn"), after("Gesture")) == (0, 1)
+
+
 @pytest.mark.parametrize("user, command, found", [
     ({"x": 0.0, "y": 1.0, "detectable": True}, "Speak", 1),          # 90 degrees off
     ({"x": 0.0, "y": 1.0, "detectable": False}, "Speak", 0),         # cannot be seen
     ({"x": 0.0, "y": 1.0, "detectable": True}, "FaceHumanAndSpeak", 0),  # turns first
     ({"x": 1.0, "y": 0.5, "detectable": True}, "Speak", 0),          # 26.6 degrees off
     ({"x": -1.0, "y": -0.1, "detectable": True}, "Speak+Gesture", 1),  # behind it
+    ({"x": -1.0, "y": -0.1, "detectable": True}, "PointByHand+Speak", 0),  # about a place
 ])
 def test_talking_unfaced(user: dict[str, Any], command: str, found: int) -> None:
+    devices = {"Speak": ("speaker",), "Speak+Gesture": ("arm", "neck", "speaker"),
+               "FaceHumanAndSpeak": ("human-detection", "locomotion", "speaker"),
+               "PointByHand+Speak": ("arm", "speaker")}[command]
     tr = Trace()
     tr.user = {"heading": 0.0, **user}
-    tr.request(1.0, "fa", 1, 1, command=command, text="Hello.")
-    tr.start(1.0, "fa", 1, 1, command=command, text="Hello.")
-    tr.end(2.0, "fa", 1, 1, command=command)
+    tr.request(1.0, "fa", 1, 1, command=command, text="Hello.", devices=devices)
+    tr.start(1.0, "fa", 1, 1, command=command, text="Hello.", devices=devices)
+    tr.end(2.0, "fa", 1, 1, command=command, devices=devices)
     report = tr.judge()
     assert counts(report) == ({"unfaced": 1} if found else {})
     if found:

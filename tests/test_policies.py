@@ -15,6 +15,7 @@ from prima.dsl import parse_profile
 from prima.errors import DocumentError, ScenarioError
 from prima.judge import judge
 from prima.run import Run
+from prima.trace import format_text
 from prima.sim import load_scenario
 from prima.vocab import POLICIES, policy_settings
 
@@ -43,8 +44,9 @@ def test_every_policy_has_a_default_and_all_switches_every_one() -> None:
     assert policy_settings() == {name: p.default for name, p in POLICIES.items()}
     assert set(policy_settings({"all": False}).values()) == {False}
     # ``all`` first in its layer, then that layer's named ones; later layers win
-    assert policy_settings({"all": False, "streams": True}) == {"streams": True}
-    assert policy_settings({"streams": False}, {"all": True}) == {"streams": True}
+    assert policy_settings({"all": False, "streams": True}) == \
+        {"streams": True, "connect-channel": False}
+    assert policy_settings({"streams": False}, {"all": True})["streams"] is True
     assert policy_settings({"no-such-policy": False}) == policy_settings()
 
 
@@ -113,7 +115,8 @@ def test_streams_off_is_the_thesis_prima(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("switch, message", [
-    ("teleport=on", "--policy teleport=on: no policy 'teleport' (known: all, streams)"),
+    ("teleport=on",
+     "--policy teleport=on: no policy 'teleport' (known: all, streams, connect-channel)"),
     ("streams=maybe", "--policy streams=maybe: say streams=on or streams=off"),
     ("streams", "--policy streams: say streams=on or streams=off"),
 ])
@@ -153,3 +156,35 @@ def test_streams_off_shows_the_split_the_stream_prevents() -> None:
     off = judge(Run(ROOT / "scenarios" / "policies" / "streams-off.xml").run())
     on = judge(Run(SAMPLE_05_STREAM).run())
     assert (len(off.splits), len(on.splits)) == (2, 0)
+
+
+THESIS = ROOT / "scenarios" / "thesis"
+
+
+@pytest.mark.parametrize("scenario", sorted(THESIS.glob("*.xml")), ids=lambda p: p.stem)
+def test_every_policy_off_is_the_thesis_prima_byte_for_byte(scenario: Path) -> None:
+    """``--policy all=off`` is the baseline: each thesis scenario's trace is the one
+    the thesis' PRIMA gave before there were policies (scenarios/thesis/all-off/)."""
+    expected = (THESIS / "all-off" / f"{scenario.stem}.txt").read_text()
+    assert format_text(Run(scenario, policies={"all": False}).run()) == expected
+
+
+def _unfaced(path: Path, policies: dict[str, bool] | None = None) -> int:
+    return len(judge(Run(path, policies=policies).run()).unfaced)
+
+
+def test_connect_channel_turns_the_robot_to_its_user_before_it_speaks() -> None:
+    """Thesis Fig. 5.3 lines 9-10 and sample-04: touched from behind, the robot used to
+    ask "What's the matter with you?" with its back to the user, and EA3's whole
+    message followed unfaced. With the policy, a FaceHuman of the mediator's own
+    (reason connect-channel) comes first, in the same stream."""
+    sample_04 = THESIS / "sample-04.xml"
+    assert _unfaced(sample_04, {"connect-channel": False}) > 10
+    assert _unfaced(sample_04) == 0
+    lines = Run(sample_04).run()
+    turns = [ln for ln in lines if ln.reason == "connect-channel"
+             and ln.kind.value in ("request", "start")]
+    assert {ln.command for ln in turns} == {"FaceHuman"}
+    assert {ln.kind.value for ln in turns} == {"request", "start"}
+    request = next(ln for ln in turns if ln.kind.value == "request")
+    assert isinstance((request.detail or {}).get("precedes"), int)

@@ -529,7 +529,7 @@ class Builder:
                                              "iterations is an atomic behavior of its own")
                 return None
         return Request(tuple(calls), RunningOrder(el.get("order", "after-latest")), grouped,
-                       self.loc_of(el))
+                       self.loc_of(el), face_user=flag(el, "face-user", default=True))
 
     def _request_calls(self, el: etree._Element) -> list[CommandCall] | None:
         """The Commands of a request or chain; None if one of them has an error."""

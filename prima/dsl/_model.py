@@ -52,6 +52,9 @@ class Request:
     order: RunningOrder
     group: bool
     loc: Loc
+    face_user: bool = True
+    """``face-user``: its words are for the user (the connect-channel policy may turn
+    the robot to them first); false: they are about something else."""
 
 
 # ---------------------------------------------------------------- actions

@@ -398,7 +398,8 @@ class Interpreter:
         try:
             ids = self.port.submit(MediatorRequest(
                 app=self.app, calls=calls, order=request.order, group=request.group,
-                reactive=reactive, reaction=handling.reactive, follows=follows))
+                reactive=reactive, reaction=handling.reactive, follows=follows,
+                face_user=request.face_user))
         except PrimaError as exc:  # the mediator refused it (e.g. a Command the robot lacks)
             raise ExecutionError(f"{self._where(request.loc)}request refused: {exc}") from exc
         for cid, call in zip(ids, request.calls, strict=True):

@@ -75,6 +75,10 @@ class Rule(str, enum.Enum):
     """Its tree is the most recently suspended stream."""
     OLDEST = "oldest"
     """It belongs to the oldest request."""
+    # --- policies (docs/mediator.md, Policies) --------------------------------
+    CONNECT_CHANNEL = "connect-channel"
+    """The mediator turns the robot to the user before an utterance that would start
+    facing away from them, in the same stream (a request and a start of its own)."""
     # --- ends -----------------------------------------------------------------
     COMPLETED = "completed"
     """The driver reported the AB done (terminal, or not for a feedback iteration)."""
@@ -144,6 +148,8 @@ class Decision(NamedTuple):
     of ``to_dict``."""
     before: AbId | None = None
     """A request: the AB its root follows (its before node), if any."""
+    precedes: CommandId | None = None
+    """A policy's request: the Command it was put before (it runs first)."""
 
     def to_dict(self) -> dict[str, object]:
         """A JSON-ready dict with a stable key order."""

@@ -26,7 +26,7 @@ from prima.catalog import Catalog, CommandSpec, Priority
 from prima.errors import MediationError
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
-from prima.mediator._interface import CommandId, Driver, Request
+from prima.mediator._interface import Call, CommandId, Driver, Request
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
@@ -172,16 +172,39 @@ class Intake:
             prio = min((s.priority for s, _d in specs), default=Priority.HIGH)
             devices = frozenset().union(*(d for _s, d in specs))
             root = wm.new_node(app, tree, tuple(cmds), devices, prio, reactive, seq)
+            root.turnable = request.face_user and _turnable(root, link.parent)
             wm.link(link.parent, root)
             return root
         parent = link.parent
         nodes: list[Node] = []
         for c, (spec, devs) in zip(cmds, specs, strict=True):
             node = wm.new_node(app, tree, (c,), devs, spec.priority, reactive and not nodes, seq)
+            node.turnable = request.face_user and _turnable(node, parent)
             wm.link(parent, node)
             nodes.append(node)
             parent = node
         return nodes[0]
+
+    def insert_before(self, x: Node, call: Call, spec: CommandSpec, rule: Rule,
+                      detail: str) -> Node:
+        """Put an AB of the mediator's own (a policy's) before the waiting AB ``x``, in
+        its tree and with its rank: ``x`` waits for it. Its Command is the app's but
+        internal (the app hears nothing of it)."""
+        wm = self._wm
+        cmd = Command(self.next_command, x.app, call, spec, internal=True)
+        self.next_command += 1
+        parent_finished = x.id in wm.pjf
+        node = wm.new_node(x.app, x.tree, (cmd,), spec.devices_for(call.args), spec.priority,
+                           x.reactive, x.seq)
+        parent = wm.nodes.get(x.parent) if x.parent is not None else None
+        if parent is not None and x in parent.children:
+            parent.children[parent.children.index(x)] = node
+        node.parent, node.children, x.parent = x.parent, [x], node.id
+        wm.unwait(x)
+        self._log.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=[cmd],
+                       before=node.parent, precedes=x.commands[0].id)
+        wm.enter_waiting(node, parent_finished=parent_finished)
+        return node
 
     # ------------------------------------------------------------------ links
     def _link_follows(self, app: App, request: Request, now: float) -> Link | None:
@@ -257,3 +280,12 @@ class Intake:
         q = self._recent_q
         while q and q[0].ended_at < horizon:
             self._recent.pop(q.popleft().id, None)
+
+
+def _turnable(node: Node, before: Node | None) -> bool:
+    """An utterance the connect-channel policy may turn the robot for: it does not
+    orient the robot itself, and the AB before it in its stream did not aim the
+    robot at something on purpose (the words are about that)."""
+    return (not any(c.spec.orients for c in node.commands)
+            and any(c.spec.spoken(c.call.args) for c in node.commands)
+            and (before is None or not any(c.spec.aims for c in before.commands)))

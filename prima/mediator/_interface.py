@@ -25,6 +25,7 @@ __all__ = [
     "AppListener",
     "AtomicBehavior",
     "Call",
+    "Channel",
     "Clock",
     "CommandId",
     "Driver",
@@ -84,6 +85,9 @@ class Request:
     follows: CommandId | None = None
     """Made while handling this Command's end event or Q&A answer (rule 6a/6b):
     the request stays in that Command's tree and carries no reactivity."""
+    face_user: bool = True
+    """Its utterances are for the user: with the connect-channel policy, the mediator
+    may turn the robot to the user first. False: they are about something else."""
 
 
 class AtomicBehavior(NamedTuple):
@@ -166,6 +170,15 @@ class Driver(Protocol):
 
     def abandon(self, command_id: CommandId) -> None:
         """A feedback Command was cancelled between iterations: drop its loop state."""
+
+
+class Channel(Protocol):
+    """What the connect-channel policy asks of the robot (the run answers from the
+    simulator): the mediator never looks at poses itself."""
+
+    def unfaced(self) -> bool:
+        """The user is detectable, and the robot does not face them (beyond the
+        policy's tolerance): an utterance now would be spoken with its back turned."""
 
 
 class AppListener(Protocol):

@@ -31,7 +31,8 @@ class DecisionLog:
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
              app: str | None = None, command: Command | None = None,
              detail: str = "", tree: int | None = None,
-             request: Sequence[Command] = (), before: int | None = None) -> None:
+             request: Sequence[Command] = (), before: int | None = None,
+             precedes: int | None = None) -> None:
         """Record one decision about ``node`` (one of its Commands, or all the Commands of
         the ``request`` it roots), or about an app."""
         self.count += 1
@@ -50,5 +51,6 @@ class DecisionLog:
                 command_id=first.id, command_ids=tuple(c.id for c in commands),
                 devices=node.sorted_devices, reactive=node.reactive, iteration=node.iteration,
                 label=node.commands[0].call.label if command is None else first.call.label,
-                detail=detail, calls=tuple(c.call for c in commands), before=before)
+                detail=detail, calls=tuple(c.call for c in commands), before=before,
+                precedes=precedes)
         self._record(decision)

@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import TracebackType
 
-from prima.catalog import Catalog
+from prima.catalog import CONNECT_COMMAND, Catalog
 from prima.errors import MediationError
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._fairness import Fairness
@@ -30,6 +30,8 @@ from prima.mediator._intake import Intake
 from prima.mediator._interface import (
     AbId,
     AppListener,
+    Call,
+    Channel,
     Clock,
     CommandId,
     Driver,
@@ -103,8 +105,11 @@ class Mediator:
 
     def __init__(self, catalog: Catalog, driver: Driver, clock: Clock, *,
                  config: MediatorConfig = MediatorConfig(),
-                 record: Callable[[Decision], None] | None = None) -> None:
+                 record: Callable[[Decision], None] | None = None,
+                 channel: Channel | None = None) -> None:
         self._catalog = catalog
+        self._channel = channel
+        """Asked before an utterance starts (the connect-channel policy); None: off."""
         self._driver = driver
         self._clock = clock
         self._config = config
@@ -116,7 +121,7 @@ class Mediator:
         self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
                               config)
         self._selector = Selector(self._wm, self._holds, self._log, driver, clock,
-                                  self._overrun)
+                                  self._overrun, self._connect)
         self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
@@ -217,9 +222,29 @@ class Mediator:
             self._tell_cancelled(cancelled)
             return ids
 
+    def _connect(self, x: Node) -> bool:
+        """The connect-channel policy: before the ready utterance ``x`` starts facing
+        away from a detectable user, put a turn to the user before it, in its stream
+        (once per AB). Only when the turn's devices are free, or busy with feedback
+        iterations (they end within a control period): an utterance is never kept
+        waiting for a Command that holds the wheels longer. True if it now waits for
+        the turn."""
+        x.turnable = False
+        spec = self._catalog.get(CONNECT_COMMAND)
+        if self._channel is None or spec is None:
+            return False
+        busy = self._wm.busy
+        if (any(d in busy and not busy[d].feedback for d in spec.devices)
+                or not self._channel.unfaced()):
+            return False
+        self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
+                                   f"turns to the user before AB{x.id}")
+        return True
+
     def _tell_cancelled(self, commands: list[Command]) -> None:
         for cmd in commands:
-            self._tell(cmd.app, cmd.id, None)
+            if not cmd.internal:
+                self._tell(cmd.app, cmd.id, None)
 
     def _tell(self, app: App, command_id: CommandId, outcome: Outcome | None) -> None:
         """Tell an app that its Command ended (with ``outcome``) or was cancelled (None)."""
@@ -270,7 +295,8 @@ class Mediator:
         if cancelled is not None:
             self._tell_cancelled([cancelled])
         for cmd in ended:
-            self._tell(app, cmd.id, outcome)
+            if not cmd.internal:
+                self._tell(app, cmd.id, outcome)
 
     def _next_iteration(self, node: Node, children: list[Node]) -> Node:
         """Insert a feedback Command's next iteration between ``node`` and its children."""

@@ -101,6 +101,16 @@ class WorkingMemory:
         if parent_finished:
             self.pjf[node.id] = node
 
+    def unwait(self, node: Node) -> None:
+        """A waiting, unparked AB goes back to pending: an AB was put before it."""
+        node.state = NodeState.PENDING
+        node.version += 1
+        self._rank(node, -1)
+        self.waiting -= 1
+        node.app.active -= 1
+        self.pjf.pop(node.id, None)
+        self.dirty.update(node.devices)  # what it reserved may go to another AB now
+
     def refile(self, node: Node) -> None:
         """A parked AB takes its place in the ranking again."""
         if node.parked is None:

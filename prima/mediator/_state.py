@@ -78,10 +78,15 @@ class App:
 class Command:
     """One requested Command."""
 
-    __slots__ = ("id", "app", "call", "spec", "node", "ended", "cancelled", "cut", "ended_at")
+    __slots__ = ("id", "app", "call", "spec", "node", "ended", "cancelled", "cut", "ended_at",
+                 "internal")
 
-    def __init__(self, cid: CommandId, app: App, call: Call, spec: CommandSpec) -> None:
+    def __init__(self, cid: CommandId, app: App, call: Call, spec: CommandSpec,
+                 internal: bool = False) -> None:
         self.id = cid
+        self.internal = internal
+        """Requested by the mediator itself for the app (a policy's turn to the user):
+        the app never hears of it."""
         self.app = app
         self.call = call
         self.spec = spec
@@ -137,7 +142,7 @@ class Node:
 
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
-                 "name", "command_ids", "feedback", "calls", "parked")
+                 "name", "command_ids", "feedback", "calls", "parked", "turnable")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -159,6 +164,9 @@ class Node:
         """The request's sequence number: smaller is older."""
         self.version = 0
         """Bumped whenever its waiting-index entries go stale."""
+        self.turnable = False
+        """An utterance that does not orient the robot itself, whose app lets the
+        mediator turn the robot to the user first (the connect-channel policy)."""
         self.parked: App | None = None
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
         self.calls: tuple[Call, ...] = tuple(c.call for c in commands)

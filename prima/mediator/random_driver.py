@@ -154,6 +154,13 @@ class Scenario:
     def duration(self, ab: AtomicBehavior) -> float:
         return self.durations[(ab.id * 7 + ab.iteration) % len(self.durations)]
 
+    @property
+    def facing(self) -> int:
+        """The connect-channel policy: 0, off; else the robot faces its user at one
+        question in ``facing`` (a third of the seeds; derived from the seed alone, so
+        that the other draws stay as they were)."""
+        return (self.seed // 3) % 3 + 2 if self.seed % 3 == 0 else 0
+
     def outcome(self, ab: AtomicBehavior) -> Outcome:
         n = self.iterations[ab.command_ids[0] % len(self.iterations)]
         return Outcome(terminal=ab.iteration + 1 >= n)
@@ -295,6 +302,18 @@ class _Listener:
         self._maybe_raise("cancelled")
 
 
+class _Facing:
+    """A robot that faces its user at every ``period``-th question (connect-channel)."""
+
+    def __init__(self, period: int) -> None:
+        self.period = period
+        self.asked = 0
+
+    def unfaced(self) -> bool:
+        self.asked += 1
+        return self.asked % self.period != 0
+
+
 class _Run:
     """One scenario in the scripted harness, with the oracle watching."""
 
@@ -303,7 +322,8 @@ class _Run:
     def __init__(self, sc: Scenario, tolerance: float) -> None:
         self.sc = sc
         self.h = Harness(duration=sc.duration, outcome=sc.outcome, config=sc.config,
-                         immediate=sc.immediate)
+                         immediate=sc.immediate,
+                         channel=_Facing(sc.facing) if sc.facing else None)
         self.m = self.h.mediator
         self.oracle = Oracle(self.m.catalog, sc.config, longest=sc.longest,
                              tolerance=tolerance)

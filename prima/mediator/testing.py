@@ -30,6 +30,7 @@ from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._interface import (
     AbId,
     AtomicBehavior,
+    Channel,
     CommandId,
     Event,
     ManualClock,
@@ -138,7 +139,7 @@ class Harness:
     def __init__(self, catalog: Catalog | None = None, *, duration: Durations = 1.0,
                  outcome: Callable[[AtomicBehavior], Outcome] | None = None,
                  config: MediatorConfig = MediatorConfig(), immediate: bool = False,
-                 keep: bool = True) -> None:
+                 keep: bool = True, channel: Channel | None = None) -> None:
         self.clock = ManualClock()
         self.decisions: list[Decision] = []
         self.driver = ScriptedDriver(duration, outcome)
@@ -147,7 +148,8 @@ class Harness:
         """Zero-length ABs end from inside ``driver.start`` (re-entrant ``finish``)."""
         self.mediator = Mediator(catalog or Catalog.standard(), self.driver, self.clock,
                                  config=config,
-                                 record=self.decisions.append if keep else None)
+                                 record=self.decisions.append if keep else None,
+                                 channel=channel)
         self._queue: list[tuple[float, int, Callable[[], object]]] = []
         self._order = 0
 

@@ -118,6 +118,8 @@ class Simulator:
         self._unseen_since: int | None = None
         self._announced: str | None = None
         self._sensing = 0
+        self._sighted = False
+        """The camera saw the user since sensing last began: only then can it lose them."""
         self._running: dict[int, AtomicBehavior] = {}
         self._loops: dict[int, dict[str, Value]] = {}
         self._mic: Waker | None = None
@@ -261,6 +263,19 @@ class Simulator:
         """Whether human detection could see the user now, if the robot looked their
         way (in camera range, nothing in between)."""
         return self.world.sees_user(self.kernel.tick, any_direction=True)[0]
+
+    def user_unfaced(self, tolerance: float) -> bool:
+        """The user is detectable, and more than ``tolerance`` degrees off the robot's
+        heading: the robot does not face them."""
+        user = self.user_pose()
+        if user is None or not self.user_detectable():
+            return False
+        robot = self.world.robot_pose()
+        dx, dy = user.x - robot.x, user.y - robot.y
+        if math.hypot(dx, dy) < 1e-9:
+            return False
+        off = abs((math.degrees(math.atan2(dy, dx)) - robot.heading + 180.0) % 360.0 - 180.0)
+        return off > tolerance
 
     def user_pose(self) -> Pose | None:
         """Where the user is, or None in a scenario without a user."""
@@ -416,12 +431,13 @@ class Simulator:
         tick = self.kernel.tick
         seen, distance = self.world.sees_user(tick)
         if seen:
+            self._sighted = True
             self._unseen_since = None
             if not self.seen:
                 self.seen = True
                 self._announced = "found"
                 self.emit("human-found", {"distance": round(distance, 3)})
-        elif self.seen:
+        elif self.seen and self._sighted:
             if self._unseen_since is None:
                 self._unseen_since = tick
                 self.kernel.at(tick + self._lose_ticks, _ignore)  # look again then
@@ -474,6 +490,7 @@ class Simulator:
     def _sensing_stopped(self) -> None:
         if not self._sensing:
             self._unseen_since = None
+            self._sighted = False
 
     def _hold_still(self) -> None:
         """Stop the wheels unless a running atomic behavior drives them."""

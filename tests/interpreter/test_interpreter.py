@@ -246,3 +246,14 @@ def test_an_unexpected_exception_becomes_a_located_app_failure() -> None:
     with pytest.raises(AppFailure, match="unexpected error: RuntimeError: boom"):
         interp.event(Event("touched"))
     assert interp.stopped
+
+
+def test_a_chain_says_whether_its_words_are_for_the_user() -> None:
+    """``face-user="false"``: the words are about something else (the connect-channel
+    policy leaves the robot as it is); by default they are for the user."""
+    _interp, port, *_ = make(
+        '<state id="s" initial="true"><entry>'
+        '<chain>Speak("Hello.")</chain>'
+        '<chain face-user="false">Speak("This panel shows our robot.")</chain>'
+        '</entry></state>')
+    assert [r.face_user for r in port.requests] == [True, False]

@@ -78,6 +78,15 @@ def test_the_scenarios_cover_what_they_should() -> None:
     assert min(tiny, immediate, raising, endless) > 10
 
 
+def test_the_driver_exercises_the_connect_channel_policy() -> None:
+    """A third of the seeds run with a robot that faces its user at every few
+    questions: the mediator puts turns of its own before utterances."""
+    seeds = [seed for seed in SEEDS[:300] if scenario(seed).facing]
+    assert 80 < len(seeds) < 120
+    turns = sum(replay(seed).count("[connect-channel]") for seed in seeds[:40])
+    assert turns > 20
+
+
 def test_the_oracle_uses_the_public_api_only() -> None:
     root = Path(__file__).parents[2] / "prima" / "mediator"
     for module in ("oracle.py", "random_driver.py"):
@@ -163,7 +172,7 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
     assert any("block held" in v for v in caught())
 
 
-@pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281])
+@pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -172,7 +181,9 @@ def test_seeds_that_once_failed(seed: int) -> None:
     no rival was waiting for any more), now notes. 14252: a suspended stream whose
     waiting ABs an asap request cancelled was rejoined by that request as a stream
     under way, past the other app's stream hold; 20281: a stream that resumed through
-    one AB kept its other ABs parked by a stream hold (both fixed in the mediator)."""
+    one AB kept its other ABs parked by a stream hold (both fixed in the mediator).
+    28347: an utterance that a connect-channel turn was put before left the speaker
+    it reserved unnoticed, so the other app's utterance waited for the next event."""
     assert play(seed).violations == []
 
 

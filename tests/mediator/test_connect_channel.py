@@ -1,0 +1,94 @@
+"""The connect-channel policy (thesis Sec. 5.3 (4)): before an utterance starts with
+the robot facing away from a detectable user, the mediator turns the robot to the
+user first, in the same stream."""
+
+from __future__ import annotations
+
+from prima.mediator import AppKind, DecisionKind, Outcome, Request, Rule
+from prima.mediator.testing import Harness
+from tests.mediator.helpers import call, req, speak
+
+
+class Facing:
+    """A robot that faces away until it turns to the user (FaceHuman)."""
+
+    def __init__(self, faced: bool = False) -> None:
+        self.faced = faced
+        self.asked = 0
+
+    def unfaced(self) -> bool:
+        self.asked += 1
+        return not self.faced
+
+
+
+def starts(h: Harness) -> list[tuple[float, str, str, Rule]]:
+    return [(d.t, d.app or "", d.command or "", d.rule) for d in h.starts()]
+
+
+def test_an_unfaced_utterance_waits_for_a_turn_to_the_user() -> None:
+    facing = Facing()
+    h = Harness(duration={"FaceHuman": 1.5, "*": 2.0}, channel=facing)
+    told: list[int] = []
+    h.app("fa", AppKind.FA, on_ended=lambda cid, _o: told.append(cid))
+    (cid,) = h.mediator.submit(req("fa", speak("What's the matter with you?")))
+    h.run(until=10.0)
+    assert starts(h) == [(0.0, "fa", "FaceHuman", Rule.CONNECT_CHANNEL),
+                         (1.5, "fa", "Speak", Rule.FREE_DEVICES)]
+    (turn,) = [d for d in h.decisions if d.kind is DecisionKind.REQUEST
+               and d.rule is Rule.CONNECT_CHANNEL]
+    assert (turn.precedes, turn.tree) == (cid, h.starts()[1].tree)  # the same stream
+    assert told == [cid]  # the app hears of its own Command only
+
+
+def test_a_faced_or_aimed_utterance_is_left_as_it_is() -> None:
+    """Facing the user already; or the words are about what the robot aims at (a
+    PointByHand before them, a FaceHumanAndSpeak, an app that says so)."""
+    h = Harness(duration=1.0, channel=Facing(faced=True))
+    h.app("fa", AppKind.FA)
+    h.mediator.submit(req("fa", speak("Hello.")))
+    h.run(until=5.0)
+    assert [c for _t, _a, c, _r in starts(h)] == ["Speak"]
+
+    h = Harness(duration=1.0, channel=Facing())
+    h.app("ea", AppKind.EA)
+    h.mediator.submit(req("ea", call("PointByHand", toward="panel-1"), speak("Look at this.")))
+    h.mediator.submit(req("ea", call("FaceHumanAndSpeak", text="Welcome.")))
+    h.mediator.submit(Request("ea", (speak("The panel says so."),), face_user=False))
+    h.run(until=20.0)
+    assert "FaceHuman" not in [c for _t, _a, c, _r in starts(h)]
+
+
+def test_no_channel_no_turn_and_the_turn_never_waits_for_busy_wheels() -> None:
+    h = Harness(duration=2.0)
+    h.app("fa", AppKind.FA)
+    h.mediator.submit(req("fa", speak("Hello.")))
+    h.run(until=5.0)
+    assert [c for _t, _a, c, _r in starts(h)] == ["Speak"]
+
+    facing = Facing()
+    h = Harness(duration={"SetSpeedAndTime": 5.0, "*": 1.0}, channel=facing)
+    h.app("ea", AppKind.EA)
+    h.app("fa", AppKind.FA)
+    h.mediator.submit(req("ea", call("SetSpeedAndTime", speed=0.3, time=5.0)))
+    h.mediator.submit(req("fa", speak("I am over here.")))
+    h.run(until=10.0)
+    assert [(t, c) for t, _a, c, _r in starts(h)] == [(0.0, "SetSpeedAndTime"), (0.0, "Speak")]
+
+
+def test_a_reply_to_an_answer_is_turned_for_too() -> None:
+    """An end-event reply continues its stream: the turn goes in before it."""
+    facing = Facing()
+    h = Harness(duration={"FaceHuman": 1.0, "QA": 3.0, "*": 2.0}, channel=facing)
+    asked: list[int] = []
+
+    def reply(cid: int, _o: Outcome) -> None:
+        if cid in asked:
+            facing.faced = False  # the user walked around the robot meanwhile
+            h.mediator.submit(Request("fa", (speak("O.K."),), follows=cid))
+
+    h.app("fa", AppKind.FA, on_ended=reply)
+    asked.extend(h.mediator.submit(req("fa", call("QA", prompt="Shall we?", grammar="g"))))
+    h.run(until=20.0)
+    assert [(t, c) for t, _a, c, _r in starts(h)] == [
+        (0.0, "FaceHuman"), (1.0, "QA"), (4.0, "FaceHuman"), (5.0, "Speak")]
