@@ -188,3 +188,10 @@ def test_connect_channel_turns_the_robot_to_its_user_before_it_speaks() -> None:
     assert {ln.kind.value for ln in turns} == {"request", "start"}
     request = next(ln for ln in turns if ln.kind.value == "request")
     assert isinstance((request.detail or {}).get("precedes"), int)
+
+
+def test_connect_channel_off_is_the_baseline_of_its_pair() -> None:
+    """scenarios/policies/connect-channel-off.xml against thesis/sample-04.xml."""
+    off = judge(Run(ROOT / "scenarios" / "policies" / "connect-channel-off.xml").run())
+    on = judge(Run(THESIS / "sample-04.xml").run())
+    assert (len(off.unfaced), len(on.unfaced)) == (14, 0)
