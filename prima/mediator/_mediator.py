@@ -225,17 +225,19 @@ class Mediator:
     def _connect(self, x: Node) -> bool:
         """The connect-channel policy: before the ready utterance ``x`` starts facing
         away from a detectable user, put a turn to the user before it, in its stream
-        (once per AB). Only when the turn's devices are free, or busy with feedback
-        iterations (they end within a control period): an utterance is never kept
-        waiting for a Command that holds the wheels longer. True if it now waits for
-        the turn."""
+        (once per AB). Only when the turn's devices are free, or busy with an
+        iteration of a move that breaks the channel (it ends within a control period,
+        and the turn, keeping the channel, outranks the move's next one): an
+        utterance is never kept waiting for anything else on the wheels (a search's
+        turn, a 5 s drive), which a later reaction could take first. True if it now
+        waits for the turn."""
         x.turnable = False
         spec = self._catalog.get(CONNECT_COMMAND)
         if self._channel is None or spec is None:
             return False
         busy = self._wm.busy
-        if (any(d in busy and not busy[d].feedback for d in spec.devices)
-                or not self._channel.unfaced()):
+        if any(d in busy and not (busy[d].feedback and busy[d].priority < x.priority)
+               for d in spec.devices) or not self._channel.unfaced():
             return False
         self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
                                    f"turns to the user before AB{x.id}")

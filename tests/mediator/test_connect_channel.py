@@ -92,3 +92,26 @@ def test_a_reply_to_an_answer_is_turned_for_too() -> None:
     h.run(until=20.0)
     assert [(t, c) for t, _a, c, _r in starts(h)] == [
         (0.0, "FaceHuman"), (1.0, "QA"), (4.0, "FaceHuman"), (5.0, "Speak")]
+
+
+def test_the_turn_waits_only_for_a_moves_iteration() -> None:
+    """A Topological Move's iteration (it breaks the channel) ends within a control
+    period and the turn outranks its next one: the turn waits for it. A search's
+    iteration keeps the channel and may be long (its turn): the words go at once."""
+    def run(command: str) -> list[tuple[float, str, str]]:
+        h = Harness(duration={"TopologicalMove": 0.5, "ActiveSensingHuman": 0.5,
+                              "FaceHuman": 1.0, "*": 2.0},
+                    outcome=lambda ab: Outcome(terminal=ab.iteration >= 5), channel=Facing())
+        h.app("ea", AppKind.EA)
+        h.app("fa", AppKind.FA)
+        h.mediator.submit(req("ea", call(command, to="hall") if command == "TopologicalMove"
+                              else call(command)))
+        h.at(0.2, lambda: h.mediator.submit(
+            Request("fa", (speak("Hee-hee!"),), reactive=True, reaction=True)))
+        h.run(until=20.0)
+        return [(t, a, c) for t, a, c, _r in starts(h)][:4]
+
+    assert run("TopologicalMove")[:3] == [(0.0, "ea", "TopologicalMove"),
+                                          (0.5, "fa", "FaceHuman"), (1.5, "fa", "Speak")]
+    assert run("ActiveSensingHuman")[:2] == [(0.0, "ea", "ActiveSensingHuman"),
+                                             (0.2, "fa", "Speak")]
