@@ -172,11 +172,11 @@ POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
                                     "detectable user, the robot turns to them first "
                                     "(thesis Sec. 5.3 (4))"),
 )})
+"""Every policy, by name. ``all`` names them together in a switch."""
 
 FACE_TOLERANCE = 30.0
 """Degrees between the robot's heading and its bearing to the user beyond which it
 does not face them (the connect-channel policy, and the judge's talking unfaced)."""
-"""Every policy, by name. ``all`` names them together in a switch."""
 
 
 def policy_settings(*layers: Mapping[str, bool]) -> dict[str, bool]:
