@@ -203,7 +203,7 @@ class Holds:
                 and node.commands[0].id >= blk.first_command):
             blk.started = True
             blk.deadline = self._clock.after(blk.watchdog)
-            self._wm.dirty.update(blk.devices)  # what it holds now must step aside
+            self._step_aside(blk.devices)
         st = self._streams.get(app.name)
         if st is not None:
             st.devices.update(node.devices)
@@ -234,7 +234,7 @@ class Holds:
                     st.armed = True
                     st.deadline = self._clock.after(st.hold, since=app.idle_since)
                     st.held = set()
-                    self._wm.dirty.update(st.devices)  # what it holds now must step aside
+                    self._step_aside(st.devices)
             else:
                 st.lapsed = False
                 if st.armed:
@@ -250,8 +250,9 @@ class Holds:
             self._talk_parked.append(node)
             return
         self._parked.append(node)
-        self._kept[node.id] = holder.name
-        self.keeping[holder.name] = self.keeping.get(holder.name, 0) + 1
+        if node.id not in self._kept:
+            self._kept[node.id] = holder.name
+            self.keeping[holder.name] = self.keeping.get(holder.name, 0) + 1
 
     def unpark_all(self) -> None:
         """A hold, block or talk ended or lost its force: re-file the parked ABs (one
@@ -318,9 +319,24 @@ class Holds:
         """The app regained its precedence: its holds are in force again."""
         st, blk = self._streams.get(app.name), self._blocks.get(app.name)
         if st is not None and st.armed:
-            self._wm.dirty.update(st.devices)
+            self._step_aside(st.devices)
         if blk is not None and blk.reserving:
-            self._wm.dirty.update(blk.devices)
+            self._step_aside(blk.devices)
+
+    def _step_aside(self, devices: set[str] | frozenset[str]) -> None:
+        """A hold took force on ``devices``: every waiting AB it holds steps aside now
+        (is parked, so it reserves nothing), not only the best on each device, which
+        may be the holder's own. Linear in working memory, which the waiting budgets
+        bound; holds take force rarely."""
+        wm = self._wm
+        wm.dirty.update(devices)
+        for node in list(wm.nodes.values()):
+            if (node.state is NodeState.WAITING and node.parked is None
+                    and not node.devices.isdisjoint(devices)):
+                held = self.holder(node)
+                if held is not None and held[0] is not Rule.KEEP_CHANNEL:
+                    self.note(node, *held)
+                    self.park(node, *held)
 
     def demoted(self) -> tuple[str, ...]:
         """Apps that have lost their precedence (their holds hold nothing)."""

@@ -125,7 +125,8 @@ class Selector:
         later: list[tuple[bool, Tree]] = []
         overrun: dict[str, App] = {}
         for x in self._candidates(new, dirty, view):
-            if x.state is NodeState.WAITING and self._startable(x, view):
+            # (an earlier start of this round may have parked it: a block took force)
+            if x.state is NodeState.WAITING and x.parked is None and self._startable(x, view):
                 if self._counted(x.app):
                     self._start(x, view, started, later)
                 else:
@@ -193,7 +194,6 @@ class Selector:
         x_rank = view.rank(x)
         self._wm.start(x)
         started.append(x)
-        self._holds.started(x)
         # Who did it beat? The best remaining waiting AB on each of its devices.
         losers = [b for d in x.sorted_devices if (b := view.best(d)) is not None]
         rule = Rule.FREE_DEVICES
@@ -203,6 +203,7 @@ class Selector:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
             rule = separating_rule(x_rank, view.rank(top))
         self._log.emit(DecisionKind.START, rule, x)
+        self._holds.started(x)  # a block it starts takes force: what it holds steps aside
         if x.tree.suspended is not None:
             self._log.emit(DecisionKind.RESUME, rule, x, detail="resumed from the suspended IU")
             later.append((False, x.tree))

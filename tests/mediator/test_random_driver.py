@@ -172,7 +172,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
     assert any("block held" in v for v in caught())
 
 
-@pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347])
+@pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347,
+                                  587142])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -183,7 +184,10 @@ def test_seeds_that_once_failed(seed: int) -> None:
     under way, past the other app's stream hold; 20281: a stream that resumed through
     one AB kept its other ABs parked by a stream hold (both fixed in the mediator).
     28347: an utterance that a connect-channel turn was put before left the speaker
-    it reserved unnoticed, so the other app's utterance waited for the next event."""
+    it reserved unnoticed, so the other app's utterance waited for the next event.
+    587142: when a block took force, only the best waiting AB on each of its devices
+    stepped aside; another app's AB it held, ranked lower there, still reserved a free
+    device against a turn to the user."""
     assert play(seed).violations == []
 
 
