@@ -9,7 +9,6 @@ from pathlib import Path
 
 import pytest
 
-from prima.catalog import STANDARD_DEVICES
 from prima.cli import main
 from prima.dsl import parse_profile
 from prima.errors import DocumentError, ScenarioError
@@ -18,25 +17,13 @@ from prima.run import Run
 from prima.trace import format_text
 from prima.sim import load_scenario
 from prima.vocab import POLICIES, policy_settings
+from tests.dsl.test_profile import ALL, PROFILE
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE_05_STREAM = ROOT / "scenarios" / "thesis" / "sample-05-stream.xml"
 
-PROFILE = """<robot xmlns="urn:prima:robot:1" name="r">
-  <body radius="0.2" max-speed="0.4" max-accel="0.5" max-turn-rate="90"/>
-  <speech rate="2.5"/>
-  <camera fov="60" range="4"/>
-  <head pan-min="-90" pan-max="90" tilt-min="-30" tilt-max="30"/>
-  <devices>
-    {devices}
-  </devices>
-  {policies}
-</robot>"""
-DEVICES = "\n    ".join(f'<device name="{d}"/>' for d in STANDARD_DEVICES)
-
-
 def _profile(policies: str) -> dict[str, bool]:
-    text = PROFILE.format(devices=DEVICES, policies=policies)
+    text = PROFILE.format(devices=ALL, rest=policies, tilt="-30")
     return dict(parse_profile(text.encode(), "r.xml").policies)
 
 

@@ -267,15 +267,10 @@ class Simulator:
     def user_unfaced(self, tolerance: float) -> bool:
         """The user is detectable, and more than ``tolerance`` degrees off the robot's
         heading: the robot does not face them."""
-        user = self.user_pose()
-        if user is None or not self.user_detectable():
+        world = self.world
+        if not world.has_user or not self.user_detectable() or world.user_distance() < 1e-9:
             return False
-        robot = self.world.robot_pose()
-        dx, dy = user.x - robot.x, user.y - robot.y
-        if math.hypot(dx, dy) < 1e-9:
-            return False
-        off = abs((math.degrees(math.atan2(dy, dx)) - robot.heading + 180.0) % 360.0 - 180.0)
-        return off > tolerance
+        return abs(math.degrees(world.user_bearing())) > tolerance
 
     def user_pose(self) -> Pose | None:
         """Where the user is, or None in a scenario without a user."""
