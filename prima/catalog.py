@@ -26,6 +26,8 @@ from prima.vocab import Value
 __all__ = [
     "BODY_DEVICE",
     "CONNECT_COMMAND",
+    "RESTORE_COMMAND",
+    "RESTORE_POSITION_COMMAND",
     "STANDARD_COMMANDS",
     "STANDARD_DEVICES",
     "SYMBOLIC_KINDS",
@@ -57,6 +59,13 @@ BODY_DEVICE = "locomotion"
 
 CONNECT_COMMAND = "FaceHuman"
 """The Command the connect-channel policy runs before an utterance."""
+
+RESTORE_COMMAND = "SetPositionAndDirection"
+"""The Command the restore-state policy runs before a resumed stream."""
+
+RESTORE_POSITION_COMMAND = "SetPosition"
+"""The one it runs before a resumed AB that turns the robot itself (its heading
+would be undone at once)."""
 
 
 class Priority(enum.IntEnum):
@@ -133,6 +142,10 @@ class CommandSpec:
     """It aims the robot, its head or its arm at something on purpose (a Turn, a
     PointByHand): an utterance that follows it in its stream is about that, so the
     connect-channel policy does not turn the robot back to the user before it."""
+    travels: bool = False
+    """It takes the robot somewhere of its own (a move, following the user): when it
+    resumes a suspended stream, the restore-state policy does not return the robot
+    to where the stream was suspended first."""
 
     @property
     def orients(self) -> bool:
@@ -177,7 +190,7 @@ class CommandSpec:
 def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
           listens: bool = False, params: Iterable[Param] = (),
           one_of: Iterable[Iterable[str]] = (), doc: str = "",
-          aims: bool = False) -> CommandSpec:
+          aims: bool = False, travels: bool = False) -> CommandSpec:
     return CommandSpec(
         name=name,
         devices=frozenset(devices.split()),
@@ -188,6 +201,7 @@ def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
         doc=doc,
         listens=listens,
         aims=aims,
+        travels=travels or breaks,
     )
 
 
@@ -210,7 +224,7 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
                   _P("timeout", _N, False, 8.0, "s", "how long to listen for an answer",
                      shown=False)],
           doc="Say a prompt, then listen for an answer until a timeout: one atomic behavior."),
-    _spec("TrackingHuman", "human-detection locomotion", fb=True,
+    _spec("TrackingHuman", "human-detection locomotion", fb=True, travels=True,
           params=[_P("distance", _N, False, 1.0, "m", "comfortable distance to keep")],
           doc="Follow the user at a comfortable distance, one iteration at a time, until stopped."),
     _spec("FaceHumanAndSpeak", "human-detection locomotion speaker",
@@ -225,7 +239,7 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
           aims=True),
     _spec("Turn", "locomotion", params=[_P("angle", _N, unit="deg", doc="counter-clockwise")],
           doc="Turn the body in place by an angle.", aims=True),
-    _spec("SetSpeedAndTime", "locomotion",
+    _spec("SetSpeedAndTime", "locomotion", travels=True,
           params=[_P("speed", _N, unit="m/s"), _P("time", _N, unit="s"),
                   _P("spin", _N, False, 0.0, "deg/s", "turning rate while moving")],
           doc="Drive at a speed for a time."),

@@ -38,9 +38,9 @@ from typing import Any
 
 from prima.errors import Problem, Severity, TraceError
 from prima.catalog import BODY_DEVICE, STANDARD_COMMANDS
-from prima.vocab import FACE_TOLERANCE
+from prima.vocab import FACE_TOLERANCE, RESTORE_DISTANCE
 
-__all__ = ["Leaving", "Reaction", "Report", "Silence", "Split", "Stuck", "Thresholds",
+__all__ = ["Elsewhere", "Leaving", "Reaction", "Report", "Silence", "Split", "Stuck", "Thresholds",
            "Unfaced", "find_scenarios", "format_summary", "format_table", "judge", "judge_file",
            "load_trace"]
 
@@ -83,6 +83,8 @@ class Thresholds:
     """Utterances started facing away from a detectable user allowed."""
     max_leaving: int = 0
     """Utterances during which the robot moved away from the user allowed."""
+    max_elsewhere: int = 0
+    """Streams resumed away from where they were suspended allowed."""
     max_splits: int = 0
     """Split exchanges allowed."""
     max_silences: int = 0
@@ -100,6 +102,9 @@ class Thresholds:
     """Degrees between the robot's heading and the user's bearing still counted as facing."""
     leave_distance: float = 0.3
     """Metres the robot may move away from the user during an utterance."""
+    resume_distance: float = RESTORE_DISTANCE
+    """Metres from where a stream was suspended at which its first utterance after it
+    resumes still counts as spoken in the same place."""
     silence: float = 2.0
     """Seconds without robot output after an answer that count as a silence."""
     stuck_after: float = 60.0
@@ -220,6 +225,25 @@ class Leaving:
 
 
 @dataclass(frozen=True)
+class Elsewhere:
+    """A suspended stream's first utterance after it resumed, spoken away from where
+    the stream was suspended (an explanation resumed far from its panel)."""
+
+    seq: int
+    """The utterance's start line."""
+    t: float
+    app: str
+    text: str
+    suspend_seq: int
+    """The line at which its stream was suspended."""
+    away: float
+    """How far the robot then was from where it was at the suspension (m)."""
+
+    def to_dict(self) -> dict[str, object]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
 class Split:
     """Another application's utterance inside an exchange."""
 
@@ -282,6 +306,7 @@ class Stuck:
 _COUNTS = (("late", "late reactions", "max_late"),
            ("unfaced", "talking unfaced", "max_unfaced"),
            ("leaving", "leaving while talking", "max_leaving"),
+           ("elsewhere", "resumed elsewhere", "max_elsewhere"),
            ("splits", "split exchanges", "max_splits"),
            ("silences", "silences", "max_silences"),
            ("stuck", "stuck", "max_stuck"))
@@ -300,6 +325,7 @@ class Report:
     reactions: tuple[Reaction, ...] = ()
     unfaced: tuple[Unfaced, ...] = ()
     leaving: tuple[Leaving, ...] = ()
+    elsewhere: tuple[Elsewhere, ...] = ()
     splits: tuple[Split, ...] = ()
     silences: tuple[Silence, ...] = ()
     stuck: tuple[Stuck, ...] = ()
@@ -361,6 +387,7 @@ class Report:
             "late": self.seqs("late"),
             "unfaced": [u.to_dict() for u in self.unfaced],
             "leaving": [x.to_dict() for x in self.leaving],
+            "elsewhere": [x.to_dict() for x in self.elsewhere],
             "splits": [s.to_dict() for s in self.splits],
             "silences": [s.to_dict() for s in self.silences],
             "stuck": [s.to_dict() for s in self.stuck],
@@ -516,6 +543,17 @@ def _off_heading(robot: Mapping[str, float], user: Mapping[str, float]) -> float
 _AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
 
 
+_TRAVELS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
+
+
+def _travels(row: Row) -> bool:
+    """A start of the app's own that takes the robot somewhere (a move, following the
+    user): where its stream then speaks is where it chose to go. The restore-state
+    policy's return is not one: it takes the robot back."""
+    return row.get("reason") != "restore-state" and \
+        any(c in _TRAVELS for c in str(row.get("command") or "").split("+"))
+
+
 def _about_something_else(row: Row, before: str | None) -> bool:
     """An utterance that is not for the user's face: its AB turns or points the robot
     itself (FaceHumanAndSpeak, a Speak grouped with a PointByHand), or the AB before
@@ -629,6 +667,15 @@ class _Judge:
         self.last_command: dict[int, str] = {}
         """Tree -> the Command (``A+B`` for a group) of its latest AB started."""
         self.leaving: list[Leaving] = []
+        self.robot: tuple[float, float] | None = None
+        """Where the robot was at the latest posed line."""
+        self.suspended_at: dict[int, tuple[int, tuple[float, float]]] = {}
+        """Tree -> its suspension line and where the robot was then."""
+        self.resumed: dict[int, tuple[int, tuple[float, float]]] = {}
+        """Tree -> the same, once it resumed and until its first utterance."""
+        self.elsewhere: list[Elsewhere] = []
+        self.last_start: Row | None = None
+        """The latest start line (a resume line follows its AB's start line)."""
         self.answers: dict[str, tuple[Row, Row | None]] = {}
         """App -> its answered Q&A's end line, and the first other app's utterance since."""
         self.streams: dict[str, Row] = {}
@@ -659,6 +706,8 @@ class _Judge:
         ab, cid = row.get("ab"), (row.get("detail") or {}).get("command_id")
         if isinstance(ab, int) and isinstance(cid, int):
             self.ab_command.setdefault(ab, cid)
+        if row.get("robot") is not None:
+            self.robot = _xy(row["robot"])
         if row.get("robot") is not None and row.get("user") is not None:
             if row["user"].get("detectable") is True:
                 self.last_seen = t
@@ -750,6 +799,8 @@ class _Judge:
         self._silence_ends(row)
         self._split_start(row, app)
         self._unfaced(row, app)
+        self._elsewhere(row, app)
+        self.last_start = row
         if _is_utterance(row) and isinstance(ab, int) and row.get("robot") is not None:
             self.talking[ab] = (row, _xy(row["robot"]))
         self._command_started(row, ids)
@@ -866,6 +917,35 @@ class _Judge:
             self.unfaced.append(Unfaced(int(row["seq"]), float(row["t"]), app,
                                         str(row.get("command")), str(row.get("text")),
                                         round(off, 1)))
+
+    def _suspend(self, row: Row) -> None:
+        tree = row.get("tree")
+        if isinstance(tree, int) and self.robot is not None:
+            self.suspended_at[tree] = (int(row["seq"]), self.robot)
+
+    def _resume(self, row: Row) -> None:
+        tree = row.get("tree")
+        if isinstance(tree, int) and tree in self.suspended_at:
+            self.resumed[tree] = self.suspended_at.pop(tree)
+            start = self.last_start
+            if start is not None and start.get("ab") == row.get("ab"):
+                self._elsewhere(start, str(row.get("app") or ""))  # it resumed speaking
+
+    def _elsewhere(self, row: Row, app: str) -> None:
+        tree = row.get("tree")
+        if not isinstance(tree, int) or tree not in self.resumed:
+            return
+        if _travels(row):
+            del self.resumed[tree]  # it resumed going somewhere: not the same place
+            return
+        if not _is_utterance(row):
+            return
+        seq, was = self.resumed.pop(tree)
+        robot = row.get("robot")
+        away = math.dist(_xy(robot), was) if robot is not None else 0.0
+        if away > self.th.resume_distance + _EPS:
+            self.elsewhere.append(Elsewhere(int(row["seq"]), float(row["t"]), app,
+                                            str(row.get("text")), seq, round(away, 3)))
 
     def _posed(self, row: Row) -> None:
         if not self.talking:
@@ -1006,6 +1086,7 @@ class _Judge:
             self.name, end, self.lines, self.th,
             reactions=tuple(self._reaction(r) for r in self.reactions),
             unfaced=tuple(self.unfaced), leaving=tuple(self.leaving),
+            elsewhere=tuple(self.elsewhere),
             splits=tuple(sorted(splits.values(), key=lambda s: s.seq)),
             silences=tuple(sorted(self.silences, key=lambda s: s.seq)),
             stuck=tuple(sorted(self.stuck.values(), key=lambda s: (s.t, s.seq))))
@@ -1020,6 +1101,8 @@ _HANDLERS = {
     "cancel": _Judge._cancel,
     "unload": _Judge._unload,
     "stream": _Judge._stream,
+    "suspend": _Judge._suspend,
+    "resume": _Judge._resume,
 }
 
 
@@ -1075,6 +1158,9 @@ def _finding(key: str, item: Any) -> str:
     if key == "leaving":
         return (f"seq {item.seq} t={item.t:g} {item.app} \"{_short(item.text, 30)}\": "
                 f"{item.away:g} m farther at seq {item.at_seq}")
+    if key == "elsewhere":
+        return (f"seq {item.seq} t={item.t:g} {item.app} \"{_short(item.text, 30)}\": "
+                f"{item.away:g} m from where its stream was suspended (seq {item.suspend_seq})")
     if key == "splits":
         where = (f"between {item.app}'s answer (seq {item.anchor_seq}) and its reply"
                  if item.kind == "answer" else

@@ -35,7 +35,14 @@ from prima.mediator import (
 )
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
-from prima.vocab import FACE_TOLERANCE, Budgets, Value, policy_settings
+from prima.vocab import (
+    FACE_TOLERANCE,
+    RESTORE_ANGLE,
+    RESTORE_DISTANCE,
+    Budgets,
+    Value,
+    policy_settings,
+)
 
 __all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
 
@@ -79,13 +86,27 @@ class _App:
 
 
 class _Channel:
-    """The connect-channel policy's question, answered by the simulator."""
+    """The connect-channel and restore-state policies' questions, answered by the
+    simulator from the robot's true pose."""
 
     def __init__(self, sim: Simulator) -> None:
         self._sim = sim
 
     def unfaced(self) -> bool:
         return self._sim.user_unfaced(FACE_TOLERANCE)
+
+    def pose(self) -> Mapping[str, Value]:
+        p = self._sim.robot_pose()
+        return {"x": round(p.x, 2), "y": round(p.y, 2), "heading": round(p.heading, 1)}
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
+        p = self._sim.robot_pose()
+        x, y = (float(pose[k] or 0.0) for k in ("x", "y"))
+        if math.hypot(p.x - x, p.y - y) > RESTORE_DISTANCE:
+            return True
+        heading = pose.get("heading")
+        return heading is not None and \
+            abs((p.heading - float(heading) + 180.0) % 360.0 - 180.0) > RESTORE_ANGLE
 
 
 class _Port:
@@ -165,8 +186,10 @@ class Run:
                                            catalog=self.catalog)
         self.mediator = Mediator(
             self.catalog, self.sim, self.sim, record=self._decision,
-            config=MediatorConfig(budgets=self.budgets),
-            channel=_Channel(self.sim) if self.policies["connect-channel"] else None)
+            config=MediatorConfig(budgets=self.budgets,
+                                  connect_channel=self.policies["connect-channel"],
+                                  restore_state=self.policies["restore-state"]),
+            channel=_Channel(self.sim))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
         self.sim.on_user = self._user

@@ -268,6 +268,8 @@ _MEASURES = (
     _Measure("late reactions", lambda r: len(r.late), limit=lambda t: t.max_late),
     _Measure("talking unfaced", lambda r: len(r.unfaced), limit=lambda t: t.max_unfaced),
     _Measure("leaving while talking", lambda r: len(r.leaving), limit=lambda t: t.max_leaving),
+    _Measure("resumed elsewhere", lambda r: len(r.elsewhere),
+             limit=lambda t: t.max_elsewhere),
     _Measure("split exchanges", lambda r: len(r.splits), limit=lambda t: t.max_splits),
     _Measure("silences", lambda r: len(r.silences), limit=lambda t: t.max_silences),
     _Measure("stuck", lambda r: len(r.stuck), limit=lambda t: t.max_stuck),

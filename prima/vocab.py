@@ -22,6 +22,8 @@ __all__ = [
     "PREDEFINED_EVENTS",
     "DEFAULT_BUDGETS",
     "FACE_TOLERANCE",
+    "RESTORE_ANGLE",
+    "RESTORE_DISTANCE",
     "POLICIES",
     "AppKind",
     "Budgets",
@@ -166,6 +168,9 @@ class Policy:
 
 
 POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
+    Policy("restore-state", True, "a suspended stream, resumed with the robot moved "
+                                  "away, first returns to the pose it was suspended in "
+                                  "(thesis Sec. 5.3 (1))"),
     Policy("streams", True, "explicit stream blocks in the applications' documents keep "
                             "a Communication Stream together (thesis Sec. 5.3 (3))"),
     Policy("connect-channel", True, "before an utterance would start facing away from a "
@@ -177,6 +182,15 @@ POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
 FACE_TOLERANCE = 30.0
 """Degrees between the robot's heading and its bearing to the user beyond which it
 does not face them (the connect-channel policy, and the judge's talking unfaced)."""
+
+
+RESTORE_DISTANCE = 0.3
+"""Metres the robot may have moved since a stream was suspended before the
+restore-state policy drives it back when the stream resumes."""
+
+RESTORE_ANGLE = 20.0
+"""Degrees the robot may have turned since a stream was suspended before the
+restore-state policy turns it back when the stream resumes."""
 
 
 def policy_settings(*layers: Mapping[str, bool]) -> dict[str, bool]:

@@ -459,6 +459,48 @@ def test_moving_after_the_utterance_is_not_leaving_while_talking() -> None:
     assert counts(tr.judge()) == {}
 
 
+# ------------------------------------------------------------------ resumed elsewhere
+
+@pytest.mark.parametrize("case, found", [
+    ("here", 0),          # back where it was suspended before it speaks
+    ("away", 1),          # resumes 2 m from there
+    ("travels", 0),       # it resumed going somewhere of its own
+    ("restored", 0),      # the restore-state policy's return took it back
+    ("speaks-first", 1),  # the resume line follows the utterance's own start line
+])
+def test_resumed_elsewhere(case: str, found: int) -> None:
+    """A suspended stream's first utterance after it resumes counts only when the
+    robot is farther than 0.3 m from where it was when the stream was suspended
+    and the stream did not itself go somewhere."""
+    tr = Trace()
+    tr.user = {**tr.user, "detectable": False}  # (not a matter of facing)
+    tr.pose(0.5)
+    tr.line(1.0, "suspend", app="ea", ab=2, tree=0, command="Speak", reason="reactivity")
+    tr.robot = {**tr.robot, "x": 2.0}  # the other app's reaction moved the robot
+    tr.pose(5.0)
+    if case == "speaks-first":
+        tr.start(6.0, "ea", 2, 2, text="Look at this figure.")
+        tr.line(6.0, "resume", app="ea", ab=2, tree=0, command="Speak")
+        tr.end(7.0, "ea", 2, 2)
+    else:
+        command = {"travels": "TopologicalMove", "away": "Gesture"}.get(case, "SetPosition")
+        tr.start(6.0, "ea", 3, 3, command=command, devices=("locomotion",))
+        if case == "restored":
+            tr.rows[-1]["reason"] = "restore-state"
+        tr.line(6.0, "resume", app="ea", ab=3, tree=0, command=command)
+        if case in ("here", "restored"):
+            tr.robot = {**tr.robot, "x": 0.1}
+        tr.end(9.0, "ea", 3, 3, command=command, devices=("locomotion",))
+        tr.start(9.0, "ea", 2, 2, text="Look at this figure.")
+        tr.end(10.0, "ea", 2, 2)
+    report = tr.judge()
+    assert counts(report) == ({"elsewhere": 1} if found else {})
+    if found:
+        (e,) = report.elsewhere
+        assert (e.app, e.text, e.suspend_seq, e.away) == ("ea", "Look at this figure.", 1, 2.0)
+        assert "from where its stream was suspended (seq 1)" in format_table([report])
+
+
 # ------------------------------------------------------------------ split exchanges
 
 def test_another_apps_utterance_between_an_answer_and_the_reply_splits_it() -> None:
@@ -664,9 +706,10 @@ def test_report_dict_has_stable_keys_and_is_json() -> None:
     report = reaction_behind(speech_ends=12.0, reacts_at=12.4).judge()
     d = report.to_dict()
     assert list(d) == ["name", "end", "lines", "thresholds", "counts", "reactions", "late",
-                       "unfaced", "leaving", "splits", "silences", "stuck", "breaches", "ok"]
-    assert d["counts"] == {"reactions": 1, "late": 1, "unfaced": 0, "leaving": 0, "splits": 0,
-                           "silences": 0, "stuck": 0}
+                       "unfaced", "leaving", "elsewhere", "splits", "silences", "stuck",
+                       "breaches", "ok"]
+    assert d["counts"] == {"reactions": 1, "late": 1, "unfaced": 0, "leaving": 0,
+                           "elsewhere": 0, "splits": 0, "silences": 0, "stuck": 0}
     assert json.loads(json.dumps(d)) == d
 
 

@@ -32,7 +32,7 @@ def test_every_policy_has_a_default_and_all_switches_every_one() -> None:
     assert set(policy_settings({"all": False}).values()) == {False}
     # ``all`` first in its layer, then that layer's named ones; later layers win
     assert policy_settings({"all": False, "streams": True}) == \
-        {"streams": True, "connect-channel": False}
+        {"restore-state": False, "streams": True, "connect-channel": False}
     assert policy_settings({"streams": False}, {"all": True})["streams"] is True
     assert policy_settings({"no-such-policy": False}) == policy_settings()
 
@@ -103,7 +103,8 @@ def test_streams_off_is_the_thesis_prima(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("switch, message", [
     ("teleport=on",
-     "--policy teleport=on: no policy 'teleport' (known: all, streams, connect-channel)"),
+     "--policy teleport=on: no policy 'teleport' "
+     "(known: all, restore-state, streams, connect-channel)"),
     ("streams=maybe", "--policy streams=maybe: say streams=on or streams=off"),
     ("streams", "--policy streams: say streams=on or streams=off"),
 ])
@@ -182,3 +183,19 @@ def test_connect_channel_off_is_the_baseline_of_its_pair() -> None:
     off = judge(Run(ROOT / "scenarios" / "policies" / "connect-channel-off.xml").run())
     on = judge(Run(THESIS / "sample-04.xml").run())
     assert (len(off.unfaced), len(on.unfaced)) == (14, 0)
+
+
+def test_restore_state_resumes_the_explanation_in_front_of_its_panel() -> None:
+    """sample-07: FA2's tracking took the robot 2.4 m from panel-1 while EA1's
+    explanation was suspended. With the policy the stream first drives back (a
+    SetPosition of the mediator's own, in EA1's stream) and is explained there,
+    facing the user; scenarios/policies/restore-state-off.xml is the baseline."""
+    lines = Run(THESIS / "sample-07.xml").run()
+    back = next(ln for ln in lines if ln.reason == "restore-state" and ln.kind.value == "start")
+    suspended = next(ln for ln in lines if ln.kind.value == "suspend" and ln.app == "ea1-museum")
+    assert (back.app, back.command, back.tree) == ("ea1-museum", "SetPosition", suspended.tree)
+    on = judge(lines)
+    off = judge(Run(ROOT / "scenarios" / "policies" / "restore-state-off.xml").run())
+    assert (len(off.elsewhere), len(on.elsewhere)) == (1, 0)
+    assert off.elsewhere[0].away > 2.0
+    assert len(on.unfaced) == 0

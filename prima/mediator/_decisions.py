@@ -76,6 +76,9 @@ class Rule(str, enum.Enum):
     OLDEST = "oldest"
     """It belongs to the oldest request."""
     # --- policies (docs/mediator.md, Policies) --------------------------------
+    RESTORE_STATE = "restore-state"
+    """The mediator returns the robot to the pose a stream was suspended in before
+    the stream resumes, in that stream (a request and a start of its own)."""
     CONNECT_CHANNEL = "connect-channel"
     """The mediator turns the robot to the user before an utterance that would start
     facing away from them, in the same stream (a request and a start of its own)."""

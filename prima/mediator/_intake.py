@@ -191,7 +191,7 @@ class Intake:
         its tree and with its rank: ``x`` waits for it. Its Command is the app's but
         internal (the app hears nothing of it)."""
         wm = self._wm
-        cmd = Command(self.next_command, x.app, call, spec, internal=True)
+        cmd = Command(self.next_command, x.app, call, spec, internal=rule)
         self.next_command += 1
         parent_finished = x.id in wm.pjf
         node = wm.new_node(x.app, x.tree, (cmd,), spec.devices_for(call.args), spec.priority,

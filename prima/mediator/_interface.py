@@ -173,12 +173,20 @@ class Driver(Protocol):
 
 
 class Channel(Protocol):
-    """What the connect-channel policy asks of the robot (the run answers from the
-    simulator): the mediator never looks at poses itself."""
+    """What the connect-channel and restore-state policies ask of the robot (the run
+    answers from the simulator): the mediator never looks at poses itself."""
 
     def unfaced(self) -> bool:
         """The user is detectable, and the robot does not face them (beyond the
         policy's tolerance): an utterance now would be spoken with its back turned."""
+
+    def pose(self) -> Mapping[str, Value]:
+        """The robot's pose now, as the arguments of the Command that returns it there
+        (``RESTORE_COMMAND``: ``x``, ``y``, ``heading``)."""
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
+        """The robot is now farther from ``pose`` than the restore-state policy's
+        tolerance: in position, or in heading if ``pose`` has one."""
 
 
 class AppListener(Protocol):

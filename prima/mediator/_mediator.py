@@ -21,7 +21,13 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import TracebackType
 
-from prima.catalog import CONNECT_COMMAND, Catalog
+from prima.catalog import (
+    BODY_DEVICE,
+    CONNECT_COMMAND,
+    RESTORE_COMMAND,
+    RESTORE_POSITION_COMMAND,
+    Catalog,
+)
 from prima.errors import MediationError
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._fairness import Fairness
@@ -72,6 +78,12 @@ class MediatorConfig:
     """Upper bound on a begin/end block's watchdog, whatever the document asks:
     a runaway block cannot starve the other application (rule 3)."""
 
+    connect_channel: bool = True
+    """The connect-channel policy (MISSION.md 7.3 (4)), when there is a channel."""
+
+    restore_state: bool = True
+    """The restore-state policy (MISSION.md 7.3 (1)), when there is a channel."""
+
     budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
     """What one application of each role may consume (the robot profile's
     ``<budgets>``): the mediator enforces ``waiting``, ``starts_per_instant`` and
@@ -109,7 +121,8 @@ class Mediator:
                  channel: Channel | None = None) -> None:
         self._catalog = catalog
         self._channel = channel
-        """Asked before an utterance starts (the connect-channel policy); None: off."""
+        """Asked when a stream is suspended and before a resumed stream or an utterance
+        starts (the restore-state and connect-channel policies); None: both off."""
         self._driver = driver
         self._clock = clock
         self._config = config
@@ -121,7 +134,7 @@ class Mediator:
         self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
                               config)
         self._selector = Selector(self._wm, self._holds, self._log, driver, clock,
-                                  self._overrun, self._connect)
+                                  self._overrun, self._prepare, self._suspending)
         self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
@@ -222,6 +235,42 @@ class Mediator:
             self._tell_cancelled(cancelled)
             return ids
 
+    def _suspending(self, tree: Tree) -> None:
+        """A tree is suspended: remember where the robot is (restore-state)."""
+        if self._channel is not None and self._config.restore_state:
+            tree.pose = self._channel.pose()
+
+    def _prepare(self, x: Node) -> bool:
+        """The ready AB ``x`` is about to start: put a policy's AB before it? True if it
+        now waits for one (a return to the pose its stream was suspended in, then a
+        turn to the user)."""
+        if x.tree.pose is not None and x.tree.suspended is not None and self._restore(x):
+            return True
+        return x.turnable and self._connect(x)
+
+    def _restore(self, x: Node) -> bool:
+        """The restore-state policy: ``x`` resumes its suspended stream with the robot
+        moved away from where it was suspended, so a return to that pose goes first,
+        in the stream. Not before an AB that takes the robot somewhere itself (a move,
+        following the user), and once per suspension. Before an AB that turns the robot
+        itself (a FaceHumanAndSpeak), only the position is restored. The return waits
+        for the wheels like any AB of the resumed stream."""
+        pose, x.tree.pose = x.tree.pose, None
+        if pose is None or self._channel is None or any(c.spec.travels for c in x.commands):
+            return False
+        command = RESTORE_COMMAND
+        if BODY_DEVICE in x.devices:
+            command = RESTORE_POSITION_COMMAND
+            pose = {k: v for k, v in pose.items() if k != "heading"}
+        spec = self._catalog.get(command)
+        if spec is None or not self._channel.displaced(pose):
+            return False
+        call = Call(command, pose)
+        self._intake.insert_before(x, call, spec, Rule.RESTORE_STATE,
+                                   f"returns to the pose its stream was suspended in "
+                                   f"before AB{x.id}")
+        return True
+
     def _connect(self, x: Node) -> bool:
         """The connect-channel policy: before the ready utterance ``x`` starts facing
         away from a detectable user, put a turn to the user before it, in its stream
@@ -233,7 +282,7 @@ class Mediator:
         waits for the turn."""
         x.turnable = False
         spec = self._catalog.get(CONNECT_COMMAND)
-        if self._channel is None or spec is None:
+        if self._channel is None or spec is None or not self._config.connect_channel:
             return False
         busy = self._wm.busy
         if any(d in busy and not (busy[d].feedback and busy[d].priority < x.priority)

@@ -90,15 +90,18 @@ class Selector:
 
     def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
                  clock: Clock, overrun: Callable[[App, str], None],
-                 connect: Callable[[Node], bool]) -> None:
+                 prepare: Callable[[Node], bool], suspending: Callable[[Tree], None]) -> None:
         self._wm = wm
         self._holds = holds
         self._log = log
         self._driver = driver
         self._clock = clock
         self._overrun = overrun
-        self._connect = connect
-        """Put a turn to the user before this ready utterance? (connect-channel)"""
+        self._prepare = prepare
+        """Put a policy's AB before this ready one (restore-state, connect-channel)?
+        True if it now waits for it."""
+        self._suspending = suspending
+        """Told of each tree as it is suspended (restore-state remembers the pose)."""
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
@@ -133,7 +136,8 @@ class Selector:
                     overrun[x.app.name] = x.app
         for is_suspend, tree in later:
             if is_suspend:
-                wm.suspend(tree)
+                if wm.suspend(tree):
+                    self._suspending(tree)
             else:
                 wm.resume(tree)
                 if self._holds.open():
@@ -178,8 +182,8 @@ class Selector:
         held = holds.holder(x) if holds.open() or x.priority is Priority.LOW else None
         ready = all(d not in self._wm.busy and view.best(d) is x for d in x.sorted_devices)
         if held is None:
-            if ready and x.turnable and self._connect(x):
-                return False  # it waits for the turn put before it
+            if ready and self._prepare(x):
+                return False  # it waits for the policy's AB put before it
             return ready
         # Held by another app's block, stream hold or talk: out of the ranking at
         # once, so it reserves nothing meanwhile. The channel rule is noted only
@@ -197,8 +201,8 @@ class Selector:
         # Who did it beat? The best remaining waiting AB on each of its devices.
         losers = [b for d in x.sorted_devices if (b := view.best(d)) is not None]
         rule = Rule.FREE_DEVICES
-        if x.commands[0].internal:
-            rule = Rule.CONNECT_CHANNEL
+        if x.commands[0].internal is not None:
+            rule = x.commands[0].internal
         elif losers:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
             rule = separating_rule(x_rank, view.rank(top))

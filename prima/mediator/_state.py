@@ -14,13 +14,15 @@ public view.
 from __future__ import annotations
 
 import enum
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from prima.catalog import CommandSpec, Priority
 from prima.mediator._interface import AbId, Call, CommandId, TreeId
-from prima.vocab import AppKind, Budgets
+from prima.vocab import AppKind, Budgets, Value
 
 if TYPE_CHECKING:
+    from prima.mediator._decisions import Rule
     from prima.mediator._interface import AppListener
 
 __all__ = ["IN_MEMORY", "App", "Command", "Node", "NodeState", "Tree"]
@@ -82,11 +84,11 @@ class Command:
                  "internal")
 
     def __init__(self, cid: CommandId, app: App, call: Call, spec: CommandSpec,
-                 internal: bool = False) -> None:
+                 internal: Rule | None = None) -> None:
         self.id = cid
         self.internal = internal
-        """Requested by the mediator itself for the app (a policy's turn to the user):
-        the app never hears of it."""
+        """The policy that requested it, for the app (a turn to the user, a return to a
+        pose); the app never hears of it. None: the app requested it."""
         self.app = app
         self.call = call
         self.spec = spec
@@ -103,7 +105,7 @@ class Tree:
     """One AB tree (one Communication Stream)."""
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "version", "reaction",
-                 "started")
+                 "started", "pose")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -122,6 +124,9 @@ class Tree:
         takes over as a stream), larger is later; None if it is no reaction."""
         self.started = False
         """Some AB of it has started: it is a stream under way, not a new one."""
+        self.pose: Mapping[str, Value] | None = None
+        """The robot's pose when it was last suspended, until the restore-state
+        policy has put its return before the stream's next AB (or found none needed)."""
 
 
 _SORTED: dict[frozenset[str], tuple[str, ...]] = {}

@@ -303,13 +303,24 @@ class _Listener:
 
 
 class _Facing:
-    """A robot that faces its user at every ``period``-th question (connect-channel)."""
+    """A robot that faces its user at every ``period``-th question (connect-channel),
+    and has moved since a stream was suspended but at every ``period``-th question
+    (restore-state)."""
 
     def __init__(self, period: int) -> None:
         self.period = period
         self.asked = 0
+        self.poses = 0
 
     def unfaced(self) -> bool:
+        self.asked += 1
+        return self.asked % self.period != 0
+
+    def pose(self) -> Mapping[str, Value]:
+        self.poses += 1
+        return {"x": float(self.poses), "y": 0.0, "heading": 0.0}
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
         self.asked += 1
         return self.asked % self.period != 0
 

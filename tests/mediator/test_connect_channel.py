@@ -4,8 +4,11 @@ user first, in the same stream."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from prima.mediator import AppKind, DecisionKind, Outcome, Request, Rule
 from prima.mediator.testing import Harness
+from prima.vocab import Value
 from tests.mediator.helpers import call, req, speak
 
 
@@ -19,6 +22,12 @@ class Facing:
     def unfaced(self) -> bool:
         self.asked += 1
         return not self.faced
+
+    def pose(self) -> Mapping[str, Value]:
+        return {"x": 0.0, "y": 0.0, "heading": 0.0}
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
+        return False
 
 
 

@@ -1,0 +1,97 @@
+"""The restore-state policy (thesis Sec. 5.3 (1), MISSION.md 7.3 (1)): when a suspended
+stream resumes with the robot moved away from where it was suspended, the mediator
+first returns the robot to that pose, as part of the resumed stream."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from prima.mediator import AppKind, DecisionKind, MediatorConfig, Request, Rule
+from prima.mediator.testing import Harness
+from prima.vocab import Value
+from tests.mediator.helpers import call, req, speak
+
+SUSPENDED_AT = {"x": 7.0, "y": 6.4, "heading": 98.8}
+
+
+class Robot:
+    """A robot that the other app's reaction moves away (``moved``)."""
+
+    def __init__(self, moved: bool = True) -> None:
+        self.moved = moved
+        self.asked: list[Mapping[str, Value]] = []
+
+    def unfaced(self) -> bool:
+        return False
+
+    def pose(self) -> Mapping[str, Value]:
+        return SUSPENDED_AT
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
+        self.asked.append(pose)
+        return self.moved
+
+
+def explain_and_interrupt(robot: Robot, second: object = None,
+                          config: MediatorConfig = MediatorConfig()) -> Harness:
+    """The EA explains in two utterances; a touch at 0.5 s: the FA's reaction (an
+    utterance, then a move) takes the speaker from EA's second utterance, which is
+    suspended, and moves the robot."""
+    h = Harness(duration={"SetPositionAndDirection": 3.0, "SetPosition": 3.0, "*": 2.0},
+                channel=robot, config=config)
+    told: list[int] = []
+    h.app("ea", AppKind.EA, on_ended=lambda cid, _o: told.append(cid))
+    h.app("fa", AppKind.FA)
+    h.mediator.submit(req("ea", speak("This panel shows our lab."),
+                          second or speak("Look at this figure.")))
+    h.at(0.5, lambda: h.mediator.submit(
+        Request("fa", (speak("What?"), call("SetSpeedAndTime", speed=0.3, time=2.0)),
+                reactive=True, reaction=True)))
+    h.run(until=30.0)
+    h.told = told  # type: ignore[attr-defined]
+    return h
+
+
+def commands(h: Harness) -> list[tuple[float, str, str, Rule]]:
+    return [(d.t, d.app or "", d.command or "", d.rule) for d in h.starts()]
+
+
+def test_a_resumed_stream_first_returns_to_where_it_was_suspended() -> None:
+    robot = Robot()
+    h = explain_and_interrupt(robot)
+    assert commands(h) == [
+        (0.0, "ea", "Speak", Rule.FREE_DEVICES),
+        (2.0, "fa", "Speak", Rule.REACTIVITY),
+        (4.0, "fa", "SetSpeedAndTime", Rule.FREE_DEVICES),
+        (6.0, "ea", "SetPositionAndDirection", Rule.RESTORE_STATE),
+        (9.0, "ea", "Speak", Rule.FREE_DEVICES)]
+    (suspend,) = [d for d in h.decisions if d.kind is DecisionKind.SUSPEND]
+    (resume,) = [d for d in h.decisions if d.kind is DecisionKind.RESUME]
+    (back,) = [d for d in h.decisions if d.kind is DecisionKind.REQUEST
+               and d.rule is Rule.RESTORE_STATE]
+    assert suspend.tree == resume.tree == back.tree  # part of the resumed stream
+    assert resume.command == "SetPositionAndDirection"
+    assert dict(back.calls[0].args) == SUSPENDED_AT
+    assert robot.asked == [SUSPENDED_AT]  # once
+    assert len(h.told) == 2  # type: ignore[attr-defined]  # the app hears of its own only
+
+
+def test_not_moved_not_on_or_a_travelling_ab_no_return() -> None:
+    for robot, config in ((Robot(moved=False), MediatorConfig()),
+                          (Robot(), MediatorConfig(restore_state=False))):
+        h = explain_and_interrupt(robot, config=config)
+        assert [c for _t, _a, c, _r in commands(h)] == [
+            "Speak", "Speak", "SetSpeedAndTime", "Speak"]
+    # the resumed AB takes the robot somewhere itself: going back first is pointless
+    h = explain_and_interrupt(Robot(), second=call("TopologicalMove", to="panel-2"))
+    assert [c for _t, _a, c, _r in commands(h)][-1] == "TopologicalMove"
+    assert Rule.RESTORE_STATE not in [r for *_x, r in commands(h)]
+
+
+def test_before_an_ab_that_turns_the_robot_only_the_position_is_restored() -> None:
+    h = explain_and_interrupt(Robot(), second=call("FaceHumanAndSpeak", text="Look."))
+    assert [(c, r) for _t, _a, c, r in commands(h)][-2:] == [
+        ("SetPosition", Rule.RESTORE_STATE), ("FaceHumanAndSpeak", Rule.FREE_DEVICES)]
+    (back,) = [d for d in h.decisions if d.kind is DecisionKind.REQUEST
+               and d.rule is Rule.RESTORE_STATE]
+    assert dict(back.calls[0].args) == {"x": 7.0, "y": 6.4}
