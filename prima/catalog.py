@@ -17,6 +17,7 @@ A robot hardware profile extends the catalog with robot-specific Commands
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -142,6 +143,10 @@ class CommandSpec:
     """It aims the robot, its head or its arm at something on purpose (a Turn, a
     PointByHand): an utterance that follows it in its stream is about that, so the
     connect-channel policy does not turn the robot back to the user before it."""
+    interruptible: bool = False
+    """The robot can cut it for another application's reaction (the interrupt policy:
+    the robot profile's ``<interruptible>`` says which Commands): speech at a word
+    boundary, anything else at once."""
     travels: bool = False
     """It takes the robot somewhere of its own (a move, following the user): when it
     resumes a suspended stream, the restore-state policy does not return the robot
@@ -288,6 +293,13 @@ class Catalog:
         for c in commands:
             merged[c.name] = c
         return Catalog(merged, self.devices | frozenset(devices), self.talk_devices)
+
+    def interruptible(self, names: Iterable[str]) -> Catalog:
+        """A catalog in which the Commands ``names`` may be cut (the interrupt policy)."""
+        chosen = set(names)
+        merged = {name: dataclasses.replace(c, interruptible=name in chosen)
+                  for name, c in self.commands.items()}
+        return Catalog(merged, self.devices, self.talk_devices)
 
     @property
     def channel_devices(self) -> frozenset[str]:

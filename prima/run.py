@@ -32,6 +32,7 @@ from prima.mediator import (
     MediatorConfig,
     Outcome,
     Request,
+    Rule,
 )
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
@@ -188,7 +189,8 @@ class Run:
             self.catalog, self.sim, self.sim, record=self._decision,
             config=MediatorConfig(budgets=self.budgets,
                                   connect_channel=self.policies["connect-channel"],
-                                  restore_state=self.policies["restore-state"]),
+                                  restore_state=self.policies["restore-state"],
+                                  interrupt=self.policies["interrupt"]),
             channel=_Channel(self.sim))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
@@ -320,6 +322,10 @@ class Run:
                 detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
                 if "error" in outcome.values:
                     detail["error"] = outcome.values["error"]
+                if d.rule is Rule.INTERRUPT:
+                    detail["interrupt"] = d.detail
+                    detail["spoken"] = outcome.values.get("spoken")
+                    detail["unspoken"] = outcome.values.get("unspoken")
         spoken = [words for c in d.calls for words in self.catalog[c.command].spoken(c.args)]
         text = " / ".join(spoken) if spoken else None
         if (kind is DecisionKind.START and d.iteration and d.command_id is not None

@@ -114,6 +114,16 @@ def _describe_send(line: TraceLine) -> str:
     return f"{said} (dropped: {dropped})" if dropped else said
 
 
+def _describe_end(line: TraceLine) -> str | None:
+    if "error" in line.detail:
+        return f"{line.command} fails: {line.detail['error']}"
+    if line.reason == "interrupt":
+        said, then = line.detail.get("spoken") or "", line.detail.get("interrupt") or ""
+        return (f'{line.command} cut after "{said}", {then}' if said
+                else f"{line.command} cut before its first word, {then}")
+    return None
+
+
 def _describe_hold(line: TraceLine) -> str:
     return f"holds {line.command} back ({line.text})" if line.text else f"holds {line.command} back"
 
@@ -124,8 +134,8 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     DecisionKind.UNLOAD: lambda line: f"unloads the application ({line.reason})",
     DecisionKind.REQUEST: lambda _line: None,  # requests and ends: in the jsonl trace only
     DecisionKind.START: lambda line: _describe_start(line),
-    DecisionKind.END: lambda line: (f"{line.command} fails: {line.detail['error']}"
-                                    if "error" in line.detail else None),
+    DecisionKind.END: lambda line: _describe_end(line),
+    DecisionKind.INTERRUPT: lambda line: f"is cut at {line.command} {line.text}",
     DecisionKind.CANCEL: lambda line: f"cancels {line.command}",
     DecisionKind.SUSPEND: lambda line: f"suspends its stream at {line.command}",
     DecisionKind.RESUME: lambda line: f"resumes its stream at {line.command}",
@@ -149,7 +159,8 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
 """How each kind of line reads in the text trace (None: not shown there)."""
 
 _REASON_SHOWN = frozenset({DecisionKind.START, DecisionKind.CANCEL, DecisionKind.SUSPEND,
-                           DecisionKind.RESUME, DecisionKind.HOLD, DecisionKind.BUDGET})
+                           DecisionKind.RESUME, DecisionKind.HOLD, DecisionKind.BUDGET,
+                           DecisionKind.INTERRUPT})
 """Kinds whose text line ends with the mediation rule in brackets."""
 
 

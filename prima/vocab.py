@@ -20,6 +20,8 @@ __all__ = [
     "MAX_STREAM_HOLD",
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
+    "INTERRUPTED_EVENT",
+    "OnInterrupt",
     "DEFAULT_BUDGETS",
     "FACE_TOLERANCE",
     "RESTORE_ANGLE",
@@ -93,8 +95,28 @@ PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
     "sound-heard": "a sound the robot recognises, e.g. a tune (data: sound)",
     "message": "a network message arrived from the environment's server (data: sender, text)",
     "place-reached": "a place on the map was reached while moving (data: place, kind)",
+    "interrupted": "one of the application's own atomic behaviors was cut for the other "
+                   "application's reaction (data: command, label, spoken, unspoken, "
+                   "restarts); not reactive",
 })
-"""Events every robot posts, FA and EA alike; all are reactive."""
+"""Events every robot posts, FA and EA alike; all are reactive but ``interrupted``."""
+
+INTERRUPTED_EVENT = "interrupted"
+"""The event an application gets when the interrupt policy cut one of its atomic
+behaviors; the only predefined event that is not reactive (it is news about the
+application's own Command, not the user)."""
+
+
+class OnInterrupt(str, enum.Enum):
+    """What a request says of its atomic behaviors under the interrupt policy."""
+
+    RESTART = "restart"
+    """They may be cut for another application's reaction, and then start again
+    from their beginning after it (the default)."""
+    DROP = "drop"
+    """They may be cut, and then are dropped: their Command ends, interrupted."""
+    NEVER = "never"
+    """They are never cut."""
 
 MAX_STREAM_HOLD = 30.0
 """Upper bound on an explicit stream's hold (s), whatever a document asks: the
@@ -171,6 +193,11 @@ POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
     Policy("restore-state", True, "a suspended stream, resumed with the robot moved "
                                   "away, first returns to the pose it was suspended in "
                                   "(thesis Sec. 5.3 (1))"),
+    Policy("interrupt", True, "a reaction cuts the other application's running atomic "
+                              "behavior (an utterance at a word boundary, a gesture, a "
+                              "feedback iteration) where the robot profile declares "
+                              "its Command interruptible; it restarts after the reaction "
+                              "(thesis Sec. 5.3 (2))"),
     Policy("streams", True, "explicit stream blocks in the applications' documents keep "
                             "a Communication Stream together (thesis Sec. 5.3 (3))"),
     Policy("connect-channel", True, "before an utterance would start facing away from a "

@@ -32,7 +32,7 @@ def test_every_policy_has_a_default_and_all_switches_every_one() -> None:
     assert set(policy_settings({"all": False}).values()) == {False}
     # ``all`` first in its layer, then that layer's named ones; later layers win
     assert policy_settings({"all": False, "streams": True}) == \
-        {"restore-state": False, "streams": True, "connect-channel": False}
+        {"restore-state": False, "interrupt": False, "streams": True, "connect-channel": False}
     assert policy_settings({"streams": False}, {"all": True})["streams"] is True
     assert policy_settings({"no-such-policy": False}) == policy_settings()
 
@@ -104,7 +104,7 @@ def test_streams_off_is_the_thesis_prima(tmp_path: Path) -> None:
 @pytest.mark.parametrize("switch, message", [
     ("teleport=on",
      "--policy teleport=on: no policy 'teleport' "
-     "(known: all, restore-state, streams, connect-channel)"),
+     "(known: all, restore-state, interrupt, streams, connect-channel)"),
     ("streams=maybe", "--policy streams=maybe: say streams=on or streams=off"),
     ("streams", "--policy streams: say streams=on or streams=off"),
 ])

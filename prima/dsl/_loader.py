@@ -65,6 +65,7 @@ from prima.vocab import (
     MAX_STREAM_HOLD,
     PREDEFINED_EVENTS,
     AppKind,
+    OnInterrupt,
     RunningOrder,
 )
 from prima.xmlio import (
@@ -97,6 +98,10 @@ class _Refs:
     handlers: list[tuple[HandlerKind, str, Spot, bool | None]] = field(default_factory=list)
     raises: list[tuple[str, Spot]] = field(default_factory=list)
     cancels: list[tuple[str, Spot]] = field(default_factory=list)
+
+
+_ON_INTERRUPT = {m.value: m for m in OnInterrupt}
+"""``interrupt`` values (the schema refuses others)."""
 
 
 class Builder:
@@ -529,7 +534,9 @@ class Builder:
                                              "iterations is an atomic behavior of its own")
                 return None
         return Request(tuple(calls), RunningOrder(el.get("order", "after-latest")), grouped,
-                       self.loc_of(el), face_user=flag(el, "face-user", default=True))
+                       self.loc_of(el), face_user=flag(el, "face-user", default=True),
+                       on_interrupt=_ON_INTERRUPT.get(el.get("interrupt") or "",
+                                                      OnInterrupt.RESTART))
 
     def _request_calls(self, el: etree._Element) -> list[CommandCall] | None:
         """The Commands of a request or chain; None if one of them has an error."""

@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from prima.dsl._expr import Compiled
-from prima.vocab import AppKind, RunningOrder
+from prima.vocab import AppKind, OnInterrupt, RunningOrder
 
 
 @dataclass(frozen=True)
@@ -55,6 +55,8 @@ class Request:
     face_user: bool = True
     """``face-user``: its words are for the user (the connect-channel policy may turn
     the robot to them first); false: they are about something else."""
+    on_interrupt: OnInterrupt = OnInterrupt.RESTART
+    """``interrupt``: what the interrupt policy may do to its atomic behaviors."""
 
 
 # ---------------------------------------------------------------- actions

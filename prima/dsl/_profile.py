@@ -93,12 +93,17 @@ class RobotProfile:
     policies: Mapping[str, bool] = field(default_factory=dict)
     """The mediation policies this robot switches (``all`` switches every one first);
     a scenario and ``prima run --policy`` switch over them."""
+    interruptible: frozenset[str] = frozenset()
+    """The Commands this robot can cut for another application's reaction (its
+    ``<interruptible>``; the interrupt policy)."""
     _catalog: Catalog = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         # built once: every document loaded against the profile asks for it
-        object.__setattr__(self, "_catalog",
-                           Catalog.standard().extended(self.commands, self.devices))
+        catalog = Catalog.standard().extended(self.commands, self.devices)
+        if self.interruptible:
+            catalog = catalog.interruptible(self.interruptible)
+        object.__setattr__(self, "_catalog", catalog)
 
     def catalog(self) -> Catalog:
         """The common Commands plus this robot's own."""
@@ -239,6 +244,7 @@ class _Reader:
             budgets=self._role_budgets([el for el in elements(root)
                                         if local_name(el) == "budgets"]),
             policies=MappingProxyType(self.policies),
+            interruptible=self._interruptible(root),
         )
 
     def _role_budgets(self, found: list[etree._Element]) -> Mapping[AppKind, Budgets]:
@@ -287,6 +293,20 @@ class _Reader:
             self.devices.add(name)
         for missing in (d for d in STANDARD_DEVICES if d not in self.devices):
             self.error(parent, f"a PRIMA robot needs the device '{missing}'")
+
+    def _interruptible(self, root: etree._Element) -> frozenset[str]:
+        """The Commands named by ``<interruptible commands="...">``, each one known."""
+        names: set[str] = set()
+        known = {c.name for c in Catalog.standard()} | {c.name for c in self.commands}
+        for el in elements(root):
+            if local_name(el) != "interruptible":
+                continue
+            for name in (el.get("commands") or "").split():
+                if name not in known:
+                    self.error(el, f"<interruptible> names {name!r}, which is no Command "
+                                   "of this robot", "commands")
+                names.add(name)
+        return frozenset(names)
 
     def policy(self, el: etree._Element) -> None:
         name = el.get("name", "")

@@ -45,7 +45,15 @@ from prima.dsl import (
 from prima.errors import AppFailure, ExecutionError, PrimaError
 from prima.mediator import Call, Clock, CommandId, Event, Outcome
 from prima.mediator import Request as MediatorRequest
-from prima.vocab import DEFAULT_BUDGETS, PREDEFINED_EVENTS, AppKind, Budgets, TraceKind, Value
+from prima.vocab import (
+    DEFAULT_BUDGETS,
+    INTERRUPTED_EVENT,
+    PREDEFINED_EVENTS,
+    AppKind,
+    Budgets,
+    TraceKind,
+    Value,
+)
 
 MAX_TRANSITIONS = 100
 """State changes allowed while handling one event (a goto loop is an error)."""
@@ -225,7 +233,7 @@ class Interpreter:
 
     def _default_reactivity(self, name: str) -> bool:
         if name in PREDEFINED_EVENTS:
-            return True
+            return name != INTERRUPTED_EVENT
         if name in self.robot_events:
             return self.robot_events[name]
         declared = self.document.events.get(name)
@@ -399,7 +407,7 @@ class Interpreter:
             ids = self.port.submit(MediatorRequest(
                 app=self.app, calls=calls, order=request.order, group=request.group,
                 reactive=reactive, reaction=handling.reactive, follows=follows,
-                face_user=request.face_user))
+                face_user=request.face_user, on_interrupt=request.on_interrupt))
         except PrimaError as exc:  # the mediator refused it (e.g. a Command the robot lacks)
             raise ExecutionError(f"{self._where(request.loc)}request refused: {exc}") from exc
         for cid, call in zip(ids, request.calls, strict=True):

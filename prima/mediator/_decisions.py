@@ -43,6 +43,9 @@ class DecisionKind(str, enum.Enum):
     FAILURE = "failure"
     """An application failed (its callback raised, or it overran a budget that
     fails it); the application is removed."""
+    INTERRUPT = "interrupt"
+    """A reaction's AB had the driver cut another application's running AB (the
+    interrupt policy); the cut AB's end follows at a word boundary."""
     BUDGET = "budget"
     """An application's share of the others' waiting ran out (it loses its
     precedence for a while), or came back."""
@@ -76,6 +79,11 @@ class Rule(str, enum.Enum):
     OLDEST = "oldest"
     """It belongs to the oldest request."""
     # --- policies (docs/mediator.md, Policies) --------------------------------
+    INTERRUPT = "interrupt"
+    """A reaction's AB cuts another application's running interruptible AB (an
+    interrupt decision, and the cut AB's end)."""
+    RESTART = "restart"
+    """A cut AB starts again from its beginning (its request and its start)."""
     RESTORE_STATE = "restore-state"
     """The mediator returns the robot to the pose a stream was suspended in before
     the stream resumes, in that stream (a request and a start of its own)."""

@@ -123,7 +123,7 @@ class Intake:
         seq = self._next_seq
         self._next_seq += 1
         cid = self.next_command
-        cmds = [Command(cid + i, app, call, spec)
+        cmds = [Command(cid + i, app, call, spec, on_interrupt=request.on_interrupt)
                 for i, (call, (spec, _d)) in enumerate(zip(request.calls, specs, strict=True))]
         self.next_command = cid + len(cmds)
         all_devices = frozenset().union(*(d for _s, d in specs))

@@ -18,7 +18,7 @@ from types import MappingProxyType
 from typing import NamedTuple, Protocol
 
 from prima.errors import MediationError
-from prima.vocab import RunningOrder, Value
+from prima.vocab import OnInterrupt, RunningOrder, Value
 
 __all__ = [
     "AbId",
@@ -88,6 +88,9 @@ class Request:
     face_user: bool = True
     """Its utterances are for the user: with the connect-channel policy, the mediator
     may turn the robot to the user first. False: they are about something else."""
+    on_interrupt: OnInterrupt = OnInterrupt.RESTART
+    """What the interrupt policy may do to its ABs: cut and restart them, cut and
+    drop them, or never cut them."""
 
 
 class AtomicBehavior(NamedTuple):
@@ -170,6 +173,13 @@ class Driver(Protocol):
 
     def abandon(self, command_id: CommandId) -> None:
         """A feedback Command was cancelled between iterations: drop its loop state."""
+
+    def cut(self, ab_id: AbId) -> bool:
+        """Stop the running ``ab_id`` early (the interrupt policy): speech at its next
+        word boundary, anything else at once. Report its end via ``Mediator.finish``
+        (never from inside here) with ``interrupted=True`` and the words ``spoken``
+        and ``unspoken`` in its outcome. False if it will not be cut (it is on its
+        last word, or not running): it ends on its own, as usual."""
 
 
 class Channel(Protocol):

@@ -47,15 +47,18 @@ from prima.mediator._interface import (
 )
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
+from prima.mediator._ranking import preempts
 from prima.mediator._rounds import Selector
 from prima.mediator._snapshot import Snapshot, take
 from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
 from prima.vocab import (
     DEFAULT_BUDGETS,
+    INTERRUPTED_EVENT,
     MAX_BLOCK_WATCHDOG,
     MAX_STREAM_HOLD,
     AppKind,
     Budgets,
+    OnInterrupt,
 )
 
 __all__ = ["Mediator", "MediatorConfig"]
@@ -83,6 +86,10 @@ class MediatorConfig:
 
     restore_state: bool = True
     """The restore-state policy (MISSION.md 7.3 (1)), when there is a channel."""
+
+    interrupt: bool = True
+    """The interrupt policy (MISSION.md 7.3 (2)): on the Commands the catalog says are
+    interruptible (the robot profile's ``<interruptible>``)."""
 
     budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
     """What one application of each role may consume (the robot profile's
@@ -134,7 +141,7 @@ class Mediator:
         self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
                               config)
         self._selector = Selector(self._wm, self._holds, self._log, driver, clock,
-                                  self._overrun, self._prepare, self._suspending)
+                                  self._overrun, self._prepare, self._suspending, self._cut)
         self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
@@ -235,6 +242,77 @@ class Mediator:
             self._tell_cancelled(cancelled)
             return ids
 
+    def _cut(self, x: Node) -> None:
+        """The interrupt policy: the reaction's AB ``x`` ranks best on its devices but
+        some are busy. If every AB running on them is another application's and may
+        be cut (its Commands are interruptible on this robot, its request allows it,
+        no block of its application keeps its devices), have the driver cut them."""
+        if not self._config.interrupt:
+            return
+        busy = self._wm.busy
+        running = sorted({busy[d] for d in x.devices if d in busy}, key=lambda y: y.id)
+        if not running or not all(self._cuttable(y, x) for y in running):
+            return
+        for y in running:
+            if not y.cutting and self._driver.cut(y.id):
+                y.cutting = True
+                self._log.emit(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
+                               detail=f"for {x.app.name}'s reaction (AB{x.id})")
+
+    def _cuttable(self, y: Node, x: Node) -> bool:
+        if y.app is x.app or not preempts(x, y):
+            return False
+        if not all(c.spec.interruptible and c.on_interrupt is not OnInterrupt.NEVER
+                   and not c.cut for c in y.commands):
+            return False
+        block = self._holds.block(y.app)
+        return block is None or not (block.devices & y.devices)
+
+    def _interrupted(self, node: Node, outcome: Outcome) -> None:
+        """A cut AB ended at a word boundary: start it again from its beginning, in its
+        place in its tree (it waits, and the reaction that cut it outranks it), or, if
+        its request said so, drop it (its Commands end, interrupted). Its application
+        gets an ``interrupted`` event either way, before anything else of it."""
+        now = self._clock.now()
+        wm = self._wm
+        children = wm.end(node, now)
+        self._holds.ended(node)
+        app = node.app
+        drop = any(c.on_interrupt is OnInterrupt.DROP for c in node.commands)
+        self._log.emit(DecisionKind.END, Rule.INTERRUPT, node,
+                       detail="dropped" if drop else "to restart")
+        ended: tuple[Command, ...] = ()
+        if drop:
+            ended = node.commands
+            self._intake.ended(ended, now)
+            if node.feedback:
+                self._driver.abandon(node.commands[0].id)
+            for child in children:
+                if child.state is NodeState.PENDING:
+                    wm.enter_waiting(child, parent_finished=True)
+        else:
+            again = wm.new_node(app, node.tree, node.commands, node.devices, node.priority,
+                                node.reactive, node.seq, node.iteration)
+            again.restarts = node.id
+            again.parent = node.id
+            again.children = children
+            for c in children:
+                c.parent = again.id
+            self._log.emit(DecisionKind.REQUEST, Rule.RESTART, again,
+                           detail=f"starts AB{node.id} again from its beginning",
+                           before=node.id)
+            wm.enter_waiting(again, parent_finished=False)
+        wm.leave(node)
+        values = outcome.values
+        event = Event(INTERRUPTED_EVENT, {
+            "command": node.name, "label": node.commands[0].call.label or "",
+            "spoken": str(values.get("spoken") or ""),
+            "unspoken": str(values.get("unspoken") or ""), "restarts": not drop}, now)
+        self._call(app, lambda listener: listener.event(event), "event")
+        for cmd in ended:
+            if not cmd.internal:
+                self._tell(app, cmd.id, outcome)
+
     def _suspending(self, tree: Tree) -> None:
         """A tree is suspended: remember where the robot is (restore-state)."""
         if self._channel is not None and self._config.restore_state:
@@ -316,6 +394,10 @@ class Mediator:
             self._end(node, outcome)
 
     def _end(self, node: Node, outcome: Outcome) -> None:
+        if node.cutting and outcome.values.get("interrupted") is True \
+                and not node.commands[0].cut:
+            self._interrupted(node, outcome)
+            return
         now = self._clock.now()
         wm = self._wm
         children = wm.end(node, now)

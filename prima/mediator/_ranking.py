@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from prima.mediator._decisions import Rule
 from prima.mediator._state import Node
 
-__all__ = ["CRITERIA", "Criterion", "Key", "Rank", "Scope", "rank", "separating_rule"]
+__all__ = ["CRITERIA", "Criterion", "Key", "Rank", "Scope", "preempts", "rank", "separating_rule"]
 
 Key = tuple[int, ...]
 Rank = tuple[Key, ...]
@@ -102,6 +102,16 @@ CRITERIA: tuple[Criterion, ...] = (
 def rank(node: Node, pjf: Collection[int]) -> Rank:
     """The full rank of a waiting AB; ``pjf`` holds the ids whose parent just finished."""
     return tuple(c.key(node, pjf) for c in CRITERIA)
+
+
+_UP_TO_REACTIVITY = next(i for i, c in enumerate(CRITERIA) if c.rule is Rule.REACTIVITY) + 1
+
+
+def preempts(x: Node, y: Node) -> bool:
+    """Whether the waiting AB ``x`` outranks the running AB ``y`` on what a running
+    AB keeps (priority, the wait share, being the latest reaction), not on waiting
+    order: the interrupt policy cuts ``y`` for ``x`` only then."""
+    return rank(x, ())[:_UP_TO_REACTIVITY] < rank(y, ())[:_UP_TO_REACTIVITY]
 
 
 def separating_rule(winner: Rank, loser: Rank) -> Rule:

@@ -90,7 +90,8 @@ class Selector:
 
     def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
                  clock: Clock, overrun: Callable[[App, str], None],
-                 prepare: Callable[[Node], bool], suspending: Callable[[Tree], None]) -> None:
+                 prepare: Callable[[Node], bool], suspending: Callable[[Tree], None],
+                 cut: Callable[[Node], None]) -> None:
         self._wm = wm
         self._holds = holds
         self._log = log
@@ -102,6 +103,9 @@ class Selector:
         True if it now waits for it."""
         self._suspending = suspending
         """Told of each tree as it is suspended (restore-state remembers the pose)."""
+        self._cut = cut
+        """Asked for a reaction's AB that ranks best on its devices but finds some busy
+        (the interrupt policy may cut what runs there)."""
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
@@ -180,10 +184,13 @@ class Selector:
     def _startable(self, x: Node, view: _Round) -> bool:
         holds = self._holds
         held = holds.holder(x) if holds.open() or x.priority is Priority.LOW else None
-        ready = all(d not in self._wm.busy and view.best(d) is x for d in x.sorted_devices)
+        best = all(view.best(d) is x for d in x.sorted_devices)
+        ready = best and all(d not in self._wm.busy for d in x.sorted_devices)
         if held is None:
             if ready and self._prepare(x):
                 return False  # it waits for the policy's AB put before it
+            if best and not ready and x.tree.reaction is not None:
+                self._cut(x)
             return ready
         # Held by another app's block, stream hold or talk: out of the ranking at
         # once, so it reserves nothing meanwhile. The channel rule is noted only
@@ -201,7 +208,9 @@ class Selector:
         # Who did it beat? The best remaining waiting AB on each of its devices.
         losers = [b for d in x.sorted_devices if (b := view.best(d)) is not None]
         rule = Rule.FREE_DEVICES
-        if x.commands[0].internal is not None:
+        if x.restarts is not None:
+            rule = Rule.RESTART
+        elif x.commands[0].internal is not None:
             rule = x.commands[0].internal
         elif losers:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 from prima.catalog import CommandSpec, Priority
 from prima.mediator._interface import AbId, Call, CommandId, TreeId
-from prima.vocab import AppKind, Budgets, Value
+from prima.vocab import AppKind, Budgets, OnInterrupt, Value
 
 if TYPE_CHECKING:
     from prima.mediator._decisions import Rule
@@ -81,10 +81,11 @@ class Command:
     """One requested Command."""
 
     __slots__ = ("id", "app", "call", "spec", "node", "ended", "cancelled", "cut", "ended_at",
-                 "internal")
+                 "internal", "on_interrupt")
 
     def __init__(self, cid: CommandId, app: App, call: Call, spec: CommandSpec,
-                 internal: Rule | None = None) -> None:
+                 internal: Rule | None = None,
+                 on_interrupt: OnInterrupt = OnInterrupt.RESTART) -> None:
         self.id = cid
         self.internal = internal
         """The policy that requested it, for the app (a turn to the user, a return to a
@@ -99,6 +100,8 @@ class Command:
         self.cut = False
         """Cancelled while an iteration runs: the loop stops when that iteration ends."""
         self.ended_at = 0.0
+        self.on_interrupt = on_interrupt
+        """What the interrupt policy may do to its ABs (its request said)."""
 
 
 class Tree:
@@ -147,7 +150,8 @@ class Node:
 
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
-                 "name", "command_ids", "feedback", "calls", "parked", "turnable")
+                 "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
+                 "restarts")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -169,6 +173,10 @@ class Node:
         """The request's sequence number: smaller is older."""
         self.version = 0
         """Bumped whenever its waiting-index entries go stale."""
+        self.cutting = False
+        """Running, and the mediator asked the driver to cut it (the interrupt policy)."""
+        self.restarts: AbId | None = None
+        """The AB the interrupt policy cut, which this one starts again."""
         self.turnable = False
         """An utterance that does not orient the robot itself, whose app lets the
         mediator turn the robot to the user first (the connect-channel policy)."""

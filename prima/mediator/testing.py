@@ -66,6 +66,9 @@ class ScriptedDriver:
         self.abandoned: list[CommandId] = []
         self.running: dict[AbId, AtomicBehavior] = {}
         self.on_start: Callable[[AtomicBehavior], None] | None = None
+        self.cuts: list[AbId] = []
+        """The ABs the mediator asked to cut, in order."""
+        self.on_cut: Callable[[AtomicBehavior], None] | None = None
 
     def duration_of(self, ab: AtomicBehavior) -> float:
         d = self._duration
@@ -93,6 +96,15 @@ class ScriptedDriver:
 
     def abandon(self, command_id: CommandId) -> None:
         self.abandoned.append(command_id)
+
+    def cut(self, ab_id: AbId) -> bool:
+        ab = self.running.get(ab_id)
+        if ab is None:
+            return False
+        self.cuts.append(ab_id)
+        if self.on_cut is not None:
+            self.on_cut(ab)
+        return True
 
     def ended(self, ab_id: AbId) -> AtomicBehavior:
         return self.running.pop(ab_id)
@@ -139,11 +151,15 @@ class Harness:
     def __init__(self, catalog: Catalog | None = None, *, duration: Durations = 1.0,
                  outcome: Callable[[AtomicBehavior], Outcome] | None = None,
                  config: MediatorConfig = MediatorConfig(), immediate: bool = False,
-                 keep: bool = True, channel: Channel | None = None) -> None:
+                 keep: bool = True, channel: Channel | None = None,
+                 cut_after: float = 0.0) -> None:
         self.clock = ManualClock()
         self.decisions: list[Decision] = []
         self.driver = ScriptedDriver(duration, outcome)
         self.driver.on_start = self._scheduled_end
+        self.driver.on_cut = self._scheduled_cut
+        self.cut_after = cut_after
+        """Seconds from a cut's request to the cut AB's end (the word under way)."""
         self.immediate = immediate
         """Zero-length ABs end from inside ``driver.start`` (re-entrant ``finish``)."""
         self.mediator = Mediator(catalog or Catalog.standard(), self.driver, self.clock,
@@ -173,9 +189,15 @@ class Harness:
         else:
             self._push(self.clock.now() + max(d, 0.0), lambda: self._finish(ab))
 
-    def _finish(self, ab: AtomicBehavior) -> None:
+    def _finish(self, ab: AtomicBehavior, outcome: Outcome | None = None) -> None:
+        if ab.id not in self.driver.running:
+            return  # cut before its scripted end
         self.driver.ended(ab.id)
-        self.mediator.finish(ab.id, self.driver.outcome_of(ab))
+        self.mediator.finish(ab.id, self.driver.outcome_of(ab) if outcome is None else outcome)
+
+    def _scheduled_cut(self, ab: AtomicBehavior) -> None:
+        cut = Outcome({"interrupted": True, "spoken": "", "unspoken": ""})
+        self._push(self.clock.now() + self.cut_after, lambda: self._finish(ab, cut))
 
     def at(self, t: float, action: Callable[[], object]) -> None:
         """Run ``action`` when the clock reaches ``t``."""

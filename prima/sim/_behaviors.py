@@ -167,7 +167,9 @@ def _heading_to(sim: Simulator, place: Place) -> float | None:
 # ---- talking ------------------------------------------------------------------------------
 
 def speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    n = sim.ticks(sim.spec.speech_duration(_text(sim, call, "text")))
+    text = _text(sim, call, "text")
+    n = sim.ticks(sim.spec.speech_duration(text))
+    sim.utter(cid, text, n)
     yield sleep(n)
     return {"duration": n / sim.kernel.hz}, True
 
@@ -177,7 +179,9 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     timeout = _req(sim, call, "timeout")
     if timeout < 0:
         raise CommandError(f"timeout must not be negative, not {timeout:g}")
-    yield sleep(sim.ticks(sim.spec.speech_duration(prompt)))
+    n = sim.ticks(sim.spec.speech_duration(prompt))
+    sim.utter(cid, prompt, n)
+    yield sleep(n)
     sim.ask(prompt)
     heard = yield signal(sim.open_mic, sim.ticks(timeout), timeout=None)
     sim.close_mic()
@@ -210,7 +214,9 @@ def turn(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     angle = _req(sim, call, "angle")
-    n = sim.ticks(sim.spec.speech_duration(_text(sim, call, "text")))
+    text = _text(sim, call, "text")
+    n = sim.ticks(sim.spec.speech_duration(text))
+    sim.utter(cid, text, n)
     end = sim.kernel.tick + n
     yield from _turn(sim, math.radians(angle))
     if end > sim.kernel.tick:
@@ -339,6 +345,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
             sim.search()
             if say:
                 speech_end += sim.ticks(sim.spec.speech_duration(say))
+                sim.utter(cid, say, speech_end - k.tick)
         period = min(sim.ticks(sim.spec.control_period), search - watched)
         start = k.tick
         found = yield until(lambda: sim.seen, period)

@@ -30,7 +30,7 @@ from prima.catalog import Catalog
 from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior, Event, Outcome
 from prima.sim._behaviors import perform
-from prima.sim._kernel import Kernel, Waker
+from prima.sim._kernel import Kernel, Process, Waker
 from prima.sim._maps import Place, WorldMap
 from prima.sim._records import (
     Picture,
@@ -121,6 +121,11 @@ class Simulator:
         self._sighted = False
         """The camera saw the user since sensing last began: only then can it lose them."""
         self._running: dict[int, AtomicBehavior] = {}
+        self._procs: dict[int, Process] = {}
+        """The process performing each running atomic behavior (to cut it)."""
+        self._speech: dict[int, tuple[int, tuple[str, ...], int]] = {}
+        """Command id -> what it is saying: the tick it began, its words, its ticks."""
+        self._cutting: set[int] = set()
         self._loops: dict[int, dict[str, Value]] = {}
         self._mic: Waker | None = None
         self._sense_every = hz // SENSE_HZ
@@ -191,12 +196,69 @@ class Simulator:
         self._running[ab.id] = ab
         if "human-detection" in ab.devices:
             self._sensing += 1
-        self.kernel.spawn(perform(self, ab), lambda result: self._finish(ab, result))
+        self._procs[ab.id] = self.kernel.spawn(perform(self, ab),
+                                               lambda result: self._finish(ab, result))
 
     def abandon(self, command_id: int) -> None:
         """Forget a feedback loop; if nothing else drives the wheels, hold still."""
         self._loops.pop(command_id, None)
         self._hold_still()
+
+    def cut(self, ab_id: int) -> bool:
+        """Stop a running atomic behavior early (the interrupt policy): speech at the
+        end of the word under way, anything else at once. Its end is reported with
+        ``interrupted``, ``spoken`` and ``unspoken``; an utterance already on its last
+        word just ends (nothing is left to cut)."""
+        ab = self._running.get(ab_id)
+        if ab is None:
+            return False
+        if ab_id in self._cutting:
+            return True
+        boundary = self._boundary(ab)
+        if boundary is None:
+            return False
+        self._cutting.add(ab_id)
+        at, spoken, unspoken = boundary
+        self.kernel.at(at, lambda: self._cut_now(ab, spoken, unspoken))
+        return True
+
+    def _boundary(self, ab: AtomicBehavior) -> tuple[int, str, str] | None:
+        """When to cut ``ab`` and the words it will have said and not said then."""
+        now = self.kernel.tick
+        words: list[str] = []
+        for call in ab.calls:
+            spec = self.catalog.get(call.command)
+            for text in spec.spoken(call.args) if spec is not None else ():
+                words += text.split()
+        for cid in ab.command_ids:
+            said = self._speech.get(cid)
+            if said is None:
+                continue
+            start, saying, ticks = said
+            if now >= start + ticks or not saying:
+                return now, " ".join(words), ""  # all said (a Q&A listening)
+            per = ticks / len(saying)
+            k = min(len(saying), int((now - start) // per) + 1)  # the word under way ends
+            if k >= len(saying):
+                return None
+            return (start + math.ceil(k * per - 1e-9), " ".join(saying[:k]),
+                    " ".join(saying[k:]))
+        return now, "", " ".join(words)  # nothing said yet
+
+    def _cut_now(self, ab: AtomicBehavior, spoken: str, unspoken: str) -> None:
+        proc = self._procs.get(ab.id)
+        if proc is None or not proc.alive or ab.id not in self._running:
+            return  # it ended on its own
+        self.kernel.kill(proc)
+        if "speech-recognition" in ab.devices:
+            self.close_mic()
+        self._finish(ab, ({"interrupted": True, "spoken": spoken, "unspoken": unspoken},
+                          True))
+
+    def utter(self, command_id: int, text: str, ticks: int) -> None:
+        """A behavior of this Command starts saying ``text`` over ``ticks``: a cut
+        (the interrupt policy) waits for the end of the word under way."""
+        self._speech[command_id] = (self.kernel.tick, tuple(text.split()), ticks)
 
     # ---- discrete-event API -------------------------------------------------------
 
@@ -473,6 +535,10 @@ class Simulator:
     def _finish(self, ab: AtomicBehavior, result: tuple[dict[str, Value], bool]) -> None:
         values, terminal = result
         del self._running[ab.id]
+        self._procs.pop(ab.id, None)
+        self._cutting.discard(ab.id)
+        for cid in ab.command_ids:
+            self._speech.pop(cid, None)
         if "human-detection" in ab.devices:
             self._sensing -= 1
             if not self._sensing:  # forget how long the user was unseen, unless sensing

@@ -258,3 +258,33 @@ def test_localization_noise_is_seeded() -> None:
         return [(p.x, p.y) for p in (sim.localize() for _ in range(3))]
     assert poses(1) == poses(1) != poses(2)
     assert all(abs(x - 9.5) < 0.3 for x, _ in poses(1))
+
+
+def test_a_cut_utterance_stops_at_the_end_of_the_word_under_way() -> None:
+    """The interrupt policy's cut: five words in 2 s (0.4 s each); cut at 0.5 s, during
+    the second word, it ends at 0.8 s with two words said. On its last word, or not
+    running, nothing is cut."""
+    ends: list[tuple[float, dict]] = []
+    sim = Simulator(world_map("museum"), robot=CENTER,
+                    finished=lambda ab, o: ends.append((sim.now(), dict(o.values))))
+    sim.start(AtomicBehavior(1, "fa", 0, (call("Speak", text="one two three four five"),),
+                             (1,), frozenset({"speaker"})))
+    sim.advance_to(0.5)
+    assert sim.cut(1) and sim.cut(1)  # asked twice: cut once
+    sim.advance_to(10)
+    assert ends == [(pytest.approx(0.8), {"interrupted": True, "spoken": "one two",
+                                          "unspoken": "three four five"})]
+    assert not sim.cut(1)
+    sim.start(AtomicBehavior(2, "fa", 0, (call("Speak", text="one two"),), (2,),
+                             frozenset({"speaker"})))
+    sim.advance_to(10.5)
+    assert not sim.cut(2)  # on its last word
+    sim.advance_to(20)
+    assert ends[-1][1] == {"duration": pytest.approx(0.8)}
+    sim.start(AtomicBehavior(3, "fa", 0, (call("Gesture", name="nod"),), (3,),
+                             frozenset({"arm", "neck"})))
+    sim.advance_to(20.2)
+    assert sim.cut(3)  # no words: at once
+    sim.advance_to(30)
+    assert ends[-1] == (pytest.approx(20.2), {"interrupted": True, "spoken": "",
+                                              "unspoken": ""})
