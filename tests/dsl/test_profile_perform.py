@@ -4,20 +4,24 @@ implemented a robot's own way (<implement>), and joints (<joint>)."""
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import pytest
 
 from prima.catalog import (
     STANDARD_DEVICES,
     ArgRef,
+    Catalog,
     Hold,
     JointSpec,
     MoveJoint,
     RaiseEvent,
 )
-from prima.dsl import RobotProfile, parse_profile
+from prima.dsl import RobotProfile, check_file, load_profile, parse_profile
 from prima.errors import DocumentError
 
+ROOT = Path(__file__).parents[2]
+GUIDE = ROOT / "robots" / "guide-robot.xml"
 
 PROFILE = """<robot xmlns="urn:prima:robot:1" name="r">
   <body radius="0.2" max-speed="0.4" max-accel="0.5" max-turn-rate="90"/>
@@ -173,6 +177,40 @@ def test_an_armless_robot_must_implement_what_uses_the_arm() -> None:
     catalog = profile.catalog()
     assert "arm" not in catalog.devices and "arm" not in profile.devices
     assert catalog["PointByHand"].devices == {"laser"} and catalog["PointByHand"].perform == ()
+
+
+def test_the_guide_robot_points_with_its_laser_pointer() -> None:
+    profile = load_profile(GUIDE)
+    catalog = profile.catalog()
+    standard = Catalog.standard()
+    assert "arm" not in profile.devices and "arm" not in catalog.devices
+    assert {"laser-pointer", "neck", "touch-sensor"} <= catalog.devices
+    point = catalog["PointByHand"]
+    assert point.devices == {"laser-pointer"}
+    assert [step.joint.name for step in point.perform if isinstance(step, MoveJoint)] == [
+        "laser-tilt", "laser-pan"]
+    # everything else about PointByHand is the common Command's
+    assert (point.params, point.one_of, point.aims, point.priority, point.robot_specific) == (
+        standard["PointByHand"].params, standard["PointByHand"].one_of, True,
+        standard["PointByHand"].priority, False)
+    assert catalog["Gesture"].devices == {"neck"} and catalog["Gesture"].perform == ()
+    assert catalog["Speak"] == standard["Speak"]
+    # no common Command uses a device the robot lacks
+    assert all(c.devices <= profile.devices for c in catalog)
+    spotlight = catalog["Spotlight"]
+    assert spotlight.devices == {"laser-pointer", "neck"} and spotlight.robot_specific
+    assert RaiseEvent("spot-on") in spotlight.perform and Hold(ArgRef("time", 3.0)) in \
+        spotlight.perform
+    assert {"spot-on", "spot-off"} <= set(profile.events)
+
+
+def test_the_shipped_profiles_and_the_museum_guide_validate_on_the_guide_robot() -> None:
+    assert check_file(GUIDE) == []
+    assert check_file(ROOT / "robots" / "home-robot.xml") == []
+    guide = load_profile(GUIDE)
+    for app in ("ea/ea1-museum.pxml", "ea/ea3-navigate.pxml", "fa/fa1-emotions.pxml",
+                "fa/fa7-spotlight.pxml"):
+        assert check_file(ROOT / "apps" / app, guide) == [], app
 
 
 def test_many_commands_with_bad_steps_load_in_linear_time() -> None:
