@@ -13,7 +13,8 @@ physics step here, so velocities are written only when they change and the
 profiles keep their own progress instead of reading positions back.
 
 The user is a kinematic body moved by the scripted user. Head and arm
-angles are interpolated on demand, never stepped.
+angles, and those of the joints a robot profile declares (a laser pointer's
+pan), are interpolated on demand, never stepped.
 """
 
 from __future__ import annotations
