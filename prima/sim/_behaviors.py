@@ -404,6 +404,13 @@ def perform_steps(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return values, True
 
 
+def hold_for_duration(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    """A robot-specific Command with a duration and nothing else to say how it is
+    performed: it keeps its devices for its duration (a ``<hold>`` of it)."""
+    yield sleep(sim.ticks(sim.catalog[call.command].duration or 0.0))
+    return {}, True
+
+
 def _perform_time(sim: Simulator, call: Call, spec: CommandSpec) -> float:
     """How long a ``<perform>`` will take from now: its holds, and each joint's travel
     from where it is (or where an earlier step left it) at its rate."""
@@ -645,7 +652,8 @@ BEHAVIORS: Mapping[str, Behavior] = {
 }
 """Every Command the simulated robot performs with a behavior of its own (the standard
 ones plus TakePicture); a Command with a ``<perform>`` in the robot's profile is
-performed by :func:`perform_steps` instead."""
+performed by :func:`perform_steps` instead, and a robot-specific one with only a
+duration by :func:`hold_for_duration`."""
 
 
 # ---- planned durations (the longest-AB budget) ---------------------------------------
@@ -719,6 +727,9 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
         spec = sim.catalog.get(call.command)
         behavior = perform_steps if spec is not None and spec.perform else BEHAVIORS.get(
             call.command)
+        if (behavior is None and spec is not None and spec.robot_specific
+                and spec.duration is not None):
+            behavior = hold_for_duration
         if behavior is None or spec is None:
             values["error"] = f"the simulated robot has no Command {call.command!r}"
             return values, True

@@ -149,3 +149,11 @@ def test_without_the_generic_behavior_the_command_would_fail() -> None:
     assert "no Command 'Light'" in str(r.ends("Light")[0].data["error"])
     r = _run(_catalog(Hold(1.0)), call("Light"))
     assert r.ends("Light")[0].data == {} and r.ends("Light")[0].time == pytest.approx(1.0)
+
+
+def test_a_robot_specific_command_with_only_a_duration_holds_its_devices_that_long() -> None:
+    blink = CommandSpec("Blink", frozenset({"laser"}), robot_specific=True, duration=1.5)
+    r = _run(Catalog.standard().extended([blink], {"laser"}), call("Blink"), call("Blink"))
+    assert [(e.time, dict(e.data)) for e in r.ends("Blink")] == [(1.5, {}), (3.0, {})]
+    # a common Command has no duration to fall back on: its own behavior performs it
+    assert _run(_catalog(), call("Light")).ends("Light")[0].data["error"]
