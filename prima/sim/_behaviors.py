@@ -412,8 +412,13 @@ def hold_for_duration(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 
 def _perform_time(sim: Simulator, call: Call, spec: CommandSpec) -> float:
-    """How long a ``<perform>`` will take from now: its holds, and each joint's travel
-    from where it is (or where an earlier step left it) at its rate."""
+    """How long a ``<perform>`` will take from now, at least: its holds, and each
+    joint's travel from where it is (or where an earlier step left it) at its rate.
+
+    Every step's arguments are checked here, before anything moves. A joint turned
+    toward a place counts no travel: the body may turn first in the same atomic
+    behavior (SetDirection, then PointByHand), which changes the place's bearing.
+    """
     total, tick = 0.0, sim.kernel.tick
     at: dict[str, float] = {}
     for step in spec.perform:
@@ -423,6 +428,8 @@ def _perform_time(sim: Simulator, call: Call, spec: CommandSpec) -> float:
             name = step.joint.name
             target = _joint_target(sim, call, step)
             start = at.get(name, sim.world.joint_angle(name, tick))
+            if step.to is None or _given(call, step.to) is None:
+                start = target  # toward a place
             total += abs(target - start) / _joint_figures(sim, step.joint)[1]
             at[name] = target
     return total

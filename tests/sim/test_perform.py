@@ -157,3 +157,15 @@ def test_a_robot_specific_command_with_only_a_duration_holds_its_devices_that_lo
     assert [(e.time, dict(e.data)) for e in r.ends("Blink")] == [(1.5, {}), (3.0, {})]
     # a common Command has no duration to fall back on: its own behavior performs it
     assert _run(_catalog(), call("Light")).ends("Light")[0].data["error"]
+
+
+def test_a_joint_turned_toward_a_place_counts_no_travel_in_the_plan() -> None:
+    """The body may turn before it in the same atomic behavior: only the hold counts."""
+    steps = (MoveJoint(LASER, toward=ArgRef("at")), Hold(1.0))
+    r = runner("museum", CENTER, catalog=_catalog(*steps))
+    r.sim.longest["runner"] = 1.0
+    r.queue(call("Light", at="entrance"))  # to the left: 90 degrees of travel, 0.5 s
+    r.run(30)
+    end = r.ends("Light")[0]
+    assert "error" not in end.data and end.data["laser-pan"] == 90.0
+    assert end.time == pytest.approx(1.5)
