@@ -21,23 +21,32 @@ import dataclasses
 import enum
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 from prima.vocab import Value
 
 __all__ = [
     "BODY_DEVICE",
+    "BUILTIN_JOINTS",
     "CONNECT_COMMAND",
     "RESTORE_COMMAND",
     "RESTORE_POSITION_COMMAND",
+    "MAX_HOLD",
     "STANDARD_COMMANDS",
     "STANDARD_DEVICES",
     "SYMBOLIC_KINDS",
     "TALK_DEVICES",
+    "ArgRef",
     "Catalog",
     "CommandSpec",
+    "Hold",
+    "JointSpec",
+    "MoveJoint",
     "Param",
     "ParamKind",
+    "Primitive",
     "Priority",
+    "RaiseEvent",
 ]
 
 STANDARD_DEVICES: tuple[str, ...] = (
@@ -67,6 +76,11 @@ RESTORE_COMMAND = "SetPositionAndDirection"
 RESTORE_POSITION_COMMAND = "SetPosition"
 """The one it runs before a resumed AB that turns the robot itself (its heading
 would be undone at once)."""
+BUILTIN_JOINTS: Mapping[str, str] = MappingProxyType(
+    {"head-pan": "neck", "head-tilt": "neck", "arm": "arm"})
+"""Joints the simulated robot always models (MoveHead's and PointByHand's), by the
+device that moves them; a profile's ``<perform>`` may move them too, within the
+robot's own limits and at its own rates."""
 
 
 class Priority(enum.IntEnum):
@@ -120,6 +134,64 @@ class Param:
 
 
 @dataclass(frozen=True)
+class ArgRef:
+    """``{name}`` in a primitive of a ``<perform>``: the Command's argument ``name``,
+    else ``default`` (its parameter's default; None: no value)."""
+
+    name: str
+    default: Value = None
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """A joint a ``<perform>`` moves: built in (:data:`BUILTIN_JOINTS`; limits and
+    rate None: the robot's own) or declared by the profile's ``<joint>``."""
+
+    name: str
+    device: str
+    low: float | None = None
+    """Lowest angle (deg)."""
+    high: float | None = None
+    """Highest angle (deg)."""
+    rate: float | None = None
+    """Speed (deg/s)."""
+
+
+MAX_HOLD = 3_600.0
+"""Longest one ``<hold>`` step of a ``<perform>`` may last (s), written or given."""
+
+
+@dataclass(frozen=True)
+class Hold:
+    """Keep the Command's devices for a time (s): a literal, or a number argument."""
+
+    seconds: float | ArgRef
+
+
+@dataclass(frozen=True)
+class MoveJoint:
+    """Move a joint to an angle (deg, relative to the body) or toward a place on the
+    map; exactly one of the two must have a value when the step runs. It takes the
+    travel over the joint's rate; a target beyond its limits stops at the limit."""
+
+    joint: JointSpec
+    to: float | ArgRef | None = None
+    toward: str | ArgRef | None = None
+
+
+@dataclass(frozen=True)
+class RaiseEvent:
+    """Post a robot-specific event (one the profile declares) to the applications."""
+
+    event: str
+
+
+Primitive = Hold | MoveJoint | RaiseEvent
+"""One step of a ``<perform>``: what the simulator does, in order, to perform a
+Command a profile declares or implements its own way."""
+
+
+@dataclass(frozen=True)
 class CommandSpec:
     """A Command type: what it occupies and how PRIMA schedules it."""
 
@@ -151,6 +223,10 @@ class CommandSpec:
     """It takes the robot somewhere of its own (a move, following the user): when it
     resumes a suspended stream, the restore-state policy does not return the robot
     to where the stream was suspended first."""
+    perform: tuple[Primitive, ...] = ()
+    """How the simulator performs it, when a robot profile says (its ``<perform>``):
+    these steps in order, instead of a behavior of its own. Empty: the simulator's
+    own behavior for the Command."""
 
     @property
     def orients(self) -> bool:
@@ -288,7 +364,8 @@ class Catalog:
         return cls({c.name: c for c in STANDARD_COMMANDS}, frozenset(STANDARD_DEVICES))
 
     def extended(self, commands: Iterable[CommandSpec], devices: Iterable[str] = ()) -> Catalog:
-        """A catalog with robot-specific Commands and devices added."""
+        """A catalog with robot-specific Commands and devices added (a Command of
+        the same name as one already there replaces it)."""
         merged = dict(self.commands)
         for c in commands:
             merged[c.name] = c
@@ -300,6 +377,12 @@ class Catalog:
         merged = {name: dataclasses.replace(c, interruptible=name in chosen)
                   for name, c in self.commands.items()}
         return Catalog(merged, self.devices, self.talk_devices)
+    def for_robot(self, commands: Iterable[CommandSpec], devices: Iterable[str]) -> Catalog:
+        """This catalog as one robot offers it: ``commands`` added or replacing
+        their namesakes (a common Command the robot implements its own way), on
+        exactly the robot's ``devices`` (an armless robot has no ``arm``)."""
+        extended = self.extended(commands)
+        return Catalog(extended.commands, frozenset(devices), self.talk_devices)
 
     @property
     def channel_devices(self) -> frozenset[str]:

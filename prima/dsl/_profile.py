@@ -10,6 +10,14 @@ Every number is checked as the run will use it: a decimal the schema accepts
 can still be infinite or zero once it is a float (``1`` followed by 400
 zeros, ``0.`` followed by 400 zeros), so each figure must be finite and within
 the range docs/robot-profile.md gives, or the profile has a located error.
+
+A robot-specific Command, or a common Command the robot implements its own way
+(``<implement>``), may say how the simulator performs it: a ``<perform>`` of at
+most :data:`MAX_STEPS` primitive steps (hold the devices for a time, move a
+joint, raise an event), compiled here into :class:`~prima.catalog.Primitive`
+data that the simulator runs generically. An attribute of a step is a literal
+or exactly ``{name}``, one of the Command's arguments: no expression is ever
+evaluated.
 """
 
 from __future__ import annotations
@@ -26,12 +34,20 @@ from pathlib import Path
 from lxml import etree
 
 from prima.catalog import (
+    BUILTIN_JOINTS,
+    MAX_HOLD,
     STANDARD_DEVICES,
+    ArgRef,
     Catalog,
     CommandSpec,
+    Hold,
+    JointSpec,
+    MoveJoint,
     Param,
     ParamKind,
+    Primitive,
     Priority,
+    RaiseEvent,
 )
 from prima.dsl._elements import elements, flag
 from prima.errors import DocumentError, Problem
@@ -96,11 +112,16 @@ class RobotProfile:
     interruptible: frozenset[str] = frozenset()
     """The Commands this robot can cut for another application's reaction (its
     ``<interruptible>``; the interrupt policy)."""
+    implemented: tuple[CommandSpec, ...] = ()
+    """Common Commands this robot performs its own way (``<implement>``): on its own
+    devices, and with a ``<perform>`` if it gives one."""
+    joints: Mapping[str, JointSpec] = field(default_factory=dict)
+    """Joints the profile declares (``<joint>``), beyond :data:`BUILTIN_JOINTS`."""
     _catalog: Catalog = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         # built once: every document loaded against the profile asks for it
-        catalog = Catalog.standard().extended(self.commands, self.devices)
+        catalog = Catalog.standard().for_robot(self.implemented + self.commands, self.devices)
         if self.interruptible:
             catalog = catalog.interruptible(self.interruptible)
         object.__setattr__(self, "_catalog", catalog)
@@ -109,6 +130,12 @@ class RobotProfile:
         """The common Commands plus this robot's own."""
         return self._catalog
 
+
+MAX_STEPS = 32
+"""Most steps a ``<perform>`` may have."""
+
+MAX_JOINTS = 32
+"""Most joints a profile may declare."""
 
 _BUDGET_COUNTS = ("text", "waiting", "starts-per-instant")
 _BUDGET_SECONDS = ("sends-per-second", "longest-ab", "wait-share", "wait-window")
@@ -133,6 +160,11 @@ FIGURES: Mapping[tuple[str, str], Bound] = {
     ("head", "tilt-max"): Bound(360.0, "deg", -360.0, positive=False),
     ("gesture", "duration"): Bound(3_600.0, "s"),
     ("command", "duration"): Bound(3_600.0, "s"),
+    ("joint", "min"): Bound(360.0, "deg", -360.0, positive=False),
+    ("joint", "max"): Bound(360.0, "deg", -360.0, positive=False),
+    ("joint", "rate"): Bound(3_600.0, "deg/s"),
+    ("joint", "to"): Bound(360.0, "deg", -360.0, positive=False),
+    ("hold", "seconds"): Bound(MAX_HOLD, "s"),
     ("budgets", "text"): Bound(MAX_TEXT, "characters"),
     ("budgets", "sends-per-second"): Bound(MAX_COUNT, "messages/s"),
     ("budgets", "waiting"): Bound(MAX_COUNT, "Commands"),
@@ -179,8 +211,9 @@ def profile_from_xml(doc: XmlDocument) -> RobotProfile:
         raise DocumentError(problems)
     reader = _Reader(doc)
     profile = reader.read()
-    if reader.problems:
-        raise DocumentError(limit(reader.problems, doc.name))
+    if reader.problems:  # in source order: some are found once everything is read
+        raise DocumentError(limit(sorted(reader.problems, key=lambda p: (p.line, p.col)),
+                                  doc.name))
     return profile
 
 
@@ -197,6 +230,13 @@ class _Reader:
         self.extras: dict[str, dict[str, Param]] = {}
         self.events: dict[str, bool] = {}
         self.policies: dict[str, bool] = {}
+        self.command_names: set[str] = set()
+        self.implemented: dict[str, CommandSpec] = {}
+        self.joints: dict[str, JointSpec] = {}
+        self.performs: list[tuple[etree._Element, str, int]] = []
+        """``<perform>`` elements, their Commands' names and places in
+        :attr:`commands` (-1: implemented), compiled once every argument, joint and
+        event is known (:meth:`_compile`)."""
 
     def error(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
         self.problems.append(self.doc.problem(el, message, attribute=attribute))
@@ -222,6 +262,8 @@ class _Reader:
             read = _ELEMENTS.get(local_name(el))
             if read is not None:
                 read(self, el)
+        self._compile()
+        self._check_devices(parts["devices"])
         body, head, camera = parts["body"], parts["head"], parts["camera"]
         self._check_ranges(head)
         return RobotProfile(
@@ -239,6 +281,8 @@ class _Reader:
             devices=frozenset(self.devices),
             gestures=self.gestures,
             commands=tuple(self.commands),
+            implemented=tuple(self.implemented.values()),
+            joints=MappingProxyType(self.joints),
             extras=self.extras,
             events=self.events,
             budgets=self._role_budgets([el for el in elements(root)
@@ -291,8 +335,18 @@ class _Reader:
             if name in self.devices:
                 self.error(dev, f"device '{name}' is declared twice", "name")
             self.devices.add(name)
+
+    def _check_devices(self, parent: etree._Element) -> None:
+        """Every common device the robot lacks must be one no common Command uses
+        here: each that does is implemented on the robot's own devices."""
+        specs = [self.implemented.get(c.name, c) for c in self.standard]
         for missing in (d for d in STANDARD_DEVICES if d not in self.devices):
-            self.error(parent, f"a PRIMA robot needs the device '{missing}'")
+            users = [c.name for c in specs
+                     if missing in c.devices or any(missing in p.devices for p in c.params)]
+            if users:
+                self.error(parent, f"a PRIMA robot needs the device '{missing}' "
+                                   f"(used by {_listed(users)}; a robot without it "
+                                   "must <implement> those on devices of its own)")
 
     def _interruptible(self, root: etree._Element) -> frozenset[str]:
         """The Commands named by ``<interruptible commands="...">``, each one known."""
@@ -327,23 +381,177 @@ class _Reader:
                            "Command needs a name of its own", "name")
         elif self._own_command(name):
             self.error(el, f"Command '{name}' is declared twice", "name")
-        used = el.get("devices", "").split()
-        for device in used:
-            if device not in self.devices:
-                self.error(el, f"Command '{name}' uses undeclared device '{device}'", "devices")
+        self.command_names.add(name)
+        used = self._used_devices(el, name)
         priority = el.get("priority")
-        self.commands.append(CommandSpec(
+        perform = _perform_of(el)
+        if perform is not None and el.get("duration") is not None:
+            self.error(el, f"Command '{name}' has a <perform>: it lasts as long as its steps "
+                           "take, so it gives no duration", "duration")
+        spec = CommandSpec(
             name=name,
             devices=frozenset(used),
             feedback=flag(el, "feedback"),
             breaks_cc=flag(el, "breaks-cc"),
-            params=tuple(self.param(p) for p in elements(el)),
+            params=tuple(self.param(p) for p in elements(el) if local_name(p) == "param"),
             robot_specific=True,
             doc=el.get("doc", ""),
             priority_override=None if priority is None else
             (Priority.HIGH if priority == "high" else Priority.LOW),
             duration=self.number(el, "duration") if el.get("duration") else None,
-        ))
+        )
+        self.commands.append(spec)
+        if perform is not None and self._performable(perform, spec):
+            self.performs.append((perform, name, len(self.commands) - 1))
+
+    def _used_devices(self, el: etree._Element, name: str) -> list[str]:
+        used = el.get("devices", "").split()
+        for device in used:
+            if device not in self.devices:
+                self.error(el, f"Command '{name}' uses undeclared device '{device}'", "devices")
+        return used
+
+    def _performable(self, perform: etree._Element, spec: CommandSpec) -> bool:
+        """A feedback loop or a Q&A has a behavior of its own; steps cannot perform it."""
+        what = "a feedback Command" if spec.feedback else "a Q&A" if spec.listens else None
+        if what is not None:
+            self.error(perform, f"{spec.name} is {what}; a <perform> cannot perform it")
+        return what is None
+
+    def implement(self, el: etree._Element) -> None:
+        """``<implement command="PointByHand" devices="laser-pointer">``: a common Command
+        performed on this robot's own devices, by its ``<perform>`` if it gives one."""
+        name = el.get("command", "")
+        spec = self.standard.get(name)
+        if spec is None:
+            hint = (" (a robot-specific Command gives its <perform> in its <command>)"
+                    if self._own_command(name) else "")
+            self.error(el, f"'{name}' is not a common Command{hint}", "command")
+            return
+        if name in self.implemented:
+            self.error(el, f"Command '{name}' is implemented twice", "command")
+            return
+        if el.get("devices") is not None:
+            spec = replace(spec, devices=frozenset(self._used_devices(el, name)))
+        self.implemented[name] = spec
+        perform = _perform_of(el)
+        if perform is not None and self._performable(perform, spec):
+            self.performs.append((perform, name, -1))
+
+    def joint(self, el: etree._Element) -> None:
+        """``<joint name="laser-pan" device="laser-pointer" min max rate>``."""
+        name, device = el.get("name", ""), el.get("device", "")
+        if name in BUILTIN_JOINTS:
+            self.error(el, f"'{name}' is a built-in joint (of the device "
+                           f"'{BUILTIN_JOINTS[name]}'); a declared joint needs a name of "
+                           "its own", "name")
+            return
+        if name in self.joints:
+            self.error(el, f"joint '{name}' is declared twice", "name")
+            return
+        if len(self.joints) == MAX_JOINTS:
+            self.error(el, f"a robot declares at most {MAX_JOINTS} joints")
+            return
+        if device not in self.devices:
+            self.error(el, f"joint '{name}' belongs to undeclared device '{device}'", "device")
+        low, high = self.number(el, "min", 0.0), self.number(el, "max", 0.0)
+        if low > high:
+            self.error(el, f"joint '{name}' has an empty range: min > max", "min")
+        self.joints[name] = JointSpec(name, device, low, high, self.number(el, "rate"))
+
+    # ---- <perform>: compiled once everything it may name is known ----
+
+    def _compile(self) -> None:
+        for perform, name, index in self.performs:
+            spec = self.implemented[name] if index < 0 else self.commands[index]
+            args = {p.name: p for p in spec.params}
+            args.update(self.extras.get(name, {}))
+            done = replace(spec, perform=tuple(self._steps(perform, spec, args)))
+            if index < 0:
+                self.implemented[name] = done
+            else:
+                self.commands[index] = done
+
+    def _steps(self, perform: etree._Element, spec: CommandSpec,
+               args: Mapping[str, Param]) -> list[Primitive]:
+        steps: list[Primitive] = []
+        for i, step in enumerate(elements(perform)):
+            if i == MAX_STEPS:
+                self.error(step, f"a <perform> has at most {MAX_STEPS} steps")
+                break
+            kind = local_name(step)
+            if kind == "hold":
+                seconds = self._operand(step, "seconds", spec, args, ParamKind.NUMBER)
+                if seconds is not None and not isinstance(seconds, str):
+                    steps.append(Hold(seconds))
+            elif kind == "joint":
+                move = self._move(step, spec, args)
+                if move is not None:
+                    steps.append(move)
+            elif step.get("event", "") in self.events:
+                steps.append(RaiseEvent(step.get("event", "")))
+            else:
+                event = step.get("event", "")
+                self.error(step, f"'{event}' is not an event this robot declares (declare it "
+                                 f'with <event name="{event}"/>)', "event")
+        return steps
+
+    def _move(self, step: etree._Element, spec: CommandSpec,
+              args: Mapping[str, Param]) -> MoveJoint | None:
+        name = step.get("name", "")
+        joint = self.joints.get(name)
+        if joint is None and name in BUILTIN_JOINTS:
+            joint = JointSpec(name, BUILTIN_JOINTS[name])
+        if joint is None:
+            self.error(step, f"unknown joint '{name}' (this robot's joints: "
+                             f"{_listed([*BUILTIN_JOINTS, *self.joints])})", "name")
+            return None
+        if joint.device not in spec.devices:
+            self.error(step, f"joint '{name}' is moved by the device '{joint.device}', which "
+                             f"{spec.name} does not use (its devices: "
+                             f"{_listed(sorted(spec.devices))})", "name")
+        given = [a for a in ("to", "toward") if step.get(a) is not None]
+        if not given:
+            self.error(step, "a <joint> step needs to= (an angle) or toward= (a place)")
+            return None
+        if len(given) == 2 and not all(step.get(a, "").startswith("{") for a in given):
+            self.error(step, "to= and toward= would both always have a value; give one, "
+                             "or give both as arguments of which a call gives one", "toward")
+            return None
+        to = self._operand(step, "to", spec, args, ParamKind.NUMBER)
+        toward = self._operand(step, "toward", spec, args, ParamKind.PLACE)
+        if to is None and toward is None:
+            return None
+        return MoveJoint(joint, None if isinstance(to, str) else to,
+                         None if isinstance(toward, float) else toward)
+
+    def _operand(self, step: etree._Element, attribute: str, spec: CommandSpec,
+                 args: Mapping[str, Param], kind: ParamKind) -> float | str | ArgRef | None:
+        """A step's attribute: ``{name}`` (an argument of ``kind``), else a literal (a
+        number within its :data:`FIGURES` bound, or a place name); None if absent or
+        wrong (with a problem)."""
+        raw = step.get(attribute)
+        if raw is None:
+            return None
+        if raw.startswith("{"):  # the schema's pattern: exactly {name}
+            name = raw[1:-1]
+            param = args.get(name)
+            if param is None:
+                self.error(step, f"'{raw}' is not an argument of {spec.name} (its arguments: "
+                                 f"{_listed(list(args)) or 'none'})", attribute)
+                return None
+            if param.kind is not kind:
+                self.error(step, f"'{raw}' is a {param.kind.value} argument of {spec.name}; "
+                                 f"{attribute}= takes a {kind.value}", attribute)
+                return None
+            return ArgRef(name, param.default)
+        if kind is not ParamKind.NUMBER:
+            return raw
+        value = number(self.doc, step, attribute, FIGURES[(local_name(step), attribute)], 0.0)
+        if isinstance(value, Problem):
+            self.problems.append(value)
+            return None
+        return value
 
     def extra(self, el: etree._Element) -> None:
         name, command = el.get("name", ""), el.get("command", "")
@@ -371,7 +579,7 @@ class _Reader:
         self.events[name] = flag(el, "reactive", default=True)
 
     def _own_command(self, name: str) -> bool:
-        return any(c.name == name for c in self.commands)
+        return name in self.command_names
 
     def _check_ranges(self, head: etree._Element) -> None:
         for lo, hi, what in (("pan-min", "pan-max", "pan"), ("tilt-min", "tilt-max", "tilt")):
@@ -380,9 +588,24 @@ class _Reader:
                 self.error(head, f"{what} range is empty: {lo} > {hi}", lo)
 
 
+def _perform_of(el: etree._Element) -> etree._Element | None:
+    """The ``<perform>`` child of a ``<command>`` or ``<implement>``, if any (the schema
+    allows one, last)."""
+    found = elements(el)
+    return found[-1] if found and local_name(found[-1]) == "perform" else None
+
+
+def _listed(names: list[str], most: int = 10) -> str:
+    """Names for a message: the first ``most``, then how many more."""
+    shown = ", ".join(names[:most])
+    return shown + (f" and {len(names) - most} more" if len(names) > most else "")
+
+
 _ELEMENTS: Mapping[str, Callable[[_Reader, etree._Element], None]] = {
     "gesture": _Reader.gesture,
     "command": _Reader.command,
+    "implement": _Reader.implement,
+    "joint": _Reader.joint,
     "extra": _Reader.extra,
     "event": _Reader.event,
     "policy": _Reader.policy,

@@ -6,7 +6,10 @@ call is one loop iteration; ``terminal`` says whether the loop is done. For
 any other Command ``terminal`` is True. Arguments the call leaves out take the
 defaults of the simulator's catalog (:class:`~prima.catalog.Catalog`, built from
 the robot profile), the one table both the DSL and the simulator read; so does
-a robot-specific Command's duration.
+a robot-specific Command's duration. A Command whose profile says how to
+perform it (a ``<perform>``: hold the devices, move a joint, raise an event)
+has no behavior of its own here: :func:`perform_steps` runs its steps, the same
+for every such Command.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import math
 from collections.abc import Callable, Generator, Mapping
 from typing import TYPE_CHECKING, Any
 
+from prima.catalog import MAX_HOLD, ArgRef, CommandSpec, Hold, JointSpec, MoveJoint
 from prima.errors import CommandError
 from prima.mediator import AtomicBehavior, Call
 from prima.sim._kernel import Wait, signal, sleep, until
@@ -320,6 +324,123 @@ def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"saw_user": seen, "heading": heading, "picture": sim.picture_count}, True
 
 
+# ---- a robot profile's <perform> -------------------------------------------------------------
+
+def _given(call: Call, operand: float | str | ArgRef) -> Value:
+    """A step's operand: a literal, or the call's argument (else its default)."""
+    if isinstance(operand, ArgRef):
+        return call.args.get(operand.name, operand.default)
+    return operand
+
+
+def _finite(value: Value, what: str) -> float:
+    if isinstance(value, bool) or value is None:
+        raise CommandError(f"{what} must be a number, not {value!r}")
+    try:
+        number = float(value)
+    except ValueError:
+        raise CommandError(f"{what} must be a number, not {value!r}") from None
+    if not math.isfinite(number):
+        raise CommandError(f"{what} must be finite, not {value!r}")
+    return number
+
+
+def _hold_seconds(call: Call, step: Hold) -> float:
+    seconds = _finite(_given(call, step.seconds), "a hold's seconds")
+    if not 0.0 <= seconds <= MAX_HOLD:
+        raise CommandError(f"a hold lasts 0 to {MAX_HOLD:g} s, not {seconds:g}")
+    return seconds
+
+
+def _joint_figures(sim: Simulator, joint: JointSpec) -> tuple[tuple[float, float], float]:
+    """A joint's limits (deg) and rate (deg/s): the robot's own for a built-in joint."""
+    if joint.low is not None and joint.high is not None and joint.rate is not None:
+        return (joint.low, joint.high), joint.rate
+    spec = sim.spec
+    if joint.name == "arm":
+        return spec.arm_range, spec.arm_rate
+    return (spec.head_pan_range if joint.name == "head-pan" else spec.head_tilt_range,
+            spec.head_rate)
+
+
+def _joint_target(sim: Simulator, call: Call, step: MoveJoint) -> float:
+    """Where a step moves its joint (deg, within its limits): to an angle, or toward a
+    place (its bearing from the body, as PointByHand aims the arm)."""
+    name = step.joint.name
+    to = None if step.to is None else _given(call, step.to)
+    toward = None if step.toward is None else _given(call, step.toward)
+    if (to is None) == (toward is None):
+        raise CommandError(f"joint {name!r}: give exactly one of an angle and a place")
+    if toward is not None:
+        place = sim.map.place(str(toward))
+        if place is None:
+            raise CommandError(f"unknown place {toward!r} on map {sim.map.name!r}")
+        target = _heading_to(sim, place)
+        angle = 0.0 if target is None else math.degrees(
+            wrap_angle(target - sim.world.robot.angle))
+    else:
+        angle = _finite(to, f"joint {name!r}'s angle")
+    return _clamp(angle, _joint_figures(sim, step.joint)[0])
+
+
+def perform_steps(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    """A Command the robot profile performs with a ``<perform>``: its steps in order.
+
+    A hold keeps the devices for its time; a joint step moves the joint at its
+    rate and waits until it is there (its angle is among the values); a raise
+    posts the robot-specific event to the applications at once.
+    """
+    world = sim.world
+    values: Values = {}
+    for step in sim.catalog[call.command].perform:
+        if isinstance(step, Hold):
+            yield sleep(sim.ticks(_hold_seconds(call, step)))
+        elif isinstance(step, MoveJoint):
+            tick, name = sim.kernel.tick, step.joint.name
+            target = _joint_target(sim, call, step)
+            joint = world.joint(name)
+            n = sim.ticks(abs(target - joint.at(tick)) / _joint_figures(sim, step.joint)[1])
+            joint.move(target, tick, n)
+            if name in ("head-pan", "head-tilt"):  # the camera turns with the head
+                world.joints_until = max(world.joints_until, tick + n)
+            values[name] = round(target, 1)
+            yield sleep(n)
+        else:
+            sim.emit(step.event, {"command": call.command})
+    return values, True
+
+
+def hold_for_duration(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    """A robot-specific Command with a duration and nothing else to say how it is
+    performed: it keeps its devices for its duration (a ``<hold>`` of it)."""
+    yield sleep(sim.ticks(sim.catalog[call.command].duration or 0.0))
+    return {}, True
+
+
+def _perform_time(sim: Simulator, call: Call, spec: CommandSpec) -> float:
+    """How long a ``<perform>`` will take from now, at least: its holds, and each
+    joint's travel from where it is (or where an earlier step left it) at its rate.
+
+    Every step's arguments are checked here, before anything moves. A joint turned
+    toward a place counts no travel: the body may turn first in the same atomic
+    behavior (SetDirection, then PointByHand), which changes the place's bearing.
+    """
+    total, tick = 0.0, sim.kernel.tick
+    at: dict[str, float] = {}
+    for step in spec.perform:
+        if isinstance(step, Hold):
+            total += _hold_seconds(call, step)
+        elif isinstance(step, MoveJoint):
+            name = step.joint.name
+            target = _joint_target(sim, call, step)
+            start = at.get(name, sim.world.joint_angle(name, tick))
+            if step.to is None or _given(call, step.to) is None:
+                start = target  # toward a place
+            total += abs(target - start) / _joint_figures(sim, step.joint)[1]
+            at[name] = target
+    return total
+
+
 # ---- feedback loops --------------------------------------------------------------------------
 
 def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
@@ -543,7 +664,10 @@ BEHAVIORS: Mapping[str, Behavior] = {
     "SetPositionAndDirection": set_position_and_direction,
     "TakePicture": take_picture,
 }
-"""Every Command the simulated robot performs (the standard ones plus TakePicture)."""
+"""Every Command the simulated robot performs with a behavior of its own (the standard
+ones plus TakePicture); a Command with a ``<perform>`` in the robot's profile is
+performed by :func:`perform_steps` instead, and a robot-specific one with only a
+duration by :func:`hold_for_duration`."""
 
 
 # ---- planned durations (the longest-AB budget) ---------------------------------------
@@ -584,6 +708,9 @@ by the robot itself (a leg of a move, a head turn)."""
 
 def planned(sim: Simulator, call: Call) -> float:
     """How long performing ``call`` will take, as far as it can be known at its start."""
+    performed = sim.catalog.get(call.command)
+    if performed is not None and performed.perform:
+        return _perform_time(sim, call, performed)
     estimate = PLANNED.get(call.command)
     if estimate is not None:
         return estimate(sim, call)
@@ -611,8 +738,13 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
                          "(its longest-AB budget)"}, True
     for i, call in enumerate(ab.calls):
         cid = ab.command_ids[i] if i < len(ab.command_ids) else 0
-        behavior = BEHAVIORS.get(call.command)
-        if behavior is None or call.command not in sim.catalog:
+        spec = sim.catalog.get(call.command)
+        behavior = perform_steps if spec is not None and spec.perform else BEHAVIORS.get(
+            call.command)
+        if (behavior is None and spec is not None and spec.robot_specific
+                and spec.duration is not None):
+            behavior = hold_for_duration
+        if behavior is None or spec is None:
             values["error"] = f"the simulated robot has no Command {call.command!r}"
             return values, True
         try:

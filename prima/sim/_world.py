@@ -13,7 +13,8 @@ physics step here, so velocities are written only when they change and the
 profiles keep their own progress instead of reading positions back.
 
 The user is a kinematic body moved by the scripted user. Head and arm
-angles are interpolated on demand, never stepped.
+angles, and those of the joints a robot profile declares (a laser pointer's
+pan), are interpolated on demand, never stepped.
 """
 
 from __future__ import annotations
@@ -113,6 +114,9 @@ class World:
         self.head_pan = _Joint()
         self.head_tilt = _Joint()
         self.arm = _Joint()
+        self.joints: dict[str, _Joint] = {}
+        """Joints a robot profile declares (a laser pointer's pan), by name: each
+        at 0 until a Command's ``<perform>`` first moves it."""
         self.joints_until = 0
         # robot wheel controller
         self.mode = _IDLE
@@ -133,6 +137,19 @@ class World:
         self._wmax = math.radians(spec.max_turn_rate)
 
     # ---- queries -------------------------------------------------------------
+
+    def joint(self, name: str) -> _Joint:
+        """A joint by name: ``head-pan``, ``head-tilt``, ``arm``, or one a profile
+        declares (the profile bounds how many there are)."""
+        builtin = {"head-pan": self.head_pan, "head-tilt": self.head_tilt, "arm": self.arm}
+        found = builtin.get(name)
+        if found is None:
+            found = self.joints.setdefault(name, _Joint())
+        return found
+
+    def joint_angle(self, name: str, tick: int) -> float:
+        """A joint's angle now (deg); 0 for one never moved."""
+        return self.joint(name).at(tick)
 
     def robot_pose(self) -> Pose:
         x, y = self.robot.position
