@@ -47,6 +47,7 @@ from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
 from prima.vocab import (
     DEFAULT_BUDGETS,
     MAX_BLOCK_WATCHDOG,
+    MAX_EAS,
     MAX_STREAM_HOLD,
     AppKind,
     Budgets,
@@ -71,6 +72,9 @@ class MediatorConfig:
     max_block_watchdog: float = MAX_BLOCK_WATCHDOG
     """Upper bound on a begin/end block's watchdog, whatever the document asks:
     a runaway block cannot starve the other application (rule 3)."""
+
+    max_eas: int = MAX_EAS
+    """Most EAs registered at once (besides the one FA): each has its own budgets."""
 
     budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
     """What one application of each role may consume (the robot profile's
@@ -150,17 +154,21 @@ class Mediator:
 
     # ============================================================ applications
     def register(self, app: str, kind: AppKind, listener: AppListener) -> None:
-        """Load an application: one FA, at most one EA (swap: unregister the old EA first)."""
+        """Load an application: one FA, at most ``config.max_eas`` EAs at once."""
         kind = AppKind(kind)
         if not app:
             raise MediationError("an application needs a name")
         if app in self._apps:
             raise MediationError(f"application {app!r} is already registered")
-        for other in self._apps.values():
-            if other.kind is kind:
-                raise MediationError(
-                    f"cannot register {app!r}: {kind.name} {other.name!r} is loaded "
-                    f"(one FA, at most one EA; unregister {other.name!r} first)")
+        same = [other.name for other in self._apps.values() if other.kind is kind]
+        if kind is AppKind.FA and same:
+            raise MediationError(
+                f"cannot register {app!r}: FA {same[0]!r} is loaded "
+                f"(one FA at a time; unregister {same[0]!r} first)")
+        if kind is AppKind.EA and len(same) >= self._config.max_eas:
+            raise MediationError(
+                f"cannot register {app!r}: {len(same)} EAs are loaded ({', '.join(same)}); "
+                f"at most {self._config.max_eas} EAs at once")
         with self._operation():
             self._app_order += 1
             self._apps[app] = App(app, kind, listener, self._app_order,
