@@ -15,10 +15,12 @@ from prima.errors import DocumentError, ScenarioError
 from prima.mediator import DecisionKind
 from prima.run import Run
 from prima.sim import load_scenario
+from prima.sweep import write_variant
 from prima.trace import Kind, TraceLine, device_overlaps
 from prima.vocab import MAX_EAS
 
 ROOT = Path(__file__).parents[1]
+MUSEUM_CAFE = ROOT / "scenarios" / "examples" / "museum-cafe.xml"
 ZONES = ROOT / "tests" / "data" / "zones"
 
 
@@ -29,6 +31,30 @@ def _cli(*args: str) -> tuple[int, str, str]:
 
 def _loads(lines: list[TraceLine]) -> list[tuple[str | None, object]]:
     return [(ln.app, ln.detail["role"]) for ln in lines if ln.kind is DecisionKind.LOAD]
+
+
+def test_museum_cafe_matches_its_reviewed_golden(prima_golden) -> None:  # type: ignore[no-untyped-def]
+    prima_golden(MUSEUM_CAFE)
+
+
+def test_three_streams_are_suspended_and_resume_most_recent_first() -> None:
+    """The cafe's reaction suspends the guide's explanation; the FA's reaction to a
+    touch suspends the cafe's stream; the cafe's stream resumes first, then the guide's."""
+    lines = Run(MUSEUM_CAFE).run()
+    assert _loads(lines) == [("fa1-emotions", "fa"), ("ea1-museum", "ea"), ("cafe", "ea")]
+    turns = [(ln.kind, ln.app) for ln in lines
+             if ln.kind in (DecisionKind.SUSPEND, DecisionKind.RESUME)]
+    assert turns == [(DecisionKind.SUSPEND, "ea1-museum"), (DecisionKind.SUSPEND, "cafe"),
+                     (DecisionKind.RESUME, "cafe"), (DecisionKind.RESUME, "ea1-museum")]
+    suspend_cafe = next(ln for ln in lines if ln.kind is DecisionKind.SUSPEND
+                        and ln.app == "cafe")
+    assert suspend_cafe.text == "lost to AB54 (fa1-emotions)"
+    resumed = [ln.text for ln in lines if ln.kind is DecisionKind.START and ln.text and (
+        ln.app == "cafe" or ln.command == "SetDirection+PointByHand+Speak")]
+    assert resumed[1].startswith("Today's cake")  # the cafe's news, where it was cut off
+    assert resumed[-2].startswith("Take attention")  # the guide's panel, after the cafe
+    assert device_overlaps(lines) == []
+    assert [ln for ln in lines if ln.kind is Kind.ERROR] == []
 
 
 def test_a_joining_zone_loads_its_ea_beside_the_others() -> None:
@@ -128,3 +154,19 @@ def test_two_eas_of_one_name_are_refused(tmp_path: Path) -> None:
         Run(path)
     code, out, _ = _cli("validate", str(path))
     assert code == 1 and f"{path}:3:" in out and "both named 'ea0'" in out
+
+
+def test_several_eas_load_and_validate_and_sweep() -> None:
+    scenario = load_scenario(MUSEUM_CAFE)
+    assert scenario.ea == "../../apps/ea/ea1-museum.pxml"
+    assert scenario.eas == ("../../apps/ea/cafe.pxml",)
+    assert scenario.to_dict()["eas"] == ["../../apps/ea/cafe.pxml"]
+    assert "eas" not in load_scenario(ZONES / "swap.xml").to_dict()
+    code, _, err = _cli("validate", str(MUSEUM_CAFE))  # scenario, map, FA and both EAs
+    assert code == 0 and "5 files checked: 0 error(s)" in err
+
+
+def test_a_sweep_variant_keeps_every_ea(tmp_path: Path) -> None:
+    variant = write_variant(MUSEUM_CAFE, tmp_path / "v.xml", seed=1, index=0, jitter=0.0)
+    loaded = load_scenario(variant)
+    assert Path(loaded.resolve(loaded.eas[0])) == (ROOT / "apps" / "ea" / "cafe.pxml").resolve()
