@@ -35,7 +35,7 @@ from prima.mediator import (
 )
 from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
-from prima.vocab import MAX_EAS, FACE_TOLERANCE, Budgets, Value, policy_settings
+from prima.vocab import FACE_TOLERANCE, MAX_EAS, Budgets, Value, policy_settings
 
 __all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
 
