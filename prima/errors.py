@@ -158,8 +158,9 @@ class CommandError(ExecutionError):
 
 
 class MediationError(PrimaError, ValueError):
-    """The mediator refused an operation: unknown app or Command, a second EA,
-    an unbalanced stream or block, a driver reporting an AB that is not running.
+    """The mediator refused an operation: unknown app or Command, a second FA or an
+    EA past the bound, an unbalanced stream or block, a driver reporting an AB that
+    is not running.
 
     Working memory is left unchanged when this is raised.
     """

@@ -38,6 +38,7 @@ from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, loa
 from prima.trace import Kind, RecordKind, TraceLine
 from prima.vocab import (
     FACE_TOLERANCE,
+    MAX_EAS,
     RESTORE_ANGLE,
     RESTORE_DISTANCE,
     Budgets,
@@ -140,7 +141,7 @@ class _Port:
 
 
 class Run:
-    """One simulated run of a scenario with its FA and EA.
+    """One simulated run of a scenario with its FA and its EAs.
 
     The trace goes to ``sink`` line by line as the run goes, if one is given
     (then :attr:`lines` stays empty and memory stays flat however long the run);
@@ -166,21 +167,33 @@ class Run:
         scenario and the caller, in that order (MISSION.md 7.3)."""
         self.fa_path = Path(fa) if fa else (loaded.resolve(loaded.fa) if loaded.fa else None)
         self.ea_path = Path(ea) if ea else (loaded.resolve(loaded.ea) if loaded.ea else None)
+        self.ea_paths: list[Path] = ([self.ea_path] if self.ea_path else []) + [
+            loaded.resolve(more) for more in loaded.eas]
+        """The EAs running from the start (``<apps ea>`` or ``ea=``, then ``<apps><ea>``)."""
         # Load every document up front: a broken one stops the run before it starts.
         self._documents: dict[Path, Document] = {}
-        for path, role in ((self.fa_path, AppKind.FA), (self.ea_path, AppKind.EA)):
-            if path is not None:
-                self._documents[path] = _check_slot(load_document(path, self.profile), role)
-        names = [d.name for d in self._documents.values()]
-        if len(names) == 2 and names[0] == names[1]:
-            raise DocumentError([Problem(str(self.ea_path), 1, 1, Severity.ERROR,
-                                         f"the FA and the EA are both named '{names[0]}'; "
-                                         "each application needs a name of its own")])
+        named: dict[str, tuple[Path, AppKind]] = {}
+        starting = [(self.fa_path, AppKind.FA)] + [(p, AppKind.EA) for p in self.ea_paths]
+        for path, role in starting:
+            if path is None:
+                continue
+            document = _check_slot(load_document(path, self.profile), role)
+            self._documents[path] = document
+            other = named.get(document.name)
+            if other is not None:
+                whom = ("the FA and the EA" if other[1] is AppKind.FA
+                        else f"the EAs '{other[0]}' and '{path}'")
+                raise DocumentError([Problem(str(path), 1, 1, Severity.ERROR,
+                                             f"{whom} are both named '{document.name}'; "
+                                             "each application needs a name of its own")])
+            named[document.name] = (path, role)
         self.lines: list[TraceLine] = []
         self._sink = sink or self.lines.append
         self._count = 0
         self.budgets: Mapping[AppKind, Budgets] = self.profile.budgets
         self.apps: dict[str, _App] = {}
+        self._paths: dict[str, Path] = {}
+        """Each loaded application's document."""
         self._outcomes: dict[int, Outcome] = {}
         self.catalog = self.profile.catalog()
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
@@ -205,8 +218,8 @@ class Run:
         """Run to the end; returns the trace (empty when it went to a sink)."""
         if self.fa_path is not None:
             self._load(self.fa_path, AppKind.FA)
-        if self.ea_path is not None:
-            self._load(self.ea_path, AppKind.EA)
+        for path in self.ea_paths:
+            self._load(path, AppKind.EA)
         if self.sim.sample_every:
             self._line(Kind.POSE)  # where everyone starts; the samples follow
         sim, hz = self.sim, self.sim.kernel.hz
@@ -247,6 +260,7 @@ class Run:
         self._loading = path
         self.mediator.register(name, role, interpreter)  # its load decision is traced
         self.apps[name] = app
+        self._paths[name] = path
         self._guard(app, interpreter.start)
 
     def _guard(self, app: _App, work: Callable[[], None]) -> None:
@@ -266,15 +280,32 @@ class Run:
         self.apps.pop(app.name, None)
 
     def _zone(self, entry: ZoneEntry) -> None:
-        self._line(Kind.ZONE, text=entry.zone, detail={"ea": entry.ea})
+        """The robot entered a zone: its EA replaces the EAs running, or, with
+        ``join="true"``, joins them (at most :data:`MAX_EAS`); an EA already running
+        stays as it is."""
+        zone = next((z for z in self.scenario.zones if z.name == entry.zone), None)
+        join = zone is not None and zone.join
+        self._line(Kind.ZONE, text=entry.zone,
+                   detail={"ea": entry.ea, "join": True} if join else {"ea": entry.ea})
         path = self.scenario.resolve(entry.ea)
-        current = next((a for a in self.apps.values() if a.role is AppKind.EA), None)
-        if current is not None and self.ea_path == path:
+        running = [a for a in self.apps.values() if a.role is AppKind.EA]
+        if not join:
+            for current in running:
+                if self._paths[current.name] != path:
+                    current.interpreter.stop()
+                    self.apps.pop(current.name, None)
+                    self.mediator.unregister(current.name)
+            running = [a for a in running if self._paths[a.name] == path]
+        if any(self._paths[a.name] == path for a in running):
             return
-        if current is not None:
-            current.interpreter.stop()
-            self.apps.pop(current.name, None)
-            self.mediator.unregister(current.name)
+        if len(running) >= MAX_EAS:
+            problem = Problem(self.scenario.source, zone.line if zone else 1,
+                              zone.col if zone else 1, Severity.ERROR,
+                              f"zone '{entry.zone}': {len(running)} EAs are running "
+                              f"({', '.join(a.name for a in running)}); at most {MAX_EAS} "
+                              f"run at once: '{entry.ea}' is not loaded")
+            self._line(Kind.ERROR, text=str(problem), detail={"zone": entry.zone})
+            return
         self.ea_path = path
         try:
             self._load(path, AppKind.EA)

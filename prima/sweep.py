@@ -46,7 +46,8 @@ _TIMED = frozenset({"say", "touch", "walk", "leave", "follow", "stop"})
 """The user's timed actions (children of ``<user>`` with ``at``)."""
 _SCHEDULED = frozenset({"message", "sound", "event"})
 """The environment's scheduled inputs (children of ``<scenario>`` with ``at``)."""
-_PATHS = {"map": ("href",), "apps": ("fa", "ea"), "robot": ("profile",), "zone": ("ea",)}
+_PATHS = {"map": ("href",), "apps": ("fa", "ea"), "ea": ("href",), "robot": ("profile",),
+          "zone": ("ea",)}
 """Attributes that name files, relative to the scenario file."""
 
 
@@ -81,7 +82,9 @@ def _jitter(root: etree._Element, rng: random.Random, jitter: float) -> None:
 
 def _repath(root: etree._Element, source: Path, relative_to: Path | None) -> None:
     """File paths made absolute, or relative to ``relative_to``."""
-    for el in root:
+    apps = [c for c in root if isinstance(c.tag, str) and local_name(c) == "apps"]
+    more = [c for a in apps for c in a if isinstance(c.tag, str) and local_name(c) == "ea"]
+    for el in [*root, *more]:
         if not isinstance(el.tag, str):
             continue
         for attribute in _PATHS.get(local_name(el), ()):

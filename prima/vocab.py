@@ -15,6 +15,7 @@ from types import MappingProxyType
 __all__ = [
     "TraceKind",
     "MAX_BLOCK_WATCHDOG",
+    "MAX_EAS",
     "MAX_NUMBER",
     "MAX_RUN_TIME",
     "MAX_STREAM_HOLD",
@@ -125,6 +126,11 @@ other application's response speed stays bounded (rule 6c)."""
 MAX_BLOCK_WATCHDOG = 60.0
 """Upper bound on a begin/end block's watchdog (s), whatever a document asks: a
 runaway block cannot starve the other application (rule 3)."""
+
+MAX_EAS = 4
+"""Most EAs running at once (a building's guide beside a shop's app), besides the
+one FA. Each EA has its own budgets (one EA's), so what all of them may consume
+together stays bounded; a scenario or a zone asking for more is an error."""
 
 MAX_TEXT = 10_000
 """Longest text an application may build or say (characters)."""

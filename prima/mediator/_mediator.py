@@ -55,6 +55,7 @@ from prima.vocab import (
     DEFAULT_BUDGETS,
     INTERRUPTED_EVENT,
     MAX_BLOCK_WATCHDOG,
+    MAX_EAS,
     MAX_STREAM_HOLD,
     AppKind,
     Budgets,
@@ -90,6 +91,9 @@ class MediatorConfig:
     interrupt: bool = True
     """The interrupt policy (MISSION.md 7.3 (2)): on the Commands the catalog says are
     interruptible (the robot profile's ``<interruptible>``)."""
+
+    max_eas: int = MAX_EAS
+    """Most EAs registered at once (besides the one FA): each has its own budgets."""
 
     budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
     """What one application of each role may consume (the robot profile's
@@ -170,17 +174,21 @@ class Mediator:
 
     # ============================================================ applications
     def register(self, app: str, kind: AppKind, listener: AppListener) -> None:
-        """Load an application: one FA, at most one EA (swap: unregister the old EA first)."""
+        """Load an application: one FA, at most ``config.max_eas`` EAs at once."""
         kind = AppKind(kind)
         if not app:
             raise MediationError("an application needs a name")
         if app in self._apps:
             raise MediationError(f"application {app!r} is already registered")
-        for other in self._apps.values():
-            if other.kind is kind:
-                raise MediationError(
-                    f"cannot register {app!r}: {kind.name} {other.name!r} is loaded "
-                    f"(one FA, at most one EA; unregister {other.name!r} first)")
+        same = [other.name for other in self._apps.values() if other.kind is kind]
+        if kind is AppKind.FA and same:
+            raise MediationError(
+                f"cannot register {app!r}: FA {same[0]!r} is loaded "
+                f"(one FA at a time; unregister {same[0]!r} first)")
+        if kind is AppKind.EA and len(same) >= self._config.max_eas:
+            raise MediationError(
+                f"cannot register {app!r}: {len(same)} EAs are loaded ({', '.join(same)}); "
+                f"at most {self._config.max_eas} EAs at once")
         with self._operation():
             self._app_order += 1
             self._apps[app] = App(app, kind, listener, self._app_order,

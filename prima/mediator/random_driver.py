@@ -2,7 +2,8 @@
 
 :func:`scenario` builds one random scenario from a seed (a plain
 :class:`random.Random`, so a million run fast and each replays exactly):
-an FA and an EA (a second EA may be swapped in) that request single Commands,
+an FA and an EA (a second EA may be swapped in; in about a third of the seeds,
+another EA runs beside them all along) that request single Commands,
 chains, groups, ASAP and reactive requests, requests that follow their latest
 ended Command; end handlers that request follow-ups, at once or a little later
 (inside or past the end grace), some endlessly; posted events their handlers
@@ -18,6 +19,7 @@ oracle check every step; :func:`replay` prints what a seed does.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import random
 from collections.abc import Mapping
@@ -106,7 +108,7 @@ class Act:
 
     t: float
     role: str
-    """``fa`` or ``ea`` (the EA loaded at the time)."""
+    """``fa``, ``ea`` (the EA loaded at the time) or ``eb`` (the EA beside it)."""
     kind: str
     """``submit``, ``event``, ``stream`` or ``block`` (open, or close if open), ``swap``."""
     commands: tuple[str, ...] = ()
@@ -145,6 +147,9 @@ class Scenario:
     config: MediatorConfig
     horizon: float
     """Handlers request nothing after this time (so that everything drains)."""
+    beside: AppScript | None = None
+    """A second EA, ``eb``, running beside the FA and the first EA all along (three
+    apps: acts of role ``eb`` are its), or None (two apps)."""
 
     @property
     def longest(self) -> float:
@@ -171,6 +176,8 @@ class Scenario:
                  f"horizon {self.horizon:g}"]
         lines += [f"  budgets {k.value}: {b}" for k, b in self.config.budgets.items()]
         lines += [f"  script {i}: {s}" for i, s in enumerate(self.scripts)]
+        if self.beside is not None:
+            lines += [f"  script eb: {self.beside}"]
         lines += [f"  {a}" for a in self.acts]
         return "\n".join(lines)
 
@@ -232,12 +239,25 @@ def scenario(seed: int) -> Scenario:
         max_block_watchdog=r.choice((60.0, 60.0, 2.0)),
         budgets={AppKind.FA: _budgets(r), AppKind.EA: _budgets(r)},
     )
-    return Scenario(
+    sc = Scenario(
         seed=seed, acts=tuple(acts), scripts=(_script(r), _script(r), _script(r)),
         durations=durations if max(durations) > 0 or r.random() < 0.5 else durations + (1.0,),
         iterations=tuple(r.randint(1, 5) for _ in range(r.randint(1, 3))),
         immediate=r.random() < 0.3, config=config, horizon=horizon,
     )
+    return _beside(sc)
+
+
+def _beside(sc: Scenario) -> Scenario:
+    """In about a third of the seeds, a second EA runs beside the first all along and
+    takes about half the EA's acts: three apps suspend and resume each other's streams.
+    Drawn from a generator of its own, so that the other draws stay as they were."""
+    r = random.Random(f"prima-beside:{sc.seed}")
+    if r.random() >= 0.35:
+        return sc
+    acts = tuple(dataclasses.replace(a, role="eb") if a.role == "ea" and a.kind != "swap"
+                 and r.random() < 0.5 else a for a in sc.acts)
+    return dataclasses.replace(sc, acts=acts, beside=_script(r))
 
 
 # ---------------------------------------------------------------- playing
@@ -338,13 +358,15 @@ class _Run:
         self.m = self.h.mediator
         self.oracle = Oracle(self.m.catalog, sc.config, longest=sc.longest,
                              tolerance=tolerance)
-        self.names = {"fa": "fa", "ea": "ea"}
+        self.names = {"fa": "fa", "ea": "ea", "eb": "eb"}
         self.swaps = 0
         self.latest_ended: dict[str, CommandId] = {}
         self.streams: set[str] = set()
         self.blocks: set[str] = set()
         self.register("fa", AppKind.FA, sc.scripts[0])
         self.register("ea", AppKind.EA, sc.scripts[1])
+        if sc.beside is not None:
+            self.register("eb", AppKind.EA, sc.beside)
 
     def register(self, name: str, kind: AppKind, script: AppScript) -> None:
         self.m.register(name, kind, _Listener(self, name, script))

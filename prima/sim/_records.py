@@ -143,6 +143,15 @@ class Zone:
     name: str
     ea: str
     area: Area
+    join: bool = False
+    """Its EA joins the EAs running (``join="true"``) instead of replacing them."""
+    line: int = field(default=0, compare=False)
+    col: int = field(default=0, compare=False)
+    """Where the zone is written in the scenario file (for errors at run time)."""
 
     def to_dict(self) -> dict[str, object]:
-        return {"name": self.name, "ea": self.ea, "area": self.area.to_dict()}
+        out: dict[str, object] = {"name": self.name, "ea": self.ea,
+                                  "area": self.area.to_dict()}
+        if self.join:
+            out["join"] = True
+        return out

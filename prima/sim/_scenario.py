@@ -15,6 +15,7 @@ sizes, speeds and coordinates have the documented ranges of :data:`BOUNDS`.
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 import os
@@ -33,7 +34,7 @@ from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
 from prima.sim._simulator import SENSE_HZ
-from prima.vocab import MAX_RUN_TIME
+from prima.vocab import MAX_EAS, MAX_RUN_TIME
 from prima.xmlio import (
     Bound,
     XmlDocument,
@@ -110,6 +111,9 @@ class Scenario:
     fa: str | None = None
     ea: str | None = None
     """The EA running from the start (more may be loaded on entering zones)."""
+    eas: tuple[str, ...] = ()
+    """More EAs running from the start beside ``ea`` (``<apps><ea href/></apps>``), in
+    document order; with ``ea``, at most :data:`~prima.vocab.MAX_EAS`."""
     user: UserScript | None = None
     events: tuple[ScheduledEvent, ...] = ()
     replies: tuple[ReplyRule, ...] = ()
@@ -135,7 +139,7 @@ class Scenario:
             "replies": [r.to_dict() for r in self.replies],
             "zones": [z.to_dict() for z in self.zones],
             "policies": dict(self.policies),
-        }
+        } | ({"eas": list(self.eas)} if self.eas else {})
 
 
 # ---- shared helpers ----------------------------------------------------------------------
@@ -360,9 +364,11 @@ class _Loader:
         robot = self.where(robot_el)
         apps = kids.get("apps")
         self.exists(robot_el, "profile")
+        eas: tuple[str, ...] = ()
         if apps is not None:
             self.exists(apps, "fa")
             self.exists(apps, "ea")
+            eas = self.more_eas(apps)
         for zone_el in (c for c in _children(root) if local_name(c) == "zone"):
             self.exists(zone_el, "ea")
         user = self.user(kids["user"]) if "user" in kids else None
@@ -379,10 +385,30 @@ class _Loader:
             heading_noise=heading_noise,
             profile=robot_el.get("profile"),
             fa=apps.get("fa") if apps is not None else None,
-            ea=apps.get("ea") if apps is not None else None,
+            ea=apps.get("ea") if apps is not None else None, eas=eas,
             user=user, events=events, replies=tuple(self.replies), zones=zones,
             description=_text(kids["description"]) if "description" in kids else "",
             policies=policies)
+
+    def more_eas(self, apps: etree._Element) -> tuple[str, ...]:
+        """The ``<ea href>`` children of ``<apps>``: EAs running from the start beside
+        the ``ea`` attribute's, each file once, at most :data:`MAX_EAS` in all."""
+        out: list[str] = []
+        first = apps.get("ea")
+        seen = {os.path.normpath(self.path.parent / first)} if first else set()
+        for el in (c for c in _children(apps) if local_name(c) == "ea"):
+            href = el.get("href", "")
+            self.exists(el, "href")
+            named = os.path.normpath(self.path.parent / href)
+            if named in seen:
+                self.bad(el, f"the EA {href!r} is already running from the start", "href")
+            elif len(seen) >= MAX_EAS:
+                self.bad(el, f"at most {MAX_EAS} EAs run at once; this would be EA "
+                             f"{len(seen) + 1}", "href")
+            else:
+                out.append(href)
+            seen.add(named)
+        return tuple(out)
 
     def exists(self, el: etree._Element, attribute: str) -> None:
         """A file the scenario names (a document, a profile) must be a regular file; it is not
@@ -504,6 +530,14 @@ class _Loader:
         return tuple(events), tuple(zones)
 
     def zone(self, el: etree._Element) -> Zone | None:
+        zone = self._zone(el)
+        if zone is None:
+            return None
+        line, col = self.doc.where.attribute(el, "ea")
+        return dataclasses.replace(zone, join=el.get("join", "false") in ("true", "1"),
+                                   line=line, col=col)
+
+    def _zone(self, el: etree._Element) -> Zone | None:
         name, ea = el.get("name", ""), el.get("ea", "")
         rect = [el.get(a) for a in ("x1", "y1", "x2", "y2")]
         area_name = el.get("area")
@@ -578,9 +612,11 @@ class Reference:
     """Where the attribute's value is written in the scenario file."""
 
 
-_REFERENCES = (("map", "href", "map"), ("robot", "profile", "profile"), ("apps", "fa", "fa"),
-               ("apps", "ea", "ea"), ("zone", "ea", "zone"))
-"""(element, attribute, role) of every file a scenario may name."""
+_REFERENCES = (("map", "href", "map", ""), ("robot", "profile", "profile", ""),
+               ("apps", "fa", "fa", ""), ("apps", "ea", "ea", ""), ("apps", "href", "ea", "ea"),
+               ("zone", "ea", "zone", ""))
+"""(element, attribute, role, child) of every file a scenario may name: the attribute of
+the element itself, or of its ``child`` elements (``<apps><ea href/></apps>``)."""
 
 
 def scenario_references(path: str | Path) -> list[Reference]:
@@ -596,11 +632,14 @@ def scenario_references(path: str | Path) -> list[Reference]:
         return []
     found = []
     for el in _children(doc.root):
-        for tag, attribute, role in _REFERENCES:
-            value = el.get(attribute)
-            if local_name(el) == tag and value:
-                named = Path(os.path.normpath(path.parent / value))
-                found.append(Reference(role, named, value, *doc.where.attribute(el, attribute)))
+        nested = list(_children(el)) if local_name(el) == "apps" else []
+        for tag, attribute, role, inner in _REFERENCES:
+            for named_by in (c for c in nested if local_name(c) == inner) if inner else (el,):
+                value = named_by.get(attribute)
+                if local_name(el) == tag and value:
+                    named = Path(os.path.normpath(path.parent / value))
+                    found.append(Reference(role, named, value,
+                                           *doc.where.attribute(named_by, attribute)))
     return found
 
 

@@ -5,18 +5,20 @@ from __future__ import annotations
 import pytest
 
 from prima.errors import MediationError
-from prima.mediator import AppKind, DecisionKind, Event, Rule
+from prima.mediator import AppKind, DecisionKind, Event, MediatorConfig, Rule
 from prima.mediator.testing import Harness, ScriptedApp, feedback_iterations
+from prima.vocab import MAX_EAS
 
 from tests.mediator.helpers import call, req, speak, start_of
 
 
-def test_one_fa_and_at_most_one_ea() -> None:
-    h = Harness()
+def test_one_fa_and_a_bounded_number_of_eas() -> None:
+    h = Harness(config=MediatorConfig(max_eas=2))
     m = h.mediator
     h.app("fa", AppKind.FA)
     h.app("museum", AppKind.EA)
-    with pytest.raises(MediationError, match="at most one EA"):
+    h.app("cafe", AppKind.EA)
+    with pytest.raises(MediationError, match="2 EAs are loaded .museum, cafe.; at most 2 EAs"):
         m.register("library", AppKind.EA, ScriptedApp("library"))
     with pytest.raises(MediationError, match="one FA"):
         m.register("fa2", AppKind.FA, ScriptedApp("fa2"))
@@ -24,7 +26,18 @@ def test_one_fa_and_at_most_one_ea() -> None:
         m.register("fa", AppKind.EA, ScriptedApp("fa"))
     with pytest.raises(MediationError, match="unknown application"):
         m.unregister("library")
-    assert m.apps() == ("fa", "museum")
+    assert m.apps() == ("fa", "museum", "cafe")
+    m.unregister("cafe")
+    m.register("library", AppKind.EA, ScriptedApp("library"))  # room again
+    assert m.apps() == ("fa", "museum", "library")
+
+
+def test_the_default_bound_on_eas_is_max_eas() -> None:
+    h = Harness()
+    for i in range(MAX_EAS):
+        h.app(f"ea{i}", AppKind.EA)
+    with pytest.raises(MediationError, match=f"at most {MAX_EAS} EAs"):
+        h.mediator.register("one-more", AppKind.EA, ScriptedApp("one-more"))
 
 
 def test_an_ea_swap_cancels_its_work_frees_its_devices_and_never_cuts() -> None:

@@ -87,6 +87,17 @@ def test_the_driver_exercises_the_connect_channel_policy() -> None:
     assert turns > 20
 
 
+def test_the_driver_runs_three_apps_in_a_third_of_the_seeds() -> None:
+    """An EA beside the FA and the first EA all along: the three apps' streams
+    suspend each other (the oracle checks, at every step, that suspended streams
+    resume most recent first)."""
+    seeds = [seed for seed in SEEDS[:300] if scenario(seed).beside is not None]
+    assert 80 < len(seeds) < 130
+    suspended = {line.split()[2] for seed in seeds[:60] for line in replay(seed).splitlines()
+                 if " suspend " in line}
+    assert {"fa", "ea", "eb"} <= suspended
+
+
 def test_the_oracle_uses_the_public_api_only() -> None:
     root = Path(__file__).parents[2] / "prima" / "mediator"
     for module in ("oracle.py", "random_driver.py"):
