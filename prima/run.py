@@ -97,6 +97,9 @@ class _Channel:
     def unfaced(self) -> bool:
         return self._sim.user_unfaced(FACE_TOLERANCE)
 
+    def still(self) -> bool:
+        return self._sim.body_still()
+
     def pose(self) -> Mapping[str, Value]:
         p = self._sim.robot_pose()
         return {"x": round(p.x, 2), "y": round(p.y, 2), "heading": round(p.heading, 1)}

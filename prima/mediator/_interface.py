@@ -190,6 +190,9 @@ class Channel(Protocol):
         """The user is detectable, and the robot does not face them (beyond the
         policy's tolerance): an utterance now would be spoken with its back turned."""
 
+    def still(self) -> bool:
+        """The robot's body is not moving now (what holds the wheels only watches)."""
+
     def pose(self) -> Mapping[str, Value]:
         """The robot's pose now, as the arguments of the Command that returns it there
         (``RESTORE_COMMAND``: ``x``, ``y``, ``heading``)."""

@@ -360,9 +360,8 @@ class Mediator:
     def _connect(self, x: Node) -> bool:
         """The connect-channel policy: before the ready utterance ``x`` starts facing
         away from a detectable user, put a turn to the user before it, in its stream
-        (once per AB). Only when the turn's devices are free, or busy with an
-        iteration of a move that breaks the channel (it ends within a control period,
-        and the turn, keeping the channel, outranks the move's next one): an
+        (once per AB). Only when the turn's devices are free, or will be within a
+        control period with the turn first in line (:meth:`_turn_waits_for`): an
         utterance is never kept waiting for anything else on the wheels (a search's
         turn, a 5 s drive), which a later reaction could take first. True if it now
         waits for the turn."""
@@ -371,12 +370,29 @@ class Mediator:
         if self._channel is None or spec is None or not self._config.connect_channel:
             return False
         busy = self._wm.busy
-        if any(d in busy and not (busy[d].feedback and busy[d].priority < x.priority)
-               for d in spec.devices) or not self._channel.unfaced():
+        if any(d in busy and not self._turn_waits_for(busy[d], x) for d in spec.devices) \
+                or not self._channel.unfaced():
             return False
         self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
                                    f"turns to the user before AB{x.id}")
         return True
+
+    def _turn_waits_for(self, y: Node, x: Node) -> bool:
+        """A turn to the user before ``x`` may wait for the running ``y`` on the wheels:
+        an iteration of a move that breaks the channel (it ends within a control
+        period, and the turn, keeping the channel, outranks the move's next one); for
+        a reaction's utterance, another application's iteration with the body still
+        (a search's watch: one control period, and the reaction outranks its next
+        one), or an AB the interrupt policy will cut for the turn."""
+        if not y.feedback:
+            return x.tree.reaction is not None and self._config.interrupt \
+                and self._cuttable(y, x)
+        if y.priority < x.priority:
+            return True
+        if x.tree.reaction is None or y.app is x.app:
+            return False
+        return (self._channel is not None and self._channel.still()) or \
+            (self._config.interrupt and self._cuttable(y, x))
 
     def _tell_cancelled(self, commands: list[Command]) -> None:
         for cmd in commands:

@@ -336,6 +336,10 @@ class _Facing:
         self.asked += 1
         return self.asked % self.period != 0
 
+    def still(self) -> bool:
+        self.asked += 1
+        return self.asked % 2 == 0
+
     def pose(self) -> Mapping[str, Value]:
         self.poses += 1
         return {"x": float(self.poses), "y": 0.0, "heading": 0.0}

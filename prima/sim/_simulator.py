@@ -334,6 +334,10 @@ class Simulator:
             return False
         return abs(math.degrees(world.user_bearing())) > tolerance
 
+    def body_still(self) -> bool:
+        """The wheels are neither driving nor turning the robot now."""
+        return not self.world.moving()
+
     def user_pose(self) -> Pose | None:
         """Where the user is, or None in a scenario without a user."""
         return self.world.user_pose() if self.world.has_user else None

@@ -205,6 +205,12 @@ class World:
         """Where the running straight drive goes, if one runs."""
         return (self._tx, self._ty) if self.mode == _LINEAR else None
 
+    def moving(self) -> bool:
+        """The wheels drive or turn the body, or it has not come to rest yet."""
+        body = self.robot
+        return self.mode != _IDLE or body.velocity.length > 1e-3 \
+            or abs(body.angular_velocity) > 1e-3
+
     def turning_to(self) -> float | None:
         """The body angle the running turn ends at (radians), if one runs."""
         return self._ta if self.mode == _ANGULAR else None

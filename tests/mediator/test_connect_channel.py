@@ -23,6 +23,9 @@ class Facing:
         self.asked += 1
         return not self.faced
 
+    def still(self) -> bool:
+        return False
+
     def pose(self) -> Mapping[str, Value]:
         return {"x": 0.0, "y": 0.0, "heading": 0.0}
 

@@ -24,6 +24,9 @@ class Robot:
     def unfaced(self) -> bool:
         return False
 
+    def still(self) -> bool:
+        return False
+
     def pose(self) -> Mapping[str, Value]:
         return SUSPENDED_AT
 
