@@ -363,6 +363,14 @@ class Catalog:
         """The common interface every robot offers, FA and EA alike."""
         return cls({c.name: c for c in STANDARD_COMMANDS}, frozenset(STANDARD_DEVICES))
 
+    def usually_interruptible(self) -> frozenset[str]:
+        """What a robot that declares nothing can cut when the interrupt policy is
+        switched on: utterances, gestures and feedback iterations (MISSION.md 7.3
+        (2)); ``<interruptible>`` in a robot profile says otherwise."""
+        return frozenset(c.name for c in self.commands.values()
+                         if c.feedback or c.name == "Gesture"
+                         or any(p.kind is ParamKind.TEXT for p in c.params))
+
     def extended(self, commands: Iterable[CommandSpec], devices: Iterable[str] = ()) -> Catalog:
         """A catalog with robot-specific Commands and devices added (a Command of
         the same name as one already there replaces it)."""

@@ -199,11 +199,11 @@ POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
     Policy("restore-state", True, "a suspended stream, resumed with the robot moved "
                                   "away, first returns to the pose it was suspended in "
                                   "(thesis Sec. 5.3 (1))"),
-    Policy("interrupt", True, "a reaction cuts the other application's running atomic "
-                              "behavior (an utterance at a word boundary, a gesture, a "
-                              "feedback iteration) where the robot profile declares "
-                              "its Command interruptible; it restarts after the reaction "
-                              "(thesis Sec. 5.3 (2))"),
+    Policy("interrupt", False, "a reaction cuts the other application's running atomic "
+                               "behavior (an utterance at a word boundary, a gesture, a "
+                               "feedback iteration); it restarts after the reaction. On "
+                               "by default on a robot whose profile declares "
+                               "<interruptible> (thesis Sec. 5.3 (2))"),
     Policy("streams", True, "explicit stream blocks in the applications' documents keep "
                             "a Communication Stream together (thesis Sec. 5.3 (3))"),
     Policy("connect-channel", True, "before an utterance would start facing away from a "

@@ -14,7 +14,7 @@ from prima.dsl import parse_profile
 from prima.errors import DocumentError, ScenarioError
 from prima.judge import judge
 from prima.run import Run
-from prima.trace import format_text
+from prima.trace import TraceLine, format_text
 from prima.sim import load_scenario
 from prima.vocab import POLICIES, policy_settings
 from tests.dsl.test_profile import ALL, PROFILE
@@ -127,7 +127,8 @@ def test_prima_run_switches_policies_in_order() -> None:
     on = trace()
     assert "stream-hold" in on
     assert "stream-hold" not in trace("streams=off")
-    assert trace("streams=off", "all=on") == on
+    # (interrupt is off by default on the home robot, which declares no <interruptible>)
+    assert trace("streams=off", "all=on", "interrupt=off") == on
     assert "stream-hold" not in trace("all=on", "streams=off")
 
 
@@ -199,3 +200,41 @@ def test_restore_state_resumes_the_explanation_in_front_of_its_panel() -> None:
     assert (len(off.elsewhere), len(on.elsewhere)) == (1, 0)
     assert off.elsewhere[0].away > 2.0
     assert len(on.unfaced) == 0
+
+
+def test_interrupt_cuts_explanation_1_1_for_the_touch_and_says_it_again() -> None:
+    """Fig. 5.12 line 7, the thesis' own example: a touch during Explanation-1-1.
+    With the policy, FA4's reaction starts within 0.2 s plus one word (0.4 s at 2.5
+    words a second), and Explanation-1-1 is spoken again from its beginning after the
+    picture dialogue; without it, the reaction waits for the whole explanation."""
+    def run(state: str) -> list[TraceLine]:
+        return Run(ROOT / "scenarios" / "policies" / f"interrupt-{state}.xml").run()
+
+    def touch_reaction(lines: list[TraceLine]) -> float:
+        touch = next(ln for ln in lines if ln.kind.value == "event" and ln.text == "touched")
+        first = next(ln for ln in lines if ln.kind.value == "start" and ln.app == "fa4-picture"
+                     and ln.t >= touch.t)
+        return first.t - touch.t
+
+    on, off = run("on"), run("off")
+    assert touch_reaction(on) <= 0.2 + 0.4
+    assert touch_reaction(off) > 1.5
+    explanation = "This panel shows research points of our laboratory."
+    (cut,) = [ln for ln in on if ln.kind.value == "end" and ln.reason == "interrupt"]
+    assert (cut.app, cut.text, cut.detail["spoken"]) == ("ea1-museum", explanation,
+                                                         "This panel shows")
+    (again,) = [ln for ln in on if ln.kind.value == "start" and ln.reason == "restart"]
+    assert (again.text, again.detail["command_id"]) == (explanation, cut.detail["command_id"])
+    assert again.t > max(ln.t for ln in on if ln.app == "fa4-picture"
+                         and ln.kind.value == "start" and ln.t < again.t)
+    assert not [ln for ln in off if ln.reason in ("interrupt", "restart")]
+
+
+def test_interrupt_is_on_by_default_only_where_the_profile_declares_it() -> None:
+    home = policy_settings(_profile(""))
+    declared = _profile('<interruptible commands="Speak Gesture"/>')
+    assert (home["interrupt"], policy_settings(declared)["interrupt"]) == (False, True)
+    assert policy_settings(_profile('<policy name="interrupt" state="off"/>'
+                                    '<interruptible commands="Speak"/>'))["interrupt"] is False
+    with pytest.raises(DocumentError, match="no Command of this robot"):
+        _profile('<interruptible commands="Speak Teleport"/>')

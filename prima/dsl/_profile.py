@@ -111,7 +111,9 @@ class RobotProfile:
     a scenario and ``prima run --policy`` switch over them."""
     interruptible: frozenset[str] = frozenset()
     """The Commands this robot can cut for another application's reaction (its
-    ``<interruptible>``; the interrupt policy)."""
+    ``<interruptible>``; the interrupt policy, on by default when it is given). Empty:
+    none declared; switched on, the policy cuts utterances, gestures and feedback
+    iterations."""
     implemented: tuple[CommandSpec, ...] = ()
     """Common Commands this robot performs its own way (``<implement>``): on its own
     devices, and with a ``<perform>`` if it gives one."""
@@ -122,8 +124,7 @@ class RobotProfile:
     def __post_init__(self) -> None:
         # built once: every document loaded against the profile asks for it
         catalog = Catalog.standard().for_robot(self.implemented + self.commands, self.devices)
-        if self.interruptible:
-            catalog = catalog.interruptible(self.interruptible)
+        catalog = catalog.interruptible(self.interruptible or catalog.usually_interruptible())
         object.__setattr__(self, "_catalog", catalog)
 
     def catalog(self) -> Catalog:
@@ -287,8 +288,10 @@ class _Reader:
             events=self.events,
             budgets=self._role_budgets([el for el in elements(root)
                                         if local_name(el) == "budgets"]),
-            policies=MappingProxyType(self.policies),
-            interruptible=self._interruptible(root),
+            interruptible=(interruptible := self._interruptible(root)),
+            policies=MappingProxyType(
+                {"interrupt": True, **self.policies}
+                if interruptible and "all" not in self.policies else self.policies),
         )
 
     def _role_budgets(self, found: list[etree._Element]) -> Mapping[AppKind, Budgets]:
