@@ -27,6 +27,7 @@ from prima.vocab import Value
 
 __all__ = [
     "BODY_DEVICE",
+    "Blend",
     "BUILTIN_JOINTS",
     "CONNECT_COMMAND",
     "RESTORE_COMMAND",
@@ -350,6 +351,24 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
 
 
 @dataclass(frozen=True)
+class Blend:
+    """Commands a robot runs together on a shared device (MISSION.md 7.3 (5)): a
+    local motion over a global one (a dance step while it guides), speech over
+    quieter sound (ducking). Declared by the robot profile's ``<blend>``."""
+
+    local: frozenset[str]
+    """Commands that may start over a running one of ``over`` on ``devices``."""
+    over: frozenset[str]
+    devices: frozenset[str]
+    """The devices they share."""
+    max_user_distance: float | None = None
+    """While they blend the robot never gets farther than this from its user (m):
+    a blend starts only within it, and the global motion waits for the user."""
+    slowdown: float = 1.0
+    """The global motion's speed while a local one runs over it, as a fraction."""
+
+
+@dataclass(frozen=True)
 class Catalog:
     """An immutable set of Command types, looked up by name."""
 
@@ -357,6 +376,8 @@ class Catalog:
     devices: frozenset[str] = frozenset(STANDARD_DEVICES)
     talk_devices: frozenset[str] = TALK_DEVICES
     """Devices through which the robot talks with its user (the channel rule)."""
+    blends: tuple[Blend, ...] = ()
+    """Interfering Commands the robot runs together (the blend policy)."""
 
     @classmethod
     def standard(cls) -> Catalog:
@@ -377,20 +398,41 @@ class Catalog:
         merged = dict(self.commands)
         for c in commands:
             merged[c.name] = c
-        return Catalog(merged, self.devices | frozenset(devices), self.talk_devices)
+        return Catalog(merged, self.devices | frozenset(devices), self.talk_devices, self.blends)
 
     def interruptible(self, names: Iterable[str]) -> Catalog:
         """A catalog in which the Commands ``names`` may be cut (the interrupt policy)."""
         chosen = set(names)
         merged = {name: dataclasses.replace(c, interruptible=name in chosen)
                   for name, c in self.commands.items()}
-        return Catalog(merged, self.devices, self.talk_devices)
+        return Catalog(merged, self.devices, self.talk_devices, self.blends)
+
+    def with_blends(self, blends: Iterable[Blend]) -> Catalog:
+        """A catalog with these blends declared (the blend policy)."""
+        return dataclasses.replace(self, blends=tuple(blends))
+
+    def blend(self, starting: Iterable[CommandSpec], running: Iterable[CommandSpec],
+              device: str) -> Blend | None:
+        """The declared blend that lets an AB of the Commands ``starting`` share
+        ``device`` with a running AB of the Commands ``running``, if any: every Command
+        of one that uses the device is a local one of the blend, and of the other one
+        it runs over (a local motion over a global one; or a global motion's next
+        iteration under the local one still running)."""
+        a = {c.name for c in starting if device in c.devices}
+        b = {c.name for c in running if device in c.devices}
+        for blend in self.blends:
+            if device in blend.devices and a and b and (
+                    (a <= blend.local and b <= blend.over)
+                    or (a <= blend.over and b <= blend.local)):
+                return blend
+        return None
+
     def for_robot(self, commands: Iterable[CommandSpec], devices: Iterable[str]) -> Catalog:
         """This catalog as one robot offers it: ``commands`` added or replacing
         their namesakes (a common Command the robot implements its own way), on
         exactly the robot's ``devices`` (an armless robot has no ``arm``)."""
         extended = self.extended(commands)
-        return Catalog(extended.commands, frozenset(devices), self.talk_devices)
+        return Catalog(extended.commands, frozenset(devices), self.talk_devices, self.blends)
 
     @property
     def channel_devices(self) -> frozenset[str]:

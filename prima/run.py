@@ -100,6 +100,9 @@ class _Channel:
     def still(self) -> bool:
         return self._sim.body_still()
 
+    def near(self, distance: float) -> bool:
+        return self._sim.user_near(distance)
+
     def pose(self) -> Mapping[str, Value]:
         p = self._sim.robot_pose()
         return {"x": round(p.x, 2), "y": round(p.y, 2), "heading": round(p.heading, 1)}
@@ -206,7 +209,8 @@ class Run:
             config=MediatorConfig(budgets=self.budgets,
                                   connect_channel=self.policies["connect-channel"],
                                   restore_state=self.policies["restore-state"],
-                                  interrupt=self.policies["interrupt"]),
+                                  interrupt=self.policies["interrupt"],
+                                  blend=self.policies["blend"]),
             channel=_Channel(self.sim))
         self.sim.finished = self._finished
         self.sim.on_event = self._event

@@ -204,6 +204,10 @@ POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
                                "feedback iteration); it restarts after the reaction. On "
                                "by default on a robot whose profile declares "
                                "<interruptible> (thesis Sec. 5.3 (2))"),
+    Policy("blend", False, "declared local motions run over a global motion, and "
+                           "speech over quieter sound, on a shared device, the robot "
+                           "staying within a bound of its user; on by default on a "
+                           "robot whose profile declares <blend> (thesis Sec. 5.3 (5))"),
     Policy("streams", True, "explicit stream blocks in the applications' documents keep "
                             "a Communication Stream together (thesis Sec. 5.3 (3))"),
     Policy("connect-channel", True, "before an utterance would start facing away from a "

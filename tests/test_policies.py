@@ -4,6 +4,7 @@ scenario and ``prima run --policy``, and what each one does to a run."""
 from __future__ import annotations
 
 import io
+import math
 import re
 from pathlib import Path
 
@@ -32,7 +33,8 @@ def test_every_policy_has_a_default_and_all_switches_every_one() -> None:
     assert set(policy_settings({"all": False}).values()) == {False}
     # ``all`` first in its layer, then that layer's named ones; later layers win
     assert policy_settings({"all": False, "streams": True}) == \
-        {"restore-state": False, "interrupt": False, "streams": True, "connect-channel": False}
+        {"restore-state": False, "interrupt": False, "blend": False, "streams": True,
+         "connect-channel": False}
     assert policy_settings({"streams": False}, {"all": True})["streams"] is True
     assert policy_settings({"no-such-policy": False}) == policy_settings()
 
@@ -104,7 +106,7 @@ def test_streams_off_is_the_thesis_prima(tmp_path: Path) -> None:
 @pytest.mark.parametrize("switch, message", [
     ("teleport=on",
      "--policy teleport=on: no policy 'teleport' "
-     "(known: all, restore-state, interrupt, streams, connect-channel)"),
+     "(known: all, restore-state, interrupt, blend, streams, connect-channel)"),
     ("streams=maybe", "--policy streams=maybe: say streams=on or streams=off"),
     ("streams", "--policy streams: say streams=on or streams=off"),
 ])
@@ -238,3 +240,29 @@ def test_interrupt_is_on_by_default_only_where_the_profile_declares_it() -> None
                                     '<interruptible commands="Speak"/>'))["interrupt"] is False
     with pytest.raises(DocumentError, match="no Command of this robot"):
         _profile('<interruptible commands="Speak Teleport"/>')
+
+
+def test_blend_the_robot_dances_while_it_guides_within_the_bound() -> None:
+    """scenarios/policies/blend-on.xml: the tune plays while EA1 guides the user to
+    panel-2. FA3's dance blends over the move (the home robot declares Turn and
+    SetSpeedAndTime over TopologicalMove, within 2.5 m, at half speed): the robot goes
+    on guiding during the dance, never farther than 2.5 m from the user, and reaches
+    panel-2 before it does with the policy off, where it stops for the dance."""
+    def run(state: str) -> list[TraceLine]:
+        return Run(ROOT / "scenarios" / "policies" / f"blend-{state}.xml",
+                   pose_rate=2.0).run()
+
+    def arrival(lines: list[TraceLine]) -> float:
+        """When EA1's move to panel-2 ends there."""
+        return next(ln.t for ln in lines if ln.kind.value == "end"
+                    and ln.command == "TopologicalMove"
+                    and "place=panel-2, remaining=0" in str(ln.detail.get("result")))
+
+    on, off = run("on"), run("off")
+    dance = next(ln for ln in on if ln.kind.value == "start" and ln.app == "fa3-dance")
+    end = next(ln for ln in on if ln.kind.value == "end" and ln.ab == dance.ab)
+    assert dance.reason == "blend"
+    during = [ln for ln in on if dance.t <= ln.t <= end.t and ln.robot and ln.user]
+    assert during[-1].robot[0] - during[0].robot[0] > 2.0  # it went on guiding
+    assert max(math.dist(ln.robot[:2], ln.user[:2]) for ln in during) <= 2.5
+    assert arrival(on) < arrival(off) - 3.0

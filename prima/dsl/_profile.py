@@ -35,6 +35,7 @@ from lxml import etree
 
 from prima.catalog import (
     BUILTIN_JOINTS,
+    Blend,
     MAX_HOLD,
     STANDARD_DEVICES,
     ArgRef,
@@ -109,6 +110,9 @@ class RobotProfile:
     policies: Mapping[str, bool] = field(default_factory=dict)
     """The mediation policies this robot switches (``all`` switches every one first);
     a scenario and ``prima run --policy`` switch over them."""
+    blends: tuple[Blend, ...] = ()
+    """Interfering Commands this robot runs together (its ``<blend>`` elements; the
+    blend policy, on by default when there is one)."""
     interruptible: frozenset[str] = frozenset()
     """The Commands this robot can cut for another application's reaction (its
     ``<interruptible>``; the interrupt policy, on by default when it is given). Empty:
@@ -125,6 +129,8 @@ class RobotProfile:
         # built once: every document loaded against the profile asks for it
         catalog = Catalog.standard().for_robot(self.implemented + self.commands, self.devices)
         catalog = catalog.interruptible(self.interruptible or catalog.usually_interruptible())
+        if self.blends:
+            catalog = catalog.with_blends(self.blends)
         object.__setattr__(self, "_catalog", catalog)
 
     def catalog(self) -> Catalog:
@@ -140,6 +146,9 @@ MAX_JOINTS = 32
 
 _BUDGET_COUNTS = ("text", "waiting", "starts-per-instant")
 _BUDGET_SECONDS = ("sends-per-second", "longest-ab", "wait-share", "wait-window")
+
+MAX_BLENDS = 64
+"""Most ``<blend>`` elements in one profile."""
 
 MAX_SECONDS = MAX_RUN_TIME
 """Longest duration a budget may give (s)."""
@@ -161,6 +170,8 @@ FIGURES: Mapping[tuple[str, str], Bound] = {
     ("head", "tilt-max"): Bound(360.0, "deg", -360.0, positive=False),
     ("gesture", "duration"): Bound(3_600.0, "s"),
     ("command", "duration"): Bound(3_600.0, "s"),
+    ("blend", "max-user-distance"): Bound(1_000.0, "m"),
+    ("blend", "slowdown"): Bound(1.0, "", positive=True),
     ("joint", "min"): Bound(360.0, "deg", -360.0, positive=False),
     ("joint", "max"): Bound(360.0, "deg", -360.0, positive=False),
     ("joint", "rate"): Bound(3_600.0, "deg/s"),
@@ -289,10 +300,43 @@ class _Reader:
             budgets=self._role_budgets([el for el in elements(root)
                                         if local_name(el) == "budgets"]),
             interruptible=(interruptible := self._interruptible(root)),
-            policies=MappingProxyType(
-                {"interrupt": True, **self.policies}
-                if interruptible and "all" not in self.policies else self.policies),
+            blends=(blends := self._blends(root)),
+            policies=MappingProxyType(self._declared_on(interruptible=bool(interruptible),
+                                                        blend=bool(blends))),
         )
+
+    def _declared_on(self, **declared: bool) -> dict[str, bool]:
+        """The profile's policy switches: a policy the profile declares the means of
+        (``<interruptible>``, ``<blend>``) is on unless a ``<policy>`` says otherwise."""
+        if "all" in self.policies:
+            return self.policies
+        on = {"interrupt": declared["interruptible"], "blend": declared["blend"]}
+        return {**{name: True for name, yes in on.items() if yes}, **self.policies}
+
+    def _blends(self, root: etree._Element) -> tuple[Blend, ...]:
+        """The ``<blend>`` elements: Commands and devices each known."""
+        known = {c.name for c in Catalog.standard()} | {c.name for c in self.commands}
+        out: list[Blend] = []
+        for el in elements(root):
+            if local_name(el) != "blend":
+                continue
+            names = {a: frozenset((el.get(a) or "").split()) for a in ("local", "over")}
+            for attr, found in names.items():
+                for name in sorted(found - known):
+                    self.error(el, f"<blend> names {name!r}, which is no Command of this "
+                                   "robot", attr)
+            devices = frozenset((el.get("devices") or "").split())
+            for name in sorted(devices - self.devices):
+                self.error(el, f"<blend> shares the device {name!r}, which this robot "
+                               "does not declare", "devices")
+            bound = el.get("max-user-distance")
+            out.append(Blend(names["local"], names["over"], devices,
+                             self.number(el, "max-user-distance") if bound else None,
+                             self.number(el, "slowdown", 1.0)))
+            if len(out) > MAX_BLENDS:
+                self.error(el, f"more than {MAX_BLENDS} <blend> elements")
+                break
+        return tuple(out)
 
     def _role_budgets(self, found: list[etree._Element]) -> Mapping[AppKind, Budgets]:
         """Each role's budgets: a ``<budgets>`` without ``role`` sets both roles',

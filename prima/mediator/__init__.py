@@ -9,6 +9,7 @@ discrete-event harness) are in :mod:`prima.mediator.testing`.
 from prima.catalog import (
     STANDARD_COMMANDS,
     STANDARD_DEVICES,
+    Blend,
     Catalog,
     CommandSpec,
     Param,
@@ -47,6 +48,7 @@ __all__ = [
     "AppListener",
     "AtomicBehavior",
     "Call",
+    "Blend",
     "Catalog",
     "Channel",
     "Clock",

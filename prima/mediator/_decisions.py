@@ -84,6 +84,9 @@ class Rule(str, enum.Enum):
     interrupt decision, and the cut AB's end)."""
     RESTART = "restart"
     """A cut AB starts again from its beginning (its request and its start)."""
+    BLEND = "blend"
+    """An AB started over another running AB on a device they share, as the robot
+    profile declares (a local motion over a global one, speech over quieter sound)."""
     RESTORE_STATE = "restore-state"
     """The mediator returns the robot to the pose a stream was suspended in before
     the stream resumes, in that stream (a request and a start of its own)."""

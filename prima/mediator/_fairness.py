@@ -33,6 +33,10 @@ from prima.mediator._state import App
 __all__ = ["Fairness"]
 
 
+_SLACK = 1e-9
+"""Seconds of a wait share that floating-point sums may leave over: below this, it
+is spent (else its next check would fall on the very instant it is made)."""
+
 class _Share:
     """One application's record of keeping the others waiting."""
 
@@ -112,6 +116,8 @@ class Fairness:
                 share.demoted_until = None
                 changed |= self._set(app, False, "regains its precedence")
             used = share.total(now, window)
+            if used >= limit - _SLACK:  # (times summed in floating point: a share spent
+                used = max(used, limit)  # up to rounding is spent, or its deadline is now)
             if share.since is not None and used >= limit and share.demoted_until is None:
                 share.demoted_until = self._clock.after(window)
                 changed |= self._set(

@@ -110,6 +110,9 @@ class AtomicBehavior(NamedTuple):
     iteration: int = 0
     """For a feedback Command, which loop iteration this is (0, 1, 2, ...)."""
     reactive: bool = False
+    blended: frozenset[str] = frozenset()
+    """Devices it shares with another running AB (the blend policy): a local motion
+    over a global one, speech over quieter sound."""
 
 
 @dataclass(frozen=True)
@@ -189,6 +192,10 @@ class Channel(Protocol):
     def unfaced(self) -> bool:
         """The user is detectable, and the robot does not face them (beyond the
         policy's tolerance): an utterance now would be spoken with its back turned."""
+
+    def near(self, distance: float) -> bool:
+        """The user is detectable no farther than ``distance`` (m) from the robot (the
+        blend policy's bound)."""
 
     def still(self) -> bool:
         """The robot's body is not moving now (what holds the wheels only watches)."""

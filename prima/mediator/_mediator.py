@@ -88,6 +88,10 @@ class MediatorConfig:
     restore_state: bool = True
     """The restore-state policy (MISSION.md 7.3 (1)), when there is a channel."""
 
+    blend: bool = True
+    """The blend policy (MISSION.md 7.3 (5)): on the blends the catalog declares (the
+    robot profile's ``<blend>``)."""
+
     interrupt: bool = True
     """The interrupt policy (MISSION.md 7.3 (2)): on the Commands the catalog says are
     interruptible (the robot profile's ``<interruptible>``)."""
@@ -145,7 +149,8 @@ class Mediator:
         self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
                               config)
         self._selector = Selector(self._wm, self._holds, self._log, driver, clock,
-                                  self._overrun, self._prepare, self._suspending, self._cut)
+                                  self._overrun, self._prepare, self._suspending, self._cut,
+                                  self._blend)
         self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
@@ -250,6 +255,32 @@ class Mediator:
             self._tell_cancelled(cancelled)
             return ids
 
+    def _blend(self, x: Node) -> tuple[frozenset[str], bool] | None:
+        """The blend policy: the busy devices the ready ``x`` may share with what runs
+        there, if it may share every one: each is held by an AB that is no blend
+        itself and has none over it, of Commands a declared blend lets ``x``'s run
+        over there; and the user is within the blend's bound. With them, whether every
+        blend used bounds the distance to the user. None otherwise."""
+        catalog = self._catalog
+        if not self._config.blend or not catalog.blends:
+            return None
+        wm = self._wm
+        shared: set[str] = set()
+        bounded = True
+        for d in x.sorted_devices:
+            y = wm.busy.get(d)
+            if y is None:
+                continue
+            if y.blended or d in wm.blending or y.cutting:
+                return None
+            b = catalog.blend([c.spec for c in x.commands], [c.spec for c in y.commands], d)
+            if b is None or (b.max_user_distance is not None and (
+                    self._channel is None or not self._channel.near(b.max_user_distance))):
+                return None
+            shared.add(d)
+            bounded = bounded and b.max_user_distance is not None
+        return (frozenset(shared), bounded) if shared else None
+
     def _cut(self, x: Node) -> None:
         """The interrupt policy: the reaction's AB ``x`` ranks best on its devices but
         some are busy. If every AB running on them is another application's and may
@@ -270,6 +301,8 @@ class Mediator:
     def _cuttable(self, y: Node, x: Node) -> bool:
         if y.app is x.app or not preempts(x, y):
             return False
+        if y.blended or any(d in self._wm.blending for d in y.devices):
+            return False  # blended ABs are never cut
         if not all(c.spec.interruptible and c.on_interrupt is not OnInterrupt.NEVER
                    and not c.cut for c in y.commands):
             return False
@@ -286,7 +319,8 @@ class Mediator:
         children = wm.end(node, now)
         self._holds.ended(node)
         app = node.app
-        drop = any(c.on_interrupt is OnInterrupt.DROP for c in node.commands)
+        # (an unloaded app's AB still running is cut for good: nobody would restart it)
+        drop = not app.alive or any(c.on_interrupt is OnInterrupt.DROP for c in node.commands)
         self._log.emit(DecisionKind.END, Rule.INTERRUPT, node,
                        detail="dropped" if drop else "to restart")
         ended: tuple[Command, ...] = ()

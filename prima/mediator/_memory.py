@@ -31,6 +31,8 @@ class WorkingMemory:
         """Trees in working memory (with at least one such node)."""
         self.busy: dict[str, Node] = {}
         """Device -> the running AB that occupies it."""
+        self.blending: dict[str, Node] = {}
+        """Device -> the running AB blended over its occupant (the blend policy)."""
         self.index = WaitIndex()
         self.waiting = 0
         """How many ABs are on the waiting list."""
@@ -134,7 +136,10 @@ class WorkingMemory:
         self._rank(node, -1)
         self.waiting -= 1
         for d in node.sorted_devices:
-            self.busy[d] = node
+            if d in node.blended:
+                self.blending[d] = node  # the AB it blends over keeps the device
+            else:
+                self.busy[d] = node
         node.tree.running += 1
 
     def end(self, node: Node, now: float) -> list[Node]:
@@ -142,7 +147,14 @@ class WorkingMemory:
         node.state = NodeState.DONE
         for d in node.sorted_devices:
             if self.busy.get(d) is node:
-                del self.busy[d]
+                local = self.blending.pop(d, None)
+                if local is None:
+                    del self.busy[d]
+                else:  # the AB blended over it keeps the device now
+                    self.busy[d] = local
+                    local.blended = local.blended - {d}
+            elif self.blending.get(d) is node:
+                del self.blending[d]
         self.dirty.update(node.devices)
         node.tree.running -= 1
         self._inactive(node.app, now)

@@ -104,14 +104,15 @@ def rank(node: Node, pjf: Collection[int]) -> Rank:
     return tuple(c.key(node, pjf) for c in CRITERIA)
 
 
-_UP_TO_REACTIVITY = next(i for i, c in enumerate(CRITERIA) if c.rule is Rule.REACTIVITY) + 1
-
-
 def preempts(x: Node, y: Node) -> bool:
     """Whether the waiting AB ``x`` outranks the running AB ``y`` on what a running
-    AB keeps (priority, the wait share, being the latest reaction), not on waiting
-    order: the interrupt policy cuts ``y`` for ``x`` only then."""
-    return rank(x, ())[:_UP_TO_REACTIVITY] < rank(y, ())[:_UP_TO_REACTIVITY]
+    AB keeps: its priority, then being the latest reaction (not on waiting order).
+    The interrupt policy cuts ``y`` for ``x`` only then, and never for an app that
+    lost its precedence (the wait share): a budget that flips back and forth must
+    not cut and restart the same ABs over and over."""
+    if x.app.demoted:
+        return False
+    return (_priority(x, ()), _reactivity(x, ())) < (_priority(y, ()), _reactivity(y, ()))
 
 
 def separating_rule(winner: Rank, loser: Rank) -> Rule:

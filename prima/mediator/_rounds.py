@@ -35,7 +35,8 @@ def atomic_behavior(node: Node) -> AtomicBehavior:
     """What the driver is asked to perform for a node."""
     return AtomicBehavior(id=node.id, app=node.app.name, tree=node.tree.id, calls=node.calls,
                           command_ids=node.command_ids, devices=node.devices,
-                          iteration=node.iteration, reactive=node.reactive)
+                          iteration=node.iteration, reactive=node.reactive,
+                          blended=node.blended)
 
 
 class _Round:
@@ -91,7 +92,8 @@ class Selector:
     def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
                  clock: Clock, overrun: Callable[[App, str], None],
                  prepare: Callable[[Node], bool], suspending: Callable[[Tree], None],
-                 cut: Callable[[Node], None]) -> None:
+                 cut: Callable[[Node], None],
+                 blend: Callable[[Node], tuple[frozenset[str], bool] | None]) -> None:
         self._wm = wm
         self._holds = holds
         self._log = log
@@ -103,6 +105,9 @@ class Selector:
         True if it now waits for it."""
         self._suspending = suspending
         """Told of each tree as it is suspended (restore-state remembers the pose)."""
+        self._blend = blend
+        """The busy devices this ready-but-for-them AB may share (the blend policy), and
+        whether every blend it uses bounds the distance to the user; or None."""
         self._cut = cut
         """Asked for a reaction's AB that ranks best on its devices but finds some busy
         (the interrupt policy may cut what runs there)."""
@@ -185,7 +190,16 @@ class Selector:
         holds = self._holds
         held = holds.holder(x) if holds.open() or x.priority is Priority.LOW else None
         best = all(view.best(d) is x for d in x.sorted_devices)
-        ready = best and all(d not in self._wm.busy for d in x.sorted_devices)
+        busy = self._wm.busy
+        ready = best and all(d not in busy for d in x.sorted_devices)
+        x.blended = frozenset()
+        if best and not ready:
+            blend = self._blend(x)
+            if blend is not None:
+                (x.blended, bounded), ready = blend, True
+                if held is not None and held[0] is Rule.KEEP_CHANNEL and bounded:
+                    held = None  # a move blended with a local motion keeps within the
+                    # blend's bound of the user: it does not break the channel
         if held is None:
             if ready and self._prepare(x):
                 return False  # it waits for the policy's AB put before it
@@ -200,6 +214,13 @@ class Selector:
         holds.park(x, *held)
         return False
 
+    def _over(self, x: Node) -> str:
+        """A blended start's detail: what it blends over, on which devices."""
+        if not x.blended:
+            return ""
+        return "over " + ", ".join(f"AB{self._wm.busy[d].id} on {d}"
+                                   for d in sorted(x.blended))
+
     def _start(self, x: Node, view: _Round, started: list[Node],
                later: list[tuple[bool, Tree]]) -> None:
         x_rank = view.rank(x)
@@ -208,14 +229,16 @@ class Selector:
         # Who did it beat? The best remaining waiting AB on each of its devices.
         losers = [b for d in x.sorted_devices if (b := view.best(d)) is not None]
         rule = Rule.FREE_DEVICES
-        if x.restarts is not None:
+        if x.blended:
+            rule = Rule.BLEND
+        elif x.restarts is not None:
             rule = Rule.RESTART
         elif x.commands[0].internal is not None:
             rule = x.commands[0].internal
         elif losers:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
             rule = separating_rule(x_rank, view.rank(top))
-        self._log.emit(DecisionKind.START, rule, x)
+        self._log.emit(DecisionKind.START, rule, x, detail=self._over(x))
         self._holds.started(x)  # a block it starts takes force: what it holds steps aside
         if x.tree.suspended is not None:
             self._log.emit(DecisionKind.RESUME, rule, x, detail="resumed from the suspended IU")

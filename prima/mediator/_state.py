@@ -151,7 +151,7 @@ class Node:
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
-                 "restarts")
+                 "restarts", "blended")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -173,6 +173,9 @@ class Node:
         """The request's sequence number: smaller is older."""
         self.version = 0
         """Bumped whenever its waiting-index entries go stale."""
+        self.blended: frozenset[str] = frozenset()
+        """Devices it shares with another running AB (the blend policy): held by that
+        one, not by this one."""
         self.cutting = False
         """Running, and the mediator asked the driver to cut it (the interrupt policy)."""
         self.restarts: AbId | None = None

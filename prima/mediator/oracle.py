@@ -58,6 +58,7 @@ from prima.mediator import (
     AbId,
     TreeId,
     AppKind,
+    Blend,
     Catalog,
     CommandId,
     Decision,
@@ -197,7 +198,8 @@ def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
     unparked AB whose priority is not lower than that of A's AB holding the device
     (running on it or, on a free device, the best-ranked waiting unparked AB), or
     when A's stream hold or block parks another app's AB (the channel rule at work
-    is not a budget matter). A running AB in ``uncontended`` (it started while no
+    is not a budget matter; of several apps whose holds apply, the one that parked
+    it). A running AB in ``uncontended`` (it started while no
     other app's AB wanted its devices) keeps nobody: waiting for it is first come,
     first served, not a precedence taken."""
     out: set[str] = set()
@@ -207,7 +209,10 @@ def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
             for d in n.devices:
                 wanting.setdefault(d, []).append(n)
         elif not v.channel_held(n):
-            out.update(v.holders(n))
+            # Kept by several apps' holds (three apps or more): the wait is the
+            # parking hold's doing; the others would keep nothing it did not.
+            holders = v.holders(n)
+            out.update([n.parked_by] if n.parked_by in holders else holders)
     for d, ws in wanting.items():
         holder = v.busy.get(d) or ws[0]
         if holder.ab in uncontended:
@@ -280,6 +285,10 @@ class _Books:
     cancelled: set[AbId] = field(default_factory=set)
     running: dict[AbId, tuple[str, ...]] = field(default_factory=dict)
     occupied: dict[str, AbId] = field(default_factory=dict)
+    commands: dict[AbId, str] = field(default_factory=dict)
+    """Running AB -> its Commands (``A+B``)."""
+    blending: dict[str, AbId] = field(default_factory=dict)
+    """Device -> the running AB blended over its occupant (a declared blend)."""
 
 
 class Oracle:
@@ -317,6 +326,15 @@ class Oracle:
         self._exempt: set[AbId] = set()
         """ABs that started in a reaction or a stream under way (no stream hold applies)."""
         self._callbacks: dict[CommandId, int] = {}
+        self._cutting: set[AbId] = set()
+        """ABs the mediator asked the driver to cut (the interrupt policy)."""
+        self._to_restart: set[AbId] = set()
+        """Cut ABs whose restart must be requested in the same operation."""
+        self._interrupted: set[AbId] = set()
+        """Cut ABs restarted or dropped (each exactly once)."""
+        self._bounded: set[AbId] = set()
+        """ABs that started blended within a bound of the user (the channel rule does
+        not hold them)."""
 
     # ------------------------------------------------------------ reporting
     def fail(self, what: str) -> None:
@@ -353,6 +371,9 @@ class Oracle:
         suspended = set(before)  # what this operation's starts resume leaves it
         for d in new:
             self._decision(d, suspended)
+        for ab in sorted(self._to_restart):
+            self.fail(f"t={snap.t:g}: AB{ab} was cut to restart, and no restart was requested")
+        self._to_restart.clear()
         # A suspended tree that left the stack without resuming left working memory:
         # a request that joins it again takes the floor anew (7.2).
         starts = {d.tree for d in new if d.kind is DecisionKind.START}
@@ -376,6 +397,9 @@ class Oracle:
             b.kinds[d.app] = AppKind[d.detail]
         elif d.kind is DecisionKind.UNLOAD and d.app is not None:
             b.unloaded.add(d.app)
+        elif d.kind is DecisionKind.INTERRUPT or (d.kind is DecisionKind.REQUEST
+                                                  and d.rule is Rule.RESTART):
+            self._interrupt(d)
         elif d.kind is DecisionKind.REQUEST:
             self._requests += 1
             if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
@@ -384,18 +408,53 @@ class Oracle:
         elif d.kind is DecisionKind.START and d.ab is not None:
             self._start(d.ab, d, suspended)
         elif d.kind is DecisionKind.END and d.ab is not None:
-            if d.ab not in b.running:
-                self.fail(f"t={d.t:g}: AB{d.ab} ended but was not running")
-                return
-            b.ended.add(d.ab)
-            for dev in b.running.pop(d.ab):
-                b.occupied.pop(dev, None)
+            self._end(d.ab, d)
         elif d.kind is DecisionKind.CANCEL and d.ab is not None:
             if d.ab not in b.started:
                 b.cancelled.add(d.ab)
             elif d.detail != FEEDBACK_STOPPED or d.ab not in b.ended:
                 self.fail(f"t={d.t:g}: AB{d.ab} was cancelled after it started "
                           f"({d.rule.value}: {d.detail or 'no detail'})")
+
+    def _end(self, ab: AbId, d: Decision) -> None:
+        b = self.books
+        if ab not in b.running:
+            self.fail(f"t={d.t:g}: AB{ab} ended but was not running")
+            return
+        if d.rule is Rule.INTERRUPT:
+            self._interrupt(d)
+        b.ended.add(ab)
+        b.commands.pop(ab, None)
+        for dev in b.running.pop(ab):
+            if b.occupied.get(dev) == ab:
+                b.occupied.pop(dev)
+                if dev in b.blending:  # what blended over it keeps the device
+                    b.occupied[dev] = b.blending.pop(dev)
+            elif b.blending.get(dev) == ab:
+                b.blending.pop(dev)
+
+    def _interrupt(self, d: Decision) -> None:
+        """The interrupt policy: a cut is asked for a running AB, once; the AB ends cut
+        only then; it is restarted (in the same operation) or dropped, exactly once."""
+        ab = d.ab if d.ab is not None else -1
+        if d.kind is DecisionKind.INTERRUPT:
+            if ab not in self.books.running or ab in self._cutting:
+                self.fail(f"t={d.t:g}: AB{ab} was cut while not running, or twice")
+            self._cutting.add(ab)
+        elif d.kind is DecisionKind.END:
+            if ab not in self._cutting or ab in self._interrupted:
+                self.fail(f"t={d.t:g}: AB{ab} ended cut, but was not being cut")
+            if d.detail == "dropped":
+                self._interrupted.add(ab)
+            else:
+                self._to_restart.add(ab)
+        elif d.kind is DecisionKind.REQUEST:
+            self._requests += 1
+            cut = d.before if d.before is not None else -1
+            if cut not in self._to_restart:
+                self.fail(f"t={d.t:g}: AB{cut} was restarted but not cut to restart")
+            self._to_restart.discard(cut)
+            self._interrupted.add(cut)
 
     def _start(self, ab: AbId, d: Decision, suspended: set[TreeId]) -> None:
         b = self.books
@@ -405,16 +464,33 @@ class Oracle:
             self.fail(f"t={d.t:g}: AB{ab} started after it was cancelled")
         for dev in d.devices:
             other = b.occupied.get(dev)
-            if other is not None:
+            if other is None:
+                b.occupied[dev] = ab
+            elif d.rule is Rule.BLEND and (blend := self._declared_blend(d.command, other, dev)):
+                b.blending[dev] = ab
+                if blend.max_user_distance is not None:
+                    self._bounded.add(ab)
+            else:
                 self.fail(f"t={d.t:g}: AB{ab} started on {dev}, held by running AB{other}")
-            b.occupied[dev] = ab
         b.started.add(ab)
         b.running[ab] = d.devices
+        b.commands[ab] = d.command or ""
         if d.tree is not None:
             if not self.streams.held_by_stream(d.tree, suspended):
                 self._exempt.add(ab)
             self.streams.started.add(d.tree)
             suspended.discard(d.tree)  # resumed: a stream under way again
+
+    def _declared_blend(self, command: str | None, other: AbId, dev: str) -> Blend | None:
+        """The robot-declared blend that lets ``command`` run over ``other`` on ``dev``,
+        if nothing runs blended over ``other`` there yet and ``other`` is no blend."""
+        b = self.books
+        if dev in b.blending or other in b.blending.values():
+            return None
+        specs = self._catalog.commands
+        local = [specs[c] for c in (command or "").split("+") if c in specs]
+        over = [specs[c] for c in b.commands.get(other, "").split("+") if c in specs]
+        return self._catalog.blend(local, over, dev)
 
     def _check_running(self, v: _View) -> None:
         snap = v.snap
@@ -424,8 +500,11 @@ class Oracle:
             self.fail(f"t={snap.t:g}: running ABs per decisions {sorted(mine)} "
                       f"!= per snapshot {sorted(theirs)}")
         owners: dict[str, AbId] = {}
+        blending = self.books.blending
         for ab, devs in snap.running:
             for dev in devs:
+                if blending.get(dev) == ab:
+                    continue  # a declared blend (checked when it started)
                 if dev in owners:
                     self.fail(f"t={snap.t:g}: AB{ab} and AB{owners[dev]} both run on {dev}")
                 owners[dev] = ab
@@ -452,7 +531,7 @@ class Oracle:
                         and (h.kind == "block" or d.ab not in self._exempt)):
                     self.fail(f"t={d.t:g}: AB{d.ab} ({d.app} {d.command}) started while "
                               f"{h.app}'s {h.kind} held {', '.join(h.devices)}")
-            if prio is Priority.LOW and talkers - {d.app}:
+            if prio is Priority.LOW and talkers - {d.app} and d.ab not in self._bounded:
                 self.fail(f"t={d.t:g}: AB{d.ab} ({d.app} {d.command}) breaks the channel "
                           f"but started while {sorted(talkers - {d.app})} talked")
 

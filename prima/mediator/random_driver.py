@@ -40,7 +40,8 @@ from prima.mediator import (
 )
 from prima.mediator.oracle import Oracle
 from prima.mediator.testing import Harness
-from prima.vocab import Budgets
+from prima.catalog import Blend, Catalog
+from prima.vocab import Budgets, OnInterrupt
 
 __all__ = ["Act", "AppScript", "Result", "Scenario", "play", "replay", "scenario"]
 
@@ -121,6 +122,8 @@ class Act:
     """A stream's hold or a block's watchdog (s)."""
     devices: tuple[str, ...] | None = None
     """A block's devices (None: all)."""
+    on_interrupt: str = "restart"
+    """What its request lets the interrupt policy do (``restart``, ``drop``, ``never``)."""
 
     def __str__(self) -> str:
         if self.kind != "submit":
@@ -129,6 +132,8 @@ class Act:
             return f"t={self.t:g} {self.role} {self.kind}{extra}{devs}"
         flags = [f for f, on in (("asap", self.asap), ("reactive", self.reactive),
                                  ("group", self.group), ("follows", self.follows)) if on]
+        if self.on_interrupt != "restart":
+            flags.append(f"interrupt={self.on_interrupt}")
         return f"t={self.t:g} {self.role} submit {'+'.join(self.commands)} {' '.join(flags)}"
 
 
@@ -150,6 +155,12 @@ class Scenario:
     beside: AppScript | None = None
     """A second EA, ``eb``, running beside the FA and the first EA all along (three
     apps: acts of role ``eb`` are its), or None (two apps)."""
+    interrupt: bool = False
+    """The interrupt policy: reactions cut utterances, gestures and feedback
+    iterations, which end ``cut_after`` seconds after the cut is asked for."""
+    cut_after: float = 0.0
+    blends: tuple[Blend, ...] = ()
+    """The blend policy: what the robot runs together on shared devices."""
 
     @property
     def longest(self) -> float:
@@ -178,6 +189,9 @@ class Scenario:
         lines += [f"  script {i}: {s}" for i, s in enumerate(self.scripts)]
         if self.beside is not None:
             lines += [f"  script eb: {self.beside}"]
+        if self.interrupt:
+            lines += [f"  interrupt: cuts end after {self.cut_after:g} s"]
+        lines += [f"  blend: {b}" for b in self.blends]
         lines += [f"  {a}" for a in self.acts]
         return "\n".join(lines)
 
@@ -245,7 +259,41 @@ def scenario(seed: int) -> Scenario:
         iterations=tuple(r.randint(1, 5) for _ in range(r.randint(1, 3))),
         immediate=r.random() < 0.3, config=config, horizon=horizon,
     )
-    return _beside(sc)
+    return _blending(_interrupting(_beside(sc)))
+
+
+BLENDS = (
+    Blend(frozenset({"Turn", "SetSpeedAndTime", "Gesture", "MoveHead"}),
+          frozenset({"TopologicalMove", "TrackingHuman", "SetPosition"}),
+          frozenset({"locomotion", "neck"})),
+    Blend(frozenset({"Speak", "FaceHumanAndSpeak"}), frozenset({"QA", "Speak"}),
+          frozenset({"speaker"}), max_user_distance=2.0),
+)
+"""Blends a random robot declares: local motions over global ones, and speech over
+speech (ducking; bounded, so the channel's ``near`` decides)."""
+
+
+def _blending(sc: Scenario) -> Scenario:
+    """In about one seed in three, the robot declares blends (the blend policy). From
+    a generator of its own (the other draws stay)."""
+    r = random.Random(f"prima-blend:{sc.seed}")
+    if r.random() >= 0.33:
+        return sc
+    return dataclasses.replace(sc, blends=tuple(b for b in BLENDS if r.random() < 0.7))
+
+
+def _interrupting(sc: Scenario) -> Scenario:
+    """In about two seeds in five, the interrupt policy is on: reactions cut the
+    others' utterances, gestures and feedback iterations; a request now and then says
+    ``drop`` or ``never``. From a generator of its own (the other draws stay)."""
+    r = random.Random(f"prima-interrupt:{sc.seed}")
+    if r.random() >= 0.4:
+        return sc
+    acts = tuple(dataclasses.replace(a, on_interrupt=r.choice(("restart",) * 3
+                                                              + ("drop", "never")))
+                 if a.kind == "submit" else a for a in sc.acts)
+    return dataclasses.replace(sc, acts=acts, interrupt=True,
+                               cut_after=r.choice((0.0, 0.1, 0.25, 0.4)))
 
 
 def _beside(sc: Scenario) -> Scenario:
@@ -340,6 +388,10 @@ class _Facing:
         self.asked += 1
         return self.asked % 2 == 0
 
+    def near(self, distance: float) -> bool:
+        self.asked += 1
+        return self.asked % self.period != 1
+
     def pose(self) -> Mapping[str, Value]:
         self.poses += 1
         return {"x": float(self.poses), "y": 0.0, "heading": 0.0}
@@ -356,9 +408,14 @@ class _Run:
 
     def __init__(self, sc: Scenario, tolerance: float) -> None:
         self.sc = sc
-        self.h = Harness(duration=sc.duration, outcome=sc.outcome, config=sc.config,
+        standard = Catalog.standard()
+        catalog = standard.interruptible(standard.usually_interruptible()) if sc.interrupt \
+            else standard
+        catalog = catalog.with_blends(sc.blends)
+        self.h = Harness(catalog, duration=sc.duration, outcome=sc.outcome, config=sc.config,
                          immediate=sc.immediate,
-                         channel=_Facing(sc.facing) if sc.facing else None)
+                         channel=_Facing(sc.facing) if sc.facing else None,
+                         cut_after=sc.cut_after)
         self.m = self.h.mediator
         self.oracle = Oracle(self.m.catalog, sc.config, longest=sc.longest,
                              tolerance=tolerance)
@@ -404,7 +461,8 @@ class _Run:
             follows = self.latest_ended.get(name) if a.follows else None
             self.guarded(Request(name, tuple(call(c) for c in a.commands),
                                  order=RunningOrder.ASAP if a.asap else RunningOrder.AFTER_LATEST,
-                                 group=a.group, reactive=a.reactive, follows=follows))
+                                 group=a.group, reactive=a.reactive, follows=follows,
+                                 on_interrupt=OnInterrupt(a.on_interrupt)))
         elif a.kind == "event":
             self.m.post(Event(EVENTS[len(self.h.decisions) % len(EVENTS)]))
         elif a.kind == "stream":

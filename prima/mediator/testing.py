@@ -85,7 +85,7 @@ class ScriptedDriver:
 
     def start(self, ab: AtomicBehavior) -> None:
         for other in self.running.values():
-            shared = ab.devices & other.devices
+            shared = (ab.devices - ab.blended) & (other.devices - other.blended)
             if shared:
                 raise SimulationError(
                     f"AB{ab.id} started on {sorted(shared)} held by running AB{other.id}")

@@ -561,6 +561,14 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
         sim.end_loop(cid)
         return {"error": f"no route to {goal.name!r}"}, True
     nxt = path[0]
+    bound = sim.blend_bound()
+    if bound is not None and sim.world.has_user and sim.world.user_distance() > bound:
+        # blending (a dance while it guides): the robot never gets farther than the
+        # bound from its user; it waits for them this period
+        if sim.world.mode:
+            yield from _stop(sim)
+        yield sleep(sim.ticks(sim.spec.control_period))
+        return {"waiting": "user", "toward": nxt.name, "goal": goal.name, **_pose(sim)}, False
     outcome = yield from _period_toward(sim, nxt.x, nxt.y)
     if outcome is BLOCKED:
         blocked = int(state.get("blocked") or 0) + 1
@@ -706,6 +714,16 @@ PLANNED: Mapping[str, Callable[[Simulator, Call], float]] = {
 by the robot itself (a leg of a move, a head turn)."""
 
 
+def blended_motion(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+    """A local motion blended over a global one on the devices they share (the blend
+    policy): a dance step while the robot guides. The global motion keeps the wheels
+    (it slows down meanwhile); the local one sways the robot in place of commanding
+    them, taking the time it would take alone."""
+    seconds = planned(sim, call)
+    yield sleep(sim.ticks(seconds))
+    return {"blended": True, "duration": seconds}, True
+
+
 def planned(sim: Simulator, call: Call) -> float:
     """How long performing ``call`` will take, as far as it can be known at its start."""
     performed = sim.catalog.get(call.command)
@@ -744,6 +762,9 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
         if (behavior is None and spec is not None and spec.robot_specific
                 and spec.duration is not None):
             behavior = hold_for_duration
+        if spec is not None and spec.devices & ab.blended \
+                and sim.blended_locally(ab, call.command):
+            behavior = blended_motion
         if behavior is None or spec is None:
             values["error"] = f"the simulated robot has no Command {call.command!r}"
             return values, True

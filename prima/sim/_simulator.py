@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
-from prima.catalog import Catalog
+from prima.catalog import Blend, Catalog
 from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior, Event, Outcome
 from prima.sim._behaviors import perform
@@ -126,6 +126,8 @@ class Simulator:
         self._speech: dict[int, tuple[int, tuple[str, ...], int]] = {}
         """Command id -> what it is saying: the tick it began, its words, its ticks."""
         self._cutting: set[int] = set()
+        self._blends: dict[int, Blend] = {}
+        """Running atomic behaviors blended over another (the blend policy)."""
         self._loops: dict[int, dict[str, Value]] = {}
         self._mic: Waker | None = None
         self._sense_every = hz // SENSE_HZ
@@ -194,10 +196,46 @@ class Simulator:
         if ab.id in self._running:
             raise SimulationError(f"atomic behavior {ab.id} is already running")
         self._running[ab.id] = ab
+        if ab.blended:
+            self._blend(ab)
         if "human-detection" in ab.devices:
             self._sensing += 1
         self._procs[ab.id] = self.kernel.spawn(perform(self, ab),
                                                lambda result: self._finish(ab, result))
+
+    def _blend(self, ab: AtomicBehavior) -> None:
+        """``ab`` runs blended with another on a device they share. If it is the local
+        motion, the global one slows to the blend's ``slowdown`` and waits for a user
+        beyond its bound while it runs."""
+        catalog = self.catalog
+        mine = [catalog[c.command] for c in ab.calls if c.command in catalog]
+        for other in self._running.values():
+            shared = sorted(ab.blended & other.devices - other.blended)
+            if other is ab or not shared:
+                continue
+            theirs = [catalog[c.command] for c in other.calls if c.command in catalog]
+            found = catalog.blend(mine, theirs, shared[0])
+            if found is not None and all(c.name in found.local for c in mine
+                                         if found.devices & c.devices):
+                self._blends[ab.id] = found
+        self._pace()
+
+    def blended_locally(self, ab: AtomicBehavior, command: str) -> bool:
+        """``command`` of ``ab`` is a local motion blended over a global one: it leaves
+        the shared devices to the global motion."""
+        found = self._blends.get(ab.id)
+        return found is not None and command in found.local
+
+    def _pace(self) -> None:
+        slowest = min((b.slowdown for b in self._blends.values()), default=1.0)
+        self.world.speed_limit(self.spec.max_speed * slowest)
+
+    def blend_bound(self) -> float | None:
+        """How far the robot may be from its user now (m): the tightest bound of the
+        blends under way, or None."""
+        bounds = [b.max_user_distance for b in self._blends.values()
+                  if b.max_user_distance is not None]
+        return min(bounds) if bounds else None
 
     def abandon(self, command_id: int) -> None:
         """Forget a feedback loop; if nothing else drives the wheels, hold still."""
@@ -333,6 +371,11 @@ class Simulator:
         if not world.has_user or not self.user_detectable() or world.user_distance() < 1e-9:
             return False
         return abs(math.degrees(world.user_bearing())) > tolerance
+
+    def user_near(self, distance: float) -> bool:
+        """The user is detectable and no farther than ``distance`` (m)."""
+        world = self.world
+        return world.has_user and self.user_detectable() and world.user_distance() <= distance
 
     def body_still(self) -> bool:
         """The wheels are neither driving nor turning the robot now."""
@@ -541,6 +584,8 @@ class Simulator:
         del self._running[ab.id]
         self._procs.pop(ab.id, None)
         self._cutting.discard(ab.id)
+        if self._blends.pop(ab.id, None) is not None:
+            self._pace()
         for cid in ab.command_ids:
             self._speech.pop(cid, None)
         if "human-detection" in ab.devices:
@@ -559,6 +604,6 @@ class Simulator:
 
     def _hold_still(self) -> None:
         """Stop the wheels unless a running atomic behavior drives them."""
-        if self.world.mode and not any("locomotion" in ab.devices
+        if self.world.mode and not any("locomotion" in ab.devices and ab.id not in self._blends
                                        for ab in self._running.values()):
             self.world.stop()

@@ -205,6 +205,10 @@ class World:
         """Where the running straight drive goes, if one runs."""
         return (self._tx, self._ty) if self.mode == _LINEAR else None
 
+    def speed_limit(self, speed: float) -> None:
+        """Drive no faster than ``speed`` (m/s) from now on (a blend slows the robot)."""
+        self._vmax = min(speed, self.spec.max_speed)
+
     def moving(self) -> bool:
         """The wheels drive or turn the body, or it has not come to rest yet."""
         body = self.robot

@@ -26,6 +26,9 @@ class Facing:
     def still(self) -> bool:
         return False
 
+    def near(self, distance: float) -> bool:
+        return True
+
     def pose(self) -> Mapping[str, Value]:
         return {"x": 0.0, "y": 0.0, "heading": 0.0}
 

@@ -184,7 +184,7 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
 
 
 @pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347,
-                                  587142])
+                                  587142, 5151, 6858, 14284, 38491, 40689, 63038])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -198,7 +198,14 @@ def test_seeds_that_once_failed(seed: int) -> None:
     it reserved unnoticed, so the other app's utterance waited for the next event.
     587142: when a block took force, only the best waiting AB on each of its devices
     stepped aside; another app's AB it held, ranked lower there, still reserved a free
-    device against a turn to the user."""
+    device against a turn to the user. With the interrupt policy in the driver: 5151,
+    a wait share spent up to floating-point rounding set its next check on the very
+    instant (a livelock of deadlines; a share spent within 1e-9 s is spent); 6858, an
+    unloaded app's running AB was cut and restarted for nobody; 14284, two reactions'
+    tracking loops cut each other as the wait share demoted one, then the other (an
+    app that lost its precedence cuts nothing). 38491, 40689, 63038 (three apps): an AB
+    kept by two apps' stream holds at once was charged to both by the oracle; only the
+    hold that parks it keeps it waiting (the other would keep nothing more)."""
     assert play(seed).violations == []
 
 
@@ -237,3 +244,30 @@ def test_the_oracle_catches_a_stream_hold_that_splits_a_stream_under_way(
 
     monkeypatch.setattr(holds_module.Holds, "holder", holder)
     assert any("could start but waits" in v and "parked by" in v for v in caught())
+
+
+def test_the_oracle_catches_a_cut_ab_that_is_never_restarted(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The interrupt policy with its restart undone: the cut AB is neither restarted
+    nor reported dropped."""
+    from prima.mediator import _mediator as mediator_module
+
+    seeds = [s for s in range(200) if scenario(s).interrupt]
+    assert seeds
+    caught: list[str] = []
+
+    def no_restart(self: mediator_module.Mediator, node: holds_module.Node,
+                   outcome: mediator_module.Outcome) -> None:
+        wm = self._wm
+        wm.end(node, self._clock.now())
+        self._holds.ended(node)
+        self._log.emit(mediator_module.DecisionKind.END, Rule.INTERRUPT, node,
+                       detail="to restart")
+        wm.leave(node)
+
+    monkeypatch.setattr(mediator_module.Mediator, "_interrupted", no_restart)
+    for s in seeds:
+        caught += [v for v in play(s).violations if "no restart was requested" in v]
+        if caught:
+            break
+    assert caught

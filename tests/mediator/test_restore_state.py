@@ -27,6 +27,9 @@ class Robot:
     def still(self) -> bool:
         return False
 
+    def near(self, distance: float) -> bool:
+        return True
+
     def pose(self) -> Mapping[str, Value]:
         return SUSPENDED_AT
 
