@@ -271,3 +271,15 @@ def test_the_oracle_catches_a_cut_ab_that_is_never_restarted(
         if caught:
             break
     assert caught
+
+
+def test_with_every_policy_on_the_properties_hold() -> None:
+    """Seeds in which the connect-channel and restore-state channel, the interrupt
+    policy, declared blends and a third app all play at once: no two ABs share a
+    device but by a declared blend, every cut AB is restarted or dropped exactly once,
+    and working memory drains (the oracle checks each)."""
+    seeds = [s for s in range(3000) if (sc := scenario(s)).facing and sc.interrupt
+             and sc.blends and sc.beside is not None]
+    assert len(seeds) >= 20
+    for s in seeds:
+        assert play(s).violations == [], s
