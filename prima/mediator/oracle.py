@@ -65,6 +65,7 @@ from prima.mediator import (
     DecisionKind,
     HoldView,
     MediatorConfig,
+    NodeState,
     NodeView,
     Priority,
     Rule,
@@ -539,7 +540,10 @@ class Oracle:
         """Note the ABs started in this operation while no other app's AB that wanted
         one of their devices (with a priority not lower) was waiting, apart from moves
         the channel rule held back (that rule is not a budget matter)."""
-        rivals = [n for n in prev.waiting if not prev.channel_held(n)]
+        # (a waiting AB a policy put an AB of its own before is pending again: the
+        # policy's AB is the rival, entered in this operation)
+        rivals = [n for n in prev.waiting if not prev.channel_held(n)
+                  and not (n.ab in v.nodes and v.nodes[n.ab].state is NodeState.PENDING)]
         entered: set[AbId] = set()
         ended: set[AbId] = set()
         gone: set[AbId] = set()

@@ -184,7 +184,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
 
 
 @pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347,
-                                  587142, 5151, 6858, 14284, 38491, 40689, 63038])
+                                  587142, 5151, 6858, 14284, 38491, 40689, 63038, 117762,
+                                  127791])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -205,7 +206,10 @@ def test_seeds_that_once_failed(seed: int) -> None:
     tracking loops cut each other as the wait share demoted one, then the other (an
     app that lost its precedence cuts nothing). 38491, 40689, 63038 (three apps): an AB
     kept by two apps' stream holds at once was charged to both by the oracle; only the
-    hold that parks it keeps it waiting (the other would keep nothing more)."""
+    hold that parks it keeps it waiting (the other would keep nothing more). 117762,
+    127791: a waiting AB that restore-state put a return before was still counted as
+    a rival of the starts in that operation, so a demoted app's start on idle devices
+    was not excused (the return, a LOW move, was the rival)."""
     assert play(seed).violations == []
 
 
