@@ -52,15 +52,7 @@ def _number(sim: Simulator, call: Call, name: str, required: bool = True) -> flo
         if required:
             raise CommandError(f"missing argument {name!r}")
         return None
-    if isinstance(value, bool):
-        raise CommandError(f"argument {name!r} must be a number, not {value!r}")
-    try:
-        number = float(value)
-    except ValueError:
-        raise CommandError(f"argument {name!r} must be a number, not {value!r}") from None
-    if not math.isfinite(number):
-        raise CommandError(f"argument {name!r} must be finite, not {value!r}")
-    return number
+    return _finite(value, f"argument {name!r}")
 
 
 def _req(sim: Simulator, call: Call, name: str) -> float:

@@ -21,22 +21,16 @@ from prima.catalog import (
 )
 from prima.dsl import RobotProfile, check_file, load_profile, parse_profile
 from prima.errors import DocumentError
+from tests.dsl.test_profile import PROFILE as BASE
 
 ROOT = Path(__file__).parents[2]
 GUIDE = ROOT / "robots" / "guide-robot.xml"
 
-PROFILE = """<robot xmlns="urn:prima:robot:1" name="r">
-  <body radius="0.2" max-speed="0.4" max-accel="0.5" max-turn-rate="90"/>
-  <speech rate="2.5"/>
-  <camera fov="60" range="4"/>
-  <head pan-min="-90" pan-max="90" tilt-min="-30" tilt-max="30"/>
-  <devices>
-    {devices}
-  </devices>
+PROFILE = BASE.replace('tilt-min="{tilt}"', 'tilt-min="-30"').replace("  {rest}\n", """\
   <joint name="laser-pan" device="laser" min="-150" max="150" rate="180"/>
   <event name="lit"/>
 {rest}
-</robot>"""
+""")
 """A profile with a laser and its joint, and an event; ``rest`` from line 11 on."""
 
 DEVICES = " ".join(f'<device name="{d}"/>' for d in (*STANDARD_DEVICES, "laser"))
