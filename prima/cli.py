@@ -72,8 +72,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, metavar="N", help="random seed (default: the scenario's)")
     run.add_argument("--until", type=float, metavar="SECONDS",
                      help="simulated time to stop at (default: the scenario's)")
-    run.add_argument("--format", choices=("text", "jsonl"), default="text",
-                     help="trace format (default: text)")
+    run.add_argument("--format", choices=("text", "jsonl", "chrome-trace"), default="text",
+                     help="trace format (default: text); chrome-trace: the Trace Event "
+                          "Format, for Perfetto or chrome://tracing")
     run.add_argument("--out", metavar="FILE", help="write the trace to FILE instead of stdout")
     run.add_argument("--pose-rate", type=float, default=2.0, metavar="HZ",
                      help="pose samples per simulated second in the jsonl trace "
@@ -404,12 +405,23 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
                 row = text.row(line)
                 if row is not None:
                     to.write(row + "\n")
+        elif args.format == "chrome-trace":
+            from prima.chrome_trace import ChromeTraceWriter
+
+            chrome = ChromeTraceWriter(to)
+
+            def write(line: TraceLine) -> None:
+                chrome.write(line)
         else:
             def write(line: TraceLine) -> None:
                 to.write(jsonl_row(line))
         try:
             run.run()
+            if args.format == "chrome-trace":
+                chrome.close()
         except KeyboardInterrupt:
+            if args.format == "chrome-trace":
+                chrome.close()  # the slices under way end where the run stopped
             to.flush()
             print(f"prima run: interrupted at t={run.sim.now():g} s; the trace up to then "
                   f"is written{' to ' + args.out if args.out else ''}", file=err)

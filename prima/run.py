@@ -378,6 +378,8 @@ class Run:
             detail["iteration"] = d.iteration
         if d.precedes is not None:
             detail["precedes"] = d.precedes
+        if d.rule is Rule.BLEND and d.detail:
+            detail["over"] = d.detail
         if d.detail and kind not in (DecisionKind.START, DecisionKind.REQUEST, DecisionKind.END):
             text = d.detail
         self._line(kind, app=d.app, ab=d.ab, tree=d.tree, command=d.command, text=text,

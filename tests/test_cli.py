@@ -300,3 +300,19 @@ def test_a_broken_named_profile_is_reported_and_its_documents_wait(tmp_path: Pat
     assert code == 1
     assert [line.split(": error:")[0].rsplit(":", 2)[0] for line in out.splitlines()] == [
         str(robot)]
+
+
+def test_ctrl_c_closes_a_chrome_trace_where_the_run_stopped(tmp_path: Path) -> None:
+    out = tmp_path / "trace.json"
+    proc = subprocess.Popen([sys.executable, "-m", "prima", "run", str(OFFICE), "--until",
+                             "900000", "--format", "chrome-trace", "--out", str(out)],
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and (not out.exists() or out.stat().st_size < 4096):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    events = json.loads(out.read_text())  # a whole, closed array
+    begins = sum(e["ph"] == "b" for e in events)
+    assert begins and begins == sum(e["ph"] == "e" for e in events)
