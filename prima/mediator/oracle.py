@@ -538,12 +538,14 @@ class Oracle:
 
     def _contention(self, prev: _View, v: _View, new: Sequence[Decision]) -> None:
         """Note the ABs started in this operation while no other app's AB that wanted
-        one of their devices (with a priority not lower) was waiting, apart from moves
-        the channel rule held back (that rule is not a budget matter)."""
+        one of their devices (with a priority not lower) was waiting, apart from ABs
+        another app's hold kept (that app is charged for them) and moves the channel
+        rule held back (that rule is not a budget matter)."""
         # (a waiting AB a policy put an AB of its own before is pending again: the
         # policy's AB is the rival, entered in this operation)
-        rivals = [n for n in prev.waiting if not prev.channel_held(n)
-                  and not (n.ab in v.nodes and v.nodes[n.ab].state is NodeState.PENDING)]
+        rivals = [n for n in prev.waiting if not prev.held(n)
+                  and not (n.ab in v.nodes and v.nodes[n.ab].state is NodeState.PENDING)
+                  and not (n.ab in v.nodes and v.held(v.nodes[n.ab]))]
         entered: set[AbId] = set()
         ended: set[AbId] = set()
         gone: set[AbId] = set()
@@ -559,7 +561,7 @@ class Oracle:
                 gone.add(d.ab)
             elif d.kind is DecisionKind.START:
                 fresh = [n for n in v.waiting if (n.ab in entered or n.parent in ended)
-                         and not v.channel_held(n)]
+                         and not v.held(n)]
                 prio = self._priority(d)
                 devices = set(d.devices)
                 if not any(n.app != d.app and n.priority >= prio and devices & set(n.devices)

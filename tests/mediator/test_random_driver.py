@@ -185,7 +185,7 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
 
 @pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347,
                                   587142, 5151, 6858, 14284, 38491, 40689, 63038, 117762,
-                                  127791])
+                                  127791, 170836])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -209,7 +209,9 @@ def test_seeds_that_once_failed(seed: int) -> None:
     hold that parks it keeps it waiting (the other would keep nothing more). 117762,
     127791: a waiting AB that restore-state put a return before was still counted as
     a rival of the starts in that operation, so a demoted app's start on idle devices
-    was not excused (the return, a LOW move, was the rival)."""
+    was not excused (the return, a LOW move, was the rival). 170836: an AB another
+    app's stream hold kept was counted as a rival of a start on the idle device, so
+    that start was not excused when the hold ended (the holder is charged for it)."""
     assert play(seed).violations == []
 
 
