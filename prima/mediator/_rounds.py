@@ -25,6 +25,7 @@ from prima.mediator._index import WaitIndex
 from prima.mediator._interface import AbId, AtomicBehavior, Clock, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
+from prima.mediator._policies import Policies
 from prima.mediator._ranking import Rank, rank, separating_rule
 from prima.mediator._state import App, Node, NodeState, Tree
 
@@ -91,26 +92,15 @@ class Selector:
 
     def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
                  clock: Clock, overrun: Callable[[App, str], None],
-                 prepare: Callable[[Node], bool], suspending: Callable[[Tree], None],
-                 cut: Callable[[Node], None],
-                 blend: Callable[[Node], tuple[frozenset[str], bool] | None]) -> None:
+                 policies: Policies) -> None:
         self._wm = wm
         self._holds = holds
         self._log = log
         self._driver = driver
         self._clock = clock
         self._overrun = overrun
-        self._prepare = prepare
-        """Put a policy's AB before this ready one (restore-state, connect-channel)?
-        True if it now waits for it."""
-        self._suspending = suspending
-        """Told of each tree as it is suspended (restore-state remembers the pose)."""
-        self._blend = blend
-        """The busy devices this ready-but-for-them AB may share (the blend policy), and
-        whether every blend it uses bounds the distance to the user; or None."""
-        self._cut = cut
-        """Asked for a reaction's AB that ranks best on its devices but finds some busy
-        (the interrupt policy may cut what runs there)."""
+        self._policies = policies
+        """What the mediation policies decide about an AB weighed (MISSION.md 7.3)."""
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
@@ -146,7 +136,7 @@ class Selector:
         for is_suspend, tree in later:
             if is_suspend:
                 if wm.suspend(tree):
-                    self._suspending(tree)
+                    self._policies.suspending(tree)
             else:
                 wm.resume(tree)
                 if self._holds.open():
@@ -194,17 +184,17 @@ class Selector:
         ready = best and all(d not in busy for d in x.sorted_devices)
         x.blended = frozenset()
         if best and not ready:
-            blend = self._blend(x)
+            blend = self._policies.blend(x)
             if blend is not None:
                 (x.blended, bounded), ready = blend, True
                 if held is not None and held[0] is Rule.KEEP_CHANNEL and bounded:
                     held = None  # a move blended with a local motion keeps within the
                     # blend's bound of the user: it does not break the channel
         if held is None:
-            if ready and self._prepare(x):
+            if ready and self._policies.prepare(x):
                 return False  # it waits for the policy's AB put before it
             if best and not ready and x.tree.reaction is not None:
-                self._cut(x)
+                self._policies.cut(x)
             return ready
         # Held by another app's block, stream hold or talk: out of the ranking at
         # once, so it reserves nothing meanwhile. The channel rule is noted only

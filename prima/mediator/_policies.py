@@ -1,0 +1,182 @@
+"""The mechanisms of the mediation policies that act when the selector weighs an AB
+(MISSION.md 7.3): restore-state and connect-channel put an AB of the mediator's own
+before a ready one; blend lets one share devices with a running AB; interrupt has
+the driver cut a running one. What the interrupt policy does when the cut AB ends
+is the mediator's (:meth:`Mediator._interrupted`): it needs the applications.
+
+The run answers the questions about the robot (:class:`Channel`); the mediator
+never looks at poses itself.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from prima.catalog import (
+    BODY_DEVICE,
+    CONNECT_COMMAND,
+    RESTORE_COMMAND,
+    RESTORE_POSITION_COMMAND,
+    Catalog,
+)
+from prima.mediator._decisions import DecisionKind, Rule
+from prima.mediator._holds import Holds
+from prima.mediator._intake import Intake
+from prima.mediator._interface import Call, Channel, Driver
+from prima.mediator._log import DecisionLog
+from prima.mediator._memory import WorkingMemory
+from prima.mediator._ranking import preempts
+from prima.mediator._state import Node, Tree
+from prima.vocab import OnInterrupt
+
+if TYPE_CHECKING:
+    from prima.mediator._mediator import MediatorConfig
+
+__all__ = ["Policies"]
+
+
+class Policies:
+    """What the policies decide about one AB the selector weighs; each decision is a
+    decision record with the policy's own rule."""
+
+    def __init__(self, catalog: Catalog, config: MediatorConfig, channel: Channel | None,
+                 wm: WorkingMemory, intake: Intake, holds: Holds, log: DecisionLog,
+                 driver: Driver) -> None:
+        self._catalog = catalog
+        self._config = config
+        self._channel = channel
+        """Asked when a stream is suspended and before a resumed stream or an utterance
+        starts (restore-state, connect-channel), and for a blend's bound; None: those
+        policies are off."""
+        self._wm = wm
+        self._intake = intake
+        self._holds = holds
+        self._log = log
+        self._driver = driver
+
+    def suspending(self, tree: Tree) -> None:
+        """A tree is suspended: remember where the robot is (restore-state)."""
+        if self._channel is not None and self._config.restore_state:
+            tree.pose = self._channel.pose()
+
+    def prepare(self, x: Node) -> bool:
+        """The ready AB ``x`` is about to start: put a policy's AB before it? True if it
+        now waits for one (a return to the pose its stream was suspended in, then a
+        turn to the user)."""
+        if x.tree.pose is not None and x.tree.suspended is not None and self._restore(x):
+            return True
+        return x.turnable and self._connect(x)
+
+    def _restore(self, x: Node) -> bool:
+        """The restore-state policy: ``x`` resumes its suspended stream with the robot
+        moved away from where it was suspended, so a return to that pose goes first,
+        in the stream. Not before an AB that takes the robot somewhere itself (a move,
+        following the user), and once per suspension. Before an AB that turns the robot
+        itself (a FaceHumanAndSpeak), only the position is restored. The return waits
+        for the wheels like any AB of the resumed stream."""
+        pose, x.tree.pose = x.tree.pose, None
+        if pose is None or self._channel is None or any(c.spec.travels for c in x.commands):
+            return False
+        command = RESTORE_COMMAND
+        if BODY_DEVICE in x.devices:
+            command = RESTORE_POSITION_COMMAND
+            pose = {k: v for k, v in pose.items() if k != "heading"}
+        spec = self._catalog.get(command)
+        if spec is None or not self._channel.displaced(pose):
+            return False
+        call = Call(command, pose)
+        self._intake.insert_before(x, call, spec, Rule.RESTORE_STATE,
+                                   f"returns to the pose its stream was suspended in "
+                                   f"before AB{x.id}")
+        return True
+
+    def _connect(self, x: Node) -> bool:
+        """The connect-channel policy: before the ready utterance ``x`` starts facing
+        away from a detectable user, put a turn to the user before it, in its stream
+        (once per AB). Only when the turn's devices are free, or will be within a
+        control period with the turn first in line (:meth:`_turn_waits_for`): an
+        utterance is never kept waiting for anything else on the wheels (a search's
+        turn, a 5 s drive), which a later reaction could take first. True if it now
+        waits for the turn."""
+        x.turnable = False
+        spec = self._catalog.get(CONNECT_COMMAND)
+        if self._channel is None or spec is None or not self._config.connect_channel:
+            return False
+        busy = self._wm.busy
+        if any(d in busy and not self._turn_waits_for(busy[d], x) for d in spec.devices) \
+                or not self._channel.unfaced():
+            return False
+        self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
+                                   f"turns to the user before AB{x.id}")
+        return True
+
+    def _turn_waits_for(self, y: Node, x: Node) -> bool:
+        """A turn to the user before ``x`` may wait for the running ``y`` on the wheels:
+        an iteration of a move that breaks the channel (it ends within a control
+        period, and the turn, keeping the channel, outranks the move's next one); for
+        a reaction's utterance, another application's iteration with the body still
+        (a search's watch: one control period, and the reaction outranks its next
+        one), or an AB the interrupt policy will cut for the turn."""
+        if not y.feedback:
+            return x.tree.reaction is not None and self._config.interrupt \
+                and self.cuttable(y, x)
+        if y.priority < x.priority:
+            return True
+        if x.tree.reaction is None or y.app is x.app:
+            return False
+        return (self._channel is not None and self._channel.still()) or \
+            (self._config.interrupt and self.cuttable(y, x))
+
+    def blend(self, x: Node) -> tuple[frozenset[str], bool] | None:
+        """The blend policy: the busy devices the ready ``x`` may share with what runs
+        there, if it may share every one: each is held by an AB that is no blend
+        itself and has none over it, of Commands a declared blend lets ``x``'s run
+        over there; and the user is within the blend's bound. With them, whether every
+        blend used bounds the distance to the user. None otherwise."""
+        catalog = self._catalog
+        if not self._config.blend or not catalog.blends:
+            return None
+        wm = self._wm
+        shared: set[str] = set()
+        bounded = True
+        for d in x.sorted_devices:
+            y = wm.busy.get(d)
+            if y is None:
+                continue
+            if y.blended or d in wm.blending or y.cutting:
+                return None
+            b = catalog.blend([c.spec for c in x.commands], [c.spec for c in y.commands], d)
+            if b is None or (b.max_user_distance is not None and (
+                    self._channel is None or not self._channel.near(b.max_user_distance))):
+                return None
+            shared.add(d)
+            bounded = bounded and b.max_user_distance is not None
+        return (frozenset(shared), bounded) if shared else None
+
+    def cut(self, x: Node) -> None:
+        """The interrupt policy: the reaction's AB ``x`` ranks best on its devices but
+        some are busy. If every AB running on them is another application's and may
+        be cut (its Commands are interruptible on this robot, its request allows it,
+        no block of its application keeps its devices), have the driver cut them."""
+        if not self._config.interrupt:
+            return
+        busy = self._wm.busy
+        running = sorted({busy[d] for d in x.devices if d in busy}, key=lambda y: y.id)
+        if not running or not all(self.cuttable(y, x) for y in running):
+            return
+        for y in running:
+            if not y.cutting and self._driver.cut(y.id):
+                y.cutting = True
+                self._log.emit(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
+                               detail=f"for {x.app.name}'s reaction (AB{x.id})")
+
+    def cuttable(self, y: Node, x: Node) -> bool:
+        if y.app is x.app or not preempts(x, y):
+            return False
+        if y.blended or any(d in self._wm.blending for d in y.devices):
+            return False  # blended ABs are never cut
+        if not all(c.spec.interruptible and c.on_interrupt is not OnInterrupt.NEVER
+                   and not c.cut for c in y.commands):
+            return False
+        block = self._holds.block(y.app)
+        return block is None or not (block.devices & y.devices)
