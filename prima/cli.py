@@ -83,6 +83,28 @@ def build_parser() -> argparse.ArgumentParser:
                      help="switch a mediation policy, over the profile's and the scenario's "
                           f"(repeatable; NAME: all, {', '.join(POLICIES)}; "
                           "docs/mediator.md, Policies)")
+    debug = commands.add_parser(
+        "debug",
+        help="step through a run: breakpoints, working memory, the apps' states",
+        description="Run a scenario and stop where asked: at the next trace line, or at "
+                    "a breakpoint on an application, a Command, a state, an event, the "
+                    "user or a time. Stopped, show working memory (waiting, running, "
+                    "suspended streams, holds) and each application's state and "
+                    "variables. Commands come from standard input, one per line, so a "
+                    "session can be scripted; 'help' lists them (docs/running.md).",
+    )
+    debug.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
+    debug.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
+    debug.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
+    debug.add_argument("--robot", metavar="PROFILE",
+                       help="robot hardware profile (default: the scenario's, else the home "
+                            "robot)")
+    debug.add_argument("--seed", type=int, metavar="N",
+                       help="random seed (default: the scenario's)")
+    debug.add_argument("--until", type=float, metavar="SECONDS",
+                       help="simulated time to stop at (default: the scenario's)")
+    debug.add_argument("--policy", action="append", default=[], metavar="NAME=on|off",
+                       help="switch a mediation policy (repeatable; as for prima run)")
     test = commands.add_parser(
         "test",
         help="run scenarios and compare their traces with golden traces",
@@ -429,6 +451,28 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
+def _debug(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.debug import Debugger
+
+    args.out, args.pose_rate = None, 0.0
+    problem = _run_usage(args)
+    if problem:
+        return _usage("debug", problem, err)
+    debugger = Debugger(args.scenario, _stdin(), out, fa=args.fa, ea=args.ea,
+                        robot=args.robot, seed=args.seed, until=args.until,
+                        policies=args.policy)
+    try:
+        debugger.start()
+    except KeyboardInterrupt:
+        print(f"prima debug: interrupted at t={debugger.run.sim.now():g} s", file=err)
+        return EXIT_INTERRUPTED
+    return EXIT_OK
+
+
+def _stdin() -> TextIO:
+    return sys.stdin
+
+
 def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.golden import Status, check, scenarios_with_goldens
 
@@ -578,6 +622,7 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
+    "debug": _debug,
     "test": _test,
     "judge": _judge,
     "sweep": _sweep,

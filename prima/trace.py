@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from prima.mediator import DecisionKind
 from prima.vocab import TraceKind, Value
 
-__all__ = ["Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "device_overlaps",
-           "format_jsonl", "format_text", "jsonl_row"]
+__all__ = ["Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "describe",
+           "device_overlaps", "format_jsonl", "format_text", "jsonl_row"]
 
 
 Kind = TraceKind
@@ -166,6 +166,19 @@ _REASON_SHOWN = frozenset({DecisionKind.START, DecisionKind.CANCEL, DecisionKind
 
 def _describe(line: TraceLine) -> str | None:
     return _DESCRIBE[line.kind](line)
+
+
+def describe(line: TraceLine) -> str:
+    """What a line says, as the text trace's behavior column does (with its rule in
+    brackets), or, for a line the text trace does not show, its kind and what it is
+    about."""
+    text = _describe(line)
+    if text is None:
+        text = f"{line.kind.value} {line.command or line.text or ''}".rstrip()
+    marks = " (o)" if line.kind is Kind.EVENT or (line.kind is DecisionKind.START
+                                                  and line.reactive) else ""
+    why = f"  [{line.reason}]" if line.reason else ""
+    return _escape(text + marks + why)
 
 
 def _describe_user(line: TraceLine) -> str:

@@ -1,0 +1,80 @@
+"""``prima debug``: a scripted session (commands from standard input) steps through
+sample-03, breaks on the user's touch, and shows the stream the touch suspended."""
+
+from __future__ import annotations
+
+import io
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from prima import cli
+from prima.debug import Debugger
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"
+
+
+def session(script: str, scenario: Path = SAMPLE_03) -> str:
+    out = io.StringIO()
+    Debugger(scenario, io.StringIO(script), out).start()
+    return out.getvalue()
+
+
+def test_a_scripted_session_breaks_on_the_touch_and_shows_the_suspended_stream() -> None:
+    """As a terminal session would be typed, through the command line."""
+    proc = subprocess.run([sys.executable, "-m", "prima", "debug", str(SAMPLE_03)],
+                          input="break user touch\ncontinue\nstep 8\nmemory\napps\nquit\n",
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    assert "breakpoint 1 (user touch)" in out
+    assert "26.34   U                touches the robot" in out
+    # FA2 stopped the robot for its reaction: EA3's guiding stream is suspended
+    assert "suspended: stream 0 of ea3-navigate (most recent): AB49 TopologicalMove" in out
+    assert "fa2-follow (fa): state asking" in out and "goal = 'kidode-room'" in out
+    assert out.rstrip().endswith("stopped at t=27.18 s")
+
+
+def test_breakpoints_on_a_command_a_state_an_event_an_app_and_a_time() -> None:
+    out = session("b command QA\nc\ndelete 1\nb state asking\nc\ndelete 1\n"
+                  "b event message\nc\ndelete 1\nb time 100\nc\nbreaks\ndelete 9\n"
+                  "b app fa2-follow\nc\nwhere\nq\n")
+    stops = [line for line in out.splitlines() if line.startswith("breakpoint ") and "(" in line]
+    assert stops == ["breakpoint 1 (command QA)", "breakpoint 1 (state asking)",
+                     "breakpoint 1 (event message)", "breakpoint 1 (time 100)",
+                     "breakpoint 2 (app fa2-follow)"]
+    assert '0.96   R   ea3-navigate QA "Where are you going?"  [free-devices]' in out
+    assert "26.34   R   fa2-follow   state asking" in out
+    assert "1: time 100 (hit 1 time)" in out
+    assert "deleted breakpoint 1 (state asking)" in out
+    assert "delete takes a breakpoint's number (1 to 1)" in out
+
+
+def test_bad_commands_are_told_and_the_end_of_input_stops_the_run() -> None:
+    out = session("frobnicate\nstep x\nbreak colour red\nbreak time soon\nh\nstep 2\n")
+    assert "unknown command 'frobnicate'" in out
+    assert "step takes a number of lines, not 'x'" in out
+    assert "break app|command|state|event NAME" in out
+    assert "break time takes seconds, not 'soon'" in out
+    assert "commands (a prefix will do" in out
+    assert out.rstrip().endswith("s")  # "stopped at t=... s": end of input quits
+    assert "stopped at t=" in out
+
+
+def test_continue_with_no_breakpoint_runs_to_the_end() -> None:
+    out = session("c\n")
+    assert out.rstrip().endswith("the run ended at t=250 s")
+
+
+def test_prima_debug_checks_its_options(monkeypatch: pytest.MonkeyPatch) -> None:
+    err = io.StringIO()
+    assert cli.main(["debug", "no-such.xml"], out=io.StringIO(), err=err) == 2
+    assert "no such file: no-such.xml" in err.getvalue()
+    monkeypatch.setattr(cli, "_stdin", lambda: io.StringIO("quit\n"))
+    out = io.StringIO()
+    assert cli.main(["debug", str(SAMPLE_03), "--policy", "all=off"], out=out,
+                    err=io.StringIO()) == 0
+    assert "stopped at t=0 s" in out.getvalue()
