@@ -760,6 +760,7 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
         if behavior is None or spec is None:
             values["error"] = f"the simulated robot has no Command {call.command!r}"
             return values, True
+        sim.performing(ab, call)
         try:
             out, done = yield from behavior(sim, call, cid, ab.iteration)
         except CommandError as exc:

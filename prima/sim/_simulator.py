@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 from prima.catalog import Blend, Catalog
 from prima.errors import SimulationError
-from prima.mediator import AtomicBehavior, Event, Outcome
+from prima.mediator import AtomicBehavior, Call, Event, Outcome
 from prima.sim._behaviors import perform
 from prima.sim._kernel import Kernel, Process, Waker
 from prima.sim._maps import Place, WorldMap
@@ -126,6 +126,8 @@ class Simulator:
         self._speech: dict[int, tuple[int, tuple[str, ...], int]] = {}
         """Command id -> what it is saying: the tick it began, its words, its ticks."""
         self._cutting: set[int] = set()
+        self._driving: set[int] = set()
+        """Running atomic behaviors performing a call that uses the wheels now."""
         self._blends: dict[int, Blend] = {}
         """Running atomic behaviors blended over another (the blend policy)."""
         self._loops: dict[int, dict[str, Value]] = {}
@@ -229,6 +231,16 @@ class Simulator:
     def _pace(self) -> None:
         slowest = min((b.slowdown for b in self._blends.values()), default=1.0)
         self.world.speed_limit(self.spec.max_speed * slowest)
+
+    def performing(self, ab: AtomicBehavior, call: Call) -> None:
+        """``ab`` goes on to ``call``: whether it drives the wheels now (a grouped
+        atomic behavior that holds them for a later call does not keep a motion
+        before it rolling)."""
+        spec = self.catalog.get(call.command)
+        if spec is not None and "locomotion" in spec.devices_for(call.args):
+            self._driving.add(ab.id)
+        else:
+            self._driving.discard(ab.id)
 
     def blend_bound(self) -> float | None:
         """How far the robot may be from its user now (m): the tightest bound of the
@@ -584,6 +596,7 @@ class Simulator:
         del self._running[ab.id]
         self._procs.pop(ab.id, None)
         self._cutting.discard(ab.id)
+        self._driving.discard(ab.id)
         if self._blends.pop(ab.id, None) is not None:
             self._pace()
         for cid in ab.command_ids:
@@ -604,6 +617,6 @@ class Simulator:
 
     def _hold_still(self) -> None:
         """Stop the wheels unless a running atomic behavior drives them."""
-        if self.world.mode and not any("locomotion" in ab.devices and ab.id not in self._blends
-                                       for ab in self._running.values()):
+        if self.world.mode and not any(ab in self._driving and ab not in self._blends
+                                       for ab in self._running):
             self.world.stop()
