@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import json
 import math
 import os
@@ -129,7 +130,26 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--worst", type=int, default=3, metavar="K",
                        help="how many of the worst runs to write (default 3; 0: none)")
     add_threshold_options(sweep)
+    _add_plot(commands)
     return parser
+
+
+def _add_plot(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    plot = commands.add_parser(
+        "plot",
+        help="draw a run's device timeline (SVG, PNG, PDF)",
+        description="Draw a run as a picture: the device timeline (one row per device, "
+                    "a bar per atomic behavior, coloured by application; suspensions, "
+                    "holds, the user's actions and the events marked) as SVG, PNG or PDF. "
+                    "INPUT is a jsonl trace (*.jsonl) or a scenario (*.xml, run "
+                    "in-process). Needs the plot extra (matplotlib).",
+    )
+    plot.add_argument("input", metavar="INPUT", help="a jsonl trace or a scenario file")
+    plot.add_argument("-o", "--out", required=True, metavar="FILE",
+                      help="the picture: .svg, .png or .pdf")
+    plot.add_argument("--until", type=float, metavar="SECONDS",
+                      help="simulated time to stop at (a scenario: the run's end; "
+                           "a trace: where the picture ends)")
 
 
 _THRESHOLD_OPTIONS = (
@@ -575,11 +595,58 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_ERRORS if result.breached else EXIT_OK
 
 
+_PLOT_SUFFIXES = (".svg", ".png", ".pdf")
+
+
+def _plot_usage(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``prima plot``'s arguments, checked before anything runs."""
+    source, target = Path(args.input), Path(args.out)
+    if not source.is_file():
+        return f"no such file: {args.input}"
+    if source.suffix not in (".jsonl", ".xml"):
+        return f"{args.input}: give a trace (*.jsonl) or a scenario (*.xml)"
+    if target.suffix.lower() not in _PLOT_SUFFIXES:
+        return f"--out {args.out}: name a {', '.join(_PLOT_SUFFIXES)} file"
+    if target.is_dir() or not target.parent.is_dir():
+        return f"--out {args.out}: not a file in an existing folder"
+    until = args.until
+    if until is not None and not (math.isfinite(until) and 0 < until <= MAX_RUN_TIME):
+        return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
+    return None
+
+
+def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    problem = _plot_usage(args)
+    if problem:
+        return _usage("plot", problem, err)
+    try:
+        importlib.import_module("matplotlib")
+    except ImportError:
+        return _usage("plot", "matplotlib is not installed; install the plot extra: "
+                              "pip install 'prima[plot]'", err)
+    from prima.plot import save_timeline, timeline
+
+    source = Path(args.input)
+    if source.suffix == ".jsonl":
+        from prima.judge import load_trace
+
+        rows = [r for r in load_trace(source) if args.until is None or r["t"] <= args.until]
+    else:
+        from prima.run import Run
+
+        rows = [line.to_dict() for line in Run(source, until=args.until).run()]
+    drawn = timeline(rows)
+    save_timeline(drawn, args.out, title=source.stem)
+    print(f"{args.out}: {len(drawn.bars)} bars on {len(drawn.devices)} devices", file=err)
+    return EXIT_OK
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
     "test": _test,
     "judge": _judge,
     "sweep": _sweep,
+    "plot": _plot,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""
