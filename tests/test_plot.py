@@ -1,5 +1,5 @@
-"""``prima plot``: a run's device timeline as a picture (SVG, PNG, PDF);
-matplotlib is the plot extra's."""
+"""``prima plot``: a run's device timeline as a picture (SVG, PNG, PDF), and the
+run animated as a GIF; matplotlib is the plot extra's."""
 
 from __future__ import annotations
 
@@ -99,6 +99,17 @@ def test_a_trace_and_its_scenario_make_the_same_picture(
     assert (tmp_path / "t.pdf").read_bytes().startswith(b"%PDF")
 
 
+def test_the_animation_has_a_frame_per_step(tmp_path: Path) -> None:
+    from PIL import Image
+
+    gif = tmp_path / "run.gif"
+    status, err = plot(str(SAMPLE_03), "-o", str(gif), "--until", "20", "--step", "2")
+    assert status == 0, err
+    with Image.open(gif) as image:
+        assert image.format == "GIF"
+        assert image.n_frames == 11  # t = 0, 2, ..., 20
+
+
 def test_a_bad_trace_line_is_located(tmp_path: Path) -> None:
     trace = tmp_path / "bad.jsonl"
     trace.write_text('{"t": 0, "seq": 0, "kind": "load", "app": "a"}\nnot json\n')
@@ -110,10 +121,12 @@ def test_a_bad_trace_line_is_located(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("argv, message", [
     (["missing.jsonl", "-o", "x.svg"], "no such file: missing.jsonl"),
-    ([str(SAMPLE_03), "-o", "x.jpg"], "--out x.jpg: name a .svg, .png, .pdf file"),
+    ([str(SAMPLE_03), "-o", "x.jpg"], "--out x.jpg: name a .svg, .png, .pdf, .gif file"),
     ([str(SAMPLE_03), "-o", "nofolder/x.svg"], "--out nofolder/x.svg: not a file in an "
                                                "existing folder"),
     ([str(SAMPLE_03), "-o", "x.svg", "--until", "0"], "--until must be"),
+    ([str(SAMPLE_03), "-o", "x.gif", "--step", "-1"], "--step must be"),
+    ([str(SAMPLE_03), "-o", "x.gif", "--fps", "0"], "--fps must be"),
 ])
 def test_usage_errors_are_one_line(argv: list[str], message: str, tmp_path: Path,
                                    monkeypatch: pytest.MonkeyPatch) -> None:
