@@ -64,6 +64,18 @@ def test_waits_and_the_world(rows: list[dict[str, Any]]) -> None:
     assert len(tl.robot) > 400 and len(tl.user) > 400  # poses at 2 Hz and on events
 
 
+def test_blended_behaviors_are_marked_on_the_devices_they_shared() -> None:
+    import re
+
+    rows = [line.to_dict() for line in Run(ROOT / "scenarios/policies/blend-on.xml").run()]
+    tl = timeline(rows)
+    shared = {(r["ab"], d) for r in rows if r["kind"] == "start"
+              for d in re.findall(r" on ([^,\s]+)", str(r.get("detail", {}).get("over", "")))}
+    assert shared  # the scenario blends
+    assert {(b.ab, b.device) for b in tl.bars if b.blended} == shared
+    assert {b.app for b in tl.bars if b.blended} == set(tl.apps)
+
+
 def test_group_names_are_abbreviated() -> None:
     assert abbreviate("Speak") == "Speak"
     assert abbreviate("Speak+Gesture") == "Speak+Gesture"

@@ -107,17 +107,20 @@ def draw_timeline(ax: Axes, tl: Timeline, *, width_pt: float, labels: bool = Tru
 
     for device in tl.devices:
         mine = [b for b in tl.bars if b.device == device]
-        for app in tl.apps:
+        for i, app in enumerate(tl.apps):
             for blended in (False, True):
                 spans = _merged([(b.t0, b.t1, b.command) for b in mine
                                  if b.app == app and b.blended == blended])
-                if spans:
-                    height = 0.4 if blended else 0.8
-                    ax.broken_barh(spans, (y[device] - 0.4, height), facecolors=colors[app],
-                                   linewidth=0, hatch="...." if blended else None)
+                if not spans:
+                    continue
+                # two applications blended on a device share its row: a half each
+                low, height = ((0.0 if i % 2 == 0 else -0.4), 0.4) if blended else (-0.4, 0.8)
+                ax.broken_barh(spans, (y[device] + low, height), facecolors=colors[app],
+                               edgecolors="white", linewidth=0,
+                               hatch="...." if blended else None)
         if not labels:
             continue
-        for run in _runs(mine):
+        for run in _runs([b for b in mine if not b.blended]):
             t0, t1 = run[0].t0, run[-1].t1
             text = _label(run, (t1 - t0) * per_s)
             if text:
@@ -179,7 +182,8 @@ def _legend(fig: Figure, tl: Timeline) -> None:
         handles.append(Patch(facecolor="none", edgecolor="#555555", hatch="xxxx",
                              label="held back"))
     if any(b.blended for b in tl.bars):
-        handles.append(Patch(facecolor="#aaaaaa", hatch="....", label="blended"))
+        handles.append(Patch(facecolor="#888888", edgecolor="white", linewidth=0,
+                             hatch="....", label="blended (half a row)"))
     fig.legend(handles=handles, loc="upper right", ncols=len(handles), fontsize=_FONT,
                frameon=False, bbox_to_anchor=(0.99, 0.995))
 
