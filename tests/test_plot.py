@@ -155,3 +155,16 @@ def test_without_matplotlib_it_says_how_to_install_it(
     assert status == 2
     assert err == ("prima plot: error: matplotlib is not installed; install the plot extra: "
                    "pip install 'prima[plot]'\n")
+
+
+def test_a_run_without_behaviors_still_draws(tmp_path: Path) -> None:
+    import warnings
+
+    trace = tmp_path / "quiet.jsonl"
+    trace.write_text('{"t": 0, "seq": 0, "kind": "load", "app": "a"}\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for name in ("quiet.svg", "quiet.gif"):
+            status, err = plot(str(trace), "-o", str(tmp_path / name))
+            assert status == 0, err
+            assert (tmp_path / name).stat().st_size > 0

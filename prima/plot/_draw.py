@@ -96,7 +96,7 @@ def draw_timeline(ax: Axes, tl: Timeline, *, width_pt: float, labels: bool = Tru
     end = max(tl.end, 1.0)
     per_s = width_pt / end
     ax.set_xlim(0, end)
-    ax.set_ylim(-len(rows) + 0.5, 0.5)
+    ax.set_ylim(-max(len(rows), 1) + 0.5, 0.5)
     ax.set_yticks([-i for i in range(len(rows))], rows, fontsize=_FONT)
     ax.tick_params(axis="x", labelsize=_FONT)
     ax.set_xlabel("simulated time (s)", fontsize=_FONT)
