@@ -74,7 +74,7 @@ def test_a_bad_trace_is_a_located_error(tmp_path: Path, content: str, message: s
     trace.write_text(content)
     status, said = _cli("show", str(trace), "-o", str(tmp_path / "x.html"))
     assert status == 1
-    assert said.splitlines()[0].endswith(message.split(":", 1)[1]) or message in said, said
+    assert message in said.splitlines()[0], said
     assert "Traceback" not in said and not (tmp_path / "x.html").exists()
 
 

@@ -24,6 +24,11 @@ _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": [
                                                                                "lasso2d"]}
 
 
+def _esc(text: str) -> str:
+    """Text shown as itself (Plotly reads some HTML in its labels)."""
+    return html.escape(text, quote=False)
+
+
 def _colours(apps: list[str]) -> dict[str, str]:
     palette = qualitative.Plotly
     return {app: palette[i % len(palette)] for i, app in enumerate(apps)}
@@ -64,7 +69,7 @@ def map_figure(model: Model, world: WorldMap | None) -> tuple[go.Figure, dict[st
         fig.add_trace(go.Scatter(
             x=[(a.x1 + a.x2) / 2 for a in world.areas],
             y=[max(a.y1, a.y2) - 0.2 for a in world.areas],
-            text=[a.name for a in world.areas], mode="text", name="areas",
+            text=[_esc(a.name) for a in world.areas], mode="text", name="areas",
             textfont={"color": "#2980b9", "size": 11}, hoverinfo="skip"))
         wx: list[float | None] = []
         wy: list[float | None] = []
@@ -75,10 +80,10 @@ def map_figure(model: Model, world: WorldMap | None) -> tuple[go.Figure, dict[st
                                  line={"color": "#34495e", "width": 3}, hoverinfo="skip"))
         fig.add_trace(go.Scatter(
             x=[p.x for p in world.places], y=[p.y for p in world.places],
-            text=[p.name for p in world.places], mode="markers+text", name="places",
+            text=[_esc(p.name) for p in world.places], mode="markers+text", name="places",
             textposition="bottom center", textfont={"size": 9, "color": "#7f8c8d"},
             marker={"size": 5, "color": "#95a5a6"},
-            hovertext=[f"{p.name} ({p.kind.value})" for p in world.places], hoverinfo="text"))
+            hovertext=[_esc(f"{p.name} ({p.kind.value})") for p in world.places], hoverinfo="text"))
     for who, poses, colour in (("robot", model.robot, "#2c3e50"),
                                ("user", model.user, "#e67e22")):
         fig.add_trace(go.Scatter(x=[p[1] for p in poses], y=[p[2] for p in poses],
@@ -115,10 +120,10 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             continue
         traces["bars"].append(len(fig.data))
         fig.add_trace(go.Bar(
-            name=app, orientation="h", y=[b.device for b in bars],
+            name=_esc(app), orientation="h", y=[b.device for b in bars],
             base=[b.start for b in bars], x=[round(b.end - b.start, 3) for b in bars],
-            customdata=[b.ab for b in bars], text=[b.command for b in bars],
-            hovertext=[f"AB {b.ab} {b.label}<br>{b.start:.2f}-{b.end:.2f} s" for b in bars],
+            customdata=[b.ab for b in bars], text=[_esc(b.command) for b in bars],
+            hovertext=[f"AB {b.ab} {_esc(b.label)}<br>{b.start:.2f}-{b.end:.2f} s" for b in bars],
             hoverinfo="text", textposition="inside", insidetextanchor="start",
             textfont={"size": 10}, marker={"color": colours[app]},
             meta="bars"))
@@ -129,7 +134,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             name="suspended", orientation="h", y=[m.device for m in spans],
             base=[m.start for m in spans], x=[round(m.end - m.start, 3) for m in spans],
             customdata=[m.row for m in spans],
-            hovertext=[f"{m.app}: AB {m.ab} suspended {m.start:.2f}-{m.end:.2f} s"
+            hovertext=[f"{_esc(m.app)}: AB {m.ab} suspended {m.start:.2f}-{m.end:.2f} s"
                        for m in spans], hoverinfo="text",
             marker={"color": "rgba(0,0,0,0)", "line": {"width": 1, "color": "#555"},
                     "pattern": {"shape": "/", "fgcolor": "#555", "size": 6}},
@@ -144,7 +149,8 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             customdata=[m.row for m in marks], mode="markers",
             marker={"symbol": symbol, "size": 12, "color": colour, "line": {"width": 2,
                                                                             "color": colour}},
-            hovertext=[f"{m.app}: {what} (AB {m.ab}) at {m.start:.2f} s" for m in marks],
+            hovertext=[f"{_esc(m.app)}: {what} (AB {m.ab}) at {m.start:.2f} s"
+                       for m in marks],
             hoverinfo="text", meta="marks"))
     fig.update_layout(
         barmode="overlay", height=max(200, 60 + 34 * len(model.devices)),
