@@ -78,6 +78,18 @@ def test_a_bad_trace_is_a_located_error(tmp_path: Path, content: str, message: s
     assert "Traceback" not in said and not (tmp_path / "x.html").exists()
 
 
+def test_without_plotly_it_says_which_extra_to_install(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    import sys
+
+    monkeypatch.delitem(sys.modules, "prima.show._page", raising=False)
+    monkeypatch.setitem(sys.modules, "plotly", None)  # an import of it fails
+    status, said = _cli("show", str(SAMPLE_03), "-o", str(tmp_path / "x.html"))
+    assert status == 1
+    assert said == ("prima show: error: prima show needs Plotly (plotly is missing): "
+                    "pip install 'prima[show]'\n")
+
+
 @pytest.mark.parametrize("argv, message", [
     (["missing.jsonl"], "no such file: missing.jsonl"),
     (["README.md"], "give a trace (*.jsonl) or a scenario (*.xml)"),

@@ -168,6 +168,14 @@
 
   playButton.addEventListener("click", function () { if (playing) pause(); else play(); });
   scrub.addEventListener("input", function () { seek(Number(scrub.value)); });
+  document.addEventListener("keydown", function (e) {  // space: play/pause; arrows: a second
+    if (/^(INPUT|SELECT|BUTTON|TEXTAREA)$/.test(e.target.tagName)) return;
+    if (e.key === " ") { if (playing) pause(); else play(); }
+    else if (e.key === "ArrowRight") seek(now + 1);
+    else if (e.key === "ArrowLeft") seek(now - 1);
+    else return;
+    e.preventDefault();
+  });
 
   /* Details: why the mediator decided a line, or what an AB did. */
   function rowDetails(row) {
