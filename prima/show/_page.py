@@ -124,7 +124,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             base=[b.start for b in bars], x=[round(b.end - b.start, 3) for b in bars],
             customdata=[b.ab for b in bars], text=[_esc(b.command) for b in bars],
             hovertext=[f"AB {b.ab} {_esc(b.label)}<br>{b.start:.2f}-{b.end:.2f} s" for b in bars],
-            hoverinfo="text", textposition="inside", insidetextanchor="start",
+            hoverinfo="text", textposition="inside", insidetextanchor="start", textangle=0,
             textfont={"size": 10}, marker={"color": colours[app]},
             meta="bars"))
     spans = [m for m in model.marks if m.kind == "suspend"]
@@ -153,6 +153,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
                        for m in marks],
             hoverinfo="text", meta="marks"))
     fig.update_layout(
+        uniformtext={"mode": "hide", "minsize": 8},  # no label shrunk past reading
         barmode="overlay", height=max(200, 60 + 34 * len(model.devices)),
         margin={"l": 140, "r": 10, "t": 30, "b": 40}, plot_bgcolor="white",
         legend={"orientation": "h", "y": -0.25 if len(model.devices) > 3 else -0.5},
