@@ -12,9 +12,11 @@ import importlib
 import json
 import math
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import TextIO
 
 from prima import __version__
@@ -152,6 +154,22 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--worst", type=int, default=3, metavar="K",
                        help="how many of the worst runs to write (default 3; 0: none)")
     add_threshold_options(sweep)
+    show = commands.add_parser(
+        "show",
+        help="write a run as one HTML page: the map, a timeline per device, the trace",
+        description="Write a run as one self-contained HTML page that works offline "
+                    "(docs/show.md): the map with the robot, the user and their words; a "
+                    "timeline with one row per device; the trace table; one playhead drives "
+                    "all three. RUN is a jsonl trace (*.jsonl) or a scenario (*.xml, run "
+                    "in-process). Needs the show extra: pip install 'prima[show]'.",
+    )
+    show.add_argument("input", metavar="RUN", help="a jsonl trace or a scenario file")
+    show.add_argument("--scenario", metavar="SCENARIO",
+                      help="the scenario a jsonl trace was run from: its map is drawn "
+                           "(a trace does not name it)")
+    show.add_argument("-o", "--out", metavar="FILE",
+                      help="the page to write (default: RUN's name with .html, in the "
+                           "current folder)")
     _add_plot(commands)
     return parser
 
@@ -462,9 +480,11 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             from prima.chrome_trace import ChromeTraceWriter
 
             chrome = ChromeTraceWriter(to)
+            ctrl_c = files.enter_context(_between_lines())
 
             def write(line: TraceLine) -> None:
                 chrome.write(line)
+                ctrl_c.check()  # Ctrl-C lands between two lines: the file stays whole
         else:
             def write(line: TraceLine) -> None:
                 to.write(jsonl_row(line))
@@ -502,6 +522,37 @@ def _debug(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
 def _stdin() -> TextIO:
     return sys.stdin
+
+
+class _Deferred:
+    """A Ctrl-C noted, to be raised at the next safe point (``check``)."""
+
+    def __init__(self) -> None:
+        self.asked = False
+
+    def handle(self, _signum: int, _frame: object) -> None:
+        if self.asked:  # a second Ctrl-C: at once
+            raise KeyboardInterrupt
+        self.asked = True
+
+    def check(self) -> None:
+        if self.asked:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _between_lines() -> Iterator[_Deferred]:
+    """While writing a file that a torn write would spoil (a chrome trace), Ctrl-C is
+    raised only between two trace lines (a second one at once)."""
+    deferred = _Deferred()
+    if threading.current_thread() is not threading.main_thread():
+        yield deferred  # signals go to the main thread only
+        return
+    previous = signal.signal(signal.SIGINT, deferred.handle)
+    try:
+        yield deferred
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -650,6 +701,44 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_ERRORS if result.breached else EXIT_OK
 
 
+def _show_usage(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``prima show``'s arguments, checked before anything runs."""
+    source = Path(args.input)
+    if not source.is_file():
+        return f"no such file: {args.input}"
+    if source.suffix not in (".jsonl", ".xml"):
+        return f"{args.input}: give a trace (*.jsonl) or a scenario (*.xml)"
+    if args.scenario is not None:
+        if source.suffix != ".jsonl":
+            return "--scenario goes with a jsonl trace; a scenario brings its own map"
+        if not Path(args.scenario).is_file():
+            return f"no such file: {args.scenario}"
+    target = Path(args.out) if args.out else Path(source.with_suffix(".html").name)
+    if target.is_dir():
+        return f"--out {target} is a folder"
+    if not target.parent.is_dir():
+        return f"--out {target}: no such folder {target.parent}"
+    args.out = str(target)
+    return None
+
+
+def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.show import read_rows, render
+
+    problem = _show_usage(args)
+    if problem:
+        return _usage("show", problem, err)
+    source = Path(args.input)
+    rows = read_rows(source)
+    scenario = source if source.suffix == ".xml" else args.scenario
+    text = render(rows, scenario=scenario, title=source.stem)
+    Path(args.out).write_text(text, encoding="utf-8")
+    abs_ = sum(1 for row in rows if row["kind"] == "start")
+    print(f"prima show: wrote {args.out} ({abs_} atomic behavior(s), "
+          f"{rows[-1]['t'] if rows else 0:g} s{'' if scenario else '; no map'})", file=err)
+    return EXIT_OK
+
+
 _PLOT_SUFFIXES = (".svg", ".png", ".pdf", ".gif")
 _MAX_FRAMES = 3000
 
@@ -729,5 +818,6 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "judge": _judge,
     "sweep": _sweep,
     "plot": _plot,
+    "show": _show,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

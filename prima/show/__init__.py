@@ -1,0 +1,50 @@
+"""``prima show``: a run as one self-contained HTML page, to watch and to question.
+
+The page draws the map (walls, places, areas) with the robot and the user
+moving and the words being spoken in bubbles; below it a timeline, one row per
+device, each atomic behavior a bar coloured by its application and labelled by
+its Command, suspensions hatched and holds marked; below that the trace table.
+One playhead drives all three. Plotly draws the map and the timeline (its
+JavaScript is inlined: the page works offline, from ``file://``); a small
+player script moves the playhead.
+
+A viewer, apart from the core: only ``prima show`` imports it, and it needs
+the ``show`` extra (``pip install 'prima[show]'``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from prima.errors import PrimaError
+
+__all__ = ["read_rows", "render"]
+
+
+def read_rows(path: str | Path) -> list[dict[str, Any]]:
+    """A run's rows: a jsonl trace read (located errors), or a scenario run in-process."""
+    path = Path(path)
+    if path.suffix == ".jsonl":
+        from prima.judge import load_trace
+
+        return load_trace(path)
+    from prima.run import Run
+
+    return [line.to_dict() for line in Run(path).run()]
+
+
+def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None,
+           title: str = "run") -> str:
+    """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any)."""
+    try:
+        from prima.show._page import page
+    except ImportError as exc:  # the plotting library is an optional extra
+        raise PrimaError(f"prima show needs Plotly ({exc.name} is missing): "
+                         "pip install 'prima[show]'") from exc
+    from prima.show._model import build
+    from prima.sim import load_scenario
+
+    world = load_scenario(scenario).map if scenario is not None else None
+    return page(build(rows), world, title)

@@ -1,0 +1,228 @@
+"""The page: Plotly draws the map and the timeline; ``player.js`` drives the playhead."""
+
+from __future__ import annotations
+
+import html
+import json
+from importlib import resources
+from typing import Any
+
+import plotly.graph_objects as go
+import plotly.io as pio
+from plotly.colors import qualitative
+
+from prima.show._model import Model
+from prima.sim import WorldMap
+
+_MARK_STYLE = {
+    "hold": ("x-thin-open", "#c0392b", "held back"),
+    "release": ("line-ns-open", "#c0392b", "hold released"),
+    "interrupt": ("star-triangle-down", "#8e44ad", "cut"),
+    "cancel": ("x", "#7f8c8d", "cancelled"),
+}
+_CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": ["select2d",
+                                                                               "lasso2d"]}
+
+
+def _esc(text: str) -> str:
+    """Text shown as itself (Plotly reads some HTML in its labels)."""
+    return html.escape(text, quote=False)
+
+
+def _colours(apps: list[str]) -> dict[str, str]:
+    palette = qualitative.Plotly
+    return {app: palette[i % len(palette)] for i, app in enumerate(apps)}
+
+
+def _bounds(model: Model, world: WorldMap | None) -> tuple[float, float, float, float]:
+    xs: list[float] = []
+    ys: list[float] = []
+    if world is not None:
+        for w in world.walls:
+            xs += [w.x1, w.x2]
+            ys += [w.y1, w.y2]
+        for p in world.places:
+            xs.append(p.x)
+            ys.append(p.y)
+    for _, x, y, _h in model.robot + model.user:
+        xs.append(x)
+        ys.append(y)
+    if not xs:
+        return (0.0, 1.0, 0.0, 1.0)
+    return (min(xs) - 0.5, max(xs) + 0.5, min(ys) - 0.5, max(ys) + 0.5)
+
+
+def _angle(heading: float) -> float:
+    """Plotly's marker angle (clockwise from up) for a heading (anticlockwise from east)."""
+    return round((90.0 - heading) % 360.0, 1)
+
+
+def map_figure(model: Model, world: WorldMap | None) -> tuple[go.Figure, dict[str, int]]:
+    """The map, the paths walked, and the robot's and the user's markers (at t=0)."""
+    fig = go.Figure()
+    shapes: list[dict[str, Any]] = []
+    if world is not None:
+        for area in world.areas:
+            shapes.append({"type": "rect", "x0": area.x1, "y0": area.y1, "x1": area.x2,
+                           "y1": area.y2, "line": {"width": 0}, "layer": "below",
+                           "fillcolor": "rgba(52, 152, 219, 0.08)"})
+        fig.add_trace(go.Scatter(
+            x=[(a.x1 + a.x2) / 2 for a in world.areas],
+            y=[max(a.y1, a.y2) - 0.2 for a in world.areas],
+            text=[_esc(a.name) for a in world.areas], mode="text", name="areas",
+            textfont={"color": "#2980b9", "size": 11}, hoverinfo="skip"))
+        wx: list[float | None] = []
+        wy: list[float | None] = []
+        for w in world.walls:
+            wx += [w.x1, w.x2, None]
+            wy += [w.y1, w.y2, None]
+        fig.add_trace(go.Scatter(x=wx, y=wy, mode="lines", name="walls",
+                                 line={"color": "#34495e", "width": 3}, hoverinfo="skip"))
+        fig.add_trace(go.Scatter(
+            x=[p.x for p in world.places], y=[p.y for p in world.places],
+            text=[_esc(p.name) for p in world.places], mode="markers+text", name="places",
+            textposition="bottom center", textfont={"size": 9, "color": "#7f8c8d"},
+            marker={"size": 5, "color": "#95a5a6"},
+            hovertext=[_esc(f"{p.name} ({p.kind.value})") for p in world.places], hoverinfo="text"))
+    for who, poses, colour in (("robot", model.robot, "#2c3e50"),
+                               ("user", model.user, "#e67e22")):
+        fig.add_trace(go.Scatter(x=[p[1] for p in poses], y=[p[2] for p in poses],
+                                 mode="lines", name=f"{who}'s path", hoverinfo="skip",
+                                 line={"color": colour, "width": 1, "dash": "dot"},
+                                 opacity=0.35))
+    index: dict[str, int] = {}
+    for who, poses, colour, symbol in (("robot", model.robot, "#2c3e50", "triangle-up"),
+                                       ("user", model.user, "#e67e22", "arrow-up")):
+        first = poses[0] if poses else (0.0, 0.0, 0.0, 0.0)
+        index[who] = len(fig.data)
+        fig.add_trace(go.Scatter(x=[first[1]], y=[first[2]], mode="markers", name=who,
+                                 marker={"size": 18, "color": colour, "symbol": symbol,
+                                         "angle": _angle(first[3]),
+                                         "line": {"width": 1, "color": "white"}},
+                                 visible=bool(poses), hoverinfo="name"))
+    x0, x1, y0, y1 = _bounds(model, world)
+    fig.update_layout(
+        shapes=shapes, showlegend=False, margin={"l": 30, "r": 10, "t": 30, "b": 30},
+        height=360, plot_bgcolor="white", dragmode="pan",
+        xaxis={"range": [x0, x1], "showgrid": False, "zeroline": False},
+        yaxis={"range": [y0, y1], "scaleanchor": "x", "showgrid": False, "zeroline": False})
+    return fig, index
+
+
+def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
+    """One row per device: the ABs' bars by application, suspensions hatched, holds marked."""
+    fig = go.Figure()
+    colours = _colours(model.apps)
+    traces: dict[str, list[int]] = {"bars": [], "suspend": [], "marks": []}
+    for app in model.apps:
+        bars = [b for b in model.bars if b.app == app]
+        if not bars:
+            continue
+        traces["bars"].append(len(fig.data))
+        fig.add_trace(go.Bar(
+            name=_esc(app), orientation="h", y=[b.device for b in bars],
+            base=[b.start for b in bars], x=[round(b.end - b.start, 3) for b in bars],
+            customdata=[b.ab for b in bars], text=[_esc(b.command) for b in bars],
+            hovertext=[f"AB {b.ab} {_esc(b.label)}<br>{b.start:.2f}-{b.end:.2f} s" for b in bars],
+            hoverinfo="text", textposition="inside", insidetextanchor="start", textangle=0,
+            textfont={"size": 10}, marker={"color": colours[app]},
+            meta="bars"))
+    spans = [m for m in model.marks if m.kind == "suspend"]
+    if spans:
+        traces["suspend"].append(len(fig.data))
+        fig.add_trace(go.Bar(
+            name="suspended", orientation="h", y=[m.device for m in spans],
+            base=[m.start for m in spans], x=[round(m.end - m.start, 3) for m in spans],
+            customdata=[m.row for m in spans],
+            hovertext=[f"{_esc(m.app)}: AB {m.ab} suspended {m.start:.2f}-{m.end:.2f} s"
+                       for m in spans], hoverinfo="text",
+            marker={"color": "rgba(0,0,0,0)", "line": {"width": 1, "color": "#555"},
+                    "pattern": {"shape": "/", "fgcolor": "#555", "size": 6}},
+            meta="suspend"))
+    for kind, (symbol, colour, what) in _MARK_STYLE.items():
+        marks = [m for m in model.marks if m.kind == kind]
+        if not marks:
+            continue
+        traces["marks"].append(len(fig.data))
+        fig.add_trace(go.Scatter(
+            name=what, x=[m.start for m in marks], y=[m.device for m in marks],
+            customdata=[m.row for m in marks], mode="markers",
+            marker={"symbol": symbol, "size": 12, "color": colour, "line": {"width": 2,
+                                                                            "color": colour}},
+            hovertext=[f"{_esc(m.app)}: {what} (AB {m.ab}) at {m.start:.2f} s"
+                       for m in marks],
+            hoverinfo="text", meta="marks"))
+    fig.update_layout(
+        uniformtext={"mode": "hide", "minsize": 8},  # no label shrunk past reading
+        barmode="overlay", height=max(200, 60 + 34 * len(model.devices)),
+        margin={"l": 140, "r": 10, "t": 30, "b": 40}, plot_bgcolor="white",
+        legend={"orientation": "h", "y": -0.25 if len(model.devices) > 3 else -0.5},
+        xaxis={"title": "simulated time (s)", "range": [0, max(model.end, 1.0)],
+               "showgrid": True, "gridcolor": "#eee"},
+        yaxis={"categoryorder": "array", "categoryarray": model.devices[::-1],
+               "type": "category", "fixedrange": True},
+        dragmode="pan")
+    return fig, traces
+
+
+def _script_json(value: object) -> str:
+    """JSON safe inside a <script> element."""
+    text = json.dumps(value, ensure_ascii=False, separators=(",", ":"))
+    return text.replace("</", "<\\/").replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
+
+
+def page(model: Model, world: WorldMap | None, title: str) -> str:
+    """The whole self-contained page (Plotly's JavaScript inlined)."""
+    map_fig, who = map_figure(model, world)
+    timeline, traces = timeline_figure(model)
+    map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
+                           config=_CONFIG)
+    timeline_html = pio.to_html(timeline, include_plotlyjs=False, full_html=False,
+                                div_id="timeline", config=_CONFIG)
+    data = {
+        "end": model.end, "rows": model.rows, "robot": model.robot, "user": model.user,
+        "bubbles": [[b.who, b.start, b.end, b.text] for b in model.bubbles],
+        "abs": {str(k): v for k, v in model.abs.items()}, "robotTrace": who["robot"],
+        "userTrace": who["user"], "traces": traces,
+        "colours": _colours(model.apps),
+    }
+    files = resources.files("prima.show")
+    player = files.joinpath("player.js").read_text(encoding="utf-8")
+    style = files.joinpath("show.css").read_text(encoding="utf-8")
+    speeds = "".join(f'<option value="{s}"{" selected" if s == "1" else ""}>{s}x</option>'
+                     for s in ("0.5", "1", "2", "4", "8", "16", "32"))
+    name = html.escape(title)
+    return f"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>prima show: {name}</title>
+<style>
+{style}</style>
+</head>
+<body>
+<header>
+<h1>{name}</h1>
+<button id="play" type="button">Play</button>
+<label>speed <select id="speed">{speeds}</select></label>
+<input id="scrub" type="range" min="0" max="{model.end}" step="0.01" value="0">
+<span id="clock">0.00 s</span>
+</header>
+<main>
+<section id="top">
+<div id="map-box">{map_html}</div>
+<aside id="details"><p class="hint">Click a bar of the timeline or a line of the trace
+to jump there and see why the mediator decided it.</p></aside>
+</section>
+<section id="timeline-box">{timeline_html}<div id="playhead"></div></section>
+<section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
+<th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
+</main>
+<script>
+const PRIMA_SHOW = {_script_json(data)};
+</script>
+<script>
+{player}</script>
+</body>
+</html>
+"""

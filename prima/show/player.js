@@ -1,0 +1,241 @@
+/* prima show: one playhead drives the map, the timeline and the trace table.
+   Data: PRIMA_SHOW (written by prima.show); drawing: Plotly (inlined above). */
+(function () {
+  "use strict";
+  const D = PRIMA_SHOW;
+  const mapDiv = document.getElementById("map");
+  const timeline = document.getElementById("timeline");
+  const tbody = document.querySelector("#trace tbody");
+  const details = document.getElementById("details");
+  const playButton = document.getElementById("play");
+  const speed = document.getElementById("speed");
+  const scrub = document.getElementById("scrub");
+  const clock = document.getElementById("clock");
+  const timelineBox = document.getElementById("timeline-box");
+  const head = document.getElementById("playhead");
+  const times = D.rows.map(function (r) { return r.t; });
+  let now = 0, playing = false, last = null, shownRow = -1, shownBubbles = "";
+
+  function esc(text) {
+    return String(text).replace(/[&<>"]/g, function (c) {
+      return {"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}[c];
+    });
+  }
+
+  function what(row) {
+    if (row.kind === "user") {
+      return row.action === "say" ? '"' + (row.text || "") + '"' : row.action +
+        (row.detail && row.detail.target ? " " + row.detail.target : "");
+    }
+    const parts = [];
+    if (row.command) parts.push(row.command);
+    if (row.text) parts.push(row.command ? '"' + row.text + '"' : row.text);
+    if (row.detail && row.detail.args) parts.push(row.detail.args);
+    if (!parts.length && row.detail) parts.push(JSON.stringify(row.detail));
+    return parts.join(" ");
+  }
+
+  /* The trace table. */
+  const trs = D.rows.map(function (row, i) {
+    const tr = document.createElement("tr");
+    tr.dataset.i = i;
+    tr.innerHTML = "<td>" + i + "</td><td>" + row.t.toFixed(2) + "</td><td>" + esc(row.kind) +
+      "</td><td>" + esc(row.app || "") + "</td><td>" + (row.ab == null ? "" : row.ab) +
+      "</td><td>" + esc(what(row)) + "</td><td>" + esc(row.reason || "") + "</td>";
+    tr.className = "future";
+    tbody.appendChild(tr);
+    return tr;
+  });
+  tbody.addEventListener("click", function (e) {
+    const tr = e.target.closest("tr");
+    if (tr) choose(Number(tr.dataset.i));
+  });
+
+  /* Poses, interpolated between samples. */
+  function poseAt(poses, t) {
+    if (!poses.length) return null;
+    let lo = 0, hi = poses.length - 1;
+    if (t <= poses[0][0]) return poses[0];
+    if (t >= poses[hi][0]) return poses[hi];
+    while (hi - lo > 1) {
+      const mid = (lo + hi) >> 1;
+      if (poses[mid][0] <= t) lo = mid; else hi = mid;
+    }
+    const a = poses[lo], b = poses[hi];
+    const f = b[0] > a[0] ? (t - a[0]) / (b[0] - a[0]) : 1;
+    let turn = ((b[3] - a[3]) % 360 + 540) % 360 - 180;
+    return [t, a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2]), a[3] + f * turn];
+  }
+
+  function lastRowAt(t) {  // the last line at or before t, or -1
+    let lo = 0, hi = times.length;
+    while (lo < hi) {
+      const mid = (lo + hi) >> 1;
+      if (times[mid] <= t + 1e-9) lo = mid + 1; else hi = mid;
+    }
+    return lo - 1;
+  }
+
+  function bubblesAt(t, robot, user) {
+    const out = [];
+    const seen = {robot: 0, user: 0};
+    D.bubbles.forEach(function (b) {
+      if (b[1] > t || t > b[2]) return;
+      const pose = b[0] === "robot" ? robot : user;
+      if (!pose) return;
+      const n = seen[b[0]]++;
+      out.push({x: pose[1], y: pose[2], text: esc(b[3]).slice(0, 80), showarrow: true,
+                arrowhead: 0, ax: b[0] === "robot" ? -40 : 40, ay: -30 - 22 * n,
+                bgcolor: b[0] === "robot" ? "#ecf0f1" : "#fdebd0",
+                bordercolor: b[0] === "robot" ? "#2c3e50" : "#e67e22",
+                borderpad: 3, font: {size: 11}});
+    });
+    return out;
+  }
+
+  function render() {
+    scrub.value = now;
+    clock.textContent = now.toFixed(2) + " s";
+    const robot = poseAt(D.robot, now), user = poseAt(D.user, now);
+    const xs = [], ys = [], angles = [], idx = [];
+    [[robot, D.robotTrace], [user, D.userTrace]].forEach(function (p) {
+      if (!p[0]) return;
+      xs.push([p[0][1]]); ys.push([p[0][2]]); angles.push((90 - p[0][3] + 360) % 360);
+      idx.push(p[1]);
+    });
+    if (idx.length) Plotly.restyle(mapDiv, {x: xs, y: ys, "marker.angle": angles}, idx);
+    const bubbles = bubblesAt(now, robot, user);
+    const key = JSON.stringify(bubbles);
+    if (key !== shownBubbles) {
+      shownBubbles = key;
+      Plotly.relayout(mapDiv, {annotations: bubbles});
+    }
+    placeHead();
+    const row = lastRowAt(now);
+    if (row !== shownRow) {
+      const lo = Math.min(row, shownRow), hi = Math.max(row, shownRow);
+      for (let i = Math.max(lo, 0); i <= hi; i++) {
+        trs[i].className = (i <= row ? "past" : "future") +
+          (trs[i].classList.contains("chosen") ? " chosen" : "");
+      }
+      if (row >= 0) {
+        trs[row].classList.add("now");
+        const box = document.getElementById("table-box");
+        const top = trs[row].offsetTop - box.clientHeight / 2;
+        box.scrollTop = Math.max(0, top);
+      }
+      shownRow = row;
+    }
+  }
+
+  /* The playhead: a line over the timeline's plot area (moving it redraws nothing). */
+  function placeHead() {
+    const area = timeline.querySelector(".nsewdrag");
+    const range = timeline.layout.xaxis.range;
+    if (!area || !range) return;
+    const r = area.getBoundingClientRect(), box = timelineBox.getBoundingClientRect();
+    const x = r.left - box.left + (now - range[0]) / (range[1] - range[0]) * r.width;
+    const inside = x >= r.left - box.left && x <= r.right - box.left;
+    head.style.display = inside ? "block" : "none";
+    head.style.left = x + "px";
+    head.style.top = (r.top - box.top) + "px";
+    head.style.height = r.height + "px";
+  }
+  timeline.on("plotly_relayout", placeHead);
+  window.addEventListener("resize", placeHead);
+
+  function seek(t) {
+    now = Math.max(0, Math.min(D.end, t));
+    render();
+  }
+
+  function frame(stamp) {
+    if (!playing) return;
+    if (last !== null) now += (stamp - last) / 1000 * Number(speed.value);
+    last = stamp;
+    if (now >= D.end) { now = D.end; pause(); }
+    render();
+    if (playing) requestAnimationFrame(frame);
+  }
+
+  function play() {
+    if (now >= D.end) now = 0;
+    playing = true; last = null; playButton.textContent = "Pause";
+    requestAnimationFrame(frame);
+  }
+
+  function pause() { playing = false; playButton.textContent = "Play"; }
+
+  playButton.addEventListener("click", function () { if (playing) pause(); else play(); });
+  scrub.addEventListener("input", function () { seek(Number(scrub.value)); });
+  document.addEventListener("keydown", function (e) {  // space: play/pause; arrows: a second
+    if (/^(INPUT|SELECT|BUTTON|TEXTAREA)$/.test(e.target.tagName)) return;
+    if (e.key === " ") { if (playing) pause(); else play(); }
+    else if (e.key === "ArrowRight") seek(now + 1);
+    else if (e.key === "ArrowLeft") seek(now - 1);
+    else return;
+    e.preventDefault();
+  });
+
+  /* Details: why the mediator decided a line, or what an AB did. */
+  function rowDetails(row) {
+    let out = "<h2>" + esc(row.kind) + (row.app ? " by " + esc(row.app) : "") + " at " +
+      row.t.toFixed(2) + " s</h2>";
+    if (row.reason) out += '<p>reason: <span class="reason">' + esc(row.reason) + "</span></p>";
+    return out + "<p>" + esc(what(row)) + "</p><pre>" + esc(JSON.stringify(row, null, 1)) +
+      "</pre>";
+  }
+
+  function abDetails(ab) {
+    const info = D.abs[ab];
+    const start = D.rows[info.start], end = info.end == null ? null : D.rows[info.end];
+    let out = "<h2>AB " + ab + ": " + esc(start.command || "") + " (" + esc(start.app || "") +
+      ")</h2><p>" + esc(what(start)) + "</p><p>on " + esc((start.devices || []).join(", ")) +
+      "</p>";
+    info.lines.forEach(function (i) {
+      const row = D.rows[i];
+      out += "<p>" + row.t.toFixed(2) + " s " + esc(row.kind) +
+        (row.reason ? ': <span class="reason">' + esc(row.reason) + "</span>" : "") +
+        (row.kind !== "start" && row.text ? " (" + esc(row.text) + ")" : "") + "</p>";
+    });
+    if (!end) out += "<p>still running when the trace ends</p>";
+    return out;
+  }
+
+  function mark(i) {
+    trs.forEach(function (tr) { tr.classList.remove("chosen"); });
+    if (i >= 0) trs[i].classList.add("chosen");
+  }
+
+  function choose(i) {
+    pause();
+    mark(i);
+    const row = D.rows[i];
+    details.innerHTML = row.ab != null && D.abs[row.ab] && D.abs[row.ab].start != null ?
+      rowDetails(row) + abDetails(row.ab) : rowDetails(row);
+    seek(row.t);
+  }
+
+  function chooseAb(ab) {
+    pause();
+    const info = D.abs[ab];
+    mark(info.start);
+    details.innerHTML = abDetails(ab);
+    seek(D.rows[info.start].t);
+  }
+
+  timeline.on("plotly_click", function (event) {
+    const point = event.points[0];
+    if (!point) return;
+    const kind = point.data.meta;
+    if (kind === "bars") chooseAb(String(point.customdata));
+    else choose(point.customdata);
+  });
+
+  window.primaShow = {
+    abs: Object.keys(D.abs).filter(function (k) { return D.abs[k].start != null; }),
+    seek: seek, play: play, pause: pause, chooseAb: chooseAb,
+    time: function () { return now; },
+  };
+  render();
+})();

@@ -1,0 +1,270 @@
+"""``prima show``: the page of a run, checked as text and in a real headless browser."""
+
+from __future__ import annotations
+
+import io
+import shutil
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from prima.cli import main
+
+pytest.importorskip("plotly", reason="prima show needs the show extra (plotly)")
+
+from prima.show import read_rows, render  # noqa: E402 - after the skip
+
+ROOT = Path(__file__).parents[1]
+SCENARIOS = sorted(p for folder in ("thesis", "policies", "examples")
+                   for p in (ROOT / "scenarios" / folder).glob("*.xml"))
+SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"
+CHROMIUM, CHROMEDRIVER = shutil.which("chromium"), shutil.which("chromedriver")
+
+
+def _cli(*argv: str) -> tuple[int, str]:
+    err = io.StringIO()
+    status = main(list(argv), out=io.StringIO(), err=err)
+    return status, err.getvalue()
+
+
+# ------------------------------------------------------------------ the page as text
+
+def test_a_scenario_and_its_jsonl_trace_make_the_same_page(tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    assert main(["run", str(SAMPLE_03), "--format", "jsonl", "--out", str(trace)]) == 0
+    from_scenario, from_trace = tmp_path / "a.html", tmp_path / "b.html"
+    assert _cli("show", str(SAMPLE_03), "-o", str(from_scenario))[0] == 0
+    status, said = _cli("show", str(trace), "--scenario", str(SAMPLE_03),
+                        "--out", str(from_trace))
+    assert status == 0, said
+    assert "350 atomic behavior(s)" in said
+    # the same but for the title (the input's name)
+    assert (from_scenario.read_text().replace("sample-03", "run")
+            == from_trace.read_text())
+
+
+def test_the_page_is_deterministic_and_self_contained() -> None:
+    rows = read_rows(SAMPLE_03)
+    page = render(rows, scenario=SAMPLE_03, title="sample-03")
+    assert page == render(read_rows(SAMPLE_03), scenario=SAMPLE_03, title="sample-03")
+    assert "<script src=" not in page and 'src="http' not in page  # offline: nothing fetched
+    assert "Plotly.newPlot" in page and 'id="timeline"' in page and 'id="map"' in page
+
+
+def test_a_trace_without_its_scenario_has_no_map(tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    trace = tmp_path / "run.jsonl"
+    assert main(["run", str(SAMPLE_03), "--format", "jsonl", "--out", str(trace)]) == 0
+    monkeypatch.chdir(tmp_path)
+    status, said = _cli("show", str(trace))  # the default page: run.html, here
+    assert status == 0 and "no map" in said
+    assert (tmp_path / "run.html").is_file()
+
+
+@pytest.mark.parametrize("content, message", [
+    ('{"t": 0, "seq": 0, "kind": "start"}\nnot json\n', "run.jsonl:2:1: error: not a JSON"),
+    ('{"t": 0, "kind": "start"}\n', "run.jsonl:1:1: error: missing field 'seq'"),
+    ("", "run.jsonl:1:1: error: the trace has no lines"),
+])
+def test_a_bad_trace_is_a_located_error(tmp_path: Path, content: str, message: str) -> None:
+    trace = tmp_path / "run.jsonl"
+    trace.write_text(content)
+    status, said = _cli("show", str(trace), "-o", str(tmp_path / "x.html"))
+    assert status == 1
+    assert message in said.splitlines()[0], said
+    assert "Traceback" not in said and not (tmp_path / "x.html").exists()
+
+
+def test_without_plotly_it_says_which_extra_to_install(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    import sys
+
+    monkeypatch.delitem(sys.modules, "prima.show._page", raising=False)
+    monkeypatch.setitem(sys.modules, "plotly", None)  # an import of it fails
+    status, said = _cli("show", str(SAMPLE_03), "-o", str(tmp_path / "x.html"))
+    assert status == 1
+    assert said == ("prima show: error: prima show needs Plotly (plotly is missing): "
+                    "pip install 'prima[show]'\n")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["missing.jsonl"], "no such file: missing.jsonl"),
+    (["README.md"], "give a trace (*.jsonl) or a scenario (*.xml)"),
+    ([str(SAMPLE_03), "--scenario", str(SAMPLE_03)], "--scenario goes with a jsonl trace"),
+    ([str(SAMPLE_03), "-o", "no/such/folder/x.html"], "no such folder"),
+    ([str(SAMPLE_03), "-o", "."], "is a folder"),
+])
+def test_usage_errors(argv: list[str], message: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(ROOT)
+    status, said = _cli("show", *argv)
+    assert status == 2 and message in said and len(said.splitlines()) == 1, said
+
+
+# ------------------------------------------------------------ the page in a browser
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    if not (CHROMIUM and CHROMEDRIVER):
+        pytest.skip("Chromium and its driver are not installed (apt-get install chromium "
+                    "chromium-driver; .ci/run does)")
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+
+    options = Options()
+    options.binary_location = CHROMIUM
+    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
+                     "--disable-dev-shm-usage", "--window-size=1400,1000"):
+        options.add_argument(argument)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(options=options, service=Service(CHROMEDRIVER))
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def _open(browser: Any, scenario: Path, folder: Path) -> list[dict[str, Any]]:
+    """Write the scenario's page, open it from file://; its trace rows."""
+    rows = read_rows(scenario)
+    page = folder / f"{scenario.stem}.html"
+    page.write_text(render(rows, scenario=scenario, title=scenario.stem), encoding="utf-8")
+    browser.get(page.as_uri())
+    for _ in range(100):
+        if browser.execute_script("return !!window.primaShow"):
+            break
+        time.sleep(0.05)
+    return rows
+
+
+def _errors(browser: Any) -> list[str]:
+    return [e["message"] for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+
+
+_ROBOT_MARKER = """
+const trace = document.querySelectorAll('#map .scatterlayer .trace')[PRIMA_SHOW.robotTrace];
+return trace.querySelector('.point').getAttribute('transform');
+"""
+
+_BARS = """
+const gd = document.getElementById('timeline');
+const out = [];
+gd.data.forEach(function (trace, i) {
+  if (trace.meta === 'marks') {
+    trace.customdata.forEach(function (row, j) {
+      out.push([row, trace.y[j], trace.x[j], 0, i, j, null, trace.meta]);
+    });
+    return;
+  }
+  const drawn = document.querySelectorAll('#timeline .barlayer .trace')[i]
+    .querySelectorAll('.point path');
+  trace.customdata.forEach(function (ab, j) {
+    out.push([ab, trace.y[j], trace.base[j], trace.x[j], i, j, drawn.length, trace.meta]);
+  });
+});
+return out;
+"""
+
+
+def _first_move(rows: list[dict[str, Any]]) -> float | None:
+    """When the robot first leaves its first pose (None: it never does)."""
+    first = None
+    for row in rows:
+        pose = row.get("robot")
+        if pose is None:
+            continue
+        here = (pose["x"], pose["y"])
+        if first is None:
+            first = here
+        elif abs(here[0] - first[0]) + abs(here[1] - first[1]) > 0.05:
+            return float(row["t"])
+    return None
+
+
+def _clickable(bars: list[list[Any]], spans: list[list[Any]]) -> list[Any]:
+    """The widest bar no suspension span nor mark (drawn over the bars) covers."""
+    free = [b for b in bars if not any(s[1] == b[1] and s[2] <= b[2] + b[3] and b[2] <= s[2] + s[3]
+                                       for s in spans)]
+    return max(free or bars, key=lambda b: b[3])
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS, ids=lambda p: f"{p.parent.name}/{p.stem}")
+def test_the_page_in_a_browser(browser: Any, scenario: Path, tmp_path: Path) -> None:
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+
+    rows = _open(browser, scenario, tmp_path)
+    assert _errors(browser) == []
+
+    # every AB of the trace has its bar, drawn
+    drawn = browser.execute_script(_BARS)
+    bars = [b for b in drawn if b[7] == "bars"]
+    starts = {r["ab"] for r in rows if r["kind"] == "start"}
+    assert {b[0] for b in bars} == starts
+    for trace in {b[4] for b in drawn if b[7] != "marks"}:
+        assert sum(1 for b in drawn if b[4] == trace) == next(b[6] for b in drawn
+                                                              if b[4] == trace)
+
+    # playing moves the robot (from just before it first moves)
+    moves = _first_move(rows)
+    if moves is not None:
+        browser.execute_script(f"window.primaShow.seek({max(0.0, moves - 1.0)})")
+        before = browser.execute_script(_ROBOT_MARKER)
+        browser.execute_script("document.getElementById('speed').value = '16';")
+        browser.find_element(By.ID, "play").click()
+        time.sleep(0.6)
+        browser.find_element(By.ID, "play").click()  # pause
+        assert browser.execute_script("return window.primaShow.time()") > moves
+        assert browser.execute_script(_ROBOT_MARKER) != before
+
+    # clicking a bar shows its decision's reason
+    ab, _device, start, _width, trace, point, *_ = _clickable(
+        bars, [b for b in drawn if b[7] != "bars"])
+    element = browser.execute_script(
+        "return document.querySelectorAll('#timeline .barlayer .trace')[arguments[0]]"
+        ".querySelectorAll('.point')[arguments[1]];", trace, point)
+    browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", element)
+    ActionChains(browser).move_to_element(element).click().perform()
+    details = browser.find_element(By.ID, "details").text
+    reason = next(r["reason"] for r in rows if r["kind"] == "start" and r["ab"] == ab)
+    assert f"AB {ab}:" in details and reason in details, details
+    assert browser.execute_script("return window.primaShow.time()") == pytest.approx(start)
+
+    # and clicking a trace line shows its own
+    line = next(i for i, r in enumerate(r for r in rows if r["kind"] != "pose")
+                if r.get("reason") and r["kind"] in ("hold", "suspend", "cancel", "start")
+                and i > 3)
+    table_rows = [r for r in rows if r["kind"] != "pose"]
+    tr = browser.find_element(By.CSS_SELECTOR, f'#trace tr[data-i="{line}"]')
+    browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", tr)
+    tr.click()
+    assert table_rows[line]["reason"] in browser.find_element(By.ID, "details").text
+    assert _errors(browser) == []
+
+
+def test_screenshot_of_sample_03_is_in_the_docs() -> None:
+    shot = ROOT / "docs" / "show-sample-03.png"
+    assert shot.is_file() and shot.stat().st_size > 10_000
+    assert "show-sample-03.png" in (ROOT / "docs" / "show.md").read_text()
+
+
+
+
+def test_only_the_show_command_imports_the_viewer() -> None:
+    """The viewer stays apart from the core: ``prima show``'s handler imports it, lazily."""
+    import ast
+
+    importers = []
+    for path in sorted((ROOT / "prima").rglob("*.py")):
+        if "show" in path.relative_to(ROOT / "prima").parts[:1]:
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(n == "prima.show" or n.startswith(("prima.show.", "plotly")) for n in names):
+                importers.append((path.name, node.col_offset > 0))
+    assert importers == [("cli.py", True)]
