@@ -39,6 +39,27 @@ from prima.xmlio import read_source
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
+def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    """What runs a scenario: the scenario, the documents, the robot, seed and time."""
+    parser.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
+    parser.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
+    parser.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
+    parser.add_argument("--robot", metavar="PROFILE",
+                        help="robot hardware profile (default: the scenario's, else the home "
+                             "robot)")
+    parser.add_argument("--seed", type=int, metavar="N",
+                        help="random seed (default: the scenario's)")
+    parser.add_argument("--until", type=float, metavar="SECONDS",
+                        help="simulated time to stop at (default: the scenario's)")
+
+
+def _policy_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--policy", action="append", default=[], metavar="NAME=on|off",
+                        help="switch a mediation policy, over the profile's and the "
+                             f"scenario's (repeatable; NAME: all, {', '.join(POLICIES)}; "
+                             "docs/mediator.md, Policies)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="prima",
@@ -67,14 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "PRIMA. Prints the trace: a table like the thesis' figures (text), or "
                     "one JSON object per line (jsonl).",
     )
-    run.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
-    run.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
-    run.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
-    run.add_argument("--robot", metavar="PROFILE",
-                     help="robot hardware profile (default: the scenario's, else the home robot)")
-    run.add_argument("--seed", type=int, metavar="N", help="random seed (default: the scenario's)")
-    run.add_argument("--until", type=float, metavar="SECONDS",
-                     help="simulated time to stop at (default: the scenario's)")
+    _scenario_arguments(run)
     run.add_argument("--format", choices=("text", "jsonl", "chrome-trace"), default="text",
                      help="trace format (default: text); chrome-trace: the Trace Event "
                           "Format, for Perfetto or chrome://tracing")
@@ -82,10 +96,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--pose-rate", type=float, default=2.0, metavar="HZ",
                      help="pose samples per simulated second in the jsonl trace "
                           "(default: 2; 0: none)")
-    run.add_argument("--policy", action="append", default=[], metavar="NAME=on|off",
-                     help="switch a mediation policy, over the profile's and the scenario's "
-                          f"(repeatable; NAME: all, {', '.join(POLICIES)}; "
-                          "docs/mediator.md, Policies)")
+    _policy_argument(run)
     debug = commands.add_parser(
         "debug",
         help="step through a run: breakpoints, working memory, the apps' states",
@@ -96,18 +107,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "variables. Commands come from standard input, one per line, so a "
                     "session can be scripted; 'help' lists them (docs/running.md).",
     )
-    debug.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
-    debug.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
-    debug.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
-    debug.add_argument("--robot", metavar="PROFILE",
-                       help="robot hardware profile (default: the scenario's, else the home "
-                            "robot)")
-    debug.add_argument("--seed", type=int, metavar="N",
-                       help="random seed (default: the scenario's)")
-    debug.add_argument("--until", type=float, metavar="SECONDS",
-                       help="simulated time to stop at (default: the scenario's)")
-    debug.add_argument("--policy", action="append", default=[], metavar="NAME=on|off",
-                       help="switch a mediation policy (repeatable; as for prima run)")
+    _scenario_arguments(debug)
+    _policy_argument(debug)
     test = commands.add_parser(
         "test",
         help="run scenarios and compare their traces with golden traces",

@@ -49,17 +49,9 @@ def pose_at(poses: Sequence[tuple[float, Pose]], t: float) -> Pose | None:
 
 
 def _bounds(tl: Timeline, world: WorldMap | None) -> tuple[float, float, float, float]:
-    xs: list[float] = []
-    ys: list[float] = []
-    if world is not None:
-        for w in world.walls:
-            xs += [w.x1, w.x2]
-            ys += [w.y1, w.y2]
-        xs += [p.x for p in world.places]
-        ys += [p.y for p in world.places]
-    for _, pose in tl.robot + tl.user:
-        xs.append(pose[0])
-        ys.append(pose[1])
+    points = (world.outline() if world is not None else []) + [
+        (pose[0], pose[1]) for _, pose in tl.robot + tl.user]
+    xs, ys = [x for x, _ in points], [y for _, y in points]
     if not xs:
         return (0.0, 1.0, 0.0, 1.0)
     return (min(xs) - 0.6, max(xs) + 0.6, min(ys) - 0.6, max(ys) + 0.6)

@@ -35,18 +35,9 @@ def _colours(apps: list[str]) -> dict[str, str]:
 
 
 def _bounds(model: Model, world: WorldMap | None) -> tuple[float, float, float, float]:
-    xs: list[float] = []
-    ys: list[float] = []
-    if world is not None:
-        for w in world.walls:
-            xs += [w.x1, w.x2]
-            ys += [w.y1, w.y2]
-        for p in world.places:
-            xs.append(p.x)
-            ys.append(p.y)
-    for _, x, y, _h in model.robot + model.user:
-        xs.append(x)
-        ys.append(y)
+    points = (world.outline() if world is not None else []) + [
+        (x, y) for _, x, y, _h in model.robot + model.user]
+    xs, ys = [x for x, _ in points], [y for _, y in points]
     if not xs:
         return (0.0, 1.0, 0.0, 1.0)
     return (min(xs) - 0.5, max(xs) + 0.5, min(ys) - 0.5, max(ys) + 0.5)

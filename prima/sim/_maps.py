@@ -108,6 +108,11 @@ class WorldMap:
     _adjacent: Mapping[str, tuple[tuple[str, float], ...]] = field(
         init=False, repr=False, compare=False)
 
+
+    def outline(self) -> list[tuple[float, float]]:
+        """The points that span the map: the walls' ends and the places (to frame it)."""
+        points = [(w.x1, w.y1) for w in self.walls] + [(w.x2, w.y2) for w in self.walls]
+        return points + [(p.x, p.y) for p in self.places]
     def __post_init__(self) -> None:
         index = {p.name: p for p in self.places}
         if len(index) != len(self.places):
