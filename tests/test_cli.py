@@ -152,10 +152,11 @@ def test_run_checks_its_output_path_before_running(tmp_path: Path) -> None:
     assert code == 2 and "is a folder" in err
 
 
-def test_ctrl_c_ends_a_run_with_130_and_keeps_the_trace_so_far(tmp_path: Path) -> None:
-    out = tmp_path / "trace.jsonl"
+def interrupted_run(out: Path, form: str) -> str:
+    """``prima run --format FORM --out OUT`` stopped with Ctrl-C once it has written
+    some of its trace; its standard error (it exits with 130)."""
     proc = subprocess.Popen([sys.executable, "-m", "prima", "run", str(OFFICE), "--until",
-                             "900000", "--format", "jsonl", "--out", str(out)],
+                             "900000", "--format", form, "--out", str(out)],
                             stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline and (not out.exists() or out.stat().st_size < 4096):
@@ -163,6 +164,12 @@ def test_ctrl_c_ends_a_run_with_130_and_keeps_the_trace_so_far(tmp_path: Path) -
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, err
+    return err
+
+
+def test_ctrl_c_ends_a_run_with_130_and_keeps_the_trace_so_far(tmp_path: Path) -> None:
+    out = tmp_path / "trace.jsonl"
+    err = interrupted_run(out, "jsonl")
     assert "interrupted at t=" in err and "Traceback" not in err
     lines = out.read_text().splitlines()
     assert lines and all(json.loads(line)["seq"] == i for i, line in enumerate(lines[:-1]))
@@ -304,15 +311,7 @@ def test_a_broken_named_profile_is_reported_and_its_documents_wait(tmp_path: Pat
 
 def test_ctrl_c_closes_a_chrome_trace_where_the_run_stopped(tmp_path: Path) -> None:
     out = tmp_path / "trace.json"
-    proc = subprocess.Popen([sys.executable, "-m", "prima", "run", str(OFFICE), "--until",
-                             "900000", "--format", "chrome-trace", "--out", str(out)],
-                            stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline and (not out.exists() or out.stat().st_size < 4096):
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=30)
-    assert proc.returncode == 130, err
+    assert "Traceback" not in interrupted_run(out, "chrome-trace")
     events = json.loads(out.read_text())  # a whole, closed array
     begins = sum(e["ph"] == "b" for e in events)
     assert begins and begins == sum(e["ph"] == "e" for e in events)
