@@ -127,6 +127,12 @@ class Policies:
         return (self._channel is not None and self._channel.still()) or \
             (self._config.interrupt and self.cuttable(y, x))
 
+    def acts_on_busy(self, x: Node) -> bool:
+        """Whether a policy may act for ``x`` on busy devices: share them (blend) or
+        cut what runs there (interrupt, for a reaction's AB)."""
+        return (self._config.blend and bool(self._catalog.blends)) or (
+            self._config.interrupt and x.tree.reaction is not None)
+
     def blend(self, x: Node) -> tuple[frozenset[str], bool] | None:
         """The blend policy: the busy devices the ready ``x`` may share with what runs
         there, if it may share every one: each is held by an AB that is no blend

@@ -179,9 +179,12 @@ class Selector:
     def _startable(self, x: Node, view: _Round) -> bool:
         holds = self._holds
         held = holds.holder(x) if holds.open() or x.priority is Priority.LOW else None
-        best = all(view.best(d) is x for d in x.sorted_devices)
         busy = self._wm.busy
-        ready = best and all(d not in busy for d in x.sorted_devices)
+        ready = all(d not in busy and view.best(d) is x for d in x.sorted_devices)
+        # Ranking best with some devices busy matters only to a policy that may act on
+        # what runs there (blend, interrupt): only then is it worked out.
+        best = ready or (self._policies.acts_on_busy(x)
+                         and all(view.best(d) is x for d in x.sorted_devices))
         x.blended = frozenset()
         if best and not ready:
             blend = self._policies.blend(x)
