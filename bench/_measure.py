@@ -1,0 +1,87 @@
+"""How every benchmark in bench/ measures: CPU time, medians, interleaved repeats.
+
+This machine is noisy (absolute figures drift by 40%), so a benchmark never
+reports one timing of one case. It runs each case of a comparison once per
+round, round after round (``interleaved``), so that a slow spell of the machine
+falls on every case alike; it reports the median CPU time of each case; and it
+prints each case as a ratio to a peer measured in the same rounds, which is
+the figure that stays put from one machine state to the next.
+
+CPU time, not wall time: ``time.process_time`` for work done in this process,
+and the children's user + system time (``resource.getrusage``) for a cold
+process started with :func:`child_cpu`.
+"""
+
+from __future__ import annotations
+
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+try:
+    import prima  # noqa: F401
+except ModuleNotFoundError:  # running from a checkout without installing
+    sys.path.insert(0, str(ROOT))
+
+
+def cpu(fn: Callable[[], object]) -> float:
+    """CPU seconds this process spends in ``fn()``."""
+    start = time.process_time()
+    fn()
+    return time.process_time() - start
+
+
+def child_cpu(argv: Sequence[str], *, ok: tuple[int, ...] = (0,)) -> float:
+    """CPU seconds (user + system) of one cold process running ``argv``.
+
+    The process's output is swallowed; an exit status not in ``ok`` stops the
+    benchmark with the process's error output, as a benchmark of a failing
+    command measures nothing.
+    """
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    done = subprocess.run(list(argv), capture_output=True, text=True, check=False)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode not in ok:
+        sys.exit(f"{' '.join(argv)} exited {done.returncode}:\n{done.stderr}")
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def interleaved(cases: dict[str, Callable[[], float]], repeats: int) -> dict[str, float]:
+    """Median of each case's own measure (seconds) over ``repeats`` rounds.
+
+    Each case is a function that does the work once and returns what it cost
+    (``lambda: cpu(work)``, ``lambda: child_cpu(argv)``). One round runs every
+    case once, in order; the rounds interleave the cases.
+    """
+    samples: dict[str, list[float]] = {name: [] for name in cases}
+    for _ in range(repeats):
+        for name, case in cases.items():
+            samples[name].append(case())
+    return {name: statistics.median(values) for name, values in samples.items()}
+
+
+def fmt_time(seconds: float) -> str:
+    """A duration in the unit that reads best: s, ms or us."""
+    if seconds >= 1.0:
+        return f"{seconds:.2f} s"
+    if seconds >= 1e-3:
+        return f"{seconds * 1e3:.1f} ms"
+    return f"{seconds * 1e6:.1f} us"
+
+
+def report(title: str, medians: dict[str, float], peer: str, *,
+           unit: Callable[[float], str] = fmt_time, repeats: int | None = None) -> None:
+    """Print one table: each case's median and its ratio to ``peer``'s median."""
+    rounds = f", median of {repeats} interleaved rounds" if repeats else ""
+    print(f"{title} (CPU time{rounds}; ratio to {peer})")
+    width = max(len(name) for name in medians)
+    base = medians[peer]
+    for name, value in medians.items():
+        ratio = value / base if base else float("inf")
+        print(f"  {name:<{width}}  {unit(value):>10}  {ratio:8.2f}x")
