@@ -18,12 +18,13 @@ most :data:`~prima.vocab.MAX_TEXT` characters (or a robot's smaller budget).
 from __future__ import annotations
 
 import math
+import operator
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
-from typing import TypeGuard, TypeVar, cast
+from typing import Any, TypeGuard, TypeVar, cast
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
@@ -222,6 +223,42 @@ def _order(op: str, a: _Ordered, b: _Ordered) -> bool:
 
 def _is_num(v: Value) -> TypeGuard[int | float]:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+_NUMBERS = (int, float)
+
+
+def _arithmetic(op: str) -> Callable[[Value, Value], Value]:
+    """``op``'s function, with a fast way for two plain numbers whose result is in range
+    (the everyday counter); anything else takes :func:`_arith`'s checks."""
+    compute = {"+": operator.add, "-": operator.sub, "*": operator.mul}.get(op)
+    if compute is None:  # '/' and '%' check for zero: no fast way
+        return lambda a, b: _arith(op, a, b)
+
+    def fast(a: Value, b: Value) -> Value:
+        if type(a) in _NUMBERS and type(b) in _NUMBERS:
+            value = compute(a, b)
+            if -MAX_NUMBER <= value <= MAX_NUMBER:  # False for nan and inf, as _in_range
+                return value  # type: ignore[no-any-return]
+        return _arith(op, a, b)
+    return fast
+
+
+def _comparison(op: str) -> Callable[[Value, Value], bool]:
+    """``op``'s function, with a fast way for two plain numbers; else :func:`_compare`."""
+    if op not in _ORDERINGS:
+        return lambda a, b: _compare(op, a, b)
+    order = _ORDERINGS[op]
+
+    def fast(a: Value, b: Value) -> bool:
+        if type(a) in _NUMBERS and type(b) in _NUMBERS:
+            return order(a, b)  # type: ignore[no-any-return]
+        return _compare(op, a, b)
+    return fast
+
+
+_ORDERINGS: Mapping[str, Callable[[Any, Any], Any]] = {
+    "<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}
 
 
 # ---------------------------------------------------------------- parsing
@@ -820,11 +857,13 @@ class _Compiler:
 
     def binary(self, ch: list[Node]) -> Part:
         fa, op, fb = self.node(ch[0])[0], str(ch[1]), self.node(ch[2])[0]
-        return (lambda s: _arith(op, fa(s), fb(s))), False
+        arith = _arithmetic(op)
+        return (lambda s: arith(fa(s), fb(s))), False
 
     def compare(self, ch: list[Node]) -> Part:
         fa, op, fb = self.node(ch[0])[0], str(ch[1]), self.node(ch[2])[0]
-        return (lambda s: _compare(op, fa(s), fb(s))), False
+        compare = _comparison(op)
+        return (lambda s: compare(fa(s), fb(s))), False
 
     # ------------------------------------------------------------ helpers
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import operator
 import re
 import time
 
@@ -15,9 +17,10 @@ from prima.dsl import (
     compile_template,
     parse_chain,
     parser,
+    to_text,
 )
 from prima.errors import ExecutionError, ExpressionError
-from prima.vocab import MAX_TEXT
+from prima.vocab import MAX_NUMBER, MAX_TEXT
 
 SCOPE = Scope({"a": 2, "name": "Ann", "ch": 12, "nothing": None},
               {"name": "message", "text": "hi", "sender": "kidode"})
@@ -306,3 +309,37 @@ def test_now_is_the_scopes_time_and_never_a_constant() -> None:
     assert not compiled.constant
     assert compiled.evaluate(Scope({}, None, 12.5)) == 17.5
     assert compile_template("at {now()} s").evaluate(Scope({}, None, 3.0)) == "at 3 s"
+
+
+
+_OPERANDS = st.one_of(st.integers(-10**16, 10**16), st.floats(allow_nan=True, allow_infinity=True),
+                      st.booleans(), st.none(), st.text(max_size=3))
+_ORDERS = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}
+_ARITH = {"+": operator.add, "-": operator.sub, "*": operator.mul}
+
+
+def _as_the_reference_says(op: str, a: object, b: object) -> object:
+    """What docs/pxml.md says ``a op b`` is: a value, or "error"."""
+    numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (a, b))
+    if op in _ORDERS:
+        both_text = isinstance(a, str) and isinstance(b, str)
+        return _ORDERS[op](a, b) if numbers or both_text else "error"
+    if op == "+" and (isinstance(a, str) or isinstance(b, str)):
+        return to_text(a) + to_text(b)  # type: ignore[arg-type]
+    if not numbers:
+        return "error"
+    value = _ARITH[op](a, b)
+    return value if math.isfinite(value) and abs(value) <= MAX_NUMBER else "error"
+
+
+@given(_OPERANDS, _OPERANDS, st.sampled_from([*_ARITH, *_ORDERS]))
+def test_arithmetic_and_ordering_of_any_two_values(a: object, b: object, op: str) -> None:
+    """`+ - *` and the orderings take a short cut for two plain numbers: the values and
+    the errors (out of range, not a number, not ordered) stay those of the reference."""
+    scope = Scope({"a": a, "b": b})  # type: ignore[dict-item]
+    try:
+        value: object = compile_expression(f"a {op} b").evaluate(scope)
+    except ExecutionError:
+        value = "error"
+    expected = _as_the_reference_says(op, a, b)
+    assert value == expected or value != value and expected != expected  # noqa: PLR0124 - nan

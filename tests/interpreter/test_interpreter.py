@@ -9,6 +9,7 @@ import pytest
 from prima.dsl import check_document, default_profile
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import Event, ManualClock, Outcome, Request, RunningOrder
+from prima.vocab import TraceKind
 
 
 class Port:
@@ -257,3 +258,21 @@ def test_a_chain_says_whether_its_words_are_for_the_user() -> None:
         '<chain face-user="false">Speak("This panel shows our robot.")</chain>'
         '</entry></state>')
     assert [r.face_user for r in port.requests] == [True, False]
+
+
+def test_the_state_s_handlers_are_tried_before_the_document_s_each_in_order() -> None:
+    interp, _p, _c, notes, _s = make(
+        '<var name="n" expr="0"/><event name="e"/>'
+        '<on event="e"><log text="document {n}"/></on>'
+        '<state id="s" initial="true">'
+        '<on event="e" cond="n == 1"><log text="first {n}"/></on>'
+        '<on event="e" cond="n &lt; 2"><log text="second {n}"/><assign name="n" expr="n + 1"/>'
+        '</on><on event="e" cond="n == 5"><goto state="t"/></on></state>'
+        '<state id="t"><on event="e"><log text="in t"/></on></state>')
+    for n in (None, None, 2, 5, None):  # None: n as the handlers left it
+        if n is not None:
+            interp.variables["n"] = n
+        interp.event(Event("e"))
+    logs = [note.text for note in notes if note.kind is TraceKind.LOG]
+    assert logs == ["second 0", "first 1", "document 2", "in t"]
+    assert interp.state == "t"
