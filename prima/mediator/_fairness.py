@@ -51,11 +51,22 @@ class _Share:
         self.check_at: float | None = None
         """When its share could next run out (a deadline)."""
 
-    def total(self, now: float, window: float) -> float:
-        """Seconds spent keeping others waiting within ``[now - window, now]``."""
+    def prune(self, now: float, window: float) -> None:
+        """Forget the intervals that ended before ``[now - window, now]``."""
         start = now - window
         while self.intervals and self.intervals[0][1] <= start:
             self.intervals.popleft()
+
+    def none_within(self, now: float, window: float) -> bool:
+        """No interval within the window: :meth:`total` would be 0 with ``since`` None
+        (each interval left ends inside the window and lasted > 0 s), without the sum."""
+        self.prune(now, window)
+        return not self.intervals
+
+    def total(self, now: float, window: float) -> float:
+        """Seconds spent keeping others waiting within ``[now - window, now]``."""
+        start = now - window
+        self.prune(now, window)
         total = sum(end - max(begin, start) for begin, end in self.intervals)
         if self.since is not None:
             total += now - max(self.since, start)
@@ -115,17 +126,19 @@ class Fairness:
             if share.demoted_until is not None and share.demoted_until <= now:
                 share.demoted_until = None
                 changed |= self._set(app, False, "regains its precedence")
+            if share.since is None:  # keeps nobody waiting: nothing to spend, or check
+                share.check_at = None
+                continue
             used = share.total(now, window)
             if used >= limit - _SLACK:  # (times summed in floating point: a share spent
                 used = max(used, limit)  # up to rounding is spent, or its deadline is now)
-            if share.since is not None and used >= limit and share.demoted_until is None:
+            if used >= limit and share.demoted_until is None:
                 share.demoted_until = self._clock.after(window)
                 changed |= self._set(
                     app, True, f"kept other applications waiting {used:g} s within "
                                f"{window:g} s: it loses its precedence until "
                                f"t={share.demoted_until:g} s")
-            share.check_at = (self._clock.after(limit - used)
-                              if share.since is not None and used < limit else None)
+            share.check_at = self._clock.after(limit - used) if used < limit else None
         self._forget_idle(now)
         return changed
 
@@ -146,7 +159,7 @@ class Fairness:
         gone = [name for name, s in self._shares.items()
                 if name not in self._apps or (
                     s.since is None and s.demoted_until is None
-                    and s.total(now, self._apps[name].budgets.wait_window) == 0)]
+                    and s.none_within(now, self._apps[name].budgets.wait_window))]
         for name in gone:
             del self._shares[name]
 

@@ -153,10 +153,9 @@ class Holds:
         if app.name in self._streams:
             raise MediationError(f"{app.name}: a stream is already open")
         st = Stream(hold, tree)
-        for t in app.trees.values():
-            for n in t.nodes.values():
-                if n.state is NodeState.RUNNING:
-                    st.devices.update(n.devices)
+        wm = self._wm  # the devices its running ABs hold (or are blended over)
+        st.devices.update(d for occupied in (wm.busy, wm.blending)
+                          for d, n in occupied.items() if n.app is app)
         self._streams[app.name] = st
 
     def close_stream(self, app: App, rule: Rule) -> None:
@@ -326,17 +325,37 @@ class Holds:
     def _step_aside(self, devices: set[str] | frozenset[str]) -> None:
         """A hold took force on ``devices``: every waiting AB it holds steps aside now
         (is parked, so it reserves nothing), not only the best on each device, which
-        may be the holder's own. Linear in working memory, which the waiting budgets
-        bound; holds take force rarely."""
+        may be the holder's own. It looks only at the trees with waiting ABs on those
+        devices that a hold could keep (a stream hold keeps only new streams), and at
+        their ABs there: the ABs it parks, not the whole waiting list."""
         wm = self._wm
         wm.dirty.update(devices)
-        for node in list(wm.nodes.values()):
-            if (node.state is NodeState.WAITING and node.parked is None
-                    and not node.devices.isdisjoint(devices)):
+        found: dict[AbId, Node] = {}
+        for d in devices:
+            for tree, nodes in wm.on.get(d, {}).items():
+                if self._may_hold(tree):
+                    found.update(nodes)
+        for ab in sorted(found):  # in the order the ABs were created
+            node = found[ab]
+            if node.state is NodeState.WAITING and node.parked is None:
                 held = self.holder(node)
                 if held is not None and held[0] is not Rule.KEEP_CHANNEL:
                     self.note(node, *held)
                     self.park(node, *held)
+
+    def _may_hold(self, tree: Tree) -> bool:
+        """Whether another app's block or stream hold could keep an AB of ``tree``
+        (what :meth:`holder` asks of each AB, asked once for the tree)."""
+        for other in self._apps.values():
+            if other is tree.app or other.demoted:
+                continue
+            blk = self._blocks.get(other.name)
+            if blk is not None and blk.reserving:
+                return True
+            st = self._streams.get(other.name)
+            if st is not None and st.armed and _new_stream(tree):
+                return True
+        return False
 
     def demoted(self) -> tuple[str, ...]:
         """Apps that have lost their precedence (their holds hold nothing)."""

@@ -132,7 +132,7 @@ class Intake:
         # before its nodes are filed, so that they rank as its reaction
         if ((request.reactive or request.reaction) and link.reactive_allowed
                 and self._wm.react(tree, seq)
-                and any(n.parked is not None for n in tree.nodes.values())):
+                and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
         root = self._build(app, tree, request, cmds, specs, link, seq)
         app.latest = cmds[-1]
@@ -224,11 +224,10 @@ class Intake:
         running: Node | None = None
         last: Node | None = None
         cancelled: list[Command] = []
-        for tree in sorted(app.trees.values(), key=lambda t: t.id):
-            nodes = list(tree.nodes.values())
-            if not any(n.devices & devices for n in nodes):
-                continue
-            for n in nodes:
+        on = app.trees_on
+        sharing = {t.id: t for d in devices if d in on for t in on[d].values()}
+        for tid in sorted(sharing):  # the app's trees with a node that shares a device
+            for n in list(sharing[tid].nodes.values()):
                 if n.state is NodeState.RUNNING:
                     if n.feedback and not n.commands[0].cut:
                         n.commands[0].cut = True

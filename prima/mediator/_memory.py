@@ -46,6 +46,9 @@ class WorkingMemory:
         """The suspended-stream stack (``Tree.suspended`` orders it)."""
         self.ranked: dict[str, dict[tuple[str, Priority], int]] = {}
         """Device -> (app, priority) -> how many of its waiting, unparked ABs need it."""
+        self.on: dict[str, dict[Tree, dict[AbId, Node]]] = {}
+        """Device -> tree -> its waiting, unparked ABs that need the device (what a hold
+        taking force on the device looks at)."""
         self._next_ab = 1
         self._next_tree = 0
         self._next_susp = 1
@@ -68,6 +71,12 @@ class WorkingMemory:
         app.live += 1
         self.trees[tree.id] = tree
         app.trees[tree.id] = tree
+        counts = tree.devices
+        for d in node.sorted_devices:
+            n = counts.get(d, 0)
+            counts[d] = n + 1
+            if not n:
+                app.trees_on.setdefault(d, {})[tree.id] = tree
         for c in commands:
             c.node = node
         return node
@@ -84,6 +93,7 @@ class WorkingMemory:
     def _rank(self, node: Node, delta: int) -> None:
         """Count a waiting AB in (or out of) its devices' rankings."""
         key = (node.app.name, node.priority)
+        tree = node.tree
         for d in node.sorted_devices:
             counts = self.ranked.setdefault(d, {})
             n = counts.get(key, 0) + delta
@@ -91,6 +101,14 @@ class WorkingMemory:
                 counts[key] = n
             else:
                 del counts[key]
+            trees = self.on.setdefault(d, {})
+            if delta > 0:
+                trees.setdefault(tree, {})[node.id] = node
+            else:
+                ids = trees[tree]
+                del ids[node.id]
+                if not ids:
+                    del trees[tree]
 
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
@@ -118,6 +136,8 @@ class WorkingMemory:
         if node.parked is None:
             return
         node.parked = None
+        if node.tree.nodes.get(node.id) is node:  # (one cancelled meanwhile has left)
+            node.tree.parked -= 1
         if node.state is NodeState.WAITING:
             self.index.add(node)
             self._rank(node, 1)
@@ -126,6 +146,7 @@ class WorkingMemory:
     def park(self, node: Node, holder: App) -> None:
         """Take a waiting AB out of its devices' ranking (its index entries go stale)."""
         node.parked = holder
+        node.tree.parked += 1
         node.version += 1
         self._rank(node, -1)
         self.dirty.update(node.devices)
@@ -181,6 +202,19 @@ class WorkingMemory:
         tree = node.tree
         if tree.nodes.pop(node.id, None) is None:
             return
+        if node.parked is not None:
+            tree.parked -= 1
+        counts = tree.devices
+        for d in node.sorted_devices:
+            n = counts[d] - 1
+            if n:
+                counts[d] = n
+            else:
+                del counts[d]
+                on = tree.app.trees_on[d]
+                del on[tree.id]
+                if not on:
+                    del tree.app.trees_on[d]
         tree.live -= 1
         tree.app.live -= 1
         if tree.live == 0:

@@ -51,7 +51,7 @@ class App:
     """One registration of an application."""
 
     __slots__ = ("name", "kind", "listener", "alive", "order", "latest", "active",
-                 "idle_since", "trees", "live", "demoted", "budgets")
+                 "idle_since", "trees", "trees_on", "live", "demoted", "budgets")
 
     def __init__(self, name: str, kind: AppKind, listener: AppListener, order: int,
                  budgets: Budgets) -> None:
@@ -71,6 +71,8 @@ class App:
         """When ``active`` last dropped to zero."""
         self.trees: dict[TreeId, Tree] = {}
         """Its trees in working memory."""
+        self.trees_on: dict[str, dict[TreeId, Tree]] = {}
+        """Device -> its trees with a node in working memory that needs the device."""
         self.live = 0
         """Its ABs in working memory (pending, waiting or running): the waiting budget."""
         self.demoted = False
@@ -108,7 +110,7 @@ class Tree:
     """One AB tree (one Communication Stream)."""
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "version", "reaction",
-                 "started", "pose")
+                 "started", "pose", "devices", "parked")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -120,6 +122,10 @@ class Tree:
         """Position on the suspended stack (larger = more recent), or None."""
         self.nodes: dict[AbId, Node] = {}
         """Nodes in working memory, in creation order."""
+        self.devices: dict[str, int] = {}
+        """Device -> how many of its nodes in working memory need it."""
+        self.parked = 0
+        """How many of its nodes in working memory are parked (out of the ranking)."""
         self.version = 0
         """Bumped whenever the waiting index must re-rank the tree (suspend, resume)."""
         self.reaction: int | None = None
