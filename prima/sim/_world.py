@@ -18,6 +18,12 @@ written through the world's methods), and human detection keeps its answer
 until the version, the tick or the camera's pan changes. A pose written on a
 body directly, from outside, must be followed by :meth:`World.moved`.
 
+The map's places sit in a pymunk space of their own (never stepped, so the
+physics is the same with or without it): :meth:`World.places_near` asks its
+spatial index which places are near a point, instead of measuring the
+distance to every place, and says how far the point may move before the
+answer can change.
+
 The user is a kinematic body moved by the scripted user. Head and arm
 angles, and those of the joints a robot profile declares (a laser pointer's
 pan), are interpolated on demand, never stepped.
@@ -40,7 +46,12 @@ WALL = 0b001
 ROBOT = 0b010
 HUMAN = 0b100
 _SIGHT = pymunk.ShapeFilter(mask=WALL)
+_ANY = pymunk.ShapeFilter()
 HUMAN_RADIUS = 0.25
+_PLACE_MARGIN = 1e-3
+"""A margin (m) for rounding: the places' index is asked about a box this much
+wider than needed, and the distance a point may move without changing which
+places are near it is this much shorter than measured."""
 
 _IDLE, _LINEAR, _ANGULAR, _VELOCITY = 0, 1, 2, 3
 
@@ -122,6 +133,13 @@ class World:
         self._sight: dict[bool, tuple[int, int, float, tuple[bool, float]]] = {}
         """Human detection's last answer with and without ``any_direction``: the tick,
         the version and the camera's pan it was worked out for, and the answer."""
+        self._places = pymunk.Space()
+        self._place_of: dict[pymunk.Shape, int] = {}
+        for i, place in enumerate(world_map.places):
+            dot = pymunk.Circle(self._places.static_body, 0.0, (place.x, place.y))
+            dot.sensor = True
+            self._places.add(dot)
+            self._place_of[dot] = i
         self.head_pan = _Joint()
         self.head_tilt = _Joint()
         self.arm = _Joint()
@@ -212,6 +230,28 @@ class World:
             if abs(rel) > math.radians(self.spec.camera_fov) / 2:
                 return False, d
         return self.space.segment_query_first((rx, ry), (ux, uy), 0.0, _SIGHT) is None, d
+
+    def places_near(self, x: float, y: float, radius: float,
+                    slack: float = 0.0) -> tuple[list[int], float]:
+        """The places within ``radius`` of (x, y), as indices in the map's order, and
+        how far (m) the point may move before any place comes within ``radius`` or
+        leaves it (at most ``slack``).
+
+        The places' spatial index finds the candidates within ``radius + slack``;
+        each is then measured as a scan of every place would measure it, so the
+        places found are the scan's.
+        """
+        m = radius + slack + _PLACE_MARGIN
+        hits = self._places.bb_query(pymunk.BB(x - m, y - m, x + m, y + m), _ANY)
+        places = self.map.places
+        found = []
+        clear = slack
+        for i in sorted(self._place_of[dot] for dot in hits):
+            d = math.hypot(places[i].x - x, places[i].y - y)
+            if d <= radius:
+                found.append(i)
+            clear = min(clear, abs(d - radius))
+        return found, clear - _PLACE_MARGIN
 
     def user_bearing(self) -> float:
         """Direction from the robot to the user relative to the body (radians)."""
