@@ -1,85 +1,138 @@
-"""Benchmark: how much faster than real time does the simulator run?
+"""Benchmark: the full stack on moving robots, against bare pymunk stepping.
 
-The robot drives the whole time: topological moves back and forth across the
-office floor (entrance <-> Prof. Kidode's room, five legs each way, one
-feedback iteration per leg) while the user walks to and fro in the hall,
-out of its way. Prints simulated
-seconds per wall-clock second, microseconds per physics step (everything
-included: controllers, sensing, the event kernel) and, for comparison, the
-cost of a bare pymunk step of the same world.
+Usage: python bench/sim.py [--repeats 5] [--until S] [SCENARIO ...]
 
-Run: python bench/sim.py [--seconds 3600]
+Each scenario runs through the whole stack, ``prima.run.Run``: its documents,
+their interpreters, the mediator and the simulator, with every trace line made
+and formatted as ``prima run`` formats it (then dropped). The documents are
+loaded before the clock starts: this measures the run, not the cold start.
+The scenarios, all kept in the repository, keep the robot moving:
+
+- ``patrol`` (bench/data/patrol.xml): an FA drives the robot round the office
+  floor for two simulated hours, one Topological Move per leg;
+- ``tracking`` (bench/data/tracking.xml): FA2 follows a user who walks round
+  the office hall for two simulated hours (TrackingHuman, one iteration every
+  half second, each an atomic behavior through the mediator);
+- ``sample-03`` and ``sample-09`` (scenarios/thesis): two applications
+  compete for the robot while it guides, searches, tracks and dances; each
+  runs ``--loops`` times per round, as one run of either is short.
+
+The peer of each scenario is a bare pymunk space of the same world (walls,
+robot, user) stepped as many times as the full stack stepped it, measured
+in the same rounds. Printed per scenario: the CPU time of both (medians of
+interleaved rounds) and their ratio; then simulated seconds per CPU second,
+against the target of 1,000x real time.
+
+Any other scenario files may be named instead (``scenarios/thesis/*.xml``).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
-try:
-    import prima  # noqa: F401
-except ModuleNotFoundError:  # running from a checkout without installing
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _measure import ROOT, cpu, interleaved, report
 
-from prima.mediator import Call  # noqa: E402
-from prima.sim import (  # noqa: E402
-    CommandRunner,
-    EntryKind,
-    Pose,
-    Simulator,
-    TimedAction,
-    UserActionKind,
-    UserScript,
-    load_map,
-)
+from prima.run import Run
+from prima.sim import Simulator, load_scenario
+from prima.trace import TextTrace, TraceLine
 
-MAP = Path(__file__).resolve().parents[1] / "scenarios" / "maps" / "office.xml"
+TARGET = 1000.0
+"""Simulated seconds per CPU second the full stack must reach on a moving robot."""
 
-
-def build(seconds: float) -> CommandRunner:
-    world = load_map(MAP)
-    walks = tuple(TimedAction(20.0 * i, UserActionKind.WALK, x=1.0 if i % 2 else 4.5, y=5.2)
-                  for i in range(int(seconds / 20) + 1))
-    user = UserScript(Pose(1.0, 5.2, 0), speed=0.35, actions=walks)
-    runner = CommandRunner(Simulator(world, robot=Pose(1, 3, 0), user=user, seed=1))
-    # a round trip takes about 150 s; queue more than enough of them
-    trips = int(seconds / 100) + 2
-    for _ in range(trips):
-        runner.queue(Call("TopologicalMove", {"to": "kidode-room"}),
-                     Call("TopologicalMove", {"to": "entrance"}))
-    return runner
+SCENARIOS = {
+    "patrol": ROOT / "bench" / "data" / "patrol.xml",
+    "tracking": ROOT / "bench" / "data" / "tracking.xml",
+    "sample-03": ROOT / "scenarios" / "thesis" / "sample-03.xml",
+    "sample-09": ROOT / "scenarios" / "thesis" / "sample-09.xml",
+}
+SHORT = 600.0
+"""Scenarios shorter than this (simulated seconds) run ``--loops`` times per round."""
 
 
-def bare_step_cost(runner: CommandRunner, n: int = 200_000) -> float:
-    space = runner.sim.world.space
-    dt = runner.sim.world.dt
-    start = time.perf_counter()
-    for _ in range(n):
-        space.step(dt)
-    return (time.perf_counter() - start) / n * 1e6
+@dataclass
+class Case:
+    """One scenario: what its full-stack runs measured, for its peer and the summary."""
+
+    path: Path
+    until: float | None
+    loops: int
+    steps: int = 0
+    simulated: float = 0.0
+    lines: int = 0
+
+    def full(self) -> float:
+        """CPU seconds of ``loops`` full-stack runs (loaded beforehand)."""
+        sink = _TextSink()
+        runs = [Run(self.path, until=self.until, sink=sink) for _ in range(self.loops)]
+        spent = cpu(lambda: [r.run() for r in runs])
+        self.steps = sum(r.sim.steps for r in runs)
+        self.simulated = sum(r.sim.now() for r in runs)
+        self.lines = sink.lines
+        return spent
+
+    def bare(self) -> float:
+        """CPU seconds of stepping the same world's bare pymunk space as many times."""
+        scenario = load_scenario(self.path)
+        world = Simulator.from_scenario(scenario).world
+        space, dt, steps = world.space, world.dt, self.steps
+
+        def step() -> None:
+            for _ in range(steps):
+                space.step(dt)
+        return cpu(step)
+
+
+class _TextSink:
+    """Formats each trace line as ``prima run`` does, counts it, and drops it."""
+
+    def __init__(self) -> None:
+        self.lines = 0
+        self._text = TextTrace()
+
+    def __call__(self, line: TraceLine) -> None:
+        self._text.row(line)
+        self.lines += 1
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=3600.0,
-                        help="simulated seconds to run (default 3600)")
+    parser.add_argument("scenarios", nargs="*", type=Path,
+                        help="scenario files (default: patrol, tracking, sample-03, sample-09)")
+    parser.add_argument("--repeats", type=int, default=5, help="interleaved rounds (default 5)")
+    parser.add_argument("--until", type=float, default=None,
+                        help="end every run at this simulated time (default: the scenario's)")
+    parser.add_argument("--loops", type=int, default=10,
+                        help="runs per round of a scenario shorter than 600 s (default 10)")
     args = parser.parse_args(argv)
-    runner = build(args.seconds)
-    sim = runner.sim
-    start = time.perf_counter()
-    runner.run(args.seconds)
-    wall = time.perf_counter() - start
-    legs = len(runner.ends("TopologicalMove"))
-    moving = sim.steps / sim.kernel.hz
-    print(f"simulated {args.seconds:.0f} s in {wall:.3f} s wall: "
-          f"{args.seconds / wall:,.0f} simulated seconds per wall second")
-    print(f"physics steps: {sim.steps:,} ({moving / args.seconds:.0%} of the run moving), "
-          f"{wall / max(sim.steps, 1) * 1e6:.2f} us per step, all included")
-    print(f"{legs} topological-move legs, {len(runner.events())} events, "
-          f"{len([e for e in runner.trace if e.kind is EntryKind.USER])} user actions")
-    print(f"bare pymunk step of this world: {bare_step_cost(build(10)):.2f} us")
+    named = {p.stem: p for p in args.scenarios} if args.scenarios else SCENARIOS
+    cases: dict[str, Case] = {}
+    for name, path in named.items():
+        short = load_scenario(path).until < SHORT
+        cases[name] = Case(path, args.until, args.loops if short else 1)
+    work: dict[str, Callable[[], float]] = {}
+    for name, case in cases.items():
+        work[f"{name} full stack"] = case.full
+        work[f"{name} bare pymunk"] = case.bare
+    medians = interleaved(work, args.repeats)
+    for name, case in cases.items():
+        report(f"{name}: {case.simulated:,.0f} simulated s, {case.steps:,} physics steps, "
+               f"{case.lines:,} trace lines",
+               {k: v for k, v in medians.items() if k.startswith(f"{name} ")},
+               f"{name} bare pymunk", repeats=args.repeats)
+    print(f"\nsimulated seconds per CPU second, full stack (target: {TARGET:,.0f}x "
+          f"real time on every moving scenario)")
+    met = True
+    width = max(len(name) for name in cases)
+    for name, case in cases.items():
+        speed = case.simulated / medians[f"{name} full stack"]
+        ok = speed >= TARGET
+        met = met and ok
+        print(f"  {name:<{width}}  {speed:>9,.0f}x  {'met' if ok else 'NOT met'}")
+    print("target met on every scenario" if met else "target NOT met on every scenario")
     return 0
 
 

@@ -57,6 +57,9 @@ RECORDS_KEPT = 1000
 (the latest): memory stays flat over a run of any length."""
 SENSE_HZ = 10
 """How often (per simulated second) sensors are read while something moves."""
+_PASSING_SLACK = 1.0
+"""The places near the robot are looked up for this much (m) beyond the passing
+radius, so that the answer holds until the robot has moved up to this far."""
 
 
 def _ignore(*_: object) -> None:
@@ -138,6 +141,9 @@ class Simulator:
         self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
         self._near = {p.name for p in self.map.places
                       if robot.distance_to(p.x, p.y) <= self.spec.passing_radius}
+        self._passing_probe = (0.0, 0.0, -1.0)
+        """Where the places near the robot were last looked up, and how far the robot
+        may go from there before they can change (negative: look them up)."""
         for ev in events:
             self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
         self.user = ScriptedUser(user, self) if user is not None else None
@@ -564,16 +570,20 @@ class Simulator:
 
     def _check_passing(self) -> None:
         """Report places the robot passes while no Topological Move reports its route."""
-        x, y = self.world.robot.position
-        radius = self.spec.passing_radius
-        for place in self.map.places:
-            near = math.hypot(place.x - x, place.y - y) <= radius
-            if near and place.name not in self._near:
-                self._near.add(place.name)
-                if not self.navigating:
-                    self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
-            elif not near:
-                self._near.discard(place.name)
+        world = self.world
+        x, y = world.robot.position
+        px, py, clear = self._passing_probe
+        if math.hypot(x - px, y - py) < clear:
+            return  # no place can have come within the radius or left it
+        found, clear = world.places_near(x, y, self.spec.passing_radius, _PASSING_SLACK)
+        self._passing_probe = (x, y, clear)
+        places = self.map.places
+        near = self._near
+        self._near = {places[i].name for i in found}
+        for i in found:
+            place = places[i]
+            if place.name not in near and not self.navigating:
+                self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
 
     def _check_zones(self) -> None:
         x, y = self.world.robot.position

@@ -177,15 +177,11 @@ class ScriptedUser:
         self._set_velocity(0.0, 0.0)
 
     def _set_velocity(self, vx: float, vy: float) -> None:
-        world = self._sim.world
-        world.human.velocity = (vx, vy)
-        world.human_moving = vx != 0.0 or vy != 0.0
-        if world.human_moving:
-            world.human.angle = math.atan2(vy, vx)
+        self._sim.world.walk_user(vx, vy)
 
     def _leg(self, x: float, y: float, speed: float) -> ProcGen:
-        human = self._sim.world.human
-        hx, hy = human.position
+        world = self._sim.world
+        hx, hy = world.human.position
         length = math.hypot(x - hx, y - hy)
         if length < 1e-6:
             return
@@ -193,7 +189,7 @@ class ScriptedUser:
         n = max(1, math.ceil(length / (speed / k.hz)))
         self._set_velocity((x - hx) * k.hz / n, (y - hy) * k.hz / n)
         yield sleep(n)
-        human.position = (x, y)
+        world.put_user(x, y)
 
     def _walk(self, a: TimedAction, speed: float) -> ProcGen:
         sim = self._sim

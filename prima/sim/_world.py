@@ -12,6 +12,18 @@ Per-step Python work is kept small: pymunk property access costs more than a
 physics step here, so velocities are written only when they change and the
 profiles keep their own progress instead of reading positions back.
 
+What is worked out from the poses is worked out once per pose: :attr:`World.version`
+moves on whenever a body may have moved or turned (every step, and every pose
+written through the world's methods), and human detection keeps its answer
+until the version, the tick or the camera's pan changes. A pose written on a
+body directly, from outside, must be followed by :meth:`World.moved`.
+
+The map's places sit in a pymunk space of their own (never stepped, so the
+physics is the same with or without it): :meth:`World.places_near` asks its
+spatial index which places are near a point, instead of measuring the
+distance to every place, and says how far the point may move before the
+answer can change.
+
 The user is a kinematic body moved by the scripted user. Head and arm
 angles, and those of the joints a robot profile declares (a laser pointer's
 pan), are interpolated on demand, never stepped.
@@ -34,7 +46,12 @@ WALL = 0b001
 ROBOT = 0b010
 HUMAN = 0b100
 _SIGHT = pymunk.ShapeFilter(mask=WALL)
+_ANY = pymunk.ShapeFilter()
 HUMAN_RADIUS = 0.25
+_PLACE_MARGIN = 1e-3
+"""A margin (m) for rounding: the places' index is asked about a box this much
+wider than needed, and the distance a point may move without changing which
+places are near it is this much shorter than measured."""
 
 _IDLE, _LINEAR, _ANGULAR, _VELOCITY = 0, 1, 2, 3
 
@@ -111,6 +128,18 @@ class World:
         space.add(human, hshape)
         self.human = human
         self.human_moving = False
+        self.version = 0
+        """Moves on whenever a body may have moved or turned (see the module's doc)."""
+        self._sight: dict[bool, tuple[int, int, float, tuple[bool, float]]] = {}
+        """Human detection's last answer with and without ``any_direction``: the tick,
+        the version and the camera's pan it was worked out for, and the answer."""
+        self._places = pymunk.Space()
+        self._place_of: dict[pymunk.Shape, int] = {}
+        for i, place in enumerate(world_map.places):
+            dot = pymunk.Circle(self._places.static_body, 0.0, (place.x, place.y))
+            dot.sensor = True
+            self._places.add(dot)
+            self._place_of[dot] = i
         self.head_pan = _Joint()
         self.head_tilt = _Joint()
         self.arm = _Joint()
@@ -180,6 +209,15 @@ class World:
         """
         if not self.has_user:
             return False, math.inf
+        pan = 0.0 if any_direction else self.head_pan.at(tick)
+        kept = self._sight.get(any_direction)
+        if kept is not None and kept[0] == tick and kept[1] == self.version and kept[2] == pan:
+            return kept[3]
+        seen = self._look(pan, any_direction)
+        self._sight[any_direction] = (tick, self.version, pan, seen)
+        return seen
+
+    def _look(self, pan: float, any_direction: bool) -> tuple[bool, float]:
         rx, ry = self.robot.position
         ux, uy = self.human.position
         dx = ux - rx
@@ -188,16 +226,58 @@ class World:
         if d > self.spec.camera_range:
             return False, d
         if not any_direction:
-            rel = wrap_angle(math.atan2(dy, dx) - self.camera_heading(tick))
+            rel = wrap_angle(math.atan2(dy, dx) - (self.robot.angle + math.radians(pan)))
             if abs(rel) > math.radians(self.spec.camera_fov) / 2:
                 return False, d
         return self.space.segment_query_first((rx, ry), (ux, uy), 0.0, _SIGHT) is None, d
+
+    def places_near(self, x: float, y: float, radius: float,
+                    slack: float = 0.0) -> tuple[list[int], float]:
+        """The places within ``radius`` of (x, y), as indices in the map's order, and
+        how far (m) the point may move before any place comes within ``radius`` or
+        leaves it (at most ``slack``).
+
+        The places' spatial index finds the candidates within ``radius + slack``;
+        each is then measured as a scan of every place would measure it, so the
+        places found are the scan's.
+        """
+        m = radius + slack + _PLACE_MARGIN
+        hits = self._places.bb_query(pymunk.BB(x - m, y - m, x + m, y + m), _ANY)
+        places = self.map.places
+        found = []
+        clear = slack
+        for i in sorted(self._place_of[dot] for dot in hits):
+            d = math.hypot(places[i].x - x, places[i].y - y)
+            if d <= radius:
+                found.append(i)
+            clear = min(clear, abs(d - radius))
+        return found, clear - _PLACE_MARGIN
 
     def user_bearing(self) -> float:
         """Direction from the robot to the user relative to the body (radians)."""
         rx, ry = self.robot.position
         ux, uy = self.human.position
         return wrap_angle(math.atan2(uy - ry, ux - rx) - self.robot.angle)
+
+    # ---- poses written from outside the step --------------------------------------
+
+    def moved(self) -> None:
+        """A body's pose was written directly: forget what was worked out from the poses."""
+        self.version += 1
+
+    def put_user(self, x: float, y: float) -> None:
+        """Put the user at (x, y) now."""
+        self.human.position = (x, y)
+        self.version += 1
+
+    def walk_user(self, vx: float, vy: float) -> None:
+        """Move the user at (vx, vy) m/s from the next step on, facing the way they walk."""
+        human = self.human
+        human.velocity = (vx, vy)
+        self.human_moving = vx != 0.0 or vy != 0.0
+        if self.human_moving:
+            human.angle = math.atan2(vy, vx)
+            self.version += 1
 
     # ---- robot wheel commands --------------------------------------------------
 
@@ -294,6 +374,7 @@ class World:
 
     def step(self) -> Callable[[], None] | None:
         """Advance one fixed step; returns a callback if a motion just ended."""
+        self.version += 1
         mode = self.mode
         dt = self.dt
         if mode == _LINEAR:

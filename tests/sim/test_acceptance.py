@@ -100,7 +100,7 @@ def test_tracking_human_loses_a_user_who_walks_behind_a_wall() -> None:
     r.queue(call("TrackingHuman", distance=1.0))
     r.run(5)
     assert not r.events("human-lost")
-    r.sim.world.human.position = (8, 6)  # teleport the user behind the corridor wall
+    r.sim.world.put_user(8, 6)  # teleport the user behind the corridor wall
     r.run(12)
     lost = r.events("human-lost")
     assert len(lost) == 1
@@ -113,9 +113,9 @@ def test_a_wall_hides_the_user_from_human_detection() -> None:
     sim = Simulator(_library(), robot=Pose(6, 4, 0),
                     user=_script(Pose(7.5, 4, 0)))
     assert sim.user_visible()
-    sim.world.human.position = (9, 4)  # same direction, 3 m away, behind the shelf
+    sim.world.put_user(9, 4)  # same direction, 3 m away, behind the shelf
     assert not sim.user_visible()
-    sim.world.human.position = (9, 8.5)  # 5.1 m: out of camera range even in the open
+    sim.world.put_user(9, 8.5)  # 5.1 m: out of camera range even in the open
     assert not sim.user_visible()
 
 

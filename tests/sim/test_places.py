@@ -1,0 +1,84 @@
+"""The places near the robot, found by pymunk's spatial index, are exactly those a
+scan measuring every place finds, at the same ticks."""
+
+from __future__ import annotations
+
+import math
+import random
+
+from prima.sim import CommandRunner, Place, PlaceKind, Pose, Simulator, WorldMap
+from tests.sim.helpers import call
+
+RADIUS = 1.5  # the robot spec's passing radius
+
+
+def _scan(places: tuple[Place, ...], x: float, y: float, radius: float) -> list[int]:
+    """What the simulator did before the spatial index: measure every place."""
+    return [i for i, p in enumerate(places) if math.hypot(p.x - x, p.y - y) <= radius]
+
+
+def _crowded(n: int, seed: int, size: float = 30.0) -> WorldMap:
+    """A wall-less floor with ``n`` places: random ones, some on a shared spot, and a
+    row of them exactly one passing radius from (10, 10) along the axes."""
+    rnd = random.Random(seed)
+    spots = [(rnd.uniform(0, size), rnd.uniform(0, size)) for _ in range(n)]
+    spots += spots[:5]  # places on the very same spot
+    spots += [(10 + RADIUS, 10.0), (10 - RADIUS, 10.0), (10.0, 10 + RADIUS), (10.0, 10 - RADIUS)]
+    places = tuple(Place(f"p{i}", PlaceKind.POINT, round(x, 3), round(y, 3))
+                   for i, (x, y) in enumerate(spots))
+    return WorldMap("crowded", places=places)
+
+
+def test_places_near_finds_exactly_what_a_scan_of_every_place_finds() -> None:
+    floor = _crowded(600, seed=1)
+    world = Simulator(floor).world
+    rnd = random.Random(2)
+    points = [(10.0, 10.0)] + [(rnd.uniform(-2, 32), rnd.uniform(-2, 32)) for _ in range(3000)]
+    for x, y in points:
+        for radius, slack in ((RADIUS, 1.0), (RADIUS, 0.0), (0.7, 2.0)):
+            found, _clear = world.places_near(x, y, radius, slack)
+            assert found == _scan(floor.places, x, y, radius), (x, y, radius)
+    assert len(world.places_near(10.0, 10.0, RADIUS)[0]) >= 4  # the places on the radius
+
+
+def test_the_answer_holds_as_long_as_places_near_says() -> None:
+    floor = _crowded(600, seed=3)
+    world = Simulator(floor).world
+    rnd = random.Random(4)
+    for _ in range(500):
+        x, y = rnd.uniform(0, 30), rnd.uniform(0, 30)
+        found, clear = world.places_near(x, y, RADIUS, 1.0)
+        assert clear <= 1.0
+        for _ in range(20):  # anywhere within the clearance: the same places
+            a, r = rnd.uniform(0, 2 * math.pi), rnd.uniform(0, max(clear, 0.0))
+            qx, qy = x + r * math.cos(a), y + r * math.sin(a)
+            if math.hypot(qx - x, qy - y) < clear:
+                assert _scan(floor.places, qx, qy, RADIUS) == found
+
+
+class _Scanning(Simulator):
+    """The simulator as it was: every sensing tick measures every place."""
+
+    def _check_passing(self) -> None:
+        x, y = self.world.robot.position
+        for place in self.map.places:
+            near = math.hypot(place.x - x, place.y - y) <= self.spec.passing_radius
+            if near and place.name not in self._near:
+                self._near.add(place.name)
+                if not self.navigating:
+                    self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
+            elif not near:
+                self._near.discard(place.name)
+
+
+def test_places_passed_are_reported_at_the_same_ticks_as_measuring_every_place() -> None:
+    floor = _crowded(400, seed=5, size=20.0)
+    reports = []
+    for kind in (Simulator, _Scanning):
+        r = CommandRunner(kind(floor, robot=Pose(10, 10, 0)))
+        for spin in (12.0, -7.0, 25.0, 0.0, -15.0, 4.0):  # a wandering drive, no route
+            r.queue(call("SetSpeedAndTime", speed=0.4, time=20.0, spin=spin))
+        r.run(130)
+        reports.append([(e.time, e.data["place"]) for e in r.events("place-reached")])
+    assert len(reports[0]) > 50
+    assert reports[0] == reports[1]
