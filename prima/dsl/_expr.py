@@ -21,13 +21,12 @@ import math
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from functools import lru_cache
-from importlib import resources
 from typing import TypeGuard, TypeVar, cast
 
-from lark import Lark, Token, Tree
+from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from prima.dsl._grammar import parser
 from prima.errors import ExecutionError, ExpressionError
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
 
@@ -225,15 +224,6 @@ def _is_num(v: Value) -> TypeGuard[int | float]:
 
 
 # ---------------------------------------------------------------- parsing
-
-@lru_cache(maxsize=1)
-def parser() -> Lark:
-    """The LALR parser for expressions and chains, built once per process."""
-    source = resources.files("prima.dsl").joinpath("pxml.lark").read_text(encoding="utf-8")
-    # Positions come from tokens (see span): propagate_positions would cost
-    # about a third of every parse.
-    return Lark(source, parser="lalr", start=["expression", "chain"], maybe_placeholders=True)
-
 
 _READABLE = {
     "NUMBER": "a number", "STRING": "a string", "NAME": "a name", "LPAR": "'('",
