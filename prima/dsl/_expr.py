@@ -21,6 +21,7 @@ import math
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import TypeGuard, TypeVar, cast
 
 from lark import Token, Tree
@@ -449,8 +450,15 @@ def compile_expression(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -
 
     ``max_text`` bounds its literal texts (a robot profile's budget may be
     smaller than :data:`~prima.vocab.MAX_TEXT`); ``depth`` is how deeply it
-    is already nested (inside a template).
+    is already nested (inside a template). A short text is compiled once per
+    process (see :data:`MEMO_TEXT`).
     """
+    if len(text) <= MEMO_TEXT:
+        return _expressions(text, max_text, depth)
+    return _compile_expression(text, max_text, depth)
+
+
+def _compile_expression(text: str, max_text: int, depth: int) -> Compiled:
     if not text.strip():
         raise ExpressionError(0, "expression: empty", text)
     bare = _BARE_NAME.fullmatch(text)
@@ -476,8 +484,15 @@ def compile_template(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -> 
     """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``).
 
     Its literal characters are at most ``max_text``: more, and the fault is at
-    the first character beyond the limit.
+    the first character beyond the limit. A short text is compiled once per
+    process (see :data:`MEMO_TEXT`).
     """
+    if len(text) <= MEMO_TEXT:
+        return _templates(text, max_text, depth)
+    return _compile_template(text, max_text, depth)
+
+
+def _compile_template(text: str, max_text: int, depth: int) -> Compiled:
     parts: list[str | Compiled] = []
     i, n = 0, len(text)
     literal: list[str] = []
@@ -578,11 +593,18 @@ class ChainStep:
 
 
 def parse_chain(text: str) -> list[ChainStep]:
-    """Parse a command chain into steps; arguments are bound later."""
+    """Parse a command chain into steps; arguments are bound later. A short chain is
+    parsed once per process (see :data:`MEMO_TEXT`)."""
+    if len(text) <= MEMO_TEXT:
+        return list(_chains(text))
+    return list(_parse_chain(text))
+
+
+def _parse_chain(text: str) -> tuple[ChainStep, ...]:
     if not text.strip():
         raise ExpressionError(0, "chain: empty", text)
     measure(text, "chain")
-    return [_step(_tree(step)) for step in _parse(text, "chain").children]
+    return tuple(_step(_tree(step)) for step in _parse(text, "chain").children)
 
 
 def _step(step: Tree[Token]) -> ChainStep:
@@ -885,3 +907,21 @@ def span(node: Node, source: str) -> tuple[int, int]:
             break
         end += 1
     return start, end
+
+
+# ---------------------------------------------------------------- memo
+
+MEMO_TEXT = 256
+"""Longest expression, template or chain whose compiled form (or parse) is kept and
+reused for the same text in this process: documents repeat many short texts
+(``0``, ``count + 1``, ``Speak("Please say yes or no.")``). What is kept holds
+positions relative to the text only, so each use is located where it is written.
+Faults are not kept: a faulty text is compiled again and fails again."""
+
+MEMO_ENTRIES = 1024
+"""How many texts of each kind are kept (the least recently used go first), which
+bounds the memory untrusted documents can make the process keep."""
+
+_expressions = lru_cache(maxsize=MEMO_ENTRIES)(_compile_expression)
+_templates = lru_cache(maxsize=MEMO_ENTRIES)(_compile_template)
+_chains = lru_cache(maxsize=MEMO_ENTRIES)(_parse_chain)
