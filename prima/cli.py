@@ -17,24 +17,18 @@ import sys
 import threading
 from pathlib import Path
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from prima import __version__
-from prima.dsl import NAMESPACE as PXML_NS
-from prima.dsl import ROBOT_NAMESPACE as ROBOT_NS
-from prima.dsl import (
-    Checker,
-    Header,
-    RobotProfile,
-    Validation,
-    collect,
-    default_profile,
-    load_profile,
-    root_namespace,
-)
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
 from prima.vocab import MAX_RUN_TIME, POLICIES
-from prima.xmlio import read_source
+
+if TYPE_CHECKING:
+    from prima.dsl import Checker, Header, RobotProfile, Validation
+
+# Each command imports what it needs when it runs (``prima --help`` imports no lxml,
+# lark or pymunk; ``prima validate`` of documents no simulator): a cold start pays
+# only for its own command.
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -306,7 +300,8 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
     validation: its map, its robot profile, and its FA, EA and zone EAs against
     that profile (``robot``: the ``--robot`` profile instead, as ``prima run``
     does), and that each names the right kind of file and each application
-    fits its slot.
+    fits its slot. The simulator is imported only when a file of neither
+    PRIMA's documents nor its robot profiles is met.
     """
     from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
@@ -328,6 +323,8 @@ def _check_named(validation: Validation, scenario: Path, robot: bool,
     """Check the files ``scenario`` names; the problems of the scenario itself (a file of
     the wrong kind, an application in the wrong slot, two applications of one name) are
     returned, located at the attribute that names the file."""
+    from prima.dsl import NAMESPACE as PXML_NS
+    from prima.dsl import ROBOT_NAMESPACE as ROBOT_NS
     from prima.sim import scenario_references
 
     expected = {"map": (map_ns, "map"), "profile": (ROBOT_NS, "robot profile")}
@@ -372,6 +369,9 @@ def _check_named(validation: Validation, scenario: Path, robot: bool,
 
 def _namespace(path: Path) -> str | None:
     """The namespace of a file's root element, or None if it cannot be read or parsed."""
+    from prima.dsl import root_namespace
+    from prima.xmlio import read_source
+
     try:
         return root_namespace(read_source(path, DocumentError))
     except DocumentError:
@@ -392,16 +392,21 @@ def _slot_fault(role: str, written: str, header: Header, fa_name: str | None) ->
 
 
 def _profile(path: str | None) -> RobotProfile:
+    from prima.dsl import default_profile, load_profile
+
     return load_profile(path) if path else default_profile()
 
 
 def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.dsl import Validation, collect
+
     try:
         files = collect(args.paths)
     except FileNotFoundError as exc:
         return _usage("validate", f"no such file or folder: {exc}", err)
-    validation = Validation(_profile(args.robot))
-    validation.checkers.update(_scenario_checkers(validation, robot=args.robot is not None))
+    robot = args.robot is not None
+    validation = Validation(_profile(args.robot),
+                            more_checkers=lambda: _scenario_checkers(validation, robot))
     report = validation.run(files)
     if not report.files:
         return _usage("validate", f"no PRIMA files in {' '.join(args.paths)}", err)

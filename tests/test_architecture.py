@@ -11,13 +11,17 @@ functions) and checks that:
   the interpreter nor the simulator; the simulator knows no documents; the DSL
   knows no mediator;
 - the shared vocabulary modules import nothing heavy;
-- every subpackage names its public API in ``__all__``, and it all exists.
+- every subpackage names its public API in ``__all__``, and it all exists;
+- a command imports only what it needs: ``prima --help`` nothing heavy,
+  ``prima validate`` of a document no simulator.
 """
 
 from __future__ import annotations
 
 import ast
 import importlib
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -136,3 +140,41 @@ def test_the_mediator_is_one_class_without_mixins() -> None:
     from prima.mediator import Mediator
 
     assert Mediator.__mro__ == (Mediator, object)
+
+
+_IMPORTED_AFTER = """
+import contextlib, io, sys
+from prima.cli import main
+with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    status = main(sys.argv[1:])
+print(status, *sorted(sys.modules))
+"""
+
+
+def _imported_by(*argv: str) -> tuple[int, set[str]]:
+    """The exit status of ``prima ARGV`` in a fresh interpreter, and the modules it imported."""
+    done = subprocess.run([sys.executable, "-c", _IMPORTED_AFTER, *argv], capture_output=True,
+                          text=True, check=True)
+    status, *modules = done.stdout.split()
+    return int(status), set(modules)
+
+
+def _roots(modules: set[str]) -> set[str]:
+    return {m.split(".")[0] for m in modules}
+
+
+def test_prima_help_imports_nothing_heavy() -> None:
+    status, modules = _imported_by("--help")
+    assert status == 0
+    assert _roots(modules) & HEAVY == set()
+    assert {m for m in modules if m.startswith("prima.")} <= {"prima.cli", *NEUTRAL}
+
+
+def test_validating_a_document_imports_no_simulator_mediator_or_interpreter() -> None:
+    app = Path(__file__).resolve().parents[1] / "apps" / "fa" / "fa2-follow.pxml"
+    status, modules = _imported_by("validate", str(app))
+    assert status == 0
+    assert "lark" in modules and "lxml" in modules  # the check did run
+    assert _roots(modules) & {"pymunk", "xmlschema"} == set()  # xmlschema: for faults only
+    assert {unit(m) for m in modules} & {"prima.sim", "prima.mediator",
+                                         "prima.interpreter", "prima.run"} == set()

@@ -14,7 +14,9 @@ on) are private. In the direction data flows:
   :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`, with
   :func:`words` and :func:`match_pattern` for its answers);
 - the expression language: :func:`compile_expression`, :func:`compile_template`,
-  :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`.
+  :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`;
+  its lark :func:`parser` is loaded from tables prebuilt from ``pxml.lark``
+  (:func:`prebuilt_parser`; :func:`build_parser` builds it from the grammar).
 """
 
 from prima.dsl._commands import element_name
@@ -27,10 +29,12 @@ from prima.dsl._expr import (
     compile_expression,
     compile_template,
     parse_chain,
-    parser,
     to_text,
     truthy,
 )
+from prima.dsl._grammar import build as build_parser
+from prima.dsl._grammar import parser
+from prima.dsl._grammar import prebuilt as prebuilt_parser
 from prima.dsl._loader import NAMESPACE, check_document, check_parsed, load_document
 from prima.dsl._model import (
     Action,
@@ -120,6 +124,7 @@ __all__ = [
     "Variable",
     "check_document",
     "check_file",
+    "build_parser",
     "check_parsed",
     "collect",
     "compile_expression",
@@ -132,6 +137,7 @@ __all__ = [
     "parse_chain",
     "parse_profile",
     "parser",
+    "prebuilt_parser",
     "profile_from_xml",
     "root_namespace",
     "to_text",

@@ -23,12 +23,12 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
-from importlib import resources
 from typing import Any, TypeGuard, TypeVar, cast
 
-from lark import Lark, Token, Tree
+from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from prima.dsl._grammar import parser
 from prima.errors import ExecutionError, ExpressionError
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
 
@@ -263,15 +263,6 @@ _ORDERINGS: Mapping[str, Callable[[Any, Any], Any]] = {
 
 # ---------------------------------------------------------------- parsing
 
-@lru_cache(maxsize=1)
-def parser() -> Lark:
-    """The LALR parser for expressions and chains, built once per process."""
-    source = resources.files("prima.dsl").joinpath("pxml.lark").read_text(encoding="utf-8")
-    # Positions come from tokens (see span): propagate_positions would cost
-    # about a third of every parse.
-    return Lark(source, parser="lalr", start=["expression", "chain"], maybe_placeholders=True)
-
-
 _READABLE = {
     "NUMBER": "a number", "STRING": "a string", "NAME": "a name", "LPAR": "'('",
     "RPAR": "')'", "COMMA": "','", "COLON": "':'", "DOT": "'.'", "LSQB": "'['",
@@ -496,8 +487,15 @@ def compile_expression(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -
 
     ``max_text`` bounds its literal texts (a robot profile's budget may be
     smaller than :data:`~prima.vocab.MAX_TEXT`); ``depth`` is how deeply it
-    is already nested (inside a template).
+    is already nested (inside a template). A short text is compiled once per
+    process (see :data:`MEMO_TEXT`).
     """
+    if len(text) <= MEMO_TEXT:
+        return _expressions(text, max_text, depth)
+    return _compile_expression(text, max_text, depth)
+
+
+def _compile_expression(text: str, max_text: int, depth: int) -> Compiled:
     if not text.strip():
         raise ExpressionError(0, "expression: empty", text)
     bare = _BARE_NAME.fullmatch(text)
@@ -523,8 +521,15 @@ def compile_template(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -> 
     """Compile literal text with ``{expr}`` interpolation (e.g. ``text="Hi {name}"``).
 
     Its literal characters are at most ``max_text``: more, and the fault is at
-    the first character beyond the limit.
+    the first character beyond the limit. A short text is compiled once per
+    process (see :data:`MEMO_TEXT`).
     """
+    if len(text) <= MEMO_TEXT:
+        return _templates(text, max_text, depth)
+    return _compile_template(text, max_text, depth)
+
+
+def _compile_template(text: str, max_text: int, depth: int) -> Compiled:
     parts: list[str | Compiled] = []
     i, n = 0, len(text)
     literal: list[str] = []
@@ -625,11 +630,18 @@ class ChainStep:
 
 
 def parse_chain(text: str) -> list[ChainStep]:
-    """Parse a command chain into steps; arguments are bound later."""
+    """Parse a command chain into steps; arguments are bound later. A short chain is
+    parsed once per process (see :data:`MEMO_TEXT`)."""
+    if len(text) <= MEMO_TEXT:
+        return list(_chains(text))
+    return list(_parse_chain(text))
+
+
+def _parse_chain(text: str) -> tuple[ChainStep, ...]:
     if not text.strip():
         raise ExpressionError(0, "chain: empty", text)
     measure(text, "chain")
-    return [_step(_tree(step)) for step in _parse(text, "chain").children]
+    return tuple(_step(_tree(step)) for step in _parse(text, "chain").children)
 
 
 def _step(step: Tree[Token]) -> ChainStep:
@@ -934,3 +946,21 @@ def span(node: Node, source: str) -> tuple[int, int]:
             break
         end += 1
     return start, end
+
+
+# ---------------------------------------------------------------- memo
+
+MEMO_TEXT = 256
+"""Longest expression, template or chain whose compiled form (or parse) is kept and
+reused for the same text in this process: documents repeat many short texts
+(``0``, ``count + 1``, ``Speak("Please say yes or no.")``). What is kept holds
+positions relative to the text only, so each use is located where it is written.
+Faults are not kept: a faulty text is compiled again and fails again."""
+
+MEMO_ENTRIES = 1024
+"""How many texts of each kind are kept (the least recently used go first), which
+bounds the memory untrusted documents can make the process keep."""
+
+_expressions = lru_cache(maxsize=MEMO_ENTRIES)(_compile_expression)
+_templates = lru_cache(maxsize=MEMO_ENTRIES)(_compile_template)
+_chains = lru_cache(maxsize=MEMO_ENTRIES)(_parse_chain)

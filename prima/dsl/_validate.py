@@ -104,12 +104,14 @@ def check_file(path: Path, profile: RobotProfile | None = None,
     With ``skip_unknown`` (a file found in a folder), an ``.xml`` file of no
     known kind, or one that cannot be read, gives None: it is not ours.
     """
-    return _check(path, profile, checkers, skip_unknown)[0]
+    return _check(path, profile, checkers.get if checkers else None, skip_unknown)[0]
 
 
-def _check(path: Path, profile: RobotProfile | None, checkers: Mapping[str, Checker] | None,
+def _check(path: Path, profile: RobotProfile | None,
+           checker_for: Callable[[str], Checker | None] | None,
            skip_unknown: bool) -> tuple[list[Problem] | None, Header | None]:
-    """:func:`check_file`, and the file's header when its root element could be read."""
+    """:func:`check_file`, and the file's header when its root element could be read;
+    ``checker_for`` gives the checker of a namespace of another kind, if any."""
     skippable = skip_unknown and path.suffix != ".pxml"
     try:
         data = read_source(path, DocumentError)
@@ -117,7 +119,7 @@ def _check(path: Path, profile: RobotProfile | None, checkers: Mapping[str, Chec
         return (None if skippable else list(exc.problems)), None
     namespace = root_namespace(data)
     header = None if namespace is None else Header(namespace)
-    checker = checkers.get(namespace) if checkers and namespace is not None else None
+    checker = checker_for(namespace) if checker_for and namespace is not None else None
     if checker is not None:
         return checker(path), header
     if skippable and namespace not in (PXML_NS, ROBOT_NS):
@@ -139,14 +141,19 @@ class Validation:
 
     ``checkers`` check other kinds of file (the CLI adds scenarios and maps);
     a checker may call back into the validation to check the files its file
-    names (:meth:`document`, :meth:`robot`, :meth:`claim`).
+    names (:meth:`document`, :meth:`robot`, :meth:`claim`). ``more_checkers``,
+    if given, is called once, the first time a file of another kind than a
+    document, a robot profile or those of ``checkers`` is met; the checkers it
+    returns are added (so what checks them is imported only when needed).
     """
 
     def __init__(self, profile: RobotProfile | None = None,
-                 checkers: Mapping[str, Checker] | None = None) -> None:
+                 checkers: Mapping[str, Checker] | None = None, *,
+                 more_checkers: Callable[[], Mapping[str, Checker]] | None = None) -> None:
         self.profile = profile
         """The robot profile documents are checked against, unless one is named for them."""
         self.checkers: dict[str, Checker] = dict(checkers or {})
+        self._more_checkers = more_checkers
         self.report = Report()
         self._seen: set[Path] = set()
         self._checking: set[Path] = set()
@@ -175,7 +182,7 @@ class Validation:
         files_at, problems_at = len(self.report.files), len(self.report.problems)
         self._checking.add(key)
         try:
-            problems, header = _check(path, profile or self.profile, self.checkers,
+            problems, header = _check(path, profile or self.profile, self._checker,
                                       skip_unknown=not explicit)
         finally:
             self._checking.discard(key)
@@ -186,6 +193,15 @@ class Validation:
         self._seen.add(key)
         self.report.files.insert(files_at, str(path))
         self.report.problems[problems_at:problems_at] = problems
+
+    def _checker(self, namespace: str) -> Checker | None:
+        """The checker of a file whose root is in ``namespace``, if another kind's."""
+        if namespace in (PXML_NS, ROBOT_NS):
+            return self.checkers.get(namespace)
+        if namespace not in self.checkers and self._more_checkers is not None:
+            more, self._more_checkers = self._more_checkers, None
+            self.checkers.update(more())
+        return self.checkers.get(namespace)
 
     def document(self, path: Path, profile: RobotProfile | None = None) -> Header | None:
         """Check a document another file names (once); its header, if its root could be read."""

@@ -1,0 +1,112 @@
+"""Benchmark: cold ``prima`` processes, as a user starts them.
+
+Usage: python bench/cold.py [--repeats N]
+
+Every case is a fresh process, ``python -m prima ...`` with this benchmark's
+interpreter (the ``prima`` script does the same imports), so each figure
+includes the interpreter's start, PRIMA's imports and the one-off building of
+schemas and parsers. Each is measured as that process's CPU time (user +
+system), the median over interleaved rounds, and shown as a ratio to a bare
+``python -c pass`` started in the same rounds:
+
+- ``prima --help``;
+- ``prima validate`` of one application (apps/fa/fa2-follow.pxml);
+- ``prima run`` of scenarios/thesis/fig5-7.xml;
+- the 17 thesis scenarios (scenarios/thesis/*.xml) as 17 ``prima run``
+  processes, one after the other: the sum of their CPU time in each round.
+
+The acceptance targets of issue 13 are checked at the end.
+
+Compiled bytecode: an installed PRIMA has its ``.pyc`` files (pip compiles
+them at install), but a checkout under ``PYTHONDONTWRITEBYTECODE`` would
+compile every module of PRIMA again in every process (about 90 ms). So the
+children write and read their bytecode in a temporary folder of this
+benchmark (``PYTHONPYCACHEPREFIX``), filled by one warm-up round that is not
+counted; ``--no-bytecode`` measures with the environment as it is instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from collections.abc import Callable
+
+from _measure import ROOT, child_cpu, fmt_time, interleaved, report
+
+PRIMA = [sys.executable, "-m", "prima"]
+ONE_DOCUMENT = ROOT / "apps" / "fa" / "fa2-follow.pxml"
+FIG5_7 = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
+THESIS = sorted((ROOT / "scenarios" / "thesis").glob("*.xml"))
+
+TARGETS = {
+    "prima validate (one document)": 0.25,
+    f"{len(THESIS)} thesis scenarios (separate runs)": 5.0,
+}
+"""Issue 13's acceptance: CPU seconds at most."""
+
+
+def _thesis() -> float:
+    return sum(child_cpu([*PRIMA, "run", str(path)]) for path in THESIS)
+
+
+def cases() -> dict[str, Callable[[], float]]:
+    return {
+        "python -c pass": lambda: child_cpu([sys.executable, "-c", "pass"]),
+        "prima --help": lambda: child_cpu([*PRIMA, "--help"]),
+        "prima validate (one document)": lambda: child_cpu([*PRIMA, "validate",
+                                                            str(ONE_DOCUMENT)]),
+        "prima run fig5-7": lambda: child_cpu([*PRIMA, "run", str(FIG5_7)]),
+        f"{len(THESIS)} thesis scenarios (separate runs)": _thesis,
+    }
+
+
+def use_bytecode(folder: str) -> None:
+    """Let the child processes cache their bytecode in ``folder``, as an install does."""
+    os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+    os.environ["PYTHONPYCACHEPREFIX"] = folder
+
+
+def bytecode_mode() -> str:
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        return "PYTHONDONTWRITEBYTECODE set, every module compiled in every process"
+    if os.environ.get("PYTHONPYCACHEPREFIX"):
+        return "cached, as in an installed package"
+    return "the environment's"
+
+
+def check_targets(medians: dict[str, float]) -> bool:
+    """Print each target and whether it is met; whether all are."""
+    print("targets (issue 13):")
+    met_all = True
+    for name, limit in TARGETS.items():
+        met = medians[name] <= limit
+        met_all = met_all and met
+        print(f"  {name:<40} {fmt_time(medians[name]):>9} <= {fmt_time(limit):>7}: "
+              f"{'met' if met else 'NOT met'}")
+    return met_all
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=5, metavar="N",
+                        help="interleaved rounds (default 5)")
+    parser.add_argument("--no-bytecode", action="store_true",
+                        help="leave the environment's bytecode setting as it is")
+    args = parser.parse_args()
+    if len(THESIS) != 17:
+        print(f"note: {len(THESIS)} thesis scenarios, not 17")
+    with tempfile.TemporaryDirectory(prefix="prima-bench-pyc-") as pyc:
+        if not args.no_bytecode:
+            use_bytecode(pyc)
+        measured = cases()
+        interleaved(measured, 1)  # warm-up: bytecode written, files in the page cache
+        medians = interleaved(measured, args.repeats)
+    report("cold processes", medians, "python -c pass", repeats=args.repeats)
+    print(f"  (python -m prima; bytecode: {bytecode_mode()})")
+    check_targets(medians)
+
+
+if __name__ == "__main__":
+    main()
