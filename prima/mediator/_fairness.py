@@ -91,8 +91,14 @@ class Fairness:
         takes the app's precedence at once. True if some precedence changed."""
         now = self._clock.now()
         keeping = self._keeping()
-        for name in list(self._shares.keys() | keeping):
-            share = self._shares.setdefault(name, _Share())
+        shares = self._shares
+        # New records in registration order (never a set's order, which changes with
+        # PYTHONHASHSEED): the order of the records is the order of the budget
+        # decisions made at one instant. (An app gone keeps nobody waiting any more.)
+        for name in self._apps:
+            if name in keeping and name not in shares:
+                shares[name] = _Share()
+        for name, share in shares.items():
             if name in keeping and share.since is None:
                 share.since = now
             elif name not in keeping and share.since is not None:

@@ -103,8 +103,10 @@ class Policies:
         if self._channel is None or spec is None or not self._config.connect_channel:
             return False
         busy = self._wm.busy
-        if any(d in busy and not self._turn_waits_for(busy[d], x) for d in spec.devices) \
-                or not self._channel.unfaced():
+        # (devices in a fixed order: whether the channel is asked, and how often,
+        # must not depend on a set's order, which changes with PYTHONHASHSEED)
+        if any(d in busy and not self._turn_waits_for(busy[d], x)
+               for d in sorted(spec.devices)) or not self._channel.unfaced():
             return False
         self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
                                    f"turns to the user before AB{x.id}")
