@@ -101,6 +101,9 @@ class Fairness:
         self._log = log
         self._clock = clock
         self._shares: dict[str, _Share] = {}
+        self._observed: tuple[float, frozenset[str], tuple[str, ...]] | None = None
+        """The instant, the apps keeping others waiting and the apps registered at the
+        last observation: the same again changes nothing (settling is idempotent)."""
 
     # ---------------------------------------------------------------- observing
     def observe(self) -> bool:
@@ -108,6 +111,10 @@ class Fairness:
         takes the app's precedence at once. True if some precedence changed."""
         now = self._clock.now()
         keeping = self._keeping()
+        seen = (now, frozenset(keeping), tuple(self._apps))
+        if seen == self._observed:
+            return False
+        self._observed = seen
         shares = self._shares
         # New records in registration order (never a set's order, which changes with
         # PYTHONHASHSEED): the order of the records is the order of the budget
