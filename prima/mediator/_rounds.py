@@ -34,10 +34,10 @@ __all__ = ["Selector", "atomic_behavior"]
 
 def atomic_behavior(node: Node) -> AtomicBehavior:
     """What the driver is asked to perform for a node."""
-    return AtomicBehavior(id=node.id, app=node.app.name, tree=node.tree.id, calls=node.calls,
-                          command_ids=node.command_ids, devices=node.devices,
-                          iteration=node.iteration, reactive=node.reactive,
-                          blended=node.blended)
+    # (positional arguments, in field order: a named tuple takes them twice as fast as
+    # keywords, and one is built for every start)
+    return AtomicBehavior(node.id, node.app.name, node.tree.id, node.calls, node.command_ids,
+                          node.devices, node.iteration, node.reactive, node.blended)
 
 
 class _Round:
