@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Mapping
+from itertools import islice
 
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
@@ -40,11 +41,13 @@ is spent (else its next check would fall on the very instant it is made)."""
 class _Share:
     """One application's record of keeping the others waiting."""
 
-    __slots__ = ("intervals", "since", "demoted_until", "check_at")
+    __slots__ = ("intervals", "lengths", "since", "demoted_until", "check_at")
 
     def __init__(self) -> None:
         self.intervals: deque[tuple[float, float]] = deque()
         """Closed intervals, oldest first, within the last window."""
+        self.lengths: deque[float] = deque()
+        """Each interval's length (``end - begin``), in the same order."""
         self.since: float | None = None
         """When the current interval began, if the app keeps others waiting now."""
         self.demoted_until: float | None = None
@@ -56,6 +59,14 @@ class _Share:
         start = now - window
         while self.intervals and self.intervals[0][1] <= start:
             self.intervals.popleft()
+            self.lengths.popleft()
+
+    def close(self, now: float) -> None:
+        """The app stops keeping others waiting: the current interval is closed."""
+        if self.since is not None and now > self.since:
+            self.intervals.append((self.since, now))
+            self.lengths.append(now - self.since)
+        self.since = None
 
     def none_within(self, now: float, window: float) -> bool:
         """No interval within the window: :meth:`total` would be 0 with ``since`` None
@@ -67,7 +78,13 @@ class _Share:
         """Seconds spent keeping others waiting within ``[now - window, now]``."""
         start = now - window
         self.prune(now, window)
-        total = sum(end - max(begin, start) for begin, end in self.intervals)
+        total: float = 0
+        if self.intervals:
+            # Only the oldest interval can begin before the window (they follow one
+            # another), so the others count whole: their lengths are summed in C, in
+            # the order and with the roundings of summing each interval's share.
+            begin, end = self.intervals[0]
+            total = sum(islice(self.lengths, 1, None), end - max(begin, start))
         if self.since is not None:
             total += now - max(self.since, start)
         return total
@@ -84,6 +101,9 @@ class Fairness:
         self._log = log
         self._clock = clock
         self._shares: dict[str, _Share] = {}
+        self._observed: tuple[float, frozenset[str], tuple[str, ...]] | None = None
+        """The instant, the apps keeping others waiting and the apps registered at the
+        last observation: the same again changes nothing (settling is idempotent)."""
 
     # ---------------------------------------------------------------- observing
     def observe(self) -> bool:
@@ -91,14 +111,22 @@ class Fairness:
         takes the app's precedence at once. True if some precedence changed."""
         now = self._clock.now()
         keeping = self._keeping()
-        for name in list(self._shares.keys() | keeping):
-            share = self._shares.setdefault(name, _Share())
+        seen = (now, frozenset(keeping), tuple(self._apps))
+        if seen == self._observed:
+            return False
+        self._observed = seen
+        shares = self._shares
+        # New records in registration order (never a set's order, which changes with
+        # PYTHONHASHSEED): the order of the records is the order of the budget
+        # decisions made at one instant. (An app gone keeps nobody waiting any more.)
+        for name in self._apps:
+            if name in keeping and name not in shares:
+                shares[name] = _Share()
+        for name, share in shares.items():
             if name in keeping and share.since is None:
                 share.since = now
             elif name not in keeping and share.since is not None:
-                if now > share.since:
-                    share.intervals.append((share.since, now))
-                share.since = None
+                share.close(now)
         return self._settle_shares(now)
 
     def _keeping(self) -> set[str]:

@@ -52,7 +52,7 @@ _NO_ROUND: tuple[int, ...] = ()
 
 
 def _keys(node: Node, criteria: tuple[Criterion, ...]) -> Keys:
-    return tuple(c.key(node, _NO_ROUND) for c in criteria)
+    return tuple([c.key(node, _NO_ROUND) for c in criteria])
 
 
 class _Slot:

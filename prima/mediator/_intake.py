@@ -58,7 +58,8 @@ class Intake:
     """Checks requests, links them into working memory, and cancels what they replace."""
 
     def __init__(self, catalog: Catalog, apps: Mapping[str, App], wm: WorkingMemory,
-                 holds: Holds, log: DecisionLog, driver: Driver, config: MediatorConfig) -> None:
+                 holds: Holds, log: DecisionLog, driver: Driver, config: MediatorConfig,
+                 turns: bool) -> None:
         self._catalog = catalog
         self._apps = apps
         self._wm = wm
@@ -66,6 +67,9 @@ class Intake:
         self._log = log
         self._driver = driver
         self._end_grace = config.end_grace
+        self._turns = turns
+        """The connect-channel policy may turn the robot to the user (else no AB is
+        ``turnable``, and it is not worked out)."""
         self.next_command: CommandId = 1
         """The id the next requested Command will get."""
         self._next_seq = 1
@@ -168,18 +172,19 @@ class Intake:
         """The request's nodes: one AB (grouped) or a chain; returns the root."""
         wm = self._wm
         reactive = request.reactive and link.reactive_allowed
+        turns = self._turns and request.face_user
         if request.group:
             prio = min((s.priority for s, _d in specs), default=Priority.HIGH)
             devices = frozenset().union(*(d for _s, d in specs))
             root = wm.new_node(app, tree, tuple(cmds), devices, prio, reactive, seq)
-            root.turnable = request.face_user and _turnable(root, link.parent)
+            root.turnable = turns and _turnable(root, link.parent)
             wm.link(link.parent, root)
             return root
         parent = link.parent
         nodes: list[Node] = []
         for c, (spec, devs) in zip(cmds, specs, strict=True):
             node = wm.new_node(app, tree, (c,), devs, spec.priority, reactive and not nodes, seq)
-            node.turnable = request.face_user and _turnable(node, parent)
+            node.turnable = turns and _turnable(node, parent)
             wm.link(parent, node)
             nodes.append(node)
             parent = node

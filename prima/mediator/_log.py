@@ -34,23 +34,36 @@ class DecisionLog:
              request: Sequence[Command] = (), before: int | None = None,
              precedes: int | None = None) -> None:
         """Record one decision about ``node`` (one of its Commands, or all the Commands of
-        the ``request`` it roots), or about an app."""
+        the ``request`` it roots: never both), or about an app."""
         self.count += 1
         if self._record is None:
             return
         now = self._clock.now()
+        # Built with positional arguments, in field order: a named tuple takes them
+        # over twice as fast as keywords, and the mediator makes one per decision.
         if node is None:
-            decision = Decision(t=now, seq=self.count, kind=kind, rule=rule, app=app, tree=tree,
-                                detail=detail)
-        else:
-            commands = tuple(request) or (node.commands if command is None else (command,))
-            first = commands[0]
+            decision = Decision(now, self.count, kind, rule, app, None, tree, None, None,
+                                (), (), False, 0, None, detail)
+            self._record(decision)
+            return
+        app = node.app.name
+        label = node.commands[0].call.label
+        if request:  # all the Commands of the request it roots
+            first = request[0]
             decision = Decision(
-                t=now, seq=self.count, kind=kind, rule=rule, app=node.app.name, ab=node.id,
-                tree=node.tree.id, command=node.name if command is None else first.spec.name,
-                command_id=first.id, command_ids=tuple(c.id for c in commands),
-                devices=node.sorted_devices, reactive=node.reactive, iteration=node.iteration,
-                label=node.commands[0].call.label if command is None else first.call.label,
-                detail=detail, calls=tuple(c.call for c in commands), before=before,
-                precedes=precedes)
+                now, self.count, kind, rule, app, node.id, node.tree.id, node.name,
+                first.id, tuple(c.id for c in request), node.sorted_devices, node.reactive,
+                node.iteration, label, detail, tuple(c.call for c in request), before,
+                precedes)
+        elif command is not None:  # one of its Commands
+            decision = Decision(
+                now, self.count, kind, rule, app, node.id, node.tree.id, command.spec.name,
+                command.id, (command.id,), node.sorted_devices, node.reactive,
+                node.iteration, command.call.label, detail, (command.call,), before,
+                precedes)
+        else:  # the AB itself (most decisions)
+            decision = Decision(
+                now, self.count, kind, rule, app, node.id, node.tree.id, node.name,
+                node.command_ids[0], node.command_ids, node.sorted_devices, node.reactive,
+                node.iteration, label, detail, node.calls, before, precedes)
         self._record(decision)

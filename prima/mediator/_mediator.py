@@ -23,7 +23,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import TracebackType
 
-from prima.catalog import Catalog
+from prima.catalog import CONNECT_COMMAND, Catalog
 from prima.errors import MediationError
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._fairness import Fairness
@@ -138,8 +138,11 @@ class Mediator:
         self._wm = WorkingMemory()
         self._log = DecisionLog(clock, record)
         self._holds = Holds(self._apps, self._wm, self._log, catalog, clock)
+        # (whether the connect-channel policy can act: what Policies._connect requires)
+        turns = (channel is not None and config.connect_channel
+                 and catalog.get(CONNECT_COMMAND) is not None)
         self._intake = Intake(catalog, self._apps, self._wm, self._holds, self._log, driver,
-                              config)
+                              config, turns)
         self._policies = Policies(catalog, config, channel, self._wm, self._intake,
                                   self._holds, self._log, driver)
         self._selector = Selector(self._wm, self._holds, self._log, driver, clock,

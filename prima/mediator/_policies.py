@@ -53,6 +53,10 @@ class Policies:
         self._holds = holds
         self._log = log
         self._driver = driver
+        self._cuts = config.interrupt and any(
+            c.interruptible for c in catalog.commands.values())
+        """The interrupt policy is on and the catalog has Commands it may cut: else
+        it never acts (:meth:`cuttable` is false for every AB)."""
 
     def suspending(self, tree: Tree) -> None:
         """A tree is suspended: remember where the robot is (restore-state)."""
@@ -103,8 +107,10 @@ class Policies:
         if self._channel is None or spec is None or not self._config.connect_channel:
             return False
         busy = self._wm.busy
-        if any(d in busy and not self._turn_waits_for(busy[d], x) for d in spec.devices) \
-                or not self._channel.unfaced():
+        # (devices in a fixed order: whether the channel is asked, and how often,
+        # must not depend on a set's order, which changes with PYTHONHASHSEED)
+        if any(d in busy and not self._turn_waits_for(busy[d], x)
+               for d in sorted(spec.devices)) or not self._channel.unfaced():
             return False
         self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
                                    f"turns to the user before AB{x.id}")
@@ -131,7 +137,7 @@ class Policies:
         """Whether a policy may act for ``x`` on busy devices: share them (blend) or
         cut what runs there (interrupt, for a reaction's AB)."""
         return (self._config.blend and bool(self._catalog.blends)) or (
-            self._config.interrupt and x.tree.reaction is not None)
+            self._cuts and x.tree.reaction is not None)
 
     def blend(self, x: Node) -> tuple[frozenset[str], bool] | None:
         """The blend policy: the busy devices the ready ``x`` may share with what runs
@@ -164,7 +170,7 @@ class Policies:
         some are busy. If every AB running on them is another application's and may
         be cut (its Commands are interruptible on this robot, its request allows it,
         no block of its application keeps its devices), have the driver cut them."""
-        if not self._config.interrupt:
+        if not self._cuts:
             return
         busy = self._wm.busy
         running = sorted({busy[d] for d in x.devices if d in busy}, key=lambda y: y.id)

@@ -101,7 +101,7 @@ CRITERIA: tuple[Criterion, ...] = (
 
 def rank(node: Node, pjf: Collection[int]) -> Rank:
     """The full rank of a waiting AB; ``pjf`` holds the ids whose parent just finished."""
-    return tuple(c.key(node, pjf) for c in CRITERIA)
+    return tuple([c.key(node, pjf) for c in CRITERIA])
 
 
 def preempts(x: Node, y: Node) -> bool:

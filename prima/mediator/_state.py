@@ -191,8 +191,8 @@ class Node:
         mediator turn the robot to the user first (the connect-channel policy)."""
         self.parked: App | None = None
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
-        self.calls: tuple[Call, ...] = tuple(c.call for c in commands)
-        self.command_ids: tuple[CommandId, ...] = tuple(c.id for c in commands)
+        self.calls: tuple[Call, ...] = tuple([c.call for c in commands])
+        self.command_ids: tuple[CommandId, ...] = tuple([c.id for c in commands])
         if len(commands) == 1:
             self.name = commands[0].spec.name
             self.feedback = commands[0].spec.feedback
