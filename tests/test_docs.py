@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -71,3 +72,32 @@ def test_the_judging_example_is_a_real_run(monkeypatch: pytest.MonkeyPatch) -> N
     out = io.StringIO()
     assert main(["judge", "scenarios/thesis/sample-05.xml"], out=out, err=io.StringIO()) == 1
     assert out.getvalue() in (ROOT / "docs" / "judging.md").read_text()
+
+
+_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+_PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def _anchors(page: Path) -> set[str]:
+    """The anchors of a page's headings, as GitHub makes them."""
+    text = re.sub(r"```.*?```", "", page.read_text(encoding="utf-8"), flags=re.S)
+    headings = re.findall(r"^#+\s+(.*)$", text, re.M)
+    return {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-") for h in headings}
+
+
+@pytest.mark.parametrize("page", _PAGES, ids=lambda p: p.name)
+def test_every_link_of_the_docs_leads_somewhere_in_the_repository(page: Path) -> None:
+    """The README and docs/ stand alone: each link names a file of the repository (and,
+    with a #fragment, one of its headings) or a web address."""
+    broken = []
+    for target in _LINK.findall(re.sub(r"```.*?```", "", page.read_text(encoding="utf-8"),
+                                       flags=re.S)):
+        if target.startswith(("http://", "https://", "mailto:")):
+            continue
+        path, _, fragment = target.partition("#")
+        file = (page.parent / path).resolve() if path else page
+        if ROOT.resolve() not in file.parents or not file.exists():
+            broken.append(f"{target}: no such file in the repository")
+        elif fragment and file.suffix == ".md" and fragment not in _anchors(file):
+            broken.append(f"{target}: no such heading")
+    assert broken == []
