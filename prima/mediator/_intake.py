@@ -130,7 +130,8 @@ class Intake:
         cmds = [Command(cid + i, app, call, spec, on_interrupt=request.on_interrupt)
                 for i, (call, (spec, _d)) in enumerate(zip(request.calls, specs, strict=True))]
         self.next_command = cid + len(cmds)
-        all_devices = frozenset().union(*(d for _s, d in specs))
+        all_devices = (specs[0][1] if len(specs) == 1
+                       else frozenset().union(*(d for _s, d in specs)))
         link, cancelled = self._link(app, request, all_devices, now)
         tree = link.tree if link.tree is not None else self._wm.new_tree(app)
         # before its nodes are filed, so that they rank as its reaction
@@ -150,7 +151,7 @@ class Intake:
                        before=link.parent.id if link.parent is not None else None)
         if link.enter_now:
             self._wm.enter_waiting(root, parent_finished=link.parent_finished)
-        return tuple(c.id for c in cmds), cancelled
+        return tuple([c.id for c in cmds]), cancelled
 
     def _link(self, app: App, request: Request, devices: frozenset[str],
               now: float) -> tuple[Link, list[Command]]:

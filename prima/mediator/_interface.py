@@ -67,9 +67,12 @@ class Call:
     """Devices occupied beyond the catalog's (e.g. the speaker for a sensing prompt)."""
 
 
-@dataclass(frozen=True)
-class Request:
-    """A request: one Command or a chain of Commands (root first)."""
+class Request(NamedTuple):
+    """A request: one Command or a chain of Commands (root first).
+
+    An immutable record (a named tuple: applications build one per request, on
+    the mediator's hot path, and a frozen dataclass takes several times longer).
+    """
 
     app: str
     calls: tuple[Call, ...]

@@ -99,9 +99,12 @@ CRITERIA: tuple[Criterion, ...] = (
 """Rule 4, in order."""
 
 
+_KEYS = tuple(c.key for c in CRITERIA)
+
+
 def rank(node: Node, pjf: Collection[int]) -> Rank:
     """The full rank of a waiting AB; ``pjf`` holds the ids whose parent just finished."""
-    return tuple([c.key(node, pjf) for c in CRITERIA])
+    return tuple([key(node, pjf) for key in _KEYS])
 
 
 def preempts(x: Node, y: Node) -> bool:
@@ -115,9 +118,11 @@ def preempts(x: Node, y: Node) -> bool:
     return (_priority(x, ()), _reactivity(x, ())) < (_priority(y, ()), _reactivity(y, ()))
 
 
-def separating_rule(winner: Rank, loser: Rank) -> Rule:
-    """The first criterion on which ``winner`` beats ``loser``."""
-    for criterion, a, b in zip(CRITERIA, winner, loser, strict=True):
-        if a != b:
+def separating_rule(winner: Node, loser: Node, pjf: Collection[int]) -> Rule:
+    """The first criterion on which ``winner`` beats ``loser`` (their keys worked out
+    one criterion at a time, up to the first that differs: most often the first)."""
+    for criterion in CRITERIA:
+        key = criterion.key
+        if key(winner, pjf) != key(loser, pjf):
             return criterion.rule
     return Rule.OLDEST

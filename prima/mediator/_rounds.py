@@ -235,7 +235,7 @@ class Selector:
             rule = x.commands[0].internal
         elif losers:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
-            rule = separating_rule(view.rank(x), view.rank(top))
+            rule = separating_rule(x, top, view.pjf)
         self._log.emit(DecisionKind.START, rule, x, detail=self._over(x))
         self._holds.started(x)  # a block it starts takes force: what it holds steps aside
         if x.tree.suspended is not None:
