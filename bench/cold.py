@@ -15,7 +15,7 @@ system), the median over interleaved rounds, and shown as a ratio to a bare
 - the 17 thesis scenarios (scenarios/thesis/*.xml) as 17 ``prima run``
   processes, one after the other: the sum of their CPU time in each round.
 
-The acceptance targets of issue 13 are checked at the end.
+The targets we hold these to are checked at the end.
 
 Compiled bytecode: an installed PRIMA has its ``.pyc`` files (pip compiles
 them at install), but a checkout under ``PYTHONDONTWRITEBYTECODE`` would
@@ -78,7 +78,7 @@ def bytecode_mode() -> str:
 
 def check_targets(medians: dict[str, float]) -> bool:
     """Print each target and whether it is met; whether all are."""
-    print("targets (issue 13):")
+    print("targets:")
     met_all = True
     for name, limit in TARGETS.items():
         met = medians[name] <= limit

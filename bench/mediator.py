@@ -35,8 +35,8 @@ round it triggers). Workloads:
   wait (the speaker is busy; 30 ABs of other apps wait too): the cost per
   released AB, which must not grow with N (the burst linear in N).
 
-The script asserts that each workload keeps N waiting ABs. Acceptance (issue
-13): every workload's operations flat within a factor of 2 from N=10 to
+The script asserts that each workload keeps N waiting ABs. The targets we hold
+it to: every workload's operations flat within a factor of 2 from N=10 to
 N=10,000 and at most 20 us each (median); the burst's cost per AB flat within
 a factor of 2.
 """
