@@ -28,6 +28,7 @@ from typing import Any, TypeGuard, TypeVar, cast
 from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from prima.dsl._fastparse import parse as fast_parse
 from prima.dsl._grammar import parser
 from prima.errors import ExecutionError, ExpressionError
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
@@ -476,6 +477,11 @@ def measure(text: str, what: str = "expression", depth: int = 0) -> None:
 
 
 def _parse(text: str, start: str) -> Tree[Token]:
+    """``text`` parsed from the rule ``start``: by the hand-written parser if it accepts
+    it (the same tree, faster), else by lark, whose errors word every syntax fault."""
+    tree = fast_parse(text, start)
+    if tree is not None:
+        return tree
     try:
         return parser().parse(text, start=start)
     except UnexpectedInput as exc:
