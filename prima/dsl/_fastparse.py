@@ -270,11 +270,18 @@ class _Parser:
 def parse(text: str, start: str) -> Tree[Token] | None:
     """``text`` parsed from the rule ``start`` (``expression`` or ``chain``) as lark would
     parse it, or None if this parser does not accept it (ask lark)."""
+    return parse_sized(text, start)[0]
+
+
+def parse_sized(text: str, start: str) -> tuple[Tree[Token] | None, int]:
+    """As :func:`parse`, with the number of tokens the text was split into (0 if it
+    was not accepted). No nesting can be deeper than that number of levels: each
+    level takes at least a token of its own (an operator, a bracket, a call)."""
     try:
         parser = _Parser(text)
         tree = parser.or_() if start == "expression" else parser.chain()
         if parser.toks[parser.i] is not _END:
-            return None
-        return tree
+            return None, 0
+        return tree, len(parser.toks) - 1
     except (_GiveUp, RecursionError):
-        return None
+        return None, 0

@@ -24,6 +24,10 @@ from lark.exceptions import UnexpectedInput
 import prima.dsl
 from prima.dsl import collect, fast_parse, parser, validate_paths
 
+fast_parse_sized = prima.dsl._fastparse.parse_sized  # type: ignore[attr-defined]  # private
+measure = prima.dsl._expr.measure  # type: ignore[attr-defined]  # private
+MAX_NESTING = prima.dsl._expr.MAX_NESTING  # type: ignore[attr-defined]  # private
+
 ROOT = Path(__file__).resolve().parents[2]
 _POSITIONS = ("start_pos", "line", "column", "end_line", "end_column", "end_pos")
 
@@ -58,10 +62,14 @@ def _lark(text: str, start: str) -> Tree[Token] | None:
 
 
 def check(text: str, start: str) -> bool:
-    """Assert the two parsers agree on ``text``; whether the fast one accepted it."""
-    fast = fast_parse(text, start)
+    """Assert the two parsers agree on ``text``; whether the fast one accepted it. And
+    that the measure skipped for a text of few tokens would not have refused it."""
+    fast, tokens = fast_parse_sized(text, start)
+    assert (fast is None) == (fast_parse(text, start) is None)
     if fast is None:
         return False
+    if tokens <= MAX_NESTING:
+        measure(text, start, MAX_NESTING - tokens)  # raises if the skip were unsound
     slow = _lark(text, start)
     assert slow is not None, f"only the fast parser accepts {start} {text!r}"
     problems = list(_differences(fast, slow))
@@ -105,12 +113,12 @@ def document_texts(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[str, 
     _corpus(corpus)
     seen: dict[tuple[str, str], None] = {}
 
-    def record(text: str, start: str) -> None:
+    def record(text: str, start: str) -> tuple[None, int]:
         seen[(text, start)] = None
-        return None  # lark parses every text while recording
+        return None, 0  # lark parses every text while recording
 
     mp = pytest.MonkeyPatch()
-    mp.setattr(f"{_EXPR}.fast_parse", record)
+    mp.setattr(f"{_EXPR}.fast_parse_sized", record)
     _clear_memos()
     try:
         folders = [ROOT / "apps", ROOT / "tests" / "dsl" / "data", ROOT / "bench" / "data",
@@ -206,7 +214,13 @@ def test_chains_parse_alike(text: str) -> None:
     check(text, "chain")
 
 
+def _nested(levels: int) -> str:
+    return "(" * levels + "x" + ")" * levels
+
+
 @pytest.mark.parametrize("text, start", [
+    (_nested(24), "expression"), ("-" * 49 + "x", "expression"), ("not " * 49 + "x", "expression"),
+    ("f(" * 16 + ")" * 16, "expression"), ("A(" + "-" * 45 + "1)", "chain"),
     ("x andy", "expression"), ("1and 2", "expression"), ("-not", "expression"),
     ("a == not", "expression"), ("and.x", "expression"), ("event.true", "expression"),
     ("not not", "expression"), ("a < b < c", "expression"), ("f(a,)", "expression"),
