@@ -711,9 +711,18 @@ def _pos(token: Token) -> int:
 
 
 def _tokens(node: Node) -> list[Token]:
+    """The subtree's tokens, in no particular order (callers take their extremes)."""
     if isinstance(node, Token):
         return [node]
-    return list(node.scan_values(lambda v: isinstance(v, Token)))
+    found: list[Token] = []
+    trees = [node]
+    while trees:  # a loop, not lark's recursive generators: this runs for every subtree
+        for child in trees.pop().children:
+            if isinstance(child, Tree):
+                trees.append(child)
+            elif isinstance(child, Token):
+                found.append(child)
+    return found
 
 
 def _start(node: Node) -> int:

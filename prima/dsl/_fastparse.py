@@ -40,6 +40,7 @@ _LEX = re.compile(r"""[ \t\f\r\n]*(?:
 a string, a comparison, a punctuation mark; anything else is ``bad``.
 Trailing whitespace matches nothing, so the matches cover the text with no gap."""
 
+_NEWLINE = re.compile("\n")
 _END = ("", "", -1)
 _VALUE_WORDS = {"true": "true", "false": "false", "null": "null"}
 _ARGUMENT_KEYWORDS = frozenset({"not", "true", "false", "null"})
@@ -70,7 +71,7 @@ class _Parser:
         self.toks = toks
         self.i = 0
         self.depth = 0
-        self.lines = [i for i, ch in enumerate(text) if ch == "\n"] if "\n" in text else None
+        self.lines = [m.start() for m in _NEWLINE.finditer(text)] if "\n" in text else None
 
     # ------------------------------------------------------------ tokens
 
