@@ -16,7 +16,9 @@ on) are private. In the direction data flows:
 - the expression language: :func:`compile_expression`, :func:`compile_template`,
   :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`;
   its lark :func:`parser` is loaded from tables prebuilt from ``pxml.lark``
-  (:func:`prebuilt_parser`; :func:`build_parser` builds it from the grammar).
+  (:func:`prebuilt_parser`; :func:`build_parser` builds it from the grammar);
+  :func:`fast_parse` builds lark's tree of a valid text without lark, or
+  declines (and lark parses it, wording any fault).
 """
 
 from prima.dsl._commands import element_name
@@ -32,6 +34,7 @@ from prima.dsl._expr import (
     to_text,
     truthy,
 )
+from prima.dsl._fastparse import parse as fast_parse
 from prima.dsl._grammar import build as build_parser
 from prima.dsl._grammar import parser
 from prima.dsl._grammar import prebuilt as prebuilt_parser
@@ -131,6 +134,7 @@ __all__ = [
     "compile_template",
     "default_profile",
     "element_name",
+    "fast_parse",
     "load_document",
     "load_profile",
     "match_pattern",

@@ -28,6 +28,7 @@ from typing import Any, TypeGuard, TypeVar, cast
 from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from prima.dsl._fastparse import parse_sized as fast_parse_sized
 from prima.dsl._grammar import parser
 from prima.errors import ExecutionError, ExpressionError
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
@@ -475,7 +476,22 @@ def measure(text: str, what: str = "expression", depth: int = 0) -> None:
     _Measure(text, what, depth).run()
 
 
-def _parse(text: str, start: str) -> Tree[Token]:
+def _parse(text: str, start: str, depth: int = 0) -> Tree[Token]:
+    """``text`` parsed from the rule ``start``, ``depth`` levels deep already,
+    checked by :func:`measure`: by the hand-written parser if it accepts it (the same tree,
+    faster), else by lark, whose errors word every syntax fault.
+
+    The measure is skipped when it cannot refuse the text: a text the hand-written
+    parser split into at most ``MAX_NESTING - depth`` tokens nests no deeper than
+    that (measure's own tokens are no more: it reads ``event.name`` as one), so
+    it holds fewer than :data:`MAX_CHAIN_COMMANDS` Commands too.
+    """
+    longest = MAX_CHAIN if start == "chain" else MAX_EXPRESSION
+    tree, tokens = fast_parse_sized(text, start) if len(text) <= longest else (None, 0)
+    if tree is None or depth + tokens > MAX_NESTING:
+        measure(text, start, depth)
+    if tree is not None:
+        return tree
     try:
         return parser().parse(text, start=start)
     except UnexpectedInput as exc:
@@ -501,8 +517,7 @@ def _compile_expression(text: str, max_text: int, depth: int) -> Compiled:
     bare = _BARE_NAME.fullmatch(text)
     if bare and bare.group(1) not in _KEYWORDS:  # {name}: the common case, without lark
         return _variable(bare.group(1), bare.start(1))
-    measure(text, "expression", depth)
-    return _Compiler(text, max_text, depth).compile(_parse(text, "expression"))
+    return _Compiler(text, max_text, depth).compile(_parse(text, "expression", depth))
 
 
 _BARE_NAME = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*")
@@ -640,7 +655,6 @@ def parse_chain(text: str) -> list[ChainStep]:
 def _parse_chain(text: str) -> tuple[ChainStep, ...]:
     if not text.strip():
         raise ExpressionError(0, "chain: empty", text)
-    measure(text, "chain")
     return tuple(_step(_tree(step)) for step in _parse(text, "chain").children)
 
 
@@ -697,9 +711,18 @@ def _pos(token: Token) -> int:
 
 
 def _tokens(node: Node) -> list[Token]:
+    """The subtree's tokens, in no particular order (callers take their extremes)."""
     if isinstance(node, Token):
         return [node]
-    return list(node.scan_values(lambda v: isinstance(v, Token)))
+    found: list[Token] = []
+    trees = [node]
+    while trees:  # a loop, not lark's recursive generators: this runs for every subtree
+        for child in trees.pop().children:
+            if isinstance(child, Tree):
+                trees.append(child)
+            elif isinstance(child, Token):
+                found.append(child)
+    return found
 
 
 def _start(node: Node) -> int:
