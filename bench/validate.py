@@ -321,7 +321,7 @@ def main() -> None:
     print(f"  (python -m prima; bytecode: {bytecode_mode()}; the warm figure is measured "
           "after the cold rounds)")
     cold = medians["prima validate (cold)"]
-    print(f"target (issue 13): prima validate (cold) {fmt_time(cold)} <= {fmt_time(TARGET)}: "
+    print(f"target: prima validate (cold) {fmt_time(cold)} <= {fmt_time(TARGET)}: "
           f"{'met' if cold <= TARGET else 'NOT met'}")
 
 

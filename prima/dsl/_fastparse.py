@@ -14,9 +14,10 @@ and the caller parses with lark, so every syntax fault is still worded from
 lark's own error and ``pxml.lark`` stays the reference grammar.
 ``tests/dsl/test_fastparse.py`` checks both parsers agree, tree for tree.
 
-The input must already have passed :func:`prima.dsl._expr.measure` (it
-bounds nesting, hence this parser's recursion); a nesting this parser finds
-too deep anyway makes it give up, not fail.
+It runs before :func:`prima.dsl._expr.measure` (which the caller skips for a
+text of few tokens: see ``_expr._parse``), so it bounds its own recursion: past
+``_MAX_DEPTH`` levels, or at Python's recursion limit, it gives up, and the
+caller measures the text (refusing one that nests too deep) before lark sees it.
 """
 
 from __future__ import annotations
