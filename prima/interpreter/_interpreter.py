@@ -163,7 +163,7 @@ class Interpreter:
         self._handling = _Handling()
         self._fired_at, self._fired = -1.0, 0
         self._tables: dict[str | None, dict[tuple[HandlerKind, str], tuple[Handler, ...]]] = {}
-        """Per state: its handlers and the document's, by kind and key (built on entry)."""
+        """Per state: its handlers and the document's, by kind and key (built when first asked)."""
 
     # ------------------------------------------------------------ lifecycle
 
