@@ -170,11 +170,30 @@ def test_prima_help_imports_nothing_heavy() -> None:
     assert {m for m in modules if m.startswith("prima.")} <= {"prima.cli", *NEUTRAL}
 
 
+def test_running_valid_documents_imports_no_lark() -> None:
+    scenario = Path(__file__).resolve().parents[1] / "scenarios" / "thesis" / "sample-03.xml"
+    status, modules = _imported_by("run", str(scenario))
+    assert status == 0
+    assert "prima.run" in modules and "pymunk" in modules  # it did run
+    assert "lark" not in _roots(modules)
+
+
+def test_a_syntax_fault_is_worded_by_lark(tmp_path: Path) -> None:
+    app = Path(__file__).resolve().parents[1] / "apps" / "fa" / "fa2-follow.pxml"
+    text = app.read_text(encoding="utf-8")
+    bad = tmp_path / "bad.pxml"
+    bad.write_text(text.replace('cond="', 'cond="(', 1), encoding="utf-8")
+    status, modules = _imported_by("validate", str(bad))
+    assert status == 1
+    assert "lark" in _roots(modules)
+
+
 def test_validating_a_document_imports_no_simulator_mediator_or_interpreter() -> None:
     app = Path(__file__).resolve().parents[1] / "apps" / "fa" / "fa2-follow.pxml"
     status, modules = _imported_by("validate", str(app))
     assert status == 0
-    assert "lark" in modules and "lxml" in modules  # the check did run
-    assert _roots(modules) & {"pymunk", "xmlschema"} == set()  # xmlschema: for faults only
+    assert "prima.dsl._expr" in modules and "lxml" in modules  # the check did run
+    # lark words syntax faults and xmlschema schema faults: a valid document needs neither
+    assert _roots(modules) & {"pymunk", "xmlschema", "lark"} == set()
     assert {unit(m) for m in modules} & {"prima.sim", "prima.mediator",
                                          "prima.interpreter", "prima.run"} == set()

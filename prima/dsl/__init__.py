@@ -17,7 +17,8 @@ on) are private. In the direction data flows:
   :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`;
   its lark :func:`parser` is loaded from tables prebuilt from ``pxml.lark``
   (:func:`prebuilt_parser`; :func:`build_parser` builds it from the grammar);
-  :func:`fast_parse` builds lark's tree of a valid text without lark, or
+  :func:`fast_parse` builds the tree lark would of a valid text, as a
+  :class:`ParseTree` of :class:`ParseToken`, without importing lark, or
   declines (and lark parses it, wording any fault).
 """
 
@@ -38,6 +39,8 @@ from prima.dsl._fastparse import parse as fast_parse
 from prima.dsl._grammar import build as build_parser
 from prima.dsl._grammar import parser
 from prima.dsl._grammar import prebuilt as prebuilt_parser
+from prima.dsl._syntax import Token as ParseToken
+from prima.dsl._syntax import Tree as ParseTree
 from prima.dsl._loader import NAMESPACE, check_document, check_parsed, load_document
 from prima.dsl._model import (
     Action,
@@ -112,6 +115,8 @@ __all__ = [
     "If",
     "Loc",
     "Log",
+    "ParseToken",
+    "ParseTree",
     "PathNotFoundError",
     "Pattern",
     "Raise",

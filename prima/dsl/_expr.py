@@ -1,4 +1,8 @@
-"""Expressions and command chains: parsed once with lark (LALR), compiled to closures.
+"""Expressions and command chains: parsed once, compiled to closures.
+
+A valid text is parsed by the hand-written parser (:mod:`prima.dsl._fastparse`),
+any other by lark (LALR, from ``pxml.lark``), which words its syntax fault;
+lark is imported only then. Both give the trees of :mod:`prima.dsl._syntax`.
 
 Nothing here calls Python's ``eval`` or ``exec``: a parse tree becomes a tree
 of small functions over a :class:`Scope`. Strings are templates
@@ -23,15 +27,15 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, TypeGuard, TypeVar, cast
-
-from lark import Token, Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from typing import TYPE_CHECKING, Any, TypeGuard, TypeVar, cast
 
 from prima.dsl._fastparse import parse_sized as fast_parse_sized
-from prima.dsl._grammar import parser
+from prima.dsl._syntax import Node, Token, Tree, from_lark
 from prima.errors import ExecutionError, ExpressionError
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
+
+if TYPE_CHECKING:
+    from lark.exceptions import UnexpectedInput, UnexpectedToken
 
 MAX_NESTING = 50
 """Deepest nesting of an expression or chain: each bracket, operator and function
@@ -60,10 +64,6 @@ class Scope:
 
 Fn = Callable[[Scope], Value]
 """A compiled expression's function."""
-
-Node = Tree[Token] | Token
-"""A parse tree, or one of its tokens."""
-
 
 @dataclass(frozen=True)
 class Compiled:
@@ -278,6 +278,8 @@ _VALUE_START = {"NUMBER", "STRING", "NAME", "LPAR", "MINUS", "TRUE", "FALSE", "N
 
 def _syntax_fault(exc: UnexpectedInput, text: str, what: str) -> ExpressionError:
     """Lark's parse error as a fault in ``text``, worded for a document's author."""
+    from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
+
     index = exc.pos_in_stream if exc.pos_in_stream is not None else len(text)
     if isinstance(exc, UnexpectedCharacters):
         message = _bad_character(text, index)
@@ -476,7 +478,7 @@ def measure(text: str, what: str = "expression", depth: int = 0) -> None:
     _Measure(text, what, depth).run()
 
 
-def _parse(text: str, start: str, depth: int = 0) -> Tree[Token]:
+def _parse(text: str, start: str, depth: int = 0) -> Tree:
     """``text`` parsed from the rule ``start``, ``depth`` levels deep already,
     checked by :func:`measure`: by the hand-written parser if it accepts it (the same tree,
     faster), else by lark, whose errors word every syntax fault.
@@ -492,10 +494,15 @@ def _parse(text: str, start: str, depth: int = 0) -> Tree[Token]:
         measure(text, start, depth)
     if tree is not None:
         return tree
+    from lark.exceptions import UnexpectedInput
+
+    from prima.dsl._grammar import parser
+
     try:
-        return parser().parse(text, start=start)
+        parsed = parser().parse(text, start=start)
     except UnexpectedInput as exc:
         raise _syntax_fault(exc, text, start) from None
+    return cast(Tree, from_lark(parsed))
 
 
 def compile_expression(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -> Compiled:
@@ -658,7 +665,7 @@ def _parse_chain(text: str) -> tuple[ChainStep, ...]:
     return tuple(_step(_tree(step)) for step in _parse(text, "chain").children)
 
 
-def _step(step: Tree[Token]) -> ChainStep:
+def _step(step: Tree) -> ChainStep:
     # [label ":"] Name "(" [arguments] ")" [extras]; an absent optional part is None
     label, name, *rest = step.children
     extras: list[Node] = []
@@ -676,7 +683,7 @@ def _step(step: Tree[Token]) -> ChainStep:
     )
 
 
-def _chain_arg(node: Tree[Token]) -> ChainArg:
+def _chain_arg(node: Tree) -> ChainArg:
     if node.data == "named":
         name, value = node.children
         return ChainArg(str(name), *_value(value), computed=_is_computed(value),
@@ -701,9 +708,9 @@ def _token(node: Node) -> Token:
     return cast(Token, node)
 
 
-def _tree(node: Node) -> Tree[Token]:
+def _tree(node: Node) -> Tree:
     """A child the grammar makes a subtree (a step, an argument)."""
-    return cast("Tree[Token]", node)
+    return cast(Tree, node)
 
 
 def _pos(token: Token) -> int:
@@ -764,7 +771,7 @@ def _const(value: Value) -> Part:
 
 
 class _Compiler:
-    """Turns a lark tree into a :class:`Compiled` closure tree.
+    """Turns a parse tree into a :class:`Compiled` closure tree.
 
     As in a lark ``Transformer``, each grammar rule has its own method, found
     by the rule's name in :data:`_RULES`; it compiles the rule's children.

@@ -4,8 +4,9 @@ lark's LALR parser costs about 50 us per expression and 150 us per chain in
 pure Python, most of it in its generic lexer and parser loop; a document has
 dozens of them. This recursive-descent parser builds exactly the tree lark
 builds from ``pxml.lark`` (the same ``Tree.data``, children, ``None``
-placeholders, and tokens with the same types, values and positions), in one
-pass over a regex-split token list, or returns ``None``.
+placeholders, and tokens with the same types, values and positions, in
+:mod:`prima.dsl._syntax`'s classes), in one pass over a regex-split token list,
+or returns ``None``. Without importing lark.
 
 It is for valid input only. On anything it does not accept (a syntax fault,
 or a corner where lark's contextual lexer splits words in a way this parser
@@ -24,10 +25,9 @@ from __future__ import annotations
 
 import re
 from bisect import bisect_right
-from collections.abc import Callable
 from typing import Any
 
-from lark import Token, Tree
+from prima.dsl._syntax import Token, Tree
 
 _LEX = re.compile(r"""[ \t\f\r\n]*(?:
     (?P<w>[A-Za-z_][A-Za-z0-9_]*)
@@ -47,9 +47,6 @@ _VALUE_WORDS = {"true": "true", "false": "false", "null": "null"}
 _ARGUMENT_KEYWORDS = frozenset({"not", "true", "false", "null"})
 _MAX_DEPTH = 200
 """Recursion this parser allows itself before giving up (measure allows far less)."""
-
-_new_token: Callable[..., Token] = Token._future_new
-"""lark's own Token constructor, without ``Token.__new__``'s check for a deprecated keyword."""
 
 
 class _GiveUp(Exception):
@@ -77,14 +74,14 @@ class _Parser:
     # ------------------------------------------------------------ tokens
 
     def token(self, type_: str, value: str, start: int) -> Token:
-        """A lark token, positioned as lark's lexer positions it."""
+        """A token, positioned as lark's lexer positions it."""
         if self.lines is None:
             line, column = 1, start + 1
         else:
             before = bisect_right(self.lines, start - 1)
             line = before + 1
             column = start - (self.lines[before - 1] + 1 if before else 0) + 1
-        return _new_token(type_, value, start, line, column, line, column + len(value),
+        return Token(type_, value, start, line, column, line, column + len(value),
                           start + len(value))
 
     def expect(self, kind: str) -> None:
@@ -102,7 +99,7 @@ class _Parser:
 
     # ------------------------------------------------------------ expressions
 
-    def or_(self) -> Tree[Token]:
+    def or_(self) -> Tree:
         self.depth += 1
         if self.depth > _MAX_DEPTH:
             raise _GiveUp
@@ -115,7 +112,7 @@ class _Parser:
         self.depth -= 1
         return left
 
-    def and_(self) -> Tree[Token]:
+    def and_(self) -> Tree:
         left = self.not_()
         toks = self.toks
         while toks[self.i][0] == "w" and toks[self.i][1] == "and":
@@ -123,14 +120,14 @@ class _Parser:
             left = Tree("and_", [left, self.not_()])
         return left
 
-    def not_(self) -> Tree[Token]:
+    def not_(self) -> Tree:
         kind, value, _start = self.toks[self.i]
         if kind == "w" and value == "not":
             self.i += 1
             self.depth += 1
             if self.depth > _MAX_DEPTH:
                 raise _GiveUp
-            tree: Tree[Token] = Tree("not_", [self.not_()])
+            tree: Tree = Tree("not_", [self.not_()])
             self.depth -= 1
             return tree
         left = self.sum()
@@ -140,7 +137,7 @@ class _Parser:
             return Tree("compare", [left, self.token("COMP_OP", value, start), self.sum()])
         return left
 
-    def sum(self) -> Tree[Token]:
+    def sum(self) -> Tree:
         left = self.product()
         toks = self.toks
         while toks[self.i][0] in ("+", "-"):
@@ -149,7 +146,7 @@ class _Parser:
             left = Tree("binary", [left, self.token("ADD_OP", value, start), self.product()])
         return left
 
-    def product(self) -> Tree[Token]:
+    def product(self) -> Tree:
         left = self.unary()
         toks = self.toks
         while toks[self.i][0] in ("*", "/", "%"):
@@ -158,18 +155,18 @@ class _Parser:
             left = Tree("binary", [left, self.token("MUL_OP", value, start), self.unary()])
         return left
 
-    def unary(self) -> Tree[Token]:
+    def unary(self) -> Tree:
         if self.toks[self.i][0] == "-":
             self.i += 1
             self.depth += 1
             if self.depth > _MAX_DEPTH:
                 raise _GiveUp
-            tree: Tree[Token] = Tree("neg", [self.unary()])
+            tree: Tree = Tree("neg", [self.unary()])
             self.depth -= 1
             return tree
         return self.atom()
 
-    def atom(self) -> Tree[Token]:
+    def atom(self) -> Tree:
         kind, value, start = self.toks[self.i]
         self.i += 1
         if kind == "n":
@@ -210,14 +207,14 @@ class _Parser:
 
     # ------------------------------------------------------------ chains
 
-    def chain(self) -> Tree[Token]:
+    def chain(self) -> Tree:
         steps: list[Any] = [self.step()]
         while self.toks[self.i][0] == ",":
             self.i += 1
             steps.append(self.step())
         return Tree("chain", steps)
 
-    def step(self) -> Tree[Token]:
+    def step(self) -> Tree:
         first = self.word()
         label: Token | None = None
         if self.toks[self.i][0] == ":":
@@ -249,18 +246,18 @@ class _Parser:
             children.append(None)
         return Tree("step", children)
 
-    def argument(self) -> Tree[Token]:
+    def argument(self) -> Tree:
         kind, value, _start = self.toks[self.i]
         if kind == "w" and value not in _ARGUMENT_KEYWORDS and self.toks[self.i + 1][0] == "=":
             return self.named()
         return Tree("positional", [self.value()])
 
-    def named(self) -> Tree[Token]:
+    def named(self) -> Tree:
         name = self.word()
         self.expect("=")
         return Tree("named", [name, self.value()])
 
-    def value(self) -> Tree[Token]:
+    def value(self) -> Tree:
         if self.toks[self.i][0] == "{":
             self.i += 1
             inner = self.or_()
@@ -269,13 +266,13 @@ class _Parser:
         return self.or_()
 
 
-def parse(text: str, start: str) -> Tree[Token] | None:
+def parse(text: str, start: str) -> Tree | None:
     """``text`` parsed from the rule ``start`` (``expression`` or ``chain``) as lark would
     parse it, or None if this parser does not accept it (ask lark)."""
     return parse_sized(text, start)[0]
 
 
-def parse_sized(text: str, start: str) -> tuple[Tree[Token] | None, int]:
+def parse_sized(text: str, start: str) -> tuple[Tree | None, int]:
     """As :func:`parse`, with the number of tokens the text was split into (0 if it
     was not accepted). No nesting can be deeper than that number of levels: each
     level takes at least a token of its own (an operator, a bracket, a call)."""

@@ -12,15 +12,20 @@ rebuild them::
     python -m prima.dsl._build_tables
 
 (``tests/dsl/test_grammar_tables.py`` fails until the tables match the grammar.)
+
+lark itself is imported only when a parser is made: most documents never need
+one (see :mod:`prima.dsl._syntax`).
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
 from importlib import resources
+from typing import TYPE_CHECKING
 
-import lark
-from lark import Lark
+if TYPE_CHECKING:
+    from lark import Lark
+
 
 def grammar() -> str:
     """The text of ``pxml.lark``."""
@@ -30,6 +35,8 @@ def grammar() -> str:
 def build(source: str | None = None) -> Lark:
     """A parser built from the grammar ``source`` (default: pxml.lark's text), the slow
     way: what the prebuilt tables are checked against."""
+    from lark import Lark
+
     source = grammar() if source is None else source
     # Positions come from tokens (see _expr.span): propagate_positions would cost
     # about a third of every parse.
@@ -39,13 +46,15 @@ def build(source: str | None = None) -> Lark:
 def prebuilt(source: str | None = None) -> Lark | None:
     """The parser loaded from :mod:`prima.dsl._tables`, or None if those tables were not
     built from the grammar ``source`` (default: pxml.lark's text) by this version of lark."""
+    import lark
+
     from prima.dsl import _tables
 
     source = grammar() if source is None else source
     if source != _tables.GRAMMAR or lark.__version__ != _tables.LARK_VERSION:
         return None
     # how lark's own standalone parsers load their tables (lark leaves it unannotated)
-    loaded: Lark = Lark._load_from_dict(  # type: ignore[no-untyped-call]
+    loaded: Lark = lark.Lark._load_from_dict(  # type: ignore[no-untyped-call]
         _tables.DATA, _tables.MEMO)
     return loaded
 

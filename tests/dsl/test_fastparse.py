@@ -4,8 +4,8 @@
 syntax fault, or any text it does not accept, goes to lark. So for every text
 either it declines, or lark parses the text too, into the same tree: the same
 rule names, children and ``None`` placeholders, and tokens of the same type,
-value and position (``Token.__eq__`` compares only the text, so the positions
-are compared one by one here).
+value and position (compared one by one here, PRIMA's ``ParseTree`` and
+``ParseToken`` against lark's own ``Tree`` and ``Token``).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from lark import Token, Tree
 from lark.exceptions import UnexpectedInput
 
 import prima.dsl
-from prima.dsl import collect, fast_parse, parser, validate_paths
+from prima.dsl import ParseToken, ParseTree, collect, fast_parse, parser, validate_paths
 
 fast_parse_sized = prima.dsl._fastparse.parse_sized  # type: ignore[attr-defined]  # private
 measure = prima.dsl._expr.measure  # type: ignore[attr-defined]  # private
@@ -34,14 +34,14 @@ _POSITIONS = ("start_pos", "line", "column", "end_line", "end_column", "end_pos"
 
 def _differences(fast: object, slow: object, where: str = "") -> Iterator[str]:
     if isinstance(slow, Token):
-        if not isinstance(fast, Token) or type(fast) is not type(slow):
+        if type(fast) is not ParseToken:
             yield f"{where}: {fast!r} is not the token {slow!r}"
             return
         for attr in ("type", "value", *_POSITIONS):
             if getattr(fast, attr) != getattr(slow, attr) or str(fast) != str(slow):
                 yield f"{where}: {attr} {getattr(fast, attr)!r} != {getattr(slow, attr)!r}"
     elif isinstance(slow, Tree):
-        if not isinstance(fast, Tree) or type(fast) is not type(slow):
+        if type(fast) is not ParseTree:
             yield f"{where}: {fast!r} is not the tree {slow!r}"
             return
         if type(fast.data) is not type(slow.data) or fast.data != slow.data:
@@ -236,3 +236,15 @@ def test_valid_texts_are_taken_fast() -> None:
                         ("f(a, b) == 'q'", "expression"),
                         ('a: Speak("hi {x}"), Move(to=hall)[speed=1]', "chain")]:
         assert check(text, start)
+
+
+def test_a_text_lark_parses_gives_prima_trees_too() -> None:
+    text = "Speak(text={x andy})"  # 'x andy' is read 'x and y': left to lark
+    assert fast_parse(text, "chain") is None
+    (step,) = prima.dsl.parse_chain(text)
+    tree = step.args[0].tree
+    assert type(tree) is ParseTree and tree.data == "and_"
+    names = [child.children[0] for child in tree.children]  # type: ignore[union-attr]
+    assert [(type(n), n.type, n.start_pos) for n in names] == [  # type: ignore[union-attr]
+        (ParseToken, "NAME", 12), (ParseToken, "NAME", 17)]
+    assert names == ["x", "y"]
