@@ -35,7 +35,8 @@ import re
 import stat
 from bisect import bisect_right
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass, field
+from contextlib import contextmanager
+from dataclasses import dataclass
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -147,14 +148,33 @@ class _Offsets:
 _BREAKS = re.compile(r"&[^;<]*;|\r\n|<!\[CDATA\[.*?\]\]>|<", re.S)
 
 
-@dataclass
 class _Place:
-    start: int
-    attrs: dict[str, tuple[int, int]] = field(default_factory=dict)
-    """Attribute name -> where its raw value starts and ends."""
-    content: int = -1
-    offsets: dict[str, _Offsets] = field(default_factory=dict)
-    """Decoded-offset maps, built on first use (attribute name, or "" for the text)."""
+    """Where one start tag is written: its ``<``, the span of its attributes (read on
+    first need: a valid document rarely needs an attribute's position) and where
+    its content begins (-1 for an empty element)."""
+
+    __slots__ = ("start", "attrs_start", "attrs_end", "content", "_attrs", "offsets")
+
+    def __init__(self, start: int, attrs_start: int, attrs_end: int, content: int) -> None:
+        self.start = start
+        self.attrs_start = attrs_start
+        self.attrs_end = attrs_end
+        self.content = content
+        self._attrs: dict[str, tuple[int, int]] | None = None
+        self.offsets: dict[str, _Offsets] = {}
+        """Decoded-offset maps, built on first use (attribute name, or "" for the text)."""
+
+    def attrs(self, text: str) -> dict[str, tuple[int, int]]:
+        """Attribute (local) name -> where its raw value starts and ends."""
+        if self._attrs is None:
+            self._attrs = {}
+            for a in _ATTRIBUTE.finditer(text, self.attrs_start, self.attrs_end):
+                raw_name = a.group(1)
+                if raw_name.startswith("xmlns"):  # a namespace declaration, not an attribute
+                    continue
+                group = 2 if a.group(2) is not None else 3
+                self._attrs[raw_name.rpartition(":")[2]] = (a.start(group), a.end(group))
+        return self._attrs
 
 
 class SourceMap:
@@ -170,9 +190,10 @@ class SourceMap:
         self._elements = list(root.iter(tag=etree.Element))  # keeps proxies alive
         places = _scan_start_tags(text)
         self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places, strict=False))
-        self.nodes = len(places) + sum(len(p.attrs) for p in places)
+        counts = [len(el.attrib) for el in self._elements]
+        self.nodes = len(places) + sum(counts)
         """Elements plus attributes: what schema diagnostics cost."""
-        self.most_attributes = max((len(p.attrs) for p in places), default=0)
+        self.most_attributes = max(counts, default=0)
         """The most attributes one element carries."""
 
     def position(self, offset: int) -> tuple[int, int]:
@@ -206,11 +227,12 @@ class SourceMap:
     def attribute(self, el: etree._Element, name: str, index: int = 0) -> tuple[int, int]:
         """Where character ``index`` of attribute ``name``'s (decoded) value is."""
         place = self._places.get(el)
-        if place is None or name not in place.attrs:
+        span = None if place is None else place.attrs(self._text).get(name)
+        if place is None or span is None:
             return self.element(el)
         offsets = place.offsets.get(name)
         if offsets is None:
-            offsets = place.offsets[name] = _Offsets(self._text, *place.attrs[name])
+            offsets = place.offsets[name] = _Offsets(self._text, *span)
         return self.position(offsets.offset(index))
 
     def text(self, el: etree._Element, index: int = 0) -> tuple[int, int]:
@@ -238,14 +260,8 @@ def _scan_start_tags(text: str) -> list[_Place]:
     for m in _MARKUP.finditer(text):
         if m.group("name") is None:
             continue
-        place = _Place(start=m.start(), content=-1 if m.group("empty") else m.end())
-        for a in _ATTRIBUTE.finditer(text, m.start("attrs"), m.end("attrs")):
-            raw_name = a.group(1)
-            if raw_name.startswith("xmlns"):  # a namespace declaration, not an attribute
-                continue
-            group = 2 if a.group(2) is not None else 3
-            place.attrs[raw_name.rpartition(":")[2]] = (a.start(group), a.end(group))
-        places.append(place)
+        places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"),
+                             -1 if m.group("empty") else m.end()))
     return places
 
 
@@ -483,8 +499,43 @@ def schema(name: str) -> xmlschema.XMLSchema:
     import xmlschema  # imported lazily: only documents with errors need it
 
     ref = resources.files("prima.schemas").joinpath(name)
-    with resources.as_file(ref) as path:
+    with resources.as_file(ref) as path, _ascii_selector_checks():
         return xmlschema.XMLSchema(str(path))
+
+
+_ASCII_NAME_START = "[A-Za-z_:]"
+_ASCII_NAME_CHAR = "[-.0-9A-Za-z_:]"
+
+
+@contextmanager
+def _ascii_selector_checks() -> Iterator[None]:
+    """While PRIMA builds a schema with xmlschema, its check of identity-constraint
+    XPaths matches ASCII names only.
+
+    xmlschema checks the XPath of every ``xs:selector`` and ``xs:field`` against
+    a pattern it compiles on first need from XML's name classes (``\\i``, ``\\c``:
+    most of Unicode), about 0.1 s of CPU, a third of what the first document with
+    a schema fault costs. The only identity constraints are the XSD meta-schema's
+    (PRIMA's schemas have none: ``tests/dsl/test_xmlio.py`` checks), whose
+    XPaths are ASCII, so the same pattern over ASCII names checks them alike.
+    Each class's own pattern (none yet) is put back afterwards, so anyone else's
+    schema built in the process is checked as xmlschema checks it. With another
+    version of xmlschema that has no such class attribute this does nothing.
+    """
+    from xmlschema.validators import identities
+
+    patched = []
+    for cls in (identities.XsdSelector, identities.XsdFieldSelector):
+        regexp = getattr(cls, "_REGEXP", None)
+        if getattr(cls, "pattern", 0) is None and isinstance(regexp, str):
+            cls.pattern = re.compile(regexp.replace("\\i", _ASCII_NAME_START)
+                                     .replace("\\c", _ASCII_NAME_CHAR))
+            patched.append(cls)
+    try:
+        yield
+    finally:
+        for cls in patched:
+            cls.pattern = None
 
 
 _NS = re.compile(r"\{[^}]*\}")

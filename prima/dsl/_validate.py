@@ -22,7 +22,7 @@ from prima.dsl._loader import check_parsed
 from prima.dsl._profile import NAMESPACE as ROBOT_NS
 from prima.dsl._profile import RobotProfile, default_profile, load_profile, profile_from_xml
 from prima.errors import DocumentError, PrimaError, Problem, Severity
-from prima.xmlio import parse_xml, read_source
+from prima.xmlio import XmlDocument, parse_xml, read_source
 
 
 @dataclass
@@ -117,20 +117,29 @@ def _check(path: Path, profile: RobotProfile | None,
         data = read_source(path, DocumentError)
     except DocumentError as exc:
         return (None if skippable else list(exc.problems)), None
-    namespace = root_namespace(data)
+    # Parsed once, securely (most files are documents); the namespace of a file
+    # that does not parse is read from its root element alone.
+    doc: XmlDocument | None = None
+    unparsed: list[Problem] = []
+    try:
+        doc = parse_xml(data, str(path), DocumentError)
+    except DocumentError as exc:
+        unparsed = list(exc.problems)
+    namespace = root_namespace(data) if doc is None else etree.QName(doc.root).namespace
     header = None if namespace is None else Header(namespace)
     checker = checker_for(namespace) if checker_for and namespace is not None else None
     if checker is not None:
         return checker(path), header
     if skippable and namespace not in (PXML_NS, ROBOT_NS):
         return None, None
-    try:
-        doc = parse_xml(data, str(path), DocumentError)
-        if namespace == ROBOT_NS:
+    if doc is None:
+        return unparsed, header
+    if namespace == ROBOT_NS:
+        try:
             profile_from_xml(doc)
-            return [], header
-    except DocumentError as exc:
-        return list(exc.problems), header
+        except DocumentError as exc:
+            return list(exc.problems), header
+        return [], header
     if namespace == PXML_NS:
         header = Header(namespace, doc.root.get("kind", ""), doc.root.get("name", ""))
     return check_parsed(doc, profile)[1], header

@@ -170,3 +170,25 @@ def test_only_utf8_is_read(declared: str) -> None:
 def test_a_utf8_byte_order_mark_does_not_shift_columns() -> None:
     doc = parse_xml(b'\xef\xbb\xbf<a v="x"/>', "x", DocumentError)
     assert doc.where.attribute(doc.root, "v") == (1, 7)
+
+
+def test_prima_schemas_have_no_identity_constraints() -> None:
+    # the ASCII selector check used while xmlschema builds them relies on it
+    schemas = Path(__file__).resolve().parents[2] / "schemas"
+    for xsd in schemas.glob("*.xsd"):
+        text = xsd.read_text(encoding="utf-8")
+        assert not any(f"<xs:{c}" in text for c in ("unique", "key", "keyref", "selector")), xsd
+
+
+def test_the_ascii_selector_check_is_put_back(monkeypatch: pytest.MonkeyPatch) -> None:
+    from xmlschema.validators.identities import XsdFieldSelector, XsdSelector
+
+    from prima.xmlio import _ascii_selector_checks
+
+    for cls in (XsdSelector, XsdFieldSelector):  # as before xmlschema's first need
+        monkeypatch.setattr(cls, "pattern", None)
+    with _ascii_selector_checks():
+        for cls, good in ((XsdSelector, ".//xs:element|xs:attribute"), (XsdFieldSelector, "@name")):
+            assert cls.pattern is not None and cls.pattern.fullmatch(good), cls
+        assert not XsdSelector.pattern.match("@name")  # the same language, over ASCII names
+    assert XsdSelector.pattern is None and XsdFieldSelector.pattern is None
