@@ -796,10 +796,10 @@ class _Compiler:
         try:
             value = fn(Scope({}))
         except ExecutionError as exc:  # a constant that cannot be computed: -'a'
-            raise ExpressionError(start, f"expression: {exc}", self.source) from None
+            raise ExpressionError(_start(tree), f"expression: {exc}", self.source) from None
         if isinstance(value, str) and len(value) > self.max_text:
-            raise ExpressionError(start, f"expression: text longer than {self.max_text:,} "
-                                         "characters", self.source)
+            raise ExpressionError(_start(tree), f"expression: text longer than "
+                                                f"{self.max_text:,} characters", self.source)
         return constant(value, text)
 
     def node(self, node: Node) -> Part:
@@ -962,20 +962,74 @@ def _unescape(body: str) -> tuple[str, list[int]]:
 
 
 def span(node: Node, source: str) -> tuple[int, int]:
-    """Where a subtree is written; closing parentheses (not kept as tokens) included."""
-    tokens = _tokens(node)
-    if not tokens:
-        return 0, len(source)
-    start = min(_pos(t) for t in tokens)
-    end = max(t.end_pos or 0 for t in tokens)
-    depth = source.count("(", start, end) - source.count(")", start, end)
-    while depth > 0 and end < len(source):
-        if source[end] == ")":
-            depth -= 1
-        elif not source[end].isspace():
+    """Where a subtree is written, with what the tree keeps no token of: the
+    parentheses around or inside it, and a keyword value (``true``, ``false``,
+    ``null``) at either end of it."""
+    tokens = sorted(_tokens(node), key=_pos)
+    if not tokens:  # keywords only ('not null'): nothing to place it by but the whole text
+        return _skip(source, 0, _SPACE, 1), _skip(source, len(source), _SPACE, -1)
+    start, end = _pos(tokens[0]), tokens[-1].end_pos
+    last = _edge(node, -1)[-1:]
+    if last:
+        at = _skip(source, end, _SPACE + "(", 1)
+        if source.startswith(last[0], at):
+            end = at + len(last[0])
+    for word in reversed(_edge(node, 0)):  # innermost first: the keyword, then '-' or 'not'
+        at = _skip(source, start, _SPACE + "()", -1)
+        if not source.endswith(word, 0, at):
             break
+        start = at - len(word)
+    # parentheses opened and not closed within the span, outside its tokens (a string
+    # token may hold any): closed after it, or opened before it
+    depth = 0
+    at = start
+    for token in tokens:
+        gap = source[at:_pos(token)]
+        depth += gap.count("(") - gap.count(")")
+        at = max(at, token.end_pos)
+    gap = source[at:end]
+    depth += gap.count("(") - gap.count(")")
+    while depth > 0 and end < len(source) and source[end] in _SPACE + ")":
+        depth -= source[end] == ")"
         end += 1
+    while depth < 0 and start > 0 and source[start - 1] in _SPACE + "(":
+        depth += source[start - 1] == "("
+        start -= 1
     return start, end
+
+
+_SPACE = " \t\f\r\n"
+"""What the grammar skips between tokens."""
+
+_UNWRITTEN = {"true": "true", "false": "false", "null": "null", "neg": "-", "not_": "not"}
+"""Rules whose tree keeps no token of their word: a keyword value, or a prefix operator."""
+
+
+def _edge(node: Node, side: int) -> list[str]:
+    """The words the tree keeps no token of along its first (``side`` 0) or last
+    (``side`` -1) edge, outermost first: prefix operators (first edge only) and a
+    keyword value (``true``, ``false``, ``null``) at the very end."""
+    words: list[str] = []
+    while isinstance(node, Tree):
+        children = [c for c in node.children if c is not None]
+        word = _UNWRITTEN.get(node.data)
+        if word is not None and (side == 0 or not children):
+            words.append(word)
+        if not children:
+            break
+        node = children[side]
+    return words
+
+
+def _skip(source: str, at: int, chars: str, step: int) -> int:
+    """From ``at``, past the characters ``chars`` going forward (``step`` 1) or back (-1)."""
+    if step > 0:
+        while at < len(source) and source[at] in chars:
+            at += 1
+    else:
+        while at > 0 and source[at - 1] in chars:
+            at -= 1
+    return at
 
 
 # ---------------------------------------------------------------- memo

@@ -343,3 +343,13 @@ def test_arithmetic_and_ordering_of_any_two_values(a: object, b: object, op: str
         value = "error"
     expected = _as_the_reference_says(op, a, b)
     assert value == expected or value != value and expected != expected  # noqa: PLR0124 - nan
+
+
+@pytest.mark.parametrize("text", [
+    "x == true", "true == x", "(true) == x", "x == (true)", "(x) == y", "-(x)", "not x and -y",
+    "not (- x) == 1", "x + - - y", 'x == "a("', "((x + 1)) * 2", "null", "not true",
+])
+def test_a_compiled_expression_keeps_its_whole_source(text: str) -> None:
+    # keyword values, prefix operators and parentheses leave no token in the tree
+    assert compile_expression(f" {text} ").source == text
+
