@@ -538,7 +538,9 @@ def _ascii_selector_checks() -> Iterator[None]:
             cls.pattern = None
 
 
-_NS = re.compile(r"\{[^}]*\}")
+_NS = re.compile(r"\{[^}'\s]*\}")
+"""A namespace in Clark notation (``{urn:prima:pxml:1}state``); not libxml2's sets of
+values (``{'asap', 'after-latest'}``)."""
 _ATTR_VALUE = re.compile(
     r"^attribute (?P<name>[\w:\-]+)=(?P<value>'.*?'|\".*?\")?:? ?(?P<rest>.*)$", re.S)
 _NOT_ALLOWED = re.compile(r"^'(?P<name>[\w:\-]+)' attribute not allowed")
@@ -648,7 +650,7 @@ def _from_libxml2(doc: XmlDocument, entry: etree._LogEntry, hint: Hint | None) -
         return doc.problem(el, f"<{local_name(el)}>: attribute '{attr}' is not allowed here",
                            attribute=attr)
     if attr is not None:
-        return _bad_value(doc, el, attr, rest.rstrip("."), hint)
+        return _bad_value(doc, el, attr, _libxml2_value(rest.rstrip(".")), hint)
     missing = _LIBXML2_MISSING.search(rest)
     if missing:
         return doc.problem(el, f"<{local_name(el)}>: missing required attribute "
@@ -662,6 +664,26 @@ def _from_libxml2(doc: XmlDocument, entry: etree._LogEntry, hint: Hint | None) -
         return doc.problem(el, f"<{local_name(el)}> is incomplete: expected "
                                f"{expected.group('tags')}")
     return doc.problem(el, f"<{local_name(el)}>: {rest}")
+
+
+# libxml2's wording of a bad value, and xmlschema's, which every message uses
+_LIBXML2_VALUE = [
+    (re.compile(r"^\[facet 'enumeration'\] The value '.*' is not an element of the set "
+                r"\{(?P<set>.*)\}$", re.S), "value must be one of [{set}]"),
+    (re.compile(r"^\[facet 'pattern'\] The value '.*' is not accepted by the pattern "
+                r"(?P<pattern>'.*')$", re.S), "value doesn't match any pattern of [{pattern}]"),
+    (re.compile(r"^(?P<value>'.*') is not a valid value of the atomic type 'xs:boolean'$", re.S),
+     "{value} is not a boolean value"),
+]
+
+
+def _libxml2_value(reason: str) -> str:
+    """libxml2's reason a value is bad, in xmlschema's words where they differ."""
+    for pattern, words in _LIBXML2_VALUE:
+        m = pattern.match(reason)
+        if m:
+            return words.format(**m.groupdict())
+    return reason
 
 
 def _at_path(root: etree._Element, path: str) -> etree._Element | None:
