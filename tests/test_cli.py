@@ -129,6 +129,15 @@ def test_shipped_scenarios_and_maps_validate() -> None:
     assert "0 error(s)" in err
 
 
+def test_documents_a_scenario_names_are_checked_against_its_robot_in_any_order() -> None:
+    # fa7-spotlight is the guide robot's (guide-spotlight.xml names it with that robot)
+    apps, scenarios = str(ROOT / "apps"), str(ROOT / "scenarios")
+    assert run("validate", apps)[0] == 1  # alone, against the home robot: unknown Command
+    first, second = run("validate", apps, scenarios), run("validate", scenarios, apps)
+    assert first[:2] == second[:2] == (0, "")
+    assert " files checked: 0 error(s)" in first[2] and first[2] == second[2]
+
+
 def test_unknown_xml_in_a_folder_is_skipped_but_named_is_an_error(tmp_path: Path) -> None:
     other = tmp_path / "pom.xml"
     other.write_text("<project/>")

@@ -235,9 +235,15 @@ class Validation:
         return self._robots[key]
 
     def run(self, paths: Iterable[tuple[Path, bool] | Path]) -> Report:
-        """Check every path (``(path, explicit)`` pairs from :func:`collect`, or paths)."""
-        for item in paths:
-            path, explicit = item if isinstance(item, tuple) else (item, True)
+        """Check every path (``(path, explicit)`` pairs from :func:`collect`, or paths).
+
+        Files other than ``.pxml`` (scenarios, maps, robot profiles) are checked
+        first, so that a document a scenario names is checked against the scenario's
+        robot however the paths are ordered (``apps scenarios`` as ``scenarios apps``).
+        """
+        items = [item if isinstance(item, tuple) else (item, True) for item in paths]
+        items.sort(key=lambda item: item[0].suffix == ".pxml")  # stable: otherwise as given
+        for path, explicit in items:
             self.add(path, explicit=explicit)
         return self.report
 
