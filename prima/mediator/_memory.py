@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from prima.catalog import Priority
 from prima.mediator._index import WaitIndex
 from prima.mediator._interface import AbId, TreeId
+from prima.mediator._ranking import Ranking
 from prima.mediator._state import App, Command, Node, NodeState, Tree
 
 __all__ = ["WorkingMemory"]
@@ -33,7 +34,9 @@ class WorkingMemory:
         """Device -> the running AB that occupies it."""
         self.blending: dict[str, Node] = {}
         """Device -> the running AB blended over its occupant (the blend policy)."""
-        self.index = WaitIndex()
+        self.index = WaitIndex(Ranking())
+        """The waiting ABs by device, ranked by rule 4 as ``_ranking.CRITERIA`` says
+        when the mediator is made."""
         self.waiting = 0
         """How many ABs are on the waiting list."""
         self.new: list[Node] = []
@@ -220,11 +223,11 @@ class WorkingMemory:
         if tree.live == 0:
             self.trees.pop(tree.id, None)
             tree.app.trees.pop(tree.id, None)
-            self.index.forget(tree)
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
                 tree.started = False  # a request joining it takes the floor anew (7.2)
+            self.index.forget(tree)
 
     @staticmethod
     def _inactive(app: App, now: float) -> None:

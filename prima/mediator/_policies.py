@@ -179,8 +179,8 @@ class Policies:
         for y in running:
             if not y.cutting and self._driver.cut(y.id):
                 y.cutting = True
-                self._log.emit(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
-                               detail=f"for {x.app.name}'s reaction (AB{x.id})")
+                self._log.ab(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
+                               f"for {x.app.name}'s reaction (AB{x.id})")
 
     def cuttable(self, y: Node, x: Node) -> bool:
         if y.app is x.app or not preempts(x, y):
