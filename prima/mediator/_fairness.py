@@ -75,18 +75,23 @@ class _Share:
         return not self.intervals
 
     def total(self, now: float, window: float) -> float:
-        """Seconds spent keeping others waiting within ``[now - window, now]``."""
+        """Seconds spent keeping others waiting within ``[now - window, now]`` (it
+        prunes first, as :meth:`prune` does)."""
         start = now - window
-        self.prune(now, window)
+        intervals = self.intervals
+        while intervals and intervals[0][1] <= start:
+            intervals.popleft()
+            self.lengths.popleft()
         total: float = 0
-        if self.intervals:
+        if intervals:
             # Only the oldest interval can begin before the window (they follow one
             # another), so the others count whole: their lengths are summed in C, in
             # the order and with the roundings of summing each interval's share.
-            begin, end = self.intervals[0]
-            total = sum(islice(self.lengths, 1, None), end - max(begin, start))
-        if self.since is not None:
-            total += now - max(self.since, start)
+            begin, end = intervals[0]
+            total = sum(islice(self.lengths, 1, None), end - (start if start > begin else begin))
+        since = self.since
+        if since is not None:
+            total += now - (start if start > since else since)
         return total
 
 
@@ -111,7 +116,8 @@ class Fairness:
         takes the app's precedence at once. True if some precedence changed."""
         now = self._clock.now()
         keeping = self._keeping()
-        seen = (now, keeping, tuple(self._apps))
+        apps = self._apps
+        seen = (now, keeping, tuple(apps))
         if seen == self._observed:
             return False
         self._observed = seen
@@ -119,16 +125,17 @@ class Fairness:
         # New records in registration order (never a set's order, which changes with
         # PYTHONHASHSEED): the order of the records is the order of the budget
         # decisions made at one instant. (An app gone keeps nobody waiting any more.)
-        for name in self._apps:
-            if name in keeping and name not in shares:
-                shares[name] = _Share()
+        if keeping:
+            for name in apps:
+                if name in keeping and name not in shares:
+                    shares[name] = _Share()
         for name, share in shares.items():
             if name in keeping:
                 if share.since is None:
                     share.since = now
             elif share.since is not None:
                 share.close(now)
-        return self._settle_shares(now)
+        return self._settle_shares(now) if shares else False
 
     def _keeping(self) -> frozenset[str]:
         """The apps that keep another app's ready AB waiting now."""

@@ -202,7 +202,10 @@ class Holds:
 
     def started(self, node: Node) -> None:
         """An AB started: a block's first AB arms its watchdog; a stream learns devices."""
-        self._channel_held.discard(node.id)
+        if self._channel_held:
+            self._channel_held.discard(node.id)
+        if not self.opened:
+            return
         app = node.app
         blk = self._blocks.get(app.name)
         if (blk is not None and not blk.started and not blk.expired
@@ -219,9 +222,10 @@ class Holds:
         a device they wait for); those still held are parked again."""
         if self._channel_held and not node.devices.isdisjoint(self._talk):
             self._wm.dirty.update(self._channel_devices)
-        parked, self._talk_parked = self._talk_parked, []
-        for n in parked:
-            self._wm.refile(n)
+        if self._talk_parked:
+            parked, self._talk_parked = self._talk_parked, []
+            for n in parked:
+                self._wm.refile(n)
 
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)

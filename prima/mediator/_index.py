@@ -116,8 +116,14 @@ class WaitIndex:
         assert head is not None and node.order is not None
         entry = (node.order, node.id, node.version, node)
         tree = node.tree
+        devices = self._devices
         for d in node.sorted_devices:
-            slot = self._slot(d, head, tree)
+            # (``_slot``, its usual case inline: the device, group and slot exist)
+            dev = devices.get(d)
+            group = dev.groups.get(head) if dev is not None else None
+            slot = group.slots.get(tree.id) if group is not None else None
+            if slot is None:
+                slot = self._slot(d, head, tree)
             heap = slot.heap
             _heappush(heap, entry)
             self.entries += 1

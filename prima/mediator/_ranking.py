@@ -219,18 +219,38 @@ class Ranking:
     def slot_keys(self, node: Node) -> Keys:
         """What the index ranks the AB's tree by within its head group (the stable
         keys after the head: tree and order, in the table's order)."""
-        keys = self.tree_keys(node) + node.order  # type: ignore[operator]
+        tree = node.tree.keys
+        if tree is None:
+            tree = self.tree_keys(node)
+        keys = tree + node.order  # type: ignore[operator]
         return keys if self._slot is None else self._slot(keys)
 
     def rank(self, node: Node, pjf: Collection[int]) -> Rank:
-        """The AB's full rank; ``pjf`` holds the ids of the ABs the round names."""
+        """The AB's full rank; ``pjf`` holds the ids of the ABs the round names.
+
+        The rank of an AB the round does not name is kept on it (``Node.ranked``),
+        with the tree keys it was assembled from: while its tree keeps those same
+        keys (the same tuple), it is still its rank.
+        """
+        tree = node.tree.keys
+        if tree is None:
+            tree = self.tree_keys(node)
+        named = node.id in pjf
+        if not named:
+            kept = node.ranked
+            if kept is not None and kept[0] is tree:
+                return kept[1]
         if node.head is None:
             self.node_keys(node)
         rnd = self._not_named
-        if node.id in pjf:
+        if named:
             rnd = tuple([key(node, pjf) for key in self._round])
-        keys = node.head + self.tree_keys(node) + rnd + node.order  # type: ignore[operator]
-        return keys if self._full is None else self._full(keys)
+        keys = node.head + tree + rnd + node.order  # type: ignore[operator]
+        if self._full is not None:
+            keys = self._full(keys)
+        if not named:
+            node.ranked = (tree, keys)
+        return keys
 
     def separating(self, winner: Rank, loser: Rank) -> Rule:
         """The rule of the first criterion on which two ranks differ (the winner's)."""

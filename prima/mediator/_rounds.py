@@ -16,7 +16,8 @@ is suspended; when an AB of a suspended tree starts, the tree resumes.
 from __future__ import annotations
 
 import heapq
-from collections.abc import Callable
+from types import MappingProxyType
+from collections.abc import Callable, Mapping, Set
 
 from prima.catalog import Priority
 from prima.mediator._decisions import DecisionKind, Rule
@@ -34,6 +35,8 @@ __all__ = ["Selector", "atomic_behavior"]
 _WAITING = NodeState.WAITING
 _LOW = Priority.LOW
 _NO_DEVICES: frozenset[str] = frozenset()
+_NO_NODES: list[Node] = []  # (never changed)
+_NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
 
 
 def atomic_behavior(node: Node) -> AtomicBehavior:
@@ -49,28 +52,34 @@ class _Round:
 
     Parent-finished lasts one round, so it is not in the index: each device's
     parent-finished ABs are heaped here (built on first need), and a device's
-    best AB is the better of the index's answer and this heap's top.
+    best AB is the better of the index's answer and this heap's top. A round
+    that names no AB ranks as the index does: the selector keeps one such view.
     """
 
-    __slots__ = ("pjf", "best", "_index", "_ranking", "_heaps", "_ranks")
+    __slots__ = ("pjf", "best", "_index", "_ranking", "_heaps", "_named")
 
-    def __init__(self, pjf: dict[AbId, Node], index: WaitIndex) -> None:
+    def __init__(self, pjf: Mapping[AbId, Node], index: WaitIndex) -> None:
         self.pjf = pjf
         self._index = index
         self._ranking = index.ranking
         self._heaps: dict[str, list[tuple[Rank, Node]]] | None = None
-        self._ranks: dict[AbId, Rank] = {}
+        self._named: dict[AbId, Rank] = {}
+        """The ranks of the ABs the round names, worked out once per round (the others'
+        are kept on the ABs)."""
         self.best: Callable[[str], Node | None] = self._best if pjf else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
         answer when the round names no AB)."""
 
     def rank(self, node: Node) -> Rank:
-        """The AB's rank, worked out once per round: no key changes within a round
-        (trees are suspended or resumed, and apps demoted, between rounds)."""
-        r = self._ranks.get(node.id)
-        if r is None:
-            r = self._ranks[node.id] = self._ranking.rank(node, self.pjf)
-        return r
+        """The AB's rank (no key changes within a round: trees are suspended or resumed,
+        and apps demoted, between rounds)."""
+        pjf = self.pjf
+        if node.id in pjf:
+            r = self._named.get(node.id)
+            if r is None:
+                r = self._named[node.id] = self._ranking.rank(node, pjf)
+            return r
+        return self._ranking.rank(node, pjf)
 
     def separating(self, winner: Node, loser: Node) -> Rule:
         """The first criterion on which ``winner`` beats ``loser``: what a start names."""
@@ -123,14 +132,17 @@ class Selector:
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
+        self._plain = _Round(_NONE_NAMED, wm.index)
+        """The view of every round that names no AB (it keeps nothing of a round)."""
 
     def settle(self) -> None:
         """Run rounds until nothing more can start."""
         wm = self._wm
-        update = self._holds.update
+        holds = self._holds
         start = self._driver.start
         while True:
-            update()
+            if holds.opened:  # (else there is no stream to arm or let lapse)
+                holds.update()
             if not (wm.new or wm.dirty or wm.pjf):
                 break
             for node in self.round():
@@ -142,19 +154,36 @@ class Selector:
     def round(self) -> list[Node]:
         """One round: start every AB that can start now; returns them."""
         wm = self._wm
-        pjf, wm.pjf = wm.pjf, {}
-        new, wm.new = wm.new, []
-        dirty, wm.dirty = wm.dirty, set()
-        view = _Round(pjf, wm.index)
+        # What the round looks at is taken from working memory, which collects anew
+        # for the next round (what is empty stays there: nothing to take).
+        pjf: Mapping[AbId, Node] = wm.pjf
+        if pjf:
+            wm.pjf = {}
+            view = _Round(pjf, wm.index)
+        else:
+            pjf = _NONE_NAMED
+            view = self._plain
+        new = wm.new
+        if new:
+            wm.new = []
+        else:
+            new = _NO_NODES
+        dirty: Set[str] = wm.dirty
+        if dirty:
+            wm.dirty = set()
+        else:
+            dirty = _NO_DEVICES
         started: list[Node] = []
         later: list[tuple[bool, Tree]] = []
-        overrun: dict[str, App] = {}
+        overrun: dict[str, App] | None = None
         for x in self._candidates(new, dirty, view):
             # (an earlier start of this round may have parked it: a block took force)
             if x.state is _WAITING and x.parked is None and self._startable(x, view):
                 if self._counted(x.app):
                     self._start(x, view, started, later)
                 else:
+                    if overrun is None:
+                        overrun = {}
                     overrun[x.app.name] = x.app
         for is_suspend, tree in later:
             if is_suspend:
@@ -168,7 +197,7 @@ class Selector:
         for n in pjf.values():
             if n.state is _WAITING:
                 wm.dirty.update(n.devices)
-        for app in overrun.values():
+        for app in overrun.values() if overrun is not None else ():
             self._overrun(app, f"started {app.budgets.starts_per_instant} atomic behaviors at "
                                f"t={self._instant:g} s and asked for more (Commands that take "
                                "no time, requested again and again?)")
@@ -187,7 +216,7 @@ class Selector:
         return True
 
     @staticmethod
-    def _candidates(new: list[Node], dirty: set[str], view: _Round) -> list[Node]:
+    def _candidates(new: list[Node], dirty: Set[str], view: _Round) -> list[Node]:
         """What may start: ABs new on the waiting list, the best on each dirty device."""
         if not dirty and len(new) == 1:  # (one request, one AB: nothing to order)
             return new if new[0].state is _WAITING else []

@@ -140,6 +140,8 @@ class Tree:
         policy has put its return before the stream's next AB (or found none needed)."""
 
 
+_PENDING = NodeState.PENDING
+_NO_DEVICES: frozenset[str] = frozenset()
 _SORTED: dict[frozenset[str], tuple[str, ...]] = {}
 
 
@@ -159,7 +161,7 @@ class Node:
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
-                 "restarts", "blended", "head", "order", "facts")
+                 "restarts", "blended", "head", "order", "ranked", "facts")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -169,14 +171,14 @@ class Node:
         self.tree = tree
         self.commands = commands
         self.devices = devices
-        self.sorted_devices = _sorted(devices)
+        self.sorted_devices = _SORTED.get(devices) or _sorted(devices)
         self.priority = priority
         self.reactive = reactive
         self.iteration = iteration
         self.parent: AbId | None = None
         """The before node's id (kept as an id so finished nodes can be freed)."""
         self.children: list[Node] = []
-        self.state = NodeState.PENDING
+        self.state = _PENDING
         self.seq = seq
         """The request's sequence number: smaller is older."""
         self.version = 0
@@ -186,7 +188,10 @@ class Node:
         """Its keys under the NODE ranking criteria before and after the first TREE
         one, worked out by ``_ranking.Ranking`` when it first enters the waiting
         list (None before): they never change after that."""
-        self.blended: frozenset[str] = frozenset()
+        self.ranked: tuple[object, tuple[tuple[int, ...], ...]] | None = None
+        """Its full rank when no round names it, with the tree keys it was worked out
+        from (``_ranking.Ranking.rank`` keeps it: valid while the tree keeps them)."""
+        self.blended: frozenset[str] = _NO_DEVICES
         """Devices it shares with another running AB (the blend policy): held by that
         one, not by this one."""
         self.cutting = False
