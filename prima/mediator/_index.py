@@ -2,7 +2,9 @@
 
 Selection asks, for a device, which waiting AB that needs it ranks best
 (:mod:`._ranking`). The index answers from the parts of the rank that do not
-change every round, split by the criteria's scopes:
+change every round (the keys :class:`._ranking.Ranking` keeps on each AB and
+tree, so no key function is called to file or re-rank), split by the criteria's
+scopes:
 
 - ``head``: the NODE criteria before the first TREE criterion (priority): ABs
   with equal head keys form a *group*;

@@ -182,8 +182,8 @@ class Intake:
             before = f"before AB{parent.id}" if parent is not None else "roots the tree"
             grouped = "as one AB " if request.group else ""
             detail = f"{len(cmds)} Command(s) {grouped}{before}"
-        self._log.emit(DecisionKind.REQUEST, link.rule, root, detail=detail, request=cmds,
-                       before=parent.id if parent is not None else None)
+        self._log.requested(link.rule, root, detail, cmds,
+                            parent.id if parent is not None else None)
         if link.enter_now:
             wm.enter_waiting(root, parent_finished=link.parent_finished)
         return (cid,) if len(cmds) == 1 else tuple([c.id for c in cmds]), cancelled

@@ -276,7 +276,7 @@ class Mediator:
         # (an unloaded app's AB still running is cut for good: nobody would restart it)
         drop = not app.alive or any(c.on_interrupt is OnInterrupt.DROP for c in node.commands)
         self._log.ab(DecisionKind.END, Rule.INTERRUPT, node,
-                       "dropped" if drop else "to restart")
+                     "dropped" if drop else "to restart")
         ended: tuple[Command, ...] = ()
         if drop:
             ended = node.commands

@@ -173,6 +173,9 @@ class Ranking:
       index re-rank the tree, which clears them (``WaitIndex.rerank``), as does
       the tree leaving working memory (``WaitIndex.forget``).
 
+    - ``Node.ranked``: the AB's full rank when no round names it, with the tree
+      keys it was assembled from; valid while the tree holds that same tuple.
+
     A ``ROUND`` key is ``(1,)`` for every AB a round does not name (the table's
     contract), so only the named ABs' are worked out.
     """

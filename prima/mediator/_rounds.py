@@ -251,7 +251,7 @@ class Selector:
         else:
             # Ranking best with some devices busy matters only to a policy that may act on
             # what runs there (blend, interrupt): only then is it worked out.
-            ranks_best = policies.acts_on_busy(x) and all(
+            ranks_best = policies.on_busy and policies.acts_on_busy(x) and all(
                 best(d) is x for d in x.sorted_devices)
             if ranks_best:
                 blend = policies.blend(x)
