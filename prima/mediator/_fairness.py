@@ -75,18 +75,23 @@ class _Share:
         return not self.intervals
 
     def total(self, now: float, window: float) -> float:
-        """Seconds spent keeping others waiting within ``[now - window, now]``."""
+        """Seconds spent keeping others waiting within ``[now - window, now]`` (it
+        prunes first, as :meth:`prune` does)."""
         start = now - window
-        self.prune(now, window)
+        intervals = self.intervals
+        while intervals and intervals[0][1] <= start:
+            intervals.popleft()
+            self.lengths.popleft()
         total: float = 0
-        if self.intervals:
+        if intervals:
             # Only the oldest interval can begin before the window (they follow one
             # another), so the others count whole: their lengths are summed in C, in
             # the order and with the roundings of summing each interval's share.
-            begin, end = self.intervals[0]
-            total = sum(islice(self.lengths, 1, None), end - max(begin, start))
-        if self.since is not None:
-            total += now - max(self.since, start)
+            begin, end = intervals[0]
+            total = sum(islice(self.lengths, 1, None), end - (start if start > begin else begin))
+        since = self.since
+        if since is not None:
+            total += now - (start if start > since else since)
         return total
 
 
@@ -111,7 +116,8 @@ class Fairness:
         takes the app's precedence at once. True if some precedence changed."""
         now = self._clock.now()
         keeping = self._keeping()
-        seen = (now, frozenset(keeping), tuple(self._apps))
+        apps = self._apps
+        seen = (now, keeping, tuple(apps))
         if seen == self._observed:
             return False
         self._observed = seen
@@ -119,43 +125,58 @@ class Fairness:
         # New records in registration order (never a set's order, which changes with
         # PYTHONHASHSEED): the order of the records is the order of the budget
         # decisions made at one instant. (An app gone keeps nobody waiting any more.)
-        for name in self._apps:
-            if name in keeping and name not in shares:
-                shares[name] = _Share()
+        if keeping:
+            for name in apps:
+                if name in keeping and name not in shares:
+                    shares[name] = _Share()
         for name, share in shares.items():
-            if name in keeping and share.since is None:
-                share.since = now
-            elif name not in keeping and share.since is not None:
+            if name in keeping:
+                if share.since is None:
+                    share.since = now
+            elif share.since is not None:
                 share.close(now)
-        return self._settle_shares(now)
+        return self._settle_shares(now) if shares else False
 
-    def _keeping(self) -> set[str]:
+    def _keeping(self) -> frozenset[str]:
         """The apps that keep another app's ready AB waiting now."""
         wm = self._wm
+        busy = wm.busy
+        top = wm.index.top
         out = set(self._holds.keeping)
         for device, counts in wm.ranked.items():
             if not counts:
                 continue
-            holder = wm.busy.get(device) or wm.index.top(device)
-            if holder is None or holder.app.name in out:
+            holder = busy.get(device) or top(device)
+            if holder is None:
                 continue
-            name, prio = holder.app.name, holder.priority
-            if any(app != name and p >= prio for app, p in counts):
-                out.add(name)
-        return out
+            name = holder.app.name
+            if name in out:
+                continue
+            prio = holder.priority
+            for app, p in counts:
+                if app != name and p >= prio:
+                    out.add(name)
+                    break
+        return frozenset(out)
 
     def _settle_shares(self, now: float) -> bool:
         changed = False
+        apps = self._apps
+        gone: list[str] = []  # (records of apps gone, or idle for a whole window)
         for name, share in self._shares.items():
-            app = self._apps.get(name)
+            app = apps.get(name)
             if app is None:
+                gone.append(name)
                 continue
-            limit, window = app.budgets.wait_share, app.budgets.wait_window
+            budgets = app.budgets
+            limit, window = budgets.wait_share, budgets.wait_window
             if share.demoted_until is not None and share.demoted_until <= now:
                 share.demoted_until = None
                 changed |= self._set(app, False, "regains its precedence")
             if share.since is None:  # keeps nobody waiting: nothing to spend, or check
                 share.check_at = None
+                if share.demoted_until is None and share.none_within(now, window):
+                    gone.append(name)
                 continue
             used = share.total(now, window)
             if used >= limit - _SLACK:  # (times summed in floating point: a share spent
@@ -167,7 +188,8 @@ class Fairness:
                                f"{window:g} s: it loses its precedence until "
                                f"t={share.demoted_until:g} s")
             share.check_at = self._clock.after(limit - used) if used < limit else None
-        self._forget_idle(now)
+        for name in gone:
+            del self._shares[name]
         return changed
 
     def _set(self, app: App, demoted: bool, detail: str) -> bool:
@@ -181,15 +203,6 @@ class Fairness:
             self._holds.regained(app)
         self._log.emit(DecisionKind.BUDGET, Rule.WAIT_SHARE, app=app.name, detail=detail)
         return True
-
-    def _forget_idle(self, now: float) -> None:
-        """Drop the records of apps gone, or idle for a whole window."""
-        gone = [name for name, s in self._shares.items()
-                if name not in self._apps or (
-                    s.since is None and s.demoted_until is None
-                    and s.none_within(now, self._apps[name].budgets.wait_window))]
-        for name in gone:
-            del self._shares[name]
 
     # ---------------------------------------------------------------- deadlines
     def next_deadline(self) -> float | None:

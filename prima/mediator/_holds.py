@@ -106,6 +106,9 @@ class Holds:
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
         self._kept: dict[AbId, str] = {}
         """ABs parked by a stream hold or block -> the holder's name."""
+        self.opened = False
+        """Some app has an open stream or block (else no AB can be held by one): what
+        :meth:`open` says, kept in step by the methods that open and close them."""
         self.keeping: dict[str, int] = {}
         """Holder's name -> how many other apps' ABs its streams and blocks park now."""
 
@@ -157,10 +160,12 @@ class Holds:
         st.devices.update(d for occupied in (wm.busy, wm.blending)
                           for d, n in occupied.items() if n.app is app)
         self._streams[app.name] = st
+        self.opened = True
 
     def close_stream(self, app: App, rule: Rule) -> None:
         """End the app's stream (if open); an armed hold is released."""
         st = self._streams.pop(app.name, None)
+        self.opened = bool(self._streams) or bool(self._blocks)
         if st is not None and st.armed:
             self._release(st.devices)
             self._log.emit(DecisionKind.RELEASE, rule, app=app.name,
@@ -171,10 +176,12 @@ class Holds:
         if app.name in self._blocks:
             raise MediationError(f"{app.name}: a block is already open")
         self._blocks[app.name] = Block(devices, watchdog, first_command, tree)
+        self.opened = True
 
     def close_block(self, app: App, rule: Rule) -> None:
         """End the app's block (if open); a reservation is released."""
         blk = self._blocks.pop(app.name, None)
+        self.opened = bool(self._streams) or bool(self._blocks)
         if blk is not None and blk.reserving:
             self._release(blk.devices)
             self._log.emit(DecisionKind.RELEASE, rule, app=app.name,
@@ -195,7 +202,10 @@ class Holds:
 
     def started(self, node: Node) -> None:
         """An AB started: a block's first AB arms its watchdog; a stream learns devices."""
-        self._channel_held.discard(node.id)
+        if self._channel_held:
+            self._channel_held.discard(node.id)
+        if not self.opened:
+            return
         app = node.app
         blk = self._blocks.get(app.name)
         if (blk is not None and not blk.started and not blk.expired
@@ -212,9 +222,10 @@ class Holds:
         a device they wait for); those still held are parked again."""
         if self._channel_held and not node.devices.isdisjoint(self._talk):
             self._wm.dirty.update(self._channel_devices)
-        parked, self._talk_parked = self._talk_parked, []
-        for n in parked:
-            self._wm.refile(n)
+        if self._talk_parked:
+            parked, self._talk_parked = self._talk_parked, []
+            for n in parked:
+                self._wm.refile(n)
 
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
@@ -276,14 +287,14 @@ class Holds:
         if rule is Rule.KEEP_CHANNEL:
             if node.id not in self._channel_held:
                 self._channel_held.add(node.id)
-                self._log.emit(DecisionKind.HOLD, rule, node, detail=f"{holder.name} is talking")
+                self._log.ab(DecisionKind.HOLD, rule, node, f"{holder.name} is talking")
             return
         box: Block | Stream | None = (self._blocks.get(holder.name) if rule is Rule.BLOCK
                                       else self._streams.get(holder.name))
         if box is None or node.id in box.held:
             return
         box.held.add(node.id)
-        self._log.emit(DecisionKind.HOLD, rule, node, detail=f"devices kept for {holder.name}")
+        self._log.ab(DecisionKind.HOLD, rule, node, f"devices kept for {holder.name}")
 
     # ----------------------------------------------------------- deadlines
     def next_deadline(self) -> float | None:

@@ -2,7 +2,9 @@
 
 Selection asks, for a device, which waiting AB that needs it ranks best
 (:mod:`._ranking`). The index answers from the parts of the rank that do not
-change every round, split by the criteria's scopes:
+change every round (the keys :class:`._ranking.Ranking` keeps on each AB and
+tree, so no key function is called to file or re-rank), split by the criteria's
+scopes:
 
 - ``head``: the NODE criteria before the first TREE criterion (priority): ABs
   with equal head keys form a *group*;
@@ -31,32 +33,20 @@ import heapq
 import itertools
 from collections.abc import Iterable
 
-from prima.mediator._ranking import CRITERIA, Criterion, Key, Scope
+from prima.mediator._ranking import Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
 
 __all__ = ["WaitIndex"]
 
-Keys = tuple[Key, ...]
+_WAITING = NodeState.WAITING
+_heappush = heapq.heappush
 
-
-def _split(criteria: tuple[Criterion, ...]) -> tuple[tuple[Criterion, ...], ...]:
-    """The head criteria, the rest (ROUND left out), and the NODE criteria of the rest."""
-    stable = [c for c in criteria if c.scope is not Scope.ROUND]
-    first_tree = next((i for i, c in enumerate(stable) if c.scope is Scope.TREE), len(stable))
-    rest = tuple(stable[first_tree:])
-    return tuple(stable[:first_tree]), rest, tuple(c for c in rest if c.scope is Scope.NODE)
-
-
-_HEAD, _REST, _NODE_REST = _split(CRITERIA)
-_NO_ROUND: tuple[int, ...] = ()
-
-
-def _keys(node: Node, criteria: tuple[Criterion, ...]) -> Keys:
-    return tuple([c.key(node, _NO_ROUND) for c in criteria])
+_NodeEntry = tuple[Keys, int, int, Node]
+"""(the AB's order keys, its id, its version when filed, the AB)."""
 
 
 class _Slot:
-    """One tree's waiting ABs in one group: a heap by tail key."""
+    """One tree's waiting ABs in one group: a heap by order keys."""
 
     __slots__ = ("tree", "group", "device", "heap", "version", "ranked_by")
 
@@ -64,7 +54,7 @@ class _Slot:
         self.tree = tree
         self.group = group
         self.device = device
-        self.heap: list[tuple[Keys, int, int, Node]] = []
+        self.heap: list[_NodeEntry] = []
         self.version = -1
         """The serial of its one live entry in its group's heap (-1: none)."""
         self.ranked_by: Node | None = None
@@ -75,7 +65,7 @@ class _Slot:
         heap = self.heap
         while heap:
             _keys_, _ab, version, node = heap[0]
-            if node.state is NodeState.WAITING and node.version == version:
+            if node.state is _WAITING and node.version == version:
                 return node
             heapq.heappop(heap)
             index.entries -= 1
@@ -108,7 +98,9 @@ class _Device:
 class WaitIndex:
     """Waiting ABs per device, ranked by the stable part of rule 4."""
 
-    def __init__(self) -> None:
+    def __init__(self, ranking: Ranking) -> None:
+        self.ranking = ranking
+        """The criteria's keys, kept on the ABs and trees (:class:`._ranking.Ranking`)."""
         self._devices: dict[str, _Device] = {}
         self._tree_slots: dict[int, dict[tuple[str, Keys], _Slot]] = {}
         """Tree id -> its live slots, by (device, group head): a few per tree."""
@@ -120,13 +112,24 @@ class WaitIndex:
     def add(self, node: Node) -> None:
         """File a waiting AB (again, after it was parked: its old entries go stale)."""
         node.version += 1
-        head = _keys(node, _HEAD)
-        order = _keys(node, _NODE_REST)
+        if node.head is None:
+            self.ranking.node_keys(node)
+        head = node.head
+        assert head is not None and node.order is not None
+        entry = (node.order, node.id, node.version, node)
+        tree = node.tree
+        devices = self._devices
         for d in node.sorted_devices:
-            slot = self._slot(d, head, node.tree)
-            heapq.heappush(slot.heap, (order, node.id, node.version, node))
+            # (``_slot``, its usual case inline: the device, group and slot exist)
+            dev = devices.get(d)
+            group = dev.groups.get(head) if dev is not None else None
+            slot = group.slots.get(tree.id) if group is not None else None
+            if slot is None:
+                slot = self._slot(d, head, tree)
+            heap = slot.heap
+            _heappush(heap, entry)
             self.entries += 1
-            if slot.top(self) is node:
+            if heap[0] is entry or slot.top(self) is node:
                 self._push_slot(slot, node)
 
     def rerank(self, tree: Tree) -> set[str]:
@@ -134,6 +137,7 @@ class WaitIndex:
 
         Returns the devices on which the tree has waiting ABs.
         """
+        tree.keys = None
         slots = self._tree_slots.get(tree.id)
         if not slots:
             return set()
@@ -148,7 +152,8 @@ class WaitIndex:
         return devices
 
     def forget(self, tree: Tree) -> None:
-        """The tree left working memory: drop its slots."""
+        """The tree left working memory: drop its slots (and its keys)."""
+        tree.keys = None
         for slot in list(self._tree_slots.get(tree.id, {}).values()):
             self._drop_slot(slot)
 
@@ -160,9 +165,19 @@ class WaitIndex:
         heap = dev.heap
         while heap:
             head, _serial, group = heap[0]
-            node = self._group_top(group)
-            if node is not None:
-                return node
+            # (the common case inline: no stale entry on the way down)
+            gheap = group.heap
+            if gheap:
+                _keys_, version, slot = gheap[0]
+                sheap = slot.heap
+                if version == slot.version and sheap:
+                    _order, _ab, nversion, node = sheap[0]
+                    if (node.state is _WAITING and node.version == nversion
+                            and node is slot.ranked_by):
+                        return node
+            found = self._group_top(group)
+            if found is not None:
+                return found
             heapq.heappop(heap)
             self.entries -= 1
             if dev.groups.get(head) is group:
@@ -194,12 +209,11 @@ class WaitIndex:
         return slot
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
-        """(Re-)rank a slot by the stable key of its best AB; its older entries go stale."""
-        slot.version = next(self._serial)  # unique: two entries never tie up to the slot
+        """(Re-)rank a slot by the stable keys of its best AB; its older entries go stale."""
+        slot.version = version = next(self._serial)  # unique: entries never tie up to the slot
         slot.ranked_by = best
-        heapq.heappush(slot.group.heap, (_keys(best, _REST), slot.version, slot))
+        _heappush(slot.group.heap, (self.ranking.slot_keys(best), version, slot))
         self.entries += 1
-
     def _drop_slot(self, slot: _Slot) -> None:
         slot.version = -1
         tid = slot.tree.id

@@ -19,10 +19,9 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
-from prima.catalog import Catalog, CommandSpec, Priority
+from prima.catalog import Catalog, CommandSpec, Param, Priority
 from prima.errors import MediationError
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
@@ -37,11 +36,11 @@ from prima.vocab import AppKind, RunningOrder
 
 __all__ = ["Intake", "Link"]
 
-Specs = list[tuple[CommandSpec, frozenset[str]]]
+Specs = list[tuple[CommandSpec, frozenset[str], Priority]]
+"""Each call's spec, the devices it occupies and its priority (what ``check`` found)."""
 
 
-@dataclass
-class Link:
+class Link(NamedTuple):
     """Where a request's root goes."""
 
     rule: Rule
@@ -52,6 +51,13 @@ class Link:
     parent_finished: bool = False
     """The root ranks as 'parent just finished'."""
     reactive_allowed: bool = True
+
+
+_NEW_TREE = Link(Rule.NEW_TREE)
+_ASAP_NEW_TREE = Link(Rule.ASAP)
+_EA = AppKind.EA
+_ASAP = RunningOrder.ASAP
+_NO_PARAMS: tuple[Param, ...] = ()
 
 
 class Intake:
@@ -73,51 +79,72 @@ class Intake:
         self.next_command: CommandId = 1
         """The id the next requested Command will get."""
         self._next_seq = 1
+        self._specs: dict[str, tuple[CommandSpec, tuple[Param, ...], Priority]] = {}
+        """Command name -> its spec, its parameters that add devices, its priority (the
+        catalog never changes: looked up once)."""
         self._recent: dict[CommandId, Command] = {}
         self._recent_q: deque[Command] = deque()
 
     # ------------------------------------------------------------------ checks
     def check(self, request: Request) -> tuple[App, Specs]:
-        """Validate a request before anything changes; the app and each call's spec/devices."""
+        """Validate a request before anything changes; the app and each call's spec,
+        devices and priority."""
         app = self._apps.get(request.app)
         if app is None:
             raise MediationError(f"unknown application {request.app!r}: register it first")
-        if not request.calls:
+        calls = request.calls
+        if not calls:
             raise MediationError(f"{request.app}: a request needs at least one Command")
         if not isinstance(request.order, RunningOrder):
             raise MediationError(f"{request.app}: unknown running order {request.order!r}")
-        needed = 1 if request.group else len(request.calls)
+        needed = 1 if request.group else len(calls)
         if app.live + needed > app.budgets.waiting:
             raise MediationError(
                 f"{request.app}: more than {app.budgets.waiting} behaviors would be waiting "
                 "or running (its waiting budget)")
         out: Specs = []
-        for call in request.calls:
-            spec = self._catalog.get(call.command)
-            if spec is None:
-                known = ", ".join(sorted(self._catalog.commands))
+        known = self._specs
+        for call in calls:
+            found = known.get(call.command)
+            if found is None:
+                found = self._spec(request, call.command)
+            spec, params, priority = found
+            extra_devices = call.extra_devices
+            if app.kind is _EA:
+                if spec.robot_specific:
+                    raise MediationError(
+                        f"{request.app}: {spec.name} is robot-specific; only the FA may use it")
+                if call.extra:
+                    raise MediationError(
+                        f"{request.app}: additional arguments to {spec.name} are FA-only")
+            if extra_devices:
+                unknown = extra_devices - self._catalog.devices
+                if unknown:
+                    raise MediationError(
+                        f"{request.app}: {spec.name} names unknown devices {sorted(unknown)}")
+            if request.group and spec.feedback and len(calls) > 1:
                 raise MediationError(
-                    f"{request.app}: unknown Command {call.command!r} (known: {known})")
-            self._check_call(app, request, spec, call.extra_devices, bool(call.extra))
-            out.append((spec, spec.devices_for(call.args) | call.extra_devices))
+                    f"{request.app}: feedback Command {spec.name} cannot be grouped into one "
+                    "AB (each loop iteration is its own AB)")
+            # (``spec.devices_for``, asked only when a parameter can add devices)
+            devices = spec.devices_for(call.args) if params else spec.devices
+            if extra_devices:
+                devices = devices | extra_devices
+            out.append((spec, devices, priority))
         return app, out
 
-    def _check_call(self, app: App, request: Request, spec: CommandSpec,
-                    extra_devices: frozenset[str], extra_args: bool) -> None:
-        if app.kind is AppKind.EA and spec.robot_specific:
+    def _spec(self, request: Request, command: str) -> tuple[CommandSpec, tuple[Param, ...],
+                                                             Priority]:
+        """A Command's spec, its parameters that add devices, and its priority, looked up
+        in the catalog once (it never changes); an unknown Command is an error."""
+        spec = self._catalog.get(command)
+        if spec is None:
+            known = ", ".join(sorted(self._catalog.commands))
             raise MediationError(
-                f"{request.app}: {spec.name} is robot-specific; only the FA may use it")
-        if app.kind is AppKind.EA and extra_args:
-            raise MediationError(
-                f"{request.app}: additional arguments to {spec.name} are FA-only")
-        unknown = extra_devices - self._catalog.devices
-        if unknown:
-            raise MediationError(
-                f"{request.app}: {spec.name} names unknown devices {sorted(unknown)}")
-        if request.group and spec.feedback and len(request.calls) > 1:
-            raise MediationError(
-                f"{request.app}: feedback Command {spec.name} cannot be grouped into one AB "
-                "(each loop iteration is its own AB)")
+                f"{request.app}: unknown Command {command!r} (known: {known})")
+        params = tuple(p for p in spec.params if p.devices) or _NO_PARAMS
+        found = self._specs[command] = (spec, params, spec.priority)
+        return found
 
     # ------------------------------------------------------------------ accept
     def accept(self, app: App, request: Request, specs: Specs,
@@ -127,37 +154,45 @@ class Intake:
         seq = self._next_seq
         self._next_seq += 1
         cid = self.next_command
-        cmds = [Command(cid + i, app, call, spec, on_interrupt=request.on_interrupt)
-                for i, (call, (spec, _d)) in enumerate(zip(request.calls, specs, strict=True))]
+        on_interrupt = request.on_interrupt
+        if len(specs) == 1:  # (one call: the usual request)
+            spec, all_devices, _prio = specs[0]
+            cmds = [Command(cid, app, request.calls[0], spec, None, on_interrupt)]
+        else:
+            cmds = [Command(cid + i, app, call, spec, None, on_interrupt)
+                    for i, (call, (spec, _d, _p)) in enumerate(
+                        zip(request.calls, specs, strict=True))]
+            all_devices = frozenset().union(*(d for _s, d, _p in specs))
         self.next_command = cid + len(cmds)
-        all_devices = (specs[0][1] if len(specs) == 1
-                       else frozenset().union(*(d for _s, d in specs)))
         link, cancelled = self._link(app, request, all_devices, now)
-        tree = link.tree if link.tree is not None else self._wm.new_tree(app)
+        wm = self._wm
+        tree = link.tree if link.tree is not None else wm.new_tree(app)
         # before its nodes are filed, so that they rank as its reaction
         if ((request.reactive or request.reaction) and link.reactive_allowed
-                and self._wm.react(tree, seq)
+                and wm.react(tree, seq)
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
         root = self._build(app, tree, request, cmds, specs, link, seq)
         app.latest = cmds[-1]
-        self._holds.requested(app, tree)
+        if self._holds.opened:  # (else no stream or block continues a tree)
+            self._holds.requested(app, tree)
+        parent = link.parent
         detail = ""
         if self._log.recording:
-            before = f"before AB{link.parent.id}" if link.parent is not None else "roots the tree"
+            before = f"before AB{parent.id}" if parent is not None else "roots the tree"
             grouped = "as one AB " if request.group else ""
             detail = f"{len(cmds)} Command(s) {grouped}{before}"
-        self._log.emit(DecisionKind.REQUEST, link.rule, root, detail=detail, request=cmds,
-                       before=link.parent.id if link.parent is not None else None)
+        self._log.requested(link.rule, root, detail, cmds,
+                            parent.id if parent is not None else None)
         if link.enter_now:
-            self._wm.enter_waiting(root, parent_finished=link.parent_finished)
-        return tuple([c.id for c in cmds]), cancelled
+            wm.enter_waiting(root, parent_finished=link.parent_finished)
+        return (cid,) if len(cmds) == 1 else tuple([c.id for c in cmds]), cancelled
 
     def _link(self, app: App, request: Request, devices: frozenset[str],
               now: float) -> tuple[Link, list[Command]]:
         cancelled: list[Command] = []
         link = self._link_follows(app, request, now) if request.follows is not None else None
-        if request.order is RunningOrder.ASAP:
+        if request.order is _ASAP:
             # A newer request wins even when it is made in an end handler: the app's
             # own waiting work on its devices is cancelled; the end-event link only
             # chooses the tree when nothing of the app was in the way.
@@ -174,22 +209,26 @@ class Intake:
         wm = self._wm
         reactive = request.reactive and link.reactive_allowed
         turns = self._turns and request.face_user
-        if request.group:
-            prio = min((s.priority for s, _d in specs), default=Priority.HIGH)
-            devices = frozenset().union(*(d for _s, d in specs))
-            root = wm.new_node(app, tree, tuple(cmds), devices, prio, reactive, seq)
-            root.turnable = turns and _turnable(root, link.parent)
-            wm.link(link.parent, root)
-            return root
         parent = link.parent
-        nodes: list[Node] = []
-        for c, (spec, devs) in zip(cmds, specs, strict=True):
-            node = wm.new_node(app, tree, (c,), devs, spec.priority, reactive and not nodes, seq)
-            node.turnable = turns and _turnable(node, parent)
+        if request.group:
+            prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
+            devices = frozenset().union(*(d for _s, d, _p in specs))
+            root = wm.new_node(app, tree, tuple(cmds), devices, prio, reactive, seq)
+            if turns:
+                root.turnable = _turnable(root, parent)
+            wm.link(parent, root)
+            return root
+        first: Node | None = None
+        for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
+            node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None, seq)
+            if turns:
+                node.turnable = _turnable(node, parent)
             wm.link(parent, node)
-            nodes.append(node)
+            if first is None:
+                first = node
             parent = node
-        return nodes[0]
+        assert first is not None
+        return first
 
     def insert_before(self, x: Node, call: Call, spec: CommandSpec, rule: Rule,
                       detail: str) -> Node:
@@ -247,7 +286,7 @@ class Intake:
             return Link(Rule.ASAP, running, running.tree, enter_now=False), cancelled
         if last is not None:
             return Link(Rule.ASAP, last, last.tree, enter_now=True), cancelled
-        return Link(Rule.ASAP), cancelled  # nothing shares a device: a new tree at once
+        return _ASAP_NEW_TREE, cancelled  # nothing shares a device: a new tree at once
 
     def _link_after_latest(self, app: App) -> Link:
         """Rule 3, after latest (with the explicit-stream exception, rule 6c)."""
@@ -257,7 +296,7 @@ class Intake:
             return Link(Rule.AFTER_LATEST, node, node.tree, enter_now=False)
         if node is not None and self._holds.continues(app, node.tree):
             return Link(Rule.STREAM, node, node.tree, enter_now=True, parent_finished=True)
-        return Link(Rule.NEW_TREE)
+        return _NEW_TREE
 
     # ------------------------------------------------------------------ ends
     def cancel(self, node: Node, rule: Rule, now: float) -> list[Command]:
@@ -278,7 +317,9 @@ class Intake:
             cmd.ended_at = now
             self._recent[cmd.id] = cmd
             self._recent_q.append(cmd)
-        self._prune(now)
+        q = self._recent_q
+        if q and q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
+            self._prune(now)
 
     def _prune(self, now: float) -> None:
         horizon = now - self._end_grace

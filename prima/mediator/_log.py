@@ -10,6 +10,8 @@ from prima.mediator._state import Command, Node
 
 __all__ = ["DecisionLog"]
 
+_new = tuple.__new__
+
 
 class DecisionLog:
     """Numbers decisions in order (``seq`` increases by one) and records them.
@@ -20,13 +22,31 @@ class DecisionLog:
     def __init__(self, clock: Clock, record: Callable[[Decision], None] | None) -> None:
         self._clock = clock
         self._record = record
+        self.recording = record is not None
+        """Someone reads the decisions (worth building a detailed text)."""
         self.count = 0
         """How many decisions were made so far."""
 
-    @property
-    def recording(self) -> bool:
-        """Someone reads the decisions (worth building a detailed text)."""
-        return self._record is not None
+    def ab(self, kind: DecisionKind, rule: Rule, node: Node, detail: str = "") -> None:
+        """Record one decision about the AB ``node`` itself (most decisions: a start, an
+        end, a suspension): :meth:`emit` for that case, with the AB's ``facts``."""
+        self.count += 1
+        if self._record is not None:
+            self._record(_new(Decision, (self._clock.now(), self.count, kind, rule, *node.facts,
+                                         detail, node.calls, None, None)))
+
+    def requested(self, rule: Rule, node: Node, detail: str, request: Sequence[Command],
+                  before: int | None) -> None:
+        """Record a request's decision (what :meth:`emit` records for ``REQUEST`` with
+        these), positional: one per request."""
+        if self._record is None or not (len(request) == 1 == len(node.commands)
+                                        and node.commands[0] is request[0]):
+            self.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=request,
+                      before=before)
+            return
+        self.count += 1  # (the request is the AB's own Command: the AB's facts)
+        self._record(_new(Decision, (self._clock.now(), self.count, DecisionKind.REQUEST, rule,
+                                     *node.facts, detail, node.calls, before, None)))
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
              app: str | None = None, command: Command | None = None,
@@ -39,31 +59,29 @@ class DecisionLog:
         if self._record is None:
             return
         now = self._clock.now()
-        # Built with positional arguments, in field order: a named tuple takes them
-        # over twice as fast as keywords, and the mediator makes one per decision.
+        # Built from a tuple in field order (``tuple.__new__``, what the named tuple's own
+        # constructor does, without its keyword handling): one per decision.
         if node is None:
-            decision = Decision(now, self.count, kind, rule, app, None, tree, None, None,
-                                (), (), False, 0, None, detail)
-            self._record(decision)
-            return
-        app = node.app.name
-        label = node.commands[0].call.label
-        if request:  # all the Commands of the request it roots
-            first = request[0]
-            decision = Decision(
-                now, self.count, kind, rule, app, node.id, node.tree.id, node.name,
-                first.id, tuple(c.id for c in request), node.sorted_devices, node.reactive,
-                node.iteration, label, detail, tuple(c.call for c in request), before,
-                precedes)
+            decision = _new(Decision, (now, self.count, kind, rule, app, None, tree, None, None,
+                                       (), (), False, 0, None, detail, (), None, None))
+        elif request:  # all the Commands of the request it roots
+            if len(request) == 1 == len(node.commands) and node.commands[0] is request[0]:
+                decision = _new(Decision, (now, self.count, kind, rule, *node.facts, detail,
+                                           node.calls, before, precedes))
+            else:
+                first = request[0]
+                decision = _new(Decision, (
+                    now, self.count, kind, rule, node.app.name, node.id, node.tree.id,
+                    node.name, first.id, tuple([c.id for c in request]), node.sorted_devices,
+                    node.reactive, node.iteration, node.commands[0].call.label, detail,
+                    tuple([c.call for c in request]), before, precedes))
         elif command is not None:  # one of its Commands
-            decision = Decision(
-                now, self.count, kind, rule, app, node.id, node.tree.id, command.spec.name,
-                command.id, (command.id,), node.sorted_devices, node.reactive,
-                node.iteration, command.call.label, detail, (command.call,), before,
-                precedes)
-        else:  # the AB itself (most decisions)
-            decision = Decision(
-                now, self.count, kind, rule, app, node.id, node.tree.id, node.name,
-                node.command_ids[0], node.command_ids, node.sorted_devices, node.reactive,
-                node.iteration, label, detail, node.calls, before, precedes)
+            decision = _new(Decision, (
+                now, self.count, kind, rule, node.app.name, node.id, node.tree.id,
+                command.spec.name, command.id, (command.id,), node.sorted_devices,
+                node.reactive, node.iteration, command.call.label, detail, (command.call,),
+                before, precedes))
+        else:  # the AB itself
+            decision = _new(Decision, (now, self.count, kind, rule, *node.facts, detail,
+                                       node.calls, before, precedes))
         self._record(decision)

@@ -237,19 +237,31 @@ class Mediator:
         try:
             callback(app.listener)
         except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
-            if app.alive:
-                self._log.emit(DecisionKind.FAILURE, Rule.APP_FAILURE, app=app.name,
-                               detail=f"{what}: {type(exc).__name__}: {exc}")
-                self._unload(app, Rule.APP_FAILURE)
+            self._failed(app, what, exc)
+
+    def _failed(self, app: App, what: str, exc: Exception) -> None:
+        """An app's listener raised: the app is removed (once)."""
+        if app.alive:
+            self._log.emit(DecisionKind.FAILURE, Rule.APP_FAILURE, app=app.name,
+                           detail=f"{what}: {type(exc).__name__}: {exc}")
+            self._unload(app, Rule.APP_FAILURE)
 
     # ================================================================ requests
     def submit(self, request: Request) -> tuple[CommandId, ...]:
         """Accept a request; returns one Command id per Call (MISSION.md rule 3)."""
         app, specs = self._intake.check(request)
-        with self._operation():
+        # (what ``with self._operation():`` does, written out: the hottest operation)
+        outer = self._depth == 0 and not self._settling
+        self._depth += 1
+        try:
             ids, cancelled = self._intake.accept(app, request, specs, self._clock.now())
-            self._tell_cancelled(cancelled)
-            return ids
+            if cancelled:
+                self._tell_cancelled(cancelled)
+        finally:
+            self._depth -= 1
+        if outer:
+            self._settle()
+        return ids
 
     def _interrupted(self, node: Node, outcome: Outcome) -> None:
         """A cut AB ended at a word boundary: start it again from its beginning, in its
@@ -263,8 +275,8 @@ class Mediator:
         app = node.app
         # (an unloaded app's AB still running is cut for good: nobody would restart it)
         drop = not app.alive or any(c.on_interrupt is OnInterrupt.DROP for c in node.commands)
-        self._log.emit(DecisionKind.END, Rule.INTERRUPT, node,
-                       detail="dropped" if drop else "to restart")
+        self._log.ab(DecisionKind.END, Rule.INTERRUPT, node,
+                     "dropped" if drop else "to restart")
         ended: tuple[Command, ...] = ()
         if drop:
             ended = node.commands
@@ -317,8 +329,15 @@ class Mediator:
         node = self._wm.nodes.get(ab_id)
         if node is None or node.state is not NodeState.RUNNING:
             raise MediationError(f"AB{ab_id} is not running")
-        with self._operation():
+        # (what ``with self._operation():`` does, written out: the other hot operation)
+        outer = self._depth == 0 and not self._settling
+        self._depth += 1
+        try:
             self._end(node, outcome)
+        finally:
+            self._depth -= 1
+        if outer:
+            self._settle()
 
     def _end(self, node: Node, outcome: Outcome) -> None:
         if node.cutting and outcome.values.get("interrupted") is True \
@@ -332,7 +351,7 @@ class Mediator:
         detail = ""
         if node.feedback:
             detail = "terminal" if outcome.terminal else "not terminal"
-        self._log.emit(DecisionKind.END, Rule.COMPLETED, node, detail=detail)
+        self._log.ab(DecisionKind.END, Rule.COMPLETED, node, detail)
         app = node.app
         cmd0 = node.commands[0]
         ended: tuple[Command, ...] = ()
@@ -355,8 +374,11 @@ class Mediator:
         if cancelled is not None:
             self._tell_cancelled([cancelled])
         for cmd in ended:
-            if not cmd.internal:
-                self._tell(app, cmd.id, outcome)
+            if not cmd.internal and app.alive:
+                try:  # (``_tell``, written out)
+                    app.listener.command_ended(cmd.id, outcome)
+                except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
+                    self._failed(app, "command_ended", exc)
 
     def _next_iteration(self, node: Node, children: list[Node]) -> Node:
         """Insert a feedback Command's next iteration between ``node`` and its children."""

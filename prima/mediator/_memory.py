@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from prima.catalog import Priority
 from prima.mediator._index import WaitIndex
 from prima.mediator._interface import AbId, TreeId
+from prima.mediator._ranking import Ranking
 from prima.mediator._state import App, Command, Node, NodeState, Tree
 
 __all__ = ["WorkingMemory"]
@@ -33,7 +34,9 @@ class WorkingMemory:
         """Device -> the running AB that occupies it."""
         self.blending: dict[str, Node] = {}
         """Device -> the running AB blended over its occupant (the blend policy)."""
-        self.index = WaitIndex()
+        self.index = WaitIndex(Ranking())
+        """The waiting ABs by device, ranked by rule 4 as ``_ranking.CRITERIA`` says
+        when the mediator is made."""
         self.waiting = 0
         """How many ABs are on the waiting list."""
         self.new: list[Node] = []
@@ -91,24 +94,49 @@ class WorkingMemory:
 
     # ------------------------------------------------------------------ changes
     def _rank(self, node: Node, delta: int) -> None:
-        """Count a waiting AB in (or out of) its devices' rankings."""
+        """Count a waiting AB in (``delta`` 1) or out of (-1) its devices' rankings."""
+        if delta > 0:
+            self._rank_in(node)
+        else:
+            self._rank_out(node)
+
+    def _rank_in(self, node: Node) -> None:
+        """Count a waiting AB in its devices' rankings (``ranked``, ``on``)."""
         key = (node.app.name, node.priority)
         tree = node.tree
+        ranked = self.ranked
+        on = self.on
         for d in node.sorted_devices:
-            counts = self.ranked.setdefault(d, {})
-            n = counts.get(key, 0) + delta
+            counts = ranked.get(d)
+            if counts is None:
+                counts = ranked[d] = {}
+            counts[key] = counts.get(key, 0) + 1
+            trees = on.get(d)
+            if trees is None:
+                trees = on[d] = {}
+            nodes = trees.get(tree)
+            if nodes is None:
+                nodes = trees[tree] = {}
+            nodes[node.id] = node
+
+    def _rank_out(self, node: Node) -> None:
+        """Count a waiting AB out of its devices' rankings (it was counted in)."""
+        key = (node.app.name, node.priority)
+        tree = node.tree
+        ranked = self.ranked
+        on = self.on
+        for d in node.sorted_devices:
+            counts = ranked[d]
+            n = counts[key] - 1
             if n:
                 counts[key] = n
             else:
                 del counts[key]
-            trees = self.on.setdefault(d, {})
-            if delta > 0:
-                trees.setdefault(tree, {})[node.id] = node
-            else:
-                ids = trees[tree]
-                del ids[node.id]
-                if not ids:
-                    del trees[tree]
+            trees = on[d]
+            nodes = trees[tree]
+            del nodes[node.id]
+            if not nodes:
+                del trees[tree]
 
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
@@ -116,7 +144,7 @@ class WorkingMemory:
         node.app.active += 1
         self.waiting += 1
         self.index.add(node)
-        self._rank(node, 1)
+        self._rank_in(node)
         self.new.append(node)
         if parent_finished:
             self.pjf[node.id] = node
@@ -125,7 +153,7 @@ class WorkingMemory:
         """A waiting, unparked AB goes back to pending: an AB was put before it."""
         node.state = NodeState.PENDING
         node.version += 1
-        self._rank(node, -1)
+        self._rank_out(node)
         self.waiting -= 1
         node.app.active -= 1
         self.pjf.pop(node.id, None)
@@ -140,7 +168,7 @@ class WorkingMemory:
             node.tree.parked -= 1
         if node.state is NodeState.WAITING:
             self.index.add(node)
-            self._rank(node, 1)
+            self._rank_in(node)
             self.dirty.update(node.devices)
 
     def park(self, node: Node, holder: App) -> None:
@@ -148,37 +176,45 @@ class WorkingMemory:
         node.parked = holder
         node.tree.parked += 1
         node.version += 1
-        self._rank(node, -1)
+        self._rank_out(node)
         self.dirty.update(node.devices)
 
     def start(self, node: Node) -> None:
         node.state = NodeState.RUNNING
-        node.tree.started = True
-        self._rank(node, -1)
+        tree = node.tree
+        tree.started = True
+        self._rank_out(node)
         self.waiting -= 1
+        busy = self.busy
+        blended = node.blended
         for d in node.sorted_devices:
-            if d in node.blended:
+            if blended and d in blended:
                 self.blending[d] = node  # the AB it blends over keeps the device
             else:
-                self.busy[d] = node
-        node.tree.running += 1
+                busy[d] = node
+        tree.running += 1
 
     def end(self, node: Node, now: float) -> list[Node]:
         """A running AB ended: free its devices; returns its children (now orphans)."""
         node.state = NodeState.DONE
+        busy = self.busy
+        blending = self.blending
         for d in node.sorted_devices:
-            if self.busy.get(d) is node:
-                local = self.blending.pop(d, None)
+            if busy.get(d) is node:
+                local = blending.pop(d, None) if blending else None
                 if local is None:
-                    del self.busy[d]
+                    del busy[d]
                 else:  # the AB blended over it keeps the device now
-                    self.busy[d] = local
+                    busy[d] = local
                     local.blended = local.blended - {d}
-            elif self.blending.get(d) is node:
-                del self.blending[d]
+            elif blending and blending.get(d) is node:
+                del blending[d]
         self.dirty.update(node.devices)
         node.tree.running -= 1
-        self._inactive(node.app, now)
+        app = node.app
+        app.active -= 1  # (``_inactive``)
+        if app.active == 0:
+            app.idle_since = now
         children = node.children
         node.children = []
         return children
@@ -190,7 +226,7 @@ class WorkingMemory:
         node.children = []
         if was_waiting:
             if node.parked is None:
-                self._rank(node, -1)
+                self._rank_out(node)
             self.waiting -= 1
             self.dirty.update(node.devices)
             self._inactive(node.app, now)
@@ -220,11 +256,11 @@ class WorkingMemory:
         if tree.live == 0:
             self.trees.pop(tree.id, None)
             tree.app.trees.pop(tree.id, None)
-            self.index.forget(tree)
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
                 tree.started = False  # a request joining it takes the floor anew (7.2)
+            self.index.forget(tree)
 
     @staticmethod
     def _inactive(app: App, now: float) -> None:

@@ -57,6 +57,11 @@ class Policies:
             c.interruptible for c in catalog.commands.values())
         """The interrupt policy is on and the catalog has Commands it may cut: else
         it never acts (:meth:`cuttable` is false for every AB)."""
+        self._blends = config.blend and bool(catalog.blends)
+        """The blend policy is on and the catalog declares blends."""
+        self.on_busy = self._blends or self._cuts
+        """Some policy may act on busy devices for some AB (:meth:`acts_on_busy` is
+        false for every AB otherwise)."""
 
     def suspending(self, tree: Tree) -> None:
         """A tree is suspended: remember where the robot is (restore-state)."""
@@ -136,8 +141,7 @@ class Policies:
     def acts_on_busy(self, x: Node) -> bool:
         """Whether a policy may act for ``x`` on busy devices: share them (blend) or
         cut what runs there (interrupt, for a reaction's AB)."""
-        return (self._config.blend and bool(self._catalog.blends)) or (
-            self._cuts and x.tree.reaction is not None)
+        return self._blends or (self._cuts and x.tree.reaction is not None)
 
     def blend(self, x: Node) -> tuple[frozenset[str], bool] | None:
         """The blend policy: the busy devices the ready ``x`` may share with what runs
@@ -179,8 +183,8 @@ class Policies:
         for y in running:
             if not y.cutting and self._driver.cut(y.id):
                 y.cutting = True
-                self._log.emit(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
-                               detail=f"for {x.app.name}'s reaction (AB{x.id})")
+                self._log.ab(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
+                             f"for {x.app.name}'s reaction (AB{x.id})")
 
     def cuttable(self, y: Node, x: Node) -> bool:
         if y.app is x.app or not preempts(x, y):

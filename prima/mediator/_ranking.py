@@ -15,21 +15,31 @@ which is all the index needs to know:
   its ABs;
 - ``ROUND``: true for one selection round only (parent just finished). Such a
   key must be ``(0,)`` for the ABs the round names and ``(1,)`` for all others.
+
+The mediator does not call every key function each time it compares two ABs:
+a :class:`Ranking` (one per mediator, built from :data:`CRITERIA` when the
+mediator is made) keeps each AB's ``NODE`` keys on the AB, worked out once when
+it first enters the waiting list, and each tree's ``TREE`` keys on the tree,
+worked out again only after they may have changed; it assembles ranks from
+those parts, in the table's order.
 """
 
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
+from operator import itemgetter
 
 from prima.mediator._decisions import Rule
-from prima.mediator._state import Node
+from prima.mediator._state import Node, Tree
 
-__all__ = ["CRITERIA", "Criterion", "Key", "Rank", "Scope", "preempts", "rank", "separating_rule"]
+__all__ = ["CRITERIA", "Criterion", "Key", "Keys", "Rank", "Ranking", "Scope", "preempts",
+           "rank", "separating_rule"]
 
 Key = tuple[int, ...]
-Rank = tuple[Key, ...]
+Keys = tuple[Key, ...]
+Rank = Keys
 
 
 class Scope(str, enum.Enum):
@@ -38,7 +48,8 @@ class Scope(str, enum.Enum):
     NODE = "node"
     """Never: fixed when the AB enters the waiting list."""
     TREE = "tree"
-    """When the AB's tree or application changes (suspended, resumed, demoted)."""
+    """When the AB's tree or application changes (suspended, resumed, demoted). The
+    key is the same for every AB of a tree."""
     ROUND = "round"
     """Every selection round (the ABs whose parent just finished)."""
 
@@ -126,3 +137,127 @@ def separating_rule(winner: Node, loser: Node, pjf: Collection[int]) -> Rule:
         if key(winner, pjf) != key(loser, pjf):
             return criterion.rule
     return Rule.OLDEST
+
+
+def _arrange(parts: Sequence[int], order: Sequence[int]) -> Callable[[Keys], Keys] | None:
+    """How to put keys concatenated as ``parts`` (criterion positions, in the order
+    the concatenation holds them) in the order ``order``; None if they already are."""
+    perm = [parts.index(i) for i in order]
+    if perm == list(range(len(parts))):
+        return None
+    if len(perm) == 1:
+        only = perm[0]
+        return lambda keys: (keys[only],)
+    getter = itemgetter(*perm)
+    return lambda keys: getter(keys)
+
+
+class Ranking:
+    """Rule 4 worked out from a criteria table, from keys kept on the ABs and trees.
+
+    The table's criteria fall in four parts, by scope and place:
+
+    - *head*: the ``NODE`` criteria before the first ``TREE`` one (priority);
+    - *tree*: the ``TREE`` criteria;
+    - *round*: the ``ROUND`` criteria;
+    - *order*: the ``NODE`` criteria after the first ``TREE`` one (oldest).
+
+    Caches, and the invariants they keep:
+
+    - ``Node.head`` and ``Node.order``: the AB's head and order keys, worked out by
+      :meth:`node_keys` when the AB first enters the waiting list (None before);
+      ``NODE`` keys never change after that.
+    - ``Tree.keys``: the tree's ``TREE`` keys, worked out by :meth:`tree_keys` when
+      first asked; None when they may have changed. Whatever changes what a
+      ``TREE`` key reads (suspension, reaction, the app's precedence) has the
+      index re-rank the tree, which clears them (``WaitIndex.rerank``), as does
+      the tree leaving working memory (``WaitIndex.forget``).
+
+    - ``Node.ranked``: the AB's full rank when no round names it, with the tree
+      keys it was assembled from; valid while the tree holds that same tuple.
+
+    A ``ROUND`` key is ``(1,)`` for every AB a round does not name (the table's
+    contract), so only the named ABs' are worked out.
+    """
+
+    def __init__(self, criteria: Sequence[Criterion] | None = None) -> None:
+        table = tuple(CRITERIA if criteria is None else criteria)
+        self.criteria = table
+        self.rules = tuple(c.rule for c in table)
+        """Each criterion's rule, in the table's order (a rank's positions)."""
+        first_tree = next((i for i, c in enumerate(table) if c.scope is Scope.TREE),
+                          len(table))
+        node = [i for i, c in enumerate(table) if c.scope is Scope.NODE]
+        head = [i for i in node if i < first_tree]
+        order = [i for i in node if i > first_tree]
+        tree = [i for i, c in enumerate(table) if c.scope is Scope.TREE]
+        rnd = [i for i, c in enumerate(table) if c.scope is Scope.ROUND]
+        self._head = tuple(table[i].key for i in head)
+        self._order = tuple(table[i].key for i in order)
+        self._tree = tuple(table[i].key for i in tree)
+        self._round = tuple(table[i].key for i in rnd)
+        self._not_named: Keys = ((1,),) * len(rnd)
+        # A rank is head + tree + round + order keys, put in the table's order.
+        self._full = _arrange(head + tree + rnd + order, range(len(table)))
+        # The index ranks a tree's slot by its tree + order keys, in the table's order.
+        self._slot = _arrange(tree + order, sorted(tree + order))
+
+    # ------------------------------------------------------------------ caches
+    def node_keys(self, node: Node) -> None:
+        """Work out the AB's NODE keys (when it first enters the waiting list)."""
+        none: tuple[int, ...] = ()
+        node.head = tuple([key(node, none) for key in self._head])
+        node.order = tuple([key(node, none) for key in self._order])
+
+    def tree_keys(self, node: Node) -> Keys:
+        """The TREE keys of the AB's tree (kept on the tree until they may change)."""
+        tree: Tree = node.tree
+        keys = tree.keys
+        if keys is None:
+            none: tuple[int, ...] = ()
+            keys = tree.keys = tuple([key(node, none) for key in self._tree])
+        return keys
+
+    # ------------------------------------------------------------------ ranks
+    def slot_keys(self, node: Node) -> Keys:
+        """What the index ranks the AB's tree by within its head group (the stable
+        keys after the head: tree and order, in the table's order)."""
+        tree = node.tree.keys
+        if tree is None:
+            tree = self.tree_keys(node)
+        keys = tree + node.order  # type: ignore[operator]
+        return keys if self._slot is None else self._slot(keys)
+
+    def rank(self, node: Node, pjf: Collection[int]) -> Rank:
+        """The AB's full rank; ``pjf`` holds the ids of the ABs the round names.
+
+        The rank of an AB the round does not name is kept on it (``Node.ranked``),
+        with the tree keys it was assembled from: while its tree keeps those same
+        keys (the same tuple), it is still its rank.
+        """
+        tree = node.tree.keys
+        if tree is None:
+            tree = self.tree_keys(node)
+        named = node.id in pjf
+        if not named:
+            kept = node.ranked
+            if kept is not None and kept[0] is tree:
+                return kept[1]
+        if node.head is None:
+            self.node_keys(node)
+        rnd = self._not_named
+        if named:
+            rnd = tuple([key(node, pjf) for key in self._round])
+        keys = node.head + tree + rnd + node.order  # type: ignore[operator]
+        if self._full is not None:
+            keys = self._full(keys)
+        if not named:
+            node.ranked = (tree, keys)
+        return keys
+
+    def separating(self, winner: Rank, loser: Rank) -> Rule:
+        """The rule of the first criterion on which two ranks differ (the winner's)."""
+        for rule, a, b in zip(self.rules, winner, loser, strict=True):
+            if a != b:
+                return rule
+        return Rule.OLDEST

@@ -16,7 +16,8 @@ is suspended; when an AB of a suspended tree starts, the tree resumes.
 from __future__ import annotations
 
 import heapq
-from collections.abc import Callable, Iterable
+from types import MappingProxyType
+from collections.abc import Callable, Mapping, Set
 
 from prima.catalog import Priority
 from prima.mediator._decisions import DecisionKind, Rule
@@ -26,10 +27,16 @@ from prima.mediator._interface import AbId, AtomicBehavior, Clock, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._policies import Policies
-from prima.mediator._ranking import Rank, rank, separating_rule
+from prima.mediator._ranking import Rank
 from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
+
+_WAITING = NodeState.WAITING
+_LOW = Priority.LOW
+_NO_DEVICES: frozenset[str] = frozenset()
+_NO_NODES: list[Node] = []  # (never changed)
+_NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
 
 
 def atomic_behavior(node: Node) -> AtomicBehavior:
@@ -45,28 +52,43 @@ class _Round:
 
     Parent-finished lasts one round, so it is not in the index: each device's
     parent-finished ABs are heaped here (built on first need), and a device's
-    best AB is the better of the index's answer and this heap's top.
+    best AB is the better of the index's answer and this heap's top. A round
+    that names no AB ranks as the index does: the selector keeps one such view.
     """
 
-    def __init__(self, pjf: dict[AbId, Node], index: WaitIndex) -> None:
+    __slots__ = ("pjf", "best", "_index", "_ranking", "_heaps", "_named")
+
+    def __init__(self, pjf: Mapping[AbId, Node], index: WaitIndex) -> None:
         self.pjf = pjf
         self._index = index
+        self._ranking = index.ranking
         self._heaps: dict[str, list[tuple[Rank, Node]]] | None = None
-        self._ranks: dict[AbId, Rank] = {}
+        self._named: dict[AbId, Rank] = {}
+        """The ranks of the ABs the round names, worked out once per round (the others'
+        are kept on the ABs)."""
+        self.best: Callable[[str], Node | None] = self._best if pjf else index.top
+        """The best-ranked waiting AB that needs a device, or None (the index's own
+        answer when the round names no AB)."""
 
     def rank(self, node: Node) -> Rank:
-        """The AB's rank, worked out once per round: no key changes within a round
-        (trees are suspended or resumed, and apps demoted, between rounds)."""
-        r = self._ranks.get(node.id)
-        if r is None:
-            r = self._ranks[node.id] = rank(node, self.pjf)
-        return r
+        """The AB's rank (no key changes within a round: trees are suspended or resumed,
+        and apps demoted, between rounds)."""
+        pjf = self.pjf
+        if node.id in pjf:
+            r = self._named.get(node.id)
+            if r is None:
+                r = self._named[node.id] = self._ranking.rank(node, pjf)
+            return r
+        return self._ranking.rank(node, pjf)
 
-    def best(self, device: str) -> Node | None:
-        """The best-ranked waiting AB that needs ``device``, or None."""
+    def separating(self, winner: Node, loser: Node) -> Rule:
+        """The first criterion on which ``winner`` beats ``loser``: what a start names."""
+        return self._ranking.separating(self.rank(winner), self.rank(loser))
+
+    def _best(self, device: str) -> Node | None:
+        """:attr:`best` when the round names ABs: the better of the index's answer and
+        the best of the named ABs that need ``device``."""
         top = self._index.top(device)
-        if not self.pjf:
-            return top
         finished = self._finished_top(device)
         if finished is None or finished is top:
             return top
@@ -79,7 +101,7 @@ class _Round:
         if heaps is None:
             heaps = self._heaps = {}
             for n in self.pjf.values():
-                if n.state is NodeState.WAITING:
+                if n.state is _WAITING:
                     for d in n.sorted_devices:
                         heaps.setdefault(d, []).append((self.rank(n), n))
             for heap in heaps.values():
@@ -87,7 +109,7 @@ class _Round:
         found = heaps.get(device)
         while found:
             node = found[0][1]
-            if node.state is NodeState.WAITING and node.parked is None:
+            if node.state is _WAITING and node.parked is None:
                 return node
             heapq.heappop(found)
         return None
@@ -110,34 +132,58 @@ class Selector:
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
+        self._plain = _Round(_NONE_NAMED, wm.index)
+        """The view of every round that names no AB (it keeps nothing of a round)."""
 
     def settle(self) -> None:
         """Run rounds until nothing more can start."""
         wm = self._wm
+        holds = self._holds
+        start = self._driver.start
         while True:
-            self._holds.update()
+            if holds.opened:  # (else there is no stream to arm or let lapse)
+                holds.update()
             if not (wm.new or wm.dirty or wm.pjf):
                 break
             for node in self.round():
-                self._driver.start(atomic_behavior(node))
+                start(AtomicBehavior(node.id, node.app.name, node.tree.id, node.calls,
+                                     node.command_ids, node.devices, node.iteration,
+                                     node.reactive, node.blended))  # (atomic_behavior)
         wm.maybe_compact()
 
     def round(self) -> list[Node]:
         """One round: start every AB that can start now; returns them."""
         wm = self._wm
-        pjf, wm.pjf = wm.pjf, {}
-        new, wm.new = wm.new, []
-        dirty, wm.dirty = wm.dirty, set()
-        view = _Round(pjf, wm.index)
+        # What the round looks at is taken from working memory, which collects anew
+        # for the next round (what is empty stays there: nothing to take).
+        pjf: Mapping[AbId, Node] = wm.pjf
+        if pjf:
+            wm.pjf = {}
+            view = _Round(pjf, wm.index)
+        else:
+            pjf = _NONE_NAMED
+            view = self._plain
+        new = wm.new
+        if new:
+            wm.new = []
+        else:
+            new = _NO_NODES
+        dirty: Set[str] = wm.dirty
+        if dirty:
+            wm.dirty = set()
+        else:
+            dirty = _NO_DEVICES
         started: list[Node] = []
         later: list[tuple[bool, Tree]] = []
-        overrun: dict[str, App] = {}
+        overrun: dict[str, App] | None = None
         for x in self._candidates(new, dirty, view):
             # (an earlier start of this round may have parked it: a block took force)
-            if x.state is NodeState.WAITING and x.parked is None and self._startable(x, view):
+            if x.state is _WAITING and x.parked is None and self._startable(x, view):
                 if self._counted(x.app):
                     self._start(x, view, started, later)
                 else:
+                    if overrun is None:
+                        overrun = {}
                     overrun[x.app.name] = x.app
         for is_suspend, tree in later:
             if is_suspend:
@@ -145,13 +191,13 @@ class Selector:
                     self._policies.suspending(tree)
             else:
                 wm.resume(tree)
-                if self._holds.open():
+                if self._holds.opened:
                     self._holds.unpark_all()  # a stream under way again: no hold keeps it
         # "Parent just finished" lasts one round: others may now rank above.
         for n in pjf.values():
-            if n.state is NodeState.WAITING:
+            if n.state is _WAITING:
                 wm.dirty.update(n.devices)
-        for app in overrun.values():
+        for app in overrun.values() if overrun is not None else ():
             self._overrun(app, f"started {app.budgets.starts_per_instant} atomic behaviors at "
                                f"t={self._instant:g} s and asked for more (Commands that take "
                                "no time, requested again and again?)")
@@ -170,11 +216,14 @@ class Selector:
         return True
 
     @staticmethod
-    def _candidates(new: Iterable[Node], dirty: set[str], view: _Round) -> list[Node]:
+    def _candidates(new: list[Node], dirty: Set[str], view: _Round) -> list[Node]:
         """What may start: ABs new on the waiting list, the best on each dirty device."""
-        cands: dict[int, Node] = {n.id: n for n in new if n.state is NodeState.WAITING}
-        for d in sorted(dirty):
-            b = view.best(d)
+        if not dirty and len(new) == 1:  # (one request, one AB: nothing to order)
+            return new if new[0].state is _WAITING else []
+        cands: dict[int, Node] = {n.id: n for n in new if n.state is _WAITING}
+        best = view.best
+        for d in sorted(dirty) if len(dirty) > 1 else dirty:
+            b = best(d)
             if b is not None:
                 cands[b.id] = b
         order = list(cands.values())
@@ -184,27 +233,39 @@ class Selector:
 
     def _startable(self, x: Node, view: _Round) -> bool:
         holds = self._holds
-        held = holds.holder(x) if holds.open() or x.priority is Priority.LOW else None
+        held = holds.holder(x) if holds.opened or x.priority is _LOW else None
         busy = self._wm.busy
-        ready = all(d not in busy and view.best(d) is x for d in x.sorted_devices)
-        # Ranking best with some devices busy matters only to a policy that may act on
-        # what runs there (blend, interrupt): only then is it worked out.
-        best = ready or (self._policies.acts_on_busy(x)
-                         and all(view.best(d) is x for d in x.sorted_devices))
-        x.blended = frozenset()
-        if best and not ready:
-            blend = self._policies.blend(x)
-            if blend is not None:
-                (x.blended, bounded), ready = blend, True
-                if held is not None and held[0] is Rule.KEEP_CHANNEL and bounded:
-                    held = None  # a move blended with a local motion keeps within the
-                    # blend's bound of the user: it does not break the channel
-        if held is None:
-            if ready and self._policies.prepare(x):
-                return False  # it waits for the policy's AB put before it
-            if best and not ready and x.tree.reaction is not None:
-                self._policies.cut(x)
-            return ready
+        best = view.best
+        ready = True
+        for d in x.sorted_devices:
+            if d in busy or best(d) is not x:
+                ready = False
+                break
+        x.blended = _NO_DEVICES
+        policies = self._policies
+        if ready:
+            if held is None:
+                # False if it waits for a policy's AB put before it (what ``prepare`` looks
+                # at first, looked at here: most ABs need none)
+                return not ((x.turnable or x.tree.pose is not None) and policies.prepare(x))
+        else:
+            # Ranking best with some devices busy matters only to a policy that may act on
+            # what runs there (blend, interrupt): only then is it worked out.
+            ranks_best = policies.on_busy and policies.acts_on_busy(x) and all(
+                best(d) is x for d in x.sorted_devices)
+            if ranks_best:
+                blend = policies.blend(x)
+                if blend is not None:
+                    (x.blended, bounded), ready = blend, True
+                    if held is not None and held[0] is Rule.KEEP_CHANNEL and bounded:
+                        held = None  # a move blended with a local motion keeps within the
+                        # blend's bound of the user: it does not break the channel
+            if held is None:
+                if ready and policies.prepare(x):
+                    return False  # it waits for the policy's AB put before it
+                if ranks_best and not ready and x.tree.reaction is not None:
+                    policies.cut(x)
+                return ready
         # Held by another app's block, stream hold or talk: out of the ranking at
         # once, so it reserves nothing meanwhile. The channel rule is noted only
         # when the talk is what keeps it (its devices are free and it ranks best).
@@ -225,8 +286,12 @@ class Selector:
         self._wm.start(x)
         started.append(x)
         # Who did it beat? The best remaining waiting AB on each of its devices.
-        losers = [b for d in x.sorted_devices if (b := view.best(d)) is not None]
-        rule = Rule.FREE_DEVICES
+        best = view.best
+        losers = []
+        for d in x.sorted_devices:
+            b = best(d)
+            if b is not None:
+                losers.append(b)
         if x.blended:
             rule = Rule.BLEND
         elif x.restarts is not None:
@@ -235,13 +300,17 @@ class Selector:
             rule = x.commands[0].internal
         elif losers:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
-            rule = separating_rule(x, top, view.pjf)
-        self._log.emit(DecisionKind.START, rule, x, detail=self._over(x))
+            rule = view.separating(x, top)
+        else:
+            rule = Rule.FREE_DEVICES
+        log = self._log
+        log.ab(DecisionKind.START, rule, x, self._over(x) if x.blended else "")
         self._holds.started(x)  # a block it starts takes force: what it holds steps aside
         if x.tree.suspended is not None:
-            self._log.emit(DecisionKind.RESUME, rule, x, detail="resumed from the suspended IU")
+            log.ab(DecisionKind.RESUME, rule, x, "resumed from the suspended IU")
             later.append((False, x.tree))
-        self._suspend_losers(x, losers, rule, started, later)
+        if losers:
+            self._suspend_losers(x, losers, rule, started, later)
 
     def _suspend_losers(self, x: Node, losers: list[Node], rule: Rule, started: list[Node],
                         later: list[tuple[bool, Tree]]) -> None:
@@ -255,6 +324,6 @@ class Selector:
             # "Ready": it lost only to this round's starts, not to ABs already running.
             ready = all(busy.get(d) is None or busy[d] in started for d in loser.devices)
             if ready and self._holds.holder(loser) is None:
-                self._log.emit(DecisionKind.SUSPEND, rule, loser,
-                               detail=f"lost to AB{x.id} ({x.app.name})")
+                self._log.ab(DecisionKind.SUSPEND, rule, loser,
+                             f"lost to AB{x.id} ({x.app.name})")
                 later.append((True, tree))

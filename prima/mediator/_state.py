@@ -109,8 +109,8 @@ class Command:
 class Tree:
     """One AB tree (one Communication Stream)."""
 
-    __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "version", "reaction",
-                 "started", "pose", "devices", "parked")
+    __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
+                 "started", "pose", "devices", "parked", "keys")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -126,8 +126,10 @@ class Tree:
         """Device -> how many of its nodes in working memory need it."""
         self.parked = 0
         """How many of its nodes in working memory are parked (out of the ranking)."""
-        self.version = 0
-        """Bumped whenever the waiting index must re-rank the tree (suspend, resume)."""
+        self.keys: tuple[tuple[int, ...], ...] | None = None
+        """Its keys under the TREE ranking criteria, kept by ``_ranking.Ranking``;
+        None when they may have changed (the waiting index clears them whenever it
+        re-ranks or forgets the tree)."""
         self.reaction: int | None = None
         """The sequence number of the reaction it belongs to (MISSION.md 7.1: a reaction
         takes over as a stream), larger is later; None if it is no reaction."""
@@ -138,6 +140,8 @@ class Tree:
         policy has put its return before the stream's next AB (or found none needed)."""
 
 
+_PENDING = NodeState.PENDING
+_NO_DEVICES: frozenset[str] = frozenset()
 _SORTED: dict[frozenset[str], tuple[str, ...]] = {}
 
 
@@ -157,7 +161,7 @@ class Node:
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
-                 "restarts", "blended")
+                 "restarts", "blended", "head", "order", "ranked", "facts")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -167,19 +171,27 @@ class Node:
         self.tree = tree
         self.commands = commands
         self.devices = devices
-        self.sorted_devices = _sorted(devices)
+        self.sorted_devices = _SORTED.get(devices) or _sorted(devices)
         self.priority = priority
         self.reactive = reactive
         self.iteration = iteration
         self.parent: AbId | None = None
         """The before node's id (kept as an id so finished nodes can be freed)."""
         self.children: list[Node] = []
-        self.state = NodeState.PENDING
+        self.state = _PENDING
         self.seq = seq
         """The request's sequence number: smaller is older."""
         self.version = 0
         """Bumped whenever its waiting-index entries go stale."""
-        self.blended: frozenset[str] = frozenset()
+        self.head: tuple[tuple[int, ...], ...] | None = None
+        self.order: tuple[tuple[int, ...], ...] | None = None
+        """Its keys under the NODE ranking criteria before and after the first TREE
+        one, worked out by ``_ranking.Ranking`` when it first enters the waiting
+        list (None before): they never change after that."""
+        self.ranked: tuple[object, tuple[tuple[int, ...], ...]] | None = None
+        """Its full rank when no round names it, with the tree keys it was worked out
+        from (``_ranking.Ranking.rank`` keeps it: valid while the tree keeps them)."""
+        self.blended: frozenset[str] = _NO_DEVICES
         """Devices it shares with another running AB (the blend policy): held by that
         one, not by this one."""
         self.cutting = False
@@ -191,11 +203,18 @@ class Node:
         mediator turn the robot to the user first (the connect-channel policy)."""
         self.parked: App | None = None
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
-        self.calls: tuple[Call, ...] = tuple([c.call for c in commands])
-        self.command_ids: tuple[CommandId, ...] = tuple([c.id for c in commands])
+        first = commands[0]
         if len(commands) == 1:
-            self.name = commands[0].spec.name
-            self.feedback = commands[0].spec.feedback
+            self.calls: tuple[Call, ...] = (first.call,)
+            self.command_ids: tuple[CommandId, ...] = (first.id,)
+            self.name = first.spec.name
+            self.feedback = first.spec.feedback
         else:
+            self.calls = tuple([c.call for c in commands])
+            self.command_ids = tuple([c.id for c in commands])
             self.name = "+".join(c.spec.name for c in commands)
             self.feedback = False
+        self.facts = (app.name, ab, tree.id, self.name, first.id, self.command_ids,
+                      self.sorted_devices, reactive, iteration, first.call.label)
+        """What every decision about the AB itself says of it, in the fields of
+        ``Decision`` from ``app`` to ``label`` (none of them changes)."""

@@ -12,7 +12,6 @@ from collections.abc import Collection
 
 import pytest
 
-import prima.mediator._index as index_module
 import prima.mediator._ranking as ranking_module
 from prima.mediator import AppKind, CommandId, DecisionKind, Outcome, Rule
 from prima.mediator._state import Node
@@ -84,9 +83,6 @@ def test_without_the_criterion_the_oldest_stream_comes_back_first(
         ranking_module.Criterion(c.rule, c.scope, key) if c.rule is Rule.RESUME_STREAM else c
         for c in ranking_module.CRITERIA)
     monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
-    for name, value in zip(("_HEAD", "_REST", "_NODE_REST"), index_module._split(criteria),
-                           strict=True):
-        monkeypatch.setattr(index_module, name, value)
     h = Harness(duration=_durations())
     _three_levels(h)
     h.run()
