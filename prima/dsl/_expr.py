@@ -733,8 +733,19 @@ def _tokens(node: Node) -> list[Token]:
 
 
 def _start(node: Node) -> int:
+    """Where the subtree's first token is written; for a subtree without tokens (a
+    keyword value, ``-true``), where its first word is, if the tree knows (else 0)."""
     tokens = _tokens(node)
-    return min(_pos(t) for t in tokens) if tokens else 0
+    if tokens:
+        return min(_pos(t) for t in tokens)
+    while isinstance(node, Tree):
+        if node.start_pos is not None:
+            return node.start_pos
+        children = [c for c in node.children if c is not None]
+        if not children:
+            break
+        node = children[0]
+    return 0
 
 
 def bare_name(arg: ChainArg) -> str | None:
@@ -965,33 +976,27 @@ def span(node: Node, source: str) -> tuple[int, int]:
     """Where a subtree is written, with what the tree keeps no token of: the
     parentheses around or inside it, and a keyword value (``true``, ``false``,
     ``null``) at either end of it."""
-    tokens = sorted(_tokens(node), key=_pos)
-    if not tokens:  # keywords only ('not null'): nothing to place it by but the whole text
-        return _skip(source, 0, _SPACE, 1), _skip(source, len(source), _SPACE, -1)
-    start, end = _pos(tokens[0]), tokens[-1].end_pos
-    last = _edge(node, -1)[-1:]
-    if last:
-        at = _skip(source, end, _SPACE + "(", 1)
-        if source.startswith(last[0], at):
-            end = at + len(last[0])
+    tokens = _tokens(node)
+    if not tokens:  # words only ('not null', '-true'): from the first, if the tree knows it
+        start = _start(node)
+        end = _after_words(source, start, node)
+        if end == start:  # not found where the tree says (lark made it): the whole text
+            return _skip(source, 0, _SPACE, 1), _skip(source, len(source), _SPACE, -1)
+        return start, end + _closing(source, source.count("(", start, end), end)
+    start, end = min(_pos(t) for t in tokens), max(t.end_pos for t in tokens)
+    end = _after_words(source, end, _last_without_tokens(node))
     for word in reversed(_edge(node, 0)):  # innermost first: the keyword, then '-' or 'not'
         at = _skip(source, start, _SPACE + "()", -1)
         if not source.endswith(word, 0, at):
             break
         start = at - len(word)
-    # parentheses opened and not closed within the span, outside its tokens (a string
-    # token may hold any): closed after it, or opened before it
-    depth = 0
-    at = start
+    # parentheses opened and not closed within the span, outside its strings (which
+    # may hold any): closed after it, or opened before it
+    depth = source.count("(", start, end) - source.count(")", start, end)
     for token in tokens:
-        gap = source[at:_pos(token)]
-        depth += gap.count("(") - gap.count(")")
-        at = max(at, token.end_pos)
-    gap = source[at:end]
-    depth += gap.count("(") - gap.count(")")
-    while depth > 0 and end < len(source) and source[end] in _SPACE + ")":
-        depth -= source[end] == ")"
-        end += 1
+        if token.type == "STRING":
+            depth -= token.count("(") - token.count(")")
+    end += _closing(source, depth, end)
     while depth < 0 and start > 0 and source[start - 1] in _SPACE + "(":
         depth += source[start - 1] == "("
         start -= 1
@@ -1019,6 +1024,57 @@ def _edge(node: Node, side: int) -> list[str]:
             break
         node = children[side]
     return words
+
+
+def _last_without_tokens(node: Node) -> Node | None:
+    """The subtree at the end of the tree's last edge that holds no token ('-true'
+    in 'x + -true'), if the tree ends so."""
+    while isinstance(node, Tree):
+        children = [c for c in node.children if c is not None]
+        if not children:
+            return None
+        last = children[-1]
+        if isinstance(last, Tree) and not _has_token(last):
+            return last
+        node = last
+    return None
+
+
+def _has_token(node: Tree) -> bool:
+    """Whether the subtree holds a token (found at the first; only a subtree of
+    keywords and prefix operators is walked whole)."""
+    trees = [node]
+    while trees:
+        for child in trees.pop().children:
+            if isinstance(child, Token):
+                return True
+            if isinstance(child, Tree):
+                trees.append(child)
+    return False
+
+
+def _after_words(source: str, at: int, node: Node | None) -> int:
+    """Past the words of a subtree without tokens (``node``) written from ``at`` on
+    (spaces and opening parentheses between them); ``at`` if they are not there."""
+    if node is None:
+        return at
+    end = at
+    for word in _edge(node, 0):
+        end = _skip(source, end, _SPACE + "(", 1)
+        if not source.startswith(word, end):
+            return at
+        end += len(word)
+    return end
+
+
+def _closing(source: str, depth: int, end: int) -> int:
+    """How many characters after ``end`` close ``depth`` open parentheses (spaces
+    between them included)."""
+    at = end
+    while depth > 0 and at < len(source) and source[at] in _SPACE + ")":
+        depth -= source[at] == ")"
+        at += 1
+    return at - end
 
 
 def _skip(source: str, at: int, chars: str, step: int) -> int:

@@ -121,13 +121,13 @@ class _Parser:
         return left
 
     def not_(self) -> Tree:
-        kind, value, _start = self.toks[self.i]
+        kind, value, at = self.toks[self.i]
         if kind == "w" and value == "not":
             self.i += 1
             self.depth += 1
             if self.depth > _MAX_DEPTH:
                 raise _GiveUp
-            tree: Tree = Tree("not_", [self.not_()])
+            tree: Tree = Tree("not_", [self.not_()], at)
             self.depth -= 1
             return tree
         left = self.sum()
@@ -156,12 +156,13 @@ class _Parser:
         return left
 
     def unary(self) -> Tree:
-        if self.toks[self.i][0] == "-":
+        kind, _value, at = self.toks[self.i]
+        if kind == "-":
             self.i += 1
             self.depth += 1
             if self.depth > _MAX_DEPTH:
                 raise _GiveUp
-            tree: Tree = Tree("neg", [self.unary()])
+            tree: Tree = Tree("neg", [self.unary()], at)
             self.depth -= 1
             return tree
         return self.atom()
@@ -180,7 +181,7 @@ class _Parser:
         if kind != "w":
             raise _GiveUp
         if value in _VALUE_WORDS:  # after '-' or an operator 'not' is a name, as in lark
-            return Tree(_VALUE_WORDS[value], [])
+            return Tree(_VALUE_WORDS[value], [], start)
         name = self.token("NAME", value, start)
         follow = self.toks[self.i][0]
         if follow == ".":

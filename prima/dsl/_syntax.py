@@ -63,11 +63,15 @@ class Tree:
     tokens, and ``None`` where an optional part is absent: typed as lark types
     them, without the ``None``)."""
 
-    __slots__ = ("data", "children")
+    __slots__ = ("data", "children", "start_pos")
 
-    def __init__(self, data: str, children: list[Node]) -> None:
+    def __init__(self, data: str, children: list[Node], start_pos: int | None = None) -> None:
         self.data = data
         self.children = children
+        self.start_pos = start_pos
+        """Where the rule's own word is written, for a rule that keeps no token of it
+        (a keyword value, ``not``, a prefix ``-``), when the hand-written parser made
+        the tree; None otherwise. Not compared: lark's trees have no such thing."""
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Tree):

@@ -348,8 +348,18 @@ def test_arithmetic_and_ordering_of_any_two_values(a: object, b: object, op: str
 @pytest.mark.parametrize("text", [
     "x == true", "true == x", "(true) == x", "x == (true)", "(x) == y", "-(x)", "not x and -y",
     "not (- x) == 1", "x + - - y", 'x == "a("', "((x + 1)) * 2", "null", "not true",
+    "not  ( null )", "not (not false)", "x + -true", "x == (not null)", "-x - -(-(y))",
 ])
 def test_a_compiled_expression_keeps_its_whole_source(text: str) -> None:
     # keyword values, prefix operators and parentheses leave no token in the tree
     assert compile_expression(f" {text} ").source == text
 
+
+
+def test_a_chain_argument_of_words_only_is_placed_where_it_is_written() -> None:
+    chain = 'Speak(text="hi"), Turn(angle=-true), Move(a=not null, b=false)'
+    args = [a for step in parse_chain(chain) for a in step.args]
+    assert [a.index for a in args] == [11, 29, 44, 56]
+    with pytest.raises(ExpressionError) as fault:  # a constant fault, at its '-'
+        compile_expression("  -true")
+    assert fault.value.index == 2
