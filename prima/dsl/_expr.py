@@ -974,8 +974,8 @@ def _unescape(body: str) -> tuple[str, list[int]]:
 
 def span(node: Node, source: str) -> tuple[int, int]:
     """Where a subtree is written, with what the tree keeps no token of: the
-    parentheses around or inside it, and a keyword value (``true``, ``false``,
-    ``null``) at either end of it."""
+    parentheses around or inside it, and the words at either end of it (a keyword
+    value ``true``, ``false``, ``null``; a prefix ``-`` or ``not``)."""
     tokens = _tokens(node)
     if not tokens:  # words only ('not null', '-true'): from the first, if the tree knows it
         start = _start(node)
@@ -985,7 +985,7 @@ def span(node: Node, source: str) -> tuple[int, int]:
         return start, end + _closing(source, source.count("(", start, end), end)
     start, end = min(_pos(t) for t in tokens), max(t.end_pos for t in tokens)
     end = _after_words(source, end, _last_without_tokens(node))
-    for word in reversed(_edge(node, 0)):  # innermost first: the keyword, then '-' or 'not'
+    for word in reversed(_first_words(node)):  # innermost first: a keyword, then '-', 'not'
         at = _skip(source, start, _SPACE + "()", -1)
         if not source.endswith(word, 0, at):
             break
@@ -1010,19 +1010,18 @@ _UNWRITTEN = {"true": "true", "false": "false", "null": "null", "neg": "-", "not
 """Rules whose tree keeps no token of their word: a keyword value, or a prefix operator."""
 
 
-def _edge(node: Node, side: int) -> list[str]:
-    """The words the tree keeps no token of along its first (``side`` 0) or last
-    (``side`` -1) edge, outermost first: prefix operators (first edge only) and a
-    keyword value (``true``, ``false``, ``null``) at the very end."""
+def _first_words(node: Node) -> list[str]:
+    """The words the tree keeps no token of along its first edge, outermost first:
+    prefix operators, and a keyword value (``true``, ``false``, ``null``) last."""
     words: list[str] = []
     while isinstance(node, Tree):
-        children = [c for c in node.children if c is not None]
         word = _UNWRITTEN.get(node.data)
-        if word is not None and (side == 0 or not children):
+        if word is not None:
             words.append(word)
+        children = [c for c in node.children if c is not None]
         if not children:
             break
-        node = children[side]
+        node = children[0]
     return words
 
 
@@ -1059,7 +1058,7 @@ def _after_words(source: str, at: int, node: Node | None) -> int:
     if node is None:
         return at
     end = at
-    for word in _edge(node, 0):
+    for word in _first_words(node):
         end = _skip(source, end, _SPACE + "(", 1)
         if not source.startswith(word, end):
             return at
