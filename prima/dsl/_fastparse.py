@@ -82,7 +82,7 @@ class _Parser:
             line = before + 1
             column = start - (self.lines[before - 1] + 1 if before else 0) + 1
         return Token(type_, value, start, line, column, line, column + len(value),
-                          start + len(value))
+                     start + len(value))
 
     def expect(self, kind: str) -> None:
         if self.toks[self.i][0] != kind:
