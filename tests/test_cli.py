@@ -164,14 +164,22 @@ def test_run_checks_its_output_path_before_running(tmp_path: Path) -> None:
 def interrupted_run(out: Path, form: str) -> str:
     """``prima run --format FORM --out OUT`` stopped with Ctrl-C once it has written
     some of its trace; its standard error (it exits with 130)."""
+    # Ctrl-C's default action in the child even when this process ignores SIGINT (as a
+    # background job of a non-interactive shell does, and its children inherit)
     proc = subprocess.Popen([sys.executable, "-m", "prima", "run", str(OFFICE), "--until",
                              "900000", "--format", form, "--out", str(out)],
-                            stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline and (not out.exists() or out.stat().st_size < 4096):
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=30)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and (not out.exists() or out.stat().st_size < 4096):
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:  # never left running, whatever failed
+            proc.kill()
+            proc.communicate()
     assert proc.returncode == 130, err
     return err
 
