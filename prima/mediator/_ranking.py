@@ -110,12 +110,11 @@ CRITERIA: tuple[Criterion, ...] = (
 """Rule 4, in order."""
 
 
-_KEYS = tuple(c.key for c in CRITERIA)
-
-
 def rank(node: Node, pjf: Collection[int]) -> Rank:
-    """The full rank of a waiting AB; ``pjf`` holds the ids whose parent just finished."""
-    return tuple([key(node, pjf) for key in _KEYS])
+    """The full rank of a waiting AB, worked out the plain way from :data:`CRITERIA` as it
+    is now (the oracle's; the mediator keeps keys in its :class:`Ranking`); ``pjf`` holds
+    the ids whose parent just finished."""
+    return tuple([c.key(node, pjf) for c in CRITERIA])
 
 
 def preempts(x: Node, y: Node) -> bool:
