@@ -524,7 +524,8 @@ def _compile_expression(text: str, max_text: int, depth: int) -> Compiled:
     bare = _BARE_NAME.fullmatch(text)
     if bare and bare.group(1) not in _KEYWORDS:  # {name}: the common case, without lark
         return _variable(bare.group(1), bare.start(1))
-    return _Compiler(text, max_text, depth).compile(_parse(text, "expression", depth))
+    return _Compiler(text, max_text, depth).compile(_parse(text, "expression", depth),
+                                                    whole=True)
 
 
 _BARE_NAME = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*")
@@ -798,10 +799,15 @@ class _Compiler:
         self.names: set[tuple[str, int]] = set()
         self.events: list[int] = []
 
-    def compile(self, tree: Node) -> Compiled:
+    def compile(self, tree: Node, *, whole: bool = False) -> Compiled:
+        """Compile ``tree``; ``whole`` when it is all of the source (an expression, not
+        one argument of a chain), which is then what it quotes."""
         fn, const = self.node(tree)
-        start, end = span(tree, self.source)
-        text = self.source[start:end]
+        if whole:
+            text = self.source.strip(_SPACE)
+        else:
+            start, end = span(tree, self.source)
+            text = self.source[start:end]
         if not const:
             return Compiled(text, fn, frozenset(self.names), tuple(self.events))
         try:
