@@ -13,6 +13,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from prima.trace import Pose
+
 __all__ = ["Bar", "Pose", "Span", "Tick", "Timeline", "abbreviate", "timeline"]
 
 _OVER = re.compile(r" on ([^,\s]+)")
@@ -65,9 +67,6 @@ class Tick:
     label: str
     text: str | None = None
     """The words, when the user said something."""
-
-
-Pose = tuple[float, float, float]
 
 
 @dataclass
