@@ -214,6 +214,7 @@ class WaitIndex:
         slot.ranked_by = best
         _heappush(slot.group.heap, (self.ranking.slot_keys(best), version, slot))
         self.entries += 1
+
     def _drop_slot(self, slot: _Slot) -> None:
         slot.version = -1
         tid = slot.tree.id

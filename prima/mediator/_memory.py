@@ -93,13 +93,6 @@ class WorkingMemory:
             parent.children.append(child)
 
     # ------------------------------------------------------------------ changes
-    def _rank(self, node: Node, delta: int) -> None:
-        """Count a waiting AB in (``delta`` 1) or out of (-1) its devices' rankings."""
-        if delta > 0:
-            self._rank_in(node)
-        else:
-            self._rank_out(node)
-
     def _rank_in(self, node: Node) -> None:
         """Count a waiting AB in its devices' rankings (``ranked``, ``on``)."""
         key = (node.app.name, node.priority)
@@ -211,10 +204,7 @@ class WorkingMemory:
                 del blending[d]
         self.dirty.update(node.devices)
         node.tree.running -= 1
-        app = node.app
-        app.active -= 1  # (``_inactive``)
-        if app.active == 0:
-            app.idle_since = now
+        self._inactive(node.app, now)
         children = node.children
         node.children = []
         return children

@@ -16,8 +16,8 @@ is suspended; when an AB of a suspended tree starts, the tree resumes.
 from __future__ import annotations
 
 import heapq
-from types import MappingProxyType
 from collections.abc import Callable, Mapping, Set
+from types import MappingProxyType
 
 from prima.catalog import Priority
 from prima.mediator._decisions import DecisionKind, Rule
@@ -146,9 +146,7 @@ class Selector:
             if not (wm.new or wm.dirty or wm.pjf):
                 break
             for node in self.round():
-                start(AtomicBehavior(node.id, node.app.name, node.tree.id, node.calls,
-                                     node.command_ids, node.devices, node.iteration,
-                                     node.reactive, node.blended))  # (atomic_behavior)
+                start(atomic_behavior(node))
         wm.maybe_compact()
 
     def round(self) -> list[Node]:
@@ -245,9 +243,7 @@ class Selector:
         policies = self._policies
         if ready:
             if held is None:
-                # False if it waits for a policy's AB put before it (what ``prepare`` looks
-                # at first, looked at here: most ABs need none)
-                return not ((x.turnable or x.tree.pose is not None) and policies.prepare(x))
+                return not policies.prepare(x)  # (False: it waits for the policy's AB)
         else:
             # Ranking best with some devices busy matters only to a policy that may act on
             # what runs there (blend, interrupt): only then is it worked out.

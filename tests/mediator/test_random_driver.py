@@ -136,7 +136,7 @@ def test_the_oracle_catches_a_double_booking(monkeypatch: pytest.MonkeyPatch) ->
     """A mediator that forgets a device is busy (and a driver that does not check)."""
     def start(self: memory_module.WorkingMemory, node: memory_module.Node) -> None:
         node.state = memory_module.NodeState.RUNNING
-        self._rank(node, -1)
+        self._rank_out(node)
         self.waiting -= 1
         node.tree.running += 1
 
