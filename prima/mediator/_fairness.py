@@ -75,13 +75,10 @@ class _Share:
         return not self.intervals
 
     def total(self, now: float, window: float) -> float:
-        """Seconds spent keeping others waiting within ``[now - window, now]`` (it
-        prunes first, as :meth:`prune` does)."""
+        """Seconds spent keeping others waiting within ``[now - window, now]``."""
+        self.prune(now, window)
         start = now - window
         intervals = self.intervals
-        while intervals and intervals[0][1] <= start:
-            intervals.popleft()
-            self.lengths.popleft()
         total: float = 0
         if intervals:
             # Only the oldest interval can begin before the window (they follow one
