@@ -810,10 +810,7 @@ class _Compiler:
             text = self.source[start:end]
         if not const:
             return Compiled(text, fn, frozenset(self.names), tuple(self.events))
-        try:
-            value = fn(Scope({}))
-        except ExecutionError as exc:  # a constant that cannot be computed: -'a'
-            raise ExpressionError(_start(tree), f"expression: {exc}", self.source) from None
+        value = self._value(fn, tree)
         if isinstance(value, str) and len(value) > self.max_text:
             raise ExpressionError(_start(tree), f"expression: text longer than "
                                                 f"{self.max_text:,} characters", self.source)
@@ -831,6 +828,24 @@ class _Compiler:
             return rule(self, node.children)
         finally:
             self.level -= 1
+
+    def operand(self, node: Node) -> Part:
+        """Compile an operand of an operator or a function. A constant one is worked out
+        now: one that cannot be computed (``1 + -true``) is a fault at load, as a whole
+        expression that is constant is, even where it would not be reached
+        (``x and -true``)."""
+        fn, const = self.node(node)
+        if not const:
+            return fn, False
+        return _const(self._value(fn, node))
+
+    def _value(self, fn: Fn, node: Node) -> Value:
+        """A constant's value; one that cannot be computed (``-'a'``) is a fault at its
+        first character."""
+        try:
+            return fn(Scope({}))
+        except ExecutionError as exc:
+            raise ExpressionError(_start(node), f"expression: {exc}", self.source) from None
 
     def fault(self, token: Token, message: str) -> ExpressionError:
         """A fault at ``token``."""
@@ -895,7 +910,7 @@ class _Compiler:
         if not lo <= len(args) <= hi:
             want = str(lo) if lo == hi else f"{lo} to {hi}"
             raise self.fault(name_tok, f"{name}() takes {want} argument(s), got {len(args)}")
-        fns = [self.node(a)[0] for a in args]
+        fns = [self.operand(a)[0] for a in args]
         return (lambda s: impl(*(f(s) for f in fns))), False
 
     def neg(self, ch: list[Node]) -> Part:
@@ -907,20 +922,20 @@ class _Compiler:
         return (lambda s: not truthy(f(s))), c
 
     def and_(self, ch: list[Node]) -> Part:
-        (fa, ca), (fb, cb) = self.node(ch[0]), self.node(ch[1])
+        (fa, ca), (fb, cb) = self.operand(ch[0]), self.operand(ch[1])
         return (lambda s: truthy(fa(s)) and truthy(fb(s))), ca and cb
 
     def or_(self, ch: list[Node]) -> Part:
-        (fa, ca), (fb, cb) = self.node(ch[0]), self.node(ch[1])
+        (fa, ca), (fb, cb) = self.operand(ch[0]), self.operand(ch[1])
         return (lambda s: truthy(fa(s)) or truthy(fb(s))), ca and cb
 
     def binary(self, ch: list[Node]) -> Part:
-        fa, op, fb = self.node(ch[0])[0], str(ch[1]), self.node(ch[2])[0]
+        fa, op, fb = self.operand(ch[0])[0], str(ch[1]), self.operand(ch[2])[0]
         arith = _arithmetic(op)
         return (lambda s: arith(fa(s), fb(s))), False
 
     def compare(self, ch: list[Node]) -> Part:
-        fa, op, fb = self.node(ch[0])[0], str(ch[1]), self.node(ch[2])[0]
+        fa, op, fb = self.operand(ch[0])[0], str(ch[1]), self.operand(ch[2])[0]
         compare = _comparison(op)
         return (lambda s: compare(fa(s), fb(s))), False
 

@@ -185,6 +185,13 @@ def test_a_fault_in_a_string_inside_an_expression_points_into_the_string() -> No
 @pytest.mark.parametrize("source, index, fragment", [
     ("-'a'", 1, "'-' needs a number, got text 'a'"),
     ("not -null", 0, "'-' needs a number, got null"),
+    # a constant operand of an expression that is not constant, even where it would
+    # not be reached
+    ("1 + -true", 4, "'-' needs a number, got a boolean"),
+    ("x == (-'a')", 7, "'-' needs a number, got text 'a'"),
+    ("max(x, -null)", 7, "'-' needs a number, got null"),
+    ("x and -true", 6, "'-' needs a number, got a boolean"),
+    ("false and -true", 10, "'-' needs a number, got a boolean"),
 ])
 def test_a_constant_that_cannot_be_computed_is_a_fault(source: str, index: int,
                                                        fragment: str) -> None:
@@ -348,7 +355,7 @@ def test_arithmetic_and_ordering_of_any_two_values(a: object, b: object, op: str
 @pytest.mark.parametrize("text", [
     "x == true", "true == x", "(true) == x", "x == (true)", "(x) == y", "-(x)", "not x and -y",
     "not (- x) == 1", "x + - - y", 'x == "a("', "((x + 1)) * 2", "null", "not true",
-    "not  ( null )", "not (not false)", "x + -true", "x == (not null)", "-x - -(-(y))",
+    "not  ( null )", "not (not false)", "x + -(y)", "x == (not null)", "-x - -(-(y))",
 ])
 def test_a_compiled_expression_keeps_its_whole_source(text: str) -> None:
     # keyword values, prefix operators and parentheses leave no token in the tree
