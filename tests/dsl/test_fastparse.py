@@ -21,18 +21,12 @@ from hypothesis import strategies as st
 from lark import Token, Tree
 from lark.exceptions import UnexpectedInput
 
-import prima.dsl._expr as expr_module  # (white-box: the fast parser's private seams)
-from prima.dsl import (
-    ParseToken,
-    ParseTree,
-    collect,
-    fast_parse,
-    parse_chain,
-    parser,
-    validate_paths,
-)
-from prima.dsl._expr import MAX_NESTING, measure
-from prima.dsl._fastparse import parse_sized as fast_parse_sized
+import prima.dsl
+from prima.dsl import ParseToken, ParseTree, collect, fast_parse, parser, validate_paths
+
+fast_parse_sized = prima.dsl._fastparse.parse_sized  # type: ignore[attr-defined]  # private
+measure = prima.dsl._expr.measure  # type: ignore[attr-defined]  # private
+MAX_NESTING = prima.dsl._expr.MAX_NESTING  # type: ignore[attr-defined]  # private
 
 ROOT = Path(__file__).resolve().parents[2]
 _POSITIONS = ("start_pos", "line", "column", "end_line", "end_column", "end_pos")
@@ -102,11 +96,12 @@ def _corpus(folder: Path) -> None:
 # Recording which texts the loader parses needs its private seam: the loader's
 # call of the fast parser (patched to record and decline, so that lark parses
 # every text meanwhile), and its memos (cleared, so that no text is skipped).
-_EXPR = expr_module.__name__
+_EXPR = "prima.dsl._expr"
 
 
 def _clear_memos() -> None:
-    for memo in (expr_module._expressions, expr_module._templates, expr_module._chains):
+    expr = prima.dsl._expr  # type: ignore[attr-defined]  # the private seam, see above
+    for memo in (expr._expressions, expr._templates, expr._chains):
         memo.cache_clear()
 
 
@@ -246,7 +241,7 @@ def test_valid_texts_are_taken_fast() -> None:
 def test_a_text_lark_parses_gives_prima_trees_too() -> None:
     text = "Speak(text={x andy})"  # 'x andy' is read 'x and y': left to lark
     assert fast_parse(text, "chain") is None
-    (step,) = parse_chain(text)
+    (step,) = prima.dsl.parse_chain(text)
     tree = step.args[0].tree
     assert type(tree) is ParseTree and tree.data == "and_"
     names = [child.children[0] for child in tree.children]  # type: ignore[union-attr]
