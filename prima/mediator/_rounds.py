@@ -53,22 +53,31 @@ class _Round:
     Parent-finished lasts one round, so it is not in the index: each device's
     parent-finished ABs are heaped here (built on first need), and a device's
     best AB is the better of the index's answer and this heap's top. A round
-    that names no AB ranks as the index does: the selector keeps one such view.
+    that names no AB ranks as the index does. The selector keeps two views and
+    reuses them round after round (so no round leaves a view behind as garbage:
+    ``best`` holds a bound method of its view, a reference cycle): the plain one,
+    and the one it points at the ABs each round names (:meth:`name`).
     """
 
     __slots__ = ("pjf", "best", "_index", "_ranking", "_heaps", "_named")
 
-    def __init__(self, pjf: Mapping[AbId, Node], index: WaitIndex) -> None:
-        self.pjf = pjf
+    def __init__(self, index: WaitIndex, *, names: bool) -> None:
+        self.pjf: Mapping[AbId, Node] = _NONE_NAMED
         self._index = index
         self._ranking = index.ranking
         self._heaps: dict[str, list[tuple[Rank, Node]]] | None = None
         self._named: dict[AbId, Rank] = {}
         """The ranks of the ABs the round names, worked out once per round (the others'
         are kept on the ABs)."""
-        self.best: Callable[[str], Node | None] = self._best if pjf else index.top
+        self.best: Callable[[str], Node | None] = self._best if names else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
-        answer when the round names no AB)."""
+        answer for the view of rounds that name no AB)."""
+
+    def name(self, pjf: Mapping[AbId, Node]) -> None:
+        """Point the view at the ABs a round names (what it kept of the last is gone)."""
+        self.pjf = pjf
+        self._heaps = None
+        self._named.clear()
 
     def rank(self, node: Node) -> Rank:
         """The AB's rank (no key changes within a round: trees are suspended or resumed,
@@ -132,8 +141,10 @@ class Selector:
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
-        self._plain = _Round(_NONE_NAMED, wm.index)
+        self._plain = _Round(wm.index, names=False)
         """The view of every round that names no AB (it keeps nothing of a round)."""
+        self._naming = _Round(wm.index, names=True)
+        """The view of every round that names ABs (pointed at them round by round)."""
 
     def settle(self) -> None:
         """Run rounds until nothing more can start."""
@@ -157,10 +168,8 @@ class Selector:
         pjf: Mapping[AbId, Node] = wm.pjf
         if pjf:
             wm.pjf = {}
-            view = _Round(pjf, wm.index)
         else:
             pjf = _NONE_NAMED
-            view = self._plain
         new = wm.new
         if new:
             wm.new = []
@@ -171,6 +180,11 @@ class Selector:
             wm.dirty = set()
         else:
             dirty = _NO_DEVICES
+        if pjf:
+            view = self._naming
+            view.name(pjf)
+        else:
+            view = self._plain
         started: list[Node] = []
         later: list[tuple[bool, Tree]] = []
         overrun: dict[str, App] | None = None
@@ -192,9 +206,11 @@ class Selector:
                 if self._holds.opened:
                     self._holds.unpark_all()  # a stream under way again: no hold keeps it
         # "Parent just finished" lasts one round: others may now rank above.
-        for n in pjf.values():
-            if n.state is _WAITING:
-                wm.dirty.update(n.devices)
+        if pjf:
+            for n in pjf.values():
+                if n.state is _WAITING:
+                    wm.dirty.update(n.devices)
+            view.name(_NONE_NAMED)  # (it keeps no AB past its round)
         for app in overrun.values() if overrun is not None else ():
             self._overrun(app, f"started {app.budgets.starts_per_instant} atomic behaviors at "
                                f"t={self._instant:g} s and asked for more (Commands that take "
