@@ -180,6 +180,10 @@ class Selector:
             wm.dirty = set()
         else:
             dirty = _NO_DEVICES
+        if self._idle(new, dirty):
+            if pjf:
+                self._unname(pjf)
+            return []
         if pjf:
             view = self._naming
             view.name(pjf)
@@ -197,6 +201,21 @@ class Selector:
                     if overrun is None:
                         overrun = {}
                     overrun[x.app.name] = x.app
+        if later:
+            self._suspend_resume(later)
+        if pjf:
+            self._unname(pjf)
+            view.name(_NONE_NAMED)  # (it keeps no AB past its round)
+        if overrun is not None:
+            for app in overrun.values():
+                self._overrun(app, f"started {app.budgets.starts_per_instant} atomic "
+                                   f"behaviors at t={self._instant:g} s and asked for more "
+                                   "(Commands that take no time, requested again and again?)")
+        return started
+
+    def _suspend_resume(self, later: list[tuple[bool, Tree]]) -> None:
+        """Suspend and resume the trees a round's starts said (in their order)."""
+        wm = self._wm
         for is_suspend, tree in later:
             if is_suspend:
                 if wm.suspend(tree):
@@ -205,17 +224,14 @@ class Selector:
                 wm.resume(tree)
                 if self._holds.opened:
                     self._holds.unpark_all()  # a stream under way again: no hold keeps it
-        # "Parent just finished" lasts one round: others may now rank above.
-        if pjf:
-            for n in pjf.values():
-                if n.state is _WAITING:
-                    wm.dirty.update(n.devices)
-            view.name(_NONE_NAMED)  # (it keeps no AB past its round)
-        for app in overrun.values() if overrun is not None else ():
-            self._overrun(app, f"started {app.budgets.starts_per_instant} atomic behaviors at "
-                               f"t={self._instant:g} s and asked for more (Commands that take "
-                               "no time, requested again and again?)")
-        return started
+
+    def _unname(self, pjf: Mapping[AbId, Node]) -> None:
+        """"Parent just finished" lasts one round: at its end, others may rank above
+        the ABs it named (their devices are dirty)."""
+        dirty = self._wm.dirty
+        for n in pjf.values():
+            if n.state is _WAITING:
+                dirty.update(n.devices)
 
     def _counted(self, app: App) -> bool:
         """Count one more start of ``app`` at this instant; False past its budget."""
@@ -227,6 +243,44 @@ class Selector:
         if n > app.budgets.starts_per_instant:
             return False
         self._starts[app.name] = n
+        return True
+
+    def _idle(self, new: list[Node], dirty: Set[str]) -> bool:
+        """Whether the round provably does nothing (it need not find its candidates).
+
+        A round weighs the waiting ABs that are new and the best on each dirty device
+        (:meth:`_candidates`); it does nothing when there are none, or each has a busy
+        device (it cannot start: no policy's AB is put before it) and nothing acts on
+        it while it waits: no hold parks it (no stream or block is open, and it breaks
+        no channel: only a LOW AB is held by another app's talk) and no policy acts on
+        busy devices (blend, interrupt). What the index's answer for a dirty device
+        is need not be known: ``WorkingMemory.ranked`` counts the waiting, unparked ABs
+        on each device by priority, which is whom the index (and a round's named ABs)
+        can answer with. This is the common round that follows a start or an end on a
+        busy device: most of what a round would cost is finding its candidates.
+        """
+        wm = self._wm
+        busy = wm.busy
+        ranked = wm.ranked
+        quiet = not (self._holds.opened or self._policies.on_busy)
+        for d in dirty:
+            counts = ranked.get(d)
+            if not counts:
+                continue  # no AB waits for it
+            if not quiet or d not in busy:
+                return False
+            for _app, priority in counts:
+                if priority is _LOW:
+                    return False
+        for x in new:
+            if x.state is _WAITING and x.parked is None:
+                if not quiet or x.priority is _LOW:
+                    return False
+                for d in x.sorted_devices:
+                    if d in busy:
+                        break
+                else:
+                    return False
         return True
 
     @staticmethod
