@@ -147,8 +147,7 @@ def _arrange(parts: Sequence[int], order: Sequence[int]) -> Callable[[Keys], Key
     if len(perm) == 1:
         only = perm[0]
         return lambda keys: (keys[only],)
-    getter = itemgetter(*perm)
-    return lambda keys: getter(keys)
+    return itemgetter(*perm)  # (of two or more positions: a tuple, without a Python call)
 
 
 class Ranking:
@@ -253,6 +252,14 @@ class Ranking:
         if not named:
             node.ranked = (tree, keys)
         return keys
+
+    def unnamed(self, node: Node) -> Rank:
+        """The AB's full rank when the round names no AB (or not this one): :meth:`rank`,
+        its usual case first (the rank kept on the AB is still its rank)."""
+        kept = node.ranked
+        if kept is not None and kept[0] is node.tree.keys:
+            return kept[1]
+        return self.rank(node, ())
 
     def separating(self, winner: Rank, loser: Rank) -> Rule:
         """The rule of the first criterion on which two ranks differ (the winner's)."""

@@ -59,12 +59,12 @@ class _Round:
     and the one it points at the ABs each round names (:meth:`name`).
     """
 
-    __slots__ = ("pjf", "best", "_index", "_ranking", "_heaps", "_named")
+    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named")
 
     def __init__(self, index: WaitIndex, *, names: bool) -> None:
         self.pjf: Mapping[AbId, Node] = _NONE_NAMED
         self._index = index
-        self._ranking = index.ranking
+        self._ranking = ranking = index.ranking
         self._heaps: dict[str, list[tuple[Rank, Node]]] | None = None
         self._named: dict[AbId, Rank] = {}
         """The ranks of the ABs the round names, worked out once per round (the others'
@@ -72,6 +72,10 @@ class _Round:
         self.best: Callable[[str], Node | None] = self._best if names else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
         answer for the view of rounds that name no AB)."""
+        self.rank: Callable[[Node], Rank] = self._rank if names else ranking.unnamed
+        """The AB's rank (no key changes within a round: trees are suspended or resumed,
+        and apps demoted, between rounds): the one kept on it when the round names no
+        AB."""
 
     def name(self, pjf: Mapping[AbId, Node]) -> None:
         """Point the view at the ABs a round names (what it kept of the last is gone)."""
@@ -79,16 +83,15 @@ class _Round:
         self._heaps = None
         self._named.clear()
 
-    def rank(self, node: Node) -> Rank:
-        """The AB's rank (no key changes within a round: trees are suspended or resumed,
-        and apps demoted, between rounds)."""
+    def _rank(self, node: Node) -> Rank:
+        """:attr:`rank` when the round names ABs."""
         pjf = self.pjf
-        if node.id in pjf:
-            r = self._named.get(node.id)
-            if r is None:
-                r = self._named[node.id] = self._ranking.rank(node, pjf)
-            return r
-        return self._ranking.rank(node, pjf)
+        if node.id not in pjf:
+            return self._ranking.unnamed(node)
+        r = self._named.get(node.id)
+        if r is None:
+            r = self._named[node.id] = self._ranking.rank(node, pjf)
+        return r
 
     def separating(self, winner: Node, loser: Node) -> Rule:
         """The first criterion on which ``winner`` beats ``loser``: what a start names."""
@@ -96,32 +99,39 @@ class _Round:
 
     def _best(self, device: str) -> Node | None:
         """:attr:`best` when the round names ABs: the better of the index's answer and
-        the best of the named ABs that need ``device``."""
+        the best of the named ABs that need ``device`` (the top of its heap here)."""
         top = self._index.top(device)
-        finished = self._finished_top(device)
-        if finished is None or finished is top:
-            return top
-        if top is None:
-            return finished
-        return min(top, finished, key=self.rank)
-
-    def _finished_top(self, device: str) -> Node | None:
         heaps = self._heaps
         if heaps is None:
-            heaps = self._heaps = {}
-            for n in self.pjf.values():
-                if n.state is _WAITING:
-                    for d in n.sorted_devices:
-                        heaps.setdefault(d, []).append((self.rank(n), n))
-            for heap in heaps.values():
-                heapq.heapify(heap)
+            heaps = self._heaps = self._heap_named()
         found = heaps.get(device)
         while found:
-            node = found[0][1]
-            if node.state is _WAITING and node.parked is None:
-                return node
+            rank, finished = found[0]
+            if finished.state is _WAITING and finished.parked is None:
+                break
             heapq.heappop(found)
-        return None
+        else:
+            return top  # no named AB waits for the device
+        if top is None or top is finished:
+            return finished
+        return top if self.rank(top) < rank else finished
+
+    def _heap_named(self) -> dict[str, list[tuple[Rank, Node]]]:
+        """Each device's waiting named ABs, heaped by rank."""
+        heaps: dict[str, list[tuple[Rank, Node]]] = {}
+        for n in self.pjf.values():
+            if n.state is _WAITING:
+                entry = (self._rank(n), n)
+                for d in n.sorted_devices:
+                    heap = heaps.get(d)
+                    if heap is None:
+                        heaps[d] = [entry]
+                    else:
+                        heap.append(entry)
+        for heap in heaps.values():
+            if len(heap) > 1:
+                heapq.heapify(heap)
+        return heaps
 
 
 class Selector:
