@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
-from collections.abc import Iterable
+from collections.abc import Iterable, Set
 
 from prima.mediator._ranking import Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
@@ -40,6 +40,7 @@ __all__ = ["WaitIndex"]
 
 _WAITING = NodeState.WAITING
 _heappush = heapq.heappush
+_NO_DEVICES: frozenset[str] = frozenset()
 
 _NodeEntry = tuple[Keys, int, int, Node]
 """(the AB's order keys, its id, its version when filed, the AB)."""
@@ -102,8 +103,9 @@ class WaitIndex:
         self.ranking = ranking
         """The criteria's keys, kept on the ABs and trees (:class:`._ranking.Ranking`)."""
         self._devices: dict[str, _Device] = {}
-        self._tree_slots: dict[int, dict[tuple[str, Keys], _Slot]] = {}
-        """Tree id -> its live slots, by (device, group head): a few per tree."""
+        self._tree_slots: dict[int, dict[_Slot, None]] = {}
+        """Tree id -> its live slots (a few per tree; a dict as an ordered set: its order
+        is the order they were made in, whatever their addresses)."""
         self._serial = itertools.count()
         self.entries = 0
         """Heap entries held, live and stale."""
@@ -132,7 +134,7 @@ class WaitIndex:
             if heap[0] is entry or slot.top(self) is node:
                 self._push_slot(slot, node)
 
-    def rerank(self, tree: Tree) -> set[str]:
+    def rerank(self, tree: Tree) -> Set[str]:
         """The tree's TREE keys changed (suspended, resumed): re-rank its slots.
 
         Returns the devices on which the tree has waiting ABs.
@@ -140,9 +142,9 @@ class WaitIndex:
         tree.keys = None
         slots = self._tree_slots.get(tree.id)
         if not slots:
-            return set()
+            return _NO_DEVICES
         devices = set()
-        for slot in list(slots.values()):
+        for slot in list(slots):
             best = slot.top(self)
             if best is None:
                 self._drop_slot(slot)
@@ -154,8 +156,14 @@ class WaitIndex:
     def forget(self, tree: Tree) -> None:
         """The tree left working memory: drop its slots (and its keys)."""
         tree.keys = None
-        for slot in list(self._tree_slots.get(tree.id, {}).values()):
-            self._drop_slot(slot)
+        slots = self._tree_slots.pop(tree.id, None)
+        if slots:
+            tid = tree.id
+            for slot in slots:  # (``_drop_slot``, the tree's books dropped at once)
+                slot.version = -1
+                group = slot.group.slots
+                if group.get(tid) is slot:
+                    del group[tid]
 
     def top(self, device: str) -> Node | None:
         """The best-ranked waiting AB that needs ``device`` (ROUND criteria aside)."""
@@ -205,7 +213,7 @@ class WaitIndex:
         slot = group.slots.get(tree.id)
         if slot is None:
             slot = group.slots[tree.id] = _Slot(tree, group, device)
-            self._tree_slots.setdefault(tree.id, {})[device, head] = slot
+            self._tree_slots.setdefault(tree.id, {})[slot] = None
         return slot
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
@@ -216,13 +224,15 @@ class WaitIndex:
         self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
+        """Drop a live slot (its entries go stale)."""
         slot.version = -1
         tid = slot.tree.id
-        if slot.group.slots.get(tid) is slot:
-            del slot.group.slots[tid]
+        group = slot.group.slots
+        if group.get(tid) is slot:
+            del group[tid]
         slots = self._tree_slots.get(tid)
-        if slots is not None and slots.get((slot.device, slot.group.head)) is slot:
-            del slots[slot.device, slot.group.head]
+        if slots is not None and slot in slots:
+            del slots[slot]
             if not slots:
                 del self._tree_slots[tid]
 
@@ -241,9 +251,10 @@ class WaitIndex:
                 self._drop_slot(slot)
                 continue
             if best is not slot.ranked_by:  # the AB it was ranked by left the waiting list
-                heapq.heappop(heap)
-                self.entries -= 1
-                self._push_slot(slot, best)
+                # (``_push_slot``, its entry replaced: one sift down the heap, not two)
+                slot.version = version = next(self._serial)
+                slot.ranked_by = best
+                heapq.heapreplace(heap, (self.ranking.slot_keys(best), version, slot))
                 continue
             return best
         return None
