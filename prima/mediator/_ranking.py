@@ -203,9 +203,16 @@ class Ranking:
     # ------------------------------------------------------------------ caches
     def node_keys(self, node: Node) -> None:
         """Work out the AB's NODE keys (when it first enters the waiting list)."""
+        # (loops, here and below: in Python 3.11 a list comprehension is a call of its own)
         none: tuple[int, ...] = ()
-        node.head = tuple([key(node, none) for key in self._head])
-        node.order = tuple([key(node, none) for key in self._order])
+        keys: list[Key] = []
+        for key in self._head:
+            keys.append(key(node, none))
+        node.head = tuple(keys)
+        keys = []
+        for key in self._order:
+            keys.append(key(node, none))
+        node.order = tuple(keys)
 
     def tree_keys(self, node: Node) -> Keys:
         """The TREE keys of the AB's tree (kept on the tree until they may change)."""
@@ -213,7 +220,10 @@ class Ranking:
         keys = tree.keys
         if keys is None:
             none: tuple[int, ...] = ()
-            keys = tree.keys = tuple([key(node, none) for key in self._tree])
+            parts: list[Key] = []
+            for key in self._tree:
+                parts.append(key(node, none))
+            keys = tree.keys = tuple(parts)
         return keys
 
     # ------------------------------------------------------------------ ranks
@@ -245,7 +255,10 @@ class Ranking:
             self.node_keys(node)
         rnd = self._not_named
         if named:
-            rnd = tuple([key(node, pjf) for key in self._round])
+            parts: list[Key] = []
+            for key in self._round:
+                parts.append(key(node, pjf))
+            rnd = tuple(parts)
         keys = node.head + tree + rnd + node.order  # type: ignore[operator]
         if self._full is not None:
             keys = self._full(keys)
@@ -263,7 +276,8 @@ class Ranking:
 
     def separating(self, winner: Rank, loser: Rank) -> Rule:
         """The rule of the first criterion on which two ranks differ (the winner's)."""
-        for rule, a, b in zip(self.rules, winner, loser, strict=True):
-            if a != b:
-                return rule
+        rules = self.rules
+        for i, key in enumerate(winner):  # (twice as fast as zipping the three)
+            if key != loser[i]:
+                return rules[i]
         return Rule.OLDEST

@@ -298,6 +298,10 @@ class Selector:
         """What may start: ABs new on the waiting list, the best on each dirty device."""
         if not dirty and len(new) == 1:  # (one request, one AB: nothing to order)
             return new if new[0].state is _WAITING else []
+        if not new and len(dirty) == 1:  # (one device freed or re-ranked: its best)
+            (d,) = dirty
+            b = view.best(d)
+            return [] if b is None else [b]
         cands: dict[int, Node] = {n.id: n for n in new if n.state is _WAITING}
         best = view.best
         for d in sorted(dirty) if len(dirty) > 1 else dirty:
@@ -395,11 +399,15 @@ class Selector:
             tree = loser.tree
             if tree is x.tree or tree.suspended is not None:
                 continue
-            if any(is_suspend and t is tree for is_suspend, t in later):
+            if later and any(is_suspend and t is tree for is_suspend, t in later):
                 continue
             # "Ready": it lost only to this round's starts, not to ABs already running.
-            ready = all(busy.get(d) is None or busy[d] in started for d in loser.devices)
-            if ready and self._holds.holder(loser) is None:
-                self._log.ab(DecisionKind.SUSPEND, rule, loser,
-                             f"lost to AB{x.id} ({x.app.name})")
-                later.append((True, tree))
+            for d in loser.sorted_devices:
+                running = busy.get(d)
+                if running is not None and running not in started:
+                    break
+            else:
+                if self._holds.holder(loser) is None:
+                    self._log.ab(DecisionKind.SUSPEND, rule, loser,
+                                 f"lost to AB{x.id} ({x.app.name})")
+                    later.append((True, tree))
