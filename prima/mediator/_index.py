@@ -220,8 +220,14 @@ class WaitIndex:
         """(Re-)rank a slot by the stable keys of its best AB; its older entries go stale."""
         slot.version = version = next(self._serial)  # unique: entries never tie up to the slot
         slot.ranked_by = best
-        _heappush(slot.group.heap, (self.ranking.slot_keys(best), version, slot))
-        self.entries += 1
+        entry = (self.ranking.slot_keys(best), version, slot)
+        heap = slot.group.heap
+        if heap and heap[0][2] is slot:
+            # (an entry of its own at the top, now stale: replaced, not left for a pop)
+            heapq.heapreplace(heap, entry)
+        else:
+            _heappush(heap, entry)
+            self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
         """Drop a live slot (its entries go stale)."""
@@ -251,10 +257,7 @@ class WaitIndex:
                 self._drop_slot(slot)
                 continue
             if best is not slot.ranked_by:  # the AB it was ranked by left the waiting list
-                # (``_push_slot``, its entry replaced: one sift down the heap, not two)
-                slot.version = version = next(self._serial)
-                slot.ranked_by = best
-                heapq.heapreplace(heap, (self.ranking.slot_keys(best), version, slot))
+                self._push_slot(slot, best)  # (its entry at the top is replaced)
                 continue
             return best
         return None
