@@ -158,12 +158,8 @@ class WaitIndex:
         tree.keys = None
         slots = self._tree_slots.pop(tree.id, None)
         if slots:
-            tid = tree.id
-            for slot in slots:  # (``_drop_slot``, the tree's books dropped at once)
-                slot.version = -1
-                group = slot.group.slots
-                if group.get(tid) is slot:
-                    del group[tid]
+            for slot in slots:
+                self._discard(slot)
 
     def top(self, device: str) -> Node | None:
         """The best-ranked waiting AB that needs ``device`` (ROUND criteria aside)."""
@@ -230,17 +226,32 @@ class WaitIndex:
             self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
-        """Drop a live slot (its entries go stale)."""
-        slot.version = -1
+        """Drop a live slot: out of its group and its tree's books."""
+        self._discard(slot)
         tid = slot.tree.id
-        group = slot.group.slots
-        if group.get(tid) is slot:
-            del group[tid]
         slots = self._tree_slots.get(tid)
         if slots is not None and slot in slots:
             del slots[slot]
             if not slots:
                 del self._tree_slots[tid]
+
+    def _discard(self, slot: _Slot) -> None:
+        """Take a live slot out of its group (its tree's books are the caller's). What
+        stale entries it holds are dropped now, and its group's top entry if that is
+        its own: else they would keep its ABs and their tree alive until they reached
+        a top or a compaction (an ASAP request's tree, cancelled, leaves at once)."""
+        slot.version = -1
+        self.entries -= len(slot.heap)
+        slot.heap = []
+        slot.ranked_by = None
+        group = slot.group
+        tid = slot.tree.id
+        if group.slots.get(tid) is slot:
+            del group.slots[tid]
+        heap = group.heap
+        if heap and heap[0][2] is slot:
+            heapq.heappop(heap)
+            self.entries -= 1
 
     def _group_top(self, group: _Group) -> Node | None:
         heap = group.heap
@@ -252,9 +263,7 @@ class WaitIndex:
                 continue
             best = slot.top(self)
             if best is None:
-                heapq.heappop(heap)
-                self.entries -= 1
-                self._drop_slot(slot)
+                self._drop_slot(slot)  # (its entry, at the top, with it)
                 continue
             if best is not slot.ranked_by:  # the AB it was ranked by left the waiting list
                 self._push_slot(slot, best)  # (its entry at the top is replaced)
