@@ -302,7 +302,10 @@ class Selector:
             (d,) = dirty
             b = view.best(d)
             return [] if b is None else [b]
-        cands: dict[int, Node] = {n.id: n for n in new if n.state is _WAITING}
+        cands: dict[int, Node] = {}
+        for n in new:  # (a loop: in Python 3.11 a comprehension is a call of its own)
+            if n.state is _WAITING:
+                cands[n.id] = n
         best = view.best
         for d in sorted(dirty) if len(dirty) > 1 else dirty:
             b = best(d)
