@@ -122,16 +122,21 @@ class WaitIndex:
         tree = node.tree
         devices = self._devices
         for d in node.sorted_devices:
-            # (``_slot``, its usual case inline: the device, group and slot exist)
             dev = devices.get(d)
             group = dev.groups.get(head) if dev is not None else None
             slot = group.slots.get(tree.id) if group is not None else None
             if slot is None:
-                slot = self._slot(d, head, tree)
+                slot = self._slot(d, head, tree, group)
             heap = slot.heap
             _heappush(heap, entry)
             self.entries += 1
-            if heap[0] is entry or slot.top(self) is node:
+            # It ranks its slot when it is first in it: at the top, or next below stale
+            # entries (``_Slot.top`` drops them; not asked when the top entry is live).
+            first = heap[0]
+            top = first[3]
+            if first is entry or (
+                    (top.state is not _WAITING or top.version != first[2])
+                    and slot.top(self) is node):
                 self._push_slot(slot, node)
 
     def rerank(self, tree: Tree) -> Set[str]:
@@ -197,19 +202,18 @@ class WaitIndex:
             self.add(node)
 
     # -------------------------------------------------------------- internals
-    def _slot(self, device: str, head: Keys, tree: Tree) -> _Slot:
-        dev = self._devices.get(device)
-        if dev is None:
-            dev = self._devices[device] = _Device()
-        group = dev.groups.get(head)
+    def _slot(self, device: str, head: Keys, tree: Tree, group: _Group | None) -> _Slot:
+        """A new slot for ``tree`` in the group ``head`` of ``device`` (the group is
+        made if None)."""
         if group is None:
+            dev = self._devices.get(device)
+            if dev is None:
+                dev = self._devices[device] = _Device()
             group = dev.groups[head] = _Group(head)
             heapq.heappush(dev.heap, (head, next(self._serial), group))
             self.entries += 1
-        slot = group.slots.get(tree.id)
-        if slot is None:
-            slot = group.slots[tree.id] = _Slot(tree, group, device)
-            self._tree_slots.setdefault(tree.id, {})[slot] = None
+        slot = group.slots[tree.id] = _Slot(tree, group, device)
+        self._tree_slots.setdefault(tree.id, {})[slot] = None
         return slot
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
