@@ -164,14 +164,25 @@ class Selector:
         while True:
             if holds.opened:  # (else there is no stream to arm or let lapse)
                 holds.update()
-            if not (wm.new or wm.dirty or wm.pjf):
+            new, dirty, pjf = wm.new, wm.dirty, wm.pjf
+            if not (new or dirty or pjf):
                 break
+            if self._idle(new, dirty):
+                # The round is skipped: what it would take is emptied where it is
+                # (nothing of it is kept), and parent-finished ends with it.
+                new.clear()
+                dirty.clear()
+                if pjf:
+                    wm.pjf = {}
+                    self._unname(pjf)
+                continue
             for node in self.round():
                 start(atomic_behavior(node))
         wm.maybe_compact()
 
     def round(self) -> list[Node]:
-        """One round: start every AB that can start now; returns them."""
+        """One round: start every AB that can start now; returns them. (:meth:`settle`
+        runs none that :meth:`_idle` finds idle.)"""
         wm = self._wm
         # What the round looks at is taken from working memory, which collects anew
         # for the next round (what is empty stays there: nothing to take).
@@ -190,10 +201,6 @@ class Selector:
             wm.dirty = set()
         else:
             dirty = _NO_DEVICES
-        if self._idle(new, dirty):
-            if pjf:
-                self._unname(pjf)
-            return []
         if pjf:
             view = self._naming
             view.name(pjf)
