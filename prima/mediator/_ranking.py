@@ -237,42 +237,37 @@ class Ranking:
         return keys if self._slot is None else self._slot(keys)
 
     def rank(self, node: Node, pjf: Collection[int]) -> Rank:
-        """The AB's full rank; ``pjf`` holds the ids of the ABs the round names.
-
-        The rank of an AB the round does not name is kept on it (``Node.ranked``),
-        with the tree keys it was assembled from: while its tree keeps those same
-        keys (the same tuple), it is still its rank.
-        """
-        tree = node.tree.keys
-        if tree is None:
-            tree = self.tree_keys(node)
-        named = node.id in pjf
-        if not named:
-            kept = node.ranked
-            if kept is not None and kept[0] is tree:
-                return kept[1]
-        if node.head is None:
-            self.node_keys(node)
-        rnd = self._not_named
-        if named:
-            parts: list[Key] = []
-            for key in self._round:
-                parts.append(key(node, pjf))
-            rnd = tuple(parts)
-        keys = node.head + tree + rnd + node.order  # type: ignore[operator]
-        if self._full is not None:
-            keys = self._full(keys)
-        if not named:
-            node.ranked = (tree, keys)
-        return keys
+        """The AB's full rank; ``pjf`` holds the ids of the ABs the round names."""
+        if node.id not in pjf:
+            return self.unnamed(node)
+        parts: list[Key] = []
+        for key in self._round:
+            parts.append(key(node, pjf))
+        return self._assemble(node, tuple(parts))
 
     def unnamed(self, node: Node) -> Rank:
-        """The AB's full rank when the round names no AB (or not this one): :meth:`rank`,
-        its usual case first (the rank kept on the AB is still its rank)."""
+        """The AB's full rank when the round does not name it.
+
+        It is kept on the AB (``Node.ranked``), with the tree keys it was assembled
+        from: while its tree keeps those same keys (the same tuple), it is still its
+        rank.
+        """
         kept = node.ranked
         if kept is not None and kept[0] is node.tree.keys:
             return kept[1]
-        return self.rank(node, ())
+        keys = self._assemble(node, self._not_named)
+        node.ranked = (node.tree.keys, keys)
+        return keys
+
+    def _assemble(self, node: Node, rnd: Keys) -> Rank:
+        """A rank from the AB's kept keys (worked out if missing) and its round keys."""
+        tree = node.tree.keys
+        if tree is None:
+            tree = self.tree_keys(node)
+        if node.head is None:
+            self.node_keys(node)
+        keys = node.head + tree + rnd + node.order  # type: ignore[operator]
+        return keys if self._full is None else self._full(keys)
 
     def separating(self, winner: Rank, loser: Rank) -> Rule:
         """The rule of the first criterion on which two ranks differ (the winner's)."""
