@@ -19,8 +19,10 @@ application loses or regains its precedence), its slots are re-ranked, a few
 per device, never its ABs one by one. Entries are removed lazily: an AB's
 entries go stale when it leaves the waiting list or its ``version`` changes
 (it was parked); a slot's entry goes stale when the slot's ``version`` changes.
-Stale entries are dropped when they reach a heap's top; :meth:`WaitIndex.compact`
-rebuilds everything when they outnumber the live ones. Every operation costs a
+Stale entries are dropped when they reach a heap's top (a slot's stale entry at
+its group's top is replaced when the slot is re-ranked, and a dropped slot lets
+go of its own entries at once); :meth:`WaitIndex.compact` rebuilds everything
+when they outnumber the live ones. Every operation costs a
 few heap operations per device, whatever the number of waiting ABs.
 
 ROUND criteria (parent just finished) are not in the index: selection ranks
