@@ -83,6 +83,13 @@ class Intake:
         """Command name -> its spec, its parameters that add devices, its priority (the
         catalog never changes: looked up once)."""
         self._recent: dict[CommandId, Command] = {}
+        """Commands that ended within ``end_grace``, by id (what ``follows`` may name).
+
+        A Command's ``node`` is looked up only through here (a request that follows its
+        end) and through its app's ``latest`` (after latest). Once it is done (ended or
+        cancelled) and in neither, it is *forgotten*: its ``node`` is set to None. Its
+        node and it point at each other: without that, every finished AB would be freed
+        only by the cyclic garbage collector, whose collections its allocations trigger."""
         self._recent_q: deque[Command] = deque()
 
     # ------------------------------------------------------------------ checks
@@ -173,7 +180,10 @@ class Intake:
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
         root = self._build(app, tree, request, cmds, specs, link, seq)
+        old = app.latest
         app.latest = cmds[-1]
+        if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
+            old.node = None  # (forgotten: see ``_recent``)
         if self._holds.opened:  # (else no stream or block continues a tree)
             self._holds.requested(app, tree)
         parent = link.parent
@@ -306,6 +316,8 @@ class Intake:
             self._log.emit(DecisionKind.CANCEL, rule, node, command=cmd)
             if node.iteration > 0:
                 self._driver.abandon(cmd.id)
+            if cmd.app.latest is not cmd:
+                cmd.node = None  # (forgotten: see ``_recent``)
         self._holds.cancelled(node)
         self._wm.cancel(node, now)
         return list(node.commands)
@@ -324,8 +336,12 @@ class Intake:
     def _prune(self, now: float) -> None:
         horizon = now - self._end_grace
         q = self._recent_q
+        recent = self._recent
         while q and q[0].ended_at < horizon:
-            self._recent.pop(q.popleft().id, None)
+            cmd = q.popleft()
+            recent.pop(cmd.id, None)
+            if cmd.app.latest is not cmd:
+                cmd.node = None  # (forgotten: see ``_recent``)
 
 
 def _turnable(node: Node, before: Node | None) -> bool:

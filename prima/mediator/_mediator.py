@@ -361,6 +361,8 @@ class Mediator:
         elif node.feedback and not outcome.terminal:
             cancelled = cmd0
             cmd0.cancelled = True
+            if app.latest is not cmd0:
+                cmd0.node = None  # (forgotten: see ``Intake._recent``)
             self._log.emit(DecisionKind.CANCEL, Rule.ASAP if app.alive else Rule.UNLOAD, node,
                            detail="feedback loop stopped between iterations")
             self._driver.abandon(cmd0.id)
