@@ -18,7 +18,7 @@ The before node is decided in this order:
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, NamedTuple
 
 from prima.catalog import Catalog, CommandSpec, Param, Priority
@@ -55,6 +55,9 @@ class Link(NamedTuple):
 
 _NEW_TREE = Link(Rule.NEW_TREE)
 _ASAP_NEW_TREE = Link(Rule.ASAP)
+_NONE_CANCELLED: tuple[Command, ...] = ()
+_RUNNING = NodeState.RUNNING
+_new = tuple.__new__
 _EA = AppKind.EA
 _ASAP = RunningOrder.ASAP
 _NO_PARAMS: tuple[Param, ...] = ()
@@ -155,11 +158,11 @@ class Intake:
 
     # ------------------------------------------------------------------ accept
     def accept(self, app: App, request: Request, specs: Specs,
-               now: float) -> tuple[tuple[CommandId, ...], list[Command]]:
+               now: float) -> tuple[tuple[CommandId, ...], Sequence[Command]]:
         """Put a checked request in working memory; its Command ids, and the Commands
         it cancelled (their apps are told once the request is in)."""
         seq = self._next_seq
-        self._next_seq += 1
+        self._next_seq = seq + 1
         cid = self.next_command
         on_interrupt = request.on_interrupt
         if len(specs) == 1:  # (one call: the usual request)
@@ -172,35 +175,38 @@ class Intake:
             all_devices = frozenset().union(*(d for _s, d, _p in specs))
         self.next_command = cid + len(cmds)
         link, cancelled = self._link(app, request, all_devices, now)
+        # (unpacked once: a named tuple's fields are slower to read one by one)
+        rule, parent, tree, enter_now, parent_finished, reactive_allowed = link
         wm = self._wm
-        tree = link.tree if link.tree is not None else wm.new_tree(app)
+        if tree is None:
+            tree = wm.new_tree(app)
         # before its nodes are filed, so that they rank as its reaction
-        if ((request.reactive or request.reaction) and link.reactive_allowed
+        if ((request.reactive or request.reaction) and reactive_allowed
                 and wm.react(tree, seq)
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
-        root = self._build(app, tree, request, cmds, specs, link, seq)
+        root = self._build(app, tree, request, cmds, specs, parent,
+                           request.reactive and reactive_allowed, seq)
         old = app.latest
         app.latest = cmds[-1]
         if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
             old.node = None  # (forgotten: see ``_recent``)
         if self._holds.opened:  # (else no stream or block continues a tree)
             self._holds.requested(app, tree)
-        parent = link.parent
+        log = self._log
         detail = ""
-        if self._log.recording:
-            before = f"before AB{parent.id}" if parent is not None else "roots the tree"
+        if log.recording:
+            count = "1 Command(s) " if len(cmds) == 1 else f"{len(cmds)} Command(s) "
             grouped = "as one AB " if request.group else ""
-            detail = f"{len(cmds)} Command(s) {grouped}{before}"
-        self._log.requested(link.rule, root, detail, cmds,
-                            parent.id if parent is not None else None)
-        if link.enter_now:
-            wm.enter_waiting(root, parent_finished=link.parent_finished)
+            before = f"before AB{parent.id}" if parent is not None else "roots the tree"
+            detail = count + grouped + before
+        log.requested(rule, root, detail, cmds, parent.id if parent is not None else None, now)
+        if enter_now:
+            wm.enter_waiting(root, parent_finished=parent_finished)
         return (cid,) if len(cmds) == 1 else tuple([c.id for c in cmds]), cancelled
 
     def _link(self, app: App, request: Request, devices: frozenset[str],
-              now: float) -> tuple[Link, list[Command]]:
-        cancelled: list[Command] = []
+              now: float) -> tuple[Link, Sequence[Command]]:
         link = self._link_follows(app, request, now) if request.follows is not None else None
         if request.order is _ASAP:
             # A newer request wins even when it is made in an end handler: the app's
@@ -209,36 +215,43 @@ class Intake:
             asap, cancelled = self._link_asap(app, devices, now)
             if link is None or asap.parent is not None:
                 link = asap
+            return link, cancelled
         if link is None:
             link = self._link_after_latest(app)
-        return link, cancelled
+        return link, _NONE_CANCELLED
 
     def _build(self, app: App, tree: Tree, request: Request, cmds: list[Command],
-               specs: Specs, link: Link, seq: int) -> Node:
-        """The request's nodes: one AB (grouped) or a chain; returns the root."""
+               specs: Specs, parent: Node | None, reactive: bool, seq: int) -> Node:
+        """The request's nodes after ``parent``: one AB (one call, or grouped) or a
+        chain; returns the root (the one ``reactive``)."""
         wm = self._wm
-        reactive = request.reactive and link.reactive_allowed
         turns = self._turns and request.face_user
-        parent = link.parent
-        if request.group:
+        if len(cmds) == 1:  # (one call: the usual request)
+            _spec, devices, prio = specs[0]
+            commands: tuple[Command, ...] = (cmds[0],)
+        elif request.group:
             prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
             devices = frozenset().union(*(d for _s, d, _p in specs))
-            root = wm.new_node(app, tree, tuple(cmds), devices, prio, reactive, seq)
-            if turns:
-                root.turnable = _turnable(root, parent)
+            commands = tuple(cmds)
+        else:
+            first: Node | None = None
+            for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
+                node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None,
+                                   seq)
+                if turns:
+                    node.turnable = _turnable(node, parent)
+                wm.link(parent, node)
+                if first is None:
+                    first = node
+                parent = node
+            assert first is not None
+            return first
+        root = wm.new_node(app, tree, commands, devices, prio, reactive, seq)
+        if turns:
+            root.turnable = _turnable(root, parent)
+        if parent is not None:
             wm.link(parent, root)
-            return root
-        first: Node | None = None
-        for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
-            node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None, seq)
-            if turns:
-                node.turnable = _turnable(node, parent)
-            wm.link(parent, node)
-            if first is None:
-                first = node
-            parent = node
-        assert first is not None
-        return first
+        return root
 
     def insert_before(self, x: Node, call: Call, spec: CommandSpec, rule: Rule,
                       detail: str) -> Node:
@@ -262,28 +275,42 @@ class Intake:
         return node
 
     # ------------------------------------------------------------------ links
+    # (Links are built from a tuple in field order, ``tuple.__new__``: the named tuple's
+    # own constructor is a Python function, one call more per request.)
     def _link_follows(self, app: App, request: Request, now: float) -> Link | None:
         """CS exceptions (a)/(b): a request made while handling X's end stays in X's tree."""
-        self._prune(now)
+        q = self._recent_q
+        if q and q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
+            self._prune(now)
         cmd = self._recent.get(request.follows) if request.follows is not None else None
-        if cmd is None or cmd.app is not app or cmd.node is None:
+        if cmd is None or cmd.app is not app:
             return None
-        if now - cmd.ended_at > self._end_grace:
+        node = cmd.node
+        if node is None or now - cmd.ended_at > self._end_grace:
             return None
-        return Link(Rule.END_EVENT, cmd.node, cmd.node.tree, enter_now=True,
-                    parent_finished=True, reactive_allowed=False)
+        return _new(Link, (Rule.END_EVENT, node, node.tree, True, True, False))
 
     def _link_asap(self, app: App, devices: frozenset[str],
-                   now: float) -> tuple[Link, list[Command]]:
+                   now: float) -> tuple[Link, Sequence[Command]]:
         """As soon as possible: cancel the app's own trees that share a device."""
+        on = app.trees_on
+        if len(devices) == 1:  # (one device: its trees, as they are)
+            for d in devices:
+                sharing = on.get(d)
+        else:
+            sharing = {t.id: t for d in devices if d in on for t in on[d].values()}
+        if not sharing:
+            return _ASAP_NEW_TREE, _NONE_CANCELLED  # nothing shares a device: a new tree
+        # the app's trees with a node that shares a device, oldest first (taken out
+        # first: cancelling their nodes changes ``trees_on``)
+        trees = [sharing[tid] for tid in sorted(sharing)] if len(sharing) > 1 \
+            else list(sharing.values())
         running: Node | None = None
         last: Node | None = None
         cancelled: list[Command] = []
-        on = app.trees_on
-        sharing = {t.id: t for d in devices if d in on for t in on[d].values()}
-        for tid in sorted(sharing):  # the app's trees with a node that shares a device
-            for n in list(sharing[tid].nodes.values()):
-                if n.state is NodeState.RUNNING:
+        for tree in trees:
+            for n in list(tree.nodes.values()):
+                if n.state is _RUNNING:
                     if n.feedback and not n.commands[0].cut:
                         n.commands[0].cut = True
                     if n.devices & devices and (running is None or n.id > running.id):
@@ -293,9 +320,9 @@ class Intake:
                     if last is None or n.id > last.id:
                         last = n
         if running is not None:
-            return Link(Rule.ASAP, running, running.tree, enter_now=False), cancelled
+            return _new(Link, (Rule.ASAP, running, running.tree, False, False, True)), cancelled
         if last is not None:
-            return Link(Rule.ASAP, last, last.tree, enter_now=True), cancelled
+            return _new(Link, (Rule.ASAP, last, last.tree, True, False, True)), cancelled
         return _ASAP_NEW_TREE, cancelled  # nothing shares a device: a new tree at once
 
     def _link_after_latest(self, app: App) -> Link:
@@ -303,34 +330,40 @@ class Intake:
         latest = app.latest
         node = latest.node if latest is not None else None
         if node is not None and node.state in IN_MEMORY:
-            return Link(Rule.AFTER_LATEST, node, node.tree, enter_now=False)
+            return _new(Link, (Rule.AFTER_LATEST, node, node.tree, False, False, True))
         if node is not None and self._holds.continues(app, node.tree):
-            return Link(Rule.STREAM, node, node.tree, enter_now=True, parent_finished=True)
+            return _new(Link, (Rule.STREAM, node, node.tree, True, True, True))
         return _NEW_TREE
 
     # ------------------------------------------------------------------ ends
-    def cancel(self, node: Node, rule: Rule, now: float) -> list[Command]:
+    def cancel(self, node: Node, rule: Rule, now: float) -> tuple[Command, ...]:
         """Cancel a not-yet-started node; returns its Commands (for callbacks)."""
-        for cmd in node.commands:
+        log = self._log
+        commands = node.commands
+        for cmd in commands:
             cmd.cancelled = True
-            self._log.emit(DecisionKind.CANCEL, rule, node, command=cmd)
+            if len(commands) == 1:  # (the decision about the AB itself: its facts)
+                log.ab(DecisionKind.CANCEL, rule, node)
+            else:
+                log.emit(DecisionKind.CANCEL, rule, node, command=cmd)
             if node.iteration > 0:
                 self._driver.abandon(cmd.id)
             if cmd.app.latest is not cmd:
                 cmd.node = None  # (forgotten: see ``_recent``)
         self._holds.cancelled(node)
         self._wm.cancel(node, now)
-        return list(node.commands)
+        return commands
 
     def ended(self, commands: tuple[Command, ...], now: float) -> None:
         """Commands ended: requests that follow them are linked for ``end_grace``."""
+        recent = self._recent
+        q = self._recent_q
         for cmd in commands:
             cmd.ended = True
             cmd.ended_at = now
-            self._recent[cmd.id] = cmd
-            self._recent_q.append(cmd)
-        q = self._recent_q
-        if q and q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
+            recent[cmd.id] = cmd
+            q.append(cmd)
+        if q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
             self._prune(now)
 
     def _prune(self, now: float) -> None:

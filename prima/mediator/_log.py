@@ -36,17 +36,20 @@ class DecisionLog:
                                          detail, node.calls, None, None)))
 
     def requested(self, rule: Rule, node: Node, detail: str, request: Sequence[Command],
-                  before: int | None) -> None:
+                  before: int | None, now: float) -> None:
         """Record a request's decision (what :meth:`emit` records for ``REQUEST`` with
-        these), positional: one per request."""
-        if self._record is None or not (len(request) == 1 == len(node.commands)
-                                        and node.commands[0] is request[0]):
+        these), positional: one per request. ``now``: the clock's time (the caller has
+        just read it)."""
+        if self._record is None:
+            self.count += 1
+            return
+        if not (len(request) == 1 == len(node.commands) and node.commands[0] is request[0]):
             self.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=request,
                       before=before)
             return
         self.count += 1  # (the request is the AB's own Command: the AB's facts)
-        self._record(_new(Decision, (self._clock.now(), self.count, DecisionKind.REQUEST, rule,
-                                     *node.facts, detail, node.calls, before, None)))
+        self._record(_new(Decision, (now, self.count, DecisionKind.REQUEST, rule, *node.facts,
+                                     detail, node.calls, before, None)))
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
              app: str | None = None, command: Command | None = None,

@@ -19,7 +19,7 @@ more can start, so the result does not depend on how callbacks nest.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import TracebackType
 
@@ -309,10 +309,15 @@ class Mediator:
             if not cmd.internal:
                 self._tell(app, cmd.id, outcome)
 
-    def _tell_cancelled(self, commands: list[Command]) -> None:
+    def _tell_cancelled(self, commands: Sequence[Command]) -> None:
         for cmd in commands:
             if not cmd.internal:
-                self._tell(cmd.app, cmd.id, None)
+                app = cmd.app
+                if app.alive:
+                    try:  # (``_tell``, written out: an ASAP request cancels, every time)
+                        app.listener.command_cancelled(cmd.id)
+                    except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
+                        self._failed(app, "command_cancelled", exc)
 
     def _tell(self, app: App, command_id: CommandId, outcome: Outcome | None) -> None:
         """Tell an app that its Command ended (with ``outcome``) or was cancelled (None)."""

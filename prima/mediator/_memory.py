@@ -65,21 +65,26 @@ class WorkingMemory:
     def new_node(self, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
                  iteration: int = 0) -> Node:
-        node = Node(self._next_ab, app, tree, commands, devices, priority, reactive, seq,
-                    iteration)
-        self._next_ab += 1
-        self.nodes[node.id] = node
-        tree.nodes[node.id] = node
+        ab = self._next_ab
+        self._next_ab = ab + 1
+        node = Node(ab, app, tree, commands, devices, priority, reactive, seq, iteration)
+        self.nodes[ab] = node
+        tree.nodes[ab] = node
+        tid = tree.id
+        if not tree.live:  # it enters working memory (else it is there: see ``leave``)
+            self.trees[tid] = tree
+            app.trees[tid] = tree
         tree.live += 1
         app.live += 1
-        self.trees[tree.id] = tree
-        app.trees[tree.id] = tree
         counts = tree.devices
         for d in node.sorted_devices:
             n = counts.get(d, 0)
             counts[d] = n + 1
             if not n:
-                app.trees_on.setdefault(d, {})[tree.id] = tree
+                on = app.trees_on.get(d)
+                if on is None:
+                    on = app.trees_on[d] = {}
+                on[tid] = tree
         for c in commands:
             c.node = node
         return node
@@ -224,12 +229,14 @@ class WorkingMemory:
 
     def leave(self, node: Node) -> None:
         """Take a finished or cancelled node out of working memory."""
-        self.nodes.pop(node.id, None)
+        ab = node.id
+        self.nodes.pop(ab, None)
         tree = node.tree
-        if tree.nodes.pop(node.id, None) is None:
+        if tree.nodes.pop(ab, None) is None:
             return
         if node.parked is not None:
             tree.parked -= 1
+        app = tree.app
         counts = tree.devices
         for d in node.sorted_devices:
             n = counts[d] - 1
@@ -237,15 +244,15 @@ class WorkingMemory:
                 counts[d] = n
             else:
                 del counts[d]
-                on = tree.app.trees_on[d]
+                on = app.trees_on[d]
                 del on[tree.id]
                 if not on:
-                    del tree.app.trees_on[d]
-        tree.live -= 1
-        tree.app.live -= 1
-        if tree.live == 0:
+                    del app.trees_on[d]
+        app.live -= 1
+        tree.live = live = tree.live - 1
+        if not live:
             self.trees.pop(tree.id, None)
-            tree.app.trees.pop(tree.id, None)
+            app.trees.pop(tree.id, None)
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
