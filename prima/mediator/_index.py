@@ -217,6 +217,11 @@ class WaitIndex:
 
     def _drop_slot(self, slot: _Slot) -> None:
         slot.version = -1
+        # (its entries are all stale: dropped now, not when the slot's own entry reaches
+        # its group's top, so that the ABs they name are freed at once)
+        self.entries -= len(slot.heap)
+        slot.heap.clear()
+        slot.ranked_by = None
         tid = slot.tree.id
         if slot.group.slots.get(tid) is slot:
             del slot.group.slots[tid]
