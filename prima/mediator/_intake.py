@@ -99,18 +99,20 @@ class Intake:
     def check(self, request: Request) -> tuple[App, Specs]:
         """Validate a request before anything changes; the app and each call's spec,
         devices and priority."""
-        app = self._apps.get(request.app)
+        # (the fields a check reads, unpacked once: a named tuple's fields are slow to
+        # read one by one)
+        name, calls, order, group, _reactive, _reaction, _follows, _face, _interrupt = request
+        app = self._apps.get(name)
         if app is None:
-            raise MediationError(f"unknown application {request.app!r}: register it first")
-        calls = request.calls
+            raise MediationError(f"unknown application {name!r}: register it first")
         if not calls:
-            raise MediationError(f"{request.app}: a request needs at least one Command")
-        if not isinstance(request.order, RunningOrder):
-            raise MediationError(f"{request.app}: unknown running order {request.order!r}")
-        needed = 1 if request.group else len(calls)
+            raise MediationError(f"{name}: a request needs at least one Command")
+        if not isinstance(order, RunningOrder):
+            raise MediationError(f"{name}: unknown running order {order!r}")
+        needed = 1 if group else len(calls)
         if app.live + needed > app.budgets.waiting:
             raise MediationError(
-                f"{request.app}: more than {app.budgets.waiting} behaviors would be waiting "
+                f"{name}: more than {app.budgets.waiting} behaviors would be waiting "
                 "or running (its waiting budget)")
         out: Specs = []
         known = self._specs
@@ -123,18 +125,18 @@ class Intake:
             if app.kind is _EA:
                 if spec.robot_specific:
                     raise MediationError(
-                        f"{request.app}: {spec.name} is robot-specific; only the FA may use it")
+                        f"{name}: {spec.name} is robot-specific; only the FA may use it")
                 if call.extra:
                     raise MediationError(
-                        f"{request.app}: additional arguments to {spec.name} are FA-only")
+                        f"{name}: additional arguments to {spec.name} are FA-only")
             if extra_devices:
                 unknown = extra_devices - self._catalog.devices
                 if unknown:
                     raise MediationError(
-                        f"{request.app}: {spec.name} names unknown devices {sorted(unknown)}")
-            if request.group and spec.feedback and len(calls) > 1:
+                        f"{name}: {spec.name} names unknown devices {sorted(unknown)}")
+            if group and spec.feedback and len(calls) > 1:
                 raise MediationError(
-                    f"{request.app}: feedback Command {spec.name} cannot be grouped into one "
+                    f"{name}: feedback Command {spec.name} cannot be grouped into one "
                     "AB (each loop iteration is its own AB)")
             # (``spec.devices_for``, asked only when a parameter can add devices)
             devices = spec.devices_for(call.args) if params else spec.devices
@@ -161,32 +163,43 @@ class Intake:
                now: float) -> tuple[tuple[CommandId, ...], Sequence[Command]]:
         """Put a checked request in working memory; its Command ids, and the Commands
         it cancelled (their apps are told once the request is in)."""
+        # (its fields unpacked once: a named tuple's fields are slow to read one by one)
+        _name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt = \
+            request
         seq = self._next_seq
         self._next_seq = seq + 1
         cid = self.next_command
-        on_interrupt = request.on_interrupt
         if len(specs) == 1:  # (one call: the usual request)
             spec, all_devices, _prio = specs[0]
-            cmds = [Command(cid, app, request.calls[0], spec, None, on_interrupt)]
+            cmds = [Command(cid, app, calls[0], spec, None, on_interrupt)]
         else:
             cmds = [Command(cid + i, app, call, spec, None, on_interrupt)
-                    for i, (call, (spec, _d, _p)) in enumerate(
-                        zip(request.calls, specs, strict=True))]
+                    for i, (call, (spec, _d, _p)) in enumerate(zip(calls, specs, strict=True))]
             all_devices = frozenset().union(*(d for _s, d, _p in specs))
         self.next_command = cid + len(cmds)
-        link, cancelled = self._link(app, request, all_devices, now)
-        # (unpacked once: a named tuple's fields are slower to read one by one)
+        # Where its root goes (the module's docstring). A newer request wins even when it
+        # is made in an end handler: the app's own waiting work on its devices is
+        # cancelled; the end-event link only chooses the tree when nothing of the app
+        # was in the way.
+        link = self._link_follows(app, follows, now) if follows is not None else None
+        cancelled: Sequence[Command] = _NONE_CANCELLED
+        if order is _ASAP:
+            asap, cancelled = self._link_asap(app, all_devices, now)
+            if link is None or asap.parent is not None:
+                link = asap
+        elif link is None:
+            link = self._link_after_latest(app)
         rule, parent, tree, enter_now, parent_finished, reactive_allowed = link
         wm = self._wm
         if tree is None:
             tree = wm.new_tree(app)
         # before its nodes are filed, so that they rank as its reaction
-        if ((request.reactive or request.reaction) and reactive_allowed
+        if ((reactive or reaction) and reactive_allowed
                 and wm.react(tree, seq)
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
-        root = self._build(app, tree, request, cmds, specs, parent,
-                           request.reactive and reactive_allowed, seq)
+        root = self._build(app, tree, cmds, specs, group, parent, reactive and reactive_allowed,
+                           self._turns and face_user, seq)
         old = app.latest
         app.latest = cmds[-1]
         if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
@@ -197,7 +210,7 @@ class Intake:
         detail = ""
         if log.recording:
             count = "1 Command(s) " if len(cmds) == 1 else f"{len(cmds)} Command(s) "
-            grouped = "as one AB " if request.group else ""
+            grouped = "as one AB " if group else ""
             before = f"before AB{parent.id}" if parent is not None else "roots the tree"
             detail = count + grouped + before
         log.requested(rule, root, detail, cmds, parent.id if parent is not None else None, now)
@@ -205,31 +218,16 @@ class Intake:
             wm.enter_waiting(root, parent_finished=parent_finished)
         return (cid,) if len(cmds) == 1 else tuple([c.id for c in cmds]), cancelled
 
-    def _link(self, app: App, request: Request, devices: frozenset[str],
-              now: float) -> tuple[Link, Sequence[Command]]:
-        link = self._link_follows(app, request, now) if request.follows is not None else None
-        if request.order is _ASAP:
-            # A newer request wins even when it is made in an end handler: the app's
-            # own waiting work on its devices is cancelled; the end-event link only
-            # chooses the tree when nothing of the app was in the way.
-            asap, cancelled = self._link_asap(app, devices, now)
-            if link is None or asap.parent is not None:
-                link = asap
-            return link, cancelled
-        if link is None:
-            link = self._link_after_latest(app)
-        return link, _NONE_CANCELLED
-
-    def _build(self, app: App, tree: Tree, request: Request, cmds: list[Command],
-               specs: Specs, parent: Node | None, reactive: bool, seq: int) -> Node:
-        """The request's nodes after ``parent``: one AB (one call, or grouped) or a
-        chain; returns the root (the one ``reactive``)."""
+    def _build(self, app: App, tree: Tree, cmds: list[Command], specs: Specs, group: bool,
+               parent: Node | None, reactive: bool, turns: bool, seq: int) -> Node:
+        """The request's nodes after ``parent``: one AB (one call, or ``group``) or a
+        chain; returns the root (the one ``reactive``). ``turns``: its utterances may be
+        ``turnable``."""
         wm = self._wm
-        turns = self._turns and request.face_user
         if len(cmds) == 1:  # (one call: the usual request)
             _spec, devices, prio = specs[0]
             commands: tuple[Command, ...] = (cmds[0],)
-        elif request.group:
+        elif group:
             prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
             devices = frozenset().union(*(d for _s, d, _p in specs))
             commands = tuple(cmds)
@@ -277,12 +275,12 @@ class Intake:
     # ------------------------------------------------------------------ links
     # (Links are built from a tuple in field order, ``tuple.__new__``: the named tuple's
     # own constructor is a Python function, one call more per request.)
-    def _link_follows(self, app: App, request: Request, now: float) -> Link | None:
+    def _link_follows(self, app: App, follows: CommandId, now: float) -> Link | None:
         """CS exceptions (a)/(b): a request made while handling X's end stays in X's tree."""
         q = self._recent_q
         if q and q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
             self._prune(now)
-        cmd = self._recent.get(request.follows) if request.follows is not None else None
+        cmd = self._recent.get(follows)
         if cmd is None or cmd.app is not app:
             return None
         node = cmd.node
