@@ -56,7 +56,14 @@ class Link(NamedTuple):
 _NEW_TREE = Link(Rule.NEW_TREE)
 _ASAP_NEW_TREE = Link(Rule.ASAP)
 _NONE_CANCELLED: tuple[Command, ...] = ()
+# (enum members read once: reading one from its class goes through the enum's
+# metaclass, many times slower than a global)
 _RUNNING = NodeState.RUNNING
+_END_EVENT = Rule.END_EVENT
+_ASAP_RULE = Rule.ASAP
+_AFTER_LATEST = Rule.AFTER_LATEST
+_STREAM = Rule.STREAM
+_CANCEL = DecisionKind.CANCEL
 _new = tuple.__new__
 _EA = AppKind.EA
 _ASAP = RunningOrder.ASAP
@@ -286,7 +293,7 @@ class Intake:
         node = cmd.node
         if node is None or now - cmd.ended_at > self._end_grace:
             return None
-        return _new(Link, (Rule.END_EVENT, node, node.tree, True, True, False))
+        return _new(Link, (_END_EVENT, node, node.tree, True, True, False))
 
     def _link_asap(self, app: App, devices: frozenset[str],
                    now: float) -> tuple[Link, Sequence[Command]]:
@@ -314,13 +321,13 @@ class Intake:
                     if n.devices & devices and (running is None or n.id > running.id):
                         running = n
                 elif n.state in IN_MEMORY:
-                    cancelled.extend(self.cancel(n, Rule.ASAP, now))
+                    cancelled.extend(self.cancel(n, _ASAP_RULE, now))
                     if last is None or n.id > last.id:
                         last = n
         if running is not None:
-            return _new(Link, (Rule.ASAP, running, running.tree, False, False, True)), cancelled
+            return _new(Link, (_ASAP_RULE, running, running.tree, False, False, True)), cancelled
         if last is not None:
-            return _new(Link, (Rule.ASAP, last, last.tree, True, False, True)), cancelled
+            return _new(Link, (_ASAP_RULE, last, last.tree, True, False, True)), cancelled
         return _ASAP_NEW_TREE, cancelled  # nothing shares a device: a new tree at once
 
     def _link_after_latest(self, app: App) -> Link:
@@ -328,9 +335,9 @@ class Intake:
         latest = app.latest
         node = latest.node if latest is not None else None
         if node is not None and node.state in IN_MEMORY:
-            return _new(Link, (Rule.AFTER_LATEST, node, node.tree, False, False, True))
+            return _new(Link, (_AFTER_LATEST, node, node.tree, False, False, True))
         if node is not None and self._holds.continues(app, node.tree):
-            return _new(Link, (Rule.STREAM, node, node.tree, True, True, True))
+            return _new(Link, (_STREAM, node, node.tree, True, True, True))
         return _NEW_TREE
 
     # ------------------------------------------------------------------ ends
@@ -341,9 +348,9 @@ class Intake:
         for cmd in commands:
             cmd.cancelled = True
             if len(commands) == 1:  # (the decision about the AB itself: its facts)
-                log.ab(DecisionKind.CANCEL, rule, node)
+                log.ab(_CANCEL, rule, node)
             else:
-                log.emit(DecisionKind.CANCEL, rule, node, command=cmd)
+                log.emit(_CANCEL, rule, node, command=cmd)
             if node.iteration > 0:
                 self._driver.abandon(cmd.id)
             if cmd.app.latest is not cmd:

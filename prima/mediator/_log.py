@@ -11,6 +11,7 @@ from prima.mediator._state import Command, Node
 __all__ = ["DecisionLog"]
 
 _new = tuple.__new__
+_REQUEST = DecisionKind.REQUEST  # (read once: from its class, through the enum's metaclass)
 
 
 class DecisionLog:
@@ -48,7 +49,7 @@ class DecisionLog:
                       before=before)
             return
         self.count += 1  # (the request is the AB's own Command: the AB's facts)
-        self._record(_new(Decision, (now, self.count, DecisionKind.REQUEST, rule, *node.facts,
+        self._record(_new(Decision, (now, self.count, _REQUEST, rule, *node.facts,
                                      detail, node.calls, before, None)))
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,

@@ -59,6 +59,13 @@ from prima.vocab import (
 
 __all__ = ["Mediator", "MediatorConfig"]
 
+# (enum members read once on the hot paths: reading one from its class goes through the
+# enum's metaclass, many times slower than a global)
+_PENDING = NodeState.PENDING
+_RUNNING = NodeState.RUNNING
+_END = DecisionKind.END
+_COMPLETED = Rule.COMPLETED
+
 
 @dataclass(frozen=True)
 class MediatorConfig:
@@ -332,7 +339,7 @@ class Mediator:
     def finish(self, ab_id: AbId, outcome: Outcome = Outcome()) -> None:
         """The driver reports an AB's end (MISSION.md rule 3, feedback iterations)."""
         node = self._wm.nodes.get(ab_id)
-        if node is None or node.state is not NodeState.RUNNING:
+        if node is None or node.state is not _RUNNING:
             raise MediationError(f"AB{ab_id} is not running")
         # (what ``with self._operation():`` does, written out: the other hot operation)
         outer = self._depth == 0 and not self._settling
@@ -356,7 +363,7 @@ class Mediator:
         detail = ""
         if node.feedback:
             detail = "terminal" if outcome.terminal else "not terminal"
-        self._log.ab(DecisionKind.END, Rule.COMPLETED, node, detail)
+        self._log.ab(_END, _COMPLETED, node, detail)
         app = node.app
         cmd0 = node.commands[0]
         ended: tuple[Command, ...] = ()
@@ -375,7 +382,7 @@ class Mediator:
             ended = node.commands
             self._intake.ended(ended, now)
         for child in children:
-            if child.state is NodeState.PENDING:
+            if child.state is _PENDING:
                 wm.enter_waiting(child, parent_finished=True)
         wm.leave(node)
         if cancelled is not None:

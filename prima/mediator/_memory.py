@@ -17,9 +17,17 @@ from prima.catalog import Priority
 from prima.mediator._index import WaitIndex
 from prima.mediator._interface import AbId, TreeId
 from prima.mediator._ranking import Ranking
-from prima.mediator._state import App, Command, Node, NodeState, Tree
+from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
 
 __all__ = ["WorkingMemory"]
+
+# (enum members read once: reading one from its class goes through the enum's
+# metaclass, many times slower than a global)
+_PENDING = NodeState.PENDING
+_WAITING = NodeState.WAITING
+_RUNNING = NodeState.RUNNING
+_DONE = NodeState.DONE
+_CANCELLED = NodeState.CANCELLED
 
 
 class WorkingMemory:
@@ -94,7 +102,7 @@ class WorkingMemory:
         if parent is None:
             return
         child.parent = parent.id
-        if parent.state in (NodeState.PENDING, NodeState.WAITING, NodeState.RUNNING):
+        if parent.state in IN_MEMORY:
             parent.children.append(child)
 
     # ------------------------------------------------------------------ changes
@@ -138,7 +146,7 @@ class WorkingMemory:
 
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
-        node.state = NodeState.WAITING
+        node.state = _WAITING
         node.app.active += 1
         self.waiting += 1
         self.index.add(node)
@@ -149,7 +157,7 @@ class WorkingMemory:
 
     def unwait(self, node: Node) -> None:
         """A waiting, unparked AB goes back to pending: an AB was put before it."""
-        node.state = NodeState.PENDING
+        node.state = _PENDING
         node.version += 1
         self._rank_out(node)
         self.waiting -= 1
@@ -164,7 +172,7 @@ class WorkingMemory:
         node.parked = None
         if node.tree.nodes.get(node.id) is node:  # (one cancelled meanwhile has left)
             node.tree.parked -= 1
-        if node.state is NodeState.WAITING:
+        if node.state is _WAITING:
             self.index.add(node)
             self._rank_in(node)
             self.dirty.update(node.devices)
@@ -178,7 +186,7 @@ class WorkingMemory:
         self.dirty.update(node.devices)
 
     def start(self, node: Node) -> None:
-        node.state = NodeState.RUNNING
+        node.state = _RUNNING
         tree = node.tree
         tree.started = True
         self._rank_out(node)
@@ -194,7 +202,7 @@ class WorkingMemory:
 
     def end(self, node: Node, now: float) -> list[Node]:
         """A running AB ended: free its devices; returns its children (now orphans)."""
-        node.state = NodeState.DONE
+        node.state = _DONE
         busy = self.busy
         blending = self.blending
         for d in node.sorted_devices:
@@ -216,8 +224,8 @@ class WorkingMemory:
 
     def cancel(self, node: Node, now: float) -> None:
         """Remove a not-yet-started node."""
-        was_waiting = node.state is NodeState.WAITING
-        node.state = NodeState.CANCELLED
+        was_waiting = node.state is _WAITING
+        node.state = _CANCELLED
         node.children = []
         if was_waiting:
             if node.parked is None:
@@ -300,7 +308,7 @@ class WorkingMemory:
     # ------------------------------------------------------------------ queries
     @staticmethod
     def waiting_in(tree: Tree) -> Iterator[Node]:
-        return (n for n in list(tree.nodes.values()) if n.state is NodeState.WAITING)
+        return (n for n in list(tree.nodes.values()) if n.state is _WAITING)
 
     def stack(self) -> list[Tree]:
         """The suspended stack, top (most recently suspended) first."""
@@ -310,4 +318,4 @@ class WorkingMemory:
         """Drop stale index entries once they outnumber live ones."""
         if self.index.entries > 4 * (self.waiting * 3 + 64):
             self.index.compact(n for n in self.nodes.values()
-                               if n.state is NodeState.WAITING and n.parked is None)
+                               if n.state is _WAITING and n.parked is None)
