@@ -361,23 +361,26 @@ class Mediator:
         children = wm.end(node, now)
         self._holds.ended(node)
         detail = ""
+        looping = False  # (a feedback iteration that does not end its loop)
         if node.feedback:
             detail = "terminal" if outcome.terminal else "not terminal"
+            looping = not outcome.terminal
         self._log.ab(_END, _COMPLETED, node, detail)
         app = node.app
-        cmd0 = node.commands[0]
         ended: tuple[Command, ...] = ()
         cancelled: Command | None = None
-        if node.feedback and not outcome.terminal and not cmd0.cut:
-            children = [self._next_iteration(node, children)]
-        elif node.feedback and not outcome.terminal:
-            cancelled = cmd0
-            cmd0.cancelled = True
-            if app.latest is not cmd0:
-                cmd0.node = None  # (forgotten: see ``Intake._recent``)
-            self._log.emit(DecisionKind.CANCEL, Rule.ASAP if app.alive else Rule.UNLOAD, node,
-                           detail="feedback loop stopped between iterations")
-            self._driver.abandon(cmd0.id)
+        if looping:
+            cmd0 = node.commands[0]
+            if not cmd0.cut:
+                children = [self._next_iteration(node, children)]
+            else:
+                cancelled = cmd0
+                cmd0.cancelled = True
+                if app.latest is not cmd0:
+                    cmd0.node = None  # (forgotten: see ``Intake._recent``)
+                self._log.emit(DecisionKind.CANCEL, Rule.ASAP if app.alive else Rule.UNLOAD,
+                               node, detail="feedback loop stopped between iterations")
+                self._driver.abandon(cmd0.id)
         else:
             ended = node.commands
             self._intake.ended(ended, now)
