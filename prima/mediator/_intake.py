@@ -300,8 +300,8 @@ class Intake:
         """As soon as possible: cancel the app's own trees that share a device."""
         on = app.trees_on
         if len(devices) == 1:  # (one device: its trees, as they are)
-            for d in devices:
-                sharing = on.get(d)
+            (device,) = devices
+            sharing = on.get(device)
         else:
             sharing = {t.id: t for d in devices if d in on for t in on[d].values()}
         if not sharing:

@@ -96,7 +96,8 @@ class Command:
         self.call = call
         self.spec = spec
         self.node: Node | None = None
-        """Its current node (the latest iteration for a feedback Command)."""
+        """Its current node (the latest iteration for a feedback Command); None before
+        it has one, and once it is done and forgotten (see ``Intake._recent``)."""
         self.ended = False
         self.cancelled = False
         self.cut = False
