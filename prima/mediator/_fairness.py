@@ -295,8 +295,13 @@ class Fairness:
             # decisions made at one instant.
             apps = self._apps
             for name in new if len(new) == 1 else [name for name in apps if name in new]:
-                shares.pop(name, None)
-                share = shares[name] = _Share(apps[name])
+                old = shares.pop(name, None)
+                if old is None:
+                    share = _Share(apps[name])
+                else:  # (the dropped one made anew: its intervals ended before the window)
+                    share = old
+                    share.bound = 0.0
+                shares[name] = share
                 share.open(now)
                 if share.due < due:
                     due = share.due
