@@ -72,8 +72,10 @@ class _Share:
         self.use(app)
 
     def use(self, app: App) -> None:
-        """Settle the record with this registration (and its budgets, which never change)."""
+        """Settle the record with this registration (and its budgets, which never change:
+        ``limit`` and ``window`` are its ``wait_share`` and ``wait_window``)."""
         self.app = app
+        """The registration the record was last settled with."""
         budgets = app.budgets
         self.limit = limit = budgets.wait_share
         self.window = window = budgets.wait_window
@@ -173,8 +175,8 @@ class Fairness:
     the same outcome:
 
     - a record is settled only when it falls due (:meth:`_Share.plan` says why
-      nothing can be decided before), or when its app starts keeping others waiting
-      and has come within its margin of the share; an app that stops is only closed;
+      nothing can be decided before), which an app that starts keeping others waiting
+      near its share may do at once; an app that stops is only closed;
     - when a share kept running could run out is worked out when asked
       (:meth:`next_deadline`), as of the last settle, as that settle would have: the
       same sum at the same instant;
@@ -251,8 +253,8 @@ class Fairness:
                     self._names = names
                     return self._settle_all(now, keeping)
                 self._resync = True
-        # The same instant, keepers and apps as at the last settle: settling again would
-        # change nothing (it is idempotent).
+        # The same keepers and apps as at the last observation, at the instant of the
+        # last settle: settling again would change nothing (it is idempotent).
         if keeping == self._keepers:
             if now == self._at:
                 return False
