@@ -201,6 +201,7 @@ class Mediator:
             self._app_order += 1
             self._apps[app] = App(app, kind, listener, self._app_order,
                                   self._config.budgets.get(kind, DEFAULT_BUDGETS[kind]))
+            self._fairness.registrations()
             self._log.emit(DecisionKind.LOAD, Rule.REGISTER, app=app, detail=kind.name)
 
     def unregister(self, app: str) -> None:
@@ -213,6 +214,7 @@ class Mediator:
         now = self._clock.now()
         app.alive = False
         self._apps.pop(app.name, None)
+        self._fairness.registrations()
         for tree in sorted(app.trees.values(), key=lambda t: t.id):
             for node in list(tree.nodes.values()):
                 if node.state is NodeState.RUNNING:
