@@ -137,7 +137,7 @@ class Holds:
                 talker = busy.get(d)
                 if talker is not None and talker.app is not node.app:
                     return Rule.KEEP_CHANNEL, talker.app
-        if not self.open():
+        if not self.opened:
             return None
         for other in self._apps.values():
             if other is node.app or other.demoted:

@@ -19,8 +19,10 @@ application loses or regains its precedence), its slots are re-ranked, a few
 per device, never its ABs one by one. Entries are removed lazily: an AB's
 entries go stale when it leaves the waiting list or its ``version`` changes
 (it was parked); a slot's entry goes stale when the slot's ``version`` changes.
-Stale entries are dropped when they reach a heap's top; :meth:`WaitIndex.compact`
-rebuilds everything when they outnumber the live ones. Every operation costs a
+Stale entries are dropped when they reach a heap's top (a slot's stale entry at
+its group's top is replaced when the slot is re-ranked, and a dropped slot lets
+go of its own entries at once); :meth:`WaitIndex.compact` rebuilds everything
+when they outnumber the live ones. Every operation costs a
 few heap operations per device, whatever the number of waiting ABs.
 
 ROUND criteria (parent just finished) are not in the index: selection ranks
@@ -31,7 +33,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
-from collections.abc import Iterable
+from collections.abc import Iterable, Set
 
 from prima.mediator._ranking import Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
@@ -40,6 +42,7 @@ __all__ = ["WaitIndex"]
 
 _WAITING = NodeState.WAITING
 _heappush = heapq.heappush
+_NO_DEVICES: frozenset[str] = frozenset()
 
 _NodeEntry = tuple[Keys, int, int, Node]
 """(the AB's order keys, its id, its version when filed, the AB)."""
@@ -102,8 +105,9 @@ class WaitIndex:
         self.ranking = ranking
         """The criteria's keys, kept on the ABs and trees (:class:`._ranking.Ranking`)."""
         self._devices: dict[str, _Device] = {}
-        self._tree_slots: dict[int, dict[tuple[str, Keys], _Slot]] = {}
-        """Tree id -> its live slots, by (device, group head): a few per tree."""
+        self._tree_slots: dict[int, dict[_Slot, None]] = {}
+        """Tree id -> its live slots (a few per tree; a dict as an ordered set: its order
+        is the order they were made in, whatever their addresses)."""
         self._serial = itertools.count()
         self.entries = 0
         """Heap entries held, live and stale."""
@@ -120,19 +124,24 @@ class WaitIndex:
         tree = node.tree
         devices = self._devices
         for d in node.sorted_devices:
-            # (``_slot``, its usual case inline: the device, group and slot exist)
             dev = devices.get(d)
             group = dev.groups.get(head) if dev is not None else None
             slot = group.slots.get(tree.id) if group is not None else None
             if slot is None:
-                slot = self._slot(d, head, tree)
+                slot = self._slot(d, head, tree, group)
             heap = slot.heap
             _heappush(heap, entry)
             self.entries += 1
-            if heap[0] is entry or slot.top(self) is node:
+            # It ranks its slot when it is first in it: at the top, or next below stale
+            # entries (``_Slot.top`` drops them; not asked when the top entry is live).
+            first = heap[0]
+            top = first[3]
+            if first is entry or (
+                    (top.state is not _WAITING or top.version != first[2])
+                    and slot.top(self) is node):
                 self._push_slot(slot, node)
 
-    def rerank(self, tree: Tree) -> set[str]:
+    def rerank(self, tree: Tree) -> Set[str]:
         """The tree's TREE keys changed (suspended, resumed): re-rank its slots.
 
         Returns the devices on which the tree has waiting ABs.
@@ -140,9 +149,9 @@ class WaitIndex:
         tree.keys = None
         slots = self._tree_slots.get(tree.id)
         if not slots:
-            return set()
+            return _NO_DEVICES
         devices = set()
-        for slot in list(slots.values()):
+        for slot in list(slots):
             best = slot.top(self)
             if best is None:
                 self._drop_slot(slot)
@@ -154,8 +163,10 @@ class WaitIndex:
     def forget(self, tree: Tree) -> None:
         """The tree left working memory: drop its slots (and its keys)."""
         tree.keys = None
-        for slot in list(self._tree_slots.get(tree.id, {}).values()):
-            self._drop_slot(slot)
+        slots = self._tree_slots.pop(tree.id, None)
+        if slots:
+            for slot in slots:
+                self._discard(slot)
 
     def top(self, device: str) -> Node | None:
         """The best-ranked waiting AB that needs ``device`` (ROUND criteria aside)."""
@@ -193,38 +204,60 @@ class WaitIndex:
             self.add(node)
 
     # -------------------------------------------------------------- internals
-    def _slot(self, device: str, head: Keys, tree: Tree) -> _Slot:
-        dev = self._devices.get(device)
-        if dev is None:
-            dev = self._devices[device] = _Device()
-        group = dev.groups.get(head)
+    def _slot(self, device: str, head: Keys, tree: Tree, group: _Group | None) -> _Slot:
+        """A new slot for ``tree`` in the group ``head`` of ``device`` (the group is
+        made if None)."""
         if group is None:
+            dev = self._devices.get(device)
+            if dev is None:
+                dev = self._devices[device] = _Device()
             group = dev.groups[head] = _Group(head)
             heapq.heappush(dev.heap, (head, next(self._serial), group))
             self.entries += 1
-        slot = group.slots.get(tree.id)
-        if slot is None:
-            slot = group.slots[tree.id] = _Slot(tree, group, device)
-            self._tree_slots.setdefault(tree.id, {})[device, head] = slot
+        slot = group.slots[tree.id] = _Slot(tree, group, device)
+        self._tree_slots.setdefault(tree.id, {})[slot] = None
         return slot
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
         """(Re-)rank a slot by the stable keys of its best AB; its older entries go stale."""
         slot.version = version = next(self._serial)  # unique: entries never tie up to the slot
         slot.ranked_by = best
-        _heappush(slot.group.heap, (self.ranking.slot_keys(best), version, slot))
-        self.entries += 1
+        entry = (self.ranking.slot_keys(best), version, slot)
+        heap = slot.group.heap
+        if heap and heap[0][2] is slot:
+            # (an entry of its own at the top, now stale: replaced, not left for a pop)
+            heapq.heapreplace(heap, entry)
+        else:
+            _heappush(heap, entry)
+            self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
-        slot.version = -1
+        """Drop a live slot: out of its group and its tree's books."""
+        self._discard(slot)
         tid = slot.tree.id
-        if slot.group.slots.get(tid) is slot:
-            del slot.group.slots[tid]
         slots = self._tree_slots.get(tid)
-        if slots is not None and slots.get((slot.device, slot.group.head)) is slot:
-            del slots[slot.device, slot.group.head]
+        if slots is not None and slot in slots:
+            del slots[slot]
             if not slots:
                 del self._tree_slots[tid]
+
+    def _discard(self, slot: _Slot) -> None:
+        """Take a live slot out of its group (its tree's books are the caller's). What
+        stale entries it holds are dropped now, and its group's top entry if that is
+        its own: else they would keep its ABs and their tree alive until they reached
+        a top or a compaction (an ASAP request's tree, cancelled, leaves at once)."""
+        slot.version = -1
+        self.entries -= len(slot.heap)
+        slot.heap = []
+        slot.ranked_by = None
+        group = slot.group
+        tid = slot.tree.id
+        if group.slots.get(tid) is slot:
+            del group.slots[tid]
+        heap = group.heap
+        if heap and heap[0][2] is slot:
+            heapq.heappop(heap)
+            self.entries -= 1
 
     def _group_top(self, group: _Group) -> Node | None:
         heap = group.heap
@@ -236,14 +269,10 @@ class WaitIndex:
                 continue
             best = slot.top(self)
             if best is None:
-                heapq.heappop(heap)
-                self.entries -= 1
-                self._drop_slot(slot)
+                self._drop_slot(slot)  # (its entry, at the top, with it)
                 continue
             if best is not slot.ranked_by:  # the AB it was ranked by left the waiting list
-                heapq.heappop(heap)
-                self.entries -= 1
-                self._push_slot(slot, best)
+                self._push_slot(slot, best)  # (its entry at the top is replaced)
                 continue
             return best
         return None

@@ -18,7 +18,7 @@ The before node is decided in this order:
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, NamedTuple
 
 from prima.catalog import Catalog, CommandSpec, Param, Priority
@@ -55,6 +55,16 @@ class Link(NamedTuple):
 
 _NEW_TREE = Link(Rule.NEW_TREE)
 _ASAP_NEW_TREE = Link(Rule.ASAP)
+_NONE_CANCELLED: tuple[Command, ...] = ()
+# (enum members read once: reading one from its class goes through the enum's
+# metaclass, many times slower than a global)
+_RUNNING = NodeState.RUNNING
+_END_EVENT = Rule.END_EVENT
+_ASAP_RULE = Rule.ASAP
+_AFTER_LATEST = Rule.AFTER_LATEST
+_STREAM = Rule.STREAM
+_CANCEL = DecisionKind.CANCEL
+_new = tuple.__new__
 _EA = AppKind.EA
 _ASAP = RunningOrder.ASAP
 _NO_PARAMS: tuple[Param, ...] = ()
@@ -83,24 +93,33 @@ class Intake:
         """Command name -> its spec, its parameters that add devices, its priority (the
         catalog never changes: looked up once)."""
         self._recent: dict[CommandId, Command] = {}
+        """Commands that ended within ``end_grace``, by id (what ``follows`` may name).
+
+        A Command's ``node`` is looked up only through here (a request that follows its
+        end) and through its app's ``latest`` (after latest). Once it is done (ended or
+        cancelled) and in neither, it is *forgotten*: its ``node`` is set to None. Its
+        node and it point at each other: without that, every finished AB would be freed
+        only by the cyclic garbage collector, whose collections its allocations trigger."""
         self._recent_q: deque[Command] = deque()
 
     # ------------------------------------------------------------------ checks
     def check(self, request: Request) -> tuple[App, Specs]:
         """Validate a request before anything changes; the app and each call's spec,
         devices and priority."""
-        app = self._apps.get(request.app)
+        # (the fields a check reads, unpacked once: a named tuple's fields are slow to
+        # read one by one)
+        name, calls, order, group, _reactive, _reaction, _follows, _face, _interrupt = request
+        app = self._apps.get(name)
         if app is None:
-            raise MediationError(f"unknown application {request.app!r}: register it first")
-        calls = request.calls
+            raise MediationError(f"unknown application {name!r}: register it first")
         if not calls:
-            raise MediationError(f"{request.app}: a request needs at least one Command")
-        if not isinstance(request.order, RunningOrder):
-            raise MediationError(f"{request.app}: unknown running order {request.order!r}")
-        needed = 1 if request.group else len(calls)
+            raise MediationError(f"{name}: a request needs at least one Command")
+        if not isinstance(order, RunningOrder):
+            raise MediationError(f"{name}: unknown running order {order!r}")
+        needed = 1 if group else len(calls)
         if app.live + needed > app.budgets.waiting:
             raise MediationError(
-                f"{request.app}: more than {app.budgets.waiting} behaviors would be waiting "
+                f"{name}: more than {app.budgets.waiting} behaviors would be waiting "
                 "or running (its waiting budget)")
         out: Specs = []
         known = self._specs
@@ -113,18 +132,18 @@ class Intake:
             if app.kind is _EA:
                 if spec.robot_specific:
                     raise MediationError(
-                        f"{request.app}: {spec.name} is robot-specific; only the FA may use it")
+                        f"{name}: {spec.name} is robot-specific; only the FA may use it")
                 if call.extra:
                     raise MediationError(
-                        f"{request.app}: additional arguments to {spec.name} are FA-only")
+                        f"{name}: additional arguments to {spec.name} are FA-only")
             if extra_devices:
                 unknown = extra_devices - self._catalog.devices
                 if unknown:
                     raise MediationError(
-                        f"{request.app}: {spec.name} names unknown devices {sorted(unknown)}")
-            if request.group and spec.feedback and len(calls) > 1:
+                        f"{name}: {spec.name} names unknown devices {sorted(unknown)}")
+            if group and spec.feedback and len(calls) > 1:
                 raise MediationError(
-                    f"{request.app}: feedback Command {spec.name} cannot be grouped into one "
+                    f"{name}: feedback Command {spec.name} cannot be grouped into one "
                     "AB (each loop iteration is its own AB)")
             # (``spec.devices_for``, asked only when a parameter can add devices)
             devices = spec.devices_for(call.args) if params else spec.devices
@@ -148,87 +167,96 @@ class Intake:
 
     # ------------------------------------------------------------------ accept
     def accept(self, app: App, request: Request, specs: Specs,
-               now: float) -> tuple[tuple[CommandId, ...], list[Command]]:
+               now: float) -> tuple[tuple[CommandId, ...], Sequence[Command]]:
         """Put a checked request in working memory; its Command ids, and the Commands
         it cancelled (their apps are told once the request is in)."""
+        # (its fields unpacked once: a named tuple's fields are slow to read one by one)
+        _name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt = \
+            request
         seq = self._next_seq
-        self._next_seq += 1
+        self._next_seq = seq + 1
         cid = self.next_command
-        on_interrupt = request.on_interrupt
         if len(specs) == 1:  # (one call: the usual request)
             spec, all_devices, _prio = specs[0]
-            cmds = [Command(cid, app, request.calls[0], spec, None, on_interrupt)]
+            cmds = [Command(cid, app, calls[0], spec, None, on_interrupt)]
         else:
             cmds = [Command(cid + i, app, call, spec, None, on_interrupt)
-                    for i, (call, (spec, _d, _p)) in enumerate(
-                        zip(request.calls, specs, strict=True))]
+                    for i, (call, (spec, _d, _p)) in enumerate(zip(calls, specs, strict=True))]
             all_devices = frozenset().union(*(d for _s, d, _p in specs))
         self.next_command = cid + len(cmds)
-        link, cancelled = self._link(app, request, all_devices, now)
+        # Where its root goes (the module's docstring). A newer request wins even when it
+        # is made in an end handler: the app's own waiting work on its devices is
+        # cancelled; the end-event link only chooses the tree when nothing of the app
+        # was in the way.
+        link = self._link_follows(app, follows, now) if follows is not None else None
+        cancelled: Sequence[Command] = _NONE_CANCELLED
+        if order is _ASAP:
+            asap, cancelled = self._link_asap(app, all_devices, now)
+            if link is None or asap.parent is not None:
+                link = asap
+        elif link is None:
+            link = self._link_after_latest(app)
+        rule, parent, tree, enter_now, parent_finished, reactive_allowed = link
         wm = self._wm
-        tree = link.tree if link.tree is not None else wm.new_tree(app)
+        if tree is None:
+            tree = wm.new_tree(app)
         # before its nodes are filed, so that they rank as its reaction
-        if ((request.reactive or request.reaction) and link.reactive_allowed
+        if ((reactive or reaction) and reactive_allowed
                 and wm.react(tree, seq)
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
-        root = self._build(app, tree, request, cmds, specs, link, seq)
+        root = self._build(app, tree, cmds, specs, group, parent, reactive and reactive_allowed,
+                           self._turns and face_user, seq)
+        old = app.latest
         app.latest = cmds[-1]
+        if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
+            old.node = None  # (forgotten: see ``_recent``)
         if self._holds.opened:  # (else no stream or block continues a tree)
             self._holds.requested(app, tree)
-        parent = link.parent
+        log = self._log
         detail = ""
-        if self._log.recording:
+        if log.recording:
+            count = "1 Command(s) " if len(cmds) == 1 else f"{len(cmds)} Command(s) "
+            grouped = "as one AB " if group else ""
             before = f"before AB{parent.id}" if parent is not None else "roots the tree"
-            grouped = "as one AB " if request.group else ""
-            detail = f"{len(cmds)} Command(s) {grouped}{before}"
-        self._log.requested(link.rule, root, detail, cmds,
-                            parent.id if parent is not None else None)
-        if link.enter_now:
-            wm.enter_waiting(root, parent_finished=link.parent_finished)
+            detail = count + grouped + before
+        log.requested(rule, root, detail, cmds, parent.id if parent is not None else None, now)
+        if enter_now:
+            wm.enter_waiting(root, parent_finished=parent_finished)
         return (cid,) if len(cmds) == 1 else tuple([c.id for c in cmds]), cancelled
 
-    def _link(self, app: App, request: Request, devices: frozenset[str],
-              now: float) -> tuple[Link, list[Command]]:
-        cancelled: list[Command] = []
-        link = self._link_follows(app, request, now) if request.follows is not None else None
-        if request.order is _ASAP:
-            # A newer request wins even when it is made in an end handler: the app's
-            # own waiting work on its devices is cancelled; the end-event link only
-            # chooses the tree when nothing of the app was in the way.
-            asap, cancelled = self._link_asap(app, devices, now)
-            if link is None or asap.parent is not None:
-                link = asap
-        if link is None:
-            link = self._link_after_latest(app)
-        return link, cancelled
-
-    def _build(self, app: App, tree: Tree, request: Request, cmds: list[Command],
-               specs: Specs, link: Link, seq: int) -> Node:
-        """The request's nodes: one AB (grouped) or a chain; returns the root."""
+    def _build(self, app: App, tree: Tree, cmds: list[Command], specs: Specs, group: bool,
+               parent: Node | None, reactive: bool, turns: bool, seq: int) -> Node:
+        """The request's nodes after ``parent``: one AB (one call, or ``group``) or a
+        chain; returns the root (the one ``reactive``). ``turns``: its utterances may be
+        ``turnable``."""
         wm = self._wm
-        reactive = request.reactive and link.reactive_allowed
-        turns = self._turns and request.face_user
-        parent = link.parent
-        if request.group:
+        if len(cmds) == 1:  # (one call: the usual request)
+            _spec, devices, prio = specs[0]
+            commands: tuple[Command, ...] = (cmds[0],)
+        elif group:
             prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
             devices = frozenset().union(*(d for _s, d, _p in specs))
-            root = wm.new_node(app, tree, tuple(cmds), devices, prio, reactive, seq)
-            if turns:
-                root.turnable = _turnable(root, parent)
+            commands = tuple(cmds)
+        else:
+            first: Node | None = None
+            for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
+                node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None,
+                                   seq)
+                if turns:
+                    node.turnable = _turnable(node, parent)
+                wm.link(parent, node)
+                if first is None:
+                    first = node
+                parent = node
+            assert first is not None
+            return first
+        root = wm.new_node(app, tree, commands, devices, prio, reactive, seq)
+        if turns:
+            root.turnable = _turnable(root, parent)
+        if parent is not None:
             wm.link(parent, root)
-            return root
-        first: Node | None = None
-        for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
-            node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None, seq)
-            if turns:
-                node.turnable = _turnable(node, parent)
-            wm.link(parent, node)
-            if first is None:
-                first = node
-            parent = node
-        assert first is not None
-        return first
+        return root
 
     def insert_before(self, x: Node, call: Call, spec: CommandSpec, rule: Rule,
                       detail: str) -> Node:
@@ -252,40 +280,54 @@ class Intake:
         return node
 
     # ------------------------------------------------------------------ links
-    def _link_follows(self, app: App, request: Request, now: float) -> Link | None:
+    # (Links are built from a tuple in field order, ``tuple.__new__``: the named tuple's
+    # own constructor is a Python function, one call more per request.)
+    def _link_follows(self, app: App, follows: CommandId, now: float) -> Link | None:
         """CS exceptions (a)/(b): a request made while handling X's end stays in X's tree."""
-        self._prune(now)
-        cmd = self._recent.get(request.follows) if request.follows is not None else None
-        if cmd is None or cmd.app is not app or cmd.node is None:
+        q = self._recent_q
+        if q and q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
+            self._prune(now)
+        cmd = self._recent.get(follows)
+        if cmd is None or cmd.app is not app:
             return None
-        if now - cmd.ended_at > self._end_grace:
+        node = cmd.node
+        if node is None or now - cmd.ended_at > self._end_grace:
             return None
-        return Link(Rule.END_EVENT, cmd.node, cmd.node.tree, enter_now=True,
-                    parent_finished=True, reactive_allowed=False)
+        return _new(Link, (_END_EVENT, node, node.tree, True, True, False))
 
     def _link_asap(self, app: App, devices: frozenset[str],
-                   now: float) -> tuple[Link, list[Command]]:
+                   now: float) -> tuple[Link, Sequence[Command]]:
         """As soon as possible: cancel the app's own trees that share a device."""
+        on = app.trees_on
+        if len(devices) == 1:  # (one device: its trees, as they are)
+            (device,) = devices
+            sharing = on.get(device)
+        else:
+            sharing = {t.id: t for d in devices if d in on for t in on[d].values()}
+        if not sharing:
+            return _ASAP_NEW_TREE, _NONE_CANCELLED  # nothing shares a device: a new tree
+        # the app's trees with a node that shares a device, oldest first (taken out
+        # first: cancelling their nodes changes ``trees_on``)
+        trees = [sharing[tid] for tid in sorted(sharing)] if len(sharing) > 1 \
+            else list(sharing.values())
         running: Node | None = None
         last: Node | None = None
         cancelled: list[Command] = []
-        on = app.trees_on
-        sharing = {t.id: t for d in devices if d in on for t in on[d].values()}
-        for tid in sorted(sharing):  # the app's trees with a node that shares a device
-            for n in list(sharing[tid].nodes.values()):
-                if n.state is NodeState.RUNNING:
+        for tree in trees:
+            for n in list(tree.nodes.values()):
+                if n.state is _RUNNING:
                     if n.feedback and not n.commands[0].cut:
                         n.commands[0].cut = True
                     if n.devices & devices and (running is None or n.id > running.id):
                         running = n
                 elif n.state in IN_MEMORY:
-                    cancelled.extend(self.cancel(n, Rule.ASAP, now))
+                    cancelled.extend(self.cancel(n, _ASAP_RULE, now))
                     if last is None or n.id > last.id:
                         last = n
         if running is not None:
-            return Link(Rule.ASAP, running, running.tree, enter_now=False), cancelled
+            return _new(Link, (_ASAP_RULE, running, running.tree, False, False, True)), cancelled
         if last is not None:
-            return Link(Rule.ASAP, last, last.tree, enter_now=True), cancelled
+            return _new(Link, (_ASAP_RULE, last, last.tree, True, False, True)), cancelled
         return _ASAP_NEW_TREE, cancelled  # nothing shares a device: a new tree at once
 
     def _link_after_latest(self, app: App) -> Link:
@@ -293,39 +335,51 @@ class Intake:
         latest = app.latest
         node = latest.node if latest is not None else None
         if node is not None and node.state in IN_MEMORY:
-            return Link(Rule.AFTER_LATEST, node, node.tree, enter_now=False)
+            return _new(Link, (_AFTER_LATEST, node, node.tree, False, False, True))
         if node is not None and self._holds.continues(app, node.tree):
-            return Link(Rule.STREAM, node, node.tree, enter_now=True, parent_finished=True)
+            return _new(Link, (_STREAM, node, node.tree, True, True, True))
         return _NEW_TREE
 
     # ------------------------------------------------------------------ ends
-    def cancel(self, node: Node, rule: Rule, now: float) -> list[Command]:
+    def cancel(self, node: Node, rule: Rule, now: float) -> tuple[Command, ...]:
         """Cancel a not-yet-started node; returns its Commands (for callbacks)."""
-        for cmd in node.commands:
+        log = self._log
+        commands = node.commands
+        for cmd in commands:
             cmd.cancelled = True
-            self._log.emit(DecisionKind.CANCEL, rule, node, command=cmd)
+            if len(commands) == 1:  # (the decision about the AB itself: its facts)
+                log.ab(_CANCEL, rule, node)
+            else:
+                log.emit(_CANCEL, rule, node, command=cmd)
             if node.iteration > 0:
                 self._driver.abandon(cmd.id)
+            if cmd.app.latest is not cmd:
+                cmd.node = None  # (forgotten: see ``_recent``)
         self._holds.cancelled(node)
         self._wm.cancel(node, now)
-        return list(node.commands)
+        return commands
 
     def ended(self, commands: tuple[Command, ...], now: float) -> None:
         """Commands ended: requests that follow them are linked for ``end_grace``."""
+        recent = self._recent
+        q = self._recent_q
         for cmd in commands:
             cmd.ended = True
             cmd.ended_at = now
-            self._recent[cmd.id] = cmd
-            self._recent_q.append(cmd)
-        q = self._recent_q
-        if q and q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
+            recent[cmd.id] = cmd
+            q.append(cmd)
+        if q[0].ended_at < now - self._end_grace:  # (``_prune``'s first test)
             self._prune(now)
 
     def _prune(self, now: float) -> None:
         horizon = now - self._end_grace
         q = self._recent_q
+        recent = self._recent
         while q and q[0].ended_at < horizon:
-            self._recent.pop(q.popleft().id, None)
+            cmd = q.popleft()
+            recent.pop(cmd.id, None)
+            if cmd.app.latest is not cmd:
+                cmd.node = None  # (forgotten: see ``_recent``)
 
 
 def _turnable(node: Node, before: Node | None) -> bool:

@@ -11,6 +11,7 @@ from prima.mediator._state import Command, Node
 __all__ = ["DecisionLog"]
 
 _new = tuple.__new__
+_REQUEST = DecisionKind.REQUEST  # (read once: from its class, through the enum's metaclass)
 
 
 class DecisionLog:
@@ -30,23 +31,27 @@ class DecisionLog:
     def ab(self, kind: DecisionKind, rule: Rule, node: Node, detail: str = "") -> None:
         """Record one decision about the AB ``node`` itself (most decisions: a start, an
         end, a suspension): :meth:`emit` for that case, with the AB's ``facts``."""
-        self.count += 1
+        self.count = count = self.count + 1
         if self._record is not None:
-            self._record(_new(Decision, (self._clock.now(), self.count, kind, rule, *node.facts,
+            self._record(_new(Decision, (self._clock.now(), count, kind, rule, *node.facts,
                                          detail, node.calls, None, None)))
 
     def requested(self, rule: Rule, node: Node, detail: str, request: Sequence[Command],
-                  before: int | None) -> None:
+                  before: int | None, now: float) -> None:
         """Record a request's decision (what :meth:`emit` records for ``REQUEST`` with
-        these), positional: one per request."""
-        if self._record is None or not (len(request) == 1 == len(node.commands)
-                                        and node.commands[0] is request[0]):
+        these), positional: one per request. ``request``: its Commands, ``node`` the AB it
+        roots; ``now``: the clock's time (the caller has just read it)."""
+        if self._record is None:
+            self.count += 1
+            return
+        if len(request) != 1:
             self.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=request,
                       before=before)
             return
-        self.count += 1  # (the request is the AB's own Command: the AB's facts)
-        self._record(_new(Decision, (self._clock.now(), self.count, DecisionKind.REQUEST, rule,
-                                     *node.facts, detail, node.calls, before, None)))
+        # (one Command: the AB's own, so the decision is about the AB: its facts)
+        self.count = count = self.count + 1
+        self._record(_new(Decision, (now, count, _REQUEST, rule, *node.facts,
+                                     detail, node.calls, before, None)))
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
              app: str | None = None, command: Command | None = None,

@@ -19,7 +19,7 @@ more can start, so the result does not depend on how callbacks nest.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import TracebackType
 
@@ -58,6 +58,13 @@ from prima.vocab import (
 )
 
 __all__ = ["Mediator", "MediatorConfig"]
+
+# (enum members read once on the hot paths: reading one from its class goes through the
+# enum's metaclass, many times slower than a global)
+_PENDING = NodeState.PENDING
+_RUNNING = NodeState.RUNNING
+_END = DecisionKind.END
+_COMPLETED = Rule.COMPLETED
 
 
 @dataclass(frozen=True)
@@ -194,6 +201,7 @@ class Mediator:
             self._app_order += 1
             self._apps[app] = App(app, kind, listener, self._app_order,
                                   self._config.budgets.get(kind, DEFAULT_BUDGETS[kind]))
+            self._fairness.registrations()
             self._log.emit(DecisionKind.LOAD, Rule.REGISTER, app=app, detail=kind.name)
 
     def unregister(self, app: str) -> None:
@@ -206,6 +214,7 @@ class Mediator:
         now = self._clock.now()
         app.alive = False
         self._apps.pop(app.name, None)
+        self._fairness.registrations()
         for tree in sorted(app.trees.values(), key=lambda t: t.id):
             for node in list(tree.nodes.values()):
                 if node.state is NodeState.RUNNING:
@@ -309,10 +318,15 @@ class Mediator:
             if not cmd.internal:
                 self._tell(app, cmd.id, outcome)
 
-    def _tell_cancelled(self, commands: list[Command]) -> None:
+    def _tell_cancelled(self, commands: Sequence[Command]) -> None:
         for cmd in commands:
             if not cmd.internal:
-                self._tell(cmd.app, cmd.id, None)
+                app = cmd.app
+                if app.alive:
+                    try:  # (``_tell``, written out: an ASAP request cancels, every time)
+                        app.listener.command_cancelled(cmd.id)
+                    except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
+                        self._failed(app, "command_cancelled", exc)
 
     def _tell(self, app: App, command_id: CommandId, outcome: Outcome | None) -> None:
         """Tell an app that its Command ended (with ``outcome``) or was cancelled (None)."""
@@ -327,7 +341,7 @@ class Mediator:
     def finish(self, ab_id: AbId, outcome: Outcome = Outcome()) -> None:
         """The driver reports an AB's end (MISSION.md rule 3, feedback iterations)."""
         node = self._wm.nodes.get(ab_id)
-        if node is None or node.state is not NodeState.RUNNING:
+        if node is None or node.state is not _RUNNING:
             raise MediationError(f"AB{ab_id} is not running")
         # (what ``with self._operation():`` does, written out: the other hot operation)
         outer = self._depth == 0 and not self._settling
@@ -349,26 +363,31 @@ class Mediator:
         children = wm.end(node, now)
         self._holds.ended(node)
         detail = ""
+        looping = False  # (a feedback iteration that does not end its loop)
         if node.feedback:
             detail = "terminal" if outcome.terminal else "not terminal"
-        self._log.ab(DecisionKind.END, Rule.COMPLETED, node, detail)
+            looping = not outcome.terminal
+        self._log.ab(_END, _COMPLETED, node, detail)
         app = node.app
-        cmd0 = node.commands[0]
         ended: tuple[Command, ...] = ()
         cancelled: Command | None = None
-        if node.feedback and not outcome.terminal and not cmd0.cut:
-            children = [self._next_iteration(node, children)]
-        elif node.feedback and not outcome.terminal:
-            cancelled = cmd0
-            cmd0.cancelled = True
-            self._log.emit(DecisionKind.CANCEL, Rule.ASAP if app.alive else Rule.UNLOAD, node,
-                           detail="feedback loop stopped between iterations")
-            self._driver.abandon(cmd0.id)
+        if looping:
+            cmd0 = node.commands[0]
+            if not cmd0.cut:
+                children = [self._next_iteration(node, children)]
+            else:
+                cancelled = cmd0
+                cmd0.cancelled = True
+                if app.latest is not cmd0:
+                    cmd0.node = None  # (forgotten: see ``Intake._recent``)
+                self._log.emit(DecisionKind.CANCEL, Rule.ASAP if app.alive else Rule.UNLOAD,
+                               node, detail="feedback loop stopped between iterations")
+                self._driver.abandon(cmd0.id)
         else:
             ended = node.commands
             self._intake.ended(ended, now)
         for child in children:
-            if child.state is NodeState.PENDING:
+            if child.state is _PENDING:
                 wm.enter_waiting(child, parent_finished=True)
         wm.leave(node)
         if cancelled is not None:

@@ -17,9 +17,17 @@ from prima.catalog import Priority
 from prima.mediator._index import WaitIndex
 from prima.mediator._interface import AbId, TreeId
 from prima.mediator._ranking import Ranking
-from prima.mediator._state import App, Command, Node, NodeState, Tree
+from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
 
 __all__ = ["WorkingMemory"]
+
+# (enum members read once: reading one from its class goes through the enum's
+# metaclass, many times slower than a global)
+_PENDING = NodeState.PENDING
+_WAITING = NodeState.WAITING
+_RUNNING = NodeState.RUNNING
+_DONE = NodeState.DONE
+_CANCELLED = NodeState.CANCELLED
 
 
 class WorkingMemory:
@@ -65,21 +73,26 @@ class WorkingMemory:
     def new_node(self, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
                  iteration: int = 0) -> Node:
-        node = Node(self._next_ab, app, tree, commands, devices, priority, reactive, seq,
-                    iteration)
-        self._next_ab += 1
-        self.nodes[node.id] = node
-        tree.nodes[node.id] = node
+        ab = self._next_ab
+        self._next_ab = ab + 1
+        node = Node(ab, app, tree, commands, devices, priority, reactive, seq, iteration)
+        self.nodes[ab] = node
+        tree.nodes[ab] = node
+        tid = tree.id
+        if not tree.live:  # it enters working memory (else it is there: see ``leave``)
+            self.trees[tid] = tree
+            app.trees[tid] = tree
         tree.live += 1
         app.live += 1
-        self.trees[tree.id] = tree
-        app.trees[tree.id] = tree
         counts = tree.devices
         for d in node.sorted_devices:
             n = counts.get(d, 0)
             counts[d] = n + 1
             if not n:
-                app.trees_on.setdefault(d, {})[tree.id] = tree
+                on = app.trees_on.get(d)
+                if on is None:
+                    on = app.trees_on[d] = {}
+                on[tid] = tree
         for c in commands:
             c.node = node
         return node
@@ -89,7 +102,7 @@ class WorkingMemory:
         if parent is None:
             return
         child.parent = parent.id
-        if parent.state in (NodeState.PENDING, NodeState.WAITING, NodeState.RUNNING):
+        if parent.state in IN_MEMORY:
             parent.children.append(child)
 
     # ------------------------------------------------------------------ changes
@@ -133,7 +146,7 @@ class WorkingMemory:
 
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
-        node.state = NodeState.WAITING
+        node.state = _WAITING
         node.app.active += 1
         self.waiting += 1
         self.index.add(node)
@@ -144,7 +157,7 @@ class WorkingMemory:
 
     def unwait(self, node: Node) -> None:
         """A waiting, unparked AB goes back to pending: an AB was put before it."""
-        node.state = NodeState.PENDING
+        node.state = _PENDING
         node.version += 1
         self._rank_out(node)
         self.waiting -= 1
@@ -159,7 +172,7 @@ class WorkingMemory:
         node.parked = None
         if node.tree.nodes.get(node.id) is node:  # (one cancelled meanwhile has left)
             node.tree.parked -= 1
-        if node.state is NodeState.WAITING:
+        if node.state is _WAITING:
             self.index.add(node)
             self._rank_in(node)
             self.dirty.update(node.devices)
@@ -173,7 +186,7 @@ class WorkingMemory:
         self.dirty.update(node.devices)
 
     def start(self, node: Node) -> None:
-        node.state = NodeState.RUNNING
+        node.state = _RUNNING
         tree = node.tree
         tree.started = True
         self._rank_out(node)
@@ -189,7 +202,7 @@ class WorkingMemory:
 
     def end(self, node: Node, now: float) -> list[Node]:
         """A running AB ended: free its devices; returns its children (now orphans)."""
-        node.state = NodeState.DONE
+        node.state = _DONE
         busy = self.busy
         blending = self.blending
         for d in node.sorted_devices:
@@ -211,8 +224,8 @@ class WorkingMemory:
 
     def cancel(self, node: Node, now: float) -> None:
         """Remove a not-yet-started node."""
-        was_waiting = node.state is NodeState.WAITING
-        node.state = NodeState.CANCELLED
+        was_waiting = node.state is _WAITING
+        node.state = _CANCELLED
         node.children = []
         if was_waiting:
             if node.parked is None:
@@ -224,12 +237,14 @@ class WorkingMemory:
 
     def leave(self, node: Node) -> None:
         """Take a finished or cancelled node out of working memory."""
-        self.nodes.pop(node.id, None)
+        ab = node.id
+        self.nodes.pop(ab, None)
         tree = node.tree
-        if tree.nodes.pop(node.id, None) is None:
+        if tree.nodes.pop(ab, None) is None:
             return
         if node.parked is not None:
             tree.parked -= 1
+        app = tree.app
         counts = tree.devices
         for d in node.sorted_devices:
             n = counts[d] - 1
@@ -237,15 +252,15 @@ class WorkingMemory:
                 counts[d] = n
             else:
                 del counts[d]
-                on = tree.app.trees_on[d]
+                on = app.trees_on[d]
                 del on[tree.id]
                 if not on:
-                    del tree.app.trees_on[d]
-        tree.live -= 1
-        tree.app.live -= 1
-        if tree.live == 0:
+                    del app.trees_on[d]
+        app.live -= 1
+        tree.live = live = tree.live - 1
+        if not live:
             self.trees.pop(tree.id, None)
-            tree.app.trees.pop(tree.id, None)
+            app.trees.pop(tree.id, None)
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
@@ -293,7 +308,7 @@ class WorkingMemory:
     # ------------------------------------------------------------------ queries
     @staticmethod
     def waiting_in(tree: Tree) -> Iterator[Node]:
-        return (n for n in list(tree.nodes.values()) if n.state is NodeState.WAITING)
+        return (n for n in list(tree.nodes.values()) if n.state is _WAITING)
 
     def stack(self) -> list[Tree]:
         """The suspended stack, top (most recently suspended) first."""
@@ -303,4 +318,4 @@ class WorkingMemory:
         """Drop stale index entries once they outnumber live ones."""
         if self.index.entries > 4 * (self.waiting * 3 + 64):
             self.index.compact(n for n in self.nodes.values()
-                               if n.state is NodeState.WAITING and n.parked is None)
+                               if n.state is _WAITING and n.parked is None)

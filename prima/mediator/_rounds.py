@@ -53,33 +53,45 @@ class _Round:
     Parent-finished lasts one round, so it is not in the index: each device's
     parent-finished ABs are heaped here (built on first need), and a device's
     best AB is the better of the index's answer and this heap's top. A round
-    that names no AB ranks as the index does: the selector keeps one such view.
+    that names no AB ranks as the index does. The selector keeps two views and
+    reuses them round after round (so no round leaves a view behind as garbage:
+    ``best`` holds a bound method of its view, a reference cycle): the plain one,
+    and the one it points at the ABs each round names (:meth:`name`).
     """
 
-    __slots__ = ("pjf", "best", "_index", "_ranking", "_heaps", "_named")
+    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named")
 
-    def __init__(self, pjf: Mapping[AbId, Node], index: WaitIndex) -> None:
-        self.pjf = pjf
+    def __init__(self, index: WaitIndex, *, names: bool) -> None:
+        self.pjf: Mapping[AbId, Node] = _NONE_NAMED
         self._index = index
-        self._ranking = index.ranking
+        self._ranking = ranking = index.ranking
         self._heaps: dict[str, list[tuple[Rank, Node]]] | None = None
         self._named: dict[AbId, Rank] = {}
         """The ranks of the ABs the round names, worked out once per round (the others'
         are kept on the ABs)."""
-        self.best: Callable[[str], Node | None] = self._best if pjf else index.top
+        self.best: Callable[[str], Node | None] = self._best if names else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
-        answer when the round names no AB)."""
-
-    def rank(self, node: Node) -> Rank:
+        answer for the view of rounds that name no AB)."""
+        self.rank: Callable[[Node], Rank] = self._rank if names else ranking.unnamed
         """The AB's rank (no key changes within a round: trees are suspended or resumed,
-        and apps demoted, between rounds)."""
+        and apps demoted, between rounds): the one kept on it when the round names no
+        AB."""
+
+    def name(self, pjf: Mapping[AbId, Node]) -> None:
+        """Point the view at the ABs a round names (what it kept of the last is gone)."""
+        self.pjf = pjf
+        self._heaps = None
+        self._named.clear()
+
+    def _rank(self, node: Node) -> Rank:
+        """:attr:`rank` when the round names ABs."""
         pjf = self.pjf
-        if node.id in pjf:
-            r = self._named.get(node.id)
-            if r is None:
-                r = self._named[node.id] = self._ranking.rank(node, pjf)
-            return r
-        return self._ranking.rank(node, pjf)
+        if node.id not in pjf:
+            return self._ranking.unnamed(node)
+        r = self._named.get(node.id)
+        if r is None:
+            r = self._named[node.id] = self._ranking.rank(node, pjf)
+        return r
 
     def separating(self, winner: Node, loser: Node) -> Rule:
         """The first criterion on which ``winner`` beats ``loser``: what a start names."""
@@ -87,32 +99,39 @@ class _Round:
 
     def _best(self, device: str) -> Node | None:
         """:attr:`best` when the round names ABs: the better of the index's answer and
-        the best of the named ABs that need ``device``."""
+        the best of the named ABs that need ``device`` (the top of its heap here)."""
         top = self._index.top(device)
-        finished = self._finished_top(device)
-        if finished is None or finished is top:
-            return top
-        if top is None:
-            return finished
-        return min(top, finished, key=self.rank)
-
-    def _finished_top(self, device: str) -> Node | None:
         heaps = self._heaps
         if heaps is None:
-            heaps = self._heaps = {}
-            for n in self.pjf.values():
-                if n.state is _WAITING:
-                    for d in n.sorted_devices:
-                        heaps.setdefault(d, []).append((self.rank(n), n))
-            for heap in heaps.values():
-                heapq.heapify(heap)
+            heaps = self._heaps = self._heap_named()
         found = heaps.get(device)
         while found:
-            node = found[0][1]
-            if node.state is _WAITING and node.parked is None:
-                return node
+            rank, finished = found[0]
+            if finished.state is _WAITING and finished.parked is None:
+                break
             heapq.heappop(found)
-        return None
+        else:
+            return top  # no named AB waits for the device
+        if top is None or top is finished:
+            return finished
+        return top if self.rank(top) < rank else finished
+
+    def _heap_named(self) -> dict[str, list[tuple[Rank, Node]]]:
+        """Each device's waiting named ABs, heaped by rank."""
+        heaps: dict[str, list[tuple[Rank, Node]]] = {}
+        for n in self.pjf.values():
+            if n.state is _WAITING:
+                entry = (self._rank(n), n)
+                for d in n.sorted_devices:
+                    heap = heaps.get(d)
+                    if heap is None:
+                        heaps[d] = [entry]
+                    else:
+                        heap.append(entry)
+        for heap in heaps.values():
+            if len(heap) > 1:
+                heapq.heapify(heap)
+        return heaps
 
 
 class Selector:
@@ -132,8 +151,10 @@ class Selector:
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
-        self._plain = _Round(_NONE_NAMED, wm.index)
+        self._plain = _Round(wm.index, names=False)
         """The view of every round that names no AB (it keeps nothing of a round)."""
+        self._naming = _Round(wm.index, names=True)
+        """The view of every round that names ABs (pointed at them round by round)."""
 
     def settle(self) -> None:
         """Run rounds until nothing more can start."""
@@ -143,24 +164,33 @@ class Selector:
         while True:
             if holds.opened:  # (else there is no stream to arm or let lapse)
                 holds.update()
-            if not (wm.new or wm.dirty or wm.pjf):
+            new, dirty, pjf = wm.new, wm.dirty, wm.pjf
+            if not (new or dirty or pjf):
                 break
+            if self._idle(new, dirty):
+                # The round is skipped: what it would take is emptied where it is
+                # (nothing of it is kept), and parent-finished ends with it.
+                new.clear()
+                dirty.clear()
+                if pjf:
+                    wm.pjf = {}
+                    self._unname(pjf)
+                continue
             for node in self.round():
                 start(atomic_behavior(node))
         wm.maybe_compact()
 
     def round(self) -> list[Node]:
-        """One round: start every AB that can start now; returns them."""
+        """One round: start every AB that can start now; returns them. (:meth:`settle`
+        runs none that :meth:`_idle` finds idle.)"""
         wm = self._wm
         # What the round looks at is taken from working memory, which collects anew
         # for the next round (what is empty stays there: nothing to take).
         pjf: Mapping[AbId, Node] = wm.pjf
         if pjf:
             wm.pjf = {}
-            view = _Round(pjf, wm.index)
         else:
             pjf = _NONE_NAMED
-            view = self._plain
         new = wm.new
         if new:
             wm.new = []
@@ -171,6 +201,11 @@ class Selector:
             wm.dirty = set()
         else:
             dirty = _NO_DEVICES
+        if pjf:
+            view = self._naming
+            view.name(pjf)
+        else:
+            view = self._plain
         started: list[Node] = []
         later: list[tuple[bool, Tree]] = []
         overrun: dict[str, App] | None = None
@@ -183,6 +218,21 @@ class Selector:
                     if overrun is None:
                         overrun = {}
                     overrun[x.app.name] = x.app
+        if later:
+            self._suspend_resume(later)
+        if pjf:
+            self._unname(pjf)
+            view.name(_NONE_NAMED)  # (it keeps no AB past its round)
+        if overrun is not None:
+            for app in overrun.values():
+                self._overrun(app, f"started {app.budgets.starts_per_instant} atomic "
+                                   f"behaviors at t={self._instant:g} s and asked for more "
+                                   "(Commands that take no time, requested again and again?)")
+        return started
+
+    def _suspend_resume(self, later: list[tuple[bool, Tree]]) -> None:
+        """Suspend and resume the trees a round's starts said (in their order)."""
+        wm = self._wm
         for is_suspend, tree in later:
             if is_suspend:
                 if wm.suspend(tree):
@@ -191,15 +241,14 @@ class Selector:
                 wm.resume(tree)
                 if self._holds.opened:
                     self._holds.unpark_all()  # a stream under way again: no hold keeps it
-        # "Parent just finished" lasts one round: others may now rank above.
+
+    def _unname(self, pjf: Mapping[AbId, Node]) -> None:
+        """"Parent just finished" lasts one round: at its end, others may rank above
+        the ABs it named (their devices are dirty)."""
+        dirty = self._wm.dirty
         for n in pjf.values():
             if n.state is _WAITING:
-                wm.dirty.update(n.devices)
-        for app in overrun.values() if overrun is not None else ():
-            self._overrun(app, f"started {app.budgets.starts_per_instant} atomic behaviors at "
-                               f"t={self._instant:g} s and asked for more (Commands that take "
-                               "no time, requested again and again?)")
-        return started
+                dirty.update(n.devices)
 
     def _counted(self, app: App) -> bool:
         """Count one more start of ``app`` at this instant; False past its budget."""
@@ -213,12 +262,57 @@ class Selector:
         self._starts[app.name] = n
         return True
 
+    def _idle(self, new: list[Node], dirty: Set[str]) -> bool:
+        """Whether the round provably does nothing (it need not find its candidates).
+
+        A round weighs the waiting ABs that are new and the best on each dirty device
+        (:meth:`_candidates`); it does nothing when there are none, or each has a busy
+        device (it cannot start: no policy's AB is put before it) and nothing acts on
+        it while it waits: no hold parks it (no stream or block is open, and it breaks
+        no channel: only a LOW AB is held by another app's talk) and no policy acts on
+        busy devices (blend, interrupt). What the index's answer for a dirty device
+        is need not be known: ``WorkingMemory.ranked`` counts the waiting, unparked ABs
+        on each device by priority, which is whom the index (and a round's named ABs)
+        can answer with. This is the common round that follows a start or an end on a
+        busy device: most of what a round would cost is finding its candidates.
+        """
+        wm = self._wm
+        busy = wm.busy
+        ranked = wm.ranked
+        quiet = not (self._holds.opened or self._policies.on_busy)
+        for d in dirty:
+            counts = ranked.get(d)
+            if not counts:
+                continue  # no AB waits for it
+            if not quiet or d not in busy:
+                return False
+            for _app, priority in counts:
+                if priority is _LOW:
+                    return False
+        for x in new:
+            if x.state is _WAITING and x.parked is None:
+                if not quiet or x.priority is _LOW:
+                    return False
+                for d in x.sorted_devices:
+                    if d in busy:
+                        break
+                else:
+                    return False
+        return True
+
     @staticmethod
     def _candidates(new: list[Node], dirty: Set[str], view: _Round) -> list[Node]:
         """What may start: ABs new on the waiting list, the best on each dirty device."""
         if not dirty and len(new) == 1:  # (one request, one AB: nothing to order)
             return new if new[0].state is _WAITING else []
-        cands: dict[int, Node] = {n.id: n for n in new if n.state is _WAITING}
+        if not new and len(dirty) == 1:  # (one device freed or re-ranked: its best)
+            (d,) = dirty
+            b = view.best(d)
+            return [] if b is None else [b]
+        cands: dict[int, Node] = {}
+        for n in new:  # (a loop: in Python 3.11 a comprehension is a call of its own)
+            if n.state is _WAITING:
+                cands[n.id] = n
         best = view.best
         for d in sorted(dirty) if len(dirty) > 1 else dirty:
             b = best(d)
@@ -315,11 +409,15 @@ class Selector:
             tree = loser.tree
             if tree is x.tree or tree.suspended is not None:
                 continue
-            if any(is_suspend and t is tree for is_suspend, t in later):
+            if later and any(is_suspend and t is tree for is_suspend, t in later):
                 continue
             # "Ready": it lost only to this round's starts, not to ABs already running.
-            ready = all(busy.get(d) is None or busy[d] in started for d in loser.devices)
-            if ready and self._holds.holder(loser) is None:
-                self._log.ab(DecisionKind.SUSPEND, rule, loser,
-                             f"lost to AB{x.id} ({x.app.name})")
-                later.append((True, tree))
+            for d in loser.sorted_devices:
+                running = busy.get(d)
+                if running is not None and running not in started:
+                    break
+            else:
+                if self._holds.holder(loser) is None:
+                    self._log.ab(DecisionKind.SUSPEND, rule, loser,
+                                 f"lost to AB{x.id} ({x.app.name})")
+                    later.append((True, tree))

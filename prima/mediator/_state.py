@@ -96,7 +96,8 @@ class Command:
         self.call = call
         self.spec = spec
         self.node: Node | None = None
-        """Its current node (the latest iteration for a feedback Command)."""
+        """Its current node (the latest iteration for a feedback Command); None before
+        it has one, and once it is done and forgotten (see ``Intake._recent``)."""
         self.ended = False
         self.cancelled = False
         self.cut = False
@@ -166,12 +167,14 @@ class Node:
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
                  iteration: int = 0) -> None:
+        # (each value kept in a local too where ``facts`` needs it again: one node
+        # per request, on the hot path)
         self.id = ab
         self.app = app
         self.tree = tree
         self.commands = commands
         self.devices = devices
-        self.sorted_devices = _SORTED.get(devices) or _sorted(devices)
+        self.sorted_devices = ordered = _SORTED.get(devices) or _sorted(devices)
         self.priority = priority
         self.reactive = reactive
         self.iteration = iteration
@@ -204,17 +207,19 @@ class Node:
         self.parked: App | None = None
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
         first = commands[0]
+        call = first.call
         if len(commands) == 1:
-            self.calls: tuple[Call, ...] = (first.call,)
+            spec = first.spec
+            self.calls: tuple[Call, ...] = (call,)
             self.command_ids: tuple[CommandId, ...] = (first.id,)
-            self.name = first.spec.name
-            self.feedback = first.spec.feedback
+            self.name = spec.name
+            self.feedback = spec.feedback
         else:
             self.calls = tuple([c.call for c in commands])
             self.command_ids = tuple([c.id for c in commands])
             self.name = "+".join(c.spec.name for c in commands)
             self.feedback = False
-        self.facts = (app.name, ab, tree.id, self.name, first.id, self.command_ids,
-                      self.sorted_devices, reactive, iteration, first.call.label)
+        self.facts = (app.name, ab, tree.id, self.name, first.id, self.command_ids, ordered,
+                      reactive, iteration, call.label)
         """What every decision about the AB itself says of it, in the fields of
         ``Decision`` from ``app`` to ``label`` (none of them changes)."""
