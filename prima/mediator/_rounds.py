@@ -32,8 +32,17 @@ from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
 
+# Enum members read on hot paths, bound once: in Python 3.11 reading a member from its
+# class costs about as much as a short function call, a module global almost nothing.
 _WAITING = NodeState.WAITING
 _LOW = Priority.LOW
+_START = DecisionKind.START
+_RESUME = DecisionKind.RESUME
+_SUSPEND = DecisionKind.SUSPEND
+_BLEND = Rule.BLEND
+_RESTART = Rule.RESTART
+_FREE_DEVICES = Rule.FREE_DEVICES
+_KEEP_CHANNEL = Rule.KEEP_CHANNEL
 _NO_DEVICES: frozenset[str] = frozenset()
 _NO_NODES: list[Node] = []  # (never changed)
 _NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
@@ -347,7 +356,7 @@ class Selector:
                 blend = policies.blend(x)
                 if blend is not None:
                     (x.blended, bounded), ready = blend, True
-                    if held is not None and held[0] is Rule.KEEP_CHANNEL and bounded:
+                    if held is not None and held[0] is _KEEP_CHANNEL and bounded:
                         held = None  # a move blended with a local motion keeps within the
                         # blend's bound of the user: it does not break the channel
             if held is None:
@@ -359,7 +368,7 @@ class Selector:
         # Held by another app's block, stream hold or talk: out of the ranking at
         # once, so it reserves nothing meanwhile. The channel rule is noted only
         # when the talk is what keeps it (its devices are free and it ranks best).
-        if ready or held[0] is not Rule.KEEP_CHANNEL:
+        if ready or held[0] is not _KEEP_CHANNEL:
             holds.note(x, *held)
         holds.park(x, *held)
         return False
@@ -383,21 +392,21 @@ class Selector:
             if b is not None:
                 losers.append(b)
         if x.blended:
-            rule = Rule.BLEND
+            rule = _BLEND
         elif x.restarts is not None:
-            rule = Rule.RESTART
+            rule = _RESTART
         elif x.commands[0].internal is not None:
             rule = x.commands[0].internal
         elif losers:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
             rule = view.separating(x, top)
         else:
-            rule = Rule.FREE_DEVICES
+            rule = _FREE_DEVICES
         log = self._log
-        log.ab(DecisionKind.START, rule, x, self._over(x) if x.blended else "")
+        log.ab(_START, rule, x, self._over(x) if x.blended else "")
         self._holds.started(x)  # a block it starts takes force: what it holds steps aside
         if x.tree.suspended is not None:
-            log.ab(DecisionKind.RESUME, rule, x, "resumed from the suspended IU")
+            log.ab(_RESUME, rule, x, "resumed from the suspended IU")
             later.append((False, x.tree))
         if losers:
             self._suspend_losers(x, losers, rule, started, later)
@@ -418,6 +427,6 @@ class Selector:
                     break
             else:
                 if self._holds.holder(loser) is None:
-                    self._log.ab(DecisionKind.SUSPEND, rule, loser,
+                    self._log.ab(_SUSPEND, rule, loser,
                                  f"lost to AB{x.id} ({x.app.name})")
                     later.append((True, tree))
