@@ -35,7 +35,7 @@ import heapq
 import itertools
 from collections.abc import Iterable, Set
 
-from prima.mediator._ranking import Keys, Ranking
+from prima.mediator._ranking import Key, Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
 
 __all__ = ["WaitIndex"]
@@ -44,8 +44,10 @@ _WAITING = NodeState.WAITING
 _heappush = heapq.heappush
 _NO_DEVICES: frozenset[str] = frozenset()
 
-_NodeEntry = tuple[Keys, int, int, Node]
-"""(the AB's order keys, its id, its version when filed, the AB)."""
+_NodeEntry = tuple[Key | Keys, int, int, Node]
+"""(the AB's order keys, its id, its version when filed, the AB). When the order keys
+are one criterion's, that key stands for them: a tuple of one item compares as the item,
+and a heap compares entries over and over, each level of nesting a C call deeper."""
 
 
 class _Slot:
@@ -104,6 +106,8 @@ class WaitIndex:
     def __init__(self, ranking: Ranking) -> None:
         self.ranking = ranking
         """The criteria's keys, kept on the ABs and trees (:class:`._ranking.Ranking`)."""
+        self._lone_order = ranking.order_len == 1
+        """The order keys are one criterion's: an AB's entry holds that key alone."""
         self._devices: dict[str, _Device] = {}
         self._tree_slots: dict[int, dict[_Slot, None]] = {}
         """Tree id -> its live slots (a few per tree; a dict as an ordered set: its order
@@ -119,8 +123,9 @@ class WaitIndex:
         if node.head is None:
             self.ranking.node_keys(node)
         head = node.head
-        assert head is not None and node.order is not None
-        entry = (node.order, node.id, node.version, node)
+        order = node.order
+        assert head is not None and order is not None
+        entry = (order[0] if self._lone_order else order, node.id, node.version, node)
         tree = node.tree
         devices = self._devices
         for d in node.sorted_devices:
