@@ -32,7 +32,6 @@ the ABs a round names against the index's answer (see ``_rounds``).
 from __future__ import annotations
 
 import heapq
-import itertools
 from collections.abc import Iterable, Set
 
 from prima.mediator._ranking import Key, Keys, Ranking
@@ -112,7 +111,12 @@ class WaitIndex:
         self._tree_slots: dict[int, dict[_Slot, None]] = {}
         """Tree id -> its live slots (a few per tree; a dict as an ordered set: its order
         is the order they were made in, whatever their addresses)."""
-        self._serial = itertools.count()
+        self.serial = 0
+        """The serial of the latest slot or group entry (never reused). It advances
+        whenever a device's answer (:meth:`top`) may change but for its AB leaving the
+        waiting list or being parked: an AB filed first in its slot, a slot re-ranked, a
+        group made. (It also advances when a top drops stale entries, which changes no
+        answer.) Selection relies on this to ask a device once per round (``_rounds``)."""
         self.entries = 0
         """Heap entries held, live and stale."""
 
@@ -217,7 +221,8 @@ class WaitIndex:
             if dev is None:
                 dev = self._devices[device] = _Device()
             group = dev.groups[head] = _Group(head)
-            heapq.heappush(dev.heap, (head, next(self._serial), group))
+            self.serial = serial = self.serial + 1
+            heapq.heappush(dev.heap, (head, serial, group))
             self.entries += 1
         slot = group.slots[tree.id] = _Slot(tree, group, device)
         self._tree_slots.setdefault(tree.id, {})[slot] = None
@@ -225,7 +230,8 @@ class WaitIndex:
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
         """(Re-)rank a slot by the stable keys of its best AB; its older entries go stale."""
-        slot.version = version = next(self._serial)  # unique: entries never tie up to the slot
+        # (a serial unique over all entries: entries never tie up to the slot)
+        self.serial = slot.version = version = self.serial + 1
         slot.ranked_by = best
         entry = (self.ranking.slot_keys(best), version, slot)
         heap = slot.group.heap

@@ -68,7 +68,7 @@ class _Round:
     and the one it points at the ABs each round names (:meth:`name`).
     """
 
-    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named")
+    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named", "_kept")
 
     def __init__(self, index: WaitIndex, *, names: bool) -> None:
         self.pjf: Mapping[AbId, Node] = _NONE_NAMED
@@ -78,6 +78,8 @@ class _Round:
         self._named: dict[AbId, Rank] = {}
         """The ranks of the ABs the round names, worked out once per round (the others'
         are kept on the ABs)."""
+        self._kept: dict[str, tuple[Node | None, int, int]] = {}
+        """Device -> the best AB :meth:`_best` found, its version, the index's serial."""
         self.best: Callable[[str], Node | None] = self._best if names else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
         answer for the view of rounds that name no AB)."""
@@ -91,6 +93,7 @@ class _Round:
         self.pjf = pjf
         self._heaps = None
         self._named.clear()
+        self._kept.clear()
 
     def _rank(self, node: Node) -> Rank:
         """:attr:`rank` when the round names ABs."""
@@ -108,7 +111,26 @@ class _Round:
 
     def _best(self, device: str) -> Node | None:
         """:attr:`best` when the round names ABs: the better of the index's answer and
-        the best of the named ABs that need ``device`` (the top of its heap here)."""
+        the best of the named ABs that need ``device`` (the top of its heap here).
+
+        A round asks for a device's best several times (its candidates, whether one
+        ranks best on its devices, whom a start beat), and here each answer costs ranks
+        compared: it is kept, and stands while it still waits unparked (same version)
+        and the index's serial has not moved (no AB that could rank better was filed,
+        no tree re-ranked; the ABs a round names are fixed for the round)."""
+        index = self._index
+        kept = self._kept.get(device)
+        if kept is not None:
+            found, version, serial = kept
+            if serial == index.serial and (
+                    found is None or (found.state is _WAITING and found.version == version)):
+                return found
+        found = self._find(device)
+        self._kept[device] = (found, -1 if found is None else found.version, index.serial)
+        return found
+
+    def _find(self, device: str) -> Node | None:
+        """What :meth:`_best` answers, worked out."""
         top = self._index.top(device)
         heaps = self._heaps
         if heaps is None:
