@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import heapq
 from collections.abc import Iterable, Set
+from typing import Any
 
 from prima.mediator._ranking import Key, Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
@@ -76,8 +77,11 @@ class _Slot:
         return None
 
 
-_SlotEntry = tuple[Keys, int, _Slot]
-"""(keys of the slot's best AB, a serial unique over all entries, the slot)."""
+_SlotEntry = tuple[Any, ...]
+"""The keys of the slot's best AB (tree and order, one per criterion) spliced in, then
+a serial unique over all entries, then the slot: ``(*keys, serial, slot)``, read from
+its end. Every entry holds as many keys, so entries compare as ``(keys, serial, slot)``
+would, but a level of nesting less for the heaps to walk, compare after compare."""
 
 
 class _Group:
@@ -188,7 +192,9 @@ class WaitIndex:
             # (the common case inline: no stale entry on the way down)
             gheap = group.heap
             if gheap:
-                _keys_, version, slot = gheap[0]
+                first = gheap[0]
+                version: int = first[-2]
+                slot: _Slot = first[-1]
                 sheap = slot.heap
                 if version == slot.version and sheap:
                     _order, _ab, nversion, node = sheap[0]
@@ -233,9 +239,9 @@ class WaitIndex:
         # (a serial unique over all entries: entries never tie up to the slot)
         self.serial = slot.version = version = self.serial + 1
         slot.ranked_by = best
-        entry = (self.ranking.slot_keys(best), version, slot)
+        entry: _SlotEntry = self.ranking.slot_keys(best) + (version, slot)
         heap = slot.group.heap
-        if heap and heap[0][2] is slot:
+        if heap and heap[0][-1] is slot:
             # (an entry of its own at the top, now stale: replaced, not left for a pop)
             heapq.heapreplace(heap, entry)
         else:
@@ -266,14 +272,16 @@ class WaitIndex:
         if group.slots.get(tid) is slot:
             del group.slots[tid]
         heap = group.heap
-        if heap and heap[0][2] is slot:
+        if heap and heap[0][-1] is slot:
             heapq.heappop(heap)
             self.entries -= 1
 
     def _group_top(self, group: _Group) -> Node | None:
         heap = group.heap
         while heap:
-            _keys_, version, slot = heap[0]
+            entry = heap[0]
+            version: int = entry[-2]
+            slot: _Slot = entry[-1]
             if version != slot.version:
                 heapq.heappop(heap)
                 self.entries -= 1
