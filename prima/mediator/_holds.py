@@ -39,6 +39,13 @@ from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Block", "Holds", "Stream"]
 
+# Enum members read on hot paths (:meth:`Holds.holder`), bound once: reading a member
+# from its class costs far more than a module global in Python 3.11.
+_LOW = Priority.LOW
+_KEEP_CHANNEL = Rule.KEEP_CHANNEL
+_BLOCK = Rule.BLOCK
+_STREAM_HOLD = Rule.STREAM_HOLD
+
 
 class Stream:
     """An explicit stream block (``open_stream`` ... ``close_stream``)."""
@@ -131,12 +138,12 @@ class Holds:
 
     def holder(self, node: Node) -> tuple[Rule, App] | None:
         """Another app's talk, block or armed stream hold that keeps ``node`` from starting."""
-        if node.priority is Priority.LOW:
+        if node.priority is _LOW:
             busy = self._wm.busy
             for d in self._talk:
                 talker = busy.get(d)
                 if talker is not None and talker.app is not node.app:
-                    return Rule.KEEP_CHANNEL, talker.app
+                    return _KEEP_CHANNEL, talker.app
         if not self.opened:
             return None
         for other in self._apps.values():
@@ -144,11 +151,11 @@ class Holds:
                 continue
             blk = self._blocks.get(other.name)
             if blk is not None and blk.reserving and not node.devices.isdisjoint(blk.devices):
-                return Rule.BLOCK, other
+                return _BLOCK, other
             st = self._streams.get(other.name)
             if (st is not None and st.armed and _new_stream(node.tree)
                     and not node.devices.isdisjoint(st.devices)):
-                return Rule.STREAM_HOLD, other
+                return _STREAM_HOLD, other
         return None
 
     # ----------------------------------------------------------- streams, blocks

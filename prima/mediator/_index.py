@@ -32,10 +32,10 @@ the ABs a round names against the index's answer (see ``_rounds``).
 from __future__ import annotations
 
 import heapq
-import itertools
 from collections.abc import Iterable, Set
+from typing import Any
 
-from prima.mediator._ranking import Keys, Ranking
+from prima.mediator._ranking import Key, Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
 
 __all__ = ["WaitIndex"]
@@ -44,8 +44,10 @@ _WAITING = NodeState.WAITING
 _heappush = heapq.heappush
 _NO_DEVICES: frozenset[str] = frozenset()
 
-_NodeEntry = tuple[Keys, int, int, Node]
-"""(the AB's order keys, its id, its version when filed, the AB)."""
+_NodeEntry = tuple[Key | Keys, int, int, Node]
+"""(the AB's order keys, its id, its version when filed, the AB). When the order keys
+are one criterion's, that key stands for them: a tuple of one item compares as the item,
+and a heap compares entries over and over, each level of nesting a C call deeper."""
 
 
 class _Slot:
@@ -75,8 +77,11 @@ class _Slot:
         return None
 
 
-_SlotEntry = tuple[Keys, int, _Slot]
-"""(keys of the slot's best AB, a serial unique over all entries, the slot)."""
+_SlotEntry = tuple[Any, ...]
+"""The keys of the slot's best AB (tree and order, one per criterion) spliced in, then
+a serial unique over all entries, then the slot: ``(*keys, serial, slot)``, read from
+its end. Every entry holds as many keys, so entries compare as ``(keys, serial, slot)``
+would, but a level of nesting less for the heaps to walk, compare after compare."""
 
 
 class _Group:
@@ -104,11 +109,18 @@ class WaitIndex:
     def __init__(self, ranking: Ranking) -> None:
         self.ranking = ranking
         """The criteria's keys, kept on the ABs and trees (:class:`._ranking.Ranking`)."""
+        self._lone_order = ranking.order_len == 1
+        """The order keys are one criterion's: an AB's entry holds that key alone."""
         self._devices: dict[str, _Device] = {}
         self._tree_slots: dict[int, dict[_Slot, None]] = {}
         """Tree id -> its live slots (a few per tree; a dict as an ordered set: its order
         is the order they were made in, whatever their addresses)."""
-        self._serial = itertools.count()
+        self.serial = 0
+        """The serial of the latest slot or group entry (never reused). It advances
+        whenever a device's answer (:meth:`top`) may change but for its AB leaving the
+        waiting list or being parked: an AB filed first in its slot, a slot re-ranked, a
+        group made. (It also advances when a top drops stale entries, which changes no
+        answer.) Selection relies on this to ask a device once per round (``_rounds``)."""
         self.entries = 0
         """Heap entries held, live and stale."""
 
@@ -119,8 +131,9 @@ class WaitIndex:
         if node.head is None:
             self.ranking.node_keys(node)
         head = node.head
-        assert head is not None and node.order is not None
-        entry = (node.order, node.id, node.version, node)
+        order = node.order
+        assert head is not None and order is not None
+        entry = (order[0] if self._lone_order else order, node.id, node.version, node)
         tree = node.tree
         devices = self._devices
         for d in node.sorted_devices:
@@ -179,7 +192,9 @@ class WaitIndex:
             # (the common case inline: no stale entry on the way down)
             gheap = group.heap
             if gheap:
-                _keys_, version, slot = gheap[0]
+                first = gheap[0]
+                version: int = first[-2]
+                slot: _Slot = first[-1]
                 sheap = slot.heap
                 if version == slot.version and sheap:
                     _order, _ab, nversion, node = sheap[0]
@@ -212,7 +227,8 @@ class WaitIndex:
             if dev is None:
                 dev = self._devices[device] = _Device()
             group = dev.groups[head] = _Group(head)
-            heapq.heappush(dev.heap, (head, next(self._serial), group))
+            self.serial = serial = self.serial + 1
+            heapq.heappush(dev.heap, (head, serial, group))
             self.entries += 1
         slot = group.slots[tree.id] = _Slot(tree, group, device)
         self._tree_slots.setdefault(tree.id, {})[slot] = None
@@ -220,11 +236,12 @@ class WaitIndex:
 
     def _push_slot(self, slot: _Slot, best: Node) -> None:
         """(Re-)rank a slot by the stable keys of its best AB; its older entries go stale."""
-        slot.version = version = next(self._serial)  # unique: entries never tie up to the slot
+        # (a serial unique over all entries: entries never tie up to the slot)
+        self.serial = slot.version = version = self.serial + 1
         slot.ranked_by = best
-        entry = (self.ranking.slot_keys(best), version, slot)
+        entry: _SlotEntry = self.ranking.slot_keys(best) + (version, slot)
         heap = slot.group.heap
-        if heap and heap[0][2] is slot:
+        if heap and heap[0][-1] is slot:
             # (an entry of its own at the top, now stale: replaced, not left for a pop)
             heapq.heapreplace(heap, entry)
         else:
@@ -255,14 +272,16 @@ class WaitIndex:
         if group.slots.get(tid) is slot:
             del group.slots[tid]
         heap = group.heap
-        if heap and heap[0][2] is slot:
+        if heap and heap[0][-1] is slot:
             heapq.heappop(heap)
             self.entries -= 1
 
     def _group_top(self, group: _Group) -> Node | None:
         heap = group.heap
         while heap:
-            _keys_, version, slot = heap[0]
+            entry = heap[0]
+            version: int = entry[-2]
+            slot: _Slot = entry[-1]
             if version != slot.version:
                 heapq.heappop(heap)
                 self.entries -= 1

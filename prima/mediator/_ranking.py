@@ -192,6 +192,9 @@ class Ranking:
         rnd = [i for i, c in enumerate(table) if c.scope is Scope.ROUND]
         self._head = tuple(table[i].key for i in head)
         self._order = tuple(table[i].key for i in order)
+        self.order_len = len(order)
+        """How many criteria the order keys hold (one: the index files an AB by that
+        key alone)."""
         self._tree = tuple(table[i].key for i in tree)
         self._round = tuple(table[i].key for i in rnd)
         self._not_named: Keys = ((1,),) * len(rnd)

@@ -32,8 +32,17 @@ from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
 
+# Enum members read on hot paths, bound once: in Python 3.11 reading a member from its
+# class costs about as much as a short function call, a module global almost nothing.
 _WAITING = NodeState.WAITING
 _LOW = Priority.LOW
+_START = DecisionKind.START
+_RESUME = DecisionKind.RESUME
+_SUSPEND = DecisionKind.SUSPEND
+_BLEND = Rule.BLEND
+_RESTART = Rule.RESTART
+_FREE_DEVICES = Rule.FREE_DEVICES
+_KEEP_CHANNEL = Rule.KEEP_CHANNEL
 _NO_DEVICES: frozenset[str] = frozenset()
 _NO_NODES: list[Node] = []  # (never changed)
 _NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
@@ -59,7 +68,7 @@ class _Round:
     and the one it points at the ABs each round names (:meth:`name`).
     """
 
-    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named")
+    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named", "_kept")
 
     def __init__(self, index: WaitIndex, *, names: bool) -> None:
         self.pjf: Mapping[AbId, Node] = _NONE_NAMED
@@ -69,6 +78,8 @@ class _Round:
         self._named: dict[AbId, Rank] = {}
         """The ranks of the ABs the round names, worked out once per round (the others'
         are kept on the ABs)."""
+        self._kept: dict[str, tuple[Node | None, int, int]] = {}
+        """Device -> the best AB :meth:`_best` found, its version, the index's serial."""
         self.best: Callable[[str], Node | None] = self._best if names else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
         answer for the view of rounds that name no AB)."""
@@ -82,6 +93,7 @@ class _Round:
         self.pjf = pjf
         self._heaps = None
         self._named.clear()
+        self._kept.clear()
 
     def _rank(self, node: Node) -> Rank:
         """:attr:`rank` when the round names ABs."""
@@ -99,7 +111,26 @@ class _Round:
 
     def _best(self, device: str) -> Node | None:
         """:attr:`best` when the round names ABs: the better of the index's answer and
-        the best of the named ABs that need ``device`` (the top of its heap here)."""
+        the best of the named ABs that need ``device`` (the top of its heap here).
+
+        A round asks for a device's best several times (its candidates, whether one
+        ranks best on its devices, whom a start beat), and here each answer costs ranks
+        compared: it is kept, and stands while it still waits unparked (same version)
+        and the index's serial has not moved (no AB that could rank better was filed,
+        no tree re-ranked; the ABs a round names are fixed for the round)."""
+        index = self._index
+        kept = self._kept.get(device)
+        if kept is not None:
+            found, version, serial = kept
+            if serial == index.serial and (
+                    found is None or (found.state is _WAITING and found.version == version)):
+                return found
+        found = self._find(device)
+        self._kept[device] = (found, -1 if found is None else found.version, index.serial)
+        return found
+
+    def _find(self, device: str) -> Node | None:
+        """What :meth:`_best` answers, worked out."""
         top = self._index.top(device)
         heaps = self._heaps
         if heaps is None:
@@ -347,7 +378,7 @@ class Selector:
                 blend = policies.blend(x)
                 if blend is not None:
                     (x.blended, bounded), ready = blend, True
-                    if held is not None and held[0] is Rule.KEEP_CHANNEL and bounded:
+                    if held is not None and held[0] is _KEEP_CHANNEL and bounded:
                         held = None  # a move blended with a local motion keeps within the
                         # blend's bound of the user: it does not break the channel
             if held is None:
@@ -359,7 +390,7 @@ class Selector:
         # Held by another app's block, stream hold or talk: out of the ranking at
         # once, so it reserves nothing meanwhile. The channel rule is noted only
         # when the talk is what keeps it (its devices are free and it ranks best).
-        if ready or held[0] is not Rule.KEEP_CHANNEL:
+        if ready or held[0] is not _KEEP_CHANNEL:
             holds.note(x, *held)
         holds.park(x, *held)
         return False
@@ -383,21 +414,21 @@ class Selector:
             if b is not None:
                 losers.append(b)
         if x.blended:
-            rule = Rule.BLEND
+            rule = _BLEND
         elif x.restarts is not None:
-            rule = Rule.RESTART
+            rule = _RESTART
         elif x.commands[0].internal is not None:
             rule = x.commands[0].internal
         elif losers:
             top = min(losers, key=view.rank) if len(losers) > 1 else losers[0]
             rule = view.separating(x, top)
         else:
-            rule = Rule.FREE_DEVICES
+            rule = _FREE_DEVICES
         log = self._log
-        log.ab(DecisionKind.START, rule, x, self._over(x) if x.blended else "")
+        log.ab(_START, rule, x, self._over(x) if x.blended else "")
         self._holds.started(x)  # a block it starts takes force: what it holds steps aside
         if x.tree.suspended is not None:
-            log.ab(DecisionKind.RESUME, rule, x, "resumed from the suspended IU")
+            log.ab(_RESUME, rule, x, "resumed from the suspended IU")
             later.append((False, x.tree))
         if losers:
             self._suspend_losers(x, losers, rule, started, later)
@@ -418,6 +449,6 @@ class Selector:
                     break
             else:
                 if self._holds.holder(loser) is None:
-                    self._log.ab(DecisionKind.SUSPEND, rule, loser,
+                    self._log.ab(_SUSPEND, rule, loser,
                                  f"lost to AB{x.id} ({x.app.name})")
                     later.append((True, tree))

@@ -9,6 +9,8 @@ from __future__ import annotations
 import pytest
 
 from prima.mediator import AppKind, DecisionKind, Rule
+from prima.mediator._index import WaitIndex
+from prima.mediator._state import Node, NodeState
 from prima.mediator.testing import Harness, plain_scan
 
 from tests.mediator.helpers import call, ghost, req, speak, start_of, start_time
@@ -239,3 +241,31 @@ def test_found_by_the_random_driver_a_remade_slot_never_ties_with_its_stale_entr
     h.run(until=4.0)
     assert start_time(h, 7) == 3.75  # the FA's FaceHumanAndSpeak resumes its tree
     assert plain_scan(m) == []
+
+
+def test_a_device_answer_changes_only_with_the_index_serial(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """What a round keeps of a device's best (``_rounds._Round._best``) relies on it:
+    while the index's serial stays and the AB it answered still waits unparked (same
+    version), the index answers the same AB for the device. Checked at every ask."""
+    original = WaitIndex.top
+    last: dict[tuple[int, str], tuple[Node | None, int, int]] = {}
+    asked = 0
+
+    def top(self: WaitIndex, device: str) -> Node | None:
+        nonlocal asked
+        found = original(self, device)
+        kept = last.get((id(self), device))
+        if kept is not None:
+            node, version, serial = kept
+            if serial == self.serial and (node is None or (
+                    node.state is NodeState.WAITING and node.version == version)):
+                assert found is node
+                asked += 1
+        last[(id(self), device)] = (found, -1 if found is None else found.version,
+                                    self.serial)
+        return found
+
+    monkeypatch.setattr(WaitIndex, "top", top)
+    test_incremental_selection_matches_a_plain_scan(40)
+    assert asked > 0
