@@ -217,7 +217,10 @@ class WorkingMemory:
                 del blending[d]
         self.dirty.update(node.devices)
         node.tree.running -= 1
-        self._inactive(node.app, now)
+        app = node.app  # (``_inactive``, written out: once per ended AB)
+        app.active -= 1
+        if app.active == 0:
+            app.idle_since = now
         children = node.children
         node.children = []
         return children
@@ -297,7 +300,8 @@ class WorkingMemory:
         before = tree.reaction
         if before is None or before < reaction:
             tree.reaction = reaction
-            self.dirty.update(self.index.rerank(tree))
+            if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
+                self.dirty.update(self.index.rerank(tree))
         return before is None
 
     def rerank_app(self, app: App) -> None:
@@ -316,6 +320,6 @@ class WorkingMemory:
 
     def maybe_compact(self) -> None:
         """Drop stale index entries once they outnumber live ones."""
-        if self.index.entries > 4 * (self.waiting * 3 + 64):
+        if self.index.entries > 12 * self.waiting + 256:  # (4 * (waiting * 3 + 64))
             self.index.compact(n for n in self.nodes.values()
                                if n.state is _WAITING and n.parked is None)
