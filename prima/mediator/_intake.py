@@ -177,7 +177,7 @@ class Intake:
         self._next_seq = seq + 1
         cid = self.next_command
         if len(specs) == 1:  # (one call: the usual request)
-            spec, all_devices, _prio = specs[0]
+            spec, all_devices, prio = specs[0]
             cmds = [Command(cid, app, calls[0], spec, None, on_interrupt)]
         else:
             cmds = [Command(cid + i, app, call, spec, None, on_interrupt)
@@ -205,36 +205,34 @@ class Intake:
                 and wm.react(tree, seq)
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
-        root = self._build(app, tree, cmds, specs, group, parent, reactive and reactive_allowed,
-                           self._turns and face_user, seq)
+        if len(cmds) == 1:  # (``_build`` for one call, written out: the usual request)
+            root = wm.new_node(app, tree, (cmds[0],), all_devices, prio,
+                               reactive and reactive_allowed, seq)
+            if self._turns and face_user:
+                root.turnable = _turnable(root, parent)
+            if parent is not None:
+                wm.link(parent, root)
+        else:
+            root = self._build(app, tree, cmds, specs, group, parent,
+                               reactive and reactive_allowed, self._turns and face_user, seq)
         old = app.latest
         app.latest = cmds[-1]
         if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
             old.node = None  # (forgotten: see ``_recent``)
         if self._holds.opened:  # (else no stream or block continues a tree)
             self._holds.requested(app, tree)
-        log = self._log
-        detail = ""
-        if log.recording:
-            count = "1 Command(s) " if len(cmds) == 1 else f"{len(cmds)} Command(s) "
-            grouped = "as one AB " if group else ""
-            before = f"before AB{parent.id}" if parent is not None else "roots the tree"
-            detail = count + grouped + before
-        log.requested(rule, root, detail, cmds, parent.id if parent is not None else None, now)
+        self._log.requested(rule, root, cmds, group, parent, now)
         if enter_now:
             wm.enter_waiting(root, parent_finished=parent_finished)
         return (cid,) if len(cmds) == 1 else tuple([c.id for c in cmds]), cancelled
 
     def _build(self, app: App, tree: Tree, cmds: list[Command], specs: Specs, group: bool,
                parent: Node | None, reactive: bool, turns: bool, seq: int) -> Node:
-        """The request's nodes after ``parent``: one AB (one call, or ``group``) or a
-        chain; returns the root (the one ``reactive``). ``turns``: its utterances may be
-        ``turnable``."""
+        """The nodes after ``parent`` of a request of several calls (``accept`` builds
+        the one of a single call itself): one AB (``group``) or a chain; returns the root
+        (the one ``reactive``). ``turns``: its utterances may be ``turnable``."""
         wm = self._wm
-        if len(cmds) == 1:  # (one call: the usual request)
-            _spec, devices, prio = specs[0]
-            commands: tuple[Command, ...] = (cmds[0],)
-        elif group:
+        if group:
             prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
             devices = frozenset().union(*(d for _s, d, _p in specs))
             commands = tuple(cmds)
