@@ -147,10 +147,25 @@ class WorkingMemory:
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
         node.state = _WAITING
-        node.app.active += 1
+        app = node.app
+        app.active += 1
         self.waiting += 1
         self.index.add(node)
-        self._rank_in(node)
+        # (``_rank_in``, written out: every request and every child of an ended AB)
+        key = (app.name, node.priority)
+        tree = node.tree
+        for d in node.sorted_devices:
+            counts = self.ranked.get(d)
+            if counts is None:
+                counts = self.ranked[d] = {}
+            counts[key] = counts.get(key, 0) + 1
+            trees = self.on.get(d)
+            if trees is None:
+                trees = self.on[d] = {}
+            nodes = trees.get(tree)
+            if nodes is None:
+                nodes = trees[tree] = {}
+            nodes[node.id] = node
         self.new.append(node)
         if parent_finished:
             self.pjf[node.id] = node
@@ -189,7 +204,20 @@ class WorkingMemory:
         node.state = _RUNNING
         tree = node.tree
         tree.started = True
-        self._rank_out(node)
+        # (``_rank_out``, written out: every start)
+        key = (node.app.name, node.priority)
+        for d in node.sorted_devices:
+            counts = self.ranked[d]
+            n = counts[key] - 1
+            if n:
+                counts[key] = n
+            else:
+                del counts[key]
+            trees = self.on[d]
+            nodes = trees[tree]
+            del nodes[node.id]
+            if not nodes:
+                del trees[tree]
         self.waiting -= 1
         busy = self.busy
         blended = node.blended
