@@ -34,8 +34,9 @@ class DecisionLog:
         self.count = count = self.count + 1
         record = self._record
         if record is not None:
-            record(_new(Decision, (self._clock.now() if now is None else now, count, kind,
-                                   rule, *node.facts, detail, node.calls, None, None)))
+            # (its fields as tuples added up: less work than unpacking ``facts`` into one)
+            record(_new(Decision, (self._clock.now() if now is None else now, count, kind, rule)
+                        + node.facts + (detail, node.calls, None, None)))
 
     def requested(self, rule: Rule, node: Node, request: Sequence[Command], group: bool,
                   before: Node | None, now: float) -> None:
@@ -59,8 +60,8 @@ class DecisionLog:
             return
         # (one Command: the AB's own, so the decision is about the AB: its facts)
         self.count = count = self.count + 1
-        self._record(_new(Decision, (now, count, _REQUEST, rule, *node.facts,
-                                     detail, node.calls, before_id, None)))
+        self._record(_new(Decision, (now, count, _REQUEST, rule) + node.facts
+                          + (detail, node.calls, before_id, None)))
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
              app: str | None = None, command: Command | None = None,
