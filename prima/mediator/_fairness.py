@@ -227,12 +227,11 @@ class Fairness:
         # for, the holder is the AB running there or, on a free device, the best ranked.
         wm = self._wm
         busy = wm.busy
-        top = wm.index.top
         keeping = set(self._holds.keeping)
         for device, counts in wm.ranked.items():
             if not counts:
                 continue
-            holder = busy.get(device) or top(device)
+            holder = busy.get(device) or wm.index.top(device)
             if holder is None:
                 continue
             name = holder.app.name
@@ -276,13 +275,18 @@ class Fairness:
         self._deadline_stale = True
         before = self._keepers
         self._keepers = keeping
-        for name in before - keeping:
-            share = shares.get(name)
-            if share is not None:
-                share.close(now)
+        # (each record's changes are its own: the sets are walked in any order, and
+        # without building their differences)
+        for name in before:
+            if name not in keeping:
+                share = shares.get(name)
+                if share is not None:
+                    share.close(now)
         due = self._due
         new: list[str] = []
-        for name in keeping - before:
+        for name in keeping:
+            if name in before:
+                continue
             share = shares.get(name)
             if share is None or share.dropped(last):  # (no record, as the rule has it)
                 if name in self._apps:

@@ -176,14 +176,19 @@ class Intake:
         seq = self._next_seq
         self._next_seq = seq + 1
         cid = self.next_command
-        if len(specs) == 1:  # (one call: the usual request)
-            spec, all_devices, _prio = specs[0]
-            cmds = [Command(cid, app, calls[0], spec, None, on_interrupt)]
+        one = len(specs) == 1  # (one call: the usual request)
+        if one:
+            spec, all_devices, prio = specs[0]
+            last = Command(cid, app, calls[0], spec, None, on_interrupt)
+            cmds: tuple[Command, ...] = (last,)  # (its AB's ``commands`` too)
+            self.next_command = cid + 1
         else:
-            cmds = [Command(cid + i, app, call, spec, None, on_interrupt)
-                    for i, (call, (spec, _d, _p)) in enumerate(zip(calls, specs, strict=True))]
+            cmds = tuple([Command(cid + i, app, call, spec, None, on_interrupt)
+                          for i, (call, (spec, _d, _p))
+                          in enumerate(zip(calls, specs, strict=True))])
+            last = cmds[-1]
             all_devices = frozenset().union(*(d for _s, d, _p in specs))
-        self.next_command = cid + len(cmds)
+            self.next_command = cid + len(cmds)
         # Where its root goes (the module's docstring). A newer request wins even when it
         # is made in an end handler: the app's own waiting work on its devices is
         # cancelled; the end-event link only chooses the tree when nothing of the app
@@ -205,40 +210,36 @@ class Intake:
                 and wm.react(tree, seq)
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
-        root = self._build(app, tree, cmds, specs, group, parent, reactive and reactive_allowed,
-                           self._turns and face_user, seq)
+        if one:  # (``_build`` for one call, written out)
+            root = wm.new_node(app, tree, cmds, all_devices, prio,
+                               reactive and reactive_allowed, seq)
+            if self._turns and face_user:
+                root.turnable = _turnable(root, parent)
+            if parent is not None:
+                wm.link(parent, root)
+        else:
+            root = self._build(app, tree, cmds, specs, group, parent,
+                               reactive and reactive_allowed, self._turns and face_user, seq)
         old = app.latest
-        app.latest = cmds[-1]
+        app.latest = last
         if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
             old.node = None  # (forgotten: see ``_recent``)
         if self._holds.opened:  # (else no stream or block continues a tree)
             self._holds.requested(app, tree)
-        log = self._log
-        detail = ""
-        if log.recording:
-            count = "1 Command(s) " if len(cmds) == 1 else f"{len(cmds)} Command(s) "
-            grouped = "as one AB " if group else ""
-            before = f"before AB{parent.id}" if parent is not None else "roots the tree"
-            detail = count + grouped + before
-        log.requested(rule, root, detail, cmds, parent.id if parent is not None else None, now)
+        self._log.requested(rule, root, cmds, group, parent, now)
         if enter_now:
             wm.enter_waiting(root, parent_finished=parent_finished)
-        return (cid,) if len(cmds) == 1 else tuple([c.id for c in cmds]), cancelled
+        # (one call: its AB's ``command_ids`` are ``(cid,)``)
+        return root.command_ids if one else tuple([c.id for c in cmds]), cancelled
 
-    def _build(self, app: App, tree: Tree, cmds: list[Command], specs: Specs, group: bool,
-               parent: Node | None, reactive: bool, turns: bool, seq: int) -> Node:
-        """The request's nodes after ``parent``: one AB (one call, or ``group``) or a
-        chain; returns the root (the one ``reactive``). ``turns``: its utterances may be
-        ``turnable``."""
+    def _build(self, app: App, tree: Tree, cmds: tuple[Command, ...], specs: Specs,
+               group: bool, parent: Node | None, reactive: bool, turns: bool,
+               seq: int) -> Node:
+        """The nodes after ``parent`` of a request of several calls (``accept`` builds
+        the one of a single call itself): one AB (``group``) or a chain; returns the root
+        (the one ``reactive``). ``turns``: its utterances may be ``turnable``."""
         wm = self._wm
-        if len(cmds) == 1:  # (one call: the usual request)
-            _spec, devices, prio = specs[0]
-            commands: tuple[Command, ...] = (cmds[0],)
-        elif group:
-            prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
-            devices = frozenset().union(*(d for _s, d, _p in specs))
-            commands = tuple(cmds)
-        else:
+        if not group:
             first: Node | None = None
             for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
                 node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None,
@@ -251,7 +252,9 @@ class Intake:
                 parent = node
             assert first is not None
             return first
-        root = wm.new_node(app, tree, commands, devices, prio, reactive, seq)
+        prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
+        devices = frozenset().union(*(d for _s, d, _p in specs))
+        root = wm.new_node(app, tree, cmds, devices, prio, reactive, seq)
         if turns:
             root.turnable = _turnable(root, parent)
         if parent is not None:
@@ -336,7 +339,7 @@ class Intake:
         node = latest.node if latest is not None else None
         if node is not None and node.state in IN_MEMORY:
             return _new(Link, (_AFTER_LATEST, node, node.tree, False, False, True))
-        if node is not None and self._holds.continues(app, node.tree):
+        if node is not None and self._holds.opened and self._holds.continues(app, node.tree):
             return _new(Link, (_STREAM, node, node.tree, True, True, True))
         return _NEW_TREE
 

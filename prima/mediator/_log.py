@@ -23,35 +23,45 @@ class DecisionLog:
     def __init__(self, clock: Clock, record: Callable[[Decision], None] | None) -> None:
         self._clock = clock
         self._record = record
-        self.recording = record is not None
-        """Someone reads the decisions (worth building a detailed text)."""
         self.count = 0
         """How many decisions were made so far."""
 
-    def ab(self, kind: DecisionKind, rule: Rule, node: Node, detail: str = "") -> None:
+    def ab(self, kind: DecisionKind, rule: Rule, node: Node, detail: str = "",
+           now: float | None = None) -> None:
         """Record one decision about the AB ``node`` itself (most decisions: a start, an
-        end, a suspension): :meth:`emit` for that case, with the AB's ``facts``."""
+        end, a suspension): :meth:`emit` for that case, with the AB's ``facts``.
+        ``now``: the clock's time, if the caller has just read it."""
         self.count = count = self.count + 1
-        if self._record is not None:
-            self._record(_new(Decision, (self._clock.now(), count, kind, rule, *node.facts,
-                                         detail, node.calls, None, None)))
+        record = self._record
+        if record is not None:
+            # (its fields as tuples added up: less work than unpacking ``facts`` into one)
+            record(_new(Decision, (self._clock.now() if now is None else now, count, kind, rule)
+                        + node.facts + (detail, node.calls, None, None)))
 
-    def requested(self, rule: Rule, node: Node, detail: str, request: Sequence[Command],
-                  before: int | None, now: float) -> None:
+    def requested(self, rule: Rule, node: Node, request: Sequence[Command], group: bool,
+                  before: Node | None, now: float) -> None:
         """Record a request's decision (what :meth:`emit` records for ``REQUEST`` with
-        these), positional: one per request. ``request``: its Commands, ``node`` the AB it
-        roots; ``now``: the clock's time (the caller has just read it)."""
+        these), positional: one per request. ``request``: its Commands (``group``: as one
+        AB), ``node`` the AB it roots, ``before`` its before node; ``now``: the clock's time
+        (the caller has just read it). Its detail says how many Commands, and where."""
         if self._record is None:
             self.count += 1
             return
+        # (the usual request, one Command, in one f-string)
+        if len(request) == 1 and not group:
+            detail = (f"1 Command(s) before AB{before.id}" if before is not None
+                      else "1 Command(s) roots the tree")
+        else:
+            detail = (f"{len(request)} Command(s) {'as one AB ' if group else ''}"
+                      + (f"before AB{before.id}" if before is not None else "roots the tree"))
+        before_id = before.id if before is not None else None
         if len(request) != 1:
-            self.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=request,
-                      before=before)
+            self.emit(_REQUEST, rule, node, detail=detail, request=request, before=before_id)
             return
         # (one Command: the AB's own, so the decision is about the AB: its facts)
         self.count = count = self.count + 1
-        self._record(_new(Decision, (now, count, _REQUEST, rule, *node.facts,
-                                     detail, node.calls, before, None)))
+        self._record(_new(Decision, (now, count, _REQUEST, rule) + node.facts
+                          + (detail, node.calls, before_id, None)))
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
              app: str | None = None, command: Command | None = None,

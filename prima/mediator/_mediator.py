@@ -367,7 +367,7 @@ class Mediator:
         if node.feedback:
             detail = "terminal" if outcome.terminal else "not terminal"
             looping = not outcome.terminal
-        self._log.ab(_END, _COMPLETED, node, detail)
+        self._log.ab(_END, _COMPLETED, node, detail, now)
         app = node.app
         ended: tuple[Command, ...] = ()
         cancelled: Command | None = None

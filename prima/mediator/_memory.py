@@ -147,10 +147,25 @@ class WorkingMemory:
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
         node.state = _WAITING
-        node.app.active += 1
+        app = node.app
+        app.active += 1
         self.waiting += 1
         self.index.add(node)
-        self._rank_in(node)
+        # (``_rank_in``, written out: every request and every child of an ended AB)
+        key = (app.name, node.priority)
+        tree = node.tree
+        for d in node.sorted_devices:
+            counts = self.ranked.get(d)
+            if counts is None:
+                counts = self.ranked[d] = {}
+            counts[key] = counts.get(key, 0) + 1
+            trees = self.on.get(d)
+            if trees is None:
+                trees = self.on[d] = {}
+            nodes = trees.get(tree)
+            if nodes is None:
+                nodes = trees[tree] = {}
+            nodes[node.id] = node
         self.new.append(node)
         if parent_finished:
             self.pjf[node.id] = node
@@ -189,7 +204,20 @@ class WorkingMemory:
         node.state = _RUNNING
         tree = node.tree
         tree.started = True
-        self._rank_out(node)
+        # (``_rank_out``, written out: every start)
+        key = (node.app.name, node.priority)
+        for d in node.sorted_devices:
+            counts = self.ranked[d]
+            n = counts[key] - 1
+            if n:
+                counts[key] = n
+            else:
+                del counts[key]
+            trees = self.on[d]
+            nodes = trees[tree]
+            del nodes[node.id]
+            if not nodes:
+                del trees[tree]
         self.waiting -= 1
         busy = self.busy
         blended = node.blended
@@ -217,7 +245,10 @@ class WorkingMemory:
                 del blending[d]
         self.dirty.update(node.devices)
         node.tree.running -= 1
-        self._inactive(node.app, now)
+        app = node.app  # (``_inactive``, written out: once per ended AB)
+        app.active -= 1
+        if app.active == 0:
+            app.idle_since = now
         children = node.children
         node.children = []
         return children
@@ -297,7 +328,8 @@ class WorkingMemory:
         before = tree.reaction
         if before is None or before < reaction:
             tree.reaction = reaction
-            self.dirty.update(self.index.rerank(tree))
+            if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
+                self.dirty.update(self.index.rerank(tree))
         return before is None
 
     def rerank_app(self, app: App) -> None:
@@ -316,6 +348,6 @@ class WorkingMemory:
 
     def maybe_compact(self) -> None:
         """Drop stale index entries once they outnumber live ones."""
-        if self.index.entries > 4 * (self.waiting * 3 + 64):
+        if self.index.entries > 12 * self.waiting + 256:  # (4 * (waiting * 3 + 64))
             self.index.compact(n for n in self.nodes.values()
                                if n.state is _WAITING and n.parked is None)
