@@ -100,10 +100,13 @@ class _Share:
             self.plan()
 
     def close(self, now: float) -> None:
-        """The app stops keeping others waiting: the current interval is closed."""
+        """The app stops keeping others waiting: the current interval is closed (and
+        those that ended before the window are forgotten, as any later sum would: a
+        record that is never settled, its share never near spent, stays as short)."""
         since = self.since
         if since is not None:
             if now > since:
+                self.prune(now, self.window)
                 self.intervals.append((since, now))
                 self.lengths.append(now - since)
             self.bound += now - self.bound_at

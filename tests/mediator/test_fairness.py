@@ -13,11 +13,22 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable, Mapping
 from itertools import islice
+from types import SimpleNamespace
 
 import pytest
 
 import prima.mediator._mediator as mediator_module
-from prima.mediator import AppKind, Decision, DecisionKind, MediatorConfig, Outcome, Request
+from prima.catalog import Catalog
+from prima.mediator import (
+    AppKind,
+    AtomicBehavior,
+    Decision,
+    DecisionKind,
+    ManualClock,
+    MediatorConfig,
+    Outcome,
+    Request,
+)
 from prima.mediator._decisions import Rule
 from prima.mediator._fairness import _SLACK
 from prima.mediator._holds import Holds
@@ -312,3 +323,31 @@ def test_a_record_dropped_is_made_again_after_the_others(
     decisions = _both(play, monkeypatch)
     budget = [(d.t, d.app, d.detail[:7]) for d in decisions if d.kind is DecisionKind.BUDGET]
     assert budget == [(1.5, "eb", "kept ot"), (2.5, "eb", "regains"), (2.5, "ea", "kept ot")]
+
+
+def test_a_record_never_near_its_share_keeps_only_the_window() -> None:
+    """An app that keeps another waiting now and then, over and over, with a share it
+    never comes near spending, is never settled (and here no deadline is asked, which
+    would sum it): closing an interval forgets those that ended before the window, so
+    its record stays as short as the window."""
+    config = MediatorConfig(budgets={AppKind.FA: Budgets(),
+                                     AppKind.EA: Budgets(wait_share=1e6, wait_window=10.0)})
+    clock = ManualClock()
+    started: list[AtomicBehavior] = []
+    driver = SimpleNamespace(start=started.append, abandon=lambda _cid: None,
+                             cut=lambda _ab: False)
+    m = mediator_module.Mediator(Catalog.standard(), driver, clock, config=config)
+    for name, kind in (("fa", AppKind.FA), ("ea", AppKind.EA)):
+        m.register(name, kind, ScriptedApp(name))
+    for i in range(400):  # the EA talks while the FA waits for it, then the FA talks
+        clock.set(i * 2.0)
+        m.submit(req("ea", speak("mine")))
+        clock.set(i * 2.0 + 0.1)
+        m.submit(req("fa", speak("me")))
+        clock.set(i * 2.0 + 0.5)
+        m.finish(started[-1].id)
+        clock.set(i * 2.0 + 1.0)
+        m.finish(started[-1].id)
+    share = m._fairness._shares["ea"]
+    assert 4 <= len(share.intervals) <= 6  # (one per 2 s, within 10 s)
+    assert len(share.lengths) == len(share.intervals)
