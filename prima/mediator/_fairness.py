@@ -341,23 +341,14 @@ class Fairness:
                         share.open(now)
                 elif share.since is not None:
                     share.close(now)
-        changed = False
-        gone: list[str] = []  # (records of apps gone, or idle for a whole window)
-        due = inf
+        for name in [name for name in shares if name not in apps]:
+            del shares[name]  # (an app gone keeps nobody waiting any more)
         for name, share in shares.items():
-            registered = apps.get(name)
-            if registered is None:
-                gone.append(name)
-                continue
+            registered = apps[name]
             if share.app is not registered:
                 share.use(registered)
-            changed |= self._settle(name, share, now, gone)
-            if share.due < due:
-                due = share.due
-        for name in gone:
-            del shares[name]
-        self._due = due
-        return changed
+            share.due = -inf  # (every record is due: settled in its order)
+        return self._settle_due(now)
 
     def _settle_due(self, now: float) -> bool:
         """Settle the records due by ``now``, in their order."""
