@@ -62,6 +62,9 @@ class Policies:
         self.on_busy = self._blends or self._cuts
         """Some policy may act on busy devices for some AB (:meth:`acts_on_busy` is
         false for every AB otherwise)."""
+        self._blend_devices = frozenset().union(*(b.devices for b in catalog.blends)) \
+            if self._blends else frozenset()
+        """The devices a declared blend shares (no other is ever shared)."""
 
     def suspending(self, tree: Tree) -> None:
         """A tree is suspended: remember where the robot is (restore-state)."""
@@ -142,6 +145,17 @@ class Policies:
         """Whether a policy may act for ``x`` on busy devices: share them (blend) or
         cut what runs there (interrupt, for a reaction's AB)."""
         return self._blends or (self._cuts and x.tree.reaction is not None)
+
+    def may_act_on(self, device: str) -> bool:
+        """Whether a policy could act for an AB waiting for the busy ``device``, as far
+        as that device goes: blend it over what runs there (a declared blend shares
+        the device) or cut what runs there (its Commands are all interruptible). When
+        False, neither :meth:`blend` nor :meth:`cut` does anything for an AB that needs
+        the device, whichever it is."""
+        if device in self._blend_devices:
+            return True
+        return self._cuts and all(c.spec.interruptible
+                                  for c in self._wm.busy[device].commands)
 
     def blend(self, x: Node) -> tuple[frozenset[str], bool] | None:
         """The blend policy: the busy devices the ready ``x`` may share with what runs

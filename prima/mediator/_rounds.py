@@ -301,7 +301,8 @@ class Selector:
         device (it cannot start: no policy's AB is put before it) and nothing acts on
         it while it waits: no hold parks it (no stream or block is open, and it breaks
         no channel: only a LOW AB is held by another app's talk) and no policy acts on
-        busy devices (blend, interrupt). What the index's answer for a dirty device
+        busy devices for it (blend, interrupt: not on a busy device it needs that
+        :meth:`Policies.may_act_on` rules out). What the index's answer for a dirty device
         is need not be known: ``WorkingMemory.ranked`` counts the waiting, unparked ABs
         on each device by priority, which is whom the index (and a round's named ABs)
         can answer with. This is the common round that follows a start or an end on a
@@ -310,22 +311,24 @@ class Selector:
         wm = self._wm
         busy = wm.busy
         ranked = wm.ranked
-        quiet = not (self._holds.opened or self._policies.on_busy)
+        opened = self._holds.opened
+        policies = self._policies
+        on_busy = policies.on_busy
         for d in dirty:
             counts = ranked.get(d)
             if not counts:
                 continue  # no AB waits for it
-            if not quiet or d not in busy:
+            if opened or d not in busy or (on_busy and policies.may_act_on(d)):
                 return False
             for _app, priority in counts:
                 if priority is _LOW:
                     return False
         for x in new:
             if x.state is _WAITING and x.parked is None:
-                if not quiet or x.priority is _LOW:
+                if opened or x.priority is _LOW:
                     return False
-                for d in x.sorted_devices:
-                    if d in busy:
+                for d in x.sorted_devices:  # a busy device that keeps it waiting
+                    if d in busy and not (on_busy and policies.may_act_on(d)):
                         break
                 else:
                     return False

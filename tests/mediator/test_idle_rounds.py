@@ -21,18 +21,20 @@ def test_a_round_skipped_as_idle_would_have_done_nothing(
     weigh = Selector.round
     verdicts: list[bool] = []
     skipped = 0
+    with_policies = 0  # (skipped while a policy may act on busy devices)
 
     def never_idle(self: Selector, new: list[Node], dirty: Set[str]) -> bool:
         verdicts.append(idle(self, new, dirty))
         return False  # every round is weighed
 
     def checked_round(self: Selector) -> list[Node]:
-        nonlocal skipped
+        nonlocal skipped, with_policies
         holds = self._holds
         before = (self._log.count, len(holds._parked), len(holds._talk_parked))
         started = weigh(self)
         if verdicts.pop():
             skipped += 1
+            with_policies += self._policies.on_busy
             assert started == []
             assert (self._log.count, len(holds._parked), len(holds._talk_parked)) == before
         return started
@@ -43,3 +45,4 @@ def test_a_round_skipped_as_idle_would_have_done_nothing(
         assert not play(seed).violations, seed
         assert not verdicts
     assert skipped > 1000
+    assert with_policies > 1_000, with_policies
