@@ -1,8 +1,10 @@
 """Mediator benchmark: the cost of one operation as the waiting list grows from
 10 to 10,000 ABs, in workloads whose operations touch those waiting ABs.
 
-Run: ``python bench/mediator.py [--sizes 10,100,1000,10000] [--repeats 15]``
-(from the repository root). Measured as every benchmark here measures
+Run: ``python bench/mediator.py [--sizes 10,100,1000,10000] [--repeats 15]
+[--robot robots/home-robot.xml]`` (from the repository root; ``--robot``: that
+robot's Commands and the policies a run on it has, instead of the standard
+Commands). Measured as every benchmark here measures
 (``bench/_measure.py``): CPU time, the median of interleaved rounds (one round
 runs every size once), each size as a ratio to N=10 measured in the same rounds
 (flat is 1.00x).
@@ -44,6 +46,7 @@ a factor of 2.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import gc
 import sys
 from collections.abc import Callable, Sequence
@@ -67,7 +70,9 @@ from prima.mediator import (  # noqa: E402
     Request,
     RunningOrder,
 )
-from prima.vocab import Budgets  # noqa: E402
+from prima.dsl import load_profile  # noqa: E402
+from prima.errors import PrimaError  # noqa: E402
+from prima.vocab import Budgets, policy_settings  # noqa: E402
 
 SIZES = (10, 100, 1_000, 10_000)
 FLAT = 2.0
@@ -78,6 +83,9 @@ LIMIT = 20e-6
 _BIG = Budgets(waiting=10**7, starts_per_instant=10**7, wait_share=10**6, wait_window=60.0)
 CONFIG = MediatorConfig(budgets={AppKind.FA: _BIG, AppKind.EA: _BIG})
 """One app may keep 10,000 ABs waiting, and never loses its precedence."""
+CATALOG = Catalog.standard()
+"""The Commands the workloads request (``--robot``: a robot profile's, whose blends
+and interruptible Commands give the blend and interrupt policies work to weigh)."""
 
 SPEAK = Call("Speak", {"text": "x"})
 POINT = Call("PointByHand", {"angle": 1.0})
@@ -134,7 +142,7 @@ class World:
         self.driver = _Driver()
         self.decisions = 0
         self.plans: dict[CommandId, Sequence[Call]] = {}
-        self.m = Mediator(Catalog.standard(), self.driver, self.clock, config=CONFIG,
+        self.m = Mediator(CATALOG, self.driver, self.clock, config=CONFIG,
                           record=self._count)
         for name, kind in (("fa", AppKind.FA), ("ea", AppKind.EA), ("eb", AppKind.EA)):
             self.m.register(name, kind, _App(self, name))
@@ -334,7 +342,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--repeats", type=int, default=15, help="interleaved rounds")
     p.add_argument("--cycles", type=int, default=200, help="cycles per round and size")
     p.add_argument("--only", default="", help="comma-separated workloads (default: all)")
+    p.add_argument("--robot", type=Path, default=None,
+                   help="a robot profile (robots/*.xml): its Commands, and its policies as "
+                        "a run sets them (default: the standard Commands, every policy on)")
     args = p.parse_args(argv)
+    if args.robot is not None:
+        try:
+            _use_robot(args.robot)
+        except PrimaError as exc:
+            print(exc, file=sys.stderr)
+            return 2
     sizes = [int(s) for s in args.sizes.split(",")]
     names = [s for s in args.only.split(",") if s] or [*WORKLOADS, "burst"]
     peer = f"N={sizes[0]}"
@@ -375,6 +392,19 @@ def main(argv: list[str] | None = None) -> int:
         ok &= v.met
         print(f"  {v}")
     return 0 if ok else 1
+
+
+def _use_robot(path: Path) -> None:
+    """Run the workloads on a robot profile's Commands, with the policies a run on that
+    robot has by default (no channel here: connect-channel and restore-state ask none)."""
+    global CATALOG, CONFIG
+    profile = load_profile(path)
+    policies = policy_settings(profile.policies)
+    CATALOG = profile.catalog()
+    CONFIG = dataclasses.replace(CONFIG, interrupt=policies["interrupt"],
+                                 blend=policies["blend"])
+    print(f"robot: {path} (interrupt {'on' if CONFIG.interrupt else 'off'}, "
+          f"blend {'on' if CONFIG.blend else 'off'}; {len(CATALOG.blends)} blend(s))")
 
 
 def _case(load: Workload, cycles: int) -> Callable[[], float]:
