@@ -147,25 +147,10 @@ class WorkingMemory:
     def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3)."""
         node.state = _WAITING
-        app = node.app
-        app.active += 1
+        node.app.active += 1
         self.waiting += 1
         self.index.add(node)
-        # (``_rank_in``, written out: every request and every child of an ended AB)
-        key = (app.name, node.priority)
-        tree = node.tree
-        for d in node.sorted_devices:
-            counts = self.ranked.get(d)
-            if counts is None:
-                counts = self.ranked[d] = {}
-            counts[key] = counts.get(key, 0) + 1
-            trees = self.on.get(d)
-            if trees is None:
-                trees = self.on[d] = {}
-            nodes = trees.get(tree)
-            if nodes is None:
-                nodes = trees[tree] = {}
-            nodes[node.id] = node
+        self._rank_in(node)
         self.new.append(node)
         if parent_finished:
             self.pjf[node.id] = node
@@ -204,20 +189,7 @@ class WorkingMemory:
         node.state = _RUNNING
         tree = node.tree
         tree.started = True
-        # (``_rank_out``, written out: every start)
-        key = (node.app.name, node.priority)
-        for d in node.sorted_devices:
-            counts = self.ranked[d]
-            n = counts[key] - 1
-            if n:
-                counts[key] = n
-            else:
-                del counts[key]
-            trees = self.on[d]
-            nodes = trees[tree]
-            del nodes[node.id]
-            if not nodes:
-                del trees[tree]
+        self._rank_out(node)
         self.waiting -= 1
         busy = self.busy
         blended = node.blended
@@ -245,10 +217,7 @@ class WorkingMemory:
                 del blending[d]
         self.dirty.update(node.devices)
         node.tree.running -= 1
-        app = node.app  # (``_inactive``, written out: once per ended AB)
-        app.active -= 1
-        if app.active == 0:
-            app.idle_since = now
+        self._inactive(node.app, now)
         children = node.children
         node.children = []
         return children
