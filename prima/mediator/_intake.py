@@ -188,6 +188,7 @@ class Intake:
                           in enumerate(zip(calls, specs, strict=True))])
             last = cmds[-1]
             all_devices = frozenset().union(*(d for _s, d, _p in specs))
+            prio = min(p for _s, _d, p in specs)  # (of the AB they make if grouped)
             self.next_command = cid + len(cmds)
         # Where its root goes (the module's docstring). A newer request wins even when it
         # is made in an end handler: the app's own waiting work on its devices is
@@ -210,16 +211,17 @@ class Intake:
                 and wm.react(tree, seq)
                 and tree.parked):
             self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
-        if one:  # (``_build`` for one call, written out)
+        turns = self._turns and face_user
+        if one or group:  # one AB: the usual request, or its calls grouped
             root = wm.new_node(app, tree, cmds, all_devices, prio,
                                reactive and reactive_allowed, seq)
-            if self._turns and face_user:
+            if turns:
                 root.turnable = _turnable(root, parent)
             if parent is not None:
                 wm.link(parent, root)
         else:
-            root = self._build(app, tree, cmds, specs, group, parent,
-                               reactive and reactive_allowed, self._turns and face_user, seq)
+            root = self._chain(app, tree, cmds, specs, parent, reactive and reactive_allowed,
+                               turns, seq)
         old = app.latest
         app.latest = last
         if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
@@ -232,34 +234,23 @@ class Intake:
         # (one call: its AB's ``command_ids`` are ``(cid,)``)
         return root.command_ids if one else tuple([c.id for c in cmds]), cancelled
 
-    def _build(self, app: App, tree: Tree, cmds: tuple[Command, ...], specs: Specs,
-               group: bool, parent: Node | None, reactive: bool, turns: bool,
-               seq: int) -> Node:
-        """The nodes after ``parent`` of a request of several calls (``accept`` builds
-        the one of a single call itself): one AB (``group``) or a chain; returns the root
-        (the one ``reactive``). ``turns``: its utterances may be ``turnable``."""
+    def _chain(self, app: App, tree: Tree, cmds: tuple[Command, ...], specs: Specs,
+               parent: Node | None, reactive: bool, turns: bool, seq: int) -> Node:
+        """The chain of ABs after ``parent`` of a request of several calls not grouped,
+        one per call; returns the first (the one ``reactive``). ``turns``: its
+        utterances may be ``turnable``."""
         wm = self._wm
-        if not group:
-            first: Node | None = None
-            for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
-                node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None,
-                                   seq)
-                if turns:
-                    node.turnable = _turnable(node, parent)
-                wm.link(parent, node)
-                if first is None:
-                    first = node
-                parent = node
-            assert first is not None
-            return first
-        prio = min((p for _s, _d, p in specs), default=Priority.HIGH)
-        devices = frozenset().union(*(d for _s, d, _p in specs))
-        root = wm.new_node(app, tree, cmds, devices, prio, reactive, seq)
-        if turns:
-            root.turnable = _turnable(root, parent)
-        if parent is not None:
-            wm.link(parent, root)
-        return root
+        first: Node | None = None
+        for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
+            node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None, seq)
+            if turns:
+                node.turnable = _turnable(node, parent)
+            wm.link(parent, node)
+            if first is None:
+                first = node
+            parent = node
+        assert first is not None
+        return first
 
     def insert_before(self, x: Node, call: Call, spec: CommandSpec, rule: Rule,
                       detail: str) -> Node:
