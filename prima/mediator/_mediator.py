@@ -321,12 +321,7 @@ class Mediator:
     def _tell_cancelled(self, commands: Sequence[Command]) -> None:
         for cmd in commands:
             if not cmd.internal:
-                app = cmd.app
-                if app.alive:
-                    try:  # (``_tell``, written out: an ASAP request cancels, every time)
-                        app.listener.command_cancelled(cmd.id)
-                    except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
-                        self._failed(app, "command_cancelled", exc)
+                self._tell(cmd.app, cmd.id, None)
 
     def _tell(self, app: App, command_id: CommandId, outcome: Outcome | None) -> None:
         """Tell an app that its Command ended (with ``outcome``) or was cancelled (None)."""
