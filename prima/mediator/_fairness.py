@@ -44,6 +44,12 @@ _MARGIN = 1e-6
 summed: a share this much short of running out, or more, need not be summed."""
 
 
+def _spent(used: float, limit: float) -> float:
+    """Seconds of a share spent, ``used`` as summed: times summed in floating point, a
+    share spent up to rounding (:data:`_SLACK`) is spent (or its deadline is now)."""
+    return max(used, limit) if used >= limit - _SLACK else used
+
+
 class _Share:
     """One application's record of keeping the others waiting."""
 
@@ -381,8 +387,7 @@ class Fairness:
             return changed
         used = share.bound = share.total(now, window)
         share.bound_at = now
-        if used >= limit - _SLACK:  # (times summed in floating point: a share spent
-            used = max(used, limit)  # up to rounding is spent, or its deadline is now)
+        used = _spent(used, limit)
         if used >= limit and share.demoted_until is None:
             share.demoted_until = self._clock.after(window)
             changed |= self._set(
@@ -417,7 +422,6 @@ class Fairness:
         # the clock's grid: worked out as that settle would have.
         at = self._at
         clock = self._clock
-        then = clock.now() == at
         best: float | None = None
         for share in self._shares.values():
             t = share.demoted_until
@@ -425,11 +429,9 @@ class Fairness:
                 best = t
             if share.since is not None:
                 limit = share.limit
-                used = share.total(at, share.window)
-                if used >= limit - _SLACK:
-                    used = max(used, limit)
+                used = _spent(share.total(at, share.window), limit)
                 if used < limit:
-                    t = clock.after(limit - used) if then else clock.after(limit - used, at)
+                    t = clock.after(limit - used, at)
                     if best is None or t < best:
                         best = t
         return best
