@@ -35,7 +35,7 @@ import heapq
 from collections.abc import Iterable, Set
 from typing import Any
 
-from prima.mediator._ranking import Key, Keys, Ranking
+from prima.mediator._ranking import Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
 
 __all__ = ["WaitIndex"]
@@ -44,10 +44,10 @@ _WAITING = NodeState.WAITING
 _heappush = heapq.heappush
 _NO_DEVICES: frozenset[str] = frozenset()
 
-_NodeEntry = tuple[Key | Keys, int, int, Node]
-"""(the AB's order keys, its id, its version when filed, the AB). When the order keys
-are one criterion's, that key stands for them: a tuple of one item compares as the item,
-and a heap compares entries over and over, each level of nesting a C call deeper."""
+_NodeEntry = tuple[Any, ...]
+"""The AB's order keys spliced in, then its id, its version when filed and the AB:
+``(*order, id, version, node)``, read from its end (every entry holds as many keys;
+the id is unique, so entries never compare up to the AB)."""
 
 
 class _Slot:
@@ -69,8 +69,9 @@ class _Slot:
         """The slot's best live AB, dropping stale entries."""
         heap = self.heap
         while heap:
-            _keys_, _ab, version, node = heap[0]
-            if node.state is _WAITING and node.version == version:
+            entry = heap[0]
+            node: Node = entry[-1]
+            if node.state is _WAITING and node.version == entry[-2]:
                 return node
             heapq.heappop(heap)
             index.entries -= 1
@@ -78,10 +79,11 @@ class _Slot:
 
 
 _SlotEntry = tuple[Any, ...]
-"""The keys of the slot's best AB (tree and order, one per criterion) spliced in, then
-a serial unique over all entries, then the slot: ``(*keys, serial, slot)``, read from
-its end. Every entry holds as many keys, so entries compare as ``(keys, serial, slot)``
-would, but a level of nesting less for the heaps to walk, compare after compare."""
+"""The keys of the slot's best AB (its tree and order keys, laid end to end) spliced
+in, then a serial unique over all entries, then the slot: ``(*keys, serial, slot)``,
+read from its end. Every entry holds as many keys, so entries compare as ``(keys,
+serial, slot)`` would, but a level of nesting less for the heaps to walk, compare
+after compare."""
 
 
 class _Group:
@@ -109,8 +111,6 @@ class WaitIndex:
     def __init__(self, ranking: Ranking) -> None:
         self.ranking = ranking
         """The criteria's keys, kept on the ABs and trees (:class:`._ranking.Ranking`)."""
-        self._lone_order = ranking.order_len == 1
-        """The order keys are one criterion's: an AB's entry holds that key alone."""
         self._devices: dict[str, _Device] = {}
         self._tree_slots: dict[int, dict[_Slot, None]] = {}
         """Tree id -> its live slots (a few per tree; a dict as an ordered set: its order
@@ -133,7 +133,7 @@ class WaitIndex:
         head = node.head
         order = node.order
         assert head is not None and order is not None
-        entry = (order[0] if self._lone_order else order, node.id, node.version, node)
+        entry = order + (node.id, node.version, node)
         tree = node.tree
         devices = self._devices
         for d in node.sorted_devices:
@@ -148,9 +148,9 @@ class WaitIndex:
             # It ranks its slot when it is first in it: at the top, or next below stale
             # entries (``_Slot.top`` drops them; not asked when the top entry is live).
             first = heap[0]
-            top = first[3]
+            top = first[-1]
             if first is entry or (
-                    (top.state is not _WAITING or top.version != first[2])
+                    (top.state is not _WAITING or top.version != first[-2])
                     and slot.top(self) is node):
                 self._push_slot(slot, node)
 
@@ -197,8 +197,9 @@ class WaitIndex:
                 slot: _Slot = first[-1]
                 sheap = slot.heap
                 if version == slot.version and sheap:
-                    _order, _ab, nversion, node = sheap[0]
-                    if (node.state is _WAITING and node.version == nversion
+                    entry = sheap[0]
+                    node: Node = entry[-1]
+                    if (node.state is _WAITING and node.version == entry[-2]
                             and node is slot.ranked_by):
                         return node
             found = self._group_top(group)

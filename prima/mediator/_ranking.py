@@ -1,7 +1,10 @@
 """Ranking waiting ABs (MISSION.md rule 4): one ordered list of named criteria.
 
-A waiting AB's rank is the tuple of its keys under :data:`CRITERIA`, in
-order; the smaller rank wins. Each criterion names the :class:`Rule` that a
+A criterion's key is a tuple of ints, as many for every AB (its ``width``); a
+waiting AB's rank is its keys under :data:`CRITERIA`, in order, laid end to end
+in one flat tuple of ints; the smaller rank wins (flat, two ranks compare as
+their keys would, one criterion after the other, but without a tuple compared
+per criterion). Each criterion names the :class:`Rule` that a
 ``start`` decision reports when that criterion is the one that separated the
 winner from the AB it beat. To add a criterion, add one entry: the index
 (:mod:`._index`) builds its keys from this list, and selection ranks with it.
@@ -30,6 +33,7 @@ import enum
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from operator import itemgetter
+from typing import NoReturn
 
 from prima.mediator._decisions import Rule
 from prima.mediator._state import Node, Tree
@@ -38,7 +42,8 @@ __all__ = ["CRITERIA", "Criterion", "Key", "Keys", "Rank", "Ranking", "Scope", "
            "rank", "separating_rule"]
 
 Key = tuple[int, ...]
-Keys = tuple[Key, ...]
+Keys = tuple[int, ...]
+"""Several criteria's keys laid end to end, in one tuple."""
 Rank = Keys
 
 
@@ -64,6 +69,8 @@ class Criterion:
     key: Callable[[Node, Collection[int]], Key]
     """The AB's key; the collection holds the ids of the ABs whose parent just
     finished (only ``ROUND`` criteria look at it)."""
+    width: int = 1
+    """How many ints its key holds, for every AB (one for a ``ROUND`` criterion)."""
 
 
 def _priority(node: Node, _pjf: Collection[int]) -> Key:
@@ -97,23 +104,24 @@ CRITERIA: tuple[Criterion, ...] = (
     # 1. HIGH (keeps the Communication Channel) before LOW (breaks it).
     Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share),
     # (budget) an app that kept the others waiting beyond its share ranks after them.
-    Criterion(Rule.REACTIVITY, Scope.TREE, _reactivity),
+    Criterion(Rule.REACTIVITY, Scope.TREE, _reactivity, 2),
     # 2. ABs of a reaction first, the latest reaction first (response speed; MISSION.md
     #    7.1: a reaction takes over as a stream until its trees leave working memory).
     Criterion(Rule.PARENT_FINISHED, Scope.ROUND, _parent_finished),
     # 3. ABs whose before node just finished (keep the active stream).
-    Criterion(Rule.RESUME_STREAM, Scope.TREE, _resume_stream),
+    Criterion(Rule.RESUME_STREAM, Scope.TREE, _resume_stream, 2),
     # 4. ABs of a suspended stream, the most recently suspended first ...
-    Criterion(Rule.OLDEST, Scope.NODE, _oldest),
+    Criterion(Rule.OLDEST, Scope.NODE, _oldest, 2),
     # ... then the oldest request first, then the AB id.
 )
 """Rule 4, in order."""
 
 
-def rank(node: Node, pjf: Collection[int]) -> Rank:
-    """The full rank of a waiting AB, worked out the plain way from :data:`CRITERIA` as it
-    is now (the oracle's; the mediator keeps keys in its :class:`Ranking`); ``pjf`` holds
-    the ids whose parent just finished."""
+def rank(node: Node, pjf: Collection[int]) -> tuple[Key, ...]:
+    """The keys of a waiting AB, worked out the plain way from :data:`CRITERIA` as it is
+    now (the tests' slow oracle; the mediator keeps keys in its :class:`Ranking`), one
+    tuple per criterion: they compare as its rank does; ``pjf`` holds the ids whose
+    parent just finished."""
     return tuple([c.key(node, pjf) for c in CRITERIA])
 
 
@@ -138,11 +146,18 @@ def separating_rule(winner: Node, loser: Node, pjf: Collection[int]) -> Rule:
     return Rule.OLDEST
 
 
-def _arrange(parts: Sequence[int], order: Sequence[int]) -> Callable[[Keys], Keys] | None:
-    """How to put keys concatenated as ``parts`` (criterion positions, in the order
-    the concatenation holds them) in the order ``order``; None if they already are."""
-    perm = [parts.index(i) for i in order]
-    if perm == list(range(len(parts))):
+def _arrange(table: Sequence[Criterion], parts: Sequence[int],
+             order: Sequence[int]) -> Callable[[Keys], Keys] | None:
+    """How to put keys laid end to end as ``parts`` (criterion positions, in the order
+    they are laid) in the order ``order``, each criterion's key ``width`` ints; None if
+    they already are."""
+    at = 0
+    where: dict[int, range] = {}
+    for i in parts:
+        where[i] = range(at, at + table[i].width)
+        at += table[i].width
+    perm = [j for i in order for j in where[i]]
+    if perm == list(range(at)):
         return None
     if len(perm) == 1:
         only = perm[0]
@@ -181,8 +196,13 @@ class Ranking:
     def __init__(self, criteria: Sequence[Criterion] | None = None) -> None:
         table = tuple(CRITERIA if criteria is None else criteria)
         self.criteria = table
-        self.rules = tuple(c.rule for c in table)
-        """Each criterion's rule, in the table's order (a rank's positions)."""
+        for c in table:
+            if c.width < 1 or (c.scope is Scope.ROUND and c.width != 1):
+                raise ValueError(f"criterion {c.rule.value}: a {c.scope.value} key's width "
+                                 f"must be {'1' if c.scope is Scope.ROUND else '1 or more'}, "
+                                 f"not {c.width}")
+        self.rules = tuple(c.rule for c in table for _ in range(c.width))
+        """The rule of each position of a rank (each criterion's, ``width`` times)."""
         first_tree = next((i for i, c in enumerate(table) if c.scope is Scope.TREE),
                           len(table))
         node = [i for i, c in enumerate(table) if c.scope is Scope.NODE]
@@ -190,32 +210,36 @@ class Ranking:
         order = [i for i in node if i > first_tree]
         tree = [i for i, c in enumerate(table) if c.scope is Scope.TREE]
         rnd = [i for i, c in enumerate(table) if c.scope is Scope.ROUND]
-        self._head = tuple(table[i].key for i in head)
-        self._order = tuple(table[i].key for i in order)
-        self.order_len = len(order)
-        """How many criteria the order keys hold (one: the index files an AB by that
-        key alone)."""
-        self._tree = tuple(table[i].key for i in tree)
+        self._head_criteria = tuple(table[i] for i in head)
+        self._order_criteria = tuple(table[i] for i in order)
+        self._tree_criteria = tuple(table[i] for i in tree)
+        self._head = tuple(c.key for c in self._head_criteria)
+        self._order = tuple(c.key for c in self._order_criteria)
+        self._tree = tuple(c.key for c in self._tree_criteria)
+        self._head_width = sum(c.width for c in self._head_criteria)
+        self._order_width = sum(c.width for c in self._order_criteria)
+        self._tree_width = sum(c.width for c in self._tree_criteria)
         self._round = tuple(table[i].key for i in rnd)
-        self._not_named: Keys = ((1,),) * len(rnd)
+        self._not_named: Keys = (1,) * len(rnd)
         # A rank is head + tree + round + order keys, put in the table's order.
-        self._full = _arrange(head + tree + rnd + order, range(len(table)))
+        self._full = _arrange(table, head + tree + rnd + order, range(len(table)))
         # The index ranks a tree's slot by its tree + order keys, in the table's order.
-        self._slot = _arrange(tree + order, sorted(tree + order))
+        self._slot = _arrange(table, tree + order, sorted(tree + order))
 
     # ------------------------------------------------------------------ caches
     def node_keys(self, node: Node) -> None:
         """Work out the AB's NODE keys (when it first enters the waiting list)."""
-        # (loops, here and below: in Python 3.11 a list comprehension is a call of its own)
         none: tuple[int, ...] = ()
-        keys: list[Key] = []
+        head: Keys = ()
         for key in self._head:
-            keys.append(key(node, none))
-        node.head = tuple(keys)
-        keys = []
+            head += key(node, none)
+        order: Keys = ()
         for key in self._order:
-            keys.append(key(node, none))
-        node.order = tuple(keys)
+            order += key(node, none)
+        if len(head) != self._head_width or len(order) != self._order_width:
+            _malformed(self._head_criteria + self._order_criteria, node)
+        node.head = head
+        node.order = order
 
     def tree_keys(self, node: Node) -> Keys:
         """The TREE keys of the AB's tree (kept on the tree until they may change)."""
@@ -223,10 +247,12 @@ class Ranking:
         keys = tree.keys
         if keys is None:
             none: tuple[int, ...] = ()
-            parts: list[Key] = []
+            keys = ()
             for key in self._tree:
-                parts.append(key(node, none))
-            keys = tree.keys = tuple(parts)
+                keys += key(node, none)
+            if len(keys) != self._tree_width:
+                _malformed(self._tree_criteria, node)
+            tree.keys = keys
         return keys
 
     # ------------------------------------------------------------------ ranks
@@ -243,10 +269,12 @@ class Ranking:
         """The AB's full rank; ``pjf`` holds the ids of the ABs the round names."""
         if node.id not in pjf:
             return self.unnamed(node)
-        parts: list[Key] = []
+        keys: Keys = ()
         for key in self._round:
-            parts.append(key(node, pjf))
-        return self._assemble(node, tuple(parts))
+            keys += key(node, pjf)
+        if len(keys) != len(self._round):
+            raise ValueError("a round criterion's key must be (0,) or (1,)")
+        return self._assemble(node, keys)
 
     def unnamed(self, node: Node) -> Rank:
         """The AB's full rank when the round does not name it.
@@ -279,3 +307,13 @@ class Ranking:
             if key != loser[i]:
                 return rules[i]
         return Rule.OLDEST
+
+
+def _malformed(criteria: Sequence[Criterion], node: Node) -> NoReturn:
+    """Say which criterion's key does not hold as many ints as its width."""
+    for c in criteria:
+        key = c.key(node, ())
+        if not isinstance(key, tuple) or len(key) != c.width:
+            raise ValueError(f"criterion {c.rule.value}: its key for AB{node.id} is "
+                               f"{key!r}, not a tuple of {c.width} int(s) (its width)")
+    raise ValueError("criteria keys of the wrong width")  # (not reached)

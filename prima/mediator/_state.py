@@ -127,7 +127,7 @@ class Tree:
         """Device -> how many of its nodes in working memory need it."""
         self.parked = 0
         """How many of its nodes in working memory are parked (out of the ranking)."""
-        self.keys: tuple[tuple[int, ...], ...] | None = None
+        self.keys: tuple[int, ...] | None = None
         """Its keys under the TREE ranking criteria, kept by ``_ranking.Ranking``;
         None when they may have changed (the waiting index clears them whenever it
         re-ranks or forgets the tree)."""
@@ -186,12 +186,12 @@ class Node:
         """The request's sequence number: smaller is older."""
         self.version = 0
         """Bumped whenever its waiting-index entries go stale."""
-        self.head: tuple[tuple[int, ...], ...] | None = None
-        self.order: tuple[tuple[int, ...], ...] | None = None
+        self.head: tuple[int, ...] | None = None
+        self.order: tuple[int, ...] | None = None
         """Its keys under the NODE ranking criteria before and after the first TREE
         one, worked out by ``_ranking.Ranking`` when it first enters the waiting
         list (None before): they never change after that."""
-        self.ranked: tuple[object, tuple[tuple[int, ...], ...]] | None = None
+        self.ranked: tuple[object, tuple[int, ...]] | None = None
         """Its full rank when no round names it, with the tree keys it was worked out
         from (``_ranking.Ranking.rank`` keeps it: valid while the tree keeps them)."""
         self.blended: frozenset[str] = _NO_DEVICES

@@ -11,6 +11,8 @@ the long version with ``python bench/random_driver.py --scenarios 1000000``.
 
 from __future__ import annotations
 
+import dataclasses
+
 import ast
 from collections.abc import Iterator
 from pathlib import Path
@@ -217,7 +219,7 @@ def test_the_oracle_catches_a_reaction_that_loses_its_precedence(
     def reactivity(node: ranking_module.Node, _pjf: object) -> tuple[int, int]:
         return (0, -node.seq) if node.reactive else (1, 0)
 
-    criteria = tuple(ranking_module.Criterion(c.rule, ranking_module.Scope.NODE, reactivity)
+    criteria = tuple(dataclasses.replace(c, scope=ranking_module.Scope.NODE, key=reactivity)
                      if c.rule is Rule.REACTIVITY else c for c in ranking_module.CRITERIA)
     monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
     assert any("could start but waits" in v for v in caught())

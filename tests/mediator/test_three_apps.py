@@ -8,6 +8,8 @@ B's, and the streams resume from the top: B's, then A's (rule 4.4,
 
 from __future__ import annotations
 
+import dataclasses
+
 from collections.abc import Collection
 
 import pytest
@@ -80,7 +82,7 @@ def test_without_the_criterion_the_oldest_stream_comes_back_first(
         return (0, suspended)  # the least recently suspended first
 
     criteria = tuple(
-        ranking_module.Criterion(c.rule, c.scope, key) if c.rule is Rule.RESUME_STREAM else c
+        dataclasses.replace(c, key=key) if c.rule is Rule.RESUME_STREAM else c
         for c in ranking_module.CRITERIA)
     monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
     h = Harness(duration=_durations())
