@@ -6,21 +6,20 @@ change every round (the keys :class:`._ranking.Ranking` keeps on each AB and
 tree, so no key function is called to file or re-rank), split by the criteria's
 scopes:
 
-- ``head``: the NODE criteria before the first TREE criterion (priority): ABs
-  with equal head keys form a *group*;
-- within a group, each tree's ABs form a *slot*, ranked by the stable key of
-  its best AB (the TREE criteria, which are the same for every AB of a tree,
-  and the NODE criteria after the head);
+- a *slot* holds the ABs of one tree with equal head keys (the NODE criteria
+  before the first TREE criterion: priority); it is ranked by the stable keys
+  of its best AB: the head keys, the TREE criteria (the same for every AB of a
+  tree) and the NODE criteria after the head;
 - within a slot, ABs are ordered by those NODE criteria alone.
 
-Each device keeps a heap of groups, each group a heap of slots, each slot a
-heap of its ABs. When a tree's keys change (it is suspended or resumed, its
-application loses or regains its precedence), its slots are re-ranked, a few
-per device, never its ABs one by one. Entries are removed lazily: an AB's
+Each device keeps a heap of slots, each slot a heap of its ABs. When a tree's
+keys change (it is suspended or resumed, its application loses or regains its
+precedence), its slots are re-ranked, a few per device, never its ABs one by
+one. Entries are removed lazily: an AB's
 entries go stale when it leaves the waiting list or its ``version`` changes
 (it was parked); a slot's entry goes stale when the slot's ``version`` changes.
 Stale entries are dropped when they reach a heap's top (a slot's stale entry at
-its group's top is replaced when the slot is re-ranked, and a dropped slot lets
+its device's top is replaced when the slot is re-ranked, and a dropped slot lets
 go of its own entries at once); :meth:`WaitIndex.compact` rebuilds everything
 when they outnumber the live ones. Every operation costs a
 few heap operations per device, whatever the number of waiting ABs.
@@ -51,19 +50,21 @@ the id is unique, so entries never compare up to the AB)."""
 
 
 class _Slot:
-    """One tree's waiting ABs in one group: a heap by order keys."""
+    """One tree's waiting ABs with equal head keys on one device: a heap by order keys."""
 
-    __slots__ = ("tree", "group", "device", "heap", "version", "ranked_by")
+    __slots__ = ("tree", "head", "device", "ranked", "heap", "version", "ranked_by")
 
-    def __init__(self, tree: Tree, group: _Group, device: str) -> None:
+    def __init__(self, tree: Tree, head: Keys, device: str, ranked: list[_SlotEntry]) -> None:
         self.tree = tree
-        self.group = group
+        self.head = head
         self.device = device
+        self.ranked = ranked
+        """Its device's heap of slots."""
         self.heap: list[_NodeEntry] = []
         self.version = -1
-        """The serial of its one live entry in its group's heap (-1: none)."""
+        """The serial of its one live entry in its device's heap (-1: none)."""
         self.ranked_by: Node | None = None
-        """The AB whose keys the slot's live entry in its group carries."""
+        """The AB whose keys the slot's live entry carries."""
 
     def top(self, index: WaitIndex) -> Node | None:
         """The slot's best live AB, dropping stale entries."""
@@ -79,30 +80,22 @@ class _Slot:
 
 
 _SlotEntry = tuple[Any, ...]
-"""The keys of the slot's best AB (its tree and order keys, laid end to end) spliced
-in, then a serial unique over all entries, then the slot: ``(*keys, serial, slot)``,
-read from its end. Every entry holds as many keys, so entries compare as ``(keys,
-serial, slot)`` would, but a level of nesting less for the heaps to walk, compare
-after compare."""
-
-
-class _Group:
-    """The waiting ABs of one device with equal head keys: a heap of slots."""
-
-    __slots__ = ("head", "slots", "heap")
-
-    def __init__(self, head: Keys) -> None:
-        self.head = head
-        self.slots: dict[int, _Slot] = {}
-        self.heap: list[_SlotEntry] = []
+"""The keys of the slot's best AB (its head, tree and order keys, laid end to end)
+spliced in, then a serial unique over all entries, then the slot: ``(*keys, serial,
+slot)``, read from its end. Every entry holds as many keys, so entries compare as
+``(keys, serial, slot)`` would, but a level of nesting less for the heaps to walk,
+compare after compare."""
 
 
 class _Device:
-    __slots__ = ("groups", "heap")
+    """One device's waiting ABs: a heap of slots."""
+
+    __slots__ = ("slots", "heap")
 
     def __init__(self) -> None:
-        self.groups: dict[Keys, _Group] = {}
-        self.heap: list[tuple[Keys, int, _Group]] = []
+        self.slots: dict[tuple[int, Keys], _Slot] = {}
+        """(tree id, head keys) -> its live slot."""
+        self.heap: list[_SlotEntry] = []
 
 
 class WaitIndex:
@@ -116,11 +109,11 @@ class WaitIndex:
         """Tree id -> its live slots (a few per tree; a dict as an ordered set: its order
         is the order they were made in, whatever their addresses)."""
         self.serial = 0
-        """The serial of the latest slot or group entry (never reused). It advances
-        whenever a device's answer (:meth:`top`) may change but for its AB leaving the
-        waiting list or being parked: an AB filed first in its slot, a slot re-ranked, a
-        group made. (It also advances when a top drops stale entries, which changes no
-        answer.) Selection relies on this to ask a device once per round (``_rounds``)."""
+        """The serial of the latest slot entry (never reused). It advances whenever a
+        device's answer (:meth:`top`) may change but for its AB leaving the waiting list
+        or being parked: an AB filed first in its slot, a slot re-ranked. (It also
+        advances when a top drops stale entries, which changes no answer.) Selection
+        relies on this to ask a device once per round (``_rounds``)."""
         self.entries = 0
         """Heap entries held, live and stale."""
 
@@ -135,13 +128,16 @@ class WaitIndex:
         assert head is not None and order is not None
         entry = order + (node.id, node.version, node)
         tree = node.tree
+        key = (tree.id, head)
         devices = self._devices
         for d in node.sorted_devices:
             dev = devices.get(d)
-            group = dev.groups.get(head) if dev is not None else None
-            slot = group.slots.get(tree.id) if group is not None else None
+            if dev is None:
+                dev = devices[d] = _Device()
+            slot = dev.slots.get(key)
             if slot is None:
-                slot = self._slot(d, head, tree, group)
+                slot = dev.slots[key] = _Slot(tree, head, d, dev.heap)
+                self._tree_slots.setdefault(tree.id, {})[slot] = None
             heap = slot.heap
             _heappush(heap, entry)
             self.entries += 1
@@ -188,27 +184,27 @@ class WaitIndex:
             return None
         heap = dev.heap
         while heap:
-            head, _serial, group = heap[0]
-            # (the common case inline: no stale entry on the way down)
-            gheap = group.heap
-            if gheap:
-                first = gheap[0]
-                version: int = first[-2]
-                slot: _Slot = first[-1]
-                sheap = slot.heap
-                if version == slot.version and sheap:
-                    entry = sheap[0]
-                    node: Node = entry[-1]
-                    if (node.state is _WAITING and node.version == entry[-2]
-                            and node is slot.ranked_by):
-                        return node
-            found = self._group_top(group)
-            if found is not None:
-                return found
-            heapq.heappop(heap)
-            self.entries -= 1
-            if dev.groups.get(head) is group:
-                del dev.groups[head]
+            first = heap[0]
+            slot: _Slot = first[-1]
+            if first[-2] != slot.version:  # (a stale entry of its slot)
+                heapq.heappop(heap)
+                self.entries -= 1
+                continue
+            # (the common case inline: no stale entry in the slot)
+            sheap = slot.heap
+            if sheap:
+                entry = sheap[0]
+                node: Node = entry[-1]
+                if (node.state is _WAITING and node.version == entry[-2]
+                        and node is slot.ranked_by):
+                    return node
+            best = slot.top(self)
+            if best is None:
+                self._drop_slot(slot)  # (its entry, at the top, with it)
+            elif best is not slot.ranked_by:  # the AB it was ranked by left the waiting list
+                self._push_slot(slot, best)  # (its entry at the top is replaced)
+            else:
+                return best
         return None
 
     def compact(self, live: Iterable[Node]) -> None:
@@ -220,28 +216,13 @@ class WaitIndex:
             self.add(node)
 
     # -------------------------------------------------------------- internals
-    def _slot(self, device: str, head: Keys, tree: Tree, group: _Group | None) -> _Slot:
-        """A new slot for ``tree`` in the group ``head`` of ``device`` (the group is
-        made if None)."""
-        if group is None:
-            dev = self._devices.get(device)
-            if dev is None:
-                dev = self._devices[device] = _Device()
-            group = dev.groups[head] = _Group(head)
-            self.serial = serial = self.serial + 1
-            heapq.heappush(dev.heap, (head, serial, group))
-            self.entries += 1
-        slot = group.slots[tree.id] = _Slot(tree, group, device)
-        self._tree_slots.setdefault(tree.id, {})[slot] = None
-        return slot
-
     def _push_slot(self, slot: _Slot, best: Node) -> None:
         """(Re-)rank a slot by the stable keys of its best AB; its older entries go stale."""
         # (a serial unique over all entries: entries never tie up to the slot)
         self.serial = slot.version = version = self.serial + 1
         slot.ranked_by = best
         entry: _SlotEntry = self.ranking.slot_keys(best) + (version, slot)
-        heap = slot.group.heap
+        heap = slot.ranked
         if heap and heap[0][-1] is slot:
             # (an entry of its own at the top, now stale: replaced, not left for a pop)
             heapq.heapreplace(heap, entry)
@@ -250,7 +231,7 @@ class WaitIndex:
             self.entries += 1
 
     def _drop_slot(self, slot: _Slot) -> None:
-        """Drop a live slot: out of its group and its tree's books."""
+        """Drop a live slot: out of its device's heap and its tree's books."""
         self._discard(slot)
         tid = slot.tree.id
         slots = self._tree_slots.get(tid)
@@ -260,39 +241,19 @@ class WaitIndex:
                 del self._tree_slots[tid]
 
     def _discard(self, slot: _Slot) -> None:
-        """Take a live slot out of its group (its tree's books are the caller's). What
-        stale entries it holds are dropped now, and its group's top entry if that is
+        """Take a live slot out of its device (its tree's books are the caller's). What
+        stale entries it holds are dropped now, and its device's top entry if that is
         its own: else they would keep its ABs and their tree alive until they reached
         a top or a compaction (an ASAP request's tree, cancelled, leaves at once)."""
         slot.version = -1
         self.entries -= len(slot.heap)
         slot.heap = []
         slot.ranked_by = None
-        group = slot.group
-        tid = slot.tree.id
-        if group.slots.get(tid) is slot:
-            del group.slots[tid]
-        heap = group.heap
+        slots = self._devices[slot.device].slots
+        key = (slot.tree.id, slot.head)
+        if slots.get(key) is slot:
+            del slots[key]
+        heap = slot.ranked
         if heap and heap[0][-1] is slot:
             heapq.heappop(heap)
             self.entries -= 1
-
-    def _group_top(self, group: _Group) -> Node | None:
-        heap = group.heap
-        while heap:
-            entry = heap[0]
-            version: int = entry[-2]
-            slot: _Slot = entry[-1]
-            if version != slot.version:
-                heapq.heappop(heap)
-                self.entries -= 1
-                continue
-            best = slot.top(self)
-            if best is None:
-                self._drop_slot(slot)  # (its entry, at the top, with it)
-                continue
-            if best is not slot.ranked_by:  # the AB it was ranked by left the waiting list
-                self._push_slot(slot, best)  # (its entry at the top is replaced)
-                continue
-            return best
-        return None

@@ -223,8 +223,9 @@ class Ranking:
         self._not_named: Keys = (1,) * len(rnd)
         # A rank is head + tree + round + order keys, put in the table's order.
         self._full = _arrange(table, head + tree + rnd + order, range(len(table)))
-        # The index ranks a tree's slot by its tree + order keys, in the table's order.
-        self._slot = _arrange(table, tree + order, sorted(tree + order))
+        # The index ranks a tree's slot by its head + tree + order keys, in the table's
+        # order.
+        self._slot = _arrange(table, head + tree + order, sorted(head + tree + order))
 
     # ------------------------------------------------------------------ caches
     def node_keys(self, node: Node) -> None:
@@ -257,12 +258,12 @@ class Ranking:
 
     # ------------------------------------------------------------------ ranks
     def slot_keys(self, node: Node) -> Keys:
-        """What the index ranks the AB's tree by within its head group (the stable
-        keys after the head: tree and order, in the table's order)."""
+        """What the index ranks the AB's slot by (its tree's ABs with the same head keys
+        on a device): its stable keys, head, tree and order, in the table's order."""
         tree = node.tree.keys
         if tree is None:
             tree = self.tree_keys(node)
-        keys = tree + node.order  # type: ignore[operator]
+        keys = node.head + tree + node.order  # type: ignore[operator]
         return keys if self._slot is None else self._slot(keys)
 
     def rank(self, node: Node, pjf: Collection[int]) -> Rank:
