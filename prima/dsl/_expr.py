@@ -502,7 +502,50 @@ def _parse(text: str, start: str, depth: int = 0) -> Tree:
         parsed = parser().parse(text, start=start)
     except UnexpectedInput as exc:
         raise _syntax_fault(exc, text, start) from None
-    return cast(Tree, from_lark(parsed))
+    tree = cast(Tree, from_lark(parsed))
+    _words_apart(text, tree, start)
+    return tree
+
+
+_WORD = re.compile(r"[0-9]+(?:\.[0-9]+)?[A-Za-z0-9_]*|[A-Za-z_][A-Za-z0-9_]*")
+"""One word as a reader sees it: a run of letters, digits and underscores (with a
+number's decimals)."""
+
+_KEYWORDS_ALONE = frozenset({"and", "or", "not", "true", "false", "null"})
+
+
+def _words_apart(text: str, tree: Tree, what: str) -> None:
+    """Refuse a text in which lark's lexer split one word in two: it reads ``x andy`` as
+    ``x and y``, ``1and 2`` as ``1 and 2`` (after a value it tries only what may follow,
+    such as ``and``). Every word outside the string literals must be one of the tree's
+    names or numbers, or, where the tree has none (lark leaves keywords out), a keyword
+    alone. Only texts the hand-written parser declined get here (it never splits a
+    word), so this costs nothing on the common path."""
+    tokens: dict[int, int] = {}
+    strings: list[tuple[int, int]] = []
+    stack: list[Node] = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, Tree):
+            stack.extend(node.children)
+        elif isinstance(node, Token):
+            if node.type == "STRING":
+                strings.append((node.start_pos, node.end_pos))
+            else:
+                tokens[node.start_pos] = node.end_pos
+    strings.sort()
+    i = 0
+    for m in _WORD.finditer(text):
+        begin, end = m.span()
+        while i < len(strings) and strings[i][1] <= begin:
+            i += 1
+        if i < len(strings) and strings[i][0] <= begin:
+            continue  # (inside a string literal)
+        if tokens.get(begin) == end or (begin not in tokens and m[0] in _KEYWORDS_ALONE
+                                        and not any(begin < t < end for t in tokens)):
+            continue
+        raise ExpressionError(begin, f"{what}: '{m[0]}' runs two words together: put a "
+                                     "space between them", text)
 
 
 def compile_expression(text: str, *, max_text: int = MAX_TEXT, depth: int = 0) -> Compiled:

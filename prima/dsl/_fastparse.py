@@ -9,10 +9,10 @@ placeholders, and tokens with the same types, values and positions, in
 or returns ``None``. Without importing lark.
 
 It is for valid input only. On anything it does not accept (a syntax fault,
-or a corner where lark's contextual lexer splits words in a way this parser
-does not copy, such as ``x andy`` read as ``x and y``) it returns ``None``,
-and the caller parses with lark, so every syntax fault is still worded from
-lark's own error and ``pxml.lark`` stays the reference grammar.
+or a corner where lark's contextual lexer splits a word in two, such as
+``x andy`` read as ``x and y``, which the caller then refuses) it returns
+``None``, and the caller parses with lark, so every syntax fault is still
+worded from lark's own error and ``pxml.lark`` stays the reference grammar.
 ``tests/dsl/test_fastparse.py`` checks both parsers agree, tree for tree.
 
 It runs before :func:`prima.dsl._expr.measure` (which the caller skips for a
@@ -31,14 +31,15 @@ from prima.dsl._syntax import Token, Tree
 
 _LEX = re.compile(r"""[ \t\f\r\n]*(?:
     (?P<w>[A-Za-z_][A-Za-z0-9_]*)
-  | (?P<n>[0-9]+(?:\.[0-9]+)?)
+  | (?P<n>[0-9]+(?:\.[0-9]+)?(?![A-Za-z0-9_]))
   | (?P<s>"(?:[^"\\\n]|\\.)*"|'(?:[^'\\\n]|\\.)*')
   | (?P<c>==|!=|<=|>=|<|>)
   | (?P<p>[-+*/%(),.:\[\]={}])
   | (?P<bad>[^ \t\f\r\n])
 )""", re.X)
-"""One token after optional whitespace (lark's ``common.WS``): a word, a number,
-a string, a comparison, a punctuation mark; anything else is ``bad``.
+"""One token after optional whitespace (lark's ``common.WS``): a word, a number
+(not run into a word: ``1and`` is left to lark, and refused), a string, a
+comparison, a punctuation mark; anything else is ``bad``.
 Trailing whitespace matches nothing, so the matches cover the text with no gap."""
 
 _NEWLINE = re.compile("\n")

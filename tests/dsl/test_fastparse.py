@@ -23,6 +23,7 @@ from lark.exceptions import UnexpectedInput
 
 import prima.dsl
 from prima.dsl import ParseToken, ParseTree, collect, fast_parse, parser, validate_paths
+from prima.errors import ExpressionError
 
 fast_parse_sized = prima.dsl._fastparse.parse_sized  # type: ignore[attr-defined]  # private
 measure = prima.dsl._expr.measure  # type: ignore[attr-defined]  # private
@@ -238,13 +239,37 @@ def test_valid_texts_are_taken_fast() -> None:
         assert check(text, start)
 
 
-def test_a_text_lark_parses_gives_prima_trees_too() -> None:
-    text = "Speak(text={x andy})"  # 'x andy' is read 'x and y': left to lark
-    assert fast_parse(text, "chain") is None
-    (step,) = prima.dsl.parse_chain(text)
-    tree = step.args[0].tree
-    assert type(tree) is ParseTree and tree.data == "and_"
-    names = [child.children[0] for child in tree.children]  # type: ignore[union-attr]
-    assert [(type(n), n.type, n.start_pos) for n in names] == [  # type: ignore[union-attr]
-        (ParseToken, "NAME", 12), (ParseToken, "NAME", 17)]
+def test_lark_trees_become_prima_trees() -> None:
+    """What lark parses (a text the hand-written parser declines) is handed on as
+    PRIMA's own trees."""
+    parsed = _lark("Speak(text={x and y})", "chain")
+    assert parsed is not None
+    (step,) = prima.dsl._syntax.from_lark(parsed).children  # type: ignore[attr-defined]
+    tree = step.children[2].children[1].children[0]  # named -> computed -> and_
+    assert type(tree) is ParseTree and tree.data == "and_", tree
+    names = [child.children[0] for child in tree.children]
+    assert [(type(n), n.type, n.start_pos) for n in names] == [
+        (ParseToken, "NAME", 12), (ParseToken, "NAME", 18)]
     assert names == ["x", "y"]
+
+
+@pytest.mark.parametrize("text, start, at, word", [
+    ("x andy", "expression", 2, "andy"), ("1and 2", "expression", 0, "1and"),
+    ("x andnot y", "expression", 2, "andnot"), ("x ortrue", "expression", 2, "ortrue"),
+    ("3.5or x", "expression", 0, "3.5or"), ("Speak(text={x andy})", "chain", 14, "andy"),
+])
+def test_a_word_lark_would_split_in_two_is_refused(text: str, start: str, at: int,
+                                                   word: str) -> None:
+    """Lark's lexer, after a value, tries only what may follow it: it would read
+    ``x andy`` as ``x and y``. A reader sees one word there, and so does PRIMA."""
+    assert fast_parse(text, start) is None
+    with pytest.raises(ExpressionError) as caught:
+        prima.dsl._expr._parse(text, start)  # type: ignore[attr-defined]  # private
+    assert caught.value.index == at
+    assert f"'{word}' runs two words together: put a space between them" in str(caught.value)
+
+
+@pytest.mark.parametrize("text", ["x and y", "not(x)", "x == 'andy' and y", "(x)or(y)",
+                                  "event.name == \"a.b1\"", "-1", "x or-1"])
+def test_words_apart_are_taken(text: str) -> None:
+    prima.dsl.compile_expression(text)
