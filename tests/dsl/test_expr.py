@@ -243,20 +243,20 @@ def test_a_string_template_counts_as_a_level() -> None:
 
 @pytest.mark.parametrize("size", [300_000, 10_001])
 def test_a_huge_expression_is_refused_quickly(size: int) -> None:
-    start = time.perf_counter()
+    start = time.process_time()
     for source in ("(" * size + "1" + ")" * size, "-" * size + "1", "+".join(["1"] * size)):
         with pytest.raises(ExpressionError) as info:
             compile_expression(source)
         assert (info.value.index, info.value.message) == (
             10_000, "expression: longer than 10,000 characters")
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
 
 
 def test_a_deep_expression_within_the_length_is_refused_quickly() -> None:
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(ExpressionError, match="nested more than"):
         compile_expression("(" * 4_999 + "1" + ")" * 4_999)
-    assert time.perf_counter() - start < 0.1
+    assert time.process_time() - start < 0.1
 
 
 @given(st.text(alphabet="()[]{}-+*/%<=!,:'\"\\ ab1notrd.", max_size=300))

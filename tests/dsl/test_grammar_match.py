@@ -106,23 +106,23 @@ def test_a_hostile_pattern_against_a_long_answer_is_linear() -> None:
     # The regex this replaces, (.*?) four times, backtracked for minutes here.
     answer = ["word"] * 500
     items = ("*", "a", "*", "b", "*", "c", "*", "d")
-    start = time.perf_counter()
+    start = time.process_time()
     assert match_pattern(items, answer) is None
     assert match_pattern(("*", "*", "*", "*", "word"), answer) == ["", "", "", " ".join(answer[1:])]
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
     grammar = Grammar("g", (), (Pattern("* a * b * c * d", items),), Loc(1, 1))
-    start = time.perf_counter()
+    start = time.process_time()
     assert grammar.match("word " * 500) is None
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
 
 
 def test_many_long_synonyms_are_looked_up_not_scanned() -> None:
     phrases = tuple(tuple(f"w{i} x{j}".split()) for i in range(200) for j in range(5))
     grammar = Grammar("g", (Choice("v", phrases),), (), Loc(1, 1))
-    start = time.perf_counter()
+    start = time.process_time()
     for _ in range(100):
         assert grammar.match("say " * 100 + "w199 x4") == "v"
-    assert time.perf_counter() - start < 2
+    assert time.process_time() - start < 2
 
 
 @pytest.mark.parametrize("body, fragment", [

@@ -53,9 +53,9 @@ def test_the_robot_profile_budget_bounds_literal_texts() -> None:
     ("+".join(["x"] * 4_000), 102, "expression: nested more than 50 levels deep"),
 ])
 def test_a_deep_expression_is_a_located_error_quickly(expr: str, col: int, message: str) -> None:
-    start = time.perf_counter()
+    start = time.process_time()
     problems = _check(f'<var name="x" expr="{expr}"/><state id="s" initial="true"/>')
-    assert time.perf_counter() - start < 2
+    assert time.process_time() - start < 2
     [problem] = problems
     assert (problem.line, problem.col) == (2, len('<var name="x" expr="') + col)
     assert problem.message.startswith(message)
@@ -64,9 +64,9 @@ def test_a_deep_expression_is_a_located_error_quickly(expr: str, col: int, messa
 def test_many_undefined_names_among_many_variables_stay_linear() -> None:
     variables = "".join(f'<var name="v{i}"/>' for i in range(5_000))
     uses = "".join(f'<log text="{{w{i}}}"/>' for i in range(5_000))
-    start = time.perf_counter()
+    start = time.process_time()
     problems = _check(f"{variables}{ENTRY}{uses}</entry></state>")
-    assert time.perf_counter() - start < 5
+    assert time.process_time() - start < 5
     assert len(problems) == 51
     assert problems[0].message == "undefined variable 'w0'; did you mean 'v0'?"
     assert problems[-1].message.startswith("... and 4,950 more problems")
@@ -75,7 +75,7 @@ def test_many_undefined_names_among_many_variables_stay_linear() -> None:
 def test_many_unknown_events_among_many_events_stay_linear() -> None:
     events = "".join(f'<event name="e{i}"/>' for i in range(3_000))
     handlers = "".join(f'<on event="x{i}"/>' for i in range(3_000))
-    start = time.perf_counter()
+    start = time.process_time()
     problems = _check(f'{events}<state id="s" initial="true">{handlers}</state>')
-    assert time.perf_counter() - start < 5
+    assert time.process_time() - start < 5
     assert len(problems) == 51 and "unknown event 'x0'" in problems[0].message

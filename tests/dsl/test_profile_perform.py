@@ -214,17 +214,17 @@ def test_many_commands_with_bad_steps_load_in_linear_time() -> None:
         f'<command name="C{i}" devices="laser"><param name="p{i}" kind="number"/>'
         f'<perform><hold seconds="{{q{i}}}"/><raise event="e{i}"/></perform></command>'
         for i in range(2_000))
-    start = time.perf_counter()
+    start = time.process_time()
     problems = _problems(commands)
-    assert time.perf_counter() - start < 5
+    assert time.process_time() - start < 5
     assert len(problems) == 51
     assert problems[0][3] == "'{q0}' is not an argument of C0 (its arguments: p0)"
     assert problems[-1][3].startswith("... and 3,950 more problems")
 
 
 def test_a_perform_of_many_steps_is_one_error_at_the_first_too_many() -> None:
-    start = time.perf_counter()
+    start = time.process_time()
     [(_source, line, _col, message)] = _problems(LASER.format(
         steps='<hold seconds="1"/>\n' * 20_000))
-    assert time.perf_counter() - start < 5
+    assert time.process_time() - start < 5
     assert line == 16 + 32 and message == "a <perform> has at most 32 steps"

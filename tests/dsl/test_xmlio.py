@@ -56,9 +56,9 @@ def test_locating_many_faults_in_one_long_text_is_linear() -> None:
     steps = ", ".join("Speak(x)" for _ in range(100))
     body = "".join(f"<chain>{steps}</chain>" for _ in range(200))
     text = f'{HEAD}<state id="s" initial="true"><entry>{body}</entry></state></pxml>'
-    start = time.perf_counter()
+    start = time.process_time()
     _doc_, problems = _doc(text)
-    assert time.perf_counter() - start < 10
+    assert time.process_time() - start < 10
     assert len(problems) == MAX_PROBLEMS + 1
     assert problems[-1].message == "... and 19,950 more problems (a file reports at most 50)"
 
@@ -87,9 +87,9 @@ def test_limit_keeps_the_first_problems_and_counts_the_rest() -> None:
 
 def test_schema_faults_of_a_large_document_are_reported_by_libxml2_quickly() -> None:
     attrs = " ".join(f'a{i}="x"' for i in range(40_000))
-    start = time.perf_counter()
+    start = time.process_time()
     _d, problems = _doc(f'{HEAD}<state id="s" initial="true" {attrs}/></pxml>')
-    assert time.perf_counter() - start < 5
+    assert time.process_time() - start < 5
     assert len(problems) == MAX_PROBLEMS + 1
     assert problems[0].message == "<state>: attribute 'a0' is not allowed here"
     assert (problems[0].line, problems[0].col) == (2, 34)
@@ -120,9 +120,9 @@ def test_large_documents_get_the_same_wording_as_small_ones() -> None:
 
 def test_fifty_thousand_unknown_elements_are_quick() -> None:
     body = "<unknown/>\n" * 50_000
-    start = time.perf_counter()
+    start = time.process_time()
     _d, problems = _doc(f'{HEAD}<state id="s" initial="true"/>\n{body}</pxml>')
-    assert time.perf_counter() - start < 5
+    assert time.process_time() - start < 5
     assert [p.message for p in problems] == ["<unknown> is not allowed at the top of the document"]
 
 

@@ -5,7 +5,7 @@ file is made (small ones inline, big ones generated here: nothing of megabyte
 size is committed), and the verdict: rejected with the first error at a given
 place (a ``(line, col)``, or the first occurrence of a piece of the file's
 text) saying a given fragment, or accepted. :mod:`tests.redteam.runner` runs
-each under a time limit (2 s unless the row says otherwise) and a memory limit.
+each under a CPU-time limit (2 s unless the row says otherwise) and a memory limit.
 """
 
 from __future__ import annotations

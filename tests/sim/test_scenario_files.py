@@ -289,9 +289,9 @@ def test_a_safe_pattern_searches_a_long_prompt_quickly(tmp_path: Path) -> None:
     path = scenario_file(tmp_path, MAP_REF + ROBOT +
                          f'  <user x="0" y="0"><answer matches="{pattern}" say="x"/></user>\n')
     [rule] = load_scenario(path).user.answers  # type: ignore[union-attr]
-    start = time.perf_counter()
+    start = time.process_time()
     assert not rule.matches("a" * 10_000)
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
 
 
 def test_a_named_file_that_is_not_a_regular_file_is_located(tmp_path: Path) -> None:
