@@ -228,7 +228,7 @@ class Intake:
             old.node = None  # (forgotten: see ``_recent``)
         if self._holds.opened:  # (else no stream or block continues a tree)
             self._holds.requested(app, tree)
-        self._log.requested(rule, root, cmds, group, parent, now)
+        self._log.requested(rule, root, cmds, group, parent)
         if enter_now:
             wm.enter_waiting(root, parent_finished=parent_finished)
         # (one call: its AB's ``command_ids`` are ``(cid,)``)

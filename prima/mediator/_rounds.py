@@ -23,7 +23,7 @@ from prima.catalog import Priority
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
 from prima.mediator._index import WaitIndex
-from prima.mediator._interface import AbId, AtomicBehavior, Clock, Driver
+from prima.mediator._interface import AbId, AtomicBehavior, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._policies import Policies
@@ -169,13 +169,11 @@ class Selector:
     """Runs selection rounds and hands the ABs they start to the driver."""
 
     def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
-                 clock: Clock, overrun: Callable[[App, str], None],
-                 policies: Policies) -> None:
+                 overrun: Callable[[App, str], None], policies: Policies) -> None:
         self._wm = wm
         self._holds = holds
         self._log = log
         self._driver = driver
-        self._clock = clock
         self._overrun = overrun
         self._policies = policies
         """What the mediation policies decide about an AB weighed (MISSION.md 7.3)."""
@@ -283,7 +281,7 @@ class Selector:
 
     def _counted(self, app: App) -> bool:
         """Count one more start of ``app`` at this instant; False past its budget."""
-        now = self._clock.now()
+        now = self._log.now  # (the operation's instant)
         if now != self._instant:
             self._instant = now
             self._starts = {}
