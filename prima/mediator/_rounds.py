@@ -46,14 +46,16 @@ _KEEP_CHANNEL = Rule.KEEP_CHANNEL
 _NO_DEVICES: frozenset[str] = frozenset()
 _NO_NODES: list[Node] = []  # (never changed)
 _NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
+_new = tuple.__new__
 
 
 def atomic_behavior(node: Node) -> AtomicBehavior:
     """What the driver is asked to perform for a node."""
-    # (positional arguments, in field order: a named tuple takes them twice as fast as
-    # keywords, and one is built for every start)
-    return AtomicBehavior(node.id, node.app.name, node.tree.id, node.calls, node.command_ids,
-                          node.devices, node.iteration, node.reactive, node.blended)
+    # (built from a tuple in field order, ``tuple.__new__``: what the named tuple's own
+    # constructor does, without calling it; one is built for every start)
+    return _new(AtomicBehavior, (node.id, node.app.name, node.tree.id, node.calls,
+                                 node.command_ids, node.devices, node.iteration, node.reactive,
+                                 node.blended))
 
 
 class _Round:
@@ -204,6 +206,8 @@ class Selector:
                 if pjf:
                     wm.pjf = {}
                     self._unname(pjf)
+                elif not holds.opened:
+                    break  # (nothing is left for another round)
                 continue
             for node in self.round():
                 start(atomic_behavior(node))
