@@ -34,9 +34,10 @@ class DecisionLog:
         self.count = count = self.count + 1
         record = self._record
         if record is not None:
-            # (its fields as tuples added up: less work than unpacking ``facts`` into one)
-            record(_new(Decision, (self.now, count, kind, rule) + node.facts
-                        + (detail, node.calls, None, None)))
+            # (its fields as tuples added up: less work than unpacking ``facts`` into one;
+            # with no detail, what follows the first four is kept on the AB: ``plain``)
+            record(_new(Decision, (self.now, count, kind, rule) + (
+                node.facts + (detail, node.calls, None, None) if detail else node.plain)))
 
     def requested(self, rule: Rule, node: Node, request: Sequence[Command], group: bool,
                   before: Node | None) -> None:
