@@ -296,7 +296,7 @@ class Mediator:
                 self._driver.abandon(node.commands[0].id)
             for child in children:
                 if child.state is NodeState.PENDING:
-                    wm.enter_waiting(child, parent_finished=True)
+                    wm.enter_waiting(child, True)  # (its parent just finished)
         else:
             again = wm.new_node(app, node.tree, node.commands, node.devices, node.priority,
                                 node.reactive, node.seq, node.iteration)
@@ -308,7 +308,7 @@ class Mediator:
             self._log.emit(DecisionKind.REQUEST, Rule.RESTART, again,
                            detail=f"starts AB{node.id} again from its beginning",
                            before=node.id)
-            wm.enter_waiting(again, parent_finished=False)
+            wm.enter_waiting(again, False)  # (its parent has not)
         wm.leave(node)
         values = outcome.values
         event = Event(INTERRUPTED_EVENT, {
@@ -386,7 +386,7 @@ class Mediator:
             self._intake.ended(ended, now)
         for child in children:
             if child.state is _PENDING:
-                wm.enter_waiting(child, parent_finished=True)
+                wm.enter_waiting(child, True)  # (its parent just finished)
         wm.leave(node)
         if cancelled is not None:
             self._tell_cancelled([cancelled])
