@@ -97,12 +97,10 @@ class Intake:
         self._recent_q: deque[Command] = deque()
 
     # ------------------------------------------------------------------ checks
-    def check(self, request: Request) -> tuple[App, Specs]:
-        """Validate a request before anything changes; the app and each call's spec,
-        devices and priority."""
-        # (the fields a check reads, unpacked once: a named tuple's fields are slow to
-        # read one by one)
-        name, calls, order, group, _reactive, _reaction, _follows, _face, _interrupt = request
+    def check(self, name: str, calls: Sequence[Call], order: RunningOrder,
+              group: bool) -> tuple[App, Specs]:
+        """Validate a request (its app, calls, order and grouping) before anything
+        changes; the app and each call's spec, devices and priority."""
         app = self._apps.get(name)
         if app is None:
             raise MediationError(f"unknown application {name!r}: register it first")
@@ -120,7 +118,7 @@ class Intake:
         for call in calls:
             found = known.get(call.command)
             if found is None:
-                found = self._spec(request, call.command)
+                found = self._spec(name, call.command)
             spec, params, priority = found
             extra_devices = call.extra_devices
             if app.kind is _EA:
@@ -146,7 +144,7 @@ class Intake:
             out.append((spec, devices, priority))
         return app, out
 
-    def _spec(self, request: Request, command: str) -> tuple[CommandSpec, tuple[Param, ...],
+    def _spec(self, name: str, command: str) -> tuple[CommandSpec, tuple[Param, ...],
                                                              Priority]:
         """A Command's spec, its parameters that add devices, and its priority, looked up
         in the catalog once (it never changes); an unknown Command is an error."""
@@ -154,19 +152,22 @@ class Intake:
         if spec is None:
             known = ", ".join(sorted(self._catalog.commands))
             raise MediationError(
-                f"{request.app}: unknown Command {command!r} (known: {known})")
+                f"{name}: unknown Command {command!r} (known: {known})")
         params = tuple(p for p in spec.params if p.devices) or _NO_PARAMS
         found = self._specs[command] = (spec, params, spec.priority)
         return found
 
     # ------------------------------------------------------------------ accept
-    def accept(self, app: App, request: Request, specs: Specs,
+    def accept(self, request: Request,
                now: float) -> tuple[tuple[CommandId, ...], Sequence[Command]]:
-        """Put a checked request in working memory; its Command ids, and the Commands
-        it cancelled (their apps are told once the request is in)."""
-        # (its fields unpacked once: a named tuple's fields are slow to read one by one)
-        _name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt = \
+        """Check a request (:meth:`check`: nothing changes if it fails), then put it in
+        working memory; its Command ids, and the Commands it cancelled (their apps are
+        told once the request is in)."""
+        # (its fields unpacked once, here: a named tuple's fields are slow to read one by
+        # one, and it unpacks in several times the time a plain tuple takes)
+        name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt = \
             request
+        app, specs = self.check(name, calls, order, group)
         seq = self._next_seq
         self._next_seq = seq + 1
         cid = self.next_command

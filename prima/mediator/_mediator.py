@@ -258,14 +258,14 @@ class Mediator:
 
     # ================================================================ requests
     def submit(self, request: Request) -> tuple[CommandId, ...]:
-        """Accept a request; returns one Command id per Call (MISSION.md rule 3)."""
-        app, specs = self._intake.check(request)
+        """Accept a request; returns one Command id per Call (MISSION.md rule 3). One
+        that fails its check changes nothing."""
         # (what ``with self._operation():`` does, written out: the hottest operation)
         outer = self._depth == 0 and not self._settling
         self._depth += 1
         self._log.now = now = self._clock.now()
         try:
-            ids, cancelled = self._intake.accept(app, request, specs, now)
+            ids, cancelled = self._intake.accept(request, now)
             if cancelled:
                 self._tell_cancelled(cancelled)
         finally:
