@@ -15,6 +15,11 @@ application's listener or the driver may call back into the mediator while
 it is calling them. Working memory is updated at once, but selection runs
 only when the outermost operation completes, round after round until nothing
 more can start, so the result does not depend on how callbacks nest.
+
+The clock is read when an operation begins (a nested one reads it again): its
+decisions, and those of the selection after it, carry that instant
+(``DecisionLog.now``). Whoever moves the clock does so between operations, or
+makes an operation after moving it.
 """
 
 from __future__ import annotations
