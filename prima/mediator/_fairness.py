@@ -230,7 +230,7 @@ class Fairness:
     def observe(self) -> bool:
         """After every operation: who keeps the others waiting now; a spent share
         takes the app's precedence at once. True if some precedence changed."""
-        now = self._clock.now()
+        now = self._log.now  # (the operation's instant)
         # Who keeps another app's AB waiting (the rule in the module docstring), written
         # out: it runs after every operation. On each device another app's AB waits
         # for, the holder is the AB running there or, on a free device, the best ranked.
@@ -438,7 +438,7 @@ class Fairness:
 
     def expire(self) -> bool:
         """Handle what fell due; True if some precedence changed."""
-        now = self._clock.now()
+        now = self._log.now  # (the operation's instant)
         if self._resync or (self._changed and tuple(self._apps.values()) != self._registered):
             # (every record settles with the apps registered now, those of apps gone are
             # dropped; the next observation takes the registrations in)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
 from prima.catalog import Catalog, CommandSpec, Param, Priority
 from prima.errors import MediationError
@@ -40,21 +40,16 @@ Specs = list[tuple[CommandSpec, frozenset[str], Priority]]
 """Each call's spec, the devices it occupies and its priority (what ``check`` found)."""
 
 
-class Link(NamedTuple):
-    """Where a request's root goes."""
+Link = tuple[Rule, Node | None, Tree | None, bool, bool, bool]
+"""Where a request's root goes: ``(rule, parent, tree, enter_now, parent_finished,
+reactive_allowed)``: the rule that links it, its before node and its tree (None: a new
+tree), whether it enters the waiting list at once (no before node still to run), whether
+it ranks as 'parent just finished', and whether it may be reactive. (A plain tuple, read
+once by ``Intake.accept``: a named tuple costs several times more to build, and one is
+built for most requests.)"""
 
-    rule: Rule
-    parent: Node | None = None
-    tree: Tree | None = None
-    enter_now: bool = True
-    """The root enters the waiting list at once (no before node still to run)."""
-    parent_finished: bool = False
-    """The root ranks as 'parent just finished'."""
-    reactive_allowed: bool = True
-
-
-_NEW_TREE = Link(Rule.NEW_TREE)
-_ASAP_NEW_TREE = Link(Rule.ASAP)
+_NEW_TREE: Link = (Rule.NEW_TREE, None, None, True, False, True)
+_ASAP_NEW_TREE: Link = (Rule.ASAP, None, None, True, False, True)
 _NONE_CANCELLED: tuple[Command, ...] = ()
 # (enum members read once: reading one from its class goes through the enum's
 # metaclass, many times slower than a global)
@@ -64,7 +59,6 @@ _ASAP_RULE = Rule.ASAP
 _AFTER_LATEST = Rule.AFTER_LATEST
 _STREAM = Rule.STREAM
 _CANCEL = DecisionKind.CANCEL
-_new = tuple.__new__
 _EA = AppKind.EA
 _ASAP = RunningOrder.ASAP
 _NO_PARAMS: tuple[Param, ...] = ()
@@ -103,12 +97,10 @@ class Intake:
         self._recent_q: deque[Command] = deque()
 
     # ------------------------------------------------------------------ checks
-    def check(self, request: Request) -> tuple[App, Specs]:
-        """Validate a request before anything changes; the app and each call's spec,
-        devices and priority."""
-        # (the fields a check reads, unpacked once: a named tuple's fields are slow to
-        # read one by one)
-        name, calls, order, group, _reactive, _reaction, _follows, _face, _interrupt = request
+    def check(self, name: str, calls: Sequence[Call], order: RunningOrder,
+              group: bool) -> tuple[App, Specs]:
+        """Validate a request (its app, calls, order and grouping) before anything
+        changes; the app and each call's spec, devices and priority."""
         app = self._apps.get(name)
         if app is None:
             raise MediationError(f"unknown application {name!r}: register it first")
@@ -126,7 +118,7 @@ class Intake:
         for call in calls:
             found = known.get(call.command)
             if found is None:
-                found = self._spec(request, call.command)
+                found = self._spec(name, call.command)
             spec, params, priority = found
             extra_devices = call.extra_devices
             if app.kind is _EA:
@@ -152,7 +144,7 @@ class Intake:
             out.append((spec, devices, priority))
         return app, out
 
-    def _spec(self, request: Request, command: str) -> tuple[CommandSpec, tuple[Param, ...],
+    def _spec(self, name: str, command: str) -> tuple[CommandSpec, tuple[Param, ...],
                                                              Priority]:
         """A Command's spec, its parameters that add devices, and its priority, looked up
         in the catalog once (it never changes); an unknown Command is an error."""
@@ -160,19 +152,22 @@ class Intake:
         if spec is None:
             known = ", ".join(sorted(self._catalog.commands))
             raise MediationError(
-                f"{request.app}: unknown Command {command!r} (known: {known})")
+                f"{name}: unknown Command {command!r} (known: {known})")
         params = tuple(p for p in spec.params if p.devices) or _NO_PARAMS
         found = self._specs[command] = (spec, params, spec.priority)
         return found
 
     # ------------------------------------------------------------------ accept
-    def accept(self, app: App, request: Request, specs: Specs,
+    def accept(self, request: Request,
                now: float) -> tuple[tuple[CommandId, ...], Sequence[Command]]:
-        """Put a checked request in working memory; its Command ids, and the Commands
-        it cancelled (their apps are told once the request is in)."""
-        # (its fields unpacked once: a named tuple's fields are slow to read one by one)
-        _name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt = \
+        """Check a request (:meth:`check`: nothing changes if it fails), then put it in
+        working memory; its Command ids, and the Commands it cancelled (their apps are
+        told once the request is in)."""
+        # (its fields unpacked once, here: a named tuple's fields are slow to read one by
+        # one, and it unpacks in several times the time a plain tuple takes)
+        name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt = \
             request
+        app, specs = self.check(name, calls, order, group)
         seq = self._next_seq
         self._next_seq = seq + 1
         cid = self.next_command
@@ -198,7 +193,7 @@ class Intake:
         cancelled: Sequence[Command] = _NONE_CANCELLED
         if order is _ASAP:
             asap, cancelled = self._link_asap(app, all_devices, now)
-            if link is None or asap.parent is not None:
+            if link is None or asap[1] is not None:  # (its before node)
                 link = asap
         elif link is None:
             link = self._link_after_latest(app)
@@ -228,9 +223,9 @@ class Intake:
             old.node = None  # (forgotten: see ``_recent``)
         if self._holds.opened:  # (else no stream or block continues a tree)
             self._holds.requested(app, tree)
-        self._log.requested(rule, root, cmds, group, parent, now)
+        self._log.requested(rule, root, cmds, group, parent)
         if enter_now:
-            wm.enter_waiting(root, parent_finished=parent_finished)
+            wm.enter_waiting(root, parent_finished)
         # (one call: its AB's ``command_ids`` are ``(cid,)``)
         return root.command_ids if one else tuple([c.id for c in cmds]), cancelled
 
@@ -270,12 +265,10 @@ class Intake:
         wm.unwait(x)
         self._log.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=[cmd],
                        before=node.parent, precedes=x.commands[0].id)
-        wm.enter_waiting(node, parent_finished=parent_finished)
+        wm.enter_waiting(node, parent_finished)
         return node
 
     # ------------------------------------------------------------------ links
-    # (Links are built from a tuple in field order, ``tuple.__new__``: the named tuple's
-    # own constructor is a Python function, one call more per request.)
     def _link_follows(self, app: App, follows: CommandId, now: float) -> Link | None:
         """CS exceptions (a)/(b): a request made while handling X's end stays in X's tree."""
         q = self._recent_q
@@ -287,7 +280,7 @@ class Intake:
         node = cmd.node
         if node is None or now - cmd.ended_at > self._end_grace:
             return None
-        return _new(Link, (_END_EVENT, node, node.tree, True, True, False))
+        return (_END_EVENT, node, node.tree, True, True, False)
 
     def _link_asap(self, app: App, devices: frozenset[str],
                    now: float) -> tuple[Link, Sequence[Command]]:
@@ -319,9 +312,9 @@ class Intake:
                     if last is None or n.id > last.id:
                         last = n
         if running is not None:
-            return _new(Link, (_ASAP_RULE, running, running.tree, False, False, True)), cancelled
+            return (_ASAP_RULE, running, running.tree, False, False, True), cancelled
         if last is not None:
-            return _new(Link, (_ASAP_RULE, last, last.tree, True, False, True)), cancelled
+            return (_ASAP_RULE, last, last.tree, True, False, True), cancelled
         return _ASAP_NEW_TREE, cancelled  # nothing shares a device: a new tree at once
 
     def _link_after_latest(self, app: App) -> Link:
@@ -329,9 +322,9 @@ class Intake:
         latest = app.latest
         node = latest.node if latest is not None else None
         if node is not None and node.state in IN_MEMORY:
-            return _new(Link, (_AFTER_LATEST, node, node.tree, False, False, True))
+            return (_AFTER_LATEST, node, node.tree, False, False, True)
         if node is not None and self._holds.opened and self._holds.continues(app, node.tree):
-            return _new(Link, (_STREAM, node, node.tree, True, True, True))
+            return (_STREAM, node, node.tree, True, True, True)
         return _NEW_TREE
 
     # ------------------------------------------------------------------ ends

@@ -5,7 +5,6 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from prima.mediator._decisions import Decision, DecisionKind, Rule
-from prima.mediator._interface import Clock
 from prima.mediator._state import Command, Node
 
 __all__ = ["DecisionLog"]
@@ -20,30 +19,32 @@ class DecisionLog:
     Without a recorder nothing is built: the count still moves.
     """
 
-    def __init__(self, clock: Clock, record: Callable[[Decision], None] | None) -> None:
-        self._clock = clock
+    def __init__(self, record: Callable[[Decision], None] | None) -> None:
         self._record = record
         self.count = 0
         """How many decisions were made so far."""
+        self.now = 0.0
+        """The instant of the operation under way, which every decision carries: the
+        mediator reads the clock when an operation begins (one made from a callback
+        too, which reads it again)."""
 
-    def ab(self, kind: DecisionKind, rule: Rule, node: Node, detail: str = "",
-           now: float | None = None) -> None:
+    def ab(self, kind: DecisionKind, rule: Rule, node: Node, detail: str = "") -> None:
         """Record one decision about the AB ``node`` itself (most decisions: a start, an
-        end, a suspension): :meth:`emit` for that case, with the AB's ``facts``.
-        ``now``: the clock's time, if the caller has just read it."""
+        end, a suspension): :meth:`emit` for that case, with the AB's ``facts``."""
         self.count = count = self.count + 1
         record = self._record
         if record is not None:
-            # (its fields as tuples added up: less work than unpacking ``facts`` into one)
-            record(_new(Decision, (self._clock.now() if now is None else now, count, kind, rule)
-                        + node.facts + (detail, node.calls, None, None)))
+            # (its fields as tuples added up: less work than unpacking ``facts`` into one;
+            # with no detail, what follows the first four is kept on the AB: ``plain``)
+            record(_new(Decision, (self.now, count, kind, rule) + (
+                node.facts + (detail, node.calls, None, None) if detail else node.plain)))
 
     def requested(self, rule: Rule, node: Node, request: Sequence[Command], group: bool,
-                  before: Node | None, now: float) -> None:
+                  before: Node | None) -> None:
         """Record a request's decision (what :meth:`emit` records for ``REQUEST`` with
         these), positional: one per request. ``request``: its Commands (``group``: as one
-        AB), ``node`` the AB it roots, ``before`` its before node; ``now``: the clock's time
-        (the caller has just read it). Its detail says how many Commands, and where."""
+        AB), ``node`` the AB it roots, ``before`` its before node. Its detail says how many
+        Commands, and where."""
         if self._record is None:
             self.count += 1
             return
@@ -60,7 +61,7 @@ class DecisionLog:
             return
         # (one Command: the AB's own, so the decision is about the AB: its facts)
         self.count = count = self.count + 1
-        self._record(_new(Decision, (now, count, _REQUEST, rule) + node.facts
+        self._record(_new(Decision, (self.now, count, _REQUEST, rule) + node.facts
                           + (detail, node.calls, before_id, None)))
 
     def emit(self, kind: DecisionKind, rule: Rule, node: Node | None = None, *,
@@ -73,7 +74,7 @@ class DecisionLog:
         self.count += 1
         if self._record is None:
             return
-        now = self._clock.now()
+        now = self.now
         # Built from a tuple in field order (``tuple.__new__``, what the named tuple's own
         # constructor does, without its keyword handling): one per decision.
         if node is None:

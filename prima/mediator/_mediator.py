@@ -15,6 +15,11 @@ application's listener or the driver may call back into the mediator while
 it is calling them. Working memory is updated at once, but selection runs
 only when the outermost operation completes, round after round until nothing
 more can start, so the result does not depend on how callbacks nest.
+
+The clock is read when an operation begins (a nested one reads it again): its
+decisions, and those of the selection after it, carry that instant
+(``DecisionLog.now``). Whoever moves the clock does so between operations, or
+makes an operation after moving it.
 """
 
 from __future__ import annotations
@@ -120,6 +125,7 @@ class _Operation:
         m = self._m
         self._outer = m._depth == 0 and not m._settling
         m._depth += 1
+        m._log.now = m._clock.now()
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
@@ -143,7 +149,7 @@ class Mediator:
         self._apps: dict[str, App] = {}
         self._app_order = 0
         self._wm = WorkingMemory()
-        self._log = DecisionLog(clock, record)
+        self._log = DecisionLog(record)
         self._holds = Holds(self._apps, self._wm, self._log, catalog, clock)
         # (whether the connect-channel policy can act: what Policies._connect requires)
         turns = (channel is not None and config.connect_channel
@@ -152,8 +158,8 @@ class Mediator:
                               config, turns)
         self._policies = Policies(catalog, config, channel, self._wm, self._intake,
                                   self._holds, self._log, driver)
-        self._selector = Selector(self._wm, self._holds, self._log, driver, clock,
-                                  self._overrun, self._policies)
+        self._selector = Selector(self._wm, self._holds, self._log, driver, self._overrun,
+                                  self._policies)
         self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
@@ -211,7 +217,7 @@ class Mediator:
             self._unload(a, Rule.UNLOAD)
 
     def _unload(self, app: App, rule: Rule) -> None:
-        now = self._clock.now()
+        now = self._log.now
         app.alive = False
         self._apps.pop(app.name, None)
         self._fairness.registrations()
@@ -257,13 +263,14 @@ class Mediator:
 
     # ================================================================ requests
     def submit(self, request: Request) -> tuple[CommandId, ...]:
-        """Accept a request; returns one Command id per Call (MISSION.md rule 3)."""
-        app, specs = self._intake.check(request)
+        """Accept a request; returns one Command id per Call (MISSION.md rule 3). One
+        that fails its check changes nothing."""
         # (what ``with self._operation():`` does, written out: the hottest operation)
         outer = self._depth == 0 and not self._settling
         self._depth += 1
+        self._log.now = now = self._clock.now()
         try:
-            ids, cancelled = self._intake.accept(app, request, specs, self._clock.now())
+            ids, cancelled = self._intake.accept(request, now)
             if cancelled:
                 self._tell_cancelled(cancelled)
         finally:
@@ -277,7 +284,7 @@ class Mediator:
         place in its tree (it waits, and the reaction that cut it outranks it), or, if
         its request said so, drop it (its Commands end, interrupted). Its application
         gets an ``interrupted`` event either way, before anything else of it."""
-        now = self._clock.now()
+        now = self._log.now
         wm = self._wm
         children = wm.end(node, now)
         self._holds.ended(node)
@@ -294,7 +301,7 @@ class Mediator:
                 self._driver.abandon(node.commands[0].id)
             for child in children:
                 if child.state is NodeState.PENDING:
-                    wm.enter_waiting(child, parent_finished=True)
+                    wm.enter_waiting(child, True)  # (its parent just finished)
         else:
             again = wm.new_node(app, node.tree, node.commands, node.devices, node.priority,
                                 node.reactive, node.seq, node.iteration)
@@ -306,7 +313,7 @@ class Mediator:
             self._log.emit(DecisionKind.REQUEST, Rule.RESTART, again,
                            detail=f"starts AB{node.id} again from its beginning",
                            before=node.id)
-            wm.enter_waiting(again, parent_finished=False)
+            wm.enter_waiting(again, False)  # (its parent has not)
         wm.leave(node)
         values = outcome.values
         event = Event(INTERRUPTED_EVENT, {
@@ -341,6 +348,7 @@ class Mediator:
         # (what ``with self._operation():`` does, written out: the other hot operation)
         outer = self._depth == 0 and not self._settling
         self._depth += 1
+        self._log.now = self._clock.now()
         try:
             self._end(node, outcome)
         finally:
@@ -353,7 +361,7 @@ class Mediator:
                 and not node.commands[0].cut:
             self._interrupted(node, outcome)
             return
-        now = self._clock.now()
+        now = self._log.now
         wm = self._wm
         children = wm.end(node, now)
         self._holds.ended(node)
@@ -362,7 +370,7 @@ class Mediator:
         if node.feedback:
             detail = "terminal" if outcome.terminal else "not terminal"
             looping = not outcome.terminal
-        self._log.ab(_END, _COMPLETED, node, detail, now)
+        self._log.ab(_END, _COMPLETED, node, detail)
         app = node.app
         ended: tuple[Command, ...] = ()
         cancelled: Command | None = None
@@ -383,7 +391,7 @@ class Mediator:
             self._intake.ended(ended, now)
         for child in children:
             if child.state is _PENDING:
-                wm.enter_waiting(child, parent_finished=True)
+                wm.enter_waiting(child, True)  # (its parent just finished)
         wm.leave(node)
         if cancelled is not None:
             self._tell_cancelled([cancelled])
@@ -469,7 +477,7 @@ class Mediator:
     def advance(self) -> None:
         """Handle every deadline that has passed, then run selection."""
         with self._operation():
-            self._holds.expire(self._clock.now())
+            self._holds.expire(self._log.now)
             self._fairness.expire()
 
     # ================================================================ plumbing

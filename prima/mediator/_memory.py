@@ -144,8 +144,10 @@ class WorkingMemory:
             if not nodes:
                 del trees[tree]
 
-    def enter_waiting(self, node: Node, *, parent_finished: bool) -> None:
-        """Put a node on the waiting list (Figure 4.3)."""
+    def enter_waiting(self, node: Node, parent_finished: bool) -> None:
+        """Put a node on the waiting list (Figure 4.3); ``parent_finished``: it ranks as
+        'parent just finished' in the next round. (Positional: a call with a keyword
+        argument costs more, and one is made for every AB.)"""
         node.state = _WAITING
         node.app.active += 1
         self.waiting += 1

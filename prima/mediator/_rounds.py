@@ -23,7 +23,7 @@ from prima.catalog import Priority
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
 from prima.mediator._index import WaitIndex
-from prima.mediator._interface import AbId, AtomicBehavior, Clock, Driver
+from prima.mediator._interface import AbId, AtomicBehavior, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._policies import Policies
@@ -46,14 +46,16 @@ _KEEP_CHANNEL = Rule.KEEP_CHANNEL
 _NO_DEVICES: frozenset[str] = frozenset()
 _NO_NODES: list[Node] = []  # (never changed)
 _NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
+_new = tuple.__new__
 
 
 def atomic_behavior(node: Node) -> AtomicBehavior:
     """What the driver is asked to perform for a node."""
-    # (positional arguments, in field order: a named tuple takes them twice as fast as
-    # keywords, and one is built for every start)
-    return AtomicBehavior(node.id, node.app.name, node.tree.id, node.calls, node.command_ids,
-                          node.devices, node.iteration, node.reactive, node.blended)
+    # (built from a tuple in field order, ``tuple.__new__``: what the named tuple's own
+    # constructor does, without calling it; one is built for every start)
+    return _new(AtomicBehavior, (node.id, node.app.name, node.tree.id, node.calls,
+                                 node.command_ids, node.devices, node.iteration, node.reactive,
+                                 node.blended))
 
 
 class _Round:
@@ -169,13 +171,11 @@ class Selector:
     """Runs selection rounds and hands the ABs they start to the driver."""
 
     def __init__(self, wm: WorkingMemory, holds: Holds, log: DecisionLog, driver: Driver,
-                 clock: Clock, overrun: Callable[[App, str], None],
-                 policies: Policies) -> None:
+                 overrun: Callable[[App, str], None], policies: Policies) -> None:
         self._wm = wm
         self._holds = holds
         self._log = log
         self._driver = driver
-        self._clock = clock
         self._overrun = overrun
         self._policies = policies
         """What the mediation policies decide about an AB weighed (MISSION.md 7.3)."""
@@ -206,6 +206,8 @@ class Selector:
                 if pjf:
                     wm.pjf = {}
                     self._unname(pjf)
+                elif not holds.opened:
+                    break  # (nothing is left for another round)
                 continue
             for node in self.round():
                 start(atomic_behavior(node))
@@ -283,7 +285,7 @@ class Selector:
 
     def _counted(self, app: App) -> bool:
         """Count one more start of ``app`` at this instant; False past its budget."""
-        now = self._clock.now()
+        now = self._log.now  # (the operation's instant)
         if now != self._instant:
             self._instant = now
             self._starts = {}

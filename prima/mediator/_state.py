@@ -162,7 +162,7 @@ class Node:
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
-                 "restarts", "blended", "head", "order", "ranked", "facts")
+                 "restarts", "blended", "head", "order", "ranked", "facts", "plain")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -208,18 +208,29 @@ class Node:
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
         first = commands[0]
         call = first.call
+        calls: tuple[Call, ...]
+        ids: tuple[CommandId, ...]
         if len(commands) == 1:
             spec = first.spec
-            self.calls: tuple[Call, ...] = (call,)
-            self.command_ids: tuple[CommandId, ...] = (first.id,)
-            self.name = spec.name
+            calls = (call,)
+            ids = (first.id,)
+            name = spec.name
             self.feedback = spec.feedback
         else:
-            self.calls = tuple([c.call for c in commands])
-            self.command_ids = tuple([c.id for c in commands])
-            self.name = "+".join(c.spec.name for c in commands)
+            calls = tuple([c.call for c in commands])
+            ids = tuple([c.id for c in commands])
+            name = "+".join(c.spec.name for c in commands)
             self.feedback = False
-        self.facts = (app.name, ab, tree.id, self.name, first.id, self.command_ids, ordered,
-                      reactive, iteration, call.label)
+        self.calls = calls
+        self.command_ids = ids
+        self.name = name
+        label = call.label
+        self.facts = (app.name, ab, tree.id, name, first.id, ids, ordered, reactive, iteration,
+                      label)
         """What every decision about the AB itself says of it, in the fields of
         ``Decision`` from ``app`` to ``label`` (none of them changes)."""
+        self.plain = (app.name, ab, tree.id, name, first.id, ids, ordered, reactive, iteration,
+                      label, "", calls, None, None)
+        """The fields from ``app`` on of a decision about the AB itself with no detail
+        (most starts and ends): ``facts``, then no detail, its calls, no ``before`` and
+        no ``precedes`` (built once, not added up for each such decision)."""

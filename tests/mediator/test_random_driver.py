@@ -159,10 +159,10 @@ def test_the_oracle_catches_an_ab_started_twice(monkeypatch: pytest.MonkeyPatch)
     original = log_module.DecisionLog.ab  # (what records starts)
 
     def ab(self: log_module.DecisionLog, kind: DecisionKind, rule: Rule,
-           node: log_module.Node, detail: str = "", now: float | None = None) -> None:
-        original(self, kind, rule, node, detail, now)
+           node: log_module.Node, detail: str = "") -> None:
+        original(self, kind, rule, node, detail)
         if kind is DecisionKind.START and node.id % 50 == 7:
-            original(self, kind, rule, node, detail, now)
+            original(self, kind, rule, node, detail)
 
     monkeypatch.setattr(log_module.DecisionLog, "ab", ab)
     assert any("started twice" in v for v in caught())
