@@ -33,7 +33,7 @@ import sys
 import tempfile
 from collections.abc import Callable
 
-from _measure import ROOT, child_cpu, fmt_time, interleaved, report
+from _measure import ROOT, child_cpu, fmt_time, interleaved, interpreter, report
 
 PRIMA = [sys.executable, "-m", "prima"]
 ONE_DOCUMENT = ROOT / "apps" / "fa" / "fa2-follow.pxml"
@@ -85,6 +85,7 @@ def check_targets(medians: dict[str, float]) -> bool:
         met_all = met_all and met
         print(f"  {name:<40} {fmt_time(medians[name]):>9} <= {fmt_time(limit):>7}: "
               f"{'met' if met else 'NOT met'}")
+    print(interpreter())
     return met_all
 
 

@@ -28,7 +28,7 @@ import argparse
 import sys
 from collections.abc import Callable
 
-from _measure import cpu, interleaved, report
+from _measure import cpu, interleaved, interpreter, report
 
 from prima.dsl import check_document, default_profile
 from prima.interpreter import Interpreter
@@ -183,6 +183,7 @@ def main(argv: list[str] | None = None) -> int:
     report("CPU time per event", medians, "prima (PXML)", repeats=args.repeats)
     faster = medians["prima (PXML)"] < medians["transitions"]
     print(f"target: PXML dispatch faster than pytransitions: {'met' if faster else 'NOT met'}")
+    print(interpreter())
     return 0
 
 

@@ -54,7 +54,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _measure import cpu, fmt_time, interleaved, report  # noqa: E402
+from _measure import cpu, fmt_time, interleaved, interpreter, report  # noqa: E402
 
 from prima.mediator import (  # noqa: E402
     AppKind,
@@ -391,6 +391,7 @@ def main(argv: list[str] | None = None) -> int:
     for v in verdicts:
         ok &= v.met
         print(f"  {v}")
+    print(interpreter())
     return 0 if ok else 1
 
 

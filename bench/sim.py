@@ -34,7 +34,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from _measure import ROOT, cpu, interleaved, report
+from _measure import ROOT, cpu, interleaved, interpreter, report
 
 from prima.run import Run
 from prima.sim import Simulator, load_scenario
@@ -133,6 +133,7 @@ def main(argv: list[str] | None = None) -> int:
         met = met and ok
         print(f"  {name:<{width}}  {speed:>9,.0f}x  {'met' if ok else 'NOT met'}")
     print("target met on every scenario" if met else "target NOT met on every scenario")
+    print(interpreter())
     return 0
 
 

@@ -37,7 +37,7 @@ from collections.abc import Callable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from _measure import ROOT, child_cpu, cpu, fmt_time, interleaved, report
+from _measure import ROOT, child_cpu, cpu, fmt_time, interleaved, interpreter, report
 from cold import bytecode_mode, use_bytecode
 
 from prima.dsl import collect, validate_paths
@@ -323,6 +323,7 @@ def main() -> None:
     cold = medians["prima validate (cold)"]
     print(f"target: prima validate (cold) {fmt_time(cold)} <= {fmt_time(TARGET)}: "
           f"{'met' if cold <= TARGET else 'NOT met'}")
+    print(interpreter())
 
 
 if __name__ == "__main__":
