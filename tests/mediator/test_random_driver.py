@@ -11,9 +11,8 @@ the long version with ``python bench/random_driver.py --scenarios 1000000``.
 
 from __future__ import annotations
 
-import dataclasses
-
 import ast
+import dataclasses
 from collections.abc import Iterator
 from pathlib import Path
 
