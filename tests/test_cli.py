@@ -138,6 +138,24 @@ def test_documents_a_scenario_names_are_checked_against_its_robot_in_any_order()
     assert " files checked: 0 error(s)" in first[2] and first[2] == second[2]
 
 
+def test_a_document_is_checked_against_its_scenarios_robot_whatever_its_file_is_called(
+        tmp_path: Path) -> None:
+    # the guide robot's FA saved as .xml, named before the scenario that runs it there
+    app = tmp_path / "spotlight.xml"
+    app.write_bytes((ROOT / "apps/fa/fa7-spotlight.pxml").read_bytes())
+    scenario = tmp_path / "scene.xml"
+    text = (ROOT / "scenarios/examples/guide-spotlight.xml").read_text()
+    text = text.replace('href="../maps/museum.xml"', f'href="{ROOT}/scenarios/maps/museum.xml"')
+    text = text.replace('fa="../../apps/fa/fa7-spotlight.pxml"', 'fa="spotlight.xml"')
+    text = text.replace('profile="../../robots/guide-robot.xml"',
+                        f'profile="{ROOT}/robots/guide-robot.xml"')
+    scenario.write_text(text)
+    assert run("validate", str(app))[0] == 1  # alone, against the home robot: unknown Command
+    code, out, err = run("validate", str(app), str(scenario))
+    assert (code, out) == (0, ""), out
+    assert "4 files checked: 0 error(s)" in err  # the app, the scenario, its map, its robot
+
+
 def test_unknown_xml_in_a_folder_is_skipped_but_named_is_an_error(tmp_path: Path) -> None:
     other = tmp_path / "pom.xml"
     other.write_text("<project/>")

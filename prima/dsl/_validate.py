@@ -237,15 +237,28 @@ class Validation:
     def run(self, paths: Iterable[tuple[Path, bool] | Path]) -> Report:
         """Check every path (``(path, explicit)`` pairs from :func:`collect`, or paths).
 
-        Files other than ``.pxml`` (scenarios, maps, robot profiles) are checked
-        first, so that a document a scenario names is checked against the scenario's
-        robot however the paths are ordered (``apps scenarios`` as ``scenarios apps``).
+        PXML documents are checked last, after the scenarios, maps and robot profiles,
+        so that a document a scenario names is checked against the scenario's robot
+        however the paths are ordered (``apps scenarios`` as ``scenarios apps``), and
+        whatever the document's file is called.
         """
         items = [item if isinstance(item, tuple) else (item, True) for item in paths]
-        items.sort(key=lambda item: item[0].suffix == ".pxml")  # stable: otherwise as given
+        items.sort(key=lambda item: _is_document(item[0]))  # stable: otherwise as given
         for path, explicit in items:
             self.add(path, explicit=explicit)
         return self.report
+
+
+def _is_document(path: Path) -> bool:
+    """Whether ``path`` holds a PXML document: a ``.pxml`` file, or another whose root
+    element is one (read for that alone; one that cannot be read is not, and its own
+    check says why)."""
+    if path.suffix == ".pxml":
+        return True
+    try:
+        return root_namespace(read_source(path, DocumentError)) == PXML_NS
+    except DocumentError:
+        return False
 
 
 def _key(path: Path) -> Path:
