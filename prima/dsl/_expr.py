@@ -511,9 +511,6 @@ _WORD = re.compile(r"[0-9]+(?:\.[0-9]+)?[A-Za-z0-9_]*|[A-Za-z_][A-Za-z0-9_]*")
 """One word as a reader sees it: a run of letters, digits and underscores (with a
 number's decimals)."""
 
-_KEYWORDS_ALONE = frozenset({"and", "or", "not", "true", "false", "null"})
-
-
 def _words_apart(text: str, tree: Tree, what: str) -> None:
     """Refuse a text in which lark's lexer split one word in two: it reads ``x andy`` as
     ``x and y``, ``1and 2`` as ``1 and 2`` (after a value it tries only what may follow,
@@ -541,7 +538,7 @@ def _words_apart(text: str, tree: Tree, what: str) -> None:
             i += 1
         if i < len(strings) and strings[i][0] <= begin:
             continue  # (inside a string literal)
-        if tokens.get(begin) == end or (begin not in tokens and m[0] in _KEYWORDS_ALONE
+        if tokens.get(begin) == end or (begin not in tokens and m[0] in _KEYWORDS
                                         and not any(begin < t < end for t in tokens)):
             continue
         raise ExpressionError(begin, f"{what}: '{m[0]}' runs two words together: put a "

@@ -219,7 +219,8 @@ class Ranking:
         self._head_width = sum(c.width for c in self._head_criteria)
         self._order_width = sum(c.width for c in self._order_criteria)
         self._tree_width = sum(c.width for c in self._tree_criteria)
-        self._round = tuple(table[i].key for i in rnd)
+        self._round_criteria = tuple(table[i] for i in rnd)
+        self._round = tuple(c.key for c in self._round_criteria)
         self._not_named: Keys = (1,) * len(rnd)
         # A rank is head + tree + round + order keys, put in the table's order.
         self._full = _arrange(table, head + tree + rnd + order, range(len(table)))
@@ -274,7 +275,7 @@ class Ranking:
         for key in self._round:
             keys += key(node, pjf)
         if len(keys) != len(self._round):
-            raise ValueError("a round criterion's key must be (0,) or (1,)")
+            _malformed(self._round_criteria, node, pjf)
         return self._assemble(node, keys)
 
     def unnamed(self, node: Node) -> Rank:
@@ -310,10 +311,11 @@ class Ranking:
         return Rule.OLDEST
 
 
-def _malformed(criteria: Sequence[Criterion], node: Node) -> NoReturn:
+def _malformed(criteria: Sequence[Criterion], node: Node,
+               pjf: Collection[int] = ()) -> NoReturn:
     """Say which criterion's key does not hold as many ints as its width."""
     for c in criteria:
-        key = c.key(node, ())
+        key = c.key(node, pjf)
         if not isinstance(key, tuple) or len(key) != c.width:
             raise ValueError(f"criterion {c.rule.value}: its key for AB{node.id} is "
                                f"{key!r}, not a tuple of {c.width} int(s) (its width)")

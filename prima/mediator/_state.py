@@ -229,6 +229,7 @@ class Node:
                       label)
         """What every decision about the AB itself says of it, in the fields of
         ``Decision`` from ``app`` to ``label`` (none of them changes)."""
+        # (``facts`` and four more, written out: adding them up costs 0.4% of an operation)
         self.plain = (app.name, ab, tree.id, name, first.id, ids, ordered, reactive, iteration,
                       label, "", calls, None, None)
         """The fields from ``app`` on of a decision about the AB itself with no detail

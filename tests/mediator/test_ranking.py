@@ -55,3 +55,21 @@ def test_ranks_lay_the_keys_end_to_end_in_the_tables_order() -> None:
     keys = ranking_module.rank(node, ())
     assert flat == tuple(i for key in keys for i in key)
     assert len(flat) == sum(c.width for c in ranking_module.CRITERIA)
+
+
+def test_a_round_key_of_the_wrong_width_is_named_when_a_round_names_the_ab(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    def key(node: Node, pjf: Collection[int]) -> tuple[int, ...]:
+        return (0, 0) if node.id in pjf else (1,)
+
+    _with(monkeypatch, Rule.PARENT_FINISHED, key=key)
+    h = Harness(duration={"Speak": 1.0})
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m = h.mediator
+    m.submit(req("fa", speak("one")))  # AB1 starts
+    m.submit(req("ea", speak("waits")))  # AB2 waits for the speaker
+    m.submit(req("fa", speak("two")))  # AB3, after AB1
+    with pytest.raises(ValueError, match=r"criterion parent-finished: its key for AB3 is "
+                                         r"\(0, 0\), not a tuple of 1 int\(s\)"):
+        m.finish(1)  # AB3's parent just finished: the round names it
