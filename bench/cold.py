@@ -44,7 +44,7 @@ TARGETS = {
     "prima validate (one document)": 0.25,
     f"{len(THESIS)} thesis scenarios (separate runs)": 5.0,
 }
-"""Issue 13's acceptance: CPU seconds at most."""
+"""The targets: CPU seconds at most (docs/benchmarks.md)."""
 
 
 def _thesis() -> float:

@@ -46,7 +46,7 @@ PRIMA = [sys.executable, "-m", "prima"]
 SCHEMA = ROOT / "schemas" / "pxml.xsd"
 N_DOCUMENTS = 100
 TARGET = 1.0
-"""Issue 13's acceptance: cold ``prima validate`` of the corpus in at most 1 s of CPU."""
+"""The target: cold ``prima validate`` of the corpus in at most 1 s of CPU (docs/benchmarks.md)."""
 
 WORDS = (
     "apple", "river", "window", "garden", "lamp", "story", "music", "coffee", "paper",
