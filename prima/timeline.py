@@ -81,6 +81,9 @@ class Span:
     """The devices the AB waited for (:data:`NO_DEVICE` if none)."""
     line: int = 0
     """The index of the ``suspend`` or ``hold`` line among the rows."""
+    holder: str = ""
+    """A hold's holder: the app whose stream hold or block kept the devices, as its line
+    names it (empty: unnamed, the channel rule's, or a suspension)."""
 
 
 @dataclass(frozen=True)
@@ -126,7 +129,7 @@ class Timeline:
     bars: list[Bar] = field(default_factory=list)
     """By start, AB and device."""
     spans: list[Span] = field(default_factory=list)
-    """By start and application."""
+    """By start, application and line."""
     marks: list[Mark] = field(default_factory=list)
     """In trace order."""
     ticks: list[Tick] = field(default_factory=list)
@@ -171,20 +174,17 @@ def _detail(row: Row) -> Mapping[str, Any]:
     return detail if isinstance(detail, Mapping) else {}
 
 
-def _ends(wait: tuple[str, str, int | None], began: Row, kind: str, app: str,
-          ab: int | None, row: Row) -> bool:
-    """Whether a line of ``kind`` by ``app`` about ``ab`` ends the wait ``began`` began:
-    the waiting AB starts, ends or is cancelled; a suspended stream (its tree)
-    resumes; the holder releases (the channel rule's holds end only with their AB)."""
-    what, waiter, waited = wait
-    if kind in _ENDS_WAIT:
-        return waiter == app and ab is not None and waited == ab
-    if kind == "resume":
-        return what == "suspend" and waiter == app and began.get("tree") == row.get("tree")
-    if kind == "release" and what == "hold" and began.get("reason") != "keep-channel":
-        holder = _KEPT_FOR.match(str(began.get("text") or ""))
-        return holder is None or holder.group(1) == app
-    return False
+_Wait = tuple[str, str, int | None]
+"""A wait's key: (``suspend`` or ``hold``, the waiting app, the AB it is about)."""
+
+
+def _holder(hold: Row) -> str | None:
+    """The app whose stream hold or block a ``hold`` line says keeps the devices (None:
+    the channel rule's, which ends only with its AB)."""
+    if hold.get("reason") == "keep-channel":
+        return None
+    holder = _KEPT_FOR.match(str(hold.get("text") or ""))
+    return holder.group(1) if holder else ""  # ("": unnamed, any release ends it)
 
 
 class _Builder:
@@ -192,15 +192,25 @@ class _Builder:
         self.out = Timeline()
         self.running: dict[int, Row] = {}
         """AB -> its start line, while it runs."""
-        self.waiting: dict[tuple[str, str, int | None], tuple[int, Row]] = {}
+        self.waiting: dict[_Wait, tuple[int, Row]] = {}
         """(kind, app, ab) -> the index and the line of the suspend or hold that began it."""
-        self.named: list[str] = []
-        """The devices of the ABs' lines (:data:`NO_DEVICE` for none), in trace order."""
+        self.streams: dict[tuple[str, object], list[tuple[_Wait, int]]] = {}
+        """(app, tree) -> the suspensions its resume ends, as (key, line): some perhaps
+        ended already (a wait is still under way while ``waiting`` has its line)."""
+        self.holders: dict[str, list[tuple[_Wait, int]]] = {}
+        """A holder ("": one its hold line does not name) -> the holds its release ends,
+        as (key, line), the same way."""
+        self.apps: dict[str, None] = {}
+        """The apps, in the order first seen (a dict as an ordered set)."""
+        self.occupied: dict[str, None] = {}
+        """The devices ABs occupied, in the order first occupied."""
+        self.named: dict[str, None] = {}
+        """The devices of the ABs' lines (:data:`NO_DEVICE` for none), in the order first
+        named."""
 
     def app(self, name: object) -> str:
         app = str(name) if name is not None else "?"
-        if app not in self.out.apps:
-            self.out.apps.append(app)
+        self.apps[app] = None
         return app
 
     def feed(self, i: int, row: Row) -> None:
@@ -218,16 +228,16 @@ class _Builder:
             self.ends_waits(kind, app, ab, row, t)
         if kind == "start" and ab is not None:
             self.running[ab] = row
-            self.named += _devices(row)
-            self.out.devices += [d for d in _devices(row)
-                                 if d != NO_DEVICE and d not in self.out.devices]
+            devices = _devices(row)
+            self.named.update(dict.fromkeys(devices))
+            self.occupied.update(dict.fromkeys(d for d in devices if d != NO_DEVICE))
         elif kind == "end" and ab is not None:
             start = self.running.pop(ab, None)
             if start is not None:
                 self.bars(start, t, ended=True)
         elif kind in ("suspend", "hold") and app is not None:
-            self.waiting.setdefault((kind, app, ab), (i, row))
-            self.named += _devices(row)
+            self.wait((kind, app, ab), i, row)
+            self.named.update(dict.fromkeys(_devices(row)))
         elif kind == "user":
             action = str(row.get("action") or "")
             said = row.get("text") if action == "say" else None
@@ -238,26 +248,54 @@ class _Builder:
         if kind in _MARKS and app is not None:
             self.mark(i, row, kind, app, ab, t)
 
+    def wait(self, key: _Wait, i: int, row: Row) -> None:
+        """A suspend or hold line begins a wait (unless that AB's is under way)."""
+        if key in self.waiting:
+            return
+        self.waiting[key] = (i, row)
+        if key[0] == "suspend":
+            self.streams.setdefault((key[1], row.get("tree")), []).append((key, i))
+        else:
+            holder = _holder(row)
+            if holder is not None:
+                self.holders.setdefault(holder, []).append((key, i))
+
     def ends_waits(self, kind: str, app: str, ab: int | None, row: Row, t: float) -> None:
-        """Close the waits this line ends."""
-        for key, (_, began) in list(self.waiting.items()):
-            if _ends(key, began, kind, app, ab, row):
+        """Close the waits this line ends: the waiting AB starts, ends or is cancelled; a
+        suspended stream (its tree) resumes; a holder releases (the channel rule's holds
+        end only with their AB). Each wait is found by its key, never by a scan."""
+        waiting = self.waiting
+        if kind in _ENDS_WAIT:
+            if ab is not None:
+                for own in (("suspend", app, ab), ("hold", app, ab)):
+                    if own in waiting:
+                        self.close(own, t)
+            return
+        if kind == "resume":
+            ended = self.streams.pop((app, row.get("tree")), [])
+        elif kind == "release":
+            ended = self.holders.pop(app, []) + self.holders.pop("", [])
+        else:
+            return
+        for key, i in ended:
+            if key in waiting and waiting[key][0] == i:
                 self.close(key, t)
 
     def mark(self, i: int, row: Row, kind: str, app: str, ab: int | None, t: float) -> None:
         if ab is not None:
             devices = _devices(row)
-            self.named += devices
+            self.named.update(dict.fromkeys(devices))
         else:
             freed = _FREED.search(str(row.get("text") or "")) if kind == "release" else None
             devices = tuple(freed.group(1).split(", ")) if freed else ()
         self.out.marks.append(Mark(kind, t, app, ab, devices, i, str(row.get("reason") or "")))
 
-    def close(self, key: tuple[str, str, int | None], t: float) -> None:
+    def close(self, key: _Wait, t: float) -> None:
         i, row = self.waiting.pop(key)
+        holder = _holder(row) if key[0] == "hold" else None
         self.out.spans.append(Span(key[0], key[1], key[2], str(row.get("command") or ""),
                                    float(row["t"]), t, str(row.get("reason") or ""),
-                                   _devices(row), i))
+                                   _devices(row), i, holder or ""))
 
     def bars(self, start: Row, t1: float, ended: bool) -> None:
         blended = blended_devices(_detail(start).get("over"))
@@ -276,10 +314,12 @@ class _Builder:
         self.running.clear()
         for key in list(self.waiting):
             self.close(key, out.end)
-        named = [d for d in dict.fromkeys(self.named) if d not in out.devices]
-        out.devices += sorted(named, key=lambda d: d == NO_DEVICE)  # (no device) last
-        out.bars.sort(key=lambda b: (b.t0, b.ab, out.devices.index(b.device)))
-        out.spans.sort(key=lambda s: (s.t0, s.app))
+        out.apps = list(self.apps)
+        named = [d for d in self.named if d not in self.occupied]
+        out.devices = [*self.occupied, *sorted(named, key=lambda d: d == NO_DEVICE)]  # (last)
+        place = {d: i for i, d in enumerate(out.devices)}
+        out.bars.sort(key=lambda b: (b.t0, b.ab, place[b.device]))
+        out.spans.sort(key=lambda s: (s.t0, s.app, s.line))
         return out
 
 

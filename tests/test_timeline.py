@@ -182,3 +182,66 @@ def test_every_wait_of_a_run_closes_where_the_trace_says(scenario: str) -> None:
             r.get("ab") == span.ab or r["kind"] in ("resume", "release"))]
         assert closing or span.t1 == tl.end, span
     assert {b.ab for b in tl.bars} == {r["ab"] for r in rows if r["kind"] == "start"}
+
+
+@pytest.mark.parametrize("scenario", ["thesis/sample-10", "policies/interrupt-on"])
+def test_a_block_hold_ends_at_its_holders_release_in_a_real_run(scenario: str) -> None:
+    """The contract with the mediator's wording: a block's ``hold`` line names its holder
+    ("devices kept for fa4-picture") and the holder's ``release`` line names the devices
+    it frees ("block on arm, camera, ..."). The timeline parses both; if the mediator
+    words them otherwise, these spans and marks would silently change, so this fails."""
+    rows = [line.to_dict() for line in Run(ROOT / "scenarios" / f"{scenario}.xml").run()]
+    tl = timeline(rows)
+    releases = [m for m in tl.marks if m.kind == "release" and m.reason == "block-close"]
+    assert releases, "the scenario no longer has a block released"
+    release = releases[0]
+    holds = [s for s in tl.spans if s.kind == "hold" and s.reason == "block"]
+    assert holds and all(s.holder == release.app != s.app for s in holds)
+    assert [s.t1 for s in holds] == [release.t] * len(holds)  # the release, not the AB's start
+    started = {r["ab"]: r["t"] for r in rows if r["kind"] == "start"}
+    assert all(started.get(s.ab, tl.end) > release.t for s in holds)
+    assert set(holds[0].devices) <= set(release.devices)  # parsed to the devices' names
+    assert all(d.replace("-", "").isalpha() for d in release.devices), release.devices
+
+
+def test_the_cost_is_linear_in_the_number_of_open_waits() -> None:
+    """Thousands of waits open at once (suspended streams, holds of one holder) close by
+    key, not by scanning every open wait on every line: 8x the rows take 8x the work,
+    not 64x. The work is counted, not timed: the bytecodes run in prima/timeline.py."""
+    import sys
+    from types import FrameType
+
+    import prima.timeline
+
+    def rows(n: int) -> list[dict[str, Any]]:
+        out = []
+        for k in range(n):
+            out.append(row(0.0, "suspend", "a", k, tree=k, devices=["arm"]))
+            out.append(row(0.0, "hold", "b", k, text="devices kept for a", devices=["arm"]))
+        for k in range(n):
+            out += ab_rows(n + k, 1.0, 2.0, ["neck"], app="c")
+        out.append(row(3.0, "release", "a", text="block on arm"))
+        out += [row(4.0, "resume", "a", k, tree=k) for k in range(n)]
+        return out
+
+    def work(n: int) -> int:
+        data, count = rows(n), [0]
+
+        def trace(frame: FrameType, event: str, arg: object) -> Any:
+            if frame.f_code.co_filename != prima.timeline.__file__:
+                return None
+            frame.f_trace_opcodes = True
+            if event == "opcode":
+                count[0] += 1
+            return trace
+
+        sys.settrace(trace)
+        try:
+            tl = timeline(data)
+        finally:
+            sys.settrace(None)
+        assert len(tl.spans) == 2 * n
+        return count[0]
+
+    small, large = work(200), work(1600)
+    assert large < 8 * 1.25 * small, (small, large)  # (sorting adds a log factor)
