@@ -79,9 +79,11 @@ def test_the_timeline_draws_waits_as_spans_and_blends_on_half_rows() -> None:
     assert [model.rows[i]["kind"] for i in hold.customdata] == ["hold"] * len(span.devices)
     assert not any(t.meta == "marks" and "held" in t.name for t in fig.data)
     widths = [w for i in traces["bars"] for w in fig.data[i].width]
-    blended = [b.blended for app in model.timeline.apps for b in model.timeline.bars
-               if b.app == app]
+    # each app's bars, unblended first: the legend's swatch is drawn like the first bar
+    blended = [b.blended for app in model.timeline.apps
+               for b in sorted(model.timeline.bars, key=lambda b: b.blended) if b.app == app]
     assert any(blended) and widths == [0.4 if b else 0.8 for b in blended]
+    assert not any(fig.data[i].marker.pattern.shape[0] for i in traces["bars"])
     assert list(fig.layout.yaxis.categoryarray)[::-1] == model.timeline.devices
 
 

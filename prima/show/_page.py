@@ -122,7 +122,8 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
     colours = _colours(tl.apps)
     traces: dict[str, list[int]] = {"bars": [], "spans": [], "marks": []}
     for i, app in enumerate(tl.apps):
-        bars = [b for b in tl.bars if b.app == app]
+        # non-blended first: the legend's swatch is drawn like the first bar
+        bars = sorted((b for b in tl.bars if b.app == app), key=lambda b: b.blended)
         if not bars:
             continue
         traces["bars"].append(len(fig.data))
