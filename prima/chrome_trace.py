@@ -21,10 +21,10 @@ where it is not blended: two slices of one device track must nest.
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Iterable
 from typing import TextIO
 
+from prima.timeline import blended_devices
 from prima.trace import TraceLine
 
 __all__ = ["ChromeTrace", "ChromeTraceWriter", "chrome_trace_events"]
@@ -34,10 +34,6 @@ _PROCESSES = ((DEVICES, "devices"), (APPS, "applications"), (WORLD, "world"))
 _WORLD_TRACKS = {"event": 1, "user": 2}
 _INSTANT_DECISIONS = frozenset({"suspend", "resume", "hold", "release", "cancel", "interrupt",
                                 "failure", "budget", "load", "unload", "error"})
-
-
-_OVER = re.compile(r" on ([^,\s]+)")
-"""The devices in a blended start's ``over`` detail (``over AB12 on locomotion``)."""
 
 
 def _us(t: float) -> int:
@@ -131,7 +127,7 @@ class ChromeTrace:
     def _slices(self, start: TraceLine, t: float, end: TraceLine | None
                 ) -> list[dict[str, object]]:
         out: list[dict[str, object]] = []
-        blended = set(_OVER.findall(str(start.detail.get("over") or "")))
+        blended = blended_devices(start.detail.get("over"))
         args = self._args(start, end)
         for device in start.devices or ():
             if device in blended:

@@ -17,7 +17,7 @@ from prima.mediator import DecisionKind
 from prima.vocab import TraceKind, Value
 
 __all__ = ["Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "describe",
-           "device_overlaps", "format_jsonl", "format_text", "jsonl_row"]
+           "device_overlaps", "format_jsonl", "format_text", "jsonl_row", "user_words"]
 
 
 Kind = TraceKind
@@ -144,7 +144,7 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     DecisionKind.FAILURE: lambda line: f"ERROR: {line.text}",
     DecisionKind.BUDGET: lambda line: f"budget: {line.text}",
     Kind.EVENT: _describe_event,
-    Kind.USER: lambda line: _describe_user(line),
+    Kind.USER: lambda line: user_words(line.action, line.text, line.detail),
     Kind.ERROR: lambda line: f"ERROR: {line.text}",
     Kind.SEND: lambda line: _describe_send(line),
     Kind.LOG: lambda line: f"log: {line.text}",
@@ -181,12 +181,13 @@ def describe(line: TraceLine) -> str:
     return _escape(text + marks + why)
 
 
-def _describe_user(line: TraceLine) -> str:
-    action = line.action
-    target = line.detail.get("target")
+def user_words(action: str | None, text: str | None, detail: Mapping[str, object]) -> str:
+    """What the user did, as the text trace words it: ``"words"`` (`` (not heard)``
+    when the robot missed them), ``walks to hall``, ``touches the robot``, ..."""
+    target = detail.get("target")
     if action == "say":
-        heard = "" if line.detail.get("heard", True) else " (not heard)"
-        return f'"{line.text}"{heard}'
+        heard = "" if detail.get("heard", True) else " (not heard)"
+        return f'"{text or ""}"{heard}'
     if action == "touch":
         return "touches the robot"
     if action in ("walk", "leave"):

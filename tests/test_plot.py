@@ -59,8 +59,10 @@ def test_waits_and_the_world(rows: list[dict[str, Any]]) -> None:
     assert Counter(k.row for k in tl.ticks) == Counter(
         {"user": sum(r["kind"] == "user" for r in rows),
          "event": sum(r["kind"] == "event" for r in rows)})
-    assert [k.label for k in tl.ticks if k.row == "user"][:2] == ['"Prof. Kidode\'s room."',
-                                                                  "follow"]
+    user = [k for k in tl.ticks if k.row == "user"][:2]
+    assert [k.action for k in user] == ["say", "follow"]  # an action's tick: its name
+    # and worded as the text trace words it
+    assert [k.label for k in user] == ['"Prof. Kidode\'s room."', "follows the robot"]
     assert len(tl.robot) > 400 and len(tl.user) > 400  # poses at 2 Hz and on events
 
 

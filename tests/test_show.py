@@ -64,6 +64,29 @@ def test_a_trace_without_its_scenario_has_no_map(tmp_path: Path,
     assert (tmp_path / "run.html").is_file()
 
 
+def test_the_timeline_draws_waits_as_spans_and_blends_on_half_rows() -> None:
+    """The page draws :mod:`prima.timeline`'s digest, as ``prima plot`` does: a hold
+    is a span (not an instant), a blended AB has half its device's row."""
+    from prima.show._model import build
+    from prima.show._page import timeline_figure
+
+    rows = read_rows(ROOT / "scenarios" / "policies" / "blend-on.xml")
+    model = build(rows)
+    fig, traces = timeline_figure(model)
+    hold = next(t for t in fig.data if t.meta == "hold")
+    (span,) = [s for s in model.timeline.spans if s.kind == "hold"]
+    assert list(hold.base) == [span.t0] * len(span.devices) and min(hold.x) > 0.5
+    assert [model.rows[i]["kind"] for i in hold.customdata] == ["hold"] * len(span.devices)
+    assert not any(t.meta == "marks" and "held" in t.name for t in fig.data)
+    widths = [w for i in traces["bars"] for w in fig.data[i].width]
+    # each app's bars, unblended first: the legend's swatch is drawn like the first bar
+    blended = [b.blended for app in model.timeline.apps
+               for b in sorted(model.timeline.bars, key=lambda b: b.blended) if b.app == app]
+    assert any(blended) and widths == [0.4 if b else 0.8 for b in blended]
+    assert not any(fig.data[i].marker.pattern.shape[0] for i in traces["bars"])
+    assert list(fig.layout.yaxis.categoryarray)[::-1] == model.timeline.devices
+
+
 @pytest.mark.parametrize("content, message", [
     ('{"t": 0, "seq": 0, "kind": "start"}\nnot json\n', "run.jsonl:2:1: error: not a JSON"),
     ('{"t": 0, "kind": "start"}\n', "run.jsonl:1:1: error: missing field 'seq'"),

@@ -1,7 +1,8 @@
 """Pictures of a run for papers and pull requests: ``prima plot``.
 
 Apart from the core: only ``prima plot`` imports it. :func:`timeline` turns a
-run's jsonl records into the device timeline's data (plain Python); drawing it
+run's jsonl records into the device timeline's data (plain Python, shared with
+``prima show``: :mod:`prima.timeline`); drawing it
 (:func:`save_timeline`) and animating a run (:func:`save_animation`) need
 matplotlib, the ``plot`` extra (``pip install 'prima[plot]'``), which this
 package imports only when asked to draw.
@@ -12,16 +13,25 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from prima.plot._timeline import Bar, Pose, Span, Tick, Timeline, abbreviate, timeline
+from prima.timeline import Bar, Mark, Span, Tick, Timeline, timeline
+from prima.trace import Pose
 
 if TYPE_CHECKING:
     from prima.sim import WorldMap
 
-__all__ = ["FORMATS", "Bar", "Pose", "Span", "Tick", "Timeline", "abbreviate",
+__all__ = ["FORMATS", "Bar", "Mark", "Pose", "Span", "Tick", "Timeline", "abbreviate",
            "save_animation", "save_timeline", "timeline"]
 
 FORMATS = (".svg", ".png", ".pdf")
 """The timeline's picture formats, by file suffix; ``.gif`` is the animation."""
+
+
+def abbreviate(command: str, parts: int = 2) -> str:
+    """A grouped AB's name shortened: ``Speak+Gesture+PointByHand`` -> ``Speak+Gesture+...``."""
+    names = command.split("+")
+    if len(names) <= parts:
+        return command
+    return "+".join(names[:parts]) + "+..."
 
 
 def save_timeline(tl: Timeline, path: str | Path, title: str = "") -> None:

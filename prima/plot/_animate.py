@@ -21,8 +21,9 @@ from matplotlib.patches import Circle, Patch
 from PIL import Image
 
 from prima.plot._draw import app_colors, draw_timeline
-from prima.plot._timeline import Pose, Timeline
 from prima.sim import WorldMap
+from prima.timeline import Timeline
+from prima.trace import Pose
 
 __all__ = ["pose_at", "save_animation"]
 

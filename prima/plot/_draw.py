@@ -17,7 +17,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from prima.plot._timeline import Bar, Timeline, abbreviate
+from prima.plot import abbreviate
+from prima.timeline import Bar, Timeline
 
 __all__ = ["app_colors", "draw_timeline", "save_timeline", "timeline_figure"]
 
@@ -140,16 +141,18 @@ def draw_timeline(ax: Axes, tl: Timeline, *, width_pt: float, labels: bool = Tru
                 ax.text((span.t0 + span.t1) / 2, row + low + 0.18, text, ha="center", va="center",
                         fontsize=_FONT - 1, bbox={"facecolor": "white", "linewidth": 0,
                                                   "pad": 0.5})
-    for t, app, _ in tl.marks if waits else ():
-        if f"{app} waits" in y:
-            ax.plot([t], [y[f"{app} waits"]], marker="|", markersize=8, color=colors[app])
+    for mark in tl.marks if waits else ():
+        if f"{mark.app} waits" in y:
+            ax.plot([mark.t], [y[f"{mark.app} waits"]], marker="|", markersize=8,
+                    color=colors[mark.app])
     if world:
         _world(ax, tl, y, per_s, labels)
     return rows
 
 
 def _world(ax: Axes, tl: Timeline, y: dict[str, int], per_s: float, labels: bool) -> None:
-    """The user's actions and the events: ticks, labelled in two lanes where they fit."""
+    """The user's actions and the events: ticks, labelled in two lanes where they fit
+    (the words said in quotes, an action by its name: ``walk``)."""
     for row, name, marker, color in (("user", "user", "v", "#333333"),
                                      ("event", "events", "d", "#555555")):
         ticks = [k for k in tl.ticks if k.row == row]
@@ -161,7 +164,8 @@ def _world(ax: Axes, tl: Timeline, y: dict[str, int], per_s: float, labels: bool
             continue
         lanes = [float("-inf"), float("-inf")]
         for tick in ticks:
-            text = tick.label if len(tick.label) <= 32 else tick.label[:31] + '..."'
+            shown = tick.label if tick.text is not None or not tick.action else tick.action
+            text = shown if len(shown) <= 32 else shown[:31] + '..."'
             width = (len(text) * (_FONT - 1) * _CHAR + 6) / per_s
             lane = next((i for i, free in enumerate(lanes) if tick.t >= free), None)
             if lane is None:

@@ -3,7 +3,9 @@
 The page draws the map (walls, places, areas) with the robot and the user
 moving and the words being spoken in bubbles; below it a timeline, one row per
 device, each atomic behavior a bar coloured by its application and labelled by
-its Command, suspensions hatched and holds marked; below that the trace table.
+its Command, suspensions and holds hatched, releases, cancels and cuts marked
+(the digest ``prima plot`` draws too: :mod:`prima.timeline`); below that the
+trace table.
 One playhead drives all three. Plotly draws the map and the timeline (its
 JavaScript is inlined: the page works offline, from ``file://``); a small
 player script moves the playhead.

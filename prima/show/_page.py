@@ -13,9 +13,14 @@ from plotly.colors import qualitative
 
 from prima.show._model import Model
 from prima.sim import WorldMap
+from prima.timeline import Bar
 
+INSTANT = 0.05
+"""The least width (s) of a bar: an atomic behavior that took no time is still seen."""
+
+_SPAN_STYLE = {"suspend": ("/", "#555", "suspended"), "hold": ("x", "#c0392b", "held back")}
+"""A wait's hatch, its colour and its name in the legend."""
 _MARK_STYLE = {
-    "hold": ("x-thin-open", "#c0392b", "held back"),
     "release": ("line-ns-open", "#c0392b", "hold released"),
     "interrupt": ("star-triangle-down", "#8e44ad", "cut"),
     "cancel": ("x", "#7f8c8d", "cancelled"),
@@ -27,6 +32,10 @@ _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": [
 def _esc(text: str) -> str:
     """Text shown as itself (Plotly reads some HTML in its labels)."""
     return html.escape(text, quote=False)
+
+
+def _label(bar: Bar) -> str:
+    return f'{bar.command} "{bar.text}"' if bar.text else bar.command
 
 
 def _colours(apps: list[str]) -> dict[str, str]:
@@ -100,57 +109,74 @@ def map_figure(model: Model, world: WorldMap | None) -> tuple[go.Figure, dict[st
     return fig, index
 
 
+def _width(t0: float, t1: float) -> float:
+    """A bar's width, at least :data:`INSTANT` (an atomic behavior that took no time)."""
+    return round(max(t1 - t0, INSTANT), 3)
+
+
 def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
-    """One row per device: the ABs' bars by application, suspensions hatched, holds marked."""
+    """One row per device: the ABs' bars by application (blended ones on half a row,
+    dotted), suspensions and holds hatched, releases, cuts and cancels marked."""
     fig = go.Figure()
-    colours = _colours(model.apps)
-    traces: dict[str, list[int]] = {"bars": [], "suspend": [], "marks": []}
-    for app in model.apps:
-        bars = [b for b in model.bars if b.app == app]
+    tl = model.timeline
+    colours = _colours(tl.apps)
+    traces: dict[str, list[int]] = {"bars": [], "spans": [], "marks": []}
+    for i, app in enumerate(tl.apps):
+        # non-blended first: the legend's swatch is drawn like the first bar
+        bars = sorted((b for b in tl.bars if b.app == app), key=lambda b: b.blended)
         if not bars:
             continue
         traces["bars"].append(len(fig.data))
+        # two applications blended on a device share its row: a half each
         fig.add_trace(go.Bar(
             name=_esc(app), orientation="h", y=[b.device for b in bars],
-            base=[b.start for b in bars], x=[round(b.end - b.start, 3) for b in bars],
+            base=[b.t0 for b in bars], x=[_width(b.t0, b.t1) for b in bars],
+            width=[0.4 if b.blended else 0.8 for b in bars],
+            offset=[(0.0 if i % 2 else -0.4) if b.blended else -0.4 for b in bars],
             customdata=[b.ab for b in bars], text=[_esc(b.command) for b in bars],
-            hovertext=[f"AB {b.ab} {_esc(b.label)}<br>{b.start:.2f}-{b.end:.2f} s" for b in bars],
+            hovertext=[f"AB {b.ab} {_esc(_label(b))}<br>{b.t0:.2f}-{b.t1:.2f} s"
+                       + (" (blended)" if b.blended else "") for b in bars],
             hoverinfo="text", textposition="inside", insidetextanchor="start", textangle=0,
-            textfont={"size": 10}, marker={"color": colours[app]},
+            textfont={"size": 10}, marker={"color": colours[app], "pattern": {
+                "shape": ["." if b.blended else "" for b in bars], "fgcolor": "white"}},
             meta="bars"))
-    spans = [m for m in model.marks if m.kind == "suspend"]
-    if spans:
-        traces["suspend"].append(len(fig.data))
+    for kind, (shape, colour, what) in _SPAN_STYLE.items():
+        spans = [(s, d) for s in tl.spans if s.kind == kind for d in s.devices]
+        if not spans:
+            continue
+        traces["spans"].append(len(fig.data))
         fig.add_trace(go.Bar(
-            name="suspended", orientation="h", y=[m.device for m in spans],
-            base=[m.start for m in spans], x=[round(m.end - m.start, 3) for m in spans],
-            customdata=[m.row for m in spans],
-            hovertext=[f"{_esc(m.app)}: AB {m.ab} suspended {m.start:.2f}-{m.end:.2f} s"
-                       for m in spans], hoverinfo="text",
-            marker={"color": "rgba(0,0,0,0)", "line": {"width": 1, "color": "#555"},
-                    "pattern": {"shape": "/", "fgcolor": "#555", "size": 6}},
-            meta="suspend"))
+            name=what, orientation="h", y=[d for _, d in spans],
+            base=[s.t0 for s, _ in spans], x=[_width(s.t0, s.t1) for s, _ in spans],
+            customdata=[model.table[s.line] for s, _ in spans],
+            hovertext=[f"{_esc(s.app)}: AB {s.ab} {what} {s.t0:.2f}-{s.t1:.2f} s"
+                       + (f" ({_esc(s.reason)})" if s.reason else "") for s, _ in spans],
+            hoverinfo="text",
+            marker={"color": "rgba(0,0,0,0)", "line": {"width": 1, "color": colour},
+                    "pattern": {"shape": shape, "fgcolor": colour, "size": 6}},
+            meta=kind))
     for kind, (symbol, colour, what) in _MARK_STYLE.items():
-        marks = [m for m in model.marks if m.kind == kind]
+        marks = [(m, d) for m in tl.marks if m.kind == kind for d in m.devices
+                 if d in tl.devices]
         if not marks:
             continue
         traces["marks"].append(len(fig.data))
         fig.add_trace(go.Scatter(
-            name=what, x=[m.start for m in marks], y=[m.device for m in marks],
-            customdata=[m.row for m in marks], mode="markers",
+            name=what, x=[m.t for m, _ in marks], y=[d for _, d in marks],
+            customdata=[model.table[m.line] for m, _ in marks], mode="markers",
             marker={"symbol": symbol, "size": 12, "color": colour, "line": {"width": 2,
                                                                             "color": colour}},
-            hovertext=[f"{_esc(m.app)}: {what} (AB {m.ab}) at {m.start:.2f} s"
-                       for m in marks],
+            hovertext=[f"{_esc(m.app)}: {what}" + (f" (AB {m.ab})" if m.ab is not None else "")
+                       + f" at {m.t:.2f} s" for m, _ in marks],
             hoverinfo="text", meta="marks"))
     fig.update_layout(
         uniformtext={"mode": "hide", "minsize": 8},  # no label shrunk past reading
-        barmode="overlay", height=max(200, 60 + 34 * len(model.devices)),
+        barmode="overlay", height=max(200, 60 + 34 * len(tl.devices)),
         margin={"l": 140, "r": 10, "t": 30, "b": 40}, plot_bgcolor="white",
-        legend={"orientation": "h", "y": -0.25 if len(model.devices) > 3 else -0.5},
-        xaxis={"title": "simulated time (s)", "range": [0, max(model.end, 1.0)],
+        legend={"orientation": "h", "y": -0.25 if len(tl.devices) > 3 else -0.5},
+        xaxis={"title": "simulated time (s)", "range": [0, max(tl.end, 1.0)],
                "showgrid": True, "gridcolor": "#eee"},
-        yaxis={"categoryorder": "array", "categoryarray": model.devices[::-1],
+        yaxis={"categoryorder": "array", "categoryarray": tl.devices[::-1],
                "type": "category", "fixedrange": True},
         dragmode="pan")
     return fig, traces
@@ -171,11 +197,11 @@ def page(model: Model, world: WorldMap | None, title: str) -> str:
     timeline_html = pio.to_html(timeline, include_plotlyjs=False, full_html=False,
                                 div_id="timeline", config=_CONFIG)
     data = {
-        "end": model.end, "rows": model.rows, "robot": model.robot, "user": model.user,
+        "end": model.timeline.end, "rows": model.rows, "robot": model.robot, "user": model.user,
         "bubbles": [[b.who, b.start, b.end, b.text] for b in model.bubbles],
         "abs": {str(k): v for k, v in model.abs.items()}, "robotTrace": who["robot"],
         "userTrace": who["user"], "traces": traces,
-        "colours": _colours(model.apps),
+        "colours": _colours(model.timeline.apps),
     }
     files = resources.files("prima.show")
     player = files.joinpath("player.js").read_text(encoding="utf-8")
@@ -196,7 +222,7 @@ def page(model: Model, world: WorldMap | None, title: str) -> str:
 <h1>{name}</h1>
 <button id="play" type="button">Play</button>
 <label>speed <select id="speed">{speeds}</select></label>
-<input id="scrub" type="range" min="0" max="{model.end}" step="0.01" value="0">
+<input id="scrub" type="range" min="0" max="{model.timeline.end}" step="0.01" value="0">
 <span id="clock">0.00 s</span>
 </header>
 <main>
