@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, TextIO
 
 from prima import __version__
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
-from prima.vocab import MAX_RUN_TIME, POLICIES
+from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
     from prima.dsl import Checker, Header, RobotProfile, Validation
@@ -34,6 +34,17 @@ if TYPE_CHECKING:
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
+def _seed(text: str) -> int:
+    """A random seed given on the command line: a whole number from 0 to 2^63 - 1."""
+    try:
+        seed = int(text)
+    except ValueError:
+        seed = -1
+    if not 0 <= seed <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number from 0 to 2^63 - 1")
+    return seed
+
+
 def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
     """What runs a scenario: the scenario, the documents, the robot, seed and time."""
     parser.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
@@ -42,7 +53,7 @@ def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--robot", metavar="PROFILE",
                         help="robot hardware profile (default: the scenario's, else the home "
                              "robot)")
-    parser.add_argument("--seed", type=int, metavar="N",
+    parser.add_argument("--seed", type=_seed, metavar="N",
                         help="random seed (default: the scenario's)")
     parser.add_argument("--until", type=float, metavar="SECONDS",
                         help="simulated time to stop at (default: the scenario's)")
@@ -141,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--runs", type=int, required=True, metavar="N", help="how many runs")
     sweep.add_argument("--jitter", type=float, required=True, metavar="SECONDS",
                        help="largest shift of a timing, either way")
-    sweep.add_argument("--seed", type=int, default=0, metavar="S",
+    sweep.add_argument("--seed", type=_seed, default=0, metavar="S",
                        help="seed of the shifts (default 0); run i uses (S, i)")
     sweep.add_argument("--jobs", type=int, metavar="J",
                        help="parallel processes (default: every core)")

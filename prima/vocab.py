@@ -18,6 +18,7 @@ __all__ = [
     "MAX_EAS",
     "MAX_NUMBER",
     "MAX_RUN_TIME",
+    "MAX_SEED",
     "MAX_STREAM_HOLD",
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
@@ -137,6 +138,9 @@ MAX_TEXT = 10_000
 
 MAX_RUN_TIME = 1_000_000.0
 """Longest simulated run (s, about eleven and a half days): a scenario's ``until``."""
+
+MAX_SEED = 2**63 - 1
+"""Largest random seed (a scenario's ``seed``, ``--seed``)."""
 
 MAX_NUMBER = 2.0 ** 53
 """Largest magnitude of a number (beyond it, integers lose exactness anyway)."""

@@ -17,6 +17,7 @@ from prima import xmlio as _schema
 from prima.cli import main
 
 ROOT = Path(__file__).parents[1]
+FIG_5_7 = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
 OFFICE = ROOT / "scenarios" / "examples" / "office-kidode.xml"
 INVALID = ROOT / "tests" / "dsl" / "data" / "invalid"
 
@@ -75,6 +76,9 @@ def test_robot_profile_files_validate_too() -> None:
     (["validate", "no/such/path"], "no such file or folder"),
     (["validate", "--format", "xml", "apps"], "invalid choice"),
     (["frobnicate"], "invalid choice"),
+    (["run", str(FIG_5_7), "--seed", "-1"], "from 0 to 2^63 - 1"),
+    (["run", str(FIG_5_7), "--seed", str(2**63)], "from 0 to 2^63 - 1"),
+    (["debug", str(FIG_5_7), "--seed", "x"], "'x' is not a whole number"),
 ])
 def test_usage_errors_exit_2(argv: list[str], fragment: str,
                              capsys: pytest.CaptureFixture[str]) -> None:

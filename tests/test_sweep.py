@@ -167,6 +167,7 @@ def test_a_breach_exits_1_and_the_worst_runs_go_to_the_default_folder(
     (["sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--max-stuck", "-2"],
      "--max-stuck must be"),
     (["sweep", str(SHORT), "--jitter", "1"], "required"),
+    (["sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--seed", "-1"], "from 0 to 2^63"),
 ])
 def test_sweep_usage_errors_exit_2(argv: list[str], fragment: str,
                                    capsys: pytest.CaptureFixture[str]) -> None:

@@ -34,7 +34,7 @@ from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
 from prima.sim._simulator import SENSE_HZ
-from prima.vocab import MAX_EAS, MAX_RUN_TIME
+from prima.vocab import MAX_EAS, MAX_RUN_TIME, MAX_SEED
 from prima.xmlio import (
     Bound,
     XmlDocument,
@@ -58,9 +58,6 @@ MAX_UNTIL = MAX_RUN_TIME
 
 MAX_RATE = 1_000
 """Most physics steps per simulated second (a multiple of 10)."""
-
-MAX_SEED = 2**63 - 1
-"""Largest random seed."""
 
 MAX_NTH = 1_000_000
 """Largest ``nth`` of an answer rule."""
