@@ -297,6 +297,17 @@ def _usage(command: str, message: str, err: TextIO) -> int:
     return EXIT_USAGE
 
 
+def _missing_extra(module: str, library: str, extra: str) -> str | None:
+    """Why a viewer cannot run here: the optional extra it needs is not installed
+    (checked before anything runs, like a usage error)."""
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        return (f"{library} is not installed; install the {extra} extra: pip install "
+                f"'prima[{extra}]' (in a checkout of PRIMA: pip install -e '.[{extra}]')")
+    return None
+
+
 def _problems(load: Callable[[Path], object], path: Path) -> list[Problem]:
     try:
         load(path)
@@ -764,7 +775,7 @@ def _show_usage(args: argparse.Namespace) -> str | None:
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.show import read_rows, render
 
-    problem = _show_usage(args)
+    problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show")
     if problem:
         return _usage("show", problem, err)
     source = Path(args.input)
@@ -809,14 +820,9 @@ def _plot_usage(args: argparse.Namespace) -> str | None:
 
 
 def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    problem = _plot_usage(args)
+    problem = _plot_usage(args) or _missing_extra("matplotlib", "matplotlib", "plot")
     if problem:
         return _usage("plot", problem, err)
-    try:
-        importlib.import_module("matplotlib")
-    except ImportError:
-        return _usage("plot", "matplotlib is not installed; install the plot extra: "
-                              "pip install 'prima[plot]'", err)
     from prima.plot import save_animation, save_timeline, timeline
     from prima.sim import load_map
 

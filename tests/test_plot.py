@@ -156,7 +156,8 @@ def test_without_matplotlib_it_says_how_to_install_it(
     status, err = plot(str(SAMPLE_03), "-o", str(tmp_path / "x.svg"))
     assert status == 2
     assert err == ("prima plot: error: matplotlib is not installed; install the plot extra: "
-                   "pip install 'prima[plot]'\n")
+                   "pip install 'prima[plot]' (in a checkout of PRIMA: pip install -e "
+                   "'.[plot]')\n")
 
 
 def test_a_run_without_behaviors_still_draws(tmp_path: Path) -> None:

@@ -108,9 +108,11 @@ def test_without_plotly_it_says_which_extra_to_install(
     monkeypatch.delitem(sys.modules, "prima.show._page", raising=False)
     monkeypatch.setitem(sys.modules, "plotly", None)  # an import of it fails
     status, said = _cli("show", str(SAMPLE_03), "-o", str(tmp_path / "x.html"))
-    assert status == 1
-    assert said == ("prima show: error: prima show needs Plotly (plotly is missing): "
-                    "pip install 'prima[show]'\n")
+    assert status == 2  # checked before the scenario runs, as plot does
+    assert said == ("prima show: error: Plotly is not installed; install the show extra: "
+                    "pip install 'prima[show]' (in a checkout of PRIMA: pip install -e "
+                    "'.[show]')\n")
+    assert not (tmp_path / "x.html").exists()
 
 
 @pytest.mark.parametrize("argv, message", [
