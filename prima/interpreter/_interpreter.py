@@ -111,8 +111,9 @@ def _handler_table(document: Document, state_id: str | None
 class _Leave(Exception):
     """A goto: unwinds the running handler."""
 
-    def __init__(self, target: str) -> None:
+    def __init__(self, target: str, loc: Loc) -> None:
         self.target = target
+        self.loc = loc
 
 
 @dataclass(slots=True)
@@ -129,6 +130,8 @@ class _Timer:
     due: float
     reactive: bool
     seq: int
+    loc: Loc
+    """The ``<timer>`` that started it."""
 
 
 class Interpreter:
@@ -239,8 +242,9 @@ class Interpreter:
                 self._fired_at, self._fired = now, 0
             self._fired += 1
             if self._fired > MAX_TIMERS_AT_ONCE:
-                message = (f"{self.document.path}: more than {MAX_TIMERS_AT_ONCE} timers fired "
-                           f"at t={now:g} s (a timer restarting itself with after=\"0\"?)")
+                message = (f"{self._where(timer.loc)}more than {MAX_TIMERS_AT_ONCE} timers "
+                           f"fired at t={now:g} s (a timer restarting itself with "
+                           'after="0"?)')
                 self._fail(message, ExecutionError(message))
             self._fire(name, timer.reactive)
 
@@ -316,7 +320,7 @@ class Interpreter:
         try:
             self._actions(handler.actions, scope)
         except _Leave as leave:
-            self._transition(leave.target)
+            self._transition(leave.target, leave.loc)
 
     def _handlers(self, kind: HandlerKind, key: str) -> tuple[Handler, ...]:
         """The handlers for ``kind``/``key`` in the order they are tried: the state's own
@@ -326,14 +330,16 @@ class Interpreter:
             table = self._tables[self.state] = _handler_table(self.document, self.state)
         return table.get((kind, key), ())
 
-    def _transition(self, target: str) -> None:
+    def _transition(self, target: str, goto: Loc | None = None) -> None:
+        """Enter ``target`` (and the states its entries go to); ``goto``: the <goto> that
+        led there, where a loop of them is reported."""
         for _ in range(MAX_TRANSITIONS):
             try:
                 self._enter(target)
                 return
             except _Leave as leave:
-                target = leave.target
-        raise ExecutionError(f"{self._where(None)}more than {MAX_TRANSITIONS} state changes "
+                target, goto = leave.target, leave.loc
+        raise ExecutionError(f"{self._where(goto)}more than {MAX_TRANSITIONS} state changes "
                              "while handling one event (a <goto> loop?)")
 
     def _enter(self, target: str) -> None:
@@ -383,7 +389,7 @@ class Interpreter:
         self._actions(action.otherwise, scope)
 
     def _goto(self, action: Goto, _scope: Scope) -> None:
-        raise _Leave(action.state)
+        raise _Leave(action.state, action.loc)
 
     def _send_action(self, action: Send, scope: Scope) -> None:
         text = self._text(self._eval(action.text, action.loc, scope), "a message", action.loc)
@@ -411,7 +417,7 @@ class Interpreter:
         after = self._number(self._eval(action.after, action.loc, scope), "after", action.loc)
         self._timer_seq += 1
         self._timers[action.name] = _Timer(self.clock.after(max(0.0, float(after))),
-                                           action.reactive, self._timer_seq)
+                                           action.reactive, self._timer_seq, action.loc)
 
     def _cancel_timer(self, action: CancelTimer, _scope: Scope) -> None:
         self._timers.pop(action.name, None)

@@ -183,13 +183,21 @@ def test_runtime_error_is_recorded_and_stops_the_application() -> None:
     assert [n.kind for n in notes].count("error") == 1
 
 
-def test_goto_loop_is_bounded() -> None:
-    interp, *_rest = make(
-        '<state id="a" initial="true"><on event="touched"><goto state="b"/></on></state>'
-        '<state id="b"><entry><goto state="c"/></entry></state>'
-        '<state id="c"><entry><goto state="b"/></entry></state>')
-    with pytest.raises(AppFailure, match="more than 100 state changes"):
+def _at(prefix: str, body: str) -> str:
+    """Where (in ``make``'s one-line document) the last ``prefix`` in ``body`` starts."""
+    head = '<pxml xmlns="urn:prima:pxml:1" kind="fa" name="t">'
+    return f"t.pxml:1:{len(head) + body.rindex(prefix) + 1}: "
+
+
+def test_goto_loop_is_bounded_and_located_at_a_goto_of_the_loop() -> None:
+    body = ('<state id="a" initial="true"><on event="touched"><goto state="b"/></on></state>'
+            '<state id="b"><entry><goto state="c"/></entry></state>'
+            '<state id="c"><entry><goto state="b"/></entry></state>')
+    interp, *_rest = make(body)
+    with pytest.raises(AppFailure) as failure:
         interp.event(Event("touched"))
+    where, said = str(failure.value).split("more than 100 state changes")[0], str(failure.value)
+    assert where in (_at('<goto state="c"/>', body), _at('<goto state="b"/>', body)), said
 
 
 def test_number_argument_of_the_wrong_type_is_a_runtime_error() -> None:
@@ -220,10 +228,10 @@ def test_only_the_first_request_of_an_end_handler_follows_the_ended_command() ->
     assert ask.follows is None and ask.order is RunningOrder.AFTER_LATEST  # after the Turn
 
 
-def test_a_timer_restarting_itself_at_once_is_bounded() -> None:
-    interp, port, clock, notes, _s = make(
-        '<state id="s" initial="true"><entry><timer name="tick" after="1"/></entry>'
-        '<on event="tick"><timer name="tick" after="0"/></on></state>')
+def test_a_timer_restarting_itself_at_once_is_bounded_and_located() -> None:
+    body = ('<state id="s" initial="true"><entry><timer name="tick" after="1"/></entry>'
+            '<on event="tick"><timer name="tick" after="0"/></on></state>')
+    interp, port, clock, notes, _s = make(body)
     clock.set(1.0)
     for _ in range(200):  # what the run loop does: advance while a timer is due now
         if interp.next_deadline() is None:
@@ -233,7 +241,9 @@ def test_a_timer_restarting_itself_at_once_is_bounded() -> None:
         except AppFailure:
             break
     assert interp.stopped
-    assert "more than 100 timers fired" in [n for n in notes if n.kind == "error"][0].text
+    [error] = [n.text for n in notes if n.kind == "error"]
+    assert error.startswith(_at('<timer name="tick" after="0"/>', body)
+                            + "more than 100 timers fired"), error
 
 
 def test_an_unexpected_exception_becomes_a_located_app_failure() -> None:
