@@ -189,7 +189,7 @@ def user_words(action: str | None, text: str | None, detail: Mapping[str, object
         heard = "" if detail.get("heard", True) else " (not heard)"
         return f'"{text or ""}"{heard}'
     if action == "touch":
-        return "touches the robot"
+        return "touches the robot" if target is None else "does not reach the robot to touch it"
     if action in ("walk", "leave"):
         return f"{'walks' if action == 'walk' else 'walks away'} to {target}"
     if action == "arrive":

@@ -169,6 +169,14 @@ def test_every_record_kind_reads_in_the_text_trace() -> None:
     assert set(_DESCRIBE) == set(Kind) | set(DecisionKind)
 
 
+def test_a_missed_touch_reads_as_one() -> None:
+    from prima.trace import user_words
+
+    assert user_words("touch", None, {}) == "touches the robot"
+    assert user_words("touch", None, {"target": "missed"}) == (
+        "does not reach the robot to touch it")
+
+
 def test_the_jsonl_trace_carries_poses_at_a_fixed_rate(office) -> None:  # type: ignore[no-untyped-def]
     poses = [line for line in office if line.kind is Kind.POSE]
     assert [line.t for line in poses[:5]] == [0.0, 0.5, 1.0, 1.5, 2.0]

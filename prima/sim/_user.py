@@ -115,6 +115,8 @@ class ScriptedUser:
         self.script = script
         self._sim = sim
         self._motion: Process | None = None
+        self._touching = False
+        """A touch's walk up to the robot is under way (replaced, it is reported missed)."""
         self._matched = [0] * len(script.answers)
 
     def begin(self) -> None:
@@ -149,6 +151,9 @@ class ScriptedUser:
 
     def _do(self, a: TimedAction) -> None:
         kind = a.action
+        if kind is not UserActionKind.SAY and self._touching:  # the chase is replaced
+            self._touching = False
+            self._record(UserActionKind.TOUCH, target="missed")
         if kind is UserActionKind.SAY:
             self.say(a.text or "")
         elif kind is UserActionKind.STOP:
@@ -158,6 +163,7 @@ class ScriptedUser:
             self._record(kind, target="robot")
             self._move(self._follow(a.distance, a.speed or self.script.speed))
         elif kind is UserActionKind.TOUCH:
+            self._touching = True
             self._move(self._touch(a.speed or self.script.speed))
         else:  # walk, leave
             self._record(kind, target=a.target())
@@ -265,6 +271,7 @@ class ScriptedUser:
             yield from self._leg(hx + (wx - hx) / w * step, hy + (wy - hy) / w * step, speed)
         self._set_velocity(0.0, 0.0)
         touched = world.user_distance() <= reach
+        self._touching = False
         self._record(UserActionKind.TOUCH, target=None if touched else "missed")
         if touched:
             sim.emit("touched", {})

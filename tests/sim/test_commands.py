@@ -244,6 +244,27 @@ def test_touch_walks_up_to_the_robot_and_posts_touched() -> None:
     assert 5 < touched[0].time < 8
 
 
+def test_a_touch_replaced_before_it_lands_is_reported_missed() -> None:
+    """The user is still walking up to the robot when the script's next motion (a follow)
+    replaces the touch: no ``touched`` event, and a ``touch`` line says it missed, at
+    once and before the follow, so the trace never loses a scripted action."""
+    r = runner("museum", CENTER, Pose(14, 4, 180), TimedAction(1, UserActionKind.TOUCH),
+               TimedAction(3, UserActionKind.FOLLOW, distance=1.2))
+    r.run(30)
+    assert not r.events("touched")
+    users = [(e.time, e.name, e.data.get("target")) for e in r.trace
+             if e.kind is EntryKind.USER]
+    assert users[:2] == [(3.0, "touch", "missed"), (3.0, "follow", "robot")]
+
+
+def test_a_touch_that_lands_is_reported_once() -> None:
+    r = runner("museum", CENTER, Pose(12, 4, 180), TimedAction(1, UserActionKind.TOUCH),
+               TimedAction(20, UserActionKind.FOLLOW, distance=1.2))
+    r.run(30)
+    users = [(e.name, e.data.get("target")) for e in r.trace if e.kind is EntryKind.USER]
+    assert users == [("touch", None), ("follow", "robot")]
+
+
 def test_idle_stretches_are_jumped_over() -> None:
     sim = Simulator(world_map("museum"), robot=CENTER,
                     events=(ScheduledEvent(3000, "sound-heard", {"sound": "tune"}),))
