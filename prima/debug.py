@@ -90,7 +90,8 @@ class Debugger:
         """Lines to go before stopping (0: run to a breakpoint)."""
         self._history: deque[TraceLine] = deque(maxlen=200)
         self._at: TraceLine | None = None
-        run_options.setdefault("pose_rate", 0.0)  # (poses are no stopping points)
+        # pose samples at prima run's rate (never a stopping point), so that a line's
+        # seq is the one a jsonl trace, prima judge and prima show give it
         self.run = Run(scenario, sink=self._line, **run_options)  # type: ignore[arg-type]
         self._commands: Mapping[str, Callable[[list[str]], bool]] = {
             "step": self._step, "continue": self._continue, "break": self._break,

@@ -78,3 +78,13 @@ def test_prima_debug_checks_its_options(monkeypatch: pytest.MonkeyPatch) -> None
     assert cli.main(["debug", str(SAMPLE_03), "--policy", "all=off"], out=out,
                     err=io.StringIO()) == 0
     assert "stopped at t=0 s" in out.getvalue()
+
+
+def test_lines_are_numbered_as_the_jsonl_trace_numbers_them() -> None:
+    """A line's number is its ``seq`` in ``prima run --format jsonl``'s trace (with its
+    pose samples), as ``prima judge`` and ``prima show`` give it."""
+    from prima.run import Run
+
+    touch = next(line for line in Run(SAMPLE_03).run() if line.action == "touch")
+    out = session("break user touch\ncontinue\nquit\n")
+    assert f"{touch.seq:5d}    26.34   U                touches the robot" in out

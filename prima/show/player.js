@@ -39,7 +39,8 @@
   const trs = D.rows.map(function (row, i) {
     const tr = document.createElement("tr");
     tr.dataset.i = i;
-    tr.innerHTML = "<td>" + i + "</td><td>" + row.t.toFixed(2) + "</td><td>" + esc(row.kind) +
+    // numbered by the line's seq, as the jsonl, prima judge and prima debug number it
+    tr.innerHTML = "<td>" + (row.seq == null ? i : row.seq) + "</td><td>" + row.t.toFixed(2) + "</td><td>" + esc(row.kind) +
       "</td><td>" + esc(row.app || "") + "</td><td>" + (row.ab == null ? "" : row.ab) +
       "</td><td>" + esc(what(row)) + "</td><td>" + esc(row.reason || "") + "</td>";
     tr.className = "future";
