@@ -63,6 +63,24 @@ def test_readme_example_validates() -> None:
     assert document is not None and problems == [], [str(p) for p in problems]
 
 
+def test_the_scenario_example_runs(tmp_path: Path) -> None:
+    """docs/scenarios.md's example, saved where its links lead (a folder of scenarios/),
+    validates and runs: the files it names exist."""
+    from prima.cli import main
+
+    text = (ROOT / "docs" / "scenarios.md").read_text(encoding="utf-8")
+    example = re.search(r"```xml\n(<scenario .*?)```", text, re.S)
+    assert example is not None
+    for folder in ("apps", "scenarios/maps"):
+        (tmp_path / folder).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / folder).symlink_to(ROOT / folder)
+    scenario = tmp_path / "scenarios" / "docs" / "example.xml"
+    scenario.parent.mkdir()
+    scenario.write_text(example.group(1), encoding="utf-8")
+    assert main(["validate", str(scenario)]) == 0
+    assert main(["run", str(scenario), "--until", "30", "--out", str(tmp_path / "t.txt")]) == 0
+
+
 def test_the_judging_example_is_a_real_run(monkeypatch: pytest.MonkeyPatch) -> None:
     import io
 
