@@ -116,7 +116,9 @@ def _describe_send(line: TraceLine) -> str:
 
 def _describe_end(line: TraceLine) -> str | None:
     if "error" in line.detail:
-        return f"{line.command} fails: {line.detail['error']}"
+        error = str(line.detail["error"])
+        own = f"{line.command}: "  # the simulator names the Command (of a group, which)
+        return f"{line.command} fails: {error.removeprefix(own)}"
     if line.reason == "interrupt":
         said, then = line.detail.get("spoken") or "", line.detail.get("interrupt") or ""
         return (f'{line.command} cut after "{said}", {then}' if said

@@ -169,6 +169,20 @@ def test_every_record_kind_reads_in_the_text_trace() -> None:
     assert set(_DESCRIBE) == set(Kind) | set(DecisionKind)
 
 
+def test_a_failed_command_is_named_once() -> None:
+    """The simulator's error names the Command (of a group, the one that failed)."""
+    from prima.trace import describe
+
+    def end(command: str, error: str) -> str:
+        return describe(TraceLine(1.0, 0, DecisionKind.END, "a", 1, 0, command,
+                                  detail={"error": error}))
+
+    assert end("TopologicalMove", "TopologicalMove: unknown place 'x' on map 'office'") == (
+        "TopologicalMove fails: unknown place 'x' on map 'office'")
+    assert end("Speak+TopologicalMove", "TopologicalMove: unknown place 'x'") == (
+        "Speak+TopologicalMove fails: TopologicalMove: unknown place 'x'")
+
+
 def test_a_missed_touch_reads_as_one() -> None:
     from prima.trace import user_words
 

@@ -186,6 +186,12 @@ class _Numbers:
         return value
 
 
+def _shown(path: Path) -> str:
+    """Where a file a scenario names was looked for: the absolute path, dots resolved
+    (the name as written is already in the message)."""
+    return os.path.normpath(path.absolute())
+
+
 def _unusable(path: Path) -> str | None:
     """Why a file a scenario names cannot be read (missing, not a regular file), or None."""
     try:
@@ -354,7 +360,8 @@ class _Loader:
         map_path = self.path.parent / href
         unusable = _unusable(map_path)
         if unusable is not None:
-            self.bad(map_el, f"map file {href!r} {unusable} (looked for {map_path})", "href")
+            self.bad(map_el, f"map file {href!r} {unusable} (looked for {_shown(map_path)})",
+                     "href")
             raise ScenarioError(self.problems)
         self.map = load_map(map_path)
         robot_el = kids["robot"]
@@ -415,8 +422,8 @@ class _Loader:
             return
         unusable = _unusable(self.path.parent / value)
         if unusable is not None:
-            self.bad(el, f"file {value!r} {unusable} (looked for {self.path.parent / value})",
-                     attribute)
+            self.bad(el, f"file {value!r} {unusable} (looked for "
+                         f"{_shown(self.path.parent / value)})", attribute)
 
     def policies(self, root: etree._Element) -> Mapping[str, bool]:
         out: dict[str, bool] = {}

@@ -114,6 +114,18 @@ def test_missing_map_file(tmp_path: Path) -> None:
     assert (line, col) == (3, 14) and "map file 'nowhere.xml' not found" in message
 
 
+def test_a_missing_file_says_where_it_was_looked_for(tmp_path: Path,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    """Named relative to the scenario, found relative to the current folder: the message
+    gives the absolute path, not the name again."""
+    (tmp_path / "s").mkdir()
+    path = scenario_file(tmp_path / "s", '  <map href="../maps/nowhere.xml"/>\n'
+                                         '  <robot x="0" y="0"/>\n')
+    monkeypatch.chdir(tmp_path / "s")
+    [(_, _, message)] = problems(Path(path.name))
+    assert message.endswith(f"(looked for {tmp_path / 'maps' / 'nowhere.xml'})"), message
+
+
 def test_wrong_root_element(tmp_path: Path) -> None:
     path = tmp_path / "m.xml"
     path.write_text(HEAD + '<map xmlns="urn:prima:map:1" name="m">'
