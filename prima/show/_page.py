@@ -18,10 +18,10 @@ from prima.timeline import Bar
 INSTANT = 0.05
 """The least width (s) of a bar: an atomic behavior that took no time is still seen."""
 
-_SPAN_STYLE = {"suspend": ("/", "#555", "suspended"), "hold": ("x", "#c0392b", "held back")}
-"""A wait's hatch, its colour and its name in the legend."""
+_SPAN_STYLE = {"suspend": ("/", "#555", "suspended"), "hold": ("x", "#222", "held back")}
+"""A wait's hatch, its colour (greys, never an application's) and its name in the legend."""
 _MARK_STYLE = {
-    "release": ("line-ns-open", "#c0392b", "hold released"),
+    "release": ("line-ns-open", "#222", "hold released"),
     "interrupt": ("star-triangle-down", "#8e44ad", "cut"),
     "cancel": ("x", "#7f8c8d", "cancelled"),
 }
