@@ -235,6 +235,7 @@ def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label
             extras: Sequence[Extra]) -> CommandCall:
     """Checks shared by both forms, then the :class:`CommandCall`."""
     _check_signature(b, spec, where, spots)
+    _check_numbers(b, spec, args, spots)
     extra = _extras(b, spec, extras)
     grammar, into = _names(b, spec, args, spots)
     call = CommandCall(spec.name, args, extra, label, b.loc(where), grammar, into)
@@ -255,6 +256,25 @@ def _check_signature(b: Builder, spec: CommandSpec, where: Spot, spots: dict[str
         if len(present) != 1:
             got = f" (got {', '.join(present)})" if present else ""
             b.error(where, f"{spec.name} needs exactly one of {' or '.join(sorted(group))}{got}")
+
+
+def _check_numbers(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
+                   spots: dict[str, Spot]) -> None:
+    """A number argument whose value is known when the document loads (a literal, or an
+    expression of constants) must be a number: ``Turn(angle="ninety")``, ``Turn(true)`` and
+    ``angle="{'ninety'}"`` would fail when requested. Such an argument is dropped."""
+    for param in spec.params:
+        compiled = args.get(param.name)
+        if param.kind is not ParamKind.NUMBER or compiled is None or not compiled.constant:
+            continue
+        value = compiled.evaluate(_NO_SCOPE)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            el, where, _index = spot = spots[param.name]
+            written = el.get(where, "") if where not in (None, "#text") else compiled.source
+            shown = written if len(written) <= 20 else written[:17] + "..."
+            form = "argument " + param.name if where == "#text" else f"attribute {where}"
+            b.error(spot, f"{form}={shown}: expected a number, or an expression giving one")
+            del args[param.name]
 
 
 def _extras(b: Builder, spec: CommandSpec, extras: Sequence[Extra]) -> dict[str, Compiled]:
