@@ -92,7 +92,7 @@ def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
     name = el.get("name", "") if generic else b.element_commands.get(tag, "")
     spec = b.catalog.get(name)
     if spec is None:
-        b.error((el, "name", 0), f"unknown Command '{name}'{COMMANDS_HINT}")
+        b.error((el, "name", 0), f"unknown Command '{name}'{_command_hint(b, name)}")
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
@@ -133,7 +133,7 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
     where: Spot = (el, "#text", step.index)
     spec = b.catalog.get(step.command)
     if spec is None:
-        b.error(where, f"unknown Command '{step.command}'{COMMANDS_HINT}")
+        b.error(where, f"unknown Command '{step.command}'{_command_hint(b, step.command)}")
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
@@ -158,6 +158,14 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
                partial(_extra_chain, b, spec, x, text, el)) for x in step.extras]
     label_spot: Spot = (el, "#text", step.label_index)
     return _finish(b, spec, where, step.label, label_spot, args, spots, extras)
+
+
+def _command_hint(b: Builder, name: str) -> str:
+    """What follows an unknown Command's name: the Command it may be a misspelling of, or
+    where the Commands are listed. An EA is not offered the robot's own Commands."""
+    close = b.similar(name, (c.name for c in b.catalog
+                             if not (c.robot_specific and b.kind is AppKind.EA)))
+    return f"; did you mean '{close}'?" if close is not None else COMMANDS_HINT
 
 
 def _chain_param(b: Builder, spec: CommandSpec, pos: int, arg: ChainArg, arg_spot: Spot,

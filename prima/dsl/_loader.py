@@ -671,14 +671,24 @@ class Builder:
         self.error(spot, f"unknown event '{name}' (known: {known})")
 
     def _hint(self, what: str, name: str) -> str:
-        # Looking for a similar name costs a pass over the variables: only for as many
-        # undefined names as a file reports, so that thousands of them stay linear.
-        self._hints += 1
-        close = [v for v in self.variable_names if _similar(v, name)] \
-            if self._hints <= MAX_PROBLEMS else []
-        if close:
-            return f"; did you mean '{close[0]}'?"
+        close = self.similar(name, self.variable_names)
+        if close is not None:
+            return f"; did you mean '{close}'?"
         return f" (declare it with <{what} name=\"{name}\"/>)"
+
+    def similar(self, name: str, names: Iterable[str]) -> str | None:
+        """The first of ``names`` that ``name`` may be a misspelling of (one character
+        added, dropped, changed, or two neighbours swapped; or the same but for case), if any.
+
+        Looking for one costs a pass over ``names``: only for as many unknown names as a
+        file reports, so that thousands of them stay linear.
+        """
+        self._hints += 1
+        if self._hints > MAX_PROBLEMS:
+            return None
+        folded = name.casefold()
+        return next((n for n in names if _similar(n, name) or
+                     (n != name and n.casefold() == folded)), None)
 
     def _initial(self) -> str | None:
         initial = [s for s in self.states.values() if s.initial]
