@@ -103,6 +103,7 @@ def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
             if el.get(param.name) is not None:
                 spots[param.name] = (el, param.name, 0)
                 _put(args, param.name, compile_attribute(b, param.kind, el, param.name))
+                _note_place(b, spec, param, el.get(param.name, ""), spots[param.name])
     extras = [(x.get("name", ""), (x, "name", 0), partial(_extra_attr, b, spec, x))
               for x in children(el, "extra")]
     return _finish(b, spec, (el, None, 0), el.get("id"), (el, "id", 0), args, spots, extras)
@@ -121,6 +122,13 @@ def _arg_elements(b: Builder, spec: CommandSpec, el: etree._Element,
         else:
             spots[name] = (arg, "value", 0)
             _put(args, name, compile_attribute(b, param.kind, arg, "value"))
+            _note_place(b, spec, param, arg.get("value", ""), spots[name])
+
+
+def _note_place(b: Builder, spec: CommandSpec, param: Param, raw: str, spot: Spot) -> None:
+    """A place attribute written as a name, not ``{computed}``."""
+    if param.kind is ParamKind.PLACE and not _COMPUTED.match(raw):
+        b.literal_place(raw, spot, spec.name, param.name)
 
 
 def _extra_attr(b: Builder, spec: CommandSpec, el: etree._Element) -> Compiled | None:
@@ -149,11 +157,14 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
             b.error(name_spot, f"argument '{param.name}' is given twice")
             continue
         spots[param.name] = arg_spot
-        _put(args, param.name, _chain_value(b, param, arg, text, arg_spot))
+        value = _chain_value(b, param, arg, text, arg_spot)
+        _put(args, param.name, value)
         name = bare_name(arg)
         if param.kind is ParamKind.PLACE and name in b.variable_names:
             b.warning(arg_spot, f"'{name}' is taken as a place name; write {{{name}}} "
                                 "to use the variable")
+        if param.kind is ParamKind.PLACE and not arg.computed and value is not None:
+            b.literal_place(str(value.evaluate(_NO_SCOPE)), arg_spot, spec.name, param.name)
     extras = [(x.name or "", (el, "#text", x.name_index),
                partial(_extra_chain, b, spec, x, text, el)) for x in step.extras]
     label_spot: Spot = (el, "#text", step.label_index)

@@ -48,6 +48,7 @@ from prima.dsl._model import (
     Loc,
     Log,
     Pattern,
+    PlaceRef,
     Raise,
     Request,
     Send,
@@ -130,6 +131,8 @@ class Builder:
         self._carets: set[int] = set()
         self._hints = 0
         self._known: dict[str, str] = {}
+        self._places: list[tuple[str, Spot, str, str]] = []
+        """Places written by name as Command arguments: name, where, Command, argument."""
 
     # ------------------------------------------------------------ reporting
 
@@ -227,6 +230,10 @@ class Builder:
             self.error(spot, f"gesture '{name}' is robot-specific; only an FA may use it "
                              f"(common gestures: {', '.join(sorted(STANDARD_GESTURES))})")
 
+    def literal_place(self, name: str, spot: Spot, command: str, param: str) -> None:
+        """A place written by name as a Command's argument (the map checks it, if known)."""
+        self._places.append((name, spot, command, param))
+
     def need_grammar(self, name: str, spot: Spot) -> None:
         """The document must declare this grammar (checked once all is read)."""
         self.refs.grammars.append((name, spot))
@@ -276,6 +283,9 @@ class Builder:
             handlers=tuple(handlers), states=self.states, initial=initial or "",
             streams=self.streams, blocks=self.blocks, commands=dict(self.labels),
             timers=frozenset(self.timers),
+            places=tuple(sorted((PlaceRef(name, self.loc(spot), command, param)
+                                 for name, spot, command, param in self._places),
+                                key=lambda p: (p.loc.line, p.loc.col))),
         )
 
     def _variables(self) -> dict[str, Variable]:
