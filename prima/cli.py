@@ -25,7 +25,8 @@ from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Sever
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
-    from prima.dsl import Checker, Header, RobotProfile, Validation
+    from prima.dsl import Checker, Header, PlaceRef, RobotProfile, Validation
+    from prima.sim import WorldMap
 
 # Each command imports what it needs when it runs (``prima --help`` imports no lxml,
 # lark or pymunk; ``prima validate`` of documents no simulator): a cold start pays
@@ -328,24 +329,79 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
     """
     from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
+    maps: dict[Path, WorldMap] = {}
+    """The maps checked without errors, by resolved path."""
+    placed: set[tuple[Path, Path]] = set()
+    """(document, map) pairs whose places were checked: each pair once."""
+
+    def check_map(path: Path) -> list[Problem]:
+        try:
+            maps[path.resolve()] = load_map(path)
+        except LocatedError as exc:
+            return list(exc.problems)
+        return []
+
+    def check_places(map_path: Path, documents: Iterable[Path]) -> list[Problem]:
+        world = maps.get(map_path.resolve())
+        out: list[Problem] = []
+        for document in documents:
+            checked = validation.places(document)
+            pair = (document.resolve(), map_path.resolve())
+            if world is not None and checked is not None and pair not in placed:
+                placed.add(pair)
+                out.extend(_unknown_places(*checked, world))
+        return out
+
     def check_scenario(path: Path) -> list[Problem]:
         # problems loading the scenario found in its map are the map's own check's
         problems = _problems(load_scenario, path)
         own = [p for p in problems if Path(p.file).resolve() == path.resolve()]
-        return own + _check_named(validation, path, robot, MAP_NS)
+        return own + _check_named(validation, path, robot, MAP_NS, check_places)
 
-    return {SCENARIO_NS: check_scenario, MAP_NS: lambda path: _problems(load_map, path)}
+    return {SCENARIO_NS: check_scenario, MAP_NS: check_map}
+
+
+def _unknown_places(file: str, places: Sequence[PlaceRef], world: WorldMap) -> list[Problem]:
+    """A problem in the document ``file`` at each place it names that ``world`` lacks: the
+    closest name on the map if one is close, else the map's places if they are few. At
+    most MAX_PROBLEMS of them (then a line counting the rest), each hint computed once."""
+    import difflib
+
+    from prima.xmlio import MAX_PROBLEMS, limit
+
+    names = [p.name for p in world.places]
+    known = set(names)
+    if len(names) <= _FEW_PLACES:
+        listed = f" (known: {', '.join(sorted(names))})" if names else " (it has no places)"
+    else:
+        listed = f" ({len(names)} places; see {world.source or 'its file'})"
+    hints: dict[str, str] = {}
+    out: list[Problem] = []
+    unknown = [p for p in places if p.name not in known]
+    for place in unknown[:MAX_PROBLEMS + 1]:
+        if place.name not in hints:
+            close = difflib.get_close_matches(place.name, names, n=1, cutoff=0.75)
+            hints[place.name] = f" (did you mean '{close[0]}'?)" if close else listed
+        out.append(Problem(file, place.loc.line, place.loc.col, Severity.ERROR,
+                           f"unknown place '{place.name}' on map '{world.name}'"
+                           f"{hints[place.name]}"))
+    return limit(out, file, len(unknown))
+
+
+_FEW_PLACES = 12
+"""A map with at most this many places lists them under an unknown place's error."""
 
 
 _SLOTS = {"fa": "fa", "ea": "ea", "zone": "ea"}
 """A scenario's reference role -> the kind of application that runs there."""
 
 
-def _check_named(validation: Validation, scenario: Path, robot: bool,
-                 map_ns: str) -> list[Problem]:
+def _check_named(validation: Validation, scenario: Path, robot: bool, map_ns: str,
+                 check_places: Callable[[Path, Iterable[Path]], list[Problem]]) -> list[Problem]:
     """Check the files ``scenario`` names; the problems of the scenario itself (a file of
     the wrong kind, an application in the wrong slot, two applications of one name) are
-    returned, located at the attribute that names the file."""
+    returned, located at the attribute that names the file, and then, located in the
+    applications, each place they name that the scenario's map lacks (``check_places``)."""
     from prima.dsl import NAMESPACE as PXML_NS
     from prima.dsl import ROBOT_NAMESPACE as ROBOT_NS
     from prima.sim import scenario_references
@@ -387,6 +443,8 @@ def _check_named(validation: Validation, scenario: Path, robot: bool,
             fa_name = header.name
         elif header is not None and ref.role == "ea":
             eas[header.name] = ref.value
+    for map_ref in (r for r in refs if r.role == "map"):
+        out.extend(check_places(map_ref.path, (r.path for r in refs if r.role in _SLOTS)))
     return out
 
 

@@ -581,7 +581,7 @@ def _problems(doc: XmlDocument, xsd: xmlschema.XMLSchema, hint: Hint | None) -> 
             yield _unexpected(doc, el, children[el], int(m.group("pos")) - 1,
                               _clean(m.group("tag")))
             continue
-        yield _reworded(doc, el, reason, hint)
+        yield _reworded(doc, el, reason, hint, _wanted(err.validator))
 
 
 def _unexpected(doc: XmlDocument, parent: etree._Element, children: list[etree._Element],
@@ -594,12 +594,14 @@ def _unexpected(doc: XmlDocument, parent: etree._Element, children: list[etree._
     return doc.problem(child, f"<{child_tag}> is not allowed {where}")
 
 
-def _reworded(doc: XmlDocument, el: etree._Element, reason: str, hint: Hint | None) -> Problem:
-    """One of xmlschema's reasons about ``el`` (its attributes or its content), reworded."""
+def _reworded(doc: XmlDocument, el: etree._Element, reason: str, hint: Hint | None,
+              wanted: str | None = None) -> Problem:
+    """One of xmlschema's reasons about ``el`` (its attributes or its content), reworded;
+    ``wanted`` says in plain words what the value must be, when the validator is known."""
     tag = f"<{local_name(el)}>"
     m = _ATTR_VALUE.match(reason)
     if m:
-        return _bad_value(doc, el, m.group("name"), _clean(m.group("rest")), hint)
+        return _bad_value(doc, el, m.group("name"), wanted or _clean(m.group("rest")), hint)
     m = _NOT_ALLOWED.match(reason)
     if m:
         return doc.problem(el, f"{tag}: attribute '{m.group('name')}' is not allowed here",
@@ -611,7 +613,7 @@ def _reworded(doc: XmlDocument, el: etree._Element, reason: str, hint: Hint | No
         expected = re.search(r"Tag (.*) expected", reason)
         wanted = f": expected {expected.group(1)}" if expected else ""
         return doc.problem(el, f"{tag} is incomplete{wanted}")
-    return doc.problem(el, f"{tag}: {reason}")
+    return doc.problem(el, f"{tag}: {wanted or reason}")
 
 
 def _bad_value(doc: XmlDocument, el: etree._Element, name: str, reason: str,
@@ -666,24 +668,192 @@ def _from_libxml2(doc: XmlDocument, entry: etree._LogEntry, hint: Hint | None) -
     return doc.problem(el, f"<{local_name(el)}>: {rest}")
 
 
-# libxml2's wording of a bad value, and xmlschema's, which every message uses
-_LIBXML2_VALUE = [
-    (re.compile(r"^\[facet 'enumeration'\] The value '.*' is not an element of the set "
-                r"\{(?P<set>.*)\}$", re.S), "value must be one of [{set}]"),
-    (re.compile(r"^\[facet 'pattern'\] The value '.*' is not accepted by the pattern "
-                r"(?P<pattern>'.*')$", re.S), "value doesn't match any pattern of [{pattern}]"),
-    (re.compile(r"^(?P<value>'.*') is not a valid value of the atomic type 'xs:boolean'$", re.S),
-     "{value} is not a boolean value"),
-]
+# libxml2's reason a value is bad: the facet or the built-in type that refused it
+_LIBXML2_FACET = re.compile(r"^\[facet '(?P<facet>\w+)'\] (?P<rest>.*)$", re.S)
+_LIBXML2_FACET_VALUE = {
+    "enumeration": re.compile(r"the set \{(?P<v>.*)\}$", re.S),
+    "pattern": re.compile(r"by the pattern '(?P<v>.*)'$", re.S),
+    "minInclusive": re.compile(r"allowed \('(?P<v>[^']*)'\)$"),
+    "maxInclusive": re.compile(r"allowed \('(?P<v>[^']*)'\)$"),
+    "minExclusive": re.compile(r"greater than '(?P<v>[^']*)'$"),
+    "maxExclusive": re.compile(r"less than '(?P<v>[^']*)'$"),
+    "minLength": re.compile(r"length of '(?P<v>\d+)'$"),
+    "maxLength": re.compile(r"length of '(?P<v>\d+)'$"),
+    "length": re.compile(r"length of '(?P<v>\d+)'$"),
+}
+_LIBXML2_TYPE = re.compile(r"^'.*' is not a valid value of the atomic type 'xs:(?P<type>\w+)'$",
+                           re.S)
 
 
 def _libxml2_value(reason: str) -> str:
-    """libxml2's reason a value is bad, in xmlschema's words where they differ."""
-    for pattern, words in _LIBXML2_VALUE:
-        m = pattern.match(reason)
-        if m:
-            return words.format(**m.groupdict())
+    """libxml2's reason a value is bad, in the plain words xmlschema's are put in (by the
+    facet or built-in type named in it); as libxml2 says it for any other."""
+    m = _LIBXML2_FACET.match(reason)
+    if m and m.group("facet") in _LIBXML2_FACET_VALUE:
+        facet = m.group("facet")
+        found = _LIBXML2_FACET_VALUE[facet].search(m.group("rest"))
+        if found:
+            value = found.group("v")
+            if facet == "enumeration":
+                return _one_of(re.findall(r"'([^']*)'", value))
+            if facet == "pattern":
+                return _pattern_words(value)
+            if facet.startswith(("min", "max")) and "Length" not in facet:
+                value = _number_text(_decimal(value))
+            return _facet_words(facet, value)
+    m = _LIBXML2_TYPE.match(reason)
+    if m and m.group("type") in _TYPE_WORDS:
+        return _TYPE_WORDS[m.group("type")]
     return reason
+
+
+# ---------------------------------------------------------------- what a value must be
+
+_FACET_WORDS = {
+    "minInclusive": "must be {} or more",
+    "maxInclusive": "must be {} or less",
+    "minExclusive": "must be more than {}",
+    "maxExclusive": "must be less than {}",
+    "minLength": "must be at least {} character(s) long",
+    "maxLength": "must be at most {} character(s) long",
+    "length": "must be exactly {} character(s) long",
+}
+"""What a value must be, by the XSD facet that refused it, given the facet's value."""
+
+_TYPE_WORDS = {
+    **dict.fromkeys(("decimal", "double", "float"), "must be a number"),
+    **dict.fromkeys(("integer", "long", "int", "short", "byte"), "must be a whole number"),
+    **dict.fromkeys(("nonNegativeInteger", "unsignedLong", "unsignedInt", "unsignedShort",
+                     "unsignedByte"), "must be a whole number, 0 or more"),
+    "positiveInteger": "must be a whole number, 1 or more",
+    "nonPositiveInteger": "must be a whole number, 0 or less",
+    "negativeInteger": "must be a whole number, -1 or less",
+    "boolean": "must be true or false",
+}
+"""What a value must be, by the XSD built-in type that refused it."""
+
+_BUILTIN_CHECKS = {
+    "positive_int_validator": "positiveInteger",
+    "non_negative_int_validator": "nonNegativeInteger",
+    "non_positive_int_validator": "nonPositiveInteger",
+    "negative_int_validator": "negativeInteger",
+    "int_validator": "int", "long_validator": "long", "short_validator": "short",
+    "byte_validator": "byte", "unsigned_int_validator": "unsignedInt",
+    "unsigned_long_validator": "unsignedLong", "unsigned_short_validator": "unsignedShort",
+    "unsigned_byte_validator": "unsignedByte", "decimal_validator": "decimal",
+}
+"""xmlschema's range checks of built-in types (plain functions), by the type they check."""
+
+
+def _wanted(validator: object) -> str | None:
+    """What the value refused by xmlschema's ``validator`` must be, in plain words (None for
+    a validator of another kind: an element's content, a union, ...)."""
+    from xmlschema.validators import (
+        XsdAtomicBuiltin,
+        XsdEnumerationFacets,
+        XsdFacet,
+        XsdPatternFacets,
+    )
+
+    if isinstance(validator, XsdPatternFacets):
+        return " or ".join(dict.fromkeys(_pattern_words(r) for r in validator.regexps))
+    if isinstance(validator, XsdEnumerationFacets):
+        return _one_of([str(v) for v in validator.enumeration])
+    if isinstance(validator, XsdFacet):
+        facet = str(validator.elem.tag).rpartition("}")[2]
+        return _facet_words(facet, _number_text(validator.value)) \
+            if facet in _FACET_WORDS else None
+    if isinstance(validator, XsdAtomicBuiltin):
+        return _TYPE_WORDS.get(str(validator.name).rpartition("}")[2])
+    name = getattr(validator, "__name__", "")
+    return _TYPE_WORDS.get(_BUILTIN_CHECKS.get(name, ""))
+
+
+def _facet_words(facet: str, value: str) -> str:
+    """What a value must be for ``facet`` (one of :data:`_FACET_WORDS`) of ``value``."""
+    if facet == "minLength" and value == "1":
+        return "must not be empty"
+    return _FACET_WORDS[facet].format(value)
+
+
+def _decimal(text: str) -> object:
+    """``text`` as a Decimal, as xmlschema holds a bound (the text itself if it is none)."""
+    from decimal import Decimal, InvalidOperation
+
+    try:
+        return Decimal(text)
+    except InvalidOperation:
+        return text
+
+
+def _number_text(value: object) -> str:
+    """A facet's value as written in a message: ``0``, ``0.5`` (not ``Decimal('0')``)."""
+    from decimal import Decimal
+
+    if isinstance(value, Decimal):
+        text = format(value.normalize(), "f")
+        return text if text != "-0" else "0"
+    return str(value)
+
+
+def _one_of(values: Sequence[str]) -> str:
+    """``must be 'fa' or 'ea'``; ``must be one of 'a', 'b' or 'c'``."""
+    quoted = [f"'{v}'" for v in values]
+    if len(quoted) <= 2:
+        return f"must be {' or '.join(quoted)}"
+    return f"must be one of {', '.join(quoted[:-1])} or {quoted[-1]}"
+
+
+_ATOM = re.compile(r"(\[(?P<cls>(?:\\.|[^\]\\])+)\]|\\(?P<esc>.)|(?P<lit>[^\\\[\](){}|.*+?^$]))"
+                   r"(?P<q>[*+?]?)")
+_RANGES = (("A-Za-z", "a letter", "letters"), ("A-Z", "an upper-case letter", "upper-case letters"),
+           ("a-z", "a lower-case letter", "lower-case letters"), ("0-9", "a digit", "digits"))
+
+
+def _pattern_words(regex: str) -> str:
+    """What a value matching an XSD pattern looks like, in plain words, for a pattern made of
+    character classes and characters (``[A-Za-z_][A-Za-z0-9_\\-]*``: ``must be a name: a
+    letter or _, then letters, digits, _ or -``); other patterns are quoted as they are."""
+    parts: list[str] = []
+    at = 0
+    while at < len(regex):
+        m = _ATOM.match(regex, at)
+        if m is None:
+            return f"must match the pattern {regex}"
+        at = m.end()
+        one, many = _choices(m.group("cls")) if m.group("cls") else \
+            ([m.group("esc") or m.group("lit")],) * 2
+        quantity = m.group("q")
+        words = _or(many) if quantity in ("*", "+") else _or(one)
+        if quantity == "?":
+            words = f"optionally {words}"
+        elif quantity == "*" and parts:
+            words = f"then any number of {words}" if len(many) == 1 else f"then {words}"
+        elif quantity == "+":
+            words = f"then one or more {words}" if parts else f"one or more {words}"
+        elif parts:
+            words = f"then {words}"
+        parts.append(words)
+    return f"must be a name: {', '.join(parts)}"
+
+
+def _choices(cls: str) -> tuple[list[str], list[str]]:
+    """The characters a class admits, in words: (singular, plural) (``a letter``, ``letters``)."""
+    one: list[str] = []
+    many: list[str] = []
+    for chars, singular, plural in _RANGES:
+        if chars in cls:
+            cls = cls.replace(chars, "", 1)
+            one.append(singular)
+            many.append(plural)
+    rest = re.sub(r"\\(.)", r"\1", cls)
+    one.extend(rest)
+    many.extend(rest)
+    return one, many
+
+
+def _or(words: Sequence[str]) -> str:
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} or {words[-1]}"
 
 
 def _at_path(root: etree._Element, path: str) -> etree._Element | None:

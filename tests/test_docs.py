@@ -119,3 +119,41 @@ def test_every_link_of_the_docs_leads_somewhere_in_the_repository(page: Path) ->
         elif fragment and file.suffix == ".md" and fragment not in _anchors(file):
             broken.append(f"{target}: no such heading")
     assert broken == []
+
+
+def test_the_shipped_maps_table_lists_every_map_and_its_places() -> None:
+    from prima.sim import load_map
+
+    text = (ROOT / "docs" / "scenarios.md").read_text()
+    section = text.split("### Shipped maps and their places", 1)[1].split("\n#", 1)[0]
+    rows = re.findall(r"^\| `([^`]+\.xml)` \| `([^`]+)` \| (.*) \|$", section, re.M)
+    listed = {file: (name, re.findall(r"`([^`]+)`", places)) for file, name, places in rows}
+    shipped = {}
+    for path in sorted((ROOT / "scenarios" / "maps").glob("*.xml")):
+        world = load_map(path)
+        shipped[path.name] = (world.name, [p.name for p in world.places])
+    assert listed == shipped
+
+
+def _first_application() -> str:
+    text = (ROOT / "docs" / "pxml.md").read_text()
+    return re.search(r"## A first application\n\n```xml\n(.*?)```", text, re.S).group(1)
+
+
+def test_the_first_application_runs_on_the_shipped_office_map(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The doc's first application, saved as the doc gives it, validates and runs as its
+    commands say, printing what the doc shows: the robot reaches the place it names."""
+    import io
+
+    from prima.cli import main
+
+    (tmp_path / "hello-guide.pxml").write_text(_first_application(), encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    assert main(["validate", "hello-guide.pxml"], out=io.StringIO(), err=io.StringIO()) == 0
+    out = io.StringIO()
+    scenario = str(ROOT / "scenarios" / "examples" / "office-kidode.xml")
+    assert main(["run", scenario, "--ea", "hello-guide.pxml", "--until", "75"],
+                out=out, err=io.StringIO()) == 0
+    assert "place='kidode-room'" in out.getvalue()
+    assert f"```\n{out.getvalue()}```" in (ROOT / "docs" / "pxml.md").read_text()

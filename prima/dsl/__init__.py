@@ -12,7 +12,9 @@ on) are private. In the direction data flows:
   :class:`Validation` (each file once) give a :class:`Report`;
 - the model the interpreter runs (:class:`Document`, :class:`State`,
   :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`, with
-  :func:`words` and :func:`match_pattern` for its answers);
+  :func:`words` and :func:`match_pattern` for its answers, and
+  :func:`literal_places`: the places it names, as :class:`PlaceRef`, for a caller
+  that knows the map to check);
 - the expression language: :func:`compile_expression`, :func:`compile_template`,
   :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`;
   its lark :func:`parser` is loaded from tables prebuilt from ``pxml.lark``
@@ -59,6 +61,7 @@ from prima.dsl._model import (
     Loc,
     Log,
     Pattern,
+    PlaceRef,
     Raise,
     Request,
     Send,
@@ -66,6 +69,7 @@ from prima.dsl._model import (
     State,
     StreamBlock,
     Variable,
+    literal_places,
     match_pattern,
     words,
 )
@@ -119,6 +123,7 @@ __all__ = [
     "ParseTree",
     "PathNotFoundError",
     "Pattern",
+    "PlaceRef",
     "Raise",
     "Report",
     "Request",
@@ -141,6 +146,7 @@ __all__ = [
     "element_name",
     "fast_parse",
     "load_document",
+    "literal_places",
     "load_profile",
     "match_pattern",
     "parse_chain",

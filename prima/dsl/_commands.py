@@ -92,7 +92,7 @@ def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
     name = el.get("name", "") if generic else b.element_commands.get(tag, "")
     spec = b.catalog.get(name)
     if spec is None:
-        b.error((el, "name", 0), f"unknown Command '{name}'{COMMANDS_HINT}")
+        b.error((el, "name", 0), f"unknown Command '{name}'{_command_hint(b, name)}")
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
@@ -103,6 +103,7 @@ def bind_element(b: Builder, el: etree._Element) -> CommandCall | None:
             if el.get(param.name) is not None:
                 spots[param.name] = (el, param.name, 0)
                 _put(args, param.name, compile_attribute(b, param.kind, el, param.name))
+                _note_place(b, spec, param, el.get(param.name, ""), spots[param.name])
     extras = [(x.get("name", ""), (x, "name", 0), partial(_extra_attr, b, spec, x))
               for x in children(el, "extra")]
     return _finish(b, spec, (el, None, 0), el.get("id"), (el, "id", 0), args, spots, extras)
@@ -121,6 +122,13 @@ def _arg_elements(b: Builder, spec: CommandSpec, el: etree._Element,
         else:
             spots[name] = (arg, "value", 0)
             _put(args, name, compile_attribute(b, param.kind, arg, "value"))
+            _note_place(b, spec, param, arg.get("value", ""), spots[name])
+
+
+def _note_place(b: Builder, spec: CommandSpec, param: Param, raw: str, spot: Spot) -> None:
+    """A place attribute written as a name, not ``{computed}``."""
+    if param.kind is ParamKind.PLACE and not _COMPUTED.match(raw):
+        b.literal_place(raw, spot, spec.name, param.name)
 
 
 def _extra_attr(b: Builder, spec: CommandSpec, el: etree._Element) -> Compiled | None:
@@ -133,7 +141,7 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
     where: Spot = (el, "#text", step.index)
     spec = b.catalog.get(step.command)
     if spec is None:
-        b.error(where, f"unknown Command '{step.command}'{COMMANDS_HINT}")
+        b.error(where, f"unknown Command '{step.command}'{_command_hint(b, step.command)}")
         return None
     args: dict[str, Compiled] = {}
     spots: dict[str, Spot] = {}
@@ -149,15 +157,26 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
             b.error(name_spot, f"argument '{param.name}' is given twice")
             continue
         spots[param.name] = arg_spot
-        _put(args, param.name, _chain_value(b, param, arg, text, arg_spot))
+        value = _chain_value(b, param, arg, text, arg_spot)
+        _put(args, param.name, value)
         name = bare_name(arg)
         if param.kind is ParamKind.PLACE and name in b.variable_names:
             b.warning(arg_spot, f"'{name}' is taken as a place name; write {{{name}}} "
                                 "to use the variable")
+        if param.kind is ParamKind.PLACE and not arg.computed and value is not None:
+            b.literal_place(str(value.evaluate(_NO_SCOPE)), arg_spot, spec.name, param.name)
     extras = [(x.name or "", (el, "#text", x.name_index),
                partial(_extra_chain, b, spec, x, text, el)) for x in step.extras]
     label_spot: Spot = (el, "#text", step.label_index)
     return _finish(b, spec, where, step.label, label_spot, args, spots, extras)
+
+
+def _command_hint(b: Builder, name: str) -> str:
+    """What follows an unknown Command's name: the Command it may be a misspelling of, or
+    where the Commands are listed. An EA is not offered the robot's own Commands."""
+    close = b.similar(name, (c.name for c in b.catalog
+                             if not (c.robot_specific and b.kind is AppKind.EA)))
+    return f"; did you mean '{close}'?" if close is not None else COMMANDS_HINT
 
 
 def _chain_param(b: Builder, spec: CommandSpec, pos: int, arg: ChainArg, arg_spot: Spot,
@@ -235,6 +254,7 @@ def _finish(b: Builder, spec: CommandSpec, where: Spot, label: str | None, label
             extras: Sequence[Extra]) -> CommandCall:
     """Checks shared by both forms, then the :class:`CommandCall`."""
     _check_signature(b, spec, where, spots)
+    _check_numbers(b, spec, args, spots)
     extra = _extras(b, spec, extras)
     grammar, into = _names(b, spec, args, spots)
     call = CommandCall(spec.name, args, extra, label, b.loc(where), grammar, into)
@@ -255,6 +275,25 @@ def _check_signature(b: Builder, spec: CommandSpec, where: Spot, spots: dict[str
         if len(present) != 1:
             got = f" (got {', '.join(present)})" if present else ""
             b.error(where, f"{spec.name} needs exactly one of {' or '.join(sorted(group))}{got}")
+
+
+def _check_numbers(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
+                   spots: dict[str, Spot]) -> None:
+    """A number argument whose value is known when the document loads (a literal, or an
+    expression of constants) must be a number: ``Turn(angle="ninety")``, ``Turn(true)`` and
+    ``angle="{'ninety'}"`` would fail when requested. Such an argument is dropped."""
+    for param in spec.params:
+        compiled = args.get(param.name)
+        if param.kind is not ParamKind.NUMBER or compiled is None or not compiled.constant:
+            continue
+        value = compiled.evaluate(_NO_SCOPE)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            el, where, _index = spot = spots[param.name]
+            written = el.get(where, "") if where not in (None, "#text") else compiled.source
+            shown = written if len(written) <= 20 else written[:17] + "..."
+            form = "argument " + param.name if where == "#text" else f"attribute {where}"
+            b.error(spot, f"{form}={shown}: expected a number, or an expression giving one")
+            del args[param.name]
 
 
 def _extras(b: Builder, spec: CommandSpec, extras: Sequence[Extra]) -> dict[str, Compiled]:

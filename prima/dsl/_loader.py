@@ -48,6 +48,7 @@ from prima.dsl._model import (
     Loc,
     Log,
     Pattern,
+    PlaceRef,
     Raise,
     Request,
     Send,
@@ -130,6 +131,8 @@ class Builder:
         self._carets: set[int] = set()
         self._hints = 0
         self._known: dict[str, str] = {}
+        self._places: list[tuple[str, Spot, str, str]] = []
+        """Places written by name as Command arguments: name, where, Command, argument."""
 
     # ------------------------------------------------------------ reporting
 
@@ -227,6 +230,10 @@ class Builder:
             self.error(spot, f"gesture '{name}' is robot-specific; only an FA may use it "
                              f"(common gestures: {', '.join(sorted(STANDARD_GESTURES))})")
 
+    def literal_place(self, name: str, spot: Spot, command: str, param: str) -> None:
+        """A place written by name as a Command's argument (the map checks it, if known)."""
+        self._places.append((name, spot, command, param))
+
     def need_grammar(self, name: str, spot: Spot) -> None:
         """The document must declare this grammar (checked once all is read)."""
         self.refs.grammars.append((name, spot))
@@ -276,6 +283,9 @@ class Builder:
             handlers=tuple(handlers), states=self.states, initial=initial or "",
             streams=self.streams, blocks=self.blocks, commands=dict(self.labels),
             timers=frozenset(self.timers),
+            places=tuple(sorted((PlaceRef(name, self.loc(spot), command, param)
+                                 for name, spot, command, param in self._places),
+                                key=lambda p: (p.loc.line, p.loc.col))),
         )
 
     def _variables(self) -> dict[str, Variable]:
@@ -671,14 +681,24 @@ class Builder:
         self.error(spot, f"unknown event '{name}' (known: {known})")
 
     def _hint(self, what: str, name: str) -> str:
-        # Looking for a similar name costs a pass over the variables: only for as many
-        # undefined names as a file reports, so that thousands of them stay linear.
-        self._hints += 1
-        close = [v for v in self.variable_names if _similar(v, name)] \
-            if self._hints <= MAX_PROBLEMS else []
-        if close:
-            return f"; did you mean '{close[0]}'?"
+        close = self.similar(name, self.variable_names)
+        if close is not None:
+            return f"; did you mean '{close}'?"
         return f" (declare it with <{what} name=\"{name}\"/>)"
+
+    def similar(self, name: str, names: Iterable[str]) -> str | None:
+        """The first of ``names`` that ``name`` may be a misspelling of (one character
+        added, dropped, changed, or two neighbours swapped; or the same but for case), if any.
+
+        Looking for one costs a pass over ``names``: only for as many unknown names as a
+        file reports, so that thousands of them stay linear.
+        """
+        self._hints += 1
+        if self._hints > MAX_PROBLEMS:
+            return None
+        folded = name.casefold()
+        return next((n for n in names if _similar(n, name) or
+                     (n != name and n.casefold() == folded)), None)
 
     def _initial(self) -> str | None:
         initial = [s for s in self.states.values() if s.initial]

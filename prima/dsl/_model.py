@@ -30,6 +30,19 @@ class Loc:
 # ---------------------------------------------------------------- Commands
 
 @dataclass(frozen=True)
+class PlaceRef:
+    """A place written by name as a Command's argument (``to="hall"``,
+    ``TopologicalMove("kidode-room")``), not computed: the map it runs on must have it."""
+
+    name: str
+    loc: Loc
+    """Where the name is written."""
+    command: str
+    param: str
+    """The Command and its argument (``TopologicalMove``, ``to``)."""
+
+
+@dataclass(frozen=True)
 class CommandCall:
     """One Command as written in a request, arguments compiled."""
 
@@ -397,3 +410,14 @@ class Document:
     commands: Mapping[str, CommandCall]
     """Every labelled Command, by label."""
     timers: frozenset[str]
+    places: tuple[PlaceRef, ...] = ()
+    """Every place written by name as a Command's argument, in document order (see
+    :func:`literal_places`)."""
+
+
+def literal_places(document: Document) -> tuple[PlaceRef, ...]:
+    """The places a document names literally as Command arguments, each with where it is
+    written, in document order; places computed with ``{expression}`` are not among them.
+    Whoever knows the map the document runs on can check them (``prima validate`` of a
+    scenario does)."""
+    return document.places

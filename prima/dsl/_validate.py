@@ -19,6 +19,7 @@ from lxml import etree
 
 from prima.dsl._loader import NAMESPACE as PXML_NS
 from prima.dsl._loader import check_parsed
+from prima.dsl._model import PlaceRef
 from prima.dsl._profile import NAMESPACE as ROBOT_NS
 from prima.dsl._profile import RobotProfile, default_profile, load_profile, profile_from_xml
 from prima.errors import DocumentError, PrimaError, Problem, Severity
@@ -107,16 +108,24 @@ def check_file(path: Path, profile: RobotProfile | None = None,
     return _check(path, profile, checkers.get if checkers else None, skip_unknown)[0]
 
 
+class _Checked(NamedTuple):
+    problems: list[Problem] | None
+    header: Header | None
+    """The file's header, when its root element could be read."""
+    places: tuple[PlaceRef, ...] | None = None
+    """A document without errors: the places it names literally."""
+
+
 def _check(path: Path, profile: RobotProfile | None,
            checker_for: Callable[[str], Checker | None] | None,
-           skip_unknown: bool) -> tuple[list[Problem] | None, Header | None]:
-    """:func:`check_file`, and the file's header when its root element could be read;
-    ``checker_for`` gives the checker of a namespace of another kind, if any."""
+           skip_unknown: bool) -> _Checked:
+    """:func:`check_file`, with the file's header and, for a document without errors, its
+    literal places; ``checker_for`` gives the checker of a namespace of another kind, if any."""
     skippable = skip_unknown and path.suffix != ".pxml"
     try:
         data = read_source(path, DocumentError)
     except DocumentError as exc:
-        return (None if skippable else list(exc.problems)), None
+        return _Checked(None if skippable else list(exc.problems), None)
     # Parsed once, securely (most files are documents); the namespace of a file
     # that does not parse is read from its root element alone.
     doc: XmlDocument | None = None
@@ -129,20 +138,21 @@ def _check(path: Path, profile: RobotProfile | None,
     header = None if namespace is None else Header(namespace)
     checker = checker_for(namespace) if checker_for and namespace is not None else None
     if checker is not None:
-        return checker(path), header
+        return _Checked(checker(path), header)
     if skippable and namespace not in (PXML_NS, ROBOT_NS):
-        return None, None
+        return _Checked(None, None)
     if doc is None:
-        return unparsed, header
+        return _Checked(unparsed, header)
     if namespace == ROBOT_NS:
         try:
             profile_from_xml(doc)
         except DocumentError as exc:
-            return list(exc.problems), header
-        return [], header
+            return _Checked(list(exc.problems), header)
+        return _Checked([], header)
     if namespace == PXML_NS:
         header = Header(namespace, doc.root.get("kind", ""), doc.root.get("name", ""))
-    return check_parsed(doc, profile)[1], header
+    document, problems = check_parsed(doc, profile)
+    return _Checked(problems, header, None if document is None else document.places)
 
 
 class Validation:
@@ -170,6 +180,7 @@ class Validation:
         not checked again from inside its own check."""
         self._headers: dict[Path, Header] = {}
         self._robots: dict[Path, RobotProfile | None] = {}
+        self._places: dict[Path, tuple[str, tuple[PlaceRef, ...]]] = {}
 
     def claim(self, path: Path) -> bool:
         """Whether ``path`` is still to be checked; if so, it is now counted as checked."""
@@ -191,14 +202,16 @@ class Validation:
         files_at, problems_at = len(self.report.files), len(self.report.problems)
         self._checking.add(key)
         try:
-            problems, header = _check(path, profile or self.profile, self._checker,
-                                      skip_unknown=not explicit)
+            problems, header, places = _check(path, profile or self.profile, self._checker,
+                                              skip_unknown=not explicit)
         finally:
             self._checking.discard(key)
         if problems is None or key in self._seen:
             return
         if header is not None:
             self._headers[key] = header
+        if places is not None:
+            self._places[key] = (str(path), places)
         self._seen.add(key)
         self.report.files.insert(files_at, str(path))
         self.report.problems[problems_at:problems_at] = problems
@@ -216,6 +229,12 @@ class Validation:
         """Check a document another file names (once); its header, if its root could be read."""
         self.add(path, profile=profile)
         return self._headers.get(_key(path))
+
+    def places(self, path: Path) -> tuple[str, tuple[PlaceRef, ...]] | None:
+        """For a document checked here without errors, the name its problems are reported
+        under and the places it names literally (:func:`~prima.dsl.literal_places`);
+        else None."""
+        return self._places.get(_key(path))
 
     def robot(self, path: Path) -> RobotProfile | None:
         """Check a robot profile another file names (once); the profile, or None if it has

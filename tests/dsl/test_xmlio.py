@@ -106,13 +106,13 @@ def test_large_documents_get_the_same_wording_as_small_ones() -> None:
     large = _doc(f"{HEAD}{filler}{faults}</pxml>")[1]
     shift = XMLSCHEMA_NODES
     assert [(p.line, p.col, p.message) for p in small] == [
-        (2, 12, "<var>: attribute name='1x': value doesn't match any pattern of "
-                "['[A-Za-z_][A-Za-z0-9_]*']"),
-        (3, 24, "<state>: attribute initial='maybe': 'maybe' is not a boolean value"),
+        (2, 12, "<var>: attribute name='1x': must be a name: a letter or _, then letters, "
+                "digits or _"),
+        (3, 24, "<state>: attribute initial='maybe': must be true or false"),
         (3, 38, "<state>: attribute 'bogus' is not allowed here"),
         (4, 22, "<zz> is not allowed inside <entry>"),
         (5, 1, "<state>: missing required attribute 'id'"),
-        (6, 36, "<chain>: attribute order='soon': value must be one of ['after-latest', 'asap']"),
+        (6, 36, "<chain>: attribute order='soon': must be 'after-latest' or 'asap'"),
     ]
     assert [(p.line - shift, p.col, p.message) for p in large] == [
         (p.line, p.col, p.message) for p in small]
@@ -193,3 +193,71 @@ def test_the_ascii_selector_check_is_put_back(monkeypatch: pytest.MonkeyPatch) -
             assert cls.pattern is not None and cls.pattern.fullmatch(good), cls
         assert not XsdSelector.pattern.match("@name")  # the same language, over ASCII names
     assert XsdSelector.pattern is None and XsdFieldSelector.pattern is None
+
+
+# ---------------------------------------------------------------- plain words
+
+_BAD_VALUES = [
+    ("scenario.xsd",
+     '<scenario xmlns="urn:prima:scenario:1" name="bad name!" until="-5" seed="x" rate="0">'
+     '<map href=""/><robot x="1" y="1" heading="abc"/>'
+     '<user x="1" y="1" speed="0"><touch at="-1"/></user></scenario>',
+     ["<scenario>: attribute name='bad name!': must be a name: a letter or _, then letters, "
+      "digits, _, . or -",
+      "<scenario>: attribute until='-5': must be more than 0",
+      "<scenario>: attribute seed='x': must be a whole number, 0 or more",
+      "<scenario>: attribute rate='0': must be a whole number, 1 or more",
+      "<map>: attribute href='': must not be empty",
+      "<robot>: attribute heading='abc': must be a number",
+      "<user>: attribute speed='0': must be more than 0",
+      "<touch>: attribute at='-1': must be 0 or more"]),
+    ("map.xsd",
+     '<map xmlns="urn:prima:map:1" name="m m"><place name="a" x="0" y="0" kind="castle"/>'
+     '<wall x1="0" y1="0" x2="1" y2="1" thickness="-1"/></map>',
+     ["<map>: attribute name='m m': must be a name: a letter or _, then letters, digits, _, . "
+      "or -",
+      "<place>: attribute kind='castle': must be one of 'entrance', 'hall', 'corridor', "
+      "'corner', 'door', 'room', 'poster', 'panel', 'shelf', 'counter' or 'point'",
+      "<wall>: attribute thickness='-1': must be more than 0"]),
+    ("pxml.xsd",
+     '<pxml xmlns="urn:prima:pxml:1" kind="xa" name="9bad"><var name="a-b"/>'
+     '<stream hold="-1"><state id="s" initial="maybe"/></stream></pxml>',
+     ["<pxml>: attribute kind='xa': must be 'fa' or 'ea'",
+      "<pxml>: attribute name='9bad': must be a name: a letter or _, then letters, digits, _ "
+      "or -",
+      "<var>: attribute name='a-b': must be a name: a letter or _, then letters, digits or _",
+      "<stream>: attribute hold='-1': must be more than 0",
+      "<state>: attribute initial='maybe': must be true or false"]),
+]
+
+
+@pytest.mark.parametrize("xsd, text, expected", _BAD_VALUES, ids=[c[0] for c in _BAD_VALUES])
+@pytest.mark.parametrize("by", ["xmlschema", "libxml2"])
+def test_a_bad_value_says_in_plain_words_what_it_must_be(
+        xsd: str, text: str, expected: list[str], by: str,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # by the validator that refused it (a facet, a built-in type), with either validator
+    # (libxml2 words large files' faults): no Decimal('0'), no pattern lists, no int()
+    from prima import xmlio
+
+    if by == "libxml2":
+        monkeypatch.setattr(xmlio, "XMLSCHEMA_NODES", -1)
+    doc = xmlio.parse_xml(text.encode(), "f.xml", DocumentError)
+    assert [p.message for p in xmlio.validate(doc, xsd)] == expected
+
+
+def test_a_pattern_of_other_shapes_is_quoted_as_written() -> None:
+    from prima.xmlio import _pattern_words
+
+    assert _pattern_words("[A-Z][A-Za-z0-9]*") == (
+        "must be a name: an upper-case letter, then letters or digits")
+    assert _pattern_words(r"\{.+\}") == r"must match the pattern \{.+\}"
+
+
+def test_libxml2_bounds_read_as_xmlschema_holds_them() -> None:
+    from prima.xmlio import _libxml2_value
+
+    assert _libxml2_value("[facet 'minInclusive'] The value '-1' is less than the minimum "
+                          "value allowed ('0.50')") == "must be 0.5 or more"
+    assert _libxml2_value("[facet 'maxExclusive'] The value '9' must be less than '5'") == (
+        "must be less than 5")
