@@ -155,8 +155,9 @@ class Reaction:
     """How long the ABs running on those devices at ``t`` (any application's: a
     started AB is never cut) still ran: the running IU's residual."""
     talk_residual: float = 0.0
-    """The same on the talk devices (speaker, speech recognition): what its first
-    utterance had to wait for."""
+    """The same on the talk devices (speaker, speech recognition), and at least until
+    a policy's AB put before its words ended: what its first utterance had to wait
+    for."""
     first_start: float | None = None
     first_start_seq: int | None = None
     first_utterance: float | None = None
@@ -780,7 +781,8 @@ class _Judge:
     def _policy_request(self, row: Row, precedes: int) -> None:
         """A policy's AB put before a Command (a turn to the user before an utterance):
         the reactions waiting for that Command start with it, and their words may
-        wait for it as for a talk residual. Put before the Command whose
+        wait for it as for a talk residual (not once they have spoken: what comes
+        after the first utterance cannot excuse it). Put before the Command whose
         devices a reaction's residual looks at, it is that reaction's first AB: its
         devices count in the residual too (:meth:`_goes_first`)."""
         ab = row.get("ab")
@@ -791,7 +793,7 @@ class _Judge:
                 waiting.commands.append(cid)
             if waiting.first_start is None and waiting.commands[0] == precedes:
                 self._goes_first(waiting, devices, float(row["t"]))
-            if isinstance(ab, int):
+            if isinstance(ab, int) and waiting.first_utterance is None:
                 self.watched.setdefault(ab, []).append((waiting, True))
                 waiting.blocking += 1
 

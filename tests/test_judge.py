@@ -359,6 +359,28 @@ def test_a_policys_turn_requested_later_waits_for_what_runs_then() -> None:
     assert (r.residual, r.latency, r.late) == (2.0, 2.8, True)
 
 
+def test_a_turn_after_the_first_utterance_does_not_excuse_it() -> None:
+    """A reaction waves at once and says two sentences; its first words come 2 s late.
+    The policy's turn before its second sentence is no wait of the first one."""
+    turn = ("human-detection", "locomotion")
+    tr = Trace()
+    tr.event(10.0, "touched")
+    tr.request(10.0, "fa", 1, [1, 2, 3], command="Gesture", reactive=True,
+               devices=("arm",))
+    tr.start(10.0, "fa", 1, 1, command="Gesture", devices=("arm",))
+    tr.end(11.0, "fa", 1, 1, command="Gesture", devices=("arm",))
+    tr.speak(12.0, "fa", 2, 2, "Hello.", request=False)
+    tr.line(13.0, "request", app="fa", ab=4, command="FaceHuman", reactive=True,
+            reason="connect-channel", devices=list(turn),
+            detail={"command_id": 4, "precedes": 3})
+    tr.start(13.0, "fa", 4, 4, command="FaceHuman", devices=turn)
+    tr.end(16.0, "fa", 4, 4, command="FaceHuman", devices=turn)
+    tr.speak(16.0, "fa", 3, 3, "Nice to see you.", request=False)
+    [r] = tr.judge().reactions
+    assert (r.talk_residual, r.utterance_latency) == (0.0, 2.0)
+    assert r.late and r.why == "spoke after 2 s (allowed 1.2 s)"
+
+
 def test_the_robot_arriving_somewhere_is_no_reaction_to_measure() -> None:
     tr = Trace()
     tr.event(10.0, "place-reached")
