@@ -149,13 +149,15 @@ class Reaction:
     """Every Command its request lines asked for."""
     trees: tuple[int, ...]
     devices: tuple[str, ...]
-    """The devices of its first request."""
+    """The devices of its first request, then those of a policy's AB put before that
+    request's Command (the connect-channel turn: the reaction's first AB then)."""
     residual: float
     """How long the ABs running on those devices at ``t`` (any application's: a
     started AB is never cut) still ran: the running IU's residual."""
     talk_residual: float = 0.0
-    """The same on the talk devices (speaker, speech recognition): what its first
-    utterance had to wait for."""
+    """The same on the talk devices (speaker, speech recognition), and at least until
+    a policy's AB put before its words ended: what its first utterance had to wait
+    for."""
     first_start: float | None = None
     first_start_seq: int | None = None
     first_utterance: float | None = None
@@ -582,6 +584,7 @@ class _Reaction:
     commands: list[int] = field(default_factory=list)
     trees: list[int] = field(default_factory=list)
     devices: tuple[str, ...] = ()
+    """Its first request's, then a policy AB's put before that request's Command."""
     residual: float = 0.0
     """So far: when the ABs running on ``devices`` at ``t`` ended."""
     talk_residual: float = 0.0
@@ -778,15 +781,42 @@ class _Judge:
     def _policy_request(self, row: Row, precedes: int) -> None:
         """A policy's AB put before a Command (a turn to the user before an utterance):
         the reactions waiting for that Command start with it, and their words may
-        wait for it as for a talk residual."""
+        wait for it as for a talk residual (not once they have spoken: what comes
+        after the first utterance cannot excuse it). Put before the Command whose
+        devices a reaction's residual looks at, it is that reaction's first AB: its
+        devices count in the residual too (:meth:`_goes_first`)."""
         ab = row.get("ab")
+        devices = tuple(row.get("devices") or ())
         for waiting in list(self.awaiting.get(precedes, ())):
             for cid in _command_ids(row):
                 self.awaiting.setdefault(cid, []).append(waiting)
                 waiting.commands.append(cid)
-            if isinstance(ab, int):
+            if waiting.first_start is None and waiting.commands[0] == precedes:
+                self._goes_first(waiting, devices, float(row["t"]))
+            if isinstance(ab, int) and waiting.first_utterance is None:
                 self.watched.setdefault(ab, []).append((waiting, True))
                 waiting.blocking += 1
+
+    def _goes_first(self, r: _Reaction, devices: tuple[str, ...], t: float) -> None:
+        """A policy's AB goes before ``r``'s first requested Command: what ran on its
+        devices too is what ``r``'s first start waited for. Requested in ``r``'s own
+        instant, the instant's close counts what ran there at ``r.t``; requested later
+        (the utterance became ready only then), what runs there now counts, while ``r``
+        is not yet late (a reaction already late is not excused by what came after its
+        bound)."""
+        new = tuple(d for d in devices if d not in r.devices)
+        if not new:
+            return
+        r.devices += new
+        if any(x is r for x in self.instant):
+            return
+        if r.blocking <= 0 and t > r.t + r.residual + self.th.reaction_slack + _EPS:
+            return
+        own = set(r.commands)
+        for ab in {ab for d in new for ab in self.on_device.get(d, {})
+                   if self.ab_command.get(ab) not in own}:
+            self.watched.setdefault(ab, []).append((r, False))
+            r.blocking += 1
 
     def _start(self, row: Row) -> None:
         app = str(row.get("app") or "")

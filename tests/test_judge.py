@@ -294,6 +294,93 @@ def test_the_first_utterance_may_wait_for_the_talk_residual() -> None:
     assert r.late and r.why == "spoke after 3.4 s (allowed 3.2 s)"
 
 
+def _message_while_moving(turn_starts: float) -> Report:
+    """The user's reception EA (its own TopologicalMove iterating, 0.5 s each) answers a
+    message with an ASAP Speak; the connect-channel policy puts a FaceHuman before the
+    words, and the turn waits for the move's iteration under way (until 70.34)."""
+    loco = ("localization", "locomotion")
+    turn = ("human-detection", "locomotion")
+    tr = Trace()
+    tr.start(69.84, "ea", 109, 5, command="TopologicalMove", devices=loco, iteration=101)
+    tr.event(70.0, "message")
+    tr.request(70.0, "ea", 110, 9, tree=2, text="A message.", reactive=True, reason="asap")
+    tr.line(70.0, "request", app="ea", ab=111, tree=2, command="FaceHuman", reactive=True,
+            reason="connect-channel", devices=list(turn),
+            detail={"command_id": 10, "precedes": 9})
+    tr.end(70.34, "ea", 109, 5, command="TopologicalMove", devices=loco, iteration=101)
+    tr.start(turn_starts, "ea", 111, 10, tree=2, command="FaceHuman", devices=turn)
+    tr.end(turn_starts + 3.04, "ea", 111, 10, tree=2, command="FaceHuman", devices=turn)
+    tr.speak(turn_starts + 3.04, "ea", 110, 9, "A message.", tree=2, request=False)
+    return tr.judge()
+
+
+def test_a_policys_turn_before_the_first_command_counts_in_the_residual() -> None:
+    """The turn is the reaction's first AB: it waits for what runs on its wheels (the
+    app's own move iteration, never cut), not only for what runs on the speaker its
+    first request names. The words wait for the turn: its end is their talk residual."""
+    [r] = _message_while_moving(turn_starts=70.34).reactions
+    assert (r.latency, r.residual, r.utterance_latency, r.talk_residual) == (
+        0.34, 0.34, 3.38, 3.38)
+    assert set(r.devices) == {"speaker", "human-detection", "locomotion"}
+    assert not r.late
+    [r] = _message_while_moving(turn_starts=70.6).reactions  # the wheels free since 70.34
+    assert r.late and r.why == "started after 0.6 s (allowed 0.54 s)"
+
+
+def test_a_policys_turn_requested_later_waits_for_what_runs_then() -> None:
+    """The words are ready only when another app's sentence ends (2 s): the turn put
+    before them then waits for the app's own search look under way (0.3 s more).
+    Nothing ran on the wheels at the event; what runs there when the turn is put in
+    line counts, while the reaction is not yet late."""
+    def touched(ready: float) -> Report:
+        """The turn is put in line at ``ready``; the look under way ends 0.3 s later."""
+        turn = ("human-detection", "locomotion")
+        tr = Trace()
+        tr.speak(8.0, "ea", 1, 1, "A long explanation.", lasts=4.0, tree=1)
+        tr.event(10.0, "touched")
+        tr.request(10.0, "fa", 2, 2, tree=2, text="Hee-hee!", reactive=True)
+        tr.start(ready - 0.2, "fa", 3, 3, command="ActiveSensingHuman", devices=turn)
+        tr.rows.sort(key=lambda r: r["t"])
+        for seq, row in enumerate(tr.rows):
+            row["seq"] = seq
+        tr.line(ready, "request", app="fa", ab=4, tree=2, command="FaceHuman",
+                reactive=True, reason="connect-channel", devices=list(turn),
+                detail={"command_id": 4, "precedes": 2})
+        tr.end(ready + 0.3, "fa", 3, 3, command="ActiveSensingHuman", devices=turn)
+        tr.start(ready + 0.3, "fa", 4, 4, tree=2, command="FaceHuman", devices=turn)
+        tr.end(ready + 1.3, "fa", 4, 4, tree=2, command="FaceHuman", devices=turn)
+        tr.speak(ready + 1.3, "fa", 2, 2, "Hee-hee!", tree=2, request=False)
+        return tr.judge()
+
+    [r] = touched(ready=12.0).reactions
+    assert (r.residual, r.latency, r.talk_residual, r.late) == (2.3, 2.3, 3.3, False)
+    # put in line at 12.5 s, past the bound (12.2 s): what runs then is no excuse
+    [r] = touched(ready=12.5).reactions
+    assert (r.residual, r.latency, r.late) == (2.0, 2.8, True)
+
+
+def test_a_turn_after_the_first_utterance_does_not_excuse_it() -> None:
+    """A reaction waves at once and says two sentences; its first words come 2 s late.
+    The policy's turn before its second sentence is no wait of the first one."""
+    turn = ("human-detection", "locomotion")
+    tr = Trace()
+    tr.event(10.0, "touched")
+    tr.request(10.0, "fa", 1, [1, 2, 3], command="Gesture", reactive=True,
+               devices=("arm",))
+    tr.start(10.0, "fa", 1, 1, command="Gesture", devices=("arm",))
+    tr.end(11.0, "fa", 1, 1, command="Gesture", devices=("arm",))
+    tr.speak(12.0, "fa", 2, 2, "Hello.", request=False)
+    tr.line(13.0, "request", app="fa", ab=4, command="FaceHuman", reactive=True,
+            reason="connect-channel", devices=list(turn),
+            detail={"command_id": 4, "precedes": 3})
+    tr.start(13.0, "fa", 4, 4, command="FaceHuman", devices=turn)
+    tr.end(16.0, "fa", 4, 4, command="FaceHuman", devices=turn)
+    tr.speak(16.0, "fa", 3, 3, "Nice to see you.", request=False)
+    [r] = tr.judge().reactions
+    assert (r.talk_residual, r.utterance_latency) == (0.0, 2.0)
+    assert r.late and r.why == "spoke after 2 s (allowed 1.2 s)"
+
+
 def test_the_robot_arriving_somewhere_is_no_reaction_to_measure() -> None:
     tr = Trace()
     tr.event(10.0, "place-reached")
