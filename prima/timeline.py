@@ -28,13 +28,16 @@ from typing import Any
 
 from prima.trace import Pose, user_words
 
-__all__ = ["NO_DEVICE", "Bar", "Mark", "Span", "Tick", "Timeline", "blended_devices",
-           "timeline"]
+__all__ = ["JOIN", "NO_DEVICE", "Bar", "Mark", "Span", "Tick", "Timeline", "blended_devices",
+           "runs", "timeline"]
 
 Row = Mapping[str, Any]
 
 NO_DEVICE = "(no device)"
 """The row of an atomic behavior that occupies no device (last of the devices)."""
+
+JOIN = 0.05
+"""Seconds between two bars of one run (:func:`runs`) at most."""
 
 _OVER = re.compile(r" on ([^,\s]+)")
 """The devices in a blended start's ``over`` detail (``over AB12 on locomotion``)."""
@@ -149,6 +152,23 @@ class Timeline:
                 seen.add(bar.ab)
                 out.append(bar)
         return out
+
+
+def runs(bars: Iterable[Bar], join: float = JOIN) -> list[list[Bar]]:
+    """Bars that follow one another on one device, of one application and Command and
+    without words, at most ``join`` s apart: a feedback Command's iterations (a move,
+    tracking), which a viewer labels once (``TopologicalMove x54``). By device, then
+    start; a bar that follows nothing is a run of its own."""
+    out: list[list[Bar]] = []
+    for bar in sorted(bars, key=lambda b: (b.device, b.t0, b.ab)):
+        last = out[-1][-1] if out else None
+        if (last is not None and last.device == bar.device and last.app == bar.app
+                and last.command == bar.command and not bar.text and not last.text
+                and bar.t0 - last.t1 <= join):
+            out[-1].append(bar)
+        else:
+            out.append([bar])
+    return out
 
 
 def blended_devices(over: object) -> frozenset[str]:

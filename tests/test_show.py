@@ -87,6 +87,26 @@ def test_the_timeline_draws_waits_as_spans_and_blends_on_half_rows() -> None:
     assert list(fig.layout.yaxis.categoryarray)[::-1] == model.timeline.devices
 
 
+def test_a_feedback_commands_iterations_are_one_labelled_bar() -> None:
+    """As ``prima plot`` draws them: a run of iterations (``TrackingHuman x193``) is one
+    bar without seams, labelled once, over its iterations' bars, which keep their hover
+    and click (the run's bar takes neither) and no label of their own."""
+    from prima.show._model import build
+    from prima.show._page import timeline_figure
+
+    model = build(read_rows(SAMPLE_03))
+    fig, traces = timeline_figure(model)
+    labelled = [t for t in fig.data if t.meta == "runs"]
+    assert labelled and all(t.hoverinfo == "skip" for t in labelled)
+    labels = [text for t in labelled for text in t.text]
+    assert "TrackingHuman x193" in labels and "TopologicalMove x43" in labels
+    texts = {ab: text for i in traces["bars"]
+             for ab, text in zip(fig.data[i].customdata, fig.data[i].text, strict=True)}
+    tracking = [b.ab for b in model.timeline.bars if b.command == "TrackingHuman"]
+    assert tracking and all(texts[ab] == "" for ab in tracking)
+    assert any(text == "Speak" for text in texts.values())  # a lone AB keeps its label
+
+
 @pytest.mark.parametrize("content, message", [
     ('{"t": 0, "seq": 0, "kind": "start"}\nnot json\n', "run.jsonl:2:1: error: not a JSON"),
     ('{"t": 0, "kind": "start"}\n', "run.jsonl:1:1: error: missing field 'seq'"),
@@ -178,6 +198,7 @@ _BARS = """
 const gd = document.getElementById('timeline');
 const out = [];
 gd.data.forEach(function (trace, i) {
+  if (trace.meta === 'runs') return;  // a run's label bar: no AB of its own
   if (trace.meta === 'marks') {
     trace.customdata.forEach(function (row, j) {
       out.push([row, trace.y[j], trace.x[j], 0, i, j, null, trace.meta]);

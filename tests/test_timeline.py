@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from prima.run import Run
-from prima.timeline import NO_DEVICE, Bar, Span, blended_devices, timeline
+from prima.timeline import NO_DEVICE, Bar, Span, blended_devices, runs, timeline
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -245,3 +245,17 @@ def test_the_cost_is_linear_in_the_number_of_open_waits() -> None:
 
     small, large = work(200), work(1600)
     assert large < 8 * 1.25 * small, (small, large)  # (sorting adds a log factor)
+
+
+def test_runs_are_a_commands_bars_that_follow_one_another_on_one_device() -> None:
+    def bar(ab: int, t0: float, t1: float, device: str = "locomotion", app: str = "a",
+            command: str = "Move", text: str | None = None) -> Bar:
+        return Bar(ab, device, app, command, t0, t1, text)
+
+    bars = [bar(1, 0, 1), bar(2, 1, 2), bar(3, 2.04, 3),         # one run (a 0.04 s gap)
+            bar(4, 3.2, 4),                                       # too far: a run of its own
+            bar(5, 4, 5, app="b"), bar(6, 5, 6, command="Turn"),  # another app, Command
+            bar(7, 6, 7, text="hi"), bar(8, 7, 8, text="hi"),     # words: never joined
+            bar(9, 1, 2, device="neck"), bar(10, 2, 3, device="neck")]
+    assert [[b.ab for b in run] for run in runs(reversed(bars))] == [
+        [1, 2, 3], [4], [5], [6], [7], [8], [9, 10]]

@@ -18,7 +18,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from prima.plot import abbreviate
-from prima.timeline import Bar, Timeline
+from prima.timeline import Bar, Timeline, runs
 
 __all__ = ["app_colors", "draw_timeline", "save_timeline", "timeline_figure"]
 
@@ -29,8 +29,6 @@ _WORLD_ROWS = ("user", "events")
 _FONT = 7.0
 _CHAR = 0.56
 """A character's width, in font sizes (an estimate, for fitting labels)."""
-_JOIN = 0.05
-"""Bars closer than this (s) on a row, of one app and Command, share a label."""
 _METADATA = {".svg": {"Date": None}, ".pdf": {"CreationDate": None, "ModDate": None},
              ".png": {"Software": None}}
 
@@ -43,19 +41,6 @@ def app_colors(apps: Sequence[str]) -> dict[str, str]:
 def _ink(color: str) -> str:
     r, g, b = to_rgb(color)
     return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.6 else "white"
-
-
-def _runs(bars: Sequence[Bar]) -> list[list[Bar]]:
-    """Consecutive bars of one application and Command on one row, to label once."""
-    runs: list[list[Bar]] = []
-    for bar in sorted(bars, key=lambda b: (b.t0, b.ab)):
-        last = runs[-1][-1] if runs else None
-        if (last is not None and last.app == bar.app and last.command == bar.command
-                and not bar.text and not last.text and bar.t0 - last.t1 <= _JOIN):
-            runs[-1].append(bar)
-        else:
-            runs.append([bar])
-    return runs
 
 
 def _merged(spans: Sequence[tuple[float, float, str]]) -> list[tuple[float, float]]:
@@ -121,7 +106,7 @@ def draw_timeline(ax: Axes, tl: Timeline, *, width_pt: float, labels: bool = Tru
                                hatch="...." if blended else None)
         if not labels:
             continue
-        for run in _runs([b for b in mine if not b.blended]):
+        for run in runs([b for b in mine if not b.blended]):
             t0, t1 = run[0].t0, run[-1].t1
             text = _label(run, (t1 - t0) * per_s)
             if text:

@@ -13,7 +13,7 @@ from plotly.colors import qualitative
 
 from prima.show._model import Model
 from prima.sim import WorldMap
-from prima.timeline import Bar
+from prima.timeline import Bar, runs
 
 INSTANT = 0.05
 """The least width (s) of a bar: an atomic behavior that took no time is still seen."""
@@ -41,6 +41,12 @@ def _label(bar: Bar) -> str:
 def _colours(apps: list[str]) -> dict[str, str]:
     palette = qualitative.Plotly
     return {app: palette[i % len(palette)] for i, app in enumerate(apps)}
+
+
+def _ink(colour: str) -> str:
+    """Text that reads on a bar of this colour (``#rrggbb``): black on light, else white."""
+    r, g, b = (int(colour[k:k + 2], 16) / 255 for k in (1, 3, 5))
+    return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.6 else "white"
 
 
 def _bounds(model: Model, world: WorldMap | None) -> tuple[float, float, float, float]:
@@ -126,6 +132,9 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         bars = sorted((b for b in tl.bars if b.app == app), key=lambda b: b.blended)
         if not bars:
             continue
+        # a run of a feedback Command's iterations is labelled once (below), not each bar
+        repeated = [run for run in runs(b for b in bars if not b.blended) if len(run) > 1]
+        in_runs = {id(b) for run in repeated for b in run}
         traces["bars"].append(len(fig.data))
         # two applications blended on a device share its row: a half each
         fig.add_trace(go.Bar(
@@ -133,13 +142,25 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             base=[b.t0 for b in bars], x=[_width(b.t0, b.t1) for b in bars],
             width=[0.4 if b.blended else 0.8 for b in bars],
             offset=[(0.0 if i % 2 else -0.4) if b.blended else -0.4 for b in bars],
-            customdata=[b.ab for b in bars], text=[_esc(b.command) for b in bars],
+            customdata=[b.ab for b in bars],
+            text=["" if id(b) in in_runs else _esc(b.command) for b in bars],
             hovertext=[f"AB {b.ab} {_esc(_label(b))}<br>{b.t0:.2f}-{b.t1:.2f} s"
                        + (" (blended)" if b.blended else "") for b in bars],
             hoverinfo="text", textposition="inside", insidetextanchor="start", textangle=0,
             textfont={"size": 10}, marker={"color": colours[app], "pattern": {
                 "shape": ["." if b.blended else "" for b in bars], "fgcolor": "white"}},
             meta="bars"))
+        if repeated:  # over a run's bars, one bar without seams, labelled once; hovers and
+            # clicks go through it to the iteration under the pointer
+            fig.add_trace(go.Bar(
+                name=_esc(app), orientation="h", y=[r[0].device for r in repeated],
+                base=[r[0].t0 for r in repeated],
+                x=[_width(r[0].t0, r[-1].t1) for r in repeated], width=0.8, offset=-0.4,
+                text=[f"{_esc(r[0].command)} x{len(r)}" for r in repeated],
+                textposition="inside", insidetextanchor="start", textangle=0,
+                textfont={"size": 10, "color": _ink(colours[app])},
+                marker={"color": colours[app]}, hoverinfo="skip", showlegend=False,
+                meta="runs"))
     for kind, (shape, colour, what) in _SPAN_STYLE.items():
         spans = [(s, d) for s in tl.spans if s.kind == kind for d in s.devices]
         if not spans:
