@@ -222,10 +222,13 @@ class Builder:
     # ------------------------------------------------------------ references
 
     def check_gesture(self, name: str, spot: Spot) -> None:
-        """A gesture must be one the robot knows; an EA may use only the common ones."""
-        if name not in self.profile.gestures and name not in STANDARD_GESTURES:
+        """A gesture must be one the robot knows; an EA may use only the common ones (and
+        only those this robot offers: a profile should offer them all, but may not)."""
+        if name not in self.profile.gestures:
             known = self.known("gestures", lambda: self.profile.gestures)
-            self.error(spot, f"unknown gesture '{name}' (this robot knows: {known})")
+            common = " (a common gesture, but not one this robot offers; it knows: " \
+                if name in STANDARD_GESTURES else " (this robot knows: "
+            self.error(spot, f"unknown gesture '{name}'{common}{known})")
         elif name not in STANDARD_GESTURES and self.kind is AppKind.EA:
             self.error(spot, f"gesture '{name}' is robot-specific; only an FA may use it "
                              f"(common gestures: {', '.join(sorted(STANDARD_GESTURES))})")

@@ -164,3 +164,20 @@ def test_a_number_default_that_is_not_a_number_at_all_is_reported() -> None:
     [(_l, _c, message)] = _problems(rest='<extra command="Speak" name="v" kind="number" '
                                           'default="loud"/>')
     assert "default='loud'" in message
+
+
+def test_an_ea_using_a_common_gesture_this_robot_lacks_is_an_error() -> None:
+    """A robot should offer every common gesture, but one may not: an EA validated
+    against it is told so, not left to fail when it gestures."""
+    from prima.dsl import check_document
+
+    source = (b'<pxml xmlns="urn:prima:pxml:1" kind="ea" name="e"><state id="s" initial="true">'
+              b'<entry><chain>Gesture(bow), Gesture(nod)</chain></entry></state></pxml>')
+    offered = _profile(rest='<gesture name="nod" duration="1.0"/>')
+    assert "bow" not in offered.gestures
+    _, problems = check_document(source, "e.pxml", offered)
+    assert [p.message for p in problems] == [
+        "unknown gesture 'bow' (a common gesture, but not one this robot offers; it knows: "
+        "nod)"]
+    _, problems = check_document(source, "e.pxml", default_profile())
+    assert problems == []
