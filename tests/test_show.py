@@ -266,6 +266,17 @@ def test_the_page_in_a_browser(browser: Any, scenario: Path, tmp_path: Path) -> 
         assert browser.execute_script("return window.primaShow.time()") > moves
         assert browser.execute_script(_ROBOT_MARKER) != before
 
+    # the user's words read as said in their bubble (quotes, not &quot;)
+    said = next((r for r in rows if r["kind"] == "user" and r.get("action") == "say"), None)
+    if said is not None:
+        browser.execute_script(f"window.primaShow.seek({said['t'] + 0.1})")
+        time.sleep(0.2)
+        shown = browser.execute_script(
+            "return Array.from(document.querySelectorAll('#map .annotation-text'))"
+            ".map(function (e) { return e.textContent; });")
+        assert any(f'"{said["text"][:40]}' in text for text in shown), shown
+        assert not any("&quot;" in text or "&amp;" in text for text in shown), shown
+
     # clicking a bar shows its decision's reason
     ab, _device, start, _width, trace, point, *_ = _clickable(
         bars, [b for b in drawn if b[7] != "bars"])

@@ -22,6 +22,13 @@
     });
   }
 
+  // Plotly reads a few tags and entities in its texts (&lt; and the like, not &quot;)
+  function plotlyText(text) {
+    return String(text).replace(/[&<>]/g, function (c) {
+      return {"&": "&amp;", "<": "&lt;", ">": "&gt;"}[c];
+    });
+  }
+
   function what(row) {
     if (row.kind === "user") {
       return row.action === "say" ? '"' + (row.text || "") + '"' : row.action +
@@ -85,7 +92,7 @@
       const pose = b[0] === "robot" ? robot : user;
       if (!pose) return;
       const n = seen[b[0]]++;
-      out.push({x: pose[1], y: pose[2], text: esc(b[3]).slice(0, 80), showarrow: true,
+      out.push({x: pose[1], y: pose[2], text: plotlyText(String(b[3]).slice(0, 80)), showarrow: true,
                 arrowhead: 0, ax: b[0] === "robot" ? -40 : 40, ay: -30 - 22 * n,
                 bgcolor: b[0] === "robot" ? "#ecf0f1" : "#fdebd0",
                 bordercolor: b[0] === "robot" ? "#2c3e50" : "#e67e22",
