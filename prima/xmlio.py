@@ -721,7 +721,8 @@ _FACET_WORDS = {
 """What a value must be, by the XSD facet that refused it, given the facet's value."""
 
 _TYPE_WORDS = {
-    **dict.fromkeys(("decimal", "double", "float"), "must be a number"),
+    "decimal": "must be a number written like 12 or -0.5 (no exponent: not 1e3)",
+    **dict.fromkeys(("double", "float"), "must be a number"),
     **dict.fromkeys(("integer", "long", "int", "short", "byte"), "must be a whole number"),
     **dict.fromkeys(("nonNegativeInteger", "unsignedLong", "unsignedInt", "unsignedShort",
                      "unsignedByte"), "must be a whole number, 0 or more"),

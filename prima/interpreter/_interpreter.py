@@ -399,7 +399,8 @@ class Interpreter:
             sent.popleft()
         detail: dict[str, Value] = {"to": action.to}
         if len(sent) >= self.budgets.sends_per_second:
-            detail["dropped"] = (f"more than {self.budgets.sends_per_second:g} messages in one "
+            most = self.budgets.sends_per_second
+            detail["dropped"] = (f"more than {most:g} message{'s' if most != 1 else ''} in one "
                                  "second (its budget)")
             self._note(Note(now, self.app, TraceKind.SEND, text, detail))
             return

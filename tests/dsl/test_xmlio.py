@@ -208,7 +208,8 @@ _BAD_VALUES = [
       "<scenario>: attribute seed='x': must be a whole number, 0 or more",
       "<scenario>: attribute rate='0': must be a whole number, 1 or more",
       "<map>: attribute href='': must not be empty",
-      "<robot>: attribute heading='abc': must be a number",
+      "<robot>: attribute heading='abc': must be a number written like 12 or -0.5 (no "
+      "exponent: not 1e3)",
       "<user>: attribute speed='0': must be more than 0",
       "<touch>: attribute at='-1': must be 0 or more"]),
     ("map.xsd",
