@@ -65,6 +65,10 @@ TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
 """Devices through which the robot talks with its user: while another application
 uses them, a Command that breaks the Communication Channel waits (thesis Sec. 3.3)."""
 
+SPEAKER = "speaker"
+"""The device words are said through: a Command's text arguments are words only if
+its call occupies it."""
+
 BODY_DEVICE = "locomotion"
 """The wheels: a Command that uses them turns or moves the robot's body."""
 
@@ -264,7 +268,11 @@ class CommandSpec:
         return devices
 
     def spoken(self, args: Mapping[str, Value]) -> list[str]:
-        """The words a call with these arguments says (its non-empty text arguments)."""
+        """The words a call with these arguments says: its non-empty text arguments, if
+        it occupies the :data:`SPEAKER` (a robot's own Command may take a text it does not
+        say: a label it prints or shows)."""
+        if SPEAKER not in self.devices_for(args):
+            return []
         return [str(args[p.name]) for p in self.params
                 if p.kind is ParamKind.TEXT and args.get(p.name)]
 

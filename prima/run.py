@@ -421,11 +421,15 @@ class Run:
 
 
 def _shown_args(catalog: Catalog, call: Call) -> list[str]:
-    """A call's arguments as the trace shows them: ``name=value``, words said aside."""
+    """A call's arguments as the trace shows them: ``name=value``, words said aside (a
+    text not said, such as a label a robot's own Command prints, is ``name="text"``)."""
     spec = catalog[call.command]
+    said = bool(spec.spoken(call.args))
     out = []
     for name, value in call.args.items():
         param = spec.param(name)
         if param is None or (param.shown and param.kind is not ParamKind.TEXT):
             out.append(f"{name}={value}")
+        elif param.shown and not said and value:
+            out.append(f'{name}="{value}"')
     return out

@@ -181,3 +181,24 @@ def test_an_ea_using_a_common_gesture_this_robot_lacks_is_an_error() -> None:
         "nod)"]
     _, problems = check_document(source, "e.pxml", default_profile())
     assert problems == []
+
+
+def test_a_text_is_words_only_on_a_command_that_uses_the_speaker() -> None:
+    """A robot's own Command may take a text it prints or shows: not words (no bubble, no
+    turn to the user first, cut at once); the trace shows it as an argument."""
+    from prima.run import _shown_args  # white box: the trace's rendering of arguments
+    from prima.mediator import Call
+
+    profile = parse_profile(PROFILE.format(
+        devices=ALL + '<device name="printer"/>', tilt="-30",
+        rest='<command name="PrintTicket" devices="printer" duration="2">'
+             '<param name="label" kind="text"/></command>'
+             '<command name="Announce" devices="speaker" duration="2">'
+             '<param name="words" kind="text"/></command>').encode(), "r.xml")
+    catalog = profile.catalog()
+    assert catalog["PrintTicket"].spoken({"label": "Visitor Ada"}) == []
+    assert catalog["Announce"].spoken({"words": "Hello"}) == ["Hello"]
+    assert catalog["Speak"].spoken({"text": "Hi"}) == ["Hi"]
+    assert _shown_args(catalog, Call("PrintTicket", {"label": "Visitor Ada"})) == [
+        'label="Visitor Ada"']
+    assert _shown_args(catalog, Call("Announce", {"words": "Hello"})) == []
