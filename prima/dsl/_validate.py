@@ -21,7 +21,12 @@ from prima.dsl._loader import NAMESPACE as PXML_NS
 from prima.dsl._loader import check_parsed
 from prima.dsl._model import PlaceRef
 from prima.dsl._profile import NAMESPACE as ROBOT_NS
-from prima.dsl._profile import RobotProfile, default_profile, load_profile, profile_from_xml
+from prima.dsl._profile import (
+    STANDARD_GESTURES,
+    RobotProfile,
+    default_profile,
+    profile_from_xml,
+)
 from prima.errors import DocumentError, PrimaError, Problem, Severity
 from prima.xmlio import XmlDocument, parse_xml, read_source
 
@@ -145,14 +150,22 @@ def _check(path: Path, profile: RobotProfile | None,
         return _Checked(unparsed, header)
     if namespace == ROBOT_NS:
         try:
-            profile_from_xml(doc)
+            robot = profile_from_xml(doc)
         except DocumentError as exc:
             return _Checked(list(exc.problems), header)
-        return _Checked([], header)
+        return _Checked(_missing_gestures(doc, robot), header)
     if namespace == PXML_NS:
         header = Header(namespace, doc.root.get("kind", ""), doc.root.get("name", ""))
     document, problems = check_parsed(doc, profile)
     return _Checked(problems, header, None if document is None else document.places)
+
+
+def _missing_gestures(doc: XmlDocument, robot: RobotProfile) -> list[Problem]:
+    """A warning for each common gesture the profile does not offer: an EA may play it,
+    and would fail validation (and a run) on this robot."""
+    return [doc.problem(doc.root, f"no gesture '{name}': it is a common gesture an EA may "
+                        "play, and such an EA fails on this robot", severity=Severity.WARNING)
+            for name in sorted(STANDARD_GESTURES - set(robot.gestures))]
 
 
 class Validation:
@@ -242,8 +255,10 @@ class Validation:
         key = _key(path)
         if key not in self._robots:
             try:
-                robot: RobotProfile | None = load_profile(path)
-                problems: list[Problem] = []
+                doc = parse_xml(read_source(path, DocumentError), str(path), DocumentError)
+                loaded = profile_from_xml(doc)
+                robot: RobotProfile | None = loaded
+                problems = _missing_gestures(doc, loaded)
             except DocumentError as exc:
                 robot, problems = None, list(exc.problems)
             if self.claim(path):

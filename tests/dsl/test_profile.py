@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
@@ -202,3 +203,15 @@ def test_a_text_is_words_only_on_a_command_that_uses_the_speaker() -> None:
     assert _shown_args(catalog, Call("PrintTicket", {"label": "Visitor Ada"})) == [
         'label="Visitor Ada"']
     assert _shown_args(catalog, Call("Announce", {"words": "Hello"})) == []
+
+
+def test_a_profile_without_every_common_gesture_is_warned_of(tmp_path: Path) -> None:
+    from prima.dsl import Validation
+
+    robot = tmp_path / "r.xml"
+    robot.write_text(_profile_text(rest='<gesture name="nod" duration="1.0"/>'))
+    report = Validation().run([robot])
+    assert report.errors == 0
+    assert sorted(p.message.split("'")[1] for p in report.problems) == sorted(
+        {"shake-head", "wave", "bow", "happy", "sad", "surprised"})
+    assert all(p.severity.value == "warning" for p in report.problems)
