@@ -127,6 +127,8 @@ class Builder:
         self.streams: dict[str, StreamBlock] = {}
         self.blocks: dict[str, AtomicBlock] = {}
         self._state_elements: dict[str, etree._Element] = {}
+        self._goto_elements: dict[Goto, etree._Element] = {}
+        """Each <goto> read, by the action it became."""
         self.in_handler = False
         self._carets: set[int] = set()
         self._hints = 0
@@ -277,6 +279,7 @@ class Builder:
         self._check_references(events)
         initial = self._initial()
         self._check_gotos()
+        self._check_entry_loops()
         self._check_reachable(handlers, initial)
         if any(p.severity is Severity.ERROR for p in self.problems):
             return None
@@ -600,7 +603,9 @@ class Builder:
 
     def _goto(self, el: etree._Element) -> Goto:
         self.refs.gotos.append((el.get("state", ""), (el, "state", 0)))
-        return Goto(el.get("state", ""), self.loc_of(el))
+        goto = Goto(el.get("state", ""), self.loc_of(el))
+        self._goto_elements[goto] = el
+        return goto
 
     def _send(self, el: etree._Element) -> Send | None:
         text = self.template(el, "text")
@@ -721,6 +726,37 @@ class Builder:
         for target, spot in self.refs.gotos:
             if target not in self.states:
                 self.error(spot, f"no state has the id '{target}'")
+
+    def _check_entry_loops(self) -> None:
+        """States whose ``<entry>`` goes on to the next without a condition, round to the
+        first, loop forever once entered (a run stops the application after 100 state
+        changes): an error at the ``<goto>`` of each loop's first state. Each state is
+        followed once: linear in the states."""
+        passes: dict[str, Goto] = {}
+        for state in self.states.values():
+            goto = next((a for a in state.entry if isinstance(a, Goto)), None)
+            if goto is not None and goto.state in self.states:
+                passes[state.id] = goto
+        order = {name: i for i, name in enumerate(self.states)}
+        done: set[str] = set()
+        for start in self.states:
+            path: dict[str, None] = {}
+            here = start
+            while here in passes and here not in done and here not in path:
+                path[here] = None
+                here = passes[here].state
+            if here in path:  # a loop not seen before: from ``here`` round to it
+                names = list(path)
+                loop = names[names.index(here):]
+                first = min(loop, key=order.__getitem__)
+                turn = loop.index(first)
+                shown = " -> ".join(f"'{n}'" for n in [*loop[turn:], *loop[:turn], first])
+                who = ("this state's <entry> goes to itself" if len(loop) == 1 else
+                       "these states' <entry> go to one another")
+                self.error((self._goto_elements[passes[first]], "state", 0),
+                           f"{who} without a condition, forever once entered: {shown} "
+                           "(put the <goto> under an <if>, or in a handler)")
+            done.update(path)
 
     def _check_reachable(self, handlers: list[Handler], initial: str | None) -> None:
         if initial is None:
