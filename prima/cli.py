@@ -429,20 +429,23 @@ def _check_named(validation: Validation, scenario: Path, robot: bool, map_ns: st
     if profile is None:  # the named profile has errors: its documents wait until it is fixed
         return out
     fa_name: str | None = None
-    eas: dict[str, str] = {}
-    """The EAs running from the start: name -> the path as written."""
+    eas: dict[str, tuple[str, Path]] = {}
+    """The EAs running from the start: name -> the path as written, and the file."""
     for ref in (r for r in refs if r.role in _SLOTS):
         header = validation.document(ref.path, profile)
         message = None if header is None else _slot_fault(ref.role, ref.value, header, fa_name)
-        if not message and header is not None and ref.role == "ea" and header.name in eas:
-            message = (f"the EAs '{eas[header.name]}' and '{ref.value}' are both named "
-                       f"'{header.name}'; each application needs a name of its own")
+        name = "" if header is None else header.name
+        earlier = eas.get(name) if header is not None and ref.role == "ea" else None
+        # (one file named twice: the scenario's own check says so, once)
+        if not message and earlier is not None and earlier[1] != ref.path.resolve():
+            message = (f"the EAs '{earlier[0]}' and '{ref.value}' are both named '{name}'; "
+                       "each application needs a name of its own")
         if message:
             out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR, message))
         elif header is not None and ref.role == "fa":
             fa_name = header.name
         elif header is not None and ref.role == "ea":
-            eas[header.name] = ref.value
+            eas.setdefault(header.name, (ref.value, ref.path.resolve()))
     for map_ref in (r for r in refs if r.role == "map"):
         out.extend(check_places(map_ref.path, (r.path for r in refs if r.role in _SLOTS)))
     return out

@@ -303,6 +303,11 @@ def test_each_file_is_checked_once_however_it_is_named(tmp_path: Path) -> None:
      "the FA and this zone's EA are both named 'fa'"),
     ('<apps fa="map.xml"/>', "", 13,
      "'map.xml' is not a PXML document (its root is in 'urn:prima:map:1')"),
+    ('<apps fa="fa.pxml" ea="ea.pxml"><ea href="ea-twin.pxml"/></apps>', "", 45,
+     "the EAs 'ea.pxml' and 'ea-twin.pxml' are both named 'ea'"),
+    # one file named twice: said once (not also as two EAs of one name)
+    ('<apps fa="fa.pxml" ea="ea.pxml"><ea href="ea.pxml"/></apps>', "", 45,
+     "the EA 'ea.pxml' is already running from the start"),
 ])
 def test_applications_must_fit_their_slots(tmp_path: Path, apps: str, zones: str, col: int,
                                            message: str) -> None:
@@ -310,6 +315,9 @@ def test_applications_must_fit_their_slots(tmp_path: Path, apps: str, zones: str
     _pxml(tmp_path, "ea", "ea")
     (tmp_path / "twin.pxml").write_text(
         '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="fa"><state id="s" initial="true"/>'
+        "</pxml>\n")
+    (tmp_path / "ea-twin.pxml").write_text(
+        '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="ea"><state id="s" initial="true"/>'
         "</pxml>\n")
     path = _scenario(tmp_path, apps, zones=zones)
     code, out, _ = run("validate", str(path))
