@@ -25,7 +25,7 @@ from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Sever
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
-    from prima.dsl import Checker, Header, PlaceRef, RobotProfile, Validation
+    from prima.dsl import Checker, Header, RobotProfile, Validation
     from prima.sim import WorldMap
 
 # Each command imports what it needs when it runs (``prima --help`` imports no lxml,
@@ -327,6 +327,7 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
     fits its slot. The simulator is imported only when a file of neither
     PRIMA's documents nor its robot profiles is met.
     """
+    from prima.run import unknown_places
     from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
     maps: dict[Path, WorldMap] = {}
@@ -349,7 +350,7 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
             pair = (document.resolve(), map_path.resolve())
             if world is not None and checked is not None and pair not in placed:
                 placed.add(pair)
-                out.extend(_unknown_places(*checked, world))
+                out.extend(unknown_places(*checked, world))
         return out
 
     def check_scenario(path: Path) -> list[Problem]:
@@ -359,37 +360,6 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
         return own + _check_named(validation, path, robot, MAP_NS, check_places)
 
     return {SCENARIO_NS: check_scenario, MAP_NS: check_map}
-
-
-def _unknown_places(file: str, places: Sequence[PlaceRef], world: WorldMap) -> list[Problem]:
-    """A problem in the document ``file`` at each place it names that ``world`` lacks: the
-    closest name on the map if one is close, else the map's places if they are few. At
-    most MAX_PROBLEMS of them (then a line counting the rest), each hint computed once."""
-    import difflib
-
-    from prima.xmlio import MAX_PROBLEMS, limit
-
-    names = [p.name for p in world.places]
-    known = set(names)
-    if len(names) <= _FEW_PLACES:
-        listed = f" (known: {', '.join(sorted(names))})" if names else " (it has no places)"
-    else:
-        listed = f" ({len(names)} places; see {world.source or 'its file'})"
-    hints: dict[str, str] = {}
-    out: list[Problem] = []
-    unknown = [p for p in places if p.name not in known]
-    for place in unknown[:MAX_PROBLEMS + 1]:
-        if place.name not in hints:
-            close = difflib.get_close_matches(place.name, names, n=1, cutoff=0.75)
-            hints[place.name] = f" (did you mean '{close[0]}'?)" if close else listed
-        out.append(Problem(file, place.loc.line, place.loc.col, Severity.ERROR,
-                           f"unknown place '{place.name}' on map '{world.name}'"
-                           f"{hints[place.name]}"))
-    return limit(out, file, len(unknown))
-
-
-_FEW_PLACES = 12
-"""A map with at most this many places lists them under an unknown place's error."""
 
 
 _SLOTS = {"fa": "fa", "ea": "ea", "zone": "ea"}

@@ -146,3 +146,18 @@ def test_the_dsl_lists_a_documents_literal_places_with_where_they_are(tmp_path: 
     assert (panel.name, panel.command, panel.param) == ("panel-1", "PointByHand", "toward")
     assert (panel.loc.line, panel.loc.col) == (4, 54)
     assert (corner.name, corner.loc.line, corner.loc.col) == ("corner", 5, 68)
+
+
+def test_a_run_refuses_what_validating_the_scenario_refuses(tmp_path: Path) -> None:
+    """``prima run`` (and so judge, sweep, test and the fixtures) loads the applications as
+    ``prima validate`` checks them: an unknown literal place stops the run before it
+    starts, in the application's file (a zone's EA with one is left out and reported,
+    as any broken zone EA is)."""
+    _map(tmp_path, "office", OFFICE_PLACES)
+    _pxml(tmp_path, "fa", "fa")
+    _pxml(tmp_path, "guide", "ea", '<chain>TopologicalMove("kidode_room")</chain>')
+    scenario = _scenario(tmp_path, "s", "office", '<apps fa="fa.pxml" ea="guide.pxml"/>')
+    code, _, err = run("run", str(scenario))
+    assert code == 1
+    assert err.startswith(f"{tmp_path / 'guide.pxml'}:4:") and (
+        "unknown place 'kidode_room' on map 'office' (did you mean 'kidode-room'?)" in err), err
