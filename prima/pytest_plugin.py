@@ -23,9 +23,10 @@ installed, so it imports nothing of PRIMA until a test uses the fixture.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import pytest
 
@@ -48,12 +49,13 @@ def prima_golden(request: pytest.FixtureRequest) -> Callable[[str | Path], None]
 
     def compare(scenario: str | Path) -> None:
         path = here / scenario  # an absolute scenario path stays as it is
-        result = check(path, update=update)
+        result = _located(lambda: check(path, update=update))
         if result.status is Status.MISSING:
             pytest.fail(f"{scenario}: no golden trace yet; review a run and create it with "
                         "pytest --prima-update-goldens", pytrace=False)
         if result.status is Status.DIFFERENT:
-            pytest.fail(f"{scenario}: the trace differs from its golden trace\n{result.diff}",
+            pytest.fail(f"{scenario}: the trace differs from its golden trace\n{result.diff}\n"
+                        "(a change you meant: review it, then pytest --prima-update-goldens)",
                         pytrace=False)
 
     return compare
@@ -70,11 +72,34 @@ def prima_judge(request: pytest.FixtureRequest) -> Callable[..., Report]:
 
     here = Path(request.path).parent
 
+    known = {f.name for f in dataclasses.fields(Thresholds)}
+
     def check(path: str | Path, **thresholds: Any) -> Report:
-        report = judge_file(here / path, thresholds=Thresholds(**thresholds), name=str(path))
+        unknown = sorted(set(thresholds) - known)
+        if unknown:
+            pytest.fail(f"prima_judge: no threshold {', '.join(map(repr, unknown))} (the "
+                        f"thresholds: {', '.join(sorted(known))})", pytrace=False)
+        report = _located(lambda: judge_file(here / path, thresholds=Thresholds(**thresholds),
+                                             name=str(path)))
         if not report.ok:
             pytest.fail(f"{path}: {'; '.join(report.breaches())}\n\n{format_table([report])}",
                         pytrace=False)
         return report
 
     return check
+
+
+_T = TypeVar("_T")
+
+
+def _located(work: Callable[[], _T]) -> _T:
+    """``work()``; a bad scenario, document or trace fails the test with PRIMA's located
+    messages (``file:line:col: error: ...``), not a traceback through PRIMA."""
+    from prima.errors import LocatedError, PrimaError
+
+    try:
+        return work()
+    except LocatedError as exc:
+        pytest.fail("\n".join(str(p) for p in exc.problems), pytrace=False)
+    except (PrimaError, OSError) as exc:
+        pytest.fail(str(exc), pytrace=False)

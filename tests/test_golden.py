@@ -62,4 +62,27 @@ def test_pytest_fixture(pytester: pytest.Pytester, tmp_path: Path) -> None:
     scenario(tmp_path, message_at=27)
     result = pytester.runpytest()
     result.assert_outcomes(failed=1)
-    result.stdout.fnmatch_lines(["*differs from its golden trace*"])
+    result.stdout.fnmatch_lines(["*differs from its golden trace*",
+                                 "*then pytest --prima-update-goldens*"])
+
+
+def test_the_fixtures_fail_a_bad_input_with_its_message_not_a_traceback(
+        pytester: pytest.Pytester, tmp_path: Path) -> None:
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<scenario xmlns="urn:prima:scenario:1" name="x" until="10">\n'
+                   '  <map href="nowhere.xml"/>\n  <robot x="0" y="0"/>\n</scenario>\n')
+    pytester.makepyfile(f"""
+        def test_golden(prima_golden):
+            prima_golden({str(tmp_path / "missing.xml")!r})
+
+        def test_judged(prima_judge):
+            prima_judge({str(bad)!r})
+
+        def test_misspelt(prima_judge):
+            prima_judge({str(bad)!r}, max_unfacd=1)
+    """)
+    result = pytester.runpytest()
+    result.assert_outcomes(failed=3)
+    result.stdout.fnmatch_lines([f"*{bad}:2:*map file 'nowhere.xml' not found*",
+                                 "*prima_judge: no threshold 'max_unfacd'*"])
+    assert "Traceback" not in result.stdout.str() and "prima/xmlio.py" not in result.stdout.str()
