@@ -298,6 +298,13 @@ def _usage(command: str, message: str, err: TextIO) -> int:
     return EXIT_USAGE
 
 
+def _is_terminal(stream: TextIO) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):  # (a closed or unusual stream)
+        return False
+
+
 def _missing_extra(module: str, library: str, extra: str) -> str | None:
     """Why a viewer cannot run here: the optional extra it needs is not installed
     (checked before anything runs, like a usage error)."""
@@ -761,10 +768,11 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         err.flush()
 
     result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
-                   jobs=args.jobs, thresholds=thresholds, progress=progress_bar(show))
+                   jobs=args.jobs, thresholds=thresholds,
+                   progress=progress_bar(show, live=_is_terminal(err)))
     out.write(format_sweep(result))
     if result.interrupted:
-        if result.runs:
+        if result.runs and _is_terminal(err):
             err.write("\n")  # after the progress bar
         print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
               file=err)

@@ -310,12 +310,21 @@ def format_sweep(result: Sweep) -> str:
     return "\n".join(rows) + "\n"
 
 
-def progress_bar(out: Callable[[str], object], width: int = 30) -> Callable[[int, int], None]:
-    """A text progress bar redrawn in place (``\\r``), through ``out``."""
+def progress_bar(out: Callable[[str], object], width: int = 30,
+                 live: bool = True) -> Callable[[int, int], None]:
+    """A text progress bar through ``out``: redrawn in place (``\\r``) on a terminal
+    (``live``); else (a log file, CI) a line at each tenth of the runs, no more."""
+    shown = [-1]
 
     def draw(done: int, total: int) -> None:
         filled = width * done // max(total, 1)
-        end = "\n" if done >= total else ""
-        out(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} runs{end}")
+        bar = f"[{'#' * filled}{'.' * (width - filled)}] {done}/{total} runs"
+        if live:
+            out(f"\r{bar}{chr(10) if done >= total else ''}")
+            return
+        tenth = 10 * done // max(total, 1)
+        if tenth > shown[0]:
+            shown[0] = tenth
+            out(bar + "\n")
 
     return draw

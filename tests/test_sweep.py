@@ -131,7 +131,7 @@ def test_an_interrupted_sweep_keeps_what_was_done() -> None:
 
 def test_ctrl_c_prints_what_was_done_and_exits_130(tmp_path: Path,
                                                    monkeypatch: pytest.MonkeyPatch) -> None:
-    def bar(_out: Any) -> Any:
+    def bar(_out: Any, live: bool = True) -> Any:
         def draw(done: int, total: int) -> None:
             if done == 2:
                 raise KeyboardInterrupt
@@ -184,3 +184,17 @@ def test_a_bad_scenario_is_located(tmp_path: Path) -> None:
     code, _, err = cli("sweep", str(bad), "--runs", "2", "--jitter", "1")
     assert code == 1
     assert f"{bad}:2:" in err and "Traceback" not in err
+
+
+def test_the_progress_bar_is_redrawn_on_a_terminal_and_a_line_a_tenth_in_a_log() -> None:
+    from prima.sweep import progress_bar
+
+    for live, expected in ((True, 200), (False, 11)):
+        written: list[str] = []
+        draw = progress_bar(written.append, width=10, live=live)
+        for done in range(1, 201):
+            draw(done, 200)
+        assert len(written) == expected
+        assert all(("\r" in w) == live for w in written)
+        assert written[-1].endswith("[##########] 200/200 runs\n")
+    assert written[0] == "[..........] 1/200 runs\n"
