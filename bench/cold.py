@@ -89,7 +89,7 @@ def check_targets(medians: dict[str, float]) -> bool:
     return met_all
 
 
-def main() -> None:
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, metavar="N",
                         help="interleaved rounds (default 5)")
@@ -106,8 +106,8 @@ def main() -> None:
         medians = interleaved(measured, args.repeats)
     report("cold processes", medians, "python -c pass", repeats=args.repeats)
     print(f"  (python -m prima; bytecode: {bytecode_mode()})")
-    check_targets(medians)
+    return 0 if check_targets(medians) else 1
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -134,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {name:<{width}}  {speed:>9,.0f}x  {'met' if ok else 'NOT met'}")
     print("target met on every scenario" if met else "target NOT met on every scenario")
     print(interpreter())
-    return 0
+    return 0 if met else 1
 
 
 if __name__ == "__main__":

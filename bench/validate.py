@@ -286,7 +286,7 @@ def check_reports(folder: Path, bad: set[Path]) -> int:
     return len(reported)
 
 
-def main() -> None:
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, metavar="N",
                         help="interleaved rounds (default 5)")
@@ -324,7 +324,8 @@ def main() -> None:
     print(f"target: prima validate (cold) {fmt_time(cold)} <= {fmt_time(TARGET)}: "
           f"{'met' if cold <= TARGET else 'NOT met'}")
     print(interpreter())
+    return 0 if cold <= TARGET else 1
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
