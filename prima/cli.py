@@ -32,7 +32,8 @@ if TYPE_CHECKING:
 # lark or pymunk; ``prima validate`` of documents no simulator): a cold start pays
 # only for its own command.
 
-EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 130, 141
+"""141: as a shell reports a process its closed pipe stopped (128 + SIGPIPE)."""
 
 
 def _seed(text: str) -> int:
@@ -276,9 +277,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except PrimaError as exc:  # a user's error is a message, never a traceback
         print(f"prima {args.command}: error: {exc}", file=err)
         return EXIT_ERRORS
-    except BrokenPipeError:  # e.g. `prima validate apps/ | head`
+    except BrokenPipeError:  # e.g. `prima validate apps/ | head`: the reader had enough
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
-        return EXIT_ERRORS
+        return EXIT_PIPE
     except KeyboardInterrupt:  # Ctrl-C: what was written so far stays written
         print(f"prima {args.command}: interrupted", file=err)
         return EXIT_INTERRUPTED

@@ -362,3 +362,20 @@ def test_ctrl_c_closes_a_chrome_trace_where_the_run_stopped(tmp_path: Path) -> N
     events = json.loads(out.read_text())  # a whole, closed array
     begins = sum(e["ph"] == "b" for e in events)
     assert begins and begins == sum(e["ph"] == "e" for e in events)
+
+
+def test_a_reader_that_stops_early_ends_the_command_quietly_with_141() -> None:
+    """``prima run ... | head -1``: exit 141, as a shell reports a closed pipe (not 1, which
+    says the scenario has errors), and no traceback."""
+    import subprocess
+    import sys
+
+    # (a trace far longer than a pipe's buffer: the run is still writing when it closes)
+    long = ROOT / "scenarios" / "thesis" / "sample-07.xml"
+    proc = subprocess.Popen([sys.executable, "-m", "prima", "run", str(long), "--format",
+                             "jsonl"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    assert proc.stdout.readline().startswith(b'{"t": 0')
+    proc.stdout.close()
+    said = proc.stderr.read()
+    assert proc.wait(timeout=60) == 141 and b"Traceback" not in said, said
