@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import multiprocessing
 import os
+import signal
 import sys
 import time
 from dataclasses import dataclass, field
@@ -90,15 +91,26 @@ def main(argv: list[str] | None = None) -> int:
     cpu0 = time.process_time()
     print(f"{args.scenarios} scenarios from seed {base}, {args.jobs} job(s)", flush=True)
     step = max(1, len(chunks) // 20)
-    with multiprocessing.Pool(args.jobs) as pool:
-        for i, t in enumerate(pool.imap(run_range, chunks), 1):
-            for seed, v in t.violations[:3]:
-                print(f"  VIOLATION seed {seed}: {v}", flush=True)
-            total.add(t)
-            if i % step == 0 or i == len(chunks):
-                print(f"  {total.scenarios:>9} scenarios  {total.decisions:>11} decisions  "
-                      f"{total.failing} failing  {time.perf_counter() - wall:7.0f} s",
-                      flush=True)
+    interrupted = False
+    # the workers leave Ctrl-C to this process, which stops them and reports what was done
+    with multiprocessing.Pool(args.jobs, initializer=signal.signal,
+                              initargs=(signal.SIGINT, signal.SIG_IGN)) as pool:
+        try:
+            for i, t in enumerate(pool.imap(run_range, chunks), 1):
+                for seed, v in t.violations[:3]:
+                    print(f"  VIOLATION seed {seed}: {v}", flush=True)
+                total.add(t)
+                if i % step == 0 or i == len(chunks):
+                    done = total.scenarios / args.scenarios
+                    left = (time.perf_counter() - wall) * (1 - done) / max(done, 1e-9)
+                    print(f"  {total.scenarios:>9} scenarios  {total.decisions:>11} decisions  "
+                          f"{total.failing} failing  {time.perf_counter() - wall:7.0f} s "
+                          f"(about {left:.0f} s to go)", flush=True)
+        except KeyboardInterrupt:
+            interrupted = True
+            pool.terminate()
+    if interrupted:
+        print(f"interrupted: the {total.scenarios} scenarios checked so far", flush=True)
     cpu = total.cpu + time.process_time() - cpu0
     print(f"scenarios:  {total.scenarios}")
     print(f"decisions:  {total.decisions}")
@@ -112,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  seed {seed}: {v}")
     print(f"CPU time:   {cpu:.0f} s ({1e6 * cpu / max(1, total.scenarios):.0f} µs per scenario), "
           f"wall {time.perf_counter() - wall:.0f} s")
-    return 1 if total.failing else 0
+    return 1 if total.failing else 130 if interrupted else 0
 
 
 if __name__ == "__main__":
