@@ -170,3 +170,16 @@ def test_the_judging_python_example_says_what_it_gives() -> None:
     assert f"report.counts()         # {{{shown}, ...}}" in text
     assert f"report.breaches()       # {report.breaches()!r}" in text
     assert f"report.splits[0].text   # {report.splits[0].text!r}" in text
+
+
+def test_the_readme_demo_output_is_a_real_runs() -> None:
+    """The quickstart's pasted output is the first lines of the command it shows, as is."""
+    from prima.run import Run
+    from prima.trace import format_text
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = re.search(r"```\n(  No\.     time.*?)\n\.\.\.\n```", readme, re.S)
+    assert block is not None
+    real = format_text(Run(ROOT / "scenarios" / "thesis" / "sample-03.xml").run())
+    shown = block.group(1).splitlines()
+    assert shown == real.splitlines()[:len(shown)]
