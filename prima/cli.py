@@ -335,7 +335,7 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
     fits its slot. The simulator is imported only when a file of neither
     PRIMA's documents nor its robot profiles is met.
     """
-    from prima.run import unknown_places
+    from prima.dsl import unknown_places
     from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
 
     maps: dict[Path, WorldMap] = {}
@@ -358,7 +358,8 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
             pair = (document.resolve(), map_path.resolve())
             if world is not None and checked is not None and pair not in placed:
                 placed.add(pair)
-                out.extend(unknown_places(*checked, world))
+                out.extend(unknown_places(*checked, [p.name for p in world.places],
+                                          world.name, world.source))
         return out
 
     def check_scenario(path: Path) -> list[Problem]:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,11 +21,11 @@ from typing import Any
 from prima.catalog import Catalog, ParamKind
 from prima.dsl import (
     Document,
-    PlaceRef,
     RobotProfile,
     default_profile,
     load_document,
     load_profile,
+    unknown_places,
 )
 from prima.errors import AppFailure, DocumentError, LocatedError, Problem, RunError, Severity
 from prima.interpreter import Interpreter, Note
@@ -41,15 +41,7 @@ from prima.mediator import (
     Request,
     Rule,
 )
-from prima.sim import (
-    RobotSpec,
-    Scenario,
-    Simulator,
-    UserAction,
-    WorldMap,
-    ZoneEntry,
-    load_scenario,
-)
+from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
 from prima.trace import Kind, RecordKind, TraceLine
 from prima.vocab import (
     FACE_TOLERANCE,
@@ -61,7 +53,7 @@ from prima.vocab import (
     policy_settings,
 )
 
-__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile", "unknown_places"]
+__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
 
 MAX_IDLE_ROUNDS = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
@@ -267,7 +259,9 @@ class Run:
         """A document loaded for ``role``, its places written by name on the scenario's map
         (as ``prima validate`` of the scenario checks them): else the problems."""
         document = _check_slot(load_document(path, self.profile), role)
-        problems = unknown_places(str(path), document.places, self.scenario.map)
+        world = self.scenario.map
+        problems = unknown_places(str(path), document.places, [p.name for p in world.places],
+                                  world.name, world.source)
         if problems:
             raise DocumentError(problems)
         return document
@@ -457,35 +451,3 @@ def _shown_args(catalog: Catalog, call: Call) -> list[str]:
         elif param.shown and not said and value:
             out.append(f'{name}="{value}"')
     return out
-
-
-def unknown_places(file: str, places: Sequence[PlaceRef], world: WorldMap) -> list[Problem]:
-    """A problem in the document ``file`` at each place it names that ``world`` lacks: the
-    closest name on the map if one is close, else the map's places if they are few. At
-    most MAX_PROBLEMS of them (then a line counting the rest), each hint computed once.
-    ``prima validate`` of a scenario and a run's loading both check with it."""
-    import difflib
-
-    from prima.xmlio import MAX_PROBLEMS, limit
-
-    names = [p.name for p in world.places]
-    known = set(names)
-    if len(names) <= _FEW_PLACES:
-        listed = f" (known: {', '.join(sorted(names))})" if names else " (it has no places)"
-    else:
-        listed = f" ({len(names)} places; see {world.source or 'its file'})"
-    hints: dict[str, str] = {}
-    out: list[Problem] = []
-    unknown = [p for p in places if p.name not in known]
-    for place in unknown[:MAX_PROBLEMS + 1]:
-        if place.name not in hints:
-            close = difflib.get_close_matches(place.name, names, n=1, cutoff=0.75)
-            hints[place.name] = f" (did you mean '{close[0]}'?)" if close else listed
-        out.append(Problem(file, place.loc.line, place.loc.col, Severity.ERROR,
-                           f"unknown place '{place.name}' on map '{world.name}'"
-                           f"{hints[place.name]}"))
-    return limit(out, file, len(unknown))
-
-
-_FEW_PLACES = 12
-"""A map with at most this many places lists them under an unknown place's error."""

@@ -13,8 +13,8 @@ on) are private. In the direction data flows:
 - the model the interpreter runs (:class:`Document`, :class:`State`,
   :class:`Handler`, the actions, :class:`CommandCall`, :class:`Grammar`, with
   :func:`words` and :func:`match_pattern` for its answers, and
-  :func:`literal_places`: the places it names, as :class:`PlaceRef`, for a caller
-  that knows the map to check);
+  :func:`literal_places`: the places it names, as :class:`PlaceRef`, which
+  :func:`unknown_places` checks against a map's place names);
 - the expression language: :func:`compile_expression`, :func:`compile_template`,
   :func:`parse_chain` give :class:`Compiled` closures run over a :class:`Scope`;
   its lark :func:`parser` is loaded from tables prebuilt from ``pxml.lark``
@@ -91,6 +91,7 @@ from prima.dsl._validate import (
     check_file,
     collect,
     root_namespace,
+    unknown_places,
     validate_paths,
 )
 
@@ -147,6 +148,7 @@ __all__ = [
     "fast_parse",
     "load_document",
     "literal_places",
+    "unknown_places",
     "load_profile",
     "match_pattern",
     "parse_chain",

@@ -9,7 +9,7 @@ or named (a scenario names its map, robot profile and applications).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from io import BytesIO
 from pathlib import Path
@@ -307,3 +307,36 @@ def validate_paths(paths: Iterable[tuple[Path, bool] | Path], profile: RobotProf
     """Validate every file, each once; files found in folders are skipped unless they are
     known kinds."""
     return Validation(profile or default_profile(), checkers).run(paths)
+
+
+def unknown_places(file: str, places: Sequence[PlaceRef], names: Sequence[str],
+                   map_name: str, source: str = "") -> list[Problem]:
+    """A problem in the document ``file`` at each of its literal ``places`` that is not
+    among the map's place ``names``: the closest name if one is close, else the map's
+    places if they are few (``source``: where the map is, named when they are many). At
+    most MAX_PROBLEMS of them (then a line counting the rest), each hint worked out once.
+    ``prima validate`` of a scenario and a run's loading both check with it."""
+    import difflib
+
+    from prima.xmlio import MAX_PROBLEMS, limit
+
+    known = set(names)
+    if len(names) <= _FEW_PLACES:
+        listed = f" (known: {', '.join(sorted(names))})" if names else " (it has no places)"
+    else:
+        listed = f" ({len(names)} places; see {source or 'its file'})"
+    hints: dict[str, str] = {}
+    out: list[Problem] = []
+    unknown = [p for p in places if p.name not in known]
+    for place in unknown[:MAX_PROBLEMS + 1]:
+        if place.name not in hints:
+            close = difflib.get_close_matches(place.name, names, n=1, cutoff=0.75)
+            hints[place.name] = f" (did you mean '{close[0]}'?)" if close else listed
+        out.append(Problem(file, place.loc.line, place.loc.col, Severity.ERROR,
+                           f"unknown place '{place.name}' on map '{map_name}'"
+                           f"{hints[place.name]}"))
+    return limit(out, file, len(unknown))
+
+
+_FEW_PLACES = 12
+"""A map with at most this many places lists them under an unknown place's error."""
