@@ -29,7 +29,7 @@ from typing import Any
 from prima.trace import Pose, user_words
 
 __all__ = ["JOIN", "NO_DEVICE", "Bar", "Mark", "Span", "Tick", "Timeline", "blended_devices",
-           "runs", "timeline"]
+           "ink", "runs", "timeline"]
 
 Row = Mapping[str, Any]
 
@@ -169,6 +169,13 @@ def runs(bars: Iterable[Bar], join: float = JOIN) -> list[list[Bar]]:
         else:
             out.append([bar])
     return out
+
+
+def ink(colour: str) -> str:
+    """The text colour that reads on a bar of ``colour`` (``#rrggbb``), as both viewers
+    label an application's bars: black on a light one, else white."""
+    r, g, b = (int(colour[k:k + 2], 16) / 255 for k in (1, 3, 5))
+    return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.6 else "white"
 
 
 def blended_devices(over: object) -> frozenset[str]:

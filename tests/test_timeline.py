@@ -259,3 +259,10 @@ def test_runs_are_a_commands_bars_that_follow_one_another_on_one_device() -> Non
             bar(9, 1, 2, device="neck"), bar(10, 2, 3, device="neck")]
     assert [[b.ab for b in run] for run in runs(reversed(bars))] == [
         [1, 2, 3], [4], [5], [6], [7], [8], [9, 10]]
+
+
+def test_labels_are_inked_to_read_on_their_bar() -> None:
+    from prima.timeline import ink
+
+    assert [ink(c) for c in ("#1f77b4", "#EF553B", "#FECB52", "#ffffff")] == [
+        "white", "white", "black", "black"]

@@ -12,13 +12,12 @@ from pathlib import Path
 
 import matplotlib
 from matplotlib.axes import Axes
-from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from prima.plot import abbreviate
-from prima.timeline import Bar, Timeline, runs
+from prima.timeline import Bar, Timeline, ink, runs
 
 __all__ = ["app_colors", "draw_timeline", "save_timeline", "timeline_figure"]
 
@@ -36,11 +35,6 @@ _METADATA = {".svg": {"Date": None}, ".pdf": {"CreationDate": None, "ModDate": N
 def app_colors(apps: Sequence[str]) -> dict[str, str]:
     """Each application's colour, in load order."""
     return {app: _PALETTE[i % len(_PALETTE)] for i, app in enumerate(apps)}
-
-
-def _ink(color: str) -> str:
-    r, g, b = to_rgb(color)
-    return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.6 else "white"
 
 
 def _merged(spans: Sequence[tuple[float, float, str]]) -> list[tuple[float, float]]:
@@ -111,7 +105,7 @@ def draw_timeline(ax: Axes, tl: Timeline, *, width_pt: float, labels: bool = Tru
             text = _label(run, (t1 - t0) * per_s)
             if text:
                 ax.text((t0 + t1) / 2, y[device], text, ha="center", va="center",
-                        fontsize=_FONT - 1, color=_ink(colors[run[0].app]), clip_on=True)
+                        fontsize=_FONT - 1, color=ink(colors[run[0].app]), clip_on=True)
 
     for span in tl.spans if waits else ():
         row = y[f"{span.app} waits"]

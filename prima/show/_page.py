@@ -13,7 +13,7 @@ from plotly.colors import qualitative
 
 from prima.show._model import Model
 from prima.sim import WorldMap
-from prima.timeline import Bar, runs
+from prima.timeline import Bar, ink, runs
 
 INSTANT = 0.05
 """The least width (s) of a bar: an atomic behavior that took no time is still seen."""
@@ -41,12 +41,6 @@ def _label(bar: Bar) -> str:
 def _colours(apps: list[str]) -> dict[str, str]:
     palette = qualitative.Plotly
     return {app: palette[i % len(palette)] for i, app in enumerate(apps)}
-
-
-def _ink(colour: str) -> str:
-    """Text that reads on a bar of this colour (``#rrggbb``): black on light, else white."""
-    r, g, b = (int(colour[k:k + 2], 16) / 255 for k in (1, 3, 5))
-    return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.6 else "white"
 
 
 def _bounds(model: Model, world: WorldMap | None) -> tuple[float, float, float, float]:
@@ -158,7 +152,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
                 x=[_width(r[0].t0, r[-1].t1) for r in repeated], width=0.8, offset=-0.4,
                 text=[f"{_esc(r[0].command)} x{len(r)}" for r in repeated],
                 textposition="inside", insidetextanchor="start", textangle=0,
-                textfont={"size": 10, "color": _ink(colours[app])},
+                textfont={"size": 10, "color": ink(colours[app])},
                 marker={"color": colours[app]}, hoverinfo="skip", showlegend=False,
                 meta="runs"))
     for kind, (shape, colour, what) in _SPAN_STYLE.items():
