@@ -33,6 +33,7 @@ __all__ = [
     "RESTORE_COMMAND",
     "RESTORE_POSITION_COMMAND",
     "MAX_HOLD",
+    "MAX_SWAY",
     "STANDARD_COMMANDS",
     "STANDARD_DEVICES",
     "SYMBOLIC_KINDS",
@@ -48,6 +49,7 @@ __all__ = [
     "Primitive",
     "Priority",
     "RaiseEvent",
+    "SwayBody",
 ]
 
 STANDARD_DEVICES: tuple[str, ...] = (
@@ -184,6 +186,22 @@ class MoveJoint:
     toward: str | ArgRef | None = None
 
 
+MAX_SWAY = 90.0
+"""Widest a ``<sway>`` step may sway the body either way (deg)."""
+
+
+@dataclass(frozen=True)
+class SwayBody:
+    """Sway the body about its heading: +- ``degrees``, one whole sway every ``period``
+    seconds, for ``seconds`` (whole sways only: it ends facing where it began). Alone
+    it turns the robot to and fro in place; blended over a global motion (the blend
+    policy) it is superimposed on that motion's course."""
+
+    degrees: float | ArgRef
+    period: float | ArgRef
+    seconds: float | ArgRef
+
+
 @dataclass(frozen=True)
 class RaiseEvent:
     """Post a robot-specific event (one the profile declares) to the applications."""
@@ -191,7 +209,7 @@ class RaiseEvent:
     event: str
 
 
-Primitive = Hold | MoveJoint | RaiseEvent
+Primitive = Hold | MoveJoint | SwayBody | RaiseEvent
 """One step of a ``<perform>``: what the simulator does, in order, to perform a
 Command a profile declares or implements its own way."""
 

@@ -26,6 +26,7 @@ from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
     from prima.dsl import Checker, Header, RobotProfile, Validation
+    from prima.run import Switches
     from prima.sim import WorldMap
 
 # Each command imports what it needs when it runs (``prima --help`` imports no lxml,
@@ -47,14 +48,22 @@ def _seed(text: str) -> int:
     return seed
 
 
-def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
-    """What runs a scenario: the scenario, the documents, the robot, seed and time."""
-    parser.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
+def _switch_arguments(parser: argparse.ArgumentParser, policies: bool = True) -> None:
+    """What changes a scenario's own choices, the same on every command that runs one:
+    its FA, its EA, its robot (and, with ``policies``, policy switches)."""
     parser.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
     parser.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
     parser.add_argument("--robot", metavar="PROFILE",
                         help="robot hardware profile (default: the scenario's, else the home "
                              "robot)")
+    if policies:
+        _policy_argument(parser)
+
+
+def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    """What runs a scenario: the scenario, the documents, the robot, seed and time."""
+    parser.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
+    _switch_arguments(parser, policies=False)
     parser.add_argument("--seed", type=_seed, metavar="N",
                         help="random seed (default: the scenario's)")
     parser.add_argument("--until", type=float, metavar="SECONDS",
@@ -127,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     test.add_argument("paths", nargs="+", metavar="PATH", help="scenario files or folders")
     test.add_argument("--update", action="store_true",
                       help="rewrite the golden traces with this run's traces")
+    _switch_arguments(test)
     judge = commands.add_parser(
         "judge",
         help="measure the naturalness of runs: reactions, facing, splits, silences",
@@ -138,6 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     judge.add_argument("paths", nargs="+", metavar="PATH",
                        help="jsonl traces, scenario files or folders")
+    _switch_arguments(judge)
     judge.add_argument("--format", choices=("text", "json"), default="text",
                        help="output format (default: text)")
     add_threshold_options(judge)
@@ -151,6 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "Exit status 1 when a run exceeded a threshold.",
     )
     sweep.add_argument("scenario", metavar="SCENARIO", help="a scenario file")
+    _switch_arguments(sweep)
     sweep.add_argument("--runs", type=int, required=True, metavar="N", help="how many runs")
     sweep.add_argument("--jitter", type=float, required=True, metavar="SECONDS",
                        help="largest shift of a timing, either way")
@@ -173,6 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "in-process). Needs the show extra: pip install 'prima[show]'.",
     )
     show.add_argument("input", metavar="RUN", help="a jsonl trace or a scenario file")
+    _switch_arguments(show)
     show.add_argument("--scenario", metavar="SCENARIO",
                       help="the scenario a jsonl trace was run from: its map is drawn "
                            "(a trace does not name it)")
@@ -196,6 +209,7 @@ def _add_plot(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
                     "plot extra (matplotlib).",
     )
     plot.add_argument("input", metavar="INPUT", help="a jsonl trace or a scenario file")
+    _switch_arguments(plot)
     plot.add_argument("-o", "--out", required=True, metavar="FILE",
                       help="the picture: .svg, .png or .pdf (timeline) or .gif (animation)")
     plot.add_argument("--until", type=float, metavar="SECONDS",
@@ -212,50 +226,25 @@ def _add_plot(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> 
                       help="animation: frames shown per second (default 5)")
 
 
-_THRESHOLD_OPTIONS = (
-    ("--max-late", "max_late", int, "N", "late reactions allowed (default 0)"),
-    ("--max-unfaced", "max_unfaced", int, "N", "utterances unfaced allowed (default 0)"),
-    ("--max-leaving", "max_leaving", int, "N", "leavings while talking allowed (default 0)"),
-    ("--max-splits", "max_splits", int, "N", "split exchanges allowed (default 0)"),
-    ("--max-elsewhere", "max_elsewhere", int, "N",
-     "streams resumed away from where they were suspended allowed (default 0)"),
-    ("--max-silences", "max_silences", int, "N", "silences after an answer allowed (default 0)"),
-    ("--max-stuck", "max_stuck", int, "N", "stuck applications allowed (default 0)"),
-    ("--reaction-slack", "reaction_slack", float, "SECONDS",
-     "a reaction's first start may come this long after the residual (default 0.2)"),
-    ("--utterance-slack", "utterance_slack", float, "SECONDS",
-     "and its first utterance this much later still (default 1.0)"),
-    ("--react-within", "react_within", float, "SECONDS",
-     "a fixed bound for the first start instead of residual + slack (e.g. 0.2)"),
-    ("--face-tolerance", "face_tolerance", float, "DEGREES",
-     "largest angle to the user still counted as facing (default 30)"),
-    ("--leave-distance", "leave_distance", float, "METRES",
-     "how far the robot may move away from the user while talking (default 0.3)"),
-    ("--resume-distance", "resume_distance", float, "METRES",
-     "how far from where it was suspended a stream may resume speaking (default 0.3)"),
-    ("--silence", "silence", float, "SECONDS",
-     "longest pause without output after an answer (default 2)"),
-    ("--stuck-after", "stuck_after", float, "SECONDS",
-     "how long a Command may wait before its application is stuck (default 60)"),
-    ("--search-after", "search_after", float, "SECONDS",
-     "how long a search may go on without a sight of the user (default 90)"),
-)
-"""The thresholds of ``prima judge`` and ``prima sweep``: option, field, type, metavar, help."""
-
-
 def add_threshold_options(parser: argparse.ArgumentParser) -> None:
-    """The threshold options (a field of :class:`prima.judge.Thresholds` each)."""
+    """The threshold options: ``--max-<measure>`` for each measure of
+    :data:`prima.judge.LIMITS`, then the measures' parameters."""
+    from prima.judge import LIMITS, PARAMETERS
+
     group = parser.add_argument_group("thresholds")
-    for option, dest, kind, metavar, help_text in _THRESHOLD_OPTIONS:
-        group.add_argument(option, dest=dest, type=kind, metavar=metavar, help=help_text)
+    for m in LIMITS:
+        group.add_argument(m.option, dest=m.limit, type=int, metavar="N",
+                           help=f"{m.allowed} (default 0)")
+    for p in PARAMETERS:
+        group.add_argument(p.option, dest=p.name, type=float, metavar=p.metavar, help=p.help)
 
 
 def thresholds_from(args: argparse.Namespace) -> object:
     """The :class:`prima.judge.Thresholds` the options ask for; ValueError if one is bad."""
-    from prima.judge import Thresholds
+    from prima.judge import LIMITS, PARAMETERS, Thresholds
 
-    given = {dest: getattr(args, dest) for _, dest, *_ in _THRESHOLD_OPTIONS
-             if getattr(args, dest) is not None}
+    names = [m.limit for m in LIMITS] + [p.name for p in PARAMETERS]
+    given = {name: getattr(args, name) for name in names if getattr(args, name) is not None}
     return Thresholds(**given)
 
 
@@ -528,6 +517,26 @@ def _run_usage(args: argparse.Namespace) -> str | None:
     return None
 
 
+def _switches(args: argparse.Namespace) -> Switches | str:
+    """The command line's FA, EA, robot and policy switches, or what is wrong with them."""
+    from prima.run import Switches
+
+    switches = _policies(args.policy)
+    if isinstance(switches, str):
+        return switches
+    for path in (args.fa, args.ea, args.robot):
+        if path is not None and not Path(path).is_file():
+            return f"no such file: {path}"
+    return Switches(args.fa, args.ea, args.robot, tuple(switches.items()))
+
+
+def _scenario_only(args: argparse.Namespace, source: Path) -> str | None:
+    """Switches make sense only where a scenario runs (a trace is what it is)."""
+    if source.suffix == ".jsonl" and (args.fa or args.ea or args.robot or args.policy):
+        return "--fa, --ea, --robot and --policy change a scenario's run, not a trace"
+    return None
+
+
 def _policies(given: list[str]) -> dict[str, bool] | str:
     """``--policy NAME=on|off`` switches, in order (a later one wins), or what is wrong."""
     out: dict[str, bool] = {}
@@ -648,6 +657,9 @@ def _between_lines() -> Iterator[_Deferred]:
 def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.golden import Status, check, scenarios_with_goldens
 
+    switches = _switches(args)
+    if isinstance(switches, str):
+        return _usage("test", switches, err)
     try:
         scenarios = scenarios_with_goldens(args.paths)
     except FileNotFoundError as exc:
@@ -657,7 +669,7 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     failed = 0
     for scenario in scenarios:
         try:
-            result = check(scenario, update=args.update)
+            result = check(scenario, update=args.update, switches=switches)
         except LocatedError as exc:
             _report(exc.problems, err)
             failed += 1
@@ -714,11 +726,18 @@ def _judge(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     inputs = _judge_inputs(args.paths)
     if isinstance(inputs, str):
         return _usage("judge", inputs, err)
+    switches = _switches(args)
+    if isinstance(switches, str):
+        return _usage("judge", switches, err)
+    for path in inputs:
+        problem = _scenario_only(args, path)
+        if problem:
+            return _usage("judge", problem, err)
     reports: list[Report] = []
     failed = 0
     for path in inputs:
         try:
-            reports.append(judge_file(path, thresholds=thresholds))
+            reports.append(judge_file(path, thresholds=thresholds, switches=switches))
         except LocatedError as exc:
             _report(exc.problems, err)
             failed += 1
@@ -764,6 +783,9 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     thresholds = _thresholds("sweep", args, err)
     if not isinstance(thresholds, Thresholds):
         return EXIT_USAGE
+    switches = _switches(args)
+    if isinstance(switches, str):
+        return _usage("sweep", switches, err)
 
     def show(text: str) -> None:
         err.write(text)
@@ -771,7 +793,7 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
     result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
                    jobs=args.jobs, thresholds=thresholds,
-                   progress=progress_bar(show, live=_is_terminal(err)))
+                   progress=progress_bar(show, live=_is_terminal(err)), switches=switches)
     out.write(format_sweep(result))
     if result.interrupted:
         if result.runs and _is_terminal(err):
@@ -816,11 +838,15 @@ def _show_usage(args: argparse.Namespace) -> str | None:
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.show import read_rows, render
 
-    problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show")
+    problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show") \
+        or _scenario_only(args, Path(args.input))
     if problem:
         return _usage("show", problem, err)
+    switches = _switches(args)
+    if isinstance(switches, str):
+        return _usage("show", switches, err)
     source = Path(args.input)
-    rows = read_rows(source)
+    rows = read_rows(source, switches)
     scenario = source if source.suffix == ".xml" else args.scenario
     text = render(rows, scenario=scenario, title=source.stem)
     Path(args.out).write_text(text, encoding="utf-8")
@@ -861,9 +887,13 @@ def _plot_usage(args: argparse.Namespace) -> str | None:
 
 
 def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    problem = _plot_usage(args) or _missing_extra("matplotlib", "matplotlib", "plot")
+    problem = _plot_usage(args) or _missing_extra("matplotlib", "matplotlib", "plot") \
+        or _scenario_only(args, Path(args.input))
     if problem:
         return _usage("plot", problem, err)
+    switches = _switches(args)
+    if isinstance(switches, str):
+        return _usage("plot", switches, err)
     from prima.plot import save_animation, save_timeline, timeline
     from prima.sim import load_map
 
@@ -877,7 +907,7 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         from prima.run import Run
 
         pose_rate = 2.0 if args.pose_rate is None else args.pose_rate
-        run = Run(source, until=args.until, pose_rate=pose_rate)
+        run = Run(source, until=args.until, pose_rate=pose_rate, **switches.run_options())
         rows = [line.to_dict() for line in run.run()]
         world = run.scenario.map
     if args.map is not None:

@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
-from prima.run import Run
+from prima.run import Run, Switches
 from prima.trace import format_text
 
 SUFFIX = ".golden.txt"
@@ -61,9 +61,11 @@ class Result:
     diff: str = ""
 
 
-def check(scenario: Path, *, update: bool = False) -> Result:
-    """Run ``scenario`` and compare its trace with the golden one (or rewrite it)."""
-    actual = format_text(Run(scenario).run())
+def check(scenario: Path, *, update: bool = False, switches: Switches | None = None) -> Result:
+    """Run ``scenario`` and compare its trace with the golden one (or rewrite it);
+    ``switches``: its FA, EA, robot or policies changed (``prima test --policy ...``)."""
+    options = switches.run_options() if switches else {}
+    actual = format_text(Run(scenario, **options).run())
     golden = golden_path(scenario)
     if update:
         if golden.exists() and golden.read_text(encoding="utf-8") == actual:

@@ -23,7 +23,6 @@ installed, so it imports nothing of PRIMA until a test uses the fixture.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -72,7 +71,7 @@ def prima_judge(request: pytest.FixtureRequest) -> Callable[..., Report]:
 
     here = Path(request.path).parent
 
-    known = {f.name for f in dataclasses.fields(Thresholds)}
+    known = set(Thresholds().to_dict())
 
     def check(path: str | Path, **thresholds: Any) -> Report:
         unknown = sorted(set(thresholds) - known)

@@ -31,6 +31,7 @@ from prima.errors import AppFailure, DocumentError, LocatedError, Problem, RunEr
 from prima.interpreter import Interpreter, Note
 from prima.mediator import (
     AppKind,
+    AtomicBehavior,
     Call,
     Decision,
     DecisionKind,
@@ -49,11 +50,12 @@ from prima.vocab import (
     RESTORE_ANGLE,
     RESTORE_DISTANCE,
     Budgets,
+    OnInterrupt,
     Value,
     policy_settings,
 )
 
-__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "spec_from_profile"]
+__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "Switches", "spec_from_profile"]
 
 MAX_IDLE_ROUNDS = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
@@ -135,7 +137,11 @@ class _Port:
         self._streams = run.policies["streams"]
 
     def submit(self, request: Request) -> tuple[int, ...]:
-        return self._run.mediator.submit(request)
+        self._run.requesting = request
+        try:
+            return self._run.mediator.submit(request)
+        finally:
+            self._run.requesting = None
 
     def open_stream(self, app: str, hold: float) -> None:
         if self._streams:
@@ -151,6 +157,27 @@ class _Port:
 
     def close_block(self, app: str) -> None:
         self._run.mediator.close_block(app)
+
+
+@dataclass(frozen=True)
+class Switches:
+    """What a command line may change of a scenario's own choices for its runs (``prima
+    run``, ``judge``, ``sweep``, ``test``, ``show``, ``plot`` alike): its FA, its EA,
+    its robot profile, and mediation policy switches (over the profile's and the
+    scenario's, a later one winning)."""
+
+    fa: str | None = None
+    ea: str | None = None
+    robot: str | None = None
+    policies: tuple[tuple[str, bool], ...] = ()
+
+    def __bool__(self) -> bool:
+        return bool(self.fa or self.ea or self.robot or self.policies)
+
+    def run_options(self) -> dict[str, Any]:
+        """The keyword arguments of :class:`Run` they stand for."""
+        return {"fa": self.fa, "ea": self.ea, "robot": self.robot,
+                "policies": dict(self.policies)}
 
 
 class Run:
@@ -208,6 +235,15 @@ class Run:
         self._paths: dict[str, Path] = {}
         """Each loaded application's document."""
         self._outcomes: dict[int, Outcome] = {}
+        self._said: dict[int, tuple[float, float]] = {}
+        """An ended AB's words: when they began and ended (for its end line)."""
+        self.requesting: Request | None = None
+        """The request an application is making (its Commands' lines say where it is
+        written, and whether they may be cut)."""
+        self._requested: dict[int, tuple[str, bool]] = {}
+        """Command id -> where its request is written (``doc.pxml:line:col``) and whether
+        the interrupt policy may cut it (the request did not say ``never``), while it is
+        in working memory."""
         self.catalog = self.profile.catalog()
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
                                            catalog=self.catalog)
@@ -217,7 +253,9 @@ class Run:
                                   connect_channel=self.policies["connect-channel"],
                                   restore_state=self.policies["restore-state"],
                                   interrupt=self.policies["interrupt"],
-                                  blend=self.policies["blend"]),
+                                  blend=self.policies["blend"],
+                                  reactions=self.policies["reactions"],
+                                  exchange=self.policies["exchange"]),
             channel=_Channel(self.sim))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
@@ -277,6 +315,7 @@ class Run:
         budgets = self.budgets[role]
         interpreter = Interpreter(document, name, self._port, self.sim,
                                   catalog=self.catalog, robot_events=self.profile.events,
+                                  user_events=self.profile.user_events,
                                   gestures=self.profile.gestures, budgets=budgets,
                                   note=self._note,
                                   send=lambda _app, to, text: self.sim.send(to, text))
@@ -372,16 +411,15 @@ class Run:
         detail: dict[str, Value] = {}
         if d.command_id is not None:
             detail["command_id"] = d.command_id
+        if kind is DecisionKind.REQUEST:
+            self._where(d, detail)
+        elif kind is DecisionKind.START:
+            self._starting(d, detail)
         if kind is DecisionKind.END and d.ab is not None:
-            outcome = self._outcomes.pop(d.ab, None)
-            if outcome is not None and outcome.values:
-                detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
-                if "error" in outcome.values:
-                    detail["error"] = outcome.values["error"]
-                if d.rule is Rule.INTERRUPT:
-                    detail["interrupt"] = d.detail
-                    detail["spoken"] = outcome.values.get("spoken")
-                    detail["unspoken"] = outcome.values.get("unspoken")
+            self._ended(d, detail)
+        elif kind is DecisionKind.CANCEL:
+            for cid in d.command_ids:
+                self._requested.pop(cid, None)
         spoken = [words for c in d.calls for words in self.catalog[c.command].spoken(c.args)]
         text = " / ".join(spoken) if spoken else None
         if (kind is DecisionKind.START and d.iteration and d.command_id is not None
@@ -406,6 +444,64 @@ class Run:
                    reason=d.rule.value, detail=detail, before=d.before,
                    command_ids=d.command_ids if len(d.command_ids) > 1 else None)
 
+    def _ended(self, d: Decision, detail: dict[str, Value]) -> None:
+        """An end line says the AB's result (a cut one's words said and not), when its
+        words ran; its Commands are forgotten once they are over."""
+        outcome = self._outcomes.pop(d.ab or 0, None)
+        if outcome is not None and outcome.values:
+            detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
+            if "error" in outcome.values:
+                detail["error"] = outcome.values["error"]
+            if d.rule is Rule.INTERRUPT:
+                detail["interrupt"] = d.detail
+                detail["spoken"] = outcome.values.get("spoken")
+                detail["unspoken"] = outcome.values.get("unspoken")
+        said = self._said.pop(d.ab or 0, None)
+        if said is not None:
+            detail["words_start"], detail["words_end"] = round(said[0], 3), round(said[1], 3)
+        if d.detail not in ("not terminal", "to restart"):  # its Commands are over
+            for cid in d.command_ids:
+                self._requested.pop(cid, None)
+
+    def _where(self, d: Decision, detail: dict[str, Value]) -> None:
+        """A request line says where it is written (``at``): the application's request
+        being made, or, for a policy's request or a restart, the Command it is for."""
+        ids = d.command_ids or ((d.command_id,) if d.command_id is not None else ())
+        request = self.requesting
+        app = self.apps.get(d.app or "")
+        mine = d.rule is not Rule.RESTART and d.precedes is None
+        if mine and request is not None and app is not None and request.app == d.app:
+            loc = app.interpreter.last_request
+            at = f"{self._paths[app.name].name}:{loc.line}:{loc.col}" if loc else ""
+            cuttable = request.on_interrupt is not OnInterrupt.NEVER
+            for cid in ids:
+                self._requested[cid] = (at, cuttable)
+        else:
+            for_command = d.precedes if d.precedes is not None else d.command_id
+            at, _cuttable = self._requested.get(for_command or 0, ("", True))
+            for cid in ids:
+                self._requested.setdefault(cid, (at, True))
+        found = self._requested.get(ids[0]) if ids else None
+        if found is not None and found[0]:
+            detail["at"] = found[0]
+
+    def _starting(self, d: Decision, detail: dict[str, Value]) -> None:
+        """A start line says whether the interrupt policy may cut the AB (its Commands
+        are interruptible on this robot and their request allows it) and, for words said
+        as it starts, when they end (the judge's cuts, listening and talking)."""
+        ids = d.command_ids or ((d.command_id,) if d.command_id is not None else ())
+        if (self.policies["interrupt"] and d.calls
+                and all(self.catalog[c.command].interruptible for c in d.calls)
+                and all(self._requested.get(cid, ("", True))[1] for cid in ids)):
+            detail["cuttable"] = True
+        if d.ab is not None:
+            ab = AtomicBehavior(d.ab, d.app or "", d.tree or 0, d.calls, ids,
+                                frozenset(d.devices), d.iteration)
+            ahead = self.sim.words_ahead(ab)
+            if ahead is not None:
+                now = self.sim.now()
+                detail["words_start"], detail["words_end"] = round(now, 3), round(now + ahead, 3)
+
     @staticmethod
     def _located(app: _App | None, message: str) -> str:
         """A failure the mediator found, located at the app's latest request."""
@@ -416,6 +512,9 @@ class Run:
 
     def _finished(self, ab: int, outcome: Outcome) -> None:
         self._outcomes[ab] = outcome
+        said = self.sim.said(ab)
+        if said is not None:
+            self._said[ab] = said
         self.mediator.finish(ab, outcome)
 
     def _event(self, event: Event) -> None:

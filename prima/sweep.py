@@ -28,13 +28,17 @@ import tempfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from lxml import etree
 
 from prima.errors import ScenarioError
-from prima.judge import Report, Thresholds, judge
+from prima.judge import MEASURES, Report, Thresholds, judge
 from prima.sim import load_scenario
 from prima.xmlio import local_name, parse_xml, read_source
+
+if TYPE_CHECKING:
+    from prima.run import Switches
 
 __all__ = ["MIN_ANSWER_DELAY", "Sweep", "SweepRun", "format_sweep", "progress_bar", "sweep",
            "write_variant"]
@@ -102,9 +106,37 @@ def _rng(seed: int, index: int) -> random.Random:
     return random.Random(f"prima-sweep:{seed}:{index}")
 
 
+def _switch(root: etree._Element, switches: Switches) -> None:
+    """Write the command line's switches into a scenario: its FA and EA, its robot's
+    profile (absolute paths, made relative with the others), its policy switches."""
+    ns = etree.QName(root).namespace
+    children = [c for c in root if isinstance(c.tag, str)]
+    named = {local_name(c): c for c in children}
+    apps = named.get("apps")
+    if apps is not None:
+        for attribute, value in (("fa", switches.fa), ("ea", switches.ea)):
+            if value is not None:
+                apps.set(attribute, str(Path(value).resolve()))
+    robot = named.get("robot")
+    if robot is not None and switches.robot is not None:
+        robot.set("profile", str(Path(switches.robot).resolve()))
+    if robot is not None and switches.policies:
+        after = robot
+        for c in children:
+            if local_name(c) == "policy":
+                after = c
+        for name, on in switches.policies:
+            policy = etree.Element(f"{{{ns}}}policy" if ns else "policy",
+                                   name=name, state="on" if on else "off")
+            after.addnext(policy)
+            after = policy
+
+
 def write_variant(scenario: str | Path, path: str | Path, *, seed: int, index: int,
-                  jitter: float, absolute: bool = False) -> Path:
-    """Write run ``index`` of a sweep of ``scenario`` as a scenario file at ``path``.
+                  jitter: float, absolute: bool = False,
+                  switches: Switches | None = None) -> Path:
+    """Write run ``index`` of a sweep of ``scenario`` as a scenario file at ``path``
+    (with ``switches``: the command line's FA, EA, robot and policies written in).
 
     Its file paths are relative to ``path``'s folder (or absolute, with ``absolute``),
     so ``prima run`` replays it exactly.
@@ -113,6 +145,8 @@ def write_variant(scenario: str | Path, path: str | Path, *, seed: int, index: i
     doc = parse_xml(read_source(source, ScenarioError), str(source), ScenarioError)
     root = copy.deepcopy(doc.root.getroottree()).getroot()
     _jitter(root, _rng(seed, index), jitter)
+    if switches:
+        _switch(root, switches)
     _repath(root, source, None if absolute else path.parent)
     before = [etree.tostring(c, encoding="unicode") for c in root.itersiblings(preceding=True)]
     note = (f"<!-- prima sweep: run {index} of {source.name} (seed {seed}, jitter "
@@ -147,6 +181,7 @@ class _Task:
     index: int
     jitter: float
     thresholds: Thresholds
+    switches: Switches | None = None
 
 
 def _work(task: _Task) -> SweepRun:
@@ -154,7 +189,8 @@ def _work(task: _Task) -> SweepRun:
     from prima.run import Run
 
     path = write_variant(task.scenario, task.folder / f"run-{task.index}.xml", seed=task.seed,
-                         index=task.index, jitter=task.jitter, absolute=True)
+                         index=task.index, jitter=task.jitter, absolute=True,
+                         switches=task.switches)
     report = judge(Run(path).run(), thresholds=task.thresholds, name=f"run {task.index}")
     path.unlink()
     return SweepRun(task.index, report)
@@ -191,6 +227,9 @@ class Sweep:
     thresholds: Thresholds
     runs: tuple[SweepRun, ...] = ()
     interrupted: bool = False
+    switches: Switches | None = None
+    """The command line's FA, EA, robot and policies, if any (the worst runs' files
+    have them written in)."""
 
     @property
     def breached(self) -> int:
@@ -210,13 +249,15 @@ class Sweep:
         width = len(str(max(self.asked - 1, 0)))
         return [write_variant(self.scenario, folder / (f"{self.scenario.stem}-run"
                                                        f"{run.index:0{width}d}-seed{self.seed}.xml"),
-                              seed=self.seed, index=run.index, jitter=self.jitter)
+                              seed=self.seed, index=run.index, jitter=self.jitter,
+                              switches=self.switches)
                 for run in self.worst(k)]
 
 
 def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
           jobs: int | None = None, thresholds: Thresholds = Thresholds(),
-          progress: Callable[[int, int], None] | None = None) -> Sweep:
+          progress: Callable[[int, int], None] | None = None,
+          switches: Switches | None = None) -> Sweep:
     """Run ``scenario`` ``runs`` times with its timings jittered by up to ±``jitter`` s.
 
     Runs go in parallel on ``jobs`` processes (default: every core); ``progress(done,
@@ -231,7 +272,8 @@ def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
     done: dict[int, SweepRun] = {}
     interrupted = False
     with tempfile.TemporaryDirectory(prefix="prima-sweep-") as folder:
-        tasks = [_Task(source, Path(folder), seed, i, jitter, thresholds) for i in range(runs)]
+        tasks = [_Task(source, Path(folder), seed, i, jitter, thresholds, switches)
+                 for i in range(runs)]
         try:
             for result in _results(tasks, jobs):
                 done[result.index] = result
@@ -240,7 +282,7 @@ def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
         except KeyboardInterrupt:
             interrupted = True
     return Sweep(source, name, runs, jitter, seed, thresholds,
-                 tuple(done[i] for i in sorted(done)), interrupted)
+                 tuple(done[i] for i in sorted(done)), interrupted, switches)
 
 
 # ---------------------------------------------------------------------------- the summary
@@ -265,18 +307,20 @@ class _Measure:
     limit: Callable[[Thresholds], float] | None = None
 
 
+def _count(key: str) -> Callable[[Report], float]:
+    return lambda report: len(report.of(key))
+
+
+def _limit(key: str) -> Callable[[Thresholds], float]:
+    return lambda thresholds: thresholds.limit(key)
+
+
 _MEASURES = (
     _Measure("worst lateness (s)", Report.worst_lateness, seconds=True),
     _Measure("worst first start (s)", Report.worst_latency, seconds=True),
-    _Measure("late reactions", lambda r: len(r.late), limit=lambda t: t.max_late),
-    _Measure("talking unfaced", lambda r: len(r.unfaced), limit=lambda t: t.max_unfaced),
-    _Measure("leaving while talking", lambda r: len(r.leaving), limit=lambda t: t.max_leaving),
-    _Measure("resumed elsewhere", lambda r: len(r.elsewhere),
-             limit=lambda t: t.max_elsewhere),
-    _Measure("split exchanges", lambda r: len(r.splits), limit=lambda t: t.max_splits),
-    _Measure("silences", lambda r: len(r.silences), limit=lambda t: t.max_silences),
-    _Measure("stuck", lambda r: len(r.stuck), limit=lambda t: t.max_stuck),
+    *(_Measure(m.title, _count(m.key), limit=_limit(m.key)) for m in MEASURES),
 )
+"""The rows of a sweep's table: two of times, then one per measure (its table's row)."""
 
 
 @dataclass

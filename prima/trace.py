@@ -121,8 +121,11 @@ def _describe_end(line: TraceLine) -> str | None:
         return f"{line.command} fails: {error.removeprefix(own)}"
     if line.reason == "interrupt":
         said, then = line.detail.get("spoken") or "", line.detail.get("interrupt") or ""
-        return (f'{line.command} cut after "{said}", {then}' if said
-                else f"{line.command} cut before its first word, {then}")
+        if said:
+            return f'{line.command} cut after "{said}", {then}'
+        if line.detail.get("unspoken"):
+            return f"{line.command} cut before its first word, {then}"
+        return f"{line.command} cut, {then}"  # (it says nothing: a move's iteration)
     return None
 
 

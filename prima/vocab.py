@@ -23,6 +23,7 @@ __all__ = [
     "MAX_TEXT",
     "PREDEFINED_EVENTS",
     "INTERRUPTED_EVENT",
+    "ANSWERED",
     "OnInterrupt",
     "DEFAULT_BUDGETS",
     "FACE_TOLERANCE",
@@ -102,6 +103,10 @@ PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
                    "restarts); not reactive",
 })
 """Events every robot posts, FA and EA alike; all are reactive but ``interrupted``."""
+
+ANSWERED = "answered"
+"""The ``status`` with which a Command that listens (a Q&A) ends when the user
+answered it (the others: ``noinput``); its ``utterance`` holds the words."""
 
 INTERRUPTED_EVENT = "interrupted"
 """The event an application gets when the interrupt policy cut one of its atomic
@@ -217,6 +222,14 @@ POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
     Policy("connect-channel", True, "before an utterance would start facing away from a "
                                     "detectable user, the robot turns to them first "
                                     "(thesis Sec. 5.3 (4))"),
+    Policy("reactions", True, "a reaction keeps the devices its next atomic behavior "
+                              "needs, and a reaction to the user's own action (a touch, "
+                              "heard speech) goes before another application's later "
+                              "reaction to a perception or network event until it has "
+                              "said its first words"),
+    Policy("exchange", True, "the words with which an application replies to the answer "
+                             "of its own Q&A go before every other application's talk, "
+                             "reactions included, and are never cut"),
 )})
 """Every policy, by name. ``all`` names them together in a switch."""
 

@@ -26,7 +26,7 @@ def session(script: str, scenario: Path = SAMPLE_03) -> str:
 def test_a_scripted_session_breaks_on_the_touch_and_shows_the_suspended_stream() -> None:
     """As a terminal session would be typed, through the command line."""
     proc = subprocess.run([sys.executable, "-m", "prima", "debug", str(SAMPLE_03)],
-                          input="break user touch\ncontinue\nstep 8\nmemory\napps\nquit\n",
+                          input="break user touch\ncontinue\nstep 10\nmemory\napps\nquit\n",
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
@@ -35,7 +35,7 @@ def test_a_scripted_session_breaks_on_the_touch_and_shows_the_suspended_stream()
     # FA2 stopped the robot for its reaction: EA3's guiding stream is suspended
     assert "suspended: stream 0 of ea3-navigate (most recent): AB49 TopologicalMove" in out
     assert "fa2-follow (fa): state asking" in out and "goal = 'kidode-room'" in out
-    assert out.rstrip().endswith("stopped at t=27.18 s")
+    assert out.rstrip().endswith("stopped at t=27.14 s")
 
 
 def test_breakpoints_on_a_command_a_state_an_event_an_app_and_a_time() -> None:

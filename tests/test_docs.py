@@ -81,15 +81,38 @@ def test_the_scenario_example_runs(tmp_path: Path) -> None:
     assert main(["run", str(scenario), "--until", "30", "--out", str(tmp_path / "t.txt")]) == 0
 
 
-def test_the_judging_example_is_a_real_run(monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("argv, status", [
+    (["--policy", "all=off", "scenarios/thesis/sample-05.xml"], 1),
+    (["scenarios/thesis/sample-05.xml"], 0),
+])
+def test_the_judging_example_is_a_real_run(argv: list[str], status: int,
+                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """docs/judging.md's `prima judge` examples are the commands' outputs, as they are."""
     import io
 
     from prima.cli import main
 
     monkeypatch.chdir(ROOT)
     out = io.StringIO()
-    assert main(["judge", "scenarios/thesis/sample-05.xml"], out=out, err=io.StringIO()) == 1
-    assert out.getvalue() in (ROOT / "docs" / "judging.md").read_text()
+    assert main(["judge", *argv], out=out, err=io.StringIO()) == status
+    shown = f"$ prima judge {' '.join(argv)}\n{out.getvalue()}```"
+    assert shown in (ROOT / "docs" / "judging.md").read_text()
+
+
+def test_the_judging_tables_are_the_judges() -> None:
+    """docs/judging.md's table of measures and table of thresholds list every measure
+    and parameter the judge has, with its key, title, option, field and default."""
+    from prima.judge import LIMITS, PARAMETERS
+
+    text = (ROOT / "docs" / "judging.md").read_text(encoding="utf-8")
+    measures = re.findall(r"^\| `(\w+)` \| ([^|]+?) \| `(--max-[\w-]+)` \|", text, re.M)
+    assert measures == [(m.key, m.title, m.option) for m in LIMITS]
+    options = [(option, field, None if default == "none" else float(default))
+               for option, field, default in re.findall(
+                   r"^\| `(--[\w-]+) [A-Z]+` \| `(\w+)` \| ([\w.]+) \|", text, re.M)]
+    expected = [(m.option, m.limit, 0.0) for m in LIMITS]
+    expected += [(p.option, p.name, p.default) for p in PARAMETERS]
+    assert options == expected
 
 
 _LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
@@ -165,11 +188,17 @@ def test_the_judging_python_example_says_what_it_gives() -> None:
     from prima.run import Run
 
     text = (ROOT / "docs" / "judging.md").read_text(encoding="utf-8")
-    report = judge(Run(ROOT / "scenarios" / "thesis" / "sample-05.xml").run(), name="sample-05")
+    assert ('Run("scenarios/thesis/sample-05.xml", policies={"all": False}).run()'
+            in text)
+    report = judge(Run(ROOT / "scenarios" / "thesis" / "sample-05.xml",
+                       policies={"all": False}).run(), name="sample-05")
     shown = ", ".join(f"'{k}': {v}" for k, v in list(report.counts().items())[:5])
     assert f"report.counts()         # {{{shown}, ...}}" in text
     assert f"report.breaches()       # {report.breaches()!r}" in text
-    assert f"report.splits[0].text   # {report.splits[0].text!r}" in text
+    assert f'report.of("splits")[0].text   # {report.of("splits")[0].text!r}' in text
+    plain = judge(Run(ROOT / "scenarios" / "thesis" / "sample-05.xml").run())
+    assert f'judge_file("scenarios/thesis/sample-05.xml").of("splits")   # {plain.of("splits")!r}' \
+        in text
 
 
 def test_the_readme_demo_output_is_a_real_runs() -> None:

@@ -48,7 +48,9 @@ def test_three_streams_are_suspended_and_resume_most_recent_first() -> None:
                      (DecisionKind.RESUME, "cafe"), (DecisionKind.RESUME, "ea1-museum")]
     suspend_cafe = next(ln for ln in lines if ln.kind is DecisionKind.SUSPEND
                         and ln.app == "cafe")
-    assert suspend_cafe.text == "lost to AB54 (fa1-emotions)"
+    touch = next(ln for ln in lines if ln.kind is DecisionKind.START
+                 and ln.app == "fa1-emotions")
+    assert suspend_cafe.text == f"lost to AB{touch.ab} (fa1-emotions)"
     resumed = [ln.text for ln in lines if ln.kind is DecisionKind.START and ln.text and (
         ln.app == "cafe" or ln.command == "SetDirection+PointByHand+Speak")]
     assert resumed[1].startswith("Today's cake")  # the cafe's news, where it was cut off

@@ -109,10 +109,10 @@ def test_an_endless_chain_of_utterances_keeps_the_fa_waiting_only_its_share(
           <entry><chain>say2: Speak("And there is more to say.")</chain></entry>
           <on-end of="say2"><goto state="a"/></on-end>
         </state>''')
-    # The FA's reaction takes over at the first IU boundary (MISSION.md 7.1): the end of
-    # the EA's utterance under way (10-12 s, 70-70.8 s), long before the EA's wait share
-    # would run out.
-    assert fa_reactions(lines) == [12.0, 70.8]
+    # The FA's reaction takes over at once (MISSION.md 7.1, 7.3 (2)): the home robot
+    # cuts the EA's utterance under way at its next word boundary (10.4 s, 70.4 s),
+    # long before the EA's wait share would run out.
+    assert fa_reactions(lines) == [10.4, 70.4]
     assert not any(line.kind is DecisionKind.BUDGET for line in lines)
 
 
@@ -222,3 +222,40 @@ def test_a_newline_in_a_text_cannot_forge_a_row_of_the_text_trace(tmp_path: Path
         </entry></state>''', until=5)
     text = format_text(lines)
     assert "\\n    99" in text and "\n    99" not in text
+
+
+STORY = ("Once upon a time a small robot lived in an office. Every morning it greeted "
+         "everyone who came in, and every evening it said good night to the last one to "
+         "leave.")
+
+
+def test_an_ea_that_reacts_over_and_over_cuts_the_fas_story_once(tmp_path: Path) -> None:
+    """MISSION.md 7.3 (2): an EA that pings its server and reacts to every reply with a
+    word (a reaction every 3.2 s) cuts the FA's story once; the story's restart is not
+    cut again, so it is said whole, and it starts facing the user like any utterance
+    (no restart is said unfaced)."""
+    fa = tmp_path / "storyteller.pxml"
+    fa.write_text(f'''<pxml xmlns="urn:prima:pxml:1" kind="fa" name="storyteller">
+      <state id="s" initial="true">
+        <entry><timer name="tell" after="10"/></entry>
+        <on event="tell"><chain>Speak("{STORY}")</chain><timer name="tell" after="60"/></on>
+      </state></pxml>''', encoding="utf-8")
+    ea = tmp_path / "hostile.pxml"
+    ea.write_text('''<pxml xmlns="urn:prima:pxml:1" kind="ea" name="hostile">
+      <state id="s" initial="true">
+        <entry><send to="host" text="ping"/></entry>
+        <on event="message"><chain>Speak("Hey.")</chain><timer name="t" after="3"/></on>
+        <on event="t"><send to="host" text="ping"/></on>
+      </state></pxml>''', encoding="utf-8")
+    lines = Run(STAGE, fa=fa, ea=ea, until=120).run()
+    assert device_overlaps(lines) == []
+    story = [line for line in lines if line.app == "storyteller" and line.text == STORY]
+    starts = [line for line in story if line.kind is DecisionKind.START]
+    ends = [line for line in story if line.kind is DecisionKind.END]
+    # two touches: each story is cut once by a ping's reaction, then said whole
+    assert [line.reason for line in ends] == ["interrupt", "completed"] * 2
+    assert [line.reason for line in starts][1::2] == ["restart", "restart"]
+    cuts = [line for line in lines if line.kind is DecisionKind.INTERRUPT]
+    assert len(cuts) == 2 and {line.app for line in cuts} == {"storyteller"}
+    from prima.judge import judge  # (the judge says the same: nothing said unfaced)
+    assert judge(lines).of("unfaced") == ()

@@ -75,7 +75,8 @@ def test_blended_behaviors_are_marked_on_the_devices_they_shared() -> None:
               for d in re.findall(r" on ([^,\s]+)", str(r.get("detail", {}).get("over", "")))}
     assert shared  # the scenario blends
     assert {(b.ab, b.device) for b in tl.bars if b.blended} == shared
-    assert {b.app for b in tl.bars if b.blended} == set(tl.apps)
+    # the dance's sway holds the wheels; EA1's move iterations blend over it
+    assert {b.app for b in tl.bars if b.blended} == {"ea1-museum"}
 
 
 def test_group_names_are_abbreviated() -> None:

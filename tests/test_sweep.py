@@ -148,12 +148,13 @@ def test_ctrl_c_prints_what_was_done_and_exits_130(tmp_path: Path,
 def test_a_breach_exits_1_and_the_worst_runs_go_to_the_default_folder(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
-    code, out, _ = cli("sweep", str(THESIS / "sample-05.xml"), "--runs", "2", "--jitter", "0",
+    streams_off = ROOT / "scenarios" / "policies" / "streams-off.xml"
+    code, out, _ = cli("sweep", str(streams_off), "--runs", "2", "--jitter", "0",
                        "--worst", "1", "--jobs", "1")
     assert code == 1
     assert "runs exceeding a threshold: 2 of 2" in out
-    assert [p.name for p in (tmp_path / "sweep-sample-05").iterdir()] == [
-        "sample-05-run0-seed0.xml"]
+    assert [p.name for p in (tmp_path / "sweep-streams-off").iterdir()] == [
+        "streams-off-run0-seed0.xml"]
     assert "split exchanges 1 > 0" in out
 
 

@@ -35,8 +35,9 @@ from lxml import etree
 
 from prima.catalog import (
     BUILTIN_JOINTS,
-    Blend,
     MAX_HOLD,
+    MAX_SWAY,
+    Blend,
     STANDARD_DEVICES,
     ArgRef,
     Catalog,
@@ -49,6 +50,7 @@ from prima.catalog import (
     Primitive,
     Priority,
     RaiseEvent,
+    SwayBody,
 )
 from prima.dsl._elements import elements, flag
 from prima.errors import DocumentError, Problem
@@ -104,6 +106,11 @@ class RobotProfile:
     """Additional arguments: Command name -> argument name -> declaration."""
     events: Mapping[str, bool]
     """Robot-specific events -> whether they are reactive."""
+    user_events: frozenset[str] = frozenset()
+    """The robot-specific events that are the user's own action (a touch): a reaction
+    to one goes before another application's later reaction to a perception or
+    network event until it has said its first words (docs/mediator.md, *The user's own
+    action first*)."""
     budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
     """What one application of each role may consume on this robot (its
     ``<budgets>`` elements over :data:`~prima.vocab.DEFAULT_BUDGETS`)."""
@@ -177,6 +184,9 @@ FIGURES: Mapping[tuple[str, str], Bound] = {
     ("joint", "rate"): Bound(3_600.0, "deg/s"),
     ("joint", "to"): Bound(360.0, "deg", -360.0, positive=False),
     ("hold", "seconds"): Bound(MAX_HOLD, "s"),
+    ("sway", "degrees"): Bound(MAX_SWAY, "deg"),
+    ("sway", "period"): Bound(60.0, "s"),
+    ("sway", "seconds"): Bound(MAX_HOLD, "s"),
     ("budgets", "text"): Bound(MAX_TEXT, "characters"),
     ("budgets", "sends-per-second"): Bound(MAX_COUNT, "messages/s"),
     ("budgets", "waiting"): Bound(MAX_COUNT, "Commands"),
@@ -241,6 +251,7 @@ class _Reader:
         self.commands: list[CommandSpec] = []
         self.extras: dict[str, dict[str, Param]] = {}
         self.events: dict[str, bool] = {}
+        self.user_events: set[str] = set()
         self.policies: dict[str, bool] = {}
         self.command_names: set[str] = set()
         self.implemented: dict[str, CommandSpec] = {}
@@ -297,6 +308,7 @@ class _Reader:
             joints=MappingProxyType(self.joints),
             extras=self.extras,
             events=self.events,
+            user_events=frozenset(self.user_events),
             budgets=self._role_budgets([el for el in elements(root)
                                         if local_name(el) == "budgets"]),
             interruptible=(interruptible := self._interruptible(root)),
@@ -325,6 +337,13 @@ class _Reader:
                 for name in sorted(found - known):
                     self.error(el, f"<blend> names {name!r}, which is no Command of this "
                                    "robot", attr)
+            own = {c.name for c in self.commands}
+            for name in sorted(names["local"] & known - own):
+                # a local motion is a Command declared for that purpose (a dance step, a
+                # nod), never one applications use for real motion (a Turn)
+                self.error(el, f"<blend> makes the common Command {name!r} a local motion; "
+                               "a local motion is a Command this robot declares for it "
+                               '(<command name="Sway" ...> with a <perform>)', "local")
             devices = frozenset((el.get("devices") or "").split())
             for name in sorted(devices - self.devices):
                 self.error(el, f"<blend> shares the device {name!r}, which this robot "
@@ -535,6 +554,10 @@ class _Reader:
                 move = self._move(step, spec, args)
                 if move is not None:
                     steps.append(move)
+            elif kind == "sway":
+                sway = self._sway(step, spec, args)
+                if sway is not None:
+                    steps.append(sway)
             elif step.get("event", "") in self.events:
                 steps.append(RaiseEvent(step.get("event", "")))
             else:
@@ -542,6 +565,20 @@ class _Reader:
                 self.error(step, f"'{event}' is not an event this robot declares (declare it "
                                  f'with <event name="{event}"/>)', "event")
         return steps
+
+    def _sway(self, step: etree._Element, spec: CommandSpec,
+              args: Mapping[str, Param]) -> SwayBody | None:
+        """A ``<sway>`` step: the Command must drive the wheels (``locomotion``)."""
+        if "locomotion" not in spec.devices:
+            self.error(step, f"a <sway> step moves the body: {spec.name} must use the device "
+                             f"'locomotion' (its devices: {_listed(sorted(spec.devices))})")
+        found = [self._operand(step, a, spec, args, ParamKind.NUMBER)
+                 for a in ("degrees", "period", "seconds")]
+        numbers = [f for f in found if f is not None and not isinstance(f, str)]
+        if len(numbers) != 3:
+            return None
+        degrees, period, seconds = numbers
+        return SwayBody(degrees, period, seconds)
 
     def _move(self, step: etree._Element, spec: CommandSpec,
               args: Mapping[str, Param]) -> MoveJoint | None:
@@ -624,6 +661,8 @@ class _Reader:
             self.error(el, f"'{name}' is a predefined event; a robot-specific "
                            "event needs a name of its own", "name")
         self.events[name] = flag(el, "reactive", default=True)
+        if flag(el, "user", default=False):
+            self.user_events.add(name)
 
     def _own_command(self, name: str) -> bool:
         return name in self.command_names

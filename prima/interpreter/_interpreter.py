@@ -123,6 +123,8 @@ class _Handling:
     reactive: bool = False
     follows: CommandId | None = None
     requested: bool = False
+    user: bool = False
+    """The event handled is the user's own action (MISSION.md 7.1)."""
 
 
 @dataclass
@@ -139,6 +141,7 @@ class Interpreter:
 
     def __init__(self, document: Document, app: str, port: MediatorPort, clock: Clock, *,
                  catalog: Catalog, robot_events: Mapping[str, bool] | None = None,
+                 user_events: Collection[str] = (),
                  gestures: Collection[str] | None = None, budgets: Budgets | None = None,
                  note: Callable[[Note], None] | None = None,
                  send: Callable[[str, str, str], None] | None = None) -> None:
@@ -148,6 +151,9 @@ class Interpreter:
         self.clock = clock
         self.catalog = catalog
         self.robot_events = dict(robot_events or {})
+        self.user_events = frozenset(user_events)
+        """The events that are the user's own action (a touch): the reactions to them
+        go first (MISSION.md 7.1)."""
         self.gestures = frozenset(gestures) if gestures is not None else None
         """The robot's gestures (None: not checked here); an EA may use the common ones."""
         self.budgets = budgets or DEFAULT_BUDGETS[document.kind]
@@ -191,7 +197,7 @@ class Interpreter:
             return  # most of the robot's events concern an application in few of its states
         data = {"name": event.name, **event.data}
         self._guard(self._dispatch, HandlerKind.EVENT, event.name, data,
-                    self._default_reactivity(event.name), None)
+                    self._default_reactivity(event.name), None, event.name in self.user_events)
 
     def command_ended(self, command_id: CommandId, outcome: Outcome) -> None:
         call = self._commands.pop(command_id, None)
@@ -279,8 +285,8 @@ class Interpreter:
         raise AppFailure(message) from exc
 
     def _dispatch(self, kind: HandlerKind, key: str, data: dict[str, Value],
-                  reactive: bool, follows: CommandId | None) -> None:
-        previous, self._handling = self._handling, _Handling(reactive, follows)
+                  reactive: bool, follows: CommandId | None, user: bool = False) -> None:
+        previous, self._handling = self._handling, _Handling(reactive, follows, user=user)
         try:
             self._handle(kind, key, data)
             self._drain_raised()
@@ -441,7 +447,8 @@ class Interpreter:
             ids = self.port.submit(MediatorRequest(
                 app=self.app, calls=calls, order=request.order, group=request.group,
                 reactive=reactive, reaction=handling.reactive, follows=follows,
-                face_user=request.face_user, on_interrupt=request.on_interrupt))
+                face_user=request.face_user, on_interrupt=request.on_interrupt,
+                user=handling.reactive and handling.user))
         except PrimaError as exc:  # the mediator refused it (e.g. a Command the robot lacks)
             raise ExecutionError(f"{self._where(request.loc)}request refused: {exc}") from exc
         for cid, call in zip(ids, request.calls, strict=True):

@@ -70,6 +70,14 @@ class Rule(str, enum.Enum):
     """The AB's devices were free and no other waiting AB wanted them."""
     PRIORITY = "priority"
     """It keeps the Communication Channel; the AB it beat breaks it."""
+    EXCHANGE = "exchange"
+    """It is an application's spoken reply to the answer of its own Q&A: it belongs to
+    the exchange and goes before every other application's AB, reactions included
+    (MISSION.md 7.4)."""
+    USER_FIRST = "user-first"
+    """It belongs to a reaction to the user's own action (a touch, heard speech) that
+    has not yet said its first utterance in full: another application's later reaction
+    to a perception or network event does not overtake it (MISSION.md 7.1)."""
     REACTIVITY = "reactivity"
     """It is the latest reactive AB (response speed)."""
     PARENT_FINISHED = "parent-finished"
@@ -105,6 +113,10 @@ class Rule(str, enum.Enum):
     """A stream hold ended: the app closed the stream."""
     BLOCK = "block"
     """Another app's begin/end block reserves the devices (reactive ABs wait too)."""
+    RESERVED = "reserved"
+    """Its devices are kept for the next AB of another application's reaction (or
+    reply) that outranks it, even while that next AB cannot start yet: it waits for
+    the reaction's own StopMoving, or for a turn to the user (MISSION.md 7.1)."""
     KEEP_CHANNEL = "keep-channel"
     """It would break the Communication Channel while another app talks with the user:
     it waits until that talk ends (thesis Sec. 3.3, Fig. 3.3)."""
@@ -161,7 +173,8 @@ class Decision(NamedTuple):
     """The AB's Commands with their arguments (a request: all its Commands); not part
     of ``to_dict``."""
     before: AbId | None = None
-    """A request: the AB its root follows (its before node), if any."""
+    """A request: the AB its root follows (its before node), if any. A hold for a
+    reaction's next AB (rule ``reserved``): that next AB."""
     precedes: CommandId | None = None
     """A policy's request: the Command it was put before (it runs first)."""
 

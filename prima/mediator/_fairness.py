@@ -4,7 +4,8 @@ An application *keeps another waiting* while, on some device, another
 application has a waiting AB whose priority is not lower than that of the
 application's AB that holds the device (the AB running on it, or, on a free
 device, the best-ranked waiting AB, which reserves it), or while one of its
-stream holds or blocks parks another application's AB. Priority aside: an AB
+stream holds or blocks, or a reaction's next AB that keeps its devices (MISSION.md
+7.1), parks another application's AB. Priority aside: an AB
 that breaks the Communication Channel waiting for one that keeps it is the
 channel rule at work, not a budget matter.
 
@@ -54,7 +55,7 @@ class _Share:
     """One application's record of keeping the others waiting."""
 
     __slots__ = ("app", "limit", "window", "horizon", "intervals", "lengths", "since",
-                 "demoted_until", "bound", "bound_at", "due")
+                 "demoted_until", "bound", "bound_at", "due", "charges")
 
     def __init__(self, app: App) -> None:
         self.intervals: deque[tuple[float, float]] = deque()
@@ -62,6 +63,10 @@ class _Share:
         settled for a while, perhaps older ones too)."""
         self.lengths: deque[float] = deque()
         """Each interval's length (``end - begin``), in the same order."""
+        self.charges: deque[tuple[float, float]] = deque()
+        """Time charged at an instant, oldest first: (when, seconds). What the interrupt
+        policy threw away when the app's reaction had another's AB cut (MISSION.md
+        7.3 (2)) counts against its share while the instant is within the window."""
         self.since: float | None = None
         """When the current interval began, if the app keeps others waiting now."""
         self.demoted_until: float | None = None
@@ -96,6 +101,9 @@ class _Share:
         while self.intervals and self.intervals[0][1] <= start:
             self.intervals.popleft()
             self.lengths.popleft()
+        charges = self.charges
+        while charges and charges[0][0] <= start:
+            charges.popleft()
 
     def open(self, now: float) -> None:
         """The app starts keeping others waiting: an interval begins."""
@@ -119,19 +127,30 @@ class _Share:
             self.since = None
         self.due = inf if self.demoted_until is None else self.demoted_until
 
+    def charged(self, now: float) -> bool:
+        """Some time was charged within the window (the older charges are forgotten)."""
+        charges = self.charges
+        if charges:
+            start = now - self.window
+            while charges and charges[0][0] <= start:
+                charges.popleft()
+        return bool(charges)
+
     def none_within(self, now: float, window: float) -> bool:
         """No interval within the window: :meth:`total` would be 0 with ``since`` None
         (each interval left ends inside the window and lasted > 0 s), without the sum."""
         self.prune(now, window)
-        return not self.intervals
+        return not self.intervals and not self.charges
 
     def dropped(self, at: float) -> bool:
         """A settle at ``at`` drops the record (or one did, at or before ``at``): its app
         keeps nobody waiting, has its precedence and kept nobody waiting within the
         window (:meth:`none_within`, without pruning: the last interval ends last)."""
         intervals = self.intervals
+        charges = self.charges
         return (self.since is None and self.demoted_until is None
-                and (not intervals or intervals[-1][1] <= at - self.window))
+                and (not intervals or intervals[-1][1] <= at - self.window)
+                and (not charges or charges[-1][0] <= at - self.window))
 
     def total(self, now: float, window: float) -> float:
         """Seconds spent keeping others waiting within ``[now - window, now]``."""
@@ -148,6 +167,8 @@ class _Share:
         since = self.since
         if since is not None:
             total += now - (start if start > since else since)
+        if self.charges:
+            total += sum(seconds for _at, seconds in self.charges)
         return total
 
     def plan(self) -> None:
@@ -380,7 +401,7 @@ class Fairness:
         if share.demoted_until is not None and share.demoted_until <= now:
             share.demoted_until = None
             changed = self._set(app, False, "regains its precedence")
-        if share.since is None:  # keeps nobody waiting: nothing to spend
+        if share.since is None and not share.charged(now):  # keeps nobody waiting: nothing to spend
             if share.demoted_until is None and share.none_within(now, window):
                 gone.append(name)
             share.plan()
@@ -408,6 +429,26 @@ class Fairness:
             self._holds.regained(app)
         self._log.emit(DecisionKind.BUDGET, Rule.WAIT_SHARE, app=app.name, detail=detail)
         return True
+
+    def charge(self, app: App, seconds: float) -> None:
+        """Charge ``seconds`` to ``app``'s share now (the time an AB its reaction had cut
+        had run in vain: MISSION.md 7.3 (2)); a share so spent takes its precedence at
+        once."""
+        now = self._log.now
+        share = self._shares.get(app.name)
+        if share is None:
+            share = self._shares[app.name] = _Share(app)
+        elif share.app is not app:
+            share.use(app)
+        share.charges.append((now, seconds))
+        share.bound += seconds
+        gone: list[str] = []
+        self._settle(app.name, share, now, gone)
+        for name in gone:
+            del self._shares[name]
+        if share.due < self._due:
+            self._due = share.due
+        self._deadline_stale = True
 
     # ---------------------------------------------------------------- deadlines
     def next_deadline(self) -> float | None:

@@ -109,8 +109,14 @@ class Holds:
         """ABs parked by streams and blocks."""
         self._talk_parked: list[Node] = []
         """ABs parked by the channel rule: they take their places again at every end."""
+        self._reserve_parked: list[Node] = []
+        """ABs parked because a reaction's next AB keeps one of their devices: they take
+        their places again at every end, and when a next AB is cancelled."""
         self._channel_held: set[AbId] = set()
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
+        self._reserved: set[AbId] = set()
+        """Waiting ABs kept from a reaction's reserved device (a hold decision was
+        emitted)."""
         self._kept: dict[AbId, str] = {}
         """ABs parked by a stream hold or block -> the holder's name."""
         self.opened = False
@@ -211,6 +217,8 @@ class Holds:
         """An AB started: a block's first AB arms its watchdog; a stream learns devices."""
         if self._channel_held:
             self._channel_held.discard(node.id)
+        if self._reserved:
+            self._reserved.discard(node.id)
         if not self.opened:
             return
         app = node.app
@@ -226,16 +234,32 @@ class Holds:
 
     def ended(self, node: Node) -> None:
         """An AB ended: what the channel rule parked may go (a talk ended, or it freed
-        a device they wait for); those still held are parked again."""
+        a device they wait for), and what a reaction's next AB kept (it may wait now,
+        or rank otherwise); those still held are parked again."""
         if self._channel_held and not node.devices.isdisjoint(self._talk):
             self._wm.dirty.update(self._channel_devices)
         if self._talk_parked:
             parked, self._talk_parked = self._talk_parked, []
             for n in parked:
                 self._wm.refile(n)
+        if self._reserve_parked:
+            self.refile_reserved()
+
+    def refile_reserved(self) -> None:
+        """Re-file the ABs parked for a reaction's next AB (one still kept is parked
+        again in the next round)."""
+        if not self._reserve_parked:
+            return
+        parked, self._reserve_parked = self._reserve_parked, []
+        for n in parked:
+            self._unkeep(n)
+            self._wm.refile(n)
 
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
+        self._reserved.discard(node.id)
+        if node.reserving and self._reserve_parked:
+            self.refile_reserved()  # a next AB that kept devices is gone
         self._unkeep(node)
 
     def update(self) -> None:
@@ -266,7 +290,10 @@ class Holds:
         if rule is Rule.KEEP_CHANNEL:
             self._talk_parked.append(node)
             return
-        self._parked.append(node)
+        if rule is Rule.RESERVED:
+            self._reserve_parked.append(node)
+        else:
+            self._parked.append(node)
         if node.id not in self._kept:
             self._kept[node.id] = holder.name
             self.keeping[holder.name] = self.keeping.get(holder.name, 0) + 1
@@ -274,8 +301,9 @@ class Holds:
     def unpark_all(self) -> None:
         """A hold, block or talk ended or lost its force: re-file the parked ABs (one
         still held is parked again in the next round)."""
-        parked, self._parked = self._parked + self._talk_parked, []
+        parked, self._parked = self._parked + self._talk_parked + self._reserve_parked, []
         self._talk_parked = []
+        self._reserve_parked = []
         for node in parked:
             self._unkeep(node)
             self._wm.refile(node)
@@ -288,6 +316,16 @@ class Holds:
                 self.keeping[holder] = left
             else:
                 del self.keeping[holder]
+
+    def reserved(self, node: Node, by: Node) -> None:
+        """Record that the next AB ``by`` of another application's reaction (or reply)
+        keeps the ready ``node`` from its devices (once per AB: MISSION.md 7.1)."""
+        if node.id not in self._reserved:
+            self._reserved.add(node.id)
+            what = "reply" if by.protected else "reaction"
+            self._log.emit(DecisionKind.HOLD, Rule.RESERVED, node,
+                           detail=f"devices kept for {by.app.name}'s {what} (AB{by.id} next)",
+                           before=by.id)
 
     def note(self, node: Node, rule: Rule, holder: App) -> None:
         """Record that ``holder`` keeps ``node`` waiting (once per hold)."""
@@ -332,8 +370,19 @@ class Holds:
                                detail="block on " + ", ".join(sorted(blk.devices)))
 
     # ----------------------------------------------------------- looking
+    def reranked(self, tree: Tree) -> None:
+        """``tree`` took over as a (later) reaction: a stream hold no longer keeps it
+        (7.2), and what reactions kept from others may rank otherwise now (7.1)."""
+        if tree.parked:
+            self.unpark_all()
+        elif self._reserve_parked:
+            self.refile_reserved()
+
     def regained(self, app: App) -> None:
-        """The app regained its precedence: its holds are in force again."""
+        """The app regained its precedence: its holds are in force again; what the others'
+        reactions kept from it may rank otherwise now."""
+        if self._reserve_parked:
+            self.refile_reserved()
         st, blk = self._streams.get(app.name), self._blocks.get(app.name)
         if st is not None and st.armed:
             self._step_aside(st.devices)

@@ -77,6 +77,10 @@ class Intake:
         self._log = log
         self._driver = driver
         self._end_grace = config.end_grace
+        self._user_first = config.reactions
+        """The reactions policy: a reaction to the user's own action goes first."""
+        self._exchange = config.exchange
+        """The exchange policy: a reply to an answer belongs to the exchange."""
         self._turns = turns
         """The connect-channel policy may turn the robot to the user (else no AB is
         ``turnable``, and it is not worked out)."""
@@ -165,8 +169,8 @@ class Intake:
         told once the request is in)."""
         # (its fields unpacked once, here: a named tuple's fields are slow to read one by
         # one, and it unpacks in several times the time a plain tuple takes)
-        name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt = \
-            request
+        name, calls, order, group, reactive, reaction, follows, face_user, on_interrupt, \
+            user = request
         app, specs = self.check(name, calls, order, group)
         seq = self._next_seq
         self._next_seq = seq + 1
@@ -201,22 +205,30 @@ class Intake:
         wm = self._wm
         if tree is None:
             tree = wm.new_tree(app)
+        elif tree.pose is not None and ((reactive or reaction) or order is _ASAP):
+            # a reaction, or a newer request, takes the stream on from where the robot is:
+            # nothing is restored of where it was suspended (restore-state)
+            tree.pose = None
         # before its nodes are filed, so that they rank as its reaction
-        if ((reactive or reaction) and reactive_allowed
-                and wm.react(tree, seq)
-                and tree.parked):
-            self._holds.unpark_all()  # a stream hold no longer keeps the tree (7.2)
+        if (reactive or reaction) and reactive_allowed and wm.react(
+                tree, seq, user and self._user_first):
+            self._holds.reranked(tree)
         turns = self._turns and face_user
+        # (MISSION.md 7.4) words that follow the user's answer to the app's own Q&A
+        reply = self._exchange and rule is _END_EVENT and parent is not None and any(
+            c.answered for c in parent.commands)
         if one or group:  # one AB: the usual request, or its calls grouped
             root = wm.new_node(app, tree, cmds, all_devices, prio,
                                reactive and reactive_allowed, seq)
             if turns:
-                root.turnable = _turnable(root, parent)
+                root.turnable = root.faces = _turnable(root, parent)
+            if reply:
+                root.protected = _replies(root)
             if parent is not None:
                 wm.link(parent, root)
         else:
             root = self._chain(app, tree, cmds, specs, parent, reactive and reactive_allowed,
-                               turns, seq)
+                               turns, seq, reply)
         old = app.latest
         app.latest = last
         if old is not None and (old.cancelled or old.ended and old.id not in self._recent):
@@ -230,16 +242,20 @@ class Intake:
         return root.command_ids if one else tuple([c.id for c in cmds]), cancelled
 
     def _chain(self, app: App, tree: Tree, cmds: tuple[Command, ...], specs: Specs,
-               parent: Node | None, reactive: bool, turns: bool, seq: int) -> Node:
+               parent: Node | None, reactive: bool, turns: bool, seq: int,
+               reply: bool) -> Node:
         """The chain of ABs after ``parent`` of a request of several calls not grouped,
         one per call; returns the first (the one ``reactive``). ``turns``: its
-        utterances may be ``turnable``."""
+        utterances may be ``turnable``; ``reply``: it follows an answer (its first AB,
+        if words, is protected)."""
         wm = self._wm
         first: Node | None = None
         for c, (_spec, devs, prio) in zip(cmds, specs, strict=True):
             node = wm.new_node(app, tree, (c,), devs, prio, reactive and first is None, seq)
             if turns:
-                node.turnable = _turnable(node, parent)
+                node.turnable = node.faces = _turnable(node, parent)
+            if reply and first is None:
+                node.protected = _replies(node)
             wm.link(parent, node)
             if first is None:
                 first = node
@@ -258,11 +274,13 @@ class Intake:
         parent_finished = x.id in wm.pjf
         node = wm.new_node(x.app, x.tree, (cmd,), spec.devices_for(call.args), spec.priority,
                            x.reactive, x.seq)
+        node.protected = x.protected  # (what gets a reply said is part of the exchange)
         parent = wm.nodes.get(x.parent) if x.parent is not None else None
         if parent is not None and x in parent.children:
             parent.children[parent.children.index(x)] = node
         node.parent, node.children, x.parent = x.parent, [x], node.id
         wm.unwait(x)
+        x.deferred = True  # (it stays in line for its devices: it reserves them)
         self._log.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=[cmd],
                        before=node.parent, precedes=x.commands[0].id)
         wm.enter_waiting(node, parent_finished)
@@ -369,10 +387,20 @@ class Intake:
                 cmd.node = None  # (forgotten: see ``_recent``)
 
 
+def _replies(node: Node) -> bool:
+    """The first AB an answer handler requested is the reply that belongs to the
+    exchange (MISSION.md 7.4): it has words, and is no question of its own (the app's
+    next question ends the exchange: a reaction may take over before it)."""
+    return (not any(c.spec.listens for c in node.commands)
+            and any(c.spec.spoken(c.call.args) for c in node.commands))
+
+
 def _turnable(node: Node, before: Node | None) -> bool:
     """An utterance the connect-channel policy may turn the robot for: it does not
     orient the robot itself, and the AB before it in its stream did not aim the
-    robot at something on purpose (the words are about that)."""
+    robot at something on purpose (the words are about that; a policy's return, or an
+    AB cancelled before it ran, aimed at nothing)."""
     return (not any(c.spec.orients for c in node.commands)
             and any(c.spec.spoken(c.call.args) for c in node.commands)
-            and (before is None or not any(c.spec.aims for c in before.commands)))
+            and (before is None or not any(c.spec.aims and c.internal is None
+                                           and not c.cancelled for c in before.commands)))

@@ -94,6 +94,11 @@ class Request(NamedTuple):
     on_interrupt: OnInterrupt = OnInterrupt.RESTART
     """What the interrupt policy may do to its ABs: cut and restart them, cut and
     drop them, or never cut them."""
+    user: bool = False
+    """With ``reaction``: the reactive event was the user's own action (a touch, heard
+    speech), not a perception or network event (MISSION.md 7.1): the reaction is not
+    overtaken by another application's later reaction to such an event until its
+    first utterance has been said in full."""
 
 
 class AtomicBehavior(NamedTuple):

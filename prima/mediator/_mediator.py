@@ -52,6 +52,7 @@ from prima.mediator._rounds import Selector
 from prima.mediator._snapshot import Snapshot, take
 from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
 from prima.vocab import (
+    ANSWERED,
     DEFAULT_BUDGETS,
     INTERRUPTED_EVENT,
     MAX_BLOCK_WATCHDOG,
@@ -103,6 +104,16 @@ class MediatorConfig:
     """The interrupt policy (MISSION.md 7.3 (2)): on the Commands the catalog says are
     interruptible (the robot profile's ``<interruptible>``)."""
 
+    reactions: bool = True
+    """The reactions policy (MISSION.md 7.1): a reaction keeps the devices its next AB
+    needs; a reaction to the user's own action goes first until it has said its first
+    words."""
+
+    exchange: bool = True
+    """The exchange policy (MISSION.md 7.4): an application's spoken reply to the answer
+    of its own Q&A goes before every other application's AB on its devices, and is
+    never cut."""
+
     max_eas: int = MAX_EAS
     """Most EAs registered at once (besides the one FA): each has its own budgets."""
 
@@ -148,7 +159,7 @@ class Mediator:
         self._config = config
         self._apps: dict[str, App] = {}
         self._app_order = 0
-        self._wm = WorkingMemory()
+        self._wm = WorkingMemory(keep_next=config.reactions)
         self._log = DecisionLog(record)
         self._holds = Holds(self._apps, self._wm, self._log, catalog, clock)
         # (whether the connect-channel policy can act: what Policies._connect requires)
@@ -306,6 +317,8 @@ class Mediator:
             again = wm.new_node(app, node.tree, node.commands, node.devices, node.priority,
                                 node.reactive, node.seq, node.iteration)
             again.restarts = node.id
+            # it starts like any other AB: turned to the user first, where it applies
+            again.turnable = again.faces = node.faces
             again.parent = node.id
             again.children = children
             for c in children:
@@ -315,6 +328,10 @@ class Mediator:
                            before=node.id)
             wm.enter_waiting(again, False)  # (its parent has not)
         wm.leave(node)
+        cutter = node.cut_by
+        if cutter is not None and cutter.alive and now > node.started_at:
+            # the time the cut throws away counts against the cutting app's wait share
+            self._fairness.charge(cutter, now - node.started_at)
         values = outcome.values
         event = Event(INTERRUPTED_EVENT, {
             "command": node.name, "label": node.commands[0].call.label or "",
@@ -388,7 +405,11 @@ class Mediator:
                 self._driver.abandon(cmd0.id)
         else:
             ended = node.commands
+            for cmd in ended:
+                if cmd.spec.listens:
+                    cmd.answered = outcome.values.get("status") == ANSWERED
             self._intake.ended(ended, now)
+        self._done(node, children)
         for child in children:
             if child.state is _PENDING:
                 wm.enter_waiting(child, True)  # (its parent just finished)
@@ -402,10 +423,25 @@ class Mediator:
                 except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
                     self._failed(app, "command_ended", exc)
 
+    def _done(self, node: Node, children: list[Node]) -> None:
+        """What the end of ``node`` tells its tree: a reaction to the user has said its
+        first utterance in full (MISSION.md 7.1); the robot faces the user for the ABs
+        after a turn to the user, whatever happened before it."""
+        tree = node.tree
+        if tree.user and node.seq >= (tree.reaction or 0) \
+                and any(c.spec.spoken(c.call.args) for c in node.commands):
+            self._wm.heard(tree)
+        if node.commands[0].internal is Rule.CONNECT_CHANNEL:
+            for child in children:
+                child.looked = tree.suspensions
+
     def _next_iteration(self, node: Node, children: list[Node]) -> Node:
         """Insert a feedback Command's next iteration between ``node`` and its children."""
         nxt = self._wm.new_node(node.app, node.tree, node.commands, node.devices,
                                 node.priority, False, node.seq, node.iteration + 1)
+        if node.commands[0].internal is not None:
+            nxt.protected = node.protected  # (a return put before a reply is part of it;
+            # a reply's own next iteration comes after its words: the exchange is over)
         nxt.parent = node.id
         nxt.children = children
         for c in children:

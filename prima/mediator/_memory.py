@@ -33,7 +33,10 @@ _CANCELLED = NodeState.CANCELLED
 class WorkingMemory:
     """The mediator's books. Internal: use :meth:`Mediator.snapshot` to look."""
 
-    def __init__(self) -> None:
+    def __init__(self, keep_next: bool = True) -> None:
+        self.keep_next = keep_next
+        """A reaction's next AB keeps its devices (the reactions policy, MISSION.md
+        7.1); replies and ABs a policy deferred keep theirs whatever it says."""
         self.nodes: dict[AbId, Node] = {}
         """Nodes pending, waiting or running."""
         self.trees: dict[TreeId, Tree] = {}
@@ -60,6 +63,17 @@ class WorkingMemory:
         self.on: dict[str, dict[Tree, dict[AbId, Node]]] = {}
         """Device -> tree -> its waiting, unparked ABs that need the device (what a hold
         taking force on the device looks at)."""
+        self.beside: dict[str, dict[str, int]] = {}
+        """Device -> the other devices its waiting, unparked ABs need, with how many
+        need each: what an AB kept from the device (MISSION.md 7.1) stops reserving."""
+        self.unreserved = False
+        """Some AB stopped reserving its devices since the selector last looked: what it
+        kept from others may go (``Holds`` re-files them)."""
+        self.reserving: dict[str, dict[AbId, Node]] = {}
+        """Device -> the pending ABs that reserve it (``Node.reserving``): each is the
+        next AB of a reaction (or a reply to an answer, or an AB a policy put an AB of
+        its own before) right after one of its tree's waiting or running ABs
+        (MISSION.md 7.1, 7.4)."""
         self._next_ab = 1
         self._next_tree = 0
         self._next_susp = 1
@@ -97,13 +111,60 @@ class WorkingMemory:
             c.node = node
         return node
 
-    @staticmethod
-    def link(parent: Node | None, child: Node) -> None:
+    def link(self, parent: Node | None, child: Node) -> None:
         if parent is None:
             return
         child.parent = parent.id
-        if parent.state in IN_MEMORY:
+        state = parent.state
+        if state in IN_MEMORY:
             parent.children.append(child)
+            if state is not _PENDING and (
+                    (self.keep_next and child.tree.reaction is not None)
+                    or child.protected or child.deferred):
+                self._reserve(child)
+
+    # --------------------------------------------------------------- reserving
+    def _reserve(self, node: Node) -> None:
+        """The pending ``node`` is next after a waiting or running AB of its reaction
+        (or it is a reply to an answer): it reserves its devices."""
+        if node.reserving or node.state is not _PENDING:
+            return
+        node.reserving = True
+        dirty = self.dirty
+        dirty.update(node.devices)  # (what it keeps steps aside now, and reserves no
+        beside = self.beside        # more the other devices it waits for)
+        reserving = self.reserving
+        for d in node.sorted_devices:
+            others = beside.get(d)
+            if others:
+                dirty.update(others)
+            on = reserving.get(d)
+            if on is None:
+                reserving[d] = {node.id: node}
+            else:
+                on[node.id] = node
+
+    def _unreserve(self, node: Node) -> None:
+        """``node`` reserves nothing any more (it waits, started, or left)."""
+        node.reserving = False
+        self.unreserved = True
+        reserving = self.reserving
+        for d in node.sorted_devices:
+            on = reserving.get(d)
+            if on is not None:
+                on.pop(node.id, None)
+                if not on:
+                    del reserving[d]
+        self.dirty.update(node.devices)
+
+    def _reserve_children(self, node: Node) -> None:
+        """``node`` waits or runs: its pending children that a reaction (or an
+        exchange) keeps reserve their devices."""
+        for child in node.children:
+            if child.state is _PENDING and not child.reserving and (
+                    (self.keep_next and child.tree.reaction is not None)
+                    or child.protected or child.deferred):
+                self._reserve(child)
 
     # ------------------------------------------------------------------ changes
     def _rank_in(self, node: Node) -> None:
@@ -124,6 +185,16 @@ class WorkingMemory:
             if nodes is None:
                 nodes = trees[tree] = {}
             nodes[node.id] = node
+        devices = node.sorted_devices
+        if len(devices) > 1:
+            beside = self.beside
+            for d in devices:
+                others = beside.get(d)
+                if others is None:
+                    others = beside[d] = {}
+                for e in devices:
+                    if e != d:
+                        others[e] = others.get(e, 0) + 1
 
     def _rank_out(self, node: Node) -> None:
         """Count a waiting AB out of its devices' rankings (it was counted in)."""
@@ -143,12 +214,28 @@ class WorkingMemory:
             del nodes[node.id]
             if not nodes:
                 del trees[tree]
+        devices = node.sorted_devices
+        if len(devices) > 1:
+            beside = self.beside
+            for d in devices:
+                others = beside[d]
+                for e in devices:
+                    if e != d:
+                        k = others[e] - 1
+                        if k:
+                            others[e] = k
+                        else:
+                            del others[e]
 
     def enter_waiting(self, node: Node, parent_finished: bool) -> None:
         """Put a node on the waiting list (Figure 4.3); ``parent_finished``: it ranks as
         'parent just finished' in the next round. (Positional: a call with a keyword
         argument costs more, and one is made for every AB.)"""
+        if node.reserving:
+            self._unreserve(node)
         node.state = _WAITING
+        if node.children:
+            self._reserve_children(node)
         node.app.active += 1
         self.waiting += 1
         self.index.add(node)
@@ -161,6 +248,9 @@ class WorkingMemory:
         """A waiting, unparked AB goes back to pending: an AB was put before it."""
         node.state = _PENDING
         node.version += 1
+        for child in node.children:  # (next after a pending AB: not next any more)
+            if child.reserving:
+                self._unreserve(child)
         self._rank_out(node)
         self.waiting -= 1
         node.app.active -= 1
@@ -226,6 +316,8 @@ class WorkingMemory:
 
     def cancel(self, node: Node, now: float) -> None:
         """Remove a not-yet-started node."""
+        if node.reserving:
+            self._unreserve(node)
         was_waiting = node.state is _WAITING
         node.state = _CANCELLED
         node.children = []
@@ -239,6 +331,8 @@ class WorkingMemory:
 
     def leave(self, node: Node) -> None:
         """Take a finished or cancelled node out of working memory."""
+        if node.reserving:
+            self._unreserve(node)
         ab = node.id
         self.nodes.pop(ab, None)
         tree = node.tree
@@ -275,15 +369,32 @@ class WorkingMemory:
         if app.active == 0:
             app.idle_since = now
 
+    def _rerank(self, tree: Tree) -> None:
+        """The tree's rank changed: the index re-ranks its waiting ABs, and the devices
+        its next ABs reserve are looked at again (whom they outrank changed)."""
+        dirty = self.dirty
+        dirty.update(self.index.rerank(tree))
+        if self.reserving:
+            beside = self.beside
+            for d, on in self.reserving.items():
+                for r in on.values():
+                    if r.tree is tree:
+                        dirty.add(d)  # (whom it keeps, and so what they reserve, changed)
+                        others = beside.get(d)
+                        if others:
+                            dirty.update(others)
+                        break
+
     # -------------------------------------------------------- suspended stack
     def suspend(self, tree: Tree) -> bool:
         """Push a tree on the suspended stack (once). True if it was pushed."""
         if tree.suspended is not None or tree.live == 0:
             return False
         tree.suspended = self._next_susp
+        tree.suspensions += 1
         self._next_susp += 1
         self.suspended[tree.id] = tree
-        self.dirty.update(self.index.rerank(tree))
+        self._rerank(tree)
         return True
 
     def resume(self, tree: Tree) -> None:
@@ -291,22 +402,42 @@ class WorkingMemory:
             return
         tree.suspended = None
         self.suspended.pop(tree.id, None)
-        self.dirty.update(self.index.rerank(tree))
+        self._rerank(tree)
 
-    def react(self, tree: Tree, reaction: int) -> bool:
-        """The tree takes over as (a later) reaction: re-rank it. Whether it was no
-        reaction before."""
+    def react(self, tree: Tree, reaction: int, user: bool = False) -> bool:
+        """The tree takes over as (a later) reaction, to the user's own action if ``user``:
+        re-rank it. Whether its rank changed."""
         before = tree.reaction
         if before is None or before < reaction:
             tree.reaction = reaction
+            tree.user = user
             if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
-                self.dirty.update(self.index.rerank(tree))
-        return before is None
+                self._rerank(tree)
+                if before is None and self.keep_next:  # its next ABs keep their devices
+                    for node in list(tree.nodes.values()):
+                        if node.state is not _PENDING:
+                            self._reserve_children(node)
+            return True
+        return False
+
+    def heard(self, tree: Tree) -> None:
+        """A reaction to the user's own action said its first utterance in full: from now
+        on it ranks as any reaction (MISSION.md 7.1)."""
+        if tree.user:
+            tree.user = False
+            if tree.live:
+                self._rerank(tree)
 
     def rerank_app(self, app: App) -> None:
-        """The app's precedence changed: re-rank its trees."""
+        """The app's precedence changed: re-rank its trees, and look again at the
+        devices its running ABs hold (a waiting reaction may outrank them now, and the
+        interrupt policy may cut them)."""
         for tree in app.trees.values():
-            self.dirty.update(self.index.rerank(tree))
+            self._rerank(tree)
+        dirty = self.dirty
+        for d, y in self.busy.items():
+            if y.app is app:
+                dirty.add(d)
 
     # ------------------------------------------------------------------ queries
     @staticmethod

@@ -75,27 +75,46 @@ class Policies:
         """The ready AB ``x`` is about to start: put a policy's AB before it? True if it
         now waits for one (a return to the pose its stream was suspended in, then a
         turn to the user)."""
-        if x.tree.pose is not None and x.tree.suspended is not None and self._restore(x):
+        tree = x.tree
+        if x.looked != tree.suspensions:
+            x.looked = tree.suspensions  # its stream was suspended since it was last looked
+            x.turnable = x.faces  # at: whether it faces the user, anew
+        if tree.pose is not None and self._restore(x):
             return True
-        return x.turnable and self._connect(x)
+        if x.turnable and self._connect(x):
+            return True  # (the pose is looked at again when the turn has been made)
+        if tree.pose is not None and any(c.spec.spoken(c.call.args) for c in x.commands):
+            tree.pose = None  # the resumed stream's first words start here
+        return False
 
     def _restore(self, x: Node) -> bool:
         """The restore-state policy: ``x`` resumes its suspended stream with the robot
         moved away from where it was suspended, so a return to that pose goes first,
         in the stream. Not before an AB that takes the robot somewhere itself (a move,
-        following the user), and once per suspension. Before an AB that turns the robot
-        itself (a FaceHumanAndSpeak), only the position is restored. The return waits
-        for the wheels like any AB of the resumed stream."""
-        pose, x.tree.pose = x.tree.pose, None
-        if pose is None or self._channel is None or any(c.spec.travels for c in x.commands):
+        following the user), and once per suspension. Before an AB that turns or aims
+        the robot itself (a FaceHumanAndSpeak, a SetDirection toward its panel), only
+        the position is restored. The return waits
+        for the wheels like any AB of the resumed stream. Before an utterance that the
+        connect-channel policy may turn the robot to the user for, likewise."""
+        pose = x.tree.pose
+        if pose is None or self._channel is None:
             return False
+        if any(c.spec.travels for c in x.commands):
+            x.tree.pose = None  # the stream takes the robot somewhere itself
+            return False
+        if not any(c.spec.spoken(c.call.args) for c in x.commands):
+            return False  # (a StopMoving, a gesture: the pose is looked at before its words)
         command = RESTORE_COMMAND
-        if BODY_DEVICE in x.devices:
+        if BODY_DEVICE in x.devices or x.faces or any(c.spec.aims for c in x.commands):
+            # it turns or aims the robot itself (at its panel, say), or the connect-channel
+            # policy will turn it to the user before its words: the heading it had then
+            # does not matter, where it stood does
             command = RESTORE_POSITION_COMMAND
             pose = {k: v for k, v in pose.items() if k != "heading"}
         spec = self._catalog.get(command)
         if spec is None or not self._channel.displaced(pose):
             return False
+        x.tree.pose = None  # (once per suspension)
         call = Call(command, pose)
         self._intake.insert_before(x, call, spec, Rule.RESTORE_STATE,
                                    f"returns to the pose its stream was suspended in "
@@ -130,7 +149,10 @@ class Policies:
         period, and the turn, keeping the channel, outranks the move's next one); for
         a reaction's utterance, another application's iteration with the body still
         (a search's watch: one control period, and the reaction outranks its next
-        one), or an AB the interrupt policy will cut for the turn."""
+        one), or an AB the interrupt policy will cut for the turn; or a turn to the user
+        already under way (another application's: this one then has nothing to turn)."""
+        if y.name == CONNECT_COMMAND:
+            return True  # the robot turns to the user already: the turn follows at once
         if not y.feedback:
             return x.tree.reaction is not None and self._config.interrupt \
                 and self.cuttable(y, x)
@@ -197,11 +219,16 @@ class Policies:
         for y in running:
             if not y.cutting and self._driver.cut(y.id):
                 y.cutting = True
+                y.cut_by = x.app
                 self._log.ab(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
                              f"for {x.app.name}'s reaction (AB{x.id})")
 
     def cuttable(self, y: Node, x: Node) -> bool:
-        if y.app is x.app or not preempts(x, y):
+        """Whether the reaction's AB ``x`` may cut the running ``y`` (MISSION.md 7.3 (2)):
+        another application's, outranked, of interruptible Commands its request lets
+        be cut, in no block, not blended; never a reply to an answer (7.4), and never
+        twice (a restart is not cut again)."""
+        if y.app is x.app or y.restarts is not None or y.protected or not preempts(x, y):
             return False
         if y.blended or any(d in self._wm.blending for d in y.devices):
             return False  # blended ABs are never cut

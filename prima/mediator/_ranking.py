@@ -38,8 +38,9 @@ from typing import NoReturn
 from prima.mediator._decisions import Rule
 from prima.mediator._state import Node, Tree
 
-__all__ = ["CRITERIA", "Criterion", "Key", "Keys", "Rank", "Ranking", "Scope", "preempts",
-           "rank", "separating_rule"]
+__all__ = ["CRITERIA", "Criterion", "Key", "Keys", "Rank", "Ranking", "Scope", "keeps_for",
+           "outranks",
+           "preempts", "rank", "separating_rule"]
 
 Key = tuple[int, ...]
 Keys = tuple[int, ...]
@@ -71,14 +72,27 @@ class Criterion:
     finished (only ``ROUND`` criteria look at it)."""
     width: int = 1
     """How many ints its key holds, for every AB (one for a ``ROUND`` criterion)."""
+    standing: bool = False
+    """Part of what an AB keeps whatever the waiting order (priority, an exchange's
+    reply, precedence, reactions): what a reservation and a cut compare
+    (:func:`outranks`). The standing criteria come first in the table."""
 
 
 def _priority(node: Node, _pjf: Collection[int]) -> Key:
     return (-int(node.priority),)
 
 
+def _exchange(node: Node, _pjf: Collection[int]) -> Key:
+    return (0,) if node.protected else (1,)
+
+
 def _wait_share(node: Node, _pjf: Collection[int]) -> Key:
     return (1,) if node.app.demoted else (0,)
+
+
+def _user_first(node: Node, _pjf: Collection[int]) -> Key:
+    tree = node.tree
+    return (0,) if tree.user and tree.reaction is not None else (1,)
 
 
 def _reactivity(node: Node, _pjf: Collection[int]) -> Key:
@@ -100,13 +114,19 @@ def _oldest(node: Node, _pjf: Collection[int]) -> Key:
 
 
 CRITERIA: tuple[Criterion, ...] = (
-    Criterion(Rule.PRIORITY, Scope.NODE, _priority),
+    Criterion(Rule.PRIORITY, Scope.NODE, _priority, standing=True),
     # 1. HIGH (keeps the Communication Channel) before LOW (breaks it).
-    Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share),
+    Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share, standing=True),
     # (budget) an app that kept the others waiting beyond its share ranks after them.
-    Criterion(Rule.REACTIVITY, Scope.TREE, _reactivity, 2),
-    # 2. ABs of a reaction first, the latest reaction first (response speed; MISSION.md
-    #    7.1: a reaction takes over as a stream until its trees leave working memory).
+    Criterion(Rule.EXCHANGE, Scope.NODE, _exchange, standing=True),
+    # (MISSION.md 7.4) the words that reply to the user's answer belong to the exchange
+    # (an app that lost its precedence lost this one too: its wait share bounds it).
+    Criterion(Rule.USER_FIRST, Scope.TREE, _user_first, standing=True),
+    # 2. ABs of a reaction first: a reaction to the user's own action until its first
+    #    utterance is said in full (MISSION.md 7.1), ...
+    Criterion(Rule.REACTIVITY, Scope.TREE, _reactivity, 2, standing=True),
+    #    ... then the latest reaction first (response speed; MISSION.md 7.1: a reaction
+    #    takes over as a stream until its trees leave working memory).
     Criterion(Rule.PARENT_FINISHED, Scope.ROUND, _parent_finished),
     # 3. ABs whose before node just finished (keep the active stream).
     Criterion(Rule.RESUME_STREAM, Scope.TREE, _resume_stream, 2),
@@ -125,15 +145,38 @@ def rank(node: Node, pjf: Collection[int]) -> tuple[Key, ...]:
     return tuple([c.key(node, pjf) for c in CRITERIA])
 
 
+def _standing(node: Node) -> tuple[Key, ...]:
+    """The AB's keys under the standing criteria, in order (read from the table each
+    time: asked only for a reservation or a cut)."""
+    return tuple([c.key(node, ()) for c in CRITERIA if c.standing])
+
+
+def outranks(x: Node, y: Node) -> bool:
+    """Whether ``x`` outranks ``y`` on what an AB keeps whatever the waiting order (the
+    standing criteria: priority, an exchange's reply, precedence, reactions): what a
+    reaction's reservation of the devices of its next AB compares (MISSION.md 7.1)."""
+    return _standing(x) < _standing(y)
+
+
+def keeps_for(r: Node, x: Node) -> bool:
+    """Whether the pending next AB ``r`` of a reaction (or a reply) keeps a device it
+    will use from the waiting ``x`` of another application (MISSION.md 7.1): ``r``'s
+    priority is not lower, and it outranks ``x`` on the rest of what an AB keeps
+    whatever the waiting order (a reply, precedence, the user first, the latest
+    reaction). Priority is compared apart, so that no two reactions keep devices from
+    each other (the rest is the same for every AB of a tree but a reply's own)."""
+    rank_r, rank_x = _standing(r), _standing(x)
+    return rank_r[0] <= rank_x[0] and rank_r[1:] < rank_x[1:]
+
+
 def preempts(x: Node, y: Node) -> bool:
     """Whether the waiting AB ``x`` outranks the running AB ``y`` on what a running
-    AB keeps: its priority, then being the latest reaction (not on waiting order).
-    The interrupt policy cuts ``y`` for ``x`` only then, and never for an app that
-    lost its precedence (the wait share): a budget that flips back and forth must
-    not cut and restart the same ABs over and over."""
+    AB keeps (:func:`outranks`). The interrupt policy cuts ``y`` for ``x`` only then,
+    and never for an app that lost its precedence (the wait share): a budget that
+    flips back and forth must not cut and restart the same ABs over and over."""
     if x.app.demoted:
         return False
-    return (_priority(x, ()), _reactivity(x, ())) < (_priority(y, ()), _reactivity(y, ()))
+    return outranks(x, y)
 
 
 def separating_rule(winner: Node, loser: Node, pjf: Collection[int]) -> Rule:

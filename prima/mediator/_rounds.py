@@ -27,7 +27,7 @@ from prima.mediator._interface import AbId, AtomicBehavior, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._policies import Policies
-from prima.mediator._ranking import Rank
+from prima.mediator._ranking import Rank, keeps_for
 from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
@@ -195,6 +195,9 @@ class Selector:
         while True:
             if holds.opened:  # (else there is no stream to arm or let lapse)
                 holds.update()
+            if wm.unreserved:  # what a reaction's next AB kept may go now (7.1)
+                wm.unreserved = False
+                holds.refile_reserved()
             new, dirty, pjf = wm.new, wm.dirty, wm.pjf
             if not (new or dirty or pjf):
                 break
@@ -316,18 +319,21 @@ class Selector:
         opened = self._holds.opened
         policies = self._policies
         on_busy = policies.on_busy
+        reserving = wm.reserving
         for d in dirty:
             counts = ranked.get(d)
             if not counts:
                 continue  # no AB waits for it
-            if opened or d not in busy or (on_busy and policies.may_act_on(d)):
+            if opened or d not in busy or (on_busy and policies.may_act_on(d)) \
+                    or d in reserving:  # (one kept for a reaction steps aside now)
                 return False
             for _app, priority in counts:
                 if priority is _LOW:
                     return False
         for x in new:
             if x.state is _WAITING and x.parked is None:
-                if opened or x.priority is _LOW:
+                if opened or x.priority is _LOW or (
+                        reserving and not reserving.keys().isdisjoint(x.devices)):
                     return False
                 for d in x.sorted_devices:  # a busy device that keeps it waiting
                     if d in busy and not (on_busy and policies.may_act_on(d)):
@@ -359,16 +365,65 @@ class Selector:
             order.sort(key=view.rank)
         return order
 
+    def _reserved(self, x: Node) -> Node | None:
+        """The pending next AB of another application's reaction (or reply) that
+        reserves one of ``x``'s devices and keeps it from ``x`` (MISSION.md 7.1,
+        :func:`keeps_for`): ``x`` may not have that device now, whatever else holds it.
+        None if there is none."""
+        reserving = self._wm.reserving
+        found: Node | None = None
+        for d in x.sorted_devices:
+            on = reserving.get(d)
+            if on:
+                for r in on.values():
+                    if r.app is not x.app and (found is None or r.id < found.id) \
+                            and keeps_for(r, x):
+                        found = r
+        return found
+
+    def _step_aside(self, y: Node) -> bool:
+        """``y`` ranks best on a device another AB asks for, but it is kept for another
+        application's reaction (MISSION.md 7.1) on a device of its own, which this
+        round may not have looked at: it steps aside now (parked), so that it reserves
+        nothing. True if it did."""
+        if y.parked is not None or self._holds.holder(y) is not None:
+            return False
+        r = self._reserved(y)
+        if r is None:
+            return False
+        self._holds.park(y, Rule.RESERVED, r.app)
+        return True
+
+    def _ready(self, x: Node, best: Callable[[str], Node | None]) -> bool:
+        """Whether ``x``'s devices are free and it ranks best on each."""
+        busy = self._wm.busy
+        reserving = self._wm.reserving
+        for d in x.sorted_devices:
+            if d in busy:
+                return False
+            b = best(d)
+            while reserving and b is not None and b is not x and self._step_aside(b):
+                b = best(d)  # (what ranked best there was kept for a reaction: gone now)
+            if b is not x:
+                return False
+        return True
+
     def _startable(self, x: Node, view: _Round) -> bool:
+        wm = self._wm
         holds = self._holds
         held = holds.holder(x) if holds.opened or x.priority is _LOW else None
-        busy = self._wm.busy
         best = view.best
-        ready = True
-        for d in x.sorted_devices:
-            if d in busy or best(d) is not x:
-                ready = False
-                break
+        ready = self._ready(x, best)
+        reserving = wm.reserving
+        if held is None and reserving:
+            r = self._reserved(x)
+            if r is not None:
+                # Kept for the reaction's next AB (MISSION.md 7.1): it steps aside, like
+                # an AB another app's hold keeps, so that it reserves nothing meanwhile.
+                if ready:
+                    holds.reserved(x, r)
+                holds.park(x, Rule.RESERVED, r.app)
+                return False
         x.blended = _NO_DEVICES
         policies = self._policies
         if ready:
@@ -410,6 +465,7 @@ class Selector:
     def _start(self, x: Node, view: _Round, started: list[Node],
                later: list[tuple[bool, Tree]]) -> None:
         self._wm.start(x)
+        x.started_at = self._log.now
         started.append(x)
         # Who did it beat? The best remaining waiting AB on each of its devices.
         best = view.best

@@ -83,7 +83,7 @@ class Command:
     """One requested Command."""
 
     __slots__ = ("id", "app", "call", "spec", "node", "ended", "cancelled", "cut", "ended_at",
-                 "internal", "on_interrupt")
+                 "internal", "on_interrupt", "answered")
 
     def __init__(self, cid: CommandId, app: App, call: Call, spec: CommandSpec,
                  internal: Rule | None = None,
@@ -105,13 +105,17 @@ class Command:
         self.ended_at = 0.0
         self.on_interrupt = on_interrupt
         """What the interrupt policy may do to its ABs (its request said)."""
+        self.answered = False
+        """A Command that listens, which ended with the user's answer: a request that
+        follows it with words is the reply that belongs to the exchange (MISSION.md
+        7.4)."""
 
 
 class Tree:
     """One AB tree (one Communication Stream)."""
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
-                 "started", "pose", "devices", "parked", "keys")
+                 "user", "started", "pose", "devices", "parked", "keys", "suspensions")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -121,6 +125,8 @@ class Tree:
         self.running = 0
         self.suspended: int | None = None
         """Position on the suspended stack (larger = more recent), or None."""
+        self.suspensions = 0
+        """How many times it was suspended."""
         self.nodes: dict[AbId, Node] = {}
         """Nodes in working memory, in creation order."""
         self.devices: dict[str, int] = {}
@@ -134,6 +140,10 @@ class Tree:
         self.reaction: int | None = None
         """The sequence number of the reaction it belongs to (MISSION.md 7.1: a reaction
         takes over as a stream), larger is later; None if it is no reaction."""
+        self.user = False
+        """A reaction to the user's own action (a touch, heard speech) that has not yet
+        said its first utterance in full: no later reaction of another application to
+        a perception or network event overtakes it (MISSION.md 7.1)."""
         self.started = False
         """Some AB of it has started: it is a stream under way, not a new one."""
         self.pose: Mapping[str, Value] | None = None
@@ -162,7 +172,9 @@ class Node:
     __slots__ = ("id", "app", "tree", "commands", "devices", "sorted_devices", "priority",
                  "reactive", "iteration", "parent", "children", "state", "seq", "version",
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
-                 "restarts", "blended", "head", "order", "ranked", "facts", "plain")
+                 "restarts", "blended", "head", "order", "ranked", "facts", "plain",
+                 "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
+                 "looked")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -203,7 +215,30 @@ class Node:
         """The AB the interrupt policy cut, which this one starts again."""
         self.turnable = False
         """An utterance that does not orient the robot itself, whose app lets the
-        mediator turn the robot to the user first (the connect-channel policy)."""
+        mediator turn the robot to the user first (the connect-channel policy), not
+        yet looked at by the policy."""
+        self.faces = False
+        """What ``turnable`` was when the AB was requested (a restart of it is looked at
+        again: it starts like any other AB, MISSION.md 7.3 (2))."""
+        self.looked = 0
+        """Its tree's ``suspensions`` when the connect-channel policy last set
+        ``turnable``: after a suspension, whether it faces the user is looked at anew
+        (a turn made before it may have been undone meanwhile)."""
+        self.protected = False
+        """The words with which an application replies to the answer of its own Q&A: they
+        belong to the exchange (MISSION.md 7.4): they outrank every other application's
+        AB, reactions included, and are never cut."""
+        self.deferred = False
+        """A policy put an AB of its own before it when it was ready (a turn to the user,
+        a return): it stays in line for its devices meanwhile."""
+        self.reserving = False
+        """Pending right after a waiting or running AB of a reaction, or behind a policy's
+        AB (``deferred``): its devices are kept from the ABs it outranks (MISSION.md
+        7.1), in ``WorkingMemory.reserving``."""
+        self.started_at = 0.0
+        """When it started (running, or done)."""
+        self.cut_by: App | None = None
+        """The application whose reaction had it cut (the interrupt policy)."""
         self.parked: App | None = None
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
         first = commands[0]

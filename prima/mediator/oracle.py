@@ -81,7 +81,7 @@ FEEDBACK_STOPPED = "feedback loop stopped between iterations"
 
 TALK = frozenset({"speaker", "speech-recognition"})
 
-_RankKey = tuple[int, int, tuple[int, int], tuple[int, int], int, int]
+_RankKey = tuple[int, int, int, int, tuple[int, int], tuple[int, int], int, int]
 _RankKeyFn = Callable[[NodeView], _RankKey]
 
 
@@ -94,6 +94,23 @@ class Streams:
     """Reaction trees -> the order of their latest reaction request (larger: later)."""
     started: set[TreeId] = field(default_factory=set)
     """Trees some AB of which started: streams under way."""
+    user: set[TreeId] = field(default_factory=set)
+    """Reactions to the user's own action (a touch, heard speech) whose first utterance
+    has not been said in full yet: no later reaction to a perception or network event
+    overtakes them (MISSION.md 7.1)."""
+    replies: set[AbId] = field(default_factory=set)
+    """The words with which an app replied to its own Q&A's answer: they belong to the
+    exchange (MISSION.md 7.4): they go first, and are never cut."""
+    before_replies: set[CommandId] = field(default_factory=set)
+    """The Commands of a policy's ABs put before a reply (a return: each of its
+    iterations ranks as the reply does)."""
+
+    def replying(self, n: NodeView) -> bool:
+        """``n`` is a reply's AB, or an AB a policy put before one."""
+        return n.ab in self.replies or not self.before_replies.isdisjoint(n.command_ids)
+    deferred: set[CommandId] = field(default_factory=set)
+    """Commands a policy put an AB of its own before (a turn, a return): their AB stays
+    in line for its devices meanwhile."""
 
     def held_by_stream(self, tree: TreeId, suspended: Collection[TreeId]) -> bool:
         """A stream hold delays only new streams that are no reaction (7.1, 7.2): trees
@@ -113,6 +130,10 @@ class _View:
     talkers: frozenset[str]
     """Apps running an AB on a talk device."""
     streams: Streams
+    nexts: list[NodeView]
+    """The next ABs of reactions, and replies, pending right after a waiting or running
+    AB of their tree: they keep their devices from the ABs they outrank (7.1)."""
+    standing: Callable[[NodeView], tuple[int, int, int, int, tuple[int, int]]]
 
     @classmethod
     def of(cls, snap: Snapshot, talk: frozenset[str], streams: Streams) -> _View:
@@ -120,7 +141,33 @@ class _View:
         busy = {d: nodes[ab] for d, ab in snap.busy}
         talkers = frozenset(n.app for d, n in busy.items() if d in talk)
         waiting = sorted((nodes[ab] for ab in snap.waiting), key=rank_key(snap, streams))
-        return cls(snap, nodes, waiting, busy, talkers, streams)
+        nexts = [n for n in nodes.values()
+                 if n.state is NodeState.PENDING and n.parent in nodes
+                 and nodes[n.parent].state in (NodeState.WAITING, NodeState.RUNNING)
+                 and (n.tree in streams.reaction or streams.replying(n)
+                      or not streams.deferred.isdisjoint(n.command_ids))]
+        return cls(snap, nodes, waiting, busy, talkers, streams, nexts,
+                   standing_key(snap, streams))
+
+    def kept_for(self, n: NodeView, nexts: Sequence[NodeView] | None = None
+                 ) -> NodeView | None:
+        """The next AB of another app's reaction (or reply) that keeps one of ``n``'s
+        devices from it (7.1): its priority is not lower, and it outranks ``n`` on the
+        rest of what an AB keeps whatever the waiting order (of ``nexts``, if given)."""
+        mine = self.standing(n)
+        for r in self.nexts if nexts is None else nexts:
+            theirs = self.standing(r)
+            if r.app != n.app and set(r.devices) & set(n.devices) \
+                    and theirs[0] <= mine[0] and theirs[1:] < mine[1:]:
+                return r
+        return None
+
+    def keepers(self, n: NodeView) -> list[str]:
+        """The apps whose reaction's (or reply's) next AB keeps a device from ``n``."""
+        mine = self.standing(n)
+        return [r.app for r in self.nexts
+                if r.app != n.app and set(r.devices) & set(n.devices)
+                and (theirs := self.standing(r))[0] <= mine[0] and theirs[1:] < mine[1:]]
 
     def channel_held(self, n: NodeView) -> bool:
         """A Command that breaks the channel waits while another app talks."""
@@ -132,7 +179,9 @@ class _View:
                 if _applies(h, n, self.snap.demoted, self.streams, self.snap.suspended)]
 
     def held(self, n: NodeView) -> bool:
-        return self.channel_held(n) or bool(self.holders(n))
+        """Held by the channel rule, another app's hold, or kept for another app's
+        reaction (7.1): it reserves nothing."""
+        return self.channel_held(n) or bool(self.holders(n)) or self.kept_for(n) is not None
 
 
 def _applies(h: HoldView, n: NodeView, demoted: Iterable[str], streams: Streams,
@@ -148,17 +197,35 @@ def rank_key(snap: Snapshot, streams: Streams) -> _RankKeyFn:
     first, the latest reaction first; suspended trees, the most recently
     suspended first; the oldest request; the lowest AB id."""
     order = {tree: i for i, tree in enumerate(snap.suspended)}  # top of the stack first
-    demoted = set(snap.demoted)
-    reaction = streams.reaction
+    standing = standing_key(snap, streams)
 
     def key(n: NodeView) -> _RankKey:
         return (
-            0 if n.priority is Priority.HIGH else 1,
-            1 if n.app in demoted else 0,
-            (0, -reaction[n.tree]) if n.tree in reaction else (1, 0),
+            *standing(n),
             (0, order[n.tree]) if n.tree in order else (1, 0),
             n.seq,
             n.ab,
+        )
+    return key
+
+
+def standing_key(snap: Snapshot, streams: Streams
+                 ) -> Callable[[NodeView], tuple[int, int, int, int, tuple[int, int]]]:
+    """What an AB keeps whatever the waiting order: HIGH first; apps that lost their
+    precedence after the others; the reply to an answer (7.4); reactions to the user's
+    own action whose first words are not yet said; the latest reaction (7.1)."""
+    demoted = set(snap.demoted)
+    reaction = streams.reaction
+    user = streams.user
+    replying = streams.replying
+
+    def key(n: NodeView) -> tuple[int, int, int, int, tuple[int, int]]:
+        return (
+            0 if n.priority is Priority.HIGH else 1,
+            1 if n.app in demoted else 0,
+            0 if replying(n) else 1,
+            0 if n.tree in user and n.tree in reaction else 1,
+            (0, -reaction[n.tree]) if n.tree in reaction else (1, 0),
         )
     return key
 
@@ -179,8 +246,8 @@ def _left_waiting(v: _View) -> list[AbId]:
     reserved: set[str] = set()
     out: list[AbId] = []
     for n in v.waiting:
-        if v.held(n):
-            continue
+        if v.held(n) or v.kept_for(n) is not None:
+            continue  # (kept for a reaction's next AB, it steps aside too: 7.1)
         devices = set(n.devices)
         if not devices & reserved and not any(d in v.busy for d in devices):
             out.append(n.ab)
@@ -213,6 +280,8 @@ def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
             # Kept by several apps' holds (three apps or more): the wait is the
             # parking hold's doing; the others would keep nothing it did not.
             holders = v.holders(n)
+            if not holders:  # kept for another app's reaction (7.1): its precedence
+                holders = v.keepers(n)
             out.update([n.parked_by] if n.parked_by in holders else holders)
     for d, ws in wanting.items():
         holder = v.busy.get(d) or ws[0]
@@ -323,6 +392,18 @@ class Oracle:
         self.streams = Streams()
         self._reactions: set[CommandId] = set()
         """First Commands of the requests made while handling a reactive event."""
+        self._users: set[CommandId] = set()
+        """... of those, the ones handling the user's own action (7.1)."""
+        self._answering: set[CommandId] = set()
+        """First Commands of the requests made while handling a Q&A's answer (7.4)."""
+        self._reply_commands: dict[CommandId, AbId] = {}
+        """The Commands of replies (7.4), and the AB of each."""
+        self._order: dict[CommandId, int] = {}
+        """Command -> the order of the request that asked for it."""
+        self._heard: list[Decision] = []
+        """The ends in this operation that said a user reaction's first words in full."""
+        self._restarts: set[AbId] = set()
+        """ABs that start a cut AB again: never cut (7.3 (2): at most one cut)."""
         self._requests = 0
         self._exempt: set[AbId] = set()
         """ABs that started in a reaction or a stream under way (no stream hold applies)."""
@@ -343,13 +424,20 @@ class Oracle:
             self.violations.append(what)
 
     # ------------------------------------------------------------ the app side
-    def requested(self, app: str, ids: Sequence[CommandId], reaction: bool = False) -> None:
+    def requested(self, app: str, ids: Sequence[CommandId], reaction: bool = False,
+                  user: bool = False, answer: bool = False) -> None:
         """``app`` requested the Commands ``ids``; ``reaction``: while handling a
-        reactive event (the caller set ``Request.reactive`` or ``reaction``)."""
+        reactive event (the caller set ``Request.reactive`` or ``reaction``), ``user``:
+        the user's own action (``Request.user``); ``answer``: ``follows`` names a Q&A the
+        user answered (its reply, if words, belongs to the exchange: 7.4)."""
         for c in ids:
             self._requested[c] = app
         if reaction and ids:
             self._reactions.add(ids[0])
+            if user:
+                self._users.add(ids[0])
+        if answer and ids:
+            self._answering.add(ids[0])
 
     def callback(self, app: str, command: CommandId, what: str, loaded: bool) -> None:
         """An app was told its Command ``what`` (ended/cancelled); ``loaded``: the
@@ -368,6 +456,7 @@ class Oracle:
         """After an operation: read the new decisions, then check the snapshot."""
         new = decisions[self._seen:]
         self._seen = len(decisions)
+        self._heard.clear()
         before = set(self._prev.snap.suspended) if self._prev is not None else set()
         suspended = set(before)  # what this operation's starts resume leaves it
         for d in new:
@@ -384,6 +473,7 @@ class Oracle:
         self._check_running(v)
         if self._prev is not None:
             self._check_holds(self._prev, v, new)
+            self._check_outranked(self._prev, v, new)
             self._contention(self._prev, v, new)
         left = _left_waiting(v)
         if left:
@@ -403,9 +493,16 @@ class Oracle:
             self._interrupt(d)
         elif d.kind is DecisionKind.REQUEST:
             self._requests += 1
+            for cid in d.command_ids:
+                self._order[cid] = self._requests
             if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
                     and d.tree is not None):
                 self.streams.reaction[d.tree] = self._requests
+                if d.command_id in self._users:
+                    self.streams.user.add(d.tree)
+                else:
+                    self.streams.user.discard(d.tree)
+            self._reply(d)
         elif d.kind is DecisionKind.START and d.ab is not None:
             self._start(d.ab, d, suspended)
         elif d.kind is DecisionKind.END and d.ab is not None:
@@ -417,11 +514,40 @@ class Oracle:
                 self.fail(f"t={d.t:g}: AB{d.ab} was cancelled after it started "
                           f"({d.rule.value}: {d.detail or 'no detail'})")
 
+    def _reply(self, d: Decision) -> None:
+        """A request's root AB is a reply (7.4): the first AB an answer handler requested,
+        with words and no question of its own; or a policy's AB put before one."""
+        if d.ab is None:
+            return
+        if d.precedes is not None:
+            self.streams.deferred.add(d.precedes)
+            first = self._reply_commands.get(d.precedes)
+            if first is not None and first not in self.books.started:
+                # put before the reply's words (not before its loop's later iteration,
+                # which comes after them: the exchange is over by then)
+                self.streams.replies.add(d.ab)
+                self.streams.before_replies.update(d.command_ids)
+            return
+        if d.command_id not in self._answering or d.rule is not Rule.END_EVENT:
+            return
+        root = d.calls[:len((d.command or "").split("+"))]
+        specs = [(self._catalog[c.command], c) for c in root]
+        if any(spec.spoken(c.args) for spec, c in specs) and \
+                not any(spec.listens for spec, _c in specs):
+            self.streams.replies.add(d.ab)
+            for cid in d.command_ids[:len(root)]:
+                self._reply_commands[cid] = d.ab
+
     def _end(self, ab: AbId, d: Decision) -> None:
         b = self.books
         if ab not in b.running:
             self.fail(f"t={d.t:g}: AB{ab} ended but was not running")
             return
+        if (d.rule is Rule.COMPLETED and d.tree in self.streams.user
+                and self._order.get(d.command_id or 0, 0) >= self.streams.reaction[d.tree]
+                and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
+            self.streams.user.discard(d.tree)  # the reaction's first words were said in full
+            self._heard.append(d)
         if d.rule is Rule.INTERRUPT:
             self._interrupt(d)
         b.ended.add(ab)
@@ -441,6 +567,10 @@ class Oracle:
         if d.kind is DecisionKind.INTERRUPT:
             if ab not in self.books.running or ab in self._cutting:
                 self.fail(f"t={d.t:g}: AB{ab} was cut while not running, or twice")
+            if ab in self._restarts:
+                self.fail(f"t={d.t:g}: AB{ab} was cut again (it restarts a cut AB)")
+            if ab in self.streams.replies:
+                self.fail(f"t={d.t:g}: AB{ab} was cut, but it replies to an answer")
             self._cutting.add(ab)
         elif d.kind is DecisionKind.END:
             if ab not in self._cutting or ab in self._interrupted:
@@ -456,6 +586,8 @@ class Oracle:
                 self.fail(f"t={d.t:g}: AB{cut} was restarted but not cut to restart")
             self._to_restart.discard(cut)
             self._interrupted.add(cut)
+            if d.ab is not None:
+                self._restarts.add(d.ab)
 
     def _start(self, ab: AbId, d: Decision, suspended: set[TreeId]) -> None:
         b = self.books
@@ -535,6 +667,58 @@ class Oracle:
             if prio is Priority.LOW and talkers - {d.app} and d.ab not in self._bounded:
                 self.fail(f"t={d.t:g}: AB{d.ab} ({d.app} {d.command}) breaks the channel "
                           f"but started while {sorted(talkers - {d.app})} talked")
+
+    def _check_outranked(self, prev: _View, v: _View, new: Sequence[Decision]) -> None:
+        """No AB started in this operation on a device that another app's AB wanted all
+        along and that outranks it on what an AB keeps whatever the waiting order
+        (priority, a reply to an answer, precedence, the user's own action first, the
+        latest reaction): waiting for it unheld, or kept for it as a reaction's next AB
+        (7.1, 7.4). A blend shares the device instead of taking it."""
+        starts = [d for d in new if d.kind is DecisionKind.START and d.rule is not Rule.BLEND
+                  and d.ab in v.nodes]
+        if not starts or any(d.kind is DecisionKind.BUDGET for d in new):
+            return  # (a precedence changed within the operation: ranks moved meanwhile)
+        if self._heard:
+            # a reaction to the user's own action said its first words within the
+            # operation (an utterance that takes no time): the starts before that were
+            # ranked with it first, the view knows it no longer is
+            last = max(new.index(h) for h in self._heard)
+            starts = [d for d in starts if new.index(d) > last]
+        held = {d.ab for d in new if d.kind is DecisionKind.HOLD}
+        before = {n.ab for n in prev.waiting if not prev.held(n) and prev.kept_for(n) is None
+                  and n.ab not in held}
+        # An AB that entered the waiting list in this operation (asked for in it, or
+        # pending before it; it may have started since) may have been a reaction's next
+        # AB, keeping its devices, while the operation's rounds ran (the ABs before it
+        # ended meanwhile): what it kept then was no rival.
+        were_next = [n for n in v.nodes.values()
+                     if n.state is not NodeState.PENDING
+                     and (n.ab not in prev.nodes or prev.nodes[n.ab].state is NodeState.PENDING)
+                     and (n.tree in self.streams.reaction or self.streams.replying(n))]
+        # A move is held while another app talks: one that talked within the operation
+        # (an utterance that took no time) may have held it while the rounds ran.
+        talked = {d.app for d in new if d.kind is DecisionKind.START
+                  and not self._talk.isdisjoint(d.devices)}
+        rivals = [n for n in v.waiting
+                  if n.ab in before and not v.held(n) and v.kept_for(n) is None
+                  and (not were_next or v.kept_for(n, were_next) is None)
+                  and not (n.priority is Priority.LOW and talked - {n.app})]
+        kept = {n.ab for n in prev.nexts}
+        nexts = [n for n in v.nexts if n.ab in kept]
+        for d in starts:
+            x = v.nodes[d.ab if d.ab is not None else -1]
+            mine = v.standing(x)
+            for w in rivals + nexts:
+                if w.app == x.app or not set(w.devices) & set(x.devices):
+                    continue
+                theirs = v.standing(w)
+                if (theirs[0] <= mine[0] and theirs[1:] < mine[1:]) if w in nexts \
+                        else theirs < mine:
+                    self.fail(f"t={d.t:g}: AB{x.ab} ({x.app} {x.command}) started on "
+                              f"{', '.join(sorted(set(w.devices) & set(x.devices)))}, which "
+                              f"AB{w.ab} ({w.app} {w.command}, {w.state.value}) outranks it "
+                              f"for")
+                    break
 
     def _contention(self, prev: _View, v: _View, new: Sequence[Decision]) -> None:
         """Note the ABs started in this operation while no other app's AB that wanted

@@ -41,7 +41,7 @@ from prima.mediator import (
 from prima.mediator.oracle import Oracle
 from prima.mediator.testing import Harness
 from prima.catalog import Blend, Catalog
-from prima.vocab import Budgets, OnInterrupt
+from prima.vocab import ANSWERED, Budgets, OnInterrupt
 
 __all__ = ["Act", "AppScript", "Result", "Scenario", "play", "replay", "scenario"]
 
@@ -75,6 +75,8 @@ DEVICES = ("human-detection", "locomotion", "localization", "speaker", "speech-r
            "neck", "arm")
 DURATIONS = (0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0)
 EVENTS = ("human-found", "touched", "message")
+USER_EVENTS = frozenset({"touched"})
+"""The user's own actions among them (MISSION.md 7.1)."""
 FEEDBACK = frozenset({"ActiveSensingHuman", "ActiveSensingHuman+say", "TrackingHuman",
                       "TopologicalMove", "SetPosition", "SetPositionAndDirection"})
 
@@ -101,6 +103,10 @@ class AppScript:
     """``event``, ``ended`` or ``cancelled``: that callback raises ..."""
     raise_at: int = 1
     """... the ``raise_at``-th time."""
+    reply: str = ""
+    """Requested at once from the end handler of each of its Q&As the user answered
+    (MISSION.md 7.4: words reply within the exchange; a question ends it); nothing
+    if empty."""
 
 
 @dataclass(frozen=True)
@@ -179,6 +185,9 @@ class Scenario:
 
     def outcome(self, ab: AtomicBehavior) -> Outcome:
         n = self.iterations[ab.command_ids[0] % len(self.iterations)]
+        if any(c.command == "QA" for c in ab.calls):  # the user answers two Q&As in three
+            return Outcome({"status": ANSWERED if ab.id % 3 else "noinput",
+                            "utterance": "yes"}, terminal=ab.iteration + 1 >= n)
         return Outcome(terminal=ab.iteration + 1 >= n)
 
     def __str__(self) -> str:
@@ -259,7 +268,23 @@ def scenario(seed: int) -> Scenario:
         iterations=tuple(r.randint(1, 5) for _ in range(r.randint(1, 3))),
         immediate=r.random() < 0.3, config=config, horizon=horizon,
     )
-    return _blending(_interrupting(_beside(sc)))
+    return _replying(_blending(_interrupting(_beside(sc))))
+
+
+REPLIES = ("Speak", "Speak", "FaceHumanAndSpeak", "QA", "Gesture", "")
+
+
+def _replying(sc: Scenario) -> Scenario:
+    """In about half the seeds, apps reply to their answered Q&As at once, from the end
+    handler: with words (an exchange, 7.4), with their next question, or with a
+    gesture. From a generator of its own (the other draws stay)."""
+    r = random.Random(f"prima-reply:{sc.seed}")
+    if r.random() >= 0.5:
+        return sc
+    scripts = tuple(dataclasses.replace(s, reply=r.choice(REPLIES)) for s in sc.scripts)
+    beside = None if sc.beside is None else dataclasses.replace(sc.beside,
+                                                                reply=r.choice(REPLIES))
+    return dataclasses.replace(sc, scripts=scripts, beside=beside)  # type: ignore[arg-type]
 
 
 BLENDS = (
@@ -342,18 +367,24 @@ class _Listener:
             # like a handler with two chains: the first is reactive, the second is
             # part of the same reaction (MISSION.md 7.1)
             first, rest = (s.react, ()) if s.react_asap else (s.react[:1], s.react[1:])
+            user = event.name in USER_EVENTS
             self.run.submit(Request(self.name, tuple(call(c) for c in first), reactive=True,
                                     order=RunningOrder.ASAP if s.react_asap
-                                    else RunningOrder.AFTER_LATEST))
+                                    else RunningOrder.AFTER_LATEST, user=user))
             if rest:
                 self.run.submit(Request(self.name, tuple(call(c) for c in rest),
-                                        reaction=True))
+                                        reaction=True, user=user))
 
-    def command_ended(self, command_id: CommandId, _outcome: Outcome) -> None:
+    def command_ended(self, command_id: CommandId, outcome: Outcome) -> None:
         self.run.told(self.name, command_id, "ended")
         self.run.latest_ended[self.name] = command_id
+        if outcome.values.get("status") == ANSWERED:
+            self.run.answered.add(command_id)
         self._maybe_raise("ended")
         s = self.script
+        if s.reply and self.run.live() and outcome.values.get("status") == ANSWERED:
+            self.run.submit(Request(self.name, (call(s.reply),), follows=command_id))
+            return
         if not self.run.live() or not (
                 s.endless or (s.follow_every and command_id % s.follow_every == 0)):
             return
@@ -422,6 +453,8 @@ class _Run:
         self.names = {"fa": "fa", "ea": "ea", "eb": "eb"}
         self.swaps = 0
         self.latest_ended: dict[str, CommandId] = {}
+        self.answered: set[CommandId] = set()
+        """The Q&As the user answered (a request that follows one may reply: 7.4)."""
         self.streams: set[str] = set()
         self.blocks: set[str] = set()
         self.register("fa", AppKind.FA, sc.scripts[0])
@@ -442,7 +475,8 @@ class _Run:
     def submit(self, request: Request) -> None:
         """Submit (errors go to the caller: inside a handler, they fail the app)."""
         self.oracle.requested(request.app, self.m.submit(request),
-                              reaction=request.reactive or request.reaction)
+                              reaction=request.reactive or request.reaction,
+                              user=request.user, answer=request.follows in self.answered)
 
     def guarded(self, request: Request) -> None:
         """Submit from the scenario: a refused request is fine (nothing changes)."""

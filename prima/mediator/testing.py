@@ -37,7 +37,7 @@ from prima.mediator._interface import (
     Outcome,
 )
 from prima.mediator._mediator import Mediator, MediatorConfig
-from prima.mediator._ranking import rank
+from prima.mediator._ranking import outranks, rank
 from prima.mediator._state import NodeState
 from prima.vocab import AppKind, Value
 
@@ -251,13 +251,21 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
     waiting = [n for n in wm.nodes.values() if n.state is NodeState.WAITING]
     waiting.sort(key=lambda n: rank(n, wm.pjf))
     busy = set(wm.busy)
+    # the next ABs of reactions (and replies) keep their devices (MISSION.md 7.1)
+    nexts = [n for n in wm.nodes.values()
+             if n.state is NodeState.PENDING and n.parent is not None
+             and (n.tree.reaction is not None or n.protected or n.deferred)
+             and (p := wm.nodes.get(n.parent)) is not None
+             and p.state in (NodeState.WAITING, NodeState.RUNNING)]
     reserved: set[str] = set()
     out: list[AbId] = []
     for n in waiting:
         held = mediator._holds.holder(n)
         if held is not None and held[0] is not Rule.KEEP_CHANNEL:
             continue  # held by a block or stream hold: it reserves nothing
-        if n.devices & busy or n.devices & reserved or held is not None:
+        kept = any(r.app is not n.app and r.devices & n.devices and outranks(r, n)
+                   for r in nexts)
+        if n.devices & busy or n.devices & reserved or held is not None or kept:
             reserved |= n.devices
             continue
         out.append(n.id)

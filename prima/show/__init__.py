@@ -16,17 +16,23 @@ the ``show`` extra (``pip install 'prima[show]'``).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from prima.errors import PrimaError
 
+if TYPE_CHECKING:
+    from prima.run import Switches
+
 __all__ = ["read_rows", "render"]
 
 
-def read_rows(path: str | Path) -> list[dict[str, Any]]:
-    """A run's rows: a jsonl trace read (located errors), or a scenario run in-process."""
+def read_rows(path: str | Path, switches: Switches | None = None) -> list[dict[str, Any]]:
+    """A run's rows: a jsonl trace read (located errors), or a scenario run in-process
+    (``switches``: its FA, EA, robot or policies changed)."""
     path = Path(path)
     if path.suffix == ".jsonl":
         from prima.judge import load_trace
@@ -34,7 +40,8 @@ def read_rows(path: str | Path) -> list[dict[str, Any]]:
         return load_trace(path)
     from prima.run import Run
 
-    return [line.to_dict() for line in Run(path).run()]
+    options = switches.run_options() if switches else {}
+    return [line.to_dict() for line in Run(path, **options).run()]
 
 
 def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None,

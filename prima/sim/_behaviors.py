@@ -19,7 +19,16 @@ import math
 from collections.abc import Callable, Generator, Mapping
 from typing import TYPE_CHECKING, Any
 
-from prima.catalog import MAX_HOLD, ArgRef, CommandSpec, Hold, JointSpec, MoveJoint
+from prima.catalog import (
+    MAX_HOLD,
+    MAX_SWAY,
+    ArgRef,
+    CommandSpec,
+    Hold,
+    JointSpec,
+    MoveJoint,
+    SwayBody,
+)
 from prima.errors import CommandError
 from prima.mediator import AtomicBehavior, Call
 from prima.sim._kernel import Wait, signal, sleep, until
@@ -176,6 +185,7 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     if timeout < 0:
         raise CommandError(f"timeout must not be negative, not {timeout:g}")
     n = sim.ticks(sim.spec.speech_duration(prompt))
+    sim.asking(prompt)
     sim.utter(cid, prompt, n)
     yield sleep(n)
     sim.ask(prompt)
@@ -188,12 +198,21 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 # ---- turning --------------------------------------------------------------------------------
 
+FACE_AIM = math.radians(5.0)
+"""Face Human turns again, toward where the user is now, while it is this far off them
+(the user walked on while it turned), at most ``FACE_TRIES`` times in all."""
+FACE_TRIES = 3
+
+
 def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     world = sim.world
     seen, distance = world.sees_user(sim.kernel.tick, any_direction=True)
     if not seen:
         return {"found": False}, True
-    yield from _turn(sim, world.user_bearing())
+    for _ in range(FACE_TRIES):
+        yield from _turn(sim, world.user_bearing())
+        if abs(world.user_bearing()) <= FACE_AIM:
+            break
     return {"found": True, "distance": round(distance, 3), **_pose(sim)}, True
 
 
@@ -344,6 +363,24 @@ def _hold_seconds(call: Call, step: Hold) -> float:
     return seconds
 
 
+def _sway_figures(call: Call, step: SwayBody) -> tuple[float, int, float]:
+    """A sway's amplitude (deg), its number of whole sways and its length (s): as many
+    whole periods as fit in its seconds, at least one."""
+    degrees = _finite(_given(call, step.degrees), "a sway's degrees")
+    period = _finite(_given(call, step.period), "a sway's period")
+    seconds = _finite(_given(call, step.seconds), "a sway's seconds")
+    if not 0.0 < degrees <= MAX_SWAY:
+        raise CommandError(f"a sway turns more than 0 and at most {MAX_SWAY:g} degrees "
+                           f"either way, not {degrees:g}")
+    if not 0.0 < period <= 60.0:
+        raise CommandError(f"a sway's period is more than 0 and at most 60 s, not {period:g}")
+    if not 0.0 < seconds <= MAX_HOLD:
+        raise CommandError(f"a sway lasts more than 0 and at most {MAX_HOLD:g} s, "
+                           f"not {seconds:g}")
+    sways = max(1, int(seconds / period + 1e-9))
+    return degrees, sways, sways * period
+
+
 def _joint_figures(sim: Simulator, joint: JointSpec) -> tuple[tuple[float, float], float]:
     """A joint's limits (deg) and rate (deg/s): the robot's own for a built-in joint."""
     if joint.low is not None and joint.high is not None and joint.rate is not None:
@@ -379,14 +416,21 @@ def perform_steps(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     """A Command the robot profile performs with a ``<perform>``: its steps in order.
 
     A hold keeps the devices for its time; a joint step moves the joint at its
-    rate and waits until it is there (its angle is among the values); a raise
-    posts the robot-specific event to the applications at once.
+    rate and waits until it is there (its angle is among the values); a sway swings
+    the body about its heading for its time, on top of whatever drives the wheels; a
+    raise posts the robot-specific event to the applications at once.
     """
     world = sim.world
     values: Values = {}
     for step in sim.catalog[call.command].perform:
         if isinstance(step, Hold):
             yield sleep(sim.ticks(_hold_seconds(call, step)))
+        elif isinstance(step, SwayBody):
+            degrees, sways, seconds = _sway_figures(call, step)
+            n = sim.ticks(seconds)
+            world.sway(math.radians(degrees), sways, n, cid)
+            values["sways"] = sways
+            yield sleep(n)
         elif isinstance(step, MoveJoint):
             tick, name = sim.kernel.tick, step.joint.name
             target = _joint_target(sim, call, step)
@@ -422,6 +466,8 @@ def _perform_time(sim: Simulator, call: Call, spec: CommandSpec) -> float:
     for step in spec.perform:
         if isinstance(step, Hold):
             total += _hold_seconds(call, step)
+        elif isinstance(step, SwayBody):
+            total += _sway_figures(call, step)[2]
         elif isinstance(step, MoveJoint):
             name = step.joint.name
             target = _joint_target(sim, call, step)
@@ -554,9 +600,9 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
         return {"error": f"no route to {goal.name!r}"}, True
     nxt = path[0]
     bound = sim.blend_bound()
-    if bound is not None and sim.world.has_user and sim.world.user_distance() > bound:
+    if bound is not None and sim.world.has_user and _would_leave(sim, nxt.x, nxt.y, bound):
         # blending (a dance while it guides): the robot never gets farther than the
-        # bound from its user; it waits for them this period
+        # bound from its user; it waits for them this period, stopping before it would
         if sim.world.mode:
             yield from _stop(sim)
         yield sleep(sim.ticks(sim.spec.control_period))
@@ -582,6 +628,25 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
         sim.end_loop(cid)
     return {"place": nxt.name, "kind": nxt.kind.value, "goal": goal.name,
             "remaining": len(path) - 1}, done
+
+
+def _would_leave(sim: Simulator, x: float, y: float, bound: float) -> bool:
+    """Whether going on toward (x, y) for one more control period could take the robot
+    farther than ``bound`` from its user, should they stay where they are: as far as
+    it could drive in the period at its speed limit, and then brake to a stop. Asked
+    before each period, so the robot stops within the bound, ahead of time."""
+    world = sim.world
+    px, py = world.robot.position
+    ux, uy = world.human.position
+    if math.hypot(ux - px, uy - py) > bound:
+        return True
+    left = math.hypot(x - px, y - py)
+    if left < 1e-9:
+        return False
+    v = world.speed_cap()
+    reach = min(left, v * sim.spec.control_period + v * v / (2.0 * sim.spec.max_accel))
+    ax, ay = px + (x - px) / left * reach, py + (y - py) / left * reach
+    return math.hypot(ux - ax, uy - ay) > bound
 
 
 def _route(sim: Simulator, goal: Place,
@@ -626,7 +691,17 @@ def _set_position(sim: Simulator, call: Call, cid: int,
         if not points:
             return {"error": f"no route to ({tx:g}, {ty:g})"}, True
         if (yield from _period_toward(sim, *points[0])) is BLOCKED:
-            return {"error": "blocked", **_pose(sim)}, True
+            # someone in the way (the user walking by): wait a second and try again, as
+            # a Topological Move does, up to MAX_BLOCKED times in a row
+            state = sim.loop_state(cid)
+            blocked = int(state.get("blocked") or 0) + 1
+            state["blocked"] = blocked
+            if blocked >= MAX_BLOCKED:
+                sim.end_loop(cid)
+                return {"error": "blocked", **_pose(sim)}, True
+            yield sleep(sim.ticks(1.0))
+            return {"blocked": True, **_pose(sim)}, False
+        sim.loop_state(cid)["blocked"] = 0
         x, y = world.robot.position
     reached = math.hypot(tx - x, ty - y) <= tol
     if reached and heading is not None:
@@ -754,9 +829,9 @@ def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
         if (behavior is None and spec is not None and spec.robot_specific
                 and spec.duration is not None):
             behavior = hold_for_duration
-        if spec is not None and spec.devices & ab.blended \
+        if spec is not None and not spec.perform and spec.devices & ab.blended \
                 and sim.blended_locally(ab, call.command):
-            behavior = blended_motion
+            behavior = blended_motion  # (a <perform>'s steps never command the wheels)
         if behavior is None or spec is None:
             values["error"] = f"the simulated robot has no Command {call.command!r}"
             return values, True

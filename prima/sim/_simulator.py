@@ -66,6 +66,11 @@ def _ignore(*_: object) -> None:
     return None
 
 
+_SPEAK_AT_ONCE = frozenset({"Speak", "QA", "TurnAndSpeak", "ActiveSensingHuman"})
+"""The Commands whose behaviors begin with their words (a Face Human and Speak turns
+first)."""
+
+
 class Simulator:
     """A deterministic simulated robot, its building and its user."""
 
@@ -127,6 +132,8 @@ class Simulator:
         self._procs: dict[int, Process] = {}
         """The process performing each running atomic behavior (to cut it)."""
         self._speech: dict[int, tuple[int, tuple[str, ...], int]] = {}
+        self._said: dict[int, tuple[float, float]] = {}
+        """AB -> when its words began and ended (s), once it has ended (``said``)."""
         """Command id -> what it is saying: the tick it began, its words, its ticks."""
         self._cutting: set[int] = set()
         self._driving: set[int] = set()
@@ -212,9 +219,10 @@ class Simulator:
                                                lambda result: self._finish(ab, result))
 
     def _blend(self, ab: AtomicBehavior) -> None:
-        """``ab`` runs blended with another on a device they share. If it is the local
-        motion, the global one slows to the blend's ``slowdown`` and waits for a user
-        beyond its bound while it runs."""
+        """``ab`` runs blended with another on a device they share: the local motion
+        over the global one, or the global one's next iteration under the local one.
+        While the local motion runs, the global one goes at the blend's ``slowdown``
+        and stops ahead of its bound from the user (the local AB is the blend's key)."""
         catalog = self.catalog
         mine = [catalog[c.command] for c in ab.calls if c.command in catalog]
         for other in self._running.values():
@@ -223,9 +231,12 @@ class Simulator:
                 continue
             theirs = [catalog[c.command] for c in other.calls if c.command in catalog]
             found = catalog.blend(mine, theirs, shared[0])
-            if found is not None and all(c.name in found.local for c in mine
-                                         if found.devices & c.devices):
+            if found is None:
+                continue
+            if all(c.name in found.local for c in mine if found.devices & c.devices):
                 self._blends[ab.id] = found
+            elif all(c.name in found.local for c in theirs if found.devices & c.devices):
+                self._blends[other.id] = found
         self._pace()
 
     def blended_locally(self, ab: AtomicBehavior, command: str) -> bool:
@@ -243,10 +254,11 @@ class Simulator:
         atomic behavior that holds them for a later call does not keep a motion
         before it rolling)."""
         spec = self.catalog.get(call.command)
-        if spec is not None and "locomotion" in spec.devices_for(call.args):
+        if spec is not None and "locomotion" in spec.devices_for(call.args) \
+                and not spec.perform:
             self._driving.add(ab.id)
-        else:
-            self._driving.discard(ab.id)
+        else:  # (no primitive of a <perform> drives the wheels: a sway swings the body
+            self._driving.discard(ab.id)  # about whatever drives them)
 
     def blend_bound(self) -> float | None:
         """How far the robot may be from its user now (m): the tightest bound of the
@@ -292,7 +304,10 @@ class Simulator:
                 continue
             start, saying, ticks = said
             if now >= start + ticks or not saying:
-                return now, " ".join(words), ""  # all said (a Q&A listening)
+                if any(c.command in self.catalog and self.catalog[c.command].listens
+                       for c in ab.calls):
+                    return None  # a Q&A listening: the user's turn is never cut
+                return now, " ".join(words), ""  # all said
             per = ticks / len(saying)
             k = min(len(saying), int((now - start) // per) + 1)  # the word under way ends
             if k >= len(saying):
@@ -361,7 +376,7 @@ class Simulator:
                     if (k.tick >= target or (heap and heap[0][0] <= k.tick)
                             or (stop_on_report and self.reports != before)
                             or not (world.mode or world.human_moving
-                                    or k.tick < world.joints_until)):
+                                    or k.tick < world.joints_until or world.swaying)):
                         break
             else:
                 nxt = k.next_tick()
@@ -450,10 +465,37 @@ class Simulator:
     def end_loop(self, command_id: int) -> None:
         self._loops.pop(command_id, None)
 
+    def said(self, ab_id: int) -> tuple[float, float] | None:
+        """When the words of the ended atomic behavior ``ab_id`` began and would have
+        ended (s; a cut one stopped at its end), or None if it said nothing; asked
+        once."""
+        return self._said.pop(ab_id, None)
+
+    def words_ahead(self, ab: AtomicBehavior) -> float | None:
+        """How long the words of ``ab`` take if it says them as soon as it starts (s): a
+        Speak, a Q&A's prompt, a Turn and Speak, a search's prompt (in an iteration
+        that says it), first in the atomic behavior; None otherwise (it says nothing,
+        or says it after something else: a turn, an earlier Command of a group)."""
+        call = ab.calls[0] if ab.calls else None
+        if call is None or call.command not in _SPEAK_AT_ONCE:
+            return None
+        if ab.iteration and self.quiet(ab.command_ids[0]):
+            return None
+        spec = self.catalog.get(call.command)
+        words = spec.spoken(call.args) if spec is not None else []
+        if not words:
+            return None
+        return self.ticks(self.spec.speech_duration(" ".join(words))) / self.kernel.hz
+
     def quiet(self, command_id: int) -> bool:
         """The next iteration of this feedback Command says none of its words (a
         search says ``say`` once per retry, in the retry's first iteration)."""
         return bool(self._loops.get(command_id, {}).get("quiet"))
+
+    def asking(self, prompt: str) -> None:
+        """The robot starts asking ``prompt``."""
+        if self.user is not None:
+            self.user.begin_question(prompt)
 
     def ask(self, prompt: str) -> None:
         """The robot finished asking ``prompt`` and starts listening."""
@@ -528,7 +570,8 @@ class Simulator:
 
     def _moving(self) -> bool:
         w = self.world
-        return bool(w.mode or w.human_moving or self.kernel.tick < w.joints_until)
+        return bool(w.mode or w.human_moving or self.kernel.tick < w.joints_until
+                    or w.swaying)
 
     def _settle(self) -> None:
         k = self.kernel
@@ -605,12 +648,17 @@ class Simulator:
         values, terminal = result
         del self._running[ab.id]
         self._procs.pop(ab.id, None)
+        if self.world.sway_owner and self.world.sway_owner in ab.command_ids:
+            self.world.end_sway()  # (cut before its sway was over)
         self._cutting.discard(ab.id)
         self._driving.discard(ab.id)
         if self._blends.pop(ab.id, None) is not None:
             self._pace()
         for cid in ab.command_ids:
-            self._speech.pop(cid, None)
+            said = self._speech.pop(cid, None)
+            if said is not None and ab.id not in self._said:
+                start, _words, ticks = said  # (as planned: a cut one's words end earlier)
+                self._said[ab.id] = (start / self.kernel.hz, (start + ticks) / self.kernel.hz)
         if "human-detection" in ab.devices:
             self._sensing -= 1
             if not self._sensing:  # forget how long the user was unseen, unless sensing

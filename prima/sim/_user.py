@@ -118,6 +118,8 @@ class ScriptedUser:
         self._touching = False
         """A touch's walk up to the robot is under way (replaced, it is reported missed)."""
         self._matched = [0] * len(script.answers)
+        self._asked: tuple[str, AnswerRule | None] | None = None
+        """The prompt the robot is asking, and the rule that answers it (None: none)."""
 
     def begin(self) -> None:
         """Put every timed action on the agenda."""
@@ -127,9 +129,13 @@ class ScriptedUser:
 
     # ---- hearing and speaking ---------------------------------------------------
 
-    def hear_question(self, prompt: str) -> None:
-        """The robot asked ``prompt`` and now listens: answer by the first matching rule."""
+    def begin_question(self, prompt: str) -> None:
+        """The robot starts asking ``prompt``: which rule answers it is decided now, so
+        that ``nth`` counts the times the robot asks (a prompt cut and asked again
+        counts twice: the user heard it begin). Asked out of hearing range, it counts
+        for no rule."""
         sim = self._sim
+        self._asked = (prompt, None)
         if sim.world.user_distance() > sim.spec.hearing_range:
             return
         for i, rule in enumerate(self.script.answers):
@@ -138,10 +144,23 @@ class ScriptedUser:
             self._matched[i] += 1
             if rule.nth is not None and self._matched[i] != rule.nth:
                 continue
-            if rule.say is not None:
-                k = sim.kernel
-                k.at(k.tick + round(rule.after * k.hz), functools.partial(self.say, rule.say))
+            self._asked = (prompt, rule)
             return
+
+    def hear_question(self, prompt: str) -> None:
+        """The robot asked ``prompt`` and now listens: answer by the rule chosen when it
+        began asking, if the user is still within hearing range."""
+        sim = self._sim
+        asked, self._asked = self._asked, None
+        if asked is None or asked[0] != prompt:
+            self.begin_question(prompt)  # (a prompt asked without its beginning heard)
+            asked, self._asked = self._asked, None
+        rule = asked[1] if asked is not None else None
+        if rule is None or sim.world.user_distance() > sim.spec.hearing_range:
+            return
+        if rule.say is not None:
+            k = sim.kernel
+            k.at(k.tick + round(rule.after * k.hz), functools.partial(self.say, rule.say))
 
     def say(self, text: str) -> None:
         heard = self._sim.hear(text)

@@ -164,6 +164,16 @@ class World:
         self._alpha_dt = math.radians(spec.turn_accel) * self.dt
         self._vmax = spec.max_speed
         self._wmax = math.radians(spec.max_turn_rate)
+        # a sway superimposed on whatever drives the wheels (a dance step: the blend policy)
+        self._sway: tuple[float, float, int] | None = None
+        """Amplitude (rad), angular frequency (rad per step) and length (steps)."""
+        self._sway_k = 0
+        self._sway_offset = 0.0
+        """How far (rad) the sway has turned the body from where it would be."""
+        self._ta_offset = 0.0
+        """The sway's offset when the running turn began."""
+        self.sway_owner = 0
+        """The Command whose sway runs (0: none)."""
 
     # ---- queries -------------------------------------------------------------
 
@@ -289,11 +299,68 @@ class World:
         """Drive no faster than ``speed`` (m/s) from now on (a blend slows the robot)."""
         self._vmax = min(speed, self.spec.max_speed)
 
+    def speed_cap(self) -> float:
+        """The fastest the robot drives now (m/s)."""
+        return self._vmax
+
     def moving(self) -> bool:
-        """The wheels drive or turn the body, or it has not come to rest yet."""
+        """The wheels drive or turn the body (or sway it), or it has not come to rest."""
         body = self.robot
-        return self.mode != _IDLE or body.velocity.length > 1e-3 \
-            or abs(body.angular_velocity) > 1e-3
+        return self.mode != _IDLE or self._sway is not None \
+            or body.velocity.length > 1e-3 or abs(body.angular_velocity) > 1e-3
+
+    def sway(self, amplitude: float, sways: int, steps: int, owner: int) -> None:
+        """Sway the body about its heading, ``amplitude`` radians either way, ``sways``
+        whole times in ``steps`` steps, on top of whatever drives the wheels (alone it
+        turns to and fro in place; over a drive, the course is unchanged and the body
+        swings about it). It ends facing where it would have faced without it."""
+        self.end_sway()
+        if steps > 0 and sways > 0:
+            self._sway = (amplitude, 2.0 * math.pi * sways / steps, steps)
+            self._sway_k = 0
+            self._sway_offset = 0.0
+            self.sway_owner = owner
+
+    def end_sway(self) -> None:
+        """Stop a sway under way (its atomic behavior ended early): the body turns back
+        by what it had swayed."""
+        if self._sway is None:
+            return
+        body = self.robot
+        body.angle -= self._sway_offset
+        body.angular_velocity = self._base_w()
+        self._sway = None
+        self._sway_offset = 0.0
+        self.sway_owner = 0
+        self.version += 1
+
+    def _base_w(self) -> float:
+        """The turning rate the wheels' controller gives the body (rad/s)."""
+        if self.mode == _ANGULAR:
+            return self._ux * self._v
+        if self.mode == _VELOCITY:
+            return self._w
+        return 0.0
+
+    def _advance(self, dt: float) -> None:
+        """Step the physics, with the sway under way, if any, on top of the wheels."""
+        sway = self._sway
+        if sway is None:
+            self.space.step(dt)
+            return
+        amplitude, omega, steps = sway
+        k = self._sway_k + 1
+        offset = amplitude * math.sin(omega * k) if k < steps else 0.0
+        body = self.robot
+        base = self._base_w()
+        body.angular_velocity = base + (offset - self._sway_offset) / dt
+        self.space.step(dt)
+        self._sway_offset = offset
+        self._sway_k = k
+        if k >= steps:
+            self._sway = None
+            self.sway_owner = 0
+            body.angular_velocity = base
 
     def turning_to(self) -> float | None:
         """The body angle the running turn ends at (radians), if one runs."""
@@ -326,6 +393,7 @@ class World:
         if abs(delta) < 1e-9:
             return False
         self._ta = self.robot.angle + delta
+        self._ta_offset = self._sway_offset
         self._ux = 1.0 if delta > 0 else -1.0
         self._len, self._s, self._v = abs(delta), 0.0, 0.0
         self._done = done
@@ -363,10 +431,12 @@ class World:
         return True
 
     def _halt(self) -> None:
-        """Forget the current controller (the caller sets a new one)."""
-        if self.mode != _IDLE:
-            self.robot.velocity = (0.0, 0.0)
-            self.robot.angular_velocity = 0.0
+        """Forget the current controller (the caller sets a new one). The body stops too,
+        idle or not: a push (a user walking into it) leaves it no speed of its own."""
+        body = self.robot
+        if self.mode != _IDLE or body.velocity.length > 0.0 or body.angular_velocity:
+            body.velocity = (0.0, 0.0)
+            body.angular_velocity = 0.0
         self.mode = _IDLE
         self._done = None
 
@@ -383,10 +453,12 @@ class World:
             last = v * dt >= rem
             if last:
                 v = rem / dt
-            if v != self._v:
-                self.robot.velocity = (self._ux * v, self._uy * v)
-                self._v = v
-            self.space.step(dt)
+            body = self.robot
+            vx, vy = self._ux * v, self._uy * v
+            if v != self._v or body.velocity != (vx, vy):
+                body.velocity = (vx, vy)  # (the wheels hold the course: a push sets it
+                self._v = v               # off the line for a step, never for good)
+            self._advance(dt)
             self._s += v * dt
             if last:
                 return self._finish_linear()
@@ -404,18 +476,32 @@ class World:
             if w != self._v:
                 self.robot.angular_velocity = self._ux * w
                 self._v = w
-            self.space.step(dt)
+            self._advance(dt)
+            self._hold()
             self._s += w * dt
             if last:
                 body = self.robot
                 body.angular_velocity = 0.0
-                body.angle = self._ta
+                body.angle = self._ta + self._sway_offset - self._ta_offset
                 return self._finish(True)
             return None
         if mode == _VELOCITY:
             return self._step_velocity(dt)
-        self.space.step(dt)
+        self._advance(dt)
+        self._hold()
         return None
+
+    def _hold(self) -> None:
+        """Idle or turning in place, the wheels hold the body where it is: a push (the
+        user walking into it) leaves it no speed to drift on with."""
+        body = self.robot
+        if body.velocity.length > 1e-9:
+            body.velocity = (0.0, 0.0)
+
+    @property
+    def swaying(self) -> bool:
+        """A sway runs (the world must be stepped, whatever else is idle)."""
+        return self._sway is not None
 
     def _step_velocity(self, dt: float) -> Callable[[], None] | None:
         v, w = self._v, self._w
@@ -434,7 +520,7 @@ class World:
         if nw != w:
             body.angular_velocity = nw
         self._v, self._w = nv, nw
-        self.space.step(dt)
+        self._advance(dt)
         if nv == 0.0 and nw == 0.0 and self._cmd_v == 0.0 and self._cmd_w == 0.0:
             body.velocity = (0.0, 0.0)
             self.mode = _IDLE

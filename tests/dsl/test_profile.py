@@ -24,6 +24,7 @@ def test_default_profile_extends_the_catalog() -> None:
     assert catalog["Speak"].duration is None
     assert catalog["TopologicalMove"].priority is Priority.LOW
     assert profile.events == {"touched": True}
+    assert profile.user_events == {"touched"}  # (the user's own action: MISSION 7.1)
     assert "volume" in profile.extras["Speak"]
     assert profile.speech_rate == 2.5 and profile.gestures["nod"] == 1.0
 
@@ -57,6 +58,12 @@ def test_minimal_profile_loads() -> None:
     ({"rest": '<event name="message"/>'}, 15, "is a predefined event"),
     ({"tilt": "45"}, 5, "tilt range is empty"),
     ({"rest": '<gesture name="nod" duration="-1"/>'}, 15, "gesture"),
+    # a local motion is a Command the profile declares for it, never one apps move with
+    ({"rest": '<blend local="Turn" over="TopologicalMove" devices="locomotion"/>'}, 15,
+     "makes the common Command 'Turn' a local motion"),
+    ({"rest": '<command name="Wiggle" devices="arm"><perform>'
+              '<sway degrees="10" period="1" seconds="2"/></perform></command>'}, 15,
+     "a <sway> step moves the body"),
 ])
 def test_profile_errors(kwargs: dict[str, str], line: int, fragment: str) -> None:
     with pytest.raises(DocumentError) as info:

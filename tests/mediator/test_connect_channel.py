@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from prima.mediator import AppKind, DecisionKind, Outcome, Request, Rule
+from prima.mediator import AppKind, DecisionKind, MediatorConfig, Outcome, Request, Rule
 from prima.mediator.testing import Harness
 from prima.vocab import Value
 from tests.mediator.helpers import call, req, speak
@@ -130,3 +130,31 @@ def test_the_turn_waits_only_for_a_moves_iteration() -> None:
                                           (0.5, "fa", "FaceHuman"), (1.5, "fa", "Speak")]
     assert run("ActiveSensingHuman")[:2] == [(0.0, "ea", "ActiveSensingHuman"),
                                              (0.2, "fa", "Speak")]
+
+
+def test_a_stream_suspended_after_its_turn_is_turned_for_again_when_it_resumes() -> None:
+    """The FA's words wait for a turn to the user (to 1.5 s); meanwhile (at 1 s) the
+    EA's reaction asks to turn the robot to its panel and speak about it: its words
+    keep the speaker, the FA's stream is suspended. When the FA's stream resumes, the
+    turn made before is undone: the robot turns to the user again before the words,
+    with the restore-state policy on or off."""
+    def run(config: MediatorConfig) -> list[tuple[float, str, str, Rule]]:
+        facing = Facing()
+        h = Harness(duration={"FaceHuman": 1.5, "*": 2.0}, channel=facing, config=config)
+        h.app("fa", AppKind.FA)
+        h.app("ea", AppKind.EA)
+        h.mediator.submit(req("fa", speak("What's the matter with you?")))
+        h.at(1.0, lambda: h.mediator.submit(Request(
+            "ea", (call("SetDirection", toward="panel"), speak("Look at this panel.")),
+            reactive=True, reaction=True, face_user=False)))
+        h.at(1.5, lambda: setattr(facing, "faced", True))  # (the turn ends)
+        h.at(2.0, lambda: setattr(facing, "faced", False))  # (the EA's turn to its panel)
+        h.run(until=20.0)
+        return starts(h)
+
+    for config in (MediatorConfig(), MediatorConfig(restore_state=False)):
+        assert run(config) == [(0.0, "fa", "FaceHuman", Rule.CONNECT_CHANNEL),
+                               (1.5, "ea", "SetDirection", Rule.FREE_DEVICES),
+                               (3.5, "ea", "Speak", Rule.REACTIVITY),
+                               (5.5, "fa", "FaceHuman", Rule.CONNECT_CHANNEL),
+                               (7.0, "fa", "Speak", Rule.FREE_DEVICES)]

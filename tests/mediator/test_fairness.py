@@ -48,11 +48,14 @@ class _PlainShare:
         self.since: float | None = None
         self.demoted_until: float | None = None
         self.check_at: float | None = None
+        self.charges: deque[tuple[float, float]] = deque()
 
     def total(self, now: float, window: float) -> float:
         start = now - window
         while self.intervals and self.intervals[0][1] <= start:
             self.intervals.popleft()
+        while self.charges and self.charges[0][0] <= start:
+            self.charges.popleft()
         total: float = 0
         if self.intervals:
             begin, end = self.intervals[0]
@@ -60,7 +63,7 @@ class _PlainShare:
             total = sum(lengths, end - max(start, begin))
         if self.since is not None:
             total += now - max(start, self.since)
-        return total
+        return total + sum(seconds for _at, seconds in self.charges)
 
 
 class Plain:
@@ -74,6 +77,12 @@ class Plain:
 
     def registrations(self) -> None:
         pass
+
+    def charge(self, app: App, seconds: float) -> None:
+        share = self._shares.setdefault(app.name, _PlainShare())
+        share.charges.append((self._clock.now(), seconds))
+        self._observed = None  # (settled anew: a spent share takes its precedence at once)
+        self.expire()
 
     def observe(self) -> bool:
         now = self._clock.now()
@@ -116,7 +125,7 @@ class Plain:
                 share.demoted_until = None
                 changed |= self._set(app, False, "regains its precedence")
             used = share.total(now, window)
-            if share.since is None:
+            if share.since is None and not share.charges:
                 share.check_at = None
                 if share.demoted_until is None and not share.intervals:
                     gone.append(name)
@@ -129,7 +138,8 @@ class Plain:
                     app, True, f"kept other applications waiting {used:g} s within "
                                f"{window:g} s: it loses its precedence until "
                                f"t={share.demoted_until:g} s")
-            share.check_at = self._clock.after(limit - used) if used < limit else None
+            share.check_at = self._clock.after(limit - used) \
+                if used < limit and share.since is not None else None
         for name in gone:
             del self._shares[name]
         return changed

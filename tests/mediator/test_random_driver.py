@@ -118,6 +118,11 @@ def test_window_peak() -> None:
 
 
 # ---------------------------------------------------------------- the oracle can fail
+WRONG_WINNER = ("could start but waits", "outranks it for")
+"""What the oracle says when the mediator ranked wrong: a better AB left waiting, or a
+worse one started on a device a better one wanted."""
+
+
 def caught(seeds: range = SEEDS) -> list[str]:
     """The first violations the oracle reports over ``seeds``."""
     for _seed, violations in failures(seeds, stop_at=1):
@@ -130,7 +135,7 @@ def test_the_oracle_catches_a_ranking_criterion_left_out(monkeypatch: pytest.Mon
     """Without 'reactive first', an older AB reserves what a newer reactive one needs."""
     criteria = tuple(c for c in ranking_module.CRITERIA if c.rule is not Rule.REACTIVITY)
     monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
-    assert any("could start but waits" in v for v in caught())
+    assert any(what in v for v in caught() for what in WRONG_WINNER)
 
 
 def test_the_oracle_catches_a_double_booking(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -181,7 +186,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
 
 @pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347,
                                   587142, 5151, 6858, 14284, 38491, 40689, 63038, 117762,
-                                  127791, 170836])
+                                  127791, 170836, 130517, 168125, 25391, 47859, 72202,
+                                  187334, 179257, 194091, 400414, 439133, 567432, 873008])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -207,7 +213,26 @@ def test_seeds_that_once_failed(seed: int) -> None:
     a rival of the starts in that operation, so a demoted app's start on idle devices
     was not excused (the return, a LOW move, was the rival). 170836: an AB another
     app's stream hold kept was counted as a rival of a start on the idle device, so
-    that start was not excused when the hold ended (the holder is charged for it)."""
+    that start was not excused when the hold ended (the holder is charged for it).
+    With a reaction's next AB keeping its devices (MISSION.md 7.1): 130517, an AB kept
+    for it that no round looked at still reserved its other device, the speaker, so a
+    later request there waited for nothing; 168125, the same when the reservation began
+    on one device of an AB that was best on another (the devices waiting ABs need
+    beside each are now known, and looked at); 47859, the return put before a reply
+    ranked as the reply only in its first iteration, so the reply and another app's
+    reaction each kept what the other needed (the run never ended). 25391: a reply that
+    takes no time said a user reaction's first words within the operation that started
+    the reaction's next AB (the oracle judged that start by what held after it);
+    72202: an AB kept for two apps' reactions was charged by the oracle to the one the
+    mediator did not park it for. 187334: a reply's own next iteration, after its words,
+    still ranked as the reply. 179257, 194091: an AB kept for a reaction's next AB
+    while one round ran, which the operation's later rounds let go (the next AB
+    entered the waiting list), was judged a rival of that round's starts; 400414, the
+    same for a next AB that started within the operation. 439133: when an app regained
+    its precedence, the ABs its reaction's next AB now keeps were not looked at, and one
+    still reserved a device it could not have. 567432: the oracle took a return put
+    before a reply's later iteration for part of the reply. 873008: a move held back
+    while another app said something that took no time was judged a rival."""
     assert play(seed).violations == []
 
 
@@ -221,7 +246,7 @@ def test_the_oracle_catches_a_reaction_that_loses_its_precedence(
     criteria = tuple(dataclasses.replace(c, scope=ranking_module.Scope.NODE, key=reactivity)
                      if c.rule is Rule.REACTIVITY else c for c in ranking_module.CRITERIA)
     monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
-    assert any("could start but waits" in v for v in caught())
+    assert any(what in v for v in caught() for what in WRONG_WINNER)
 
 
 def test_the_oracle_catches_a_stream_hold_that_splits_a_stream_under_way(
@@ -282,3 +307,73 @@ def test_with_every_policy_on_the_properties_hold() -> None:
     assert len(seeds) >= 20
     for s in seeds:
         assert play(s).violations == [], s
+
+
+def test_the_oracle_catches_a_reaction_that_keeps_no_devices(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """MISSION.md 7.1 undone: a reaction's next AB reserves nothing while it waits for
+    the reaction's StopMoving or turn, so another app's AB slips in between."""
+    from prima.mediator import _rounds as rounds_module
+
+    monkeypatch.setattr(rounds_module.Selector, "_reserved", lambda self, x: None)
+    assert any("kept for" in v or what in v for v in caught() for what in WRONG_WINNER)
+
+
+def test_the_oracle_catches_a_later_perception_reaction_overtaking_the_users(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """MISSION.md 7.1 undone: of two reactions the latest wins, even over a reaction to
+    the user's own action whose words are still to come."""
+    criteria = tuple(c for c in ranking_module.CRITERIA if c.rule is not Rule.USER_FIRST)
+    monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
+    assert any(what in v for v in caught() for what in WRONG_WINNER)
+
+
+def test_the_oracle_catches_a_reply_that_loses_to_a_reaction(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """MISSION.md 7.4 undone: the words that reply to an answer rank like any AB."""
+    criteria = tuple(c for c in ranking_module.CRITERIA if c.rule is not Rule.EXCHANGE)
+    monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
+    assert any(what in v for v in caught() for what in WRONG_WINNER)
+
+
+@pytest.mark.parametrize("undone, said", [("protected", "it replies to an answer"),
+                                           ("restarts", "cut again")])
+def test_the_oracle_catches_a_reply_cut_or_an_ab_cut_twice(
+        monkeypatch: pytest.MonkeyPatch, undone: str, said: str) -> None:
+    """MISSION.md 7.4 and 7.3 (2) undone: the interrupt policy cuts the words that reply
+    to an answer, or cuts a restart again."""
+    from prima.mediator import _policies as policies_module
+
+    original = policies_module.Policies.cuttable
+    blank = {"protected": False, "restarts": None}[undone]
+
+    def cuttable(self: policies_module.Policies, y: policies_module.Node,
+                 x: policies_module.Node) -> bool:
+        kept = getattr(y, undone)
+        setattr(y, undone, blank)
+        try:
+            return original(self, y, x)
+        finally:
+            setattr(y, undone, kept)
+
+    monkeypatch.setattr(policies_module.Policies, "cuttable", cuttable)
+    assert any(said in v for v in caught(range(0, 20_000)))
+
+
+def test_the_oracle_catches_a_blended_ab_that_never_ends(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A blended AB the driver never ends stays started for the rest of the run (the
+    old home robot's chained blended Turn): the oracle says it never ended."""
+    original = ScriptedDriver.start
+
+    def start(self: ScriptedDriver, ab: memory_module.AtomicBehavior) -> None:
+        if ab.blended:
+            self.started.append(ab)
+            self.running[ab.id] = ab  # (no end is ever scheduled)
+            return
+        original(self, ab)
+
+    monkeypatch.setattr(ScriptedDriver, "start", start)
+    seeds = [s for s in range(3000) if scenario(s).blends][:300]
+    found = [v for s in seeds for v in play(s).violations]
+    assert any("never ended" in v for v in found)

@@ -9,7 +9,7 @@ from collections.abc import Mapping
 from prima.mediator import AppKind, DecisionKind, MediatorConfig, Request, Rule
 from prima.mediator.testing import Harness
 from prima.vocab import Value
-from tests.mediator.helpers import call, req, speak
+from tests.mediator.helpers import call, speak
 
 SUSPENDED_AT = {"x": 7.0, "y": 6.4, "heading": 98.8}
 
@@ -39,17 +39,19 @@ class Robot:
 
 
 def explain_and_interrupt(robot: Robot, second: object = None,
-                          config: MediatorConfig = MediatorConfig()) -> Harness:
-    """The EA explains in two utterances; a touch at 0.5 s: the FA's reaction (an
-    utterance, then a move) takes the speaker from EA's second utterance, which is
-    suspended, and moves the robot."""
+                          config: MediatorConfig = MediatorConfig(),
+                          face_user: bool = False) -> Harness:
+    """The EA explains in two utterances (about its panel, unless ``face_user``); a
+    touch at 0.5 s: the FA's reaction (an utterance, then a move) takes the speaker
+    from EA's second utterance, which is suspended, and moves the robot."""
     h = Harness(duration={"SetPositionAndDirection": 3.0, "SetPosition": 3.0, "*": 2.0},
                 channel=robot, config=config)
     told: list[int] = []
     h.app("ea", AppKind.EA, on_ended=lambda cid, _o: told.append(cid))
     h.app("fa", AppKind.FA)
-    h.mediator.submit(req("ea", speak("This panel shows our lab."),
-                          second or speak("Look at this figure.")))
+    h.mediator.submit(Request("ea", (speak("This panel shows our lab."),
+                                     second or speak("Look at this figure.")),
+                              face_user=face_user))
     h.at(0.5, lambda: h.mediator.submit(
         Request("fa", (speak("What?"), call("SetSpeedAndTime", speed=0.3, time=2.0)),
                 reactive=True, reaction=True)))
@@ -82,6 +84,17 @@ def test_a_resumed_stream_first_returns_to_where_it_was_suspended() -> None:
     assert len(h.told) == 2  # type: ignore[attr-defined]  # the app hears of its own only
 
 
+def test_before_words_to_the_user_only_the_position_is_restored() -> None:
+    """Words addressed to the user: the connect-channel policy turns the robot to the
+    user before them where it must, so the heading it had then does not matter."""
+    h = explain_and_interrupt(Robot(), face_user=True)
+    assert [(c, r) for _t, _a, c, r in commands(h)][-2:] == [
+        ("SetPosition", Rule.RESTORE_STATE), ("Speak", Rule.FREE_DEVICES)]
+    (back,) = [d for d in h.decisions if d.kind is DecisionKind.REQUEST
+               and d.rule is Rule.RESTORE_STATE]
+    assert dict(back.calls[0].args) == {"x": 7.0, "y": 6.4}
+
+
 def test_not_moved_not_on_or_a_travelling_ab_no_return() -> None:
     for robot, config in ((Robot(moved=False), MediatorConfig()),
                           (Robot(), MediatorConfig(restore_state=False))):
@@ -101,3 +114,24 @@ def test_before_an_ab_that_turns_the_robot_only_the_position_is_restored() -> No
     (back,) = [d for d in h.decisions if d.kind is DecisionKind.REQUEST
                and d.rule is Rule.RESTORE_STATE]
     assert dict(back.calls[0].args) == {"x": 7.0, "y": 6.4}
+
+
+def test_before_words_that_aim_the_robot_only_the_position_is_restored() -> None:
+    """A resumed explanation that turns to its panel and points at it as it speaks (a
+    grouped SetDirection, PointByHand and Speak) first goes back to where it stood."""
+    robot = Robot()
+    h = Harness(duration={"SetPosition": 3.0, "*": 2.0}, channel=robot)
+    h.app("ea", AppKind.EA)
+    h.app("fa", AppKind.FA)
+    h.mediator.submit(Request("ea", (speak("This panel shows our lab."),), face_user=False))
+    h.mediator.submit(Request("ea", (call("SetDirection", toward="panel"),
+                                     call("PointByHand", toward="panel"),
+                                     speak("Look at this figure.")), group=True,
+                              face_user=False))
+    h.at(0.5, lambda: h.mediator.submit(
+        Request("fa", (speak("What?"), call("SetSpeedAndTime", speed=0.3, time=2.0)),
+                reactive=True, reaction=True)))
+    h.run(until=30.0)
+    assert [(c, r) for _t, _a, c, r in commands(h)][-2:] == [
+        ("SetPosition", Rule.RESTORE_STATE),
+        ("SetDirection+PointByHand+Speak", Rule.FREE_DEVICES)]

@@ -1,0 +1,525 @@
+"""What every measure reads of a trace, kept in one pass: the atomic behaviors with
+their times and devices, which application and tree each belongs to and where its
+document asks for it, the reactions, the exchanges, holds, blocks and precedence.
+
+The measures (:mod:`._measures`) each see every line too, after the context has
+taken it in; what needs the whole run (a reaction's allowed wait) is worked out at
+the end (:mod:`._reactions`) from what is kept here, which is linear in the number
+of atomic behaviors, not of lines (poses are not kept).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from prima.catalog import STANDARD_COMMANDS
+from prima.judge._reading import Row
+from prima.judge._thresholds import Thresholds
+
+__all__ = ["EPS", "TALK_DEVICES", "UNMEASURED_EVENTS", "Ab", "Context", "Exchange", "Hold",
+           "ReactionState", "xy"]
+
+EPS = 1e-6
+"""Times in a trace are rounded to the millisecond: comparisons allow this much."""
+
+UNMEASURED_EVENTS = frozenset({"place-reached"})
+"""Reactive events whose reactions are not measured: the robot's own motion
+arriving, which nobody waits on the robot for (MISSION.md section 8 lists touch,
+heard speech, messages, the user found or lost)."""
+
+TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
+"""Where an utterance runs."""
+
+USER_ACTIONS = frozenset({"touch", "say"})
+"""The user's lines whose event, right after at the same instant, is the user's own
+action (MISSION.md 7.1: a touch, heard speech)."""
+
+_ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
+
+LOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.breaks_cc)
+"""Commands that break the Communication Channel (LOW priority)."""
+
+
+def xy(pose: Mapping[str, Any]) -> tuple[float, float]:
+    return float(pose["x"]), float(pose["y"])
+
+
+def command_ids(row: Row) -> tuple[int, ...]:
+    ids = row.get("command_ids")
+    if ids:
+        return tuple(ids)
+    cid = (row.get("detail") or {}).get("command_id")
+    return (cid,) if isinstance(cid, int) else ()
+
+
+def answered(row: Row) -> bool:
+    result = (row.get("detail") or {}).get("result")
+    return (str(row.get("command") or "").split("+")[-1] == "QA" and isinstance(result, str)
+            and _ANSWERED.search(result) is not None)
+
+
+@dataclass
+class Ab:
+    """One atomic behavior as the trace shows it."""
+
+    id: int
+    app: str
+    tree: int
+    command: str
+    """Its Commands' names, ``A+B`` for a group."""
+    ids: tuple[int, ...]
+    devices: frozenset[str]
+    start: float
+    seq: int
+    """Its start line."""
+    reason: str
+    """Why it started (the start line's reason)."""
+    text: str = ""
+    cuttable: bool = False
+    """The interrupt policy may cut it (its Commands are interruptible on this robot and
+    its request allows it: the start line says so)."""
+    iteration: int = 0
+    words: tuple[float, float] | None = None
+    """When its words began and ended (from its start line when they begin with it,
+    from its end line otherwise)."""
+    end: float | None = None
+    end_seq: int | None = None
+    end_reason: str = ""
+    blended_over: bool = False
+    """Another AB started blended over it (the blend policy: never cut)."""
+
+    @property
+    def low(self) -> bool:
+        """It breaks the Communication Channel (LOW priority: a group is as low as its
+        lowest Command)."""
+        return any(c in LOW_COMMANDS for c in self.command.split("+"))
+
+    @property
+    def listens(self) -> bool:
+        return "QA" in self.command.split("+")
+
+    def until(self, end: float) -> float:
+        return self.end if self.end is not None else end
+
+
+@dataclass
+class ReactionState:
+    """A reaction as the pass collects it (the finding is made at the end)."""
+
+    event: str
+    t: float
+    seq: int
+    app: str
+    user: bool
+    text: str
+    order: int
+    """Its first request line's seq: the later, the more recent (rule 4.2)."""
+    commands: list[int] = field(default_factory=list)
+    trees: list[int] = field(default_factory=list)
+    devices: frozenset[str] = frozenset()
+    """Its first request's devices (its first AB's)."""
+    at: str = ""
+    words: bool = False
+    """A request line of it says words (its root's)."""
+    answer: bool = False
+    """A reaction to a heard answer (its Q&A's tree goes on: no reaction of its own)."""
+    before: int | None = None
+    """The AB its first request follows (its application's own, still to end), if any."""
+
+
+@dataclass
+class Exchange:
+    """A Q&A the user answered, and how its application replied (MISSION.md 7.4)."""
+
+    app: str
+    tree: int
+    t: float
+    seq: int
+    """The answered Q&A's end line."""
+    at: str
+    kind: str = "none"
+    """``words`` (the first AB its answer handler asked for says something and asks
+    nothing), ``question`` (a Q&A), ``other`` (something else), ``none`` (nothing at
+    once)."""
+    reply: tuple[int, ...] = ()
+    """The reply's Commands (its first request's)."""
+    reply_ab: int | None = None
+    """The reply's words' AB, once it started."""
+    done: float | None = None
+    """When the reply's words ended (or the question started: the exchange is over)."""
+
+
+@dataclass
+class Hold:
+    """A ``hold`` line: another app's hold, block, talk or reaction keeps an AB."""
+
+    t: float
+    seq: int
+    ab: int
+    app: str
+    reason: str
+    holder: str
+    """The application that keeps it (its name, from the line's text)."""
+    before: int | None
+    """A reservation's: the AB it keeps the devices for."""
+
+
+@dataclass
+class _Window:
+    """Where the lines of a reaction may appear: after its cause, at the same instant."""
+
+    event: str
+    t: float
+    seq: int
+    user: bool
+    app: str | None = None
+    """A heard answer's reacting app (None: an event's, any app reacting)."""
+    text: str = ""
+    reactions: dict[str, ReactionState] = field(default_factory=dict)
+
+
+class Context:
+    """What every measure reads, kept as the lines go by (:meth:`feed`)."""
+
+    def __init__(self, thresholds: Thresholds) -> None:
+        self.th = thresholds
+        self.t = 0.0
+        self.lines = 0
+        self.last: Row | None = None
+        """The line before the one being fed."""
+        self.robot: tuple[float, float] | None = None
+        self.last_seen = 0.0
+        """The latest time a posed line showed the user detectable."""
+        # atomic behaviors
+        self.abs: dict[int, Ab] = {}
+        self.running: dict[int, Ab] = {}
+        self.on_device: dict[str, list[Ab]] = {}
+        """Device -> its ABs, in start order (what a reaction's wait is judged on)."""
+        self.cmd_ab: dict[int, int] = {}
+        """Command -> its latest AB."""
+        self.cmd_at: dict[int, str] = {}
+        """Command -> where its request is written."""
+        self.cmd_app: dict[int, str] = {}
+        self.precedes: dict[int, int] = {}
+        """A policy's Command (a turn, a return) -> the Command it was put before."""
+        self.cancelled: dict[int, float] = {}
+        """Command -> when it was cancelled."""
+        self.requested_at: dict[int, tuple[float, int]] = {}
+        """AB -> when (and at which line) it was requested: the root of a request, a
+        policy's AB, a restart."""
+        self.tree_app: dict[int, str] = {}
+        self.tree_reactions: dict[int, list[ReactionState]] = {}
+        """Tree -> the reactions that took it over, in order (the latest ranks)."""
+        self.tree_abs: dict[int, list[Ab]] = {}
+        # reactions
+        self.reactions: list[ReactionState] = []
+        self._window: _Window | None = None
+        self._heard: tuple[float, int, str] | None = None
+        self.reaction_cmds: dict[int, ReactionState] = {}
+        """Command -> the reaction that asked for it."""
+        # exchanges, holds, precedence, blocks
+        self.exchanges: list[Exchange] = []
+        self.open_exchange: dict[str, Exchange] = {}
+        """App -> its exchange whose reply is not yet known or not yet over."""
+        self.holds: list[Hold] = []
+        self.demoted: dict[str, list[list[float]]] = {}
+        """App -> when it had lost its precedence: [from, until] (until: inf if it had
+        not regained it)."""
+        self.blocks: dict[str, list[list[float]]] = {}
+        """App -> when its begin/end block was open: [from, until]."""
+        self.interrupts: dict[int, str] = {}
+        """AB -> the application whose reaction had it cut."""
+
+    # ---------------------------------------------------------------- the pass
+    def feed(self, row: Row) -> None:
+        t = float(row["t"])
+        if t > self.t + EPS:
+            self._window = None
+            self._heard = None
+            self.t = t
+        self.lines += 1
+        if row.get("robot") is not None:
+            self.robot = xy(row["robot"])
+            user = row.get("user")
+            if user is not None and user.get("detectable") is True:
+                self.last_seen = t
+        handler = _HANDLERS.get(row["kind"])
+        if handler is not None:
+            handler(self, row)
+
+    def fed(self, row: Row) -> None:
+        """The line has been seen by every measure too."""
+        self.last = row
+
+    def _event(self, row: Row) -> None:
+        name = str(row.get("text") or "")
+        if name in UNMEASURED_EVENTS:
+            self._window = None
+            return
+        last = self.last
+        user = (last is not None and last.get("kind") == "user"
+                and last.get("action") in USER_ACTIONS
+                and abs(float(last["t"]) - float(row["t"])) <= EPS)
+        self._window = _Window(name, float(row["t"]), int(row["seq"]), user)
+
+    def _user(self, row: Row) -> None:
+        self._window = None
+        heard = (row.get("detail") or {}).get("heard")
+        if row.get("action") == "say" and heard:
+            self._heard = (float(row["t"]), int(row["seq"]), str(row.get("text") or ""))
+
+    def _request(self, row: Row) -> None:
+        app = str(row.get("app") or "")
+        detail = row.get("detail") or {}
+        ids = command_ids(row)
+        ab = row.get("ab")
+        if isinstance(ab, int):
+            self.requested_at[ab] = (float(row["t"]), int(row["seq"]))
+        at = str(detail.get("at") or "")
+        tree = row.get("tree")
+        if isinstance(tree, int):
+            self.tree_app.setdefault(tree, app)
+        for cid in ids:
+            self.cmd_app[cid] = app
+            if at:
+                self.cmd_at[cid] = at
+        precedes = detail.get("precedes")
+        if isinstance(precedes, int):
+            for cid in ids:
+                self.precedes[cid] = precedes
+                mine = self.reaction_cmds.get(precedes)
+                if mine is not None:
+                    self.reaction_cmds[cid] = mine
+            return
+        if row.get("reason") == "restart":
+            return
+        self._exchange_request(row, app, ids)
+        self._reaction_request(row, app, ids, at)
+
+    def _reaction_request(self, row: Row, app: str, ids: tuple[int, ...], at: str) -> None:
+        w = self._window
+        if w is None:
+            self._unmeasured(row, app)
+            return
+        if w.app is not None and (app != w.app or row.get("reason") != "end-event"):
+            return
+        r = w.reactions.get(app)
+        if r is None:
+            if w.app is None and row.get("reactive") is not True:
+                self._unmeasured(row, app)
+                return
+            before = row.get("before")
+            r = ReactionState(w.event, w.t, w.seq, app, w.user, w.text, int(row["seq"]),
+                              devices=frozenset(row.get("devices") or ()), at=at,
+                              answer=w.app is not None,
+                              before=before if isinstance(before, int) else None)
+            w.reactions[app] = r
+            self.reactions.append(r)
+        if row.get("text"):
+            r.words = True
+        tree = row.get("tree")
+        if isinstance(tree, int):
+            if tree not in r.trees:
+                r.trees.append(tree)
+            if not r.answer:  # (a reply continues its Q&A's tree: no reaction of its own)
+                taken = self.tree_reactions.setdefault(tree, [])
+                if r not in taken:
+                    taken.append(r)
+        for cid in ids:
+            r.commands.append(cid)
+            self.reaction_cmds[cid] = r
+
+    def _unmeasured(self, row: Row, app: str) -> None:
+        """A reactive request outside a measured event's instant (an application's own
+        reactive event or timer, a place reached): its tree ranks as a reaction all
+        the same (rule 4.2), though its latency is not measured."""
+        tree = row.get("tree")
+        if row.get("reactive") is not True or not isinstance(tree, int) \
+                or row.get("reason") == "end-event":
+            return
+        r = ReactionState("", float(row["t"]), int(row["seq"]), app, False, "",
+                          int(row["seq"]), trees=[tree])
+        self.tree_reactions.setdefault(tree, []).append(r)
+
+    def _exchange_request(self, row: Row, app: str, ids: tuple[int, ...]) -> None:
+        ex = self.open_exchange.get(app)
+        if ex is None or ex.kind != "none" or ex.t < self.t - EPS:
+            return
+        if row.get("reason") != "end-event":
+            return
+        command = str(row.get("command") or "")
+        if "QA" in command.split("+"):
+            ex.kind = "question"
+        elif row.get("text"):
+            ex.kind = "words"
+        else:
+            ex.kind = "other"
+        ex.reply = ids
+
+    def _start(self, row: Row) -> None:
+        ab_id = row.get("ab")
+        if not isinstance(ab_id, int):
+            return
+        detail = row.get("detail") or {}
+        tree = row.get("tree")
+        ab = Ab(ab_id, str(row.get("app") or ""), tree if isinstance(tree, int) else -1,
+                str(row.get("command") or ""), command_ids(row),
+                frozenset(row.get("devices") or ()), float(row["t"]), int(row["seq"]),
+                str(row.get("reason") or ""), text=str(row.get("text") or ""),
+                cuttable=detail.get("cuttable") is True,
+                iteration=int(detail.get("iteration") or 0))
+        ws, we = detail.get("words_start"), detail.get("words_end")
+        if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
+            ab.words = (float(ws), float(we))
+        if ab.reason == "blend":
+            for d in ab.devices:
+                for other in self.running.values():
+                    if d in other.devices:
+                        other.blended_over = True
+        self.abs[ab_id] = ab
+        self.running[ab_id] = ab
+        for d in ab.devices:
+            self.on_device.setdefault(d, []).append(ab)
+        self.tree_abs.setdefault(ab.tree, []).append(ab)
+        for cid in ab.ids:
+            self.cmd_ab[cid] = ab_id
+        self._reply_started(ab)
+
+    def _reply_started(self, ab: Ab) -> None:
+        ex = self.open_exchange.get(ab.app)
+        if ex is None or not ex.reply:
+            return
+        if ex.kind == "words" and ab.text and not set(ab.ids).isdisjoint(ex.reply):
+            ex.reply_ab = ab.id
+        elif ex.kind == "question" and not set(ab.ids).isdisjoint(ex.reply):
+            ex.done = ab.start
+            del self.open_exchange[ab.app]
+
+    def _end(self, row: Row) -> None:
+        ab_id = row.get("ab")
+        ab = self.abs.get(ab_id) if isinstance(ab_id, int) else None
+        if ab is not None:
+            self.running.pop(ab.id, None)
+            ab.end = float(row["t"])
+            ab.end_seq = int(row["seq"])
+            ab.end_reason = str(row.get("reason") or "")
+            detail = row.get("detail") or {}
+            ws, we = detail.get("words_start"), detail.get("words_end")
+            if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
+                ab.words = (float(ws), float(we))
+            ex = self.open_exchange.get(ab.app)
+            if ex is not None and ex.reply_ab == ab.id:
+                ex.done = ab.end
+                del self.open_exchange[ab.app]
+        if answered(row):
+            app = str(row.get("app") or "")
+            tree = row.get("tree")
+            cid = command_ids(row)
+            ex = Exchange(app, tree if isinstance(tree, int) else -1, float(row["t"]),
+                          int(row["seq"]), self.cmd_at.get(cid[0], "") if cid else "")
+            self.exchanges.append(ex)
+            self.open_exchange[app] = ex
+            if self._heard is not None:
+                t, seq, text = self._heard
+                self._window = _Window("speech", t, seq, True, app=app, text=text)
+                self._heard = None
+
+    def _cancel(self, row: Row) -> None:
+        ids = command_ids(row)
+        for cid in ids:
+            self.cancelled.setdefault(cid, float(row["t"]))
+        for app, ex in list(self.open_exchange.items()):
+            if not set(ex.reply).isdisjoint(ids):  # its reply will never be said
+                ex.done = float(row["t"])
+                del self.open_exchange[app]
+
+    def _hold(self, row: Row) -> None:
+        ab = row.get("ab")
+        if not isinstance(ab, int):
+            return
+        text = str(row.get("text") or "")
+        holder = ""
+        for marker in ("kept for ", "for "):
+            if marker in text:
+                holder = text.split(marker, 1)[1].split("'s")[0].split()[0]
+                break
+        if not holder and text.endswith(" is talking"):
+            holder = text[:-len(" is talking")]
+        before = row.get("before")
+        self.holds.append(Hold(float(row["t"]), int(row["seq"]), ab,
+                               str(row.get("app") or ""), str(row.get("reason") or ""),
+                               holder, before if isinstance(before, int) else None))
+
+    def _budget(self, row: Row) -> None:
+        app = str(row.get("app") or "")
+        text = str(row.get("text") or "")
+        spans = self.demoted.setdefault(app, [])
+        if "loses its precedence" in text:
+            spans.append([float(row["t"]), float("inf")])
+        elif "regains" in text and spans:
+            spans[-1][1] = float(row["t"])
+
+    def _block(self, row: Row) -> None:
+        app = str(row.get("app") or "")
+        spans = self.blocks.setdefault(app, [])
+        if row.get("text") == "open":
+            spans.append([float(row["t"]), float("inf")])
+        elif spans and spans[-1][1] == float("inf"):
+            spans[-1][1] = float(row["t"])
+
+    def _release(self, row: Row) -> None:
+        if row.get("reason") in ("watchdog", "block-close"):
+            spans = self.blocks.get(str(row.get("app") or ""))
+            if spans and spans[-1][1] == float("inf"):
+                spans[-1][1] = float(row["t"])
+
+    def _interrupt(self, row: Row) -> None:
+        ab = row.get("ab")
+        text = str(row.get("text") or "")
+        if isinstance(ab, int) and text.startswith("for "):
+            self.interrupts[ab] = text[4:].split("'s")[0]
+
+    def _unload(self, row: Row) -> None:
+        ex = self.open_exchange.pop(str(row.get("app") or ""), None)
+        if ex is not None:
+            ex.done = float(row["t"])
+
+    # ---------------------------------------------------------------- looking up
+    def at(self, ab: Ab) -> str:
+        """Where the application's document asks for an AB."""
+        for cid in ab.ids:
+            found = self.cmd_at.get(cid) or self.cmd_at.get(self.precedes.get(cid, -1), "")
+            if found:
+                return found
+        return ""
+
+    def during(self, spans: list[list[float]] | None, t: float) -> bool:
+        return bool(spans) and any(lo - EPS <= t < hi - EPS for lo, hi in spans or ())
+
+    def demoted_at(self, app: str, t: float) -> bool:
+        return self.during(self.demoted.get(app), t)
+
+    def demoted_within(self, app: str, lo: float, hi: float) -> bool:
+        return any(a < hi + EPS and b > lo - EPS for a, b in self.demoted.get(app, ()))
+
+    def block_open(self, app: str, t: float) -> bool:
+        return self.during(self.blocks.get(app), t)
+
+
+_HANDLERS = {
+    "event": Context._event,
+    "user": Context._user,
+    "request": Context._request,
+    "start": Context._start,
+    "end": Context._end,
+    "cancel": Context._cancel,
+    "hold": Context._hold,
+    "budget": Context._budget,
+    "block": Context._block,
+    "release": Context._release,
+    "interrupt": Context._interrupt,
+    "unload": Context._unload,
+}

@@ -1,0 +1,647 @@
+"""The measures of naturalness (MISSION.md section 8): one entry each in :data:`MEASURES`.
+
+An entry names the measure (its key, which is also its threshold ``max_<key>`` and
+its option ``--max-<key>``), says what it finds, how ``prima judge`` shows one
+finding and which row ``prima sweep`` gives it, and makes the object that finds
+it: a *finder* sees every trace line after the shared :class:`~._context.Context`
+has taken it in, and gives its findings at the end. Adding a measure is one
+finder and one entry here; the report, the thresholds, the command-line options,
+the sweep's rows and the docs' table all come from this table.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from prima.catalog import BODY_DEVICE, STANDARD_COMMANDS
+from prima.judge._context import EPS, Context, command_ids, xy
+from prima.judge._findings import (
+    Blame,
+    Elsewhere,
+    Finding,
+    Leaving,
+    Reaction,
+    Silence,
+    Split,
+    Stuck,
+    Unfaced,
+)
+from prima.judge._reading import Row
+from prima.judge._thresholds import LIMITS, Limit
+
+__all__ = ["MEASURES", "Finder", "Measure", "measure"]
+
+SEARCH_DEVICE = "human-detection"
+"""A feedback Command on this device looks for the user: iterating on and on while
+the user is never detectable (``search_after``), its application is stuck."""
+
+_AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
+_TRAVELS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
+_FOLLOWS = frozenset(c.name for c in STANDARD_COMMANDS
+                     if c.travels and SEARCH_DEVICE in c.devices and not c.breaks_cc)
+"""Commands that move the robot after its user (Tracking Human): following the user
+is not leaving them."""
+
+
+class Finder(Protocol):
+    """What finds one measure's faults: every line, then the findings."""
+
+    def feed(self, row: Row, ctx: Context) -> None: ...
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]: ...
+
+
+@dataclass(frozen=True)
+class Measure(Limit):
+    """One measure of naturalness: its :class:`Limit`, and how it finds faults."""
+
+    finder: Callable[[], Finder]
+    line: Callable[[Any], str]
+    """One finding, in one line of ``prima judge``'s table."""
+
+
+def _short(text: str, width: int = 30) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _where(at: str) -> str:
+    return f" ({at})" if at else ""
+
+
+# ---------------------------------------------------------------- reactions
+
+class _Reactions:
+    """Late or unheard reactions: what :mod:`._reactions` found, filtered."""
+
+    def __init__(self, keep: Callable[[Reaction], bool]) -> None:
+        self.keep = keep
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        pass
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        return [r for r in reactions if self.keep(r)]
+
+
+def _reaction_line(r: Reaction) -> str:
+    cause = f'speech "{_short(r.text, 13)}"' if r.event == "speech" else r.event
+    out = f"seq {r.seq} t={r.t:g} {r.app} {cause}{_where(r.at)}: {r.why or 'unheard'}"
+    if r.waits:
+        out += "; waited for " + "; ".join(str(w) for w in r.waits)
+    if r.took is not None:
+        out += f"; meanwhile {r.took}"
+    return out
+
+
+def _unheard_line(r: Reaction) -> str:
+    cause = f'speech "{_short(r.text, 13)}"' if r.event == "speech" else r.event
+    return (f"seq {r.seq} t={r.t:g} {r.app} {cause}{_where(r.at)}: its words were never "
+            "heard whole")
+
+
+# ---------------------------------------------------------------- facing
+
+def _off_heading(robot: Row, user: Row) -> float | None:
+    dx, dy = user["x"] - robot["x"], user["y"] - robot["y"]
+    if math.hypot(dx, dy) < 1e-9:
+        return None
+    bearing = math.degrees(math.atan2(dy, dx))
+    return float(abs((bearing - robot["heading"] + 180.0) % 360.0 - 180.0))
+
+
+def _about_something_else(row: Row, before: str | None) -> bool:
+    """An utterance that is not for the user's face: its AB turns or points the robot
+    itself (FaceHumanAndSpeak, a Speak grouped with a PointByHand), or the AB before
+    it in its stream aimed the robot at something on purpose (a Turn, a PointByHand):
+    the words are about that."""
+    if BODY_DEVICE in (row.get("devices") or ()) \
+            or not _AIMING.isdisjoint(str(row.get("command")).split("+")):
+        return True
+    return before is not None and not _AIMING.isdisjoint(before.split("+"))
+
+
+class _Unfaced:
+    """Utterances started while the user is detectable and more than the tolerance off
+    the robot's heading."""
+
+    def __init__(self) -> None:
+        self.found: list[Unfaced] = []
+        self.last_command: dict[int, str] = {}
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        if row["kind"] != "start":
+            return
+        tree = row.get("tree")
+        before = self.last_command.get(tree) if isinstance(tree, int) else None
+        if isinstance(tree, int):
+            self.last_command[tree] = str(row.get("command"))
+        if not row.get("text") or _about_something_else(row, before):
+            return
+        robot, user = row.get("robot"), row.get("user")
+        if robot is None or user is None or user.get("detectable") is not True:
+            return
+        off = _off_heading(robot, user)
+        if off is not None and off > ctx.th.face_tolerance + EPS:
+            ab = ctx.abs.get(row.get("ab", -1))
+            self.found.append(Unfaced(int(row["seq"]), float(row["t"]), str(row.get("app")),
+                                      str(row.get("command")), str(row.get("text")),
+                                      round(off, 1), ctx.at(ab) if ab is not None else ""))
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        return self.found
+
+
+def _unfaced_line(u: Unfaced) -> str:
+    return (f"seq {u.seq} t={u.t:g} {u.app} {u.command} \"{_short(u.text)}\"{_where(u.at)}: "
+            f"{u.off:g} deg off")
+
+
+# ---------------------------------------------------------------- leaving
+
+@dataclass
+class _Talk:
+    ab: int
+    row: Row
+    was: tuple[float, float] | None
+    """Where the robot was when the words began (None: not yet)."""
+    words: tuple[float, float] | None
+    """When the words run, if known."""
+    gap: float = 0.0
+    """How far it was from the user when the words began."""
+    pending: list[tuple[Row, Blame | None]] = field(default_factory=list)
+    """Poses while its words' times are not known yet (they are said after something
+    else in its AB): judged at its end."""
+
+
+class _Leaving:
+    """The robot moving more than ``leave_distance`` farther from the user on its own
+    while words addressed to them run (following the user is not leaving)."""
+
+    def __init__(self) -> None:
+        self.found: list[Leaving] = []
+        self.talking: dict[int, _Talk] = {}
+        self.following = 0
+        """How many ABs that follow the user run."""
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        kind = row["kind"]
+        ab = row.get("ab")
+        if kind == "start" and isinstance(ab, int):
+            if any(c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
+                self.following += 1
+            if row.get("text") and row.get("robot") is not None:
+                known = ctx.abs[ab].words if ab in ctx.abs else None
+                self.talking[ab] = _Talk(ab, row, None, known)
+        elif kind == "end" and isinstance(ab, int):
+            if any(c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
+                self.following = max(0, self.following - 1)
+            talk = self.talking.pop(ab, None)
+            if talk is not None and talk.words is None and ab in ctx.abs:
+                talk.words = ctx.abs[ab].words
+                for pose, mover in talk.pending:
+                    if self._pose(talk, pose, mover, ctx):
+                        break
+        if row.get("robot") is not None and row.get("user") is not None and self.talking:
+            mover = self._mover(ctx)
+            for ab_id, talk in list(self.talking.items()):
+                if talk.words is None:
+                    talk.pending.append((row, mover))
+                elif self._pose(talk, row, mover, ctx):
+                    del self.talking[ab_id]
+
+    def _mover(self, ctx: Context) -> Blame | None:
+        for ab in ctx.running.values():
+            if "locomotion" in ab.devices:
+                return Blame(ab.app, ab.id, ab.command, ctx.at(ab), "drove the wheels")
+        return None
+
+    def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context) -> bool:
+        """One posed line during ``talk``'s AB: True when it counts as leaving."""
+        t = float(row["t"])
+        words = talk.words
+        if words is None or t < words[0] - EPS or t > words[1] + EPS:
+            return False
+        robot, user = xy(row["robot"]), xy(row["user"])
+        if talk.was is None or self.following:
+            talk.was = robot  # (from where its words began; following moves it on)
+            talk.gap = math.dist(robot, user)
+            return False
+        # The robot leaves when the distance to the user grew, and its own motion grew it:
+        # a user who walks off, or follows the robot that guides them, is not left.
+        now = math.dist(robot, user)
+        away = min(now - talk.gap, now - math.dist(talk.was, user))
+        if away <= ctx.th.leave_distance + EPS:
+            return False
+        start = talk.row
+        ab = ctx.abs.get(talk.ab)
+        self.found.append(Leaving(int(start["seq"]), float(start["t"]), str(start.get("app")),
+                                  str(start.get("text")), int(row["seq"]), round(away, 3),
+                                  ctx.at(ab) if ab is not None else "", mover))
+        return True
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        return sorted(self.found, key=lambda x: x.seq)
+
+
+def _leaving_line(x: Leaving) -> str:
+    moved = f", moved by {x.moved_by}" if x.moved_by is not None else ""
+    return (f"seq {x.seq} t={x.t:g} {x.app} \"{_short(x.text)}\"{_where(x.at)}: "
+            f"{x.away:g} m farther at seq {x.at_seq}{moved}")
+
+
+# ---------------------------------------------------------------- elsewhere
+
+def _travels(row: Row) -> bool:
+    """A start of the app's own that takes the robot somewhere (a move, following the
+    user): where its stream then speaks is where it chose to go. The restore-state
+    policy's return is not one: it takes the robot back."""
+    return row.get("reason") != "restore-state" and \
+        any(c in _TRAVELS for c in str(row.get("command") or "").split("+"))
+
+
+class _Elsewhere:
+    """A suspended stream's first utterance after it resumed, spoken more than
+    ``resume_distance`` from where the stream was suspended."""
+
+    def __init__(self) -> None:
+        self.found: list[Elsewhere] = []
+        self.suspended_at: dict[int, tuple[int, tuple[float, float]]] = {}
+        self.resumed: dict[int, tuple[int, tuple[float, float]]] = {}
+        self.last_start: Row | None = None
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        kind = row["kind"]
+        tree = row.get("tree")
+        if kind == "request" and isinstance(tree, int) and (
+                row.get("reactive") is True or row.get("reason") == "asap"):
+            # a reaction, or a newer request, takes the stream on from where the robot is
+            self.suspended_at.pop(tree, None)
+            self.resumed.pop(tree, None)
+        elif kind == "suspend" and isinstance(tree, int) and ctx.robot is not None:
+            self.suspended_at[tree] = (int(row["seq"]), ctx.robot)
+            self.resumed.pop(tree, None)  # (suspended again before it spoke: from here)
+        elif kind == "resume" and isinstance(tree, int) and tree in self.suspended_at:
+            self.resumed[tree] = self.suspended_at.pop(tree)
+            start = self.last_start
+            if start is not None and start.get("ab") == row.get("ab"):
+                self._start(start, ctx)  # it resumed speaking
+        elif kind == "start":
+            self._start(row, ctx)
+            self.last_start = row
+
+    def _start(self, row: Row, ctx: Context) -> None:
+        tree = row.get("tree")
+        if not isinstance(tree, int) or tree not in self.resumed:
+            return
+        if _travels(row):
+            del self.resumed[tree]  # it resumed going somewhere: not the same place
+            return
+        if not row.get("text"):
+            return
+        seq, was = self.resumed.pop(tree)
+        robot = row.get("robot")
+        away = math.dist(xy(robot), was) if robot is not None else 0.0
+        if away > ctx.th.resume_distance + EPS:
+            ab = ctx.abs.get(row.get("ab", -1))
+            self.found.append(Elsewhere(int(row["seq"]), float(row["t"]), str(row.get("app")),
+                                        str(row.get("text")), seq, round(away, 3),
+                                        ctx.at(ab) if ab is not None else ""))
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        return self.found
+
+
+def _elsewhere_line(x: Elsewhere) -> str:
+    return (f"seq {x.seq} t={x.t:g} {x.app} \"{_short(x.text)}\"{_where(x.at)}: {x.away:g} m "
+            f"from where its stream was suspended (seq {x.suspend_seq})")
+
+
+# ---------------------------------------------------------------- split exchanges
+
+class _Splits:
+    """Another application's utterance inside an exchange (MISSION.md 7.4): between an
+    answer and the end of the words that reply to it (any utterance, a reaction's
+    too; a reply cut splits it as well), or, when the app replies with its next
+    question or with something else than words at once, a non-reactive one before
+    that; or a non-reactive one inside an explicit stream. An answer its app asks
+    nothing for at once ends its exchange."""
+
+    def __init__(self) -> None:
+        self.found: dict[int, Split] = {}
+        self.streams: dict[str, Row] = {}
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        kind = row["kind"]
+        app = str(row.get("app") or "")
+        if kind == "stream":
+            if row.get("text") == "open":
+                self.streams[app] = row
+            elif row.get("text") == "close":
+                self.streams.pop(app, None)
+        elif kind == "unload":
+            self.streams.pop(app, None)
+        elif kind == "start" and row.get("text"):
+            self._utterance(row, app, ctx)
+        elif kind == "end" and row.get("reason") == "interrupt":
+            self._cut(row, app, ctx)
+
+    def _utterance(self, row: Row, app: str, ctx: Context) -> None:
+        t = float(row["t"])
+        ab = ctx.abs.get(row.get("ab", -1))
+        # part of a reaction: of its requests, or of a tree a reaction took over (what it
+        # chains from its end and answer handlers is part of it too: MISSION.md 7.1)
+        reacting = ab is not None and (
+            any(cid in ctx.reaction_cmds for cid in ab.ids)
+            or any(r.t <= t + EPS for r in ctx.tree_reactions.get(ab.tree, ())))
+        at = ctx.at(ab) if ab is not None else ""
+        for ex in ctx.exchanges:
+            if ex.app == app or ex.t > t + EPS or (ex.done is not None and ex.done <= t + EPS):
+                continue
+            if ex.kind == "none":
+                continue  # (nothing asked for at the answer: the exchange ended with it)
+            if ex.kind == "other" and self._answered_since(ex, ctx, t):
+                continue
+            if ex.kind == "words" or not reacting:
+                kind = "reply" if ex.kind == "words" else (
+                    "question" if ex.kind == "question" else "answer")
+                self._add(Split(int(row["seq"]), t, ex.app, app, str(row.get("text")), kind,
+                                ex.seq, at))
+        if not reacting:
+            for other, opened in self.streams.items():
+                if other != app:
+                    self._add(Split(int(row["seq"]), t, other, app, str(row.get("text")),
+                                    "stream", int(opened["seq"]), at))
+
+    @staticmethod
+    def _answered_since(ex: Any, ctx: Context, t: float) -> bool:
+        """The app of an exchange replied with no words and has started something since
+        its answer: that exchange is over."""
+        return any(ab.app == ex.app and ex.t - EPS <= ab.start < t - EPS
+                   for ab in ctx.tree_abs.get(ex.tree, ()))
+
+    def _cut(self, row: Row, app: str, ctx: Context) -> None:
+        ab = row.get("ab")
+        for ex in ctx.exchanges:
+            if ex.app == app and ex.reply_ab == ab:
+                self._add(Split(int(row["seq"]), float(row["t"]), app,
+                                ctx.interrupts.get(ab if isinstance(ab, int) else -1, "?"),
+                                str(row.get("text") or ""), "reply", ex.seq, ex.at))
+
+    def _add(self, split: Split) -> None:
+        kept = self.found.get(split.seq)
+        if kept is None or (kept.kind == "stream" and split.kind != "stream"):
+            self.found[split.seq] = split
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        return sorted(self.found.values(), key=lambda s: s.seq)
+
+
+def _split_line(s: Split) -> str:
+    where = {
+        "reply": f"between {s.app}'s answer (seq {s.anchor_seq}) and the end of its reply",
+        "question": f"between {s.app}'s answer (seq {s.anchor_seq}) and its next question",
+        "answer": f"between {s.app}'s answer (seq {s.anchor_seq}) and what it did next",
+        "stream": f"inside {s.app}'s stream (opened seq {s.anchor_seq})",
+    }[s.kind]
+    return f'seq {s.seq} t={s.t:g} {s.by} "{_short(s.text)}"{_where(s.at)} {where}'
+
+
+# ---------------------------------------------------------------- silences
+
+class _Silences:
+    """More than ``silence`` seconds with no robot output after a user's answer."""
+
+    def __init__(self) -> None:
+        self.found: list[Silence] = []
+        self.silent: list[tuple[Row, str]] = []
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        kind = row["kind"]
+        if kind == "start":
+            t = float(row["t"])
+            for end, at in self.silent:
+                gap = round(t - float(end["t"]), 3)
+                if gap > ctx.th.silence + EPS:
+                    self.found.append(Silence(int(end["seq"]), float(end["t"]),
+                                              str(end.get("app")), gap, at))
+            self.silent = []
+        elif kind == "end" and ctx.exchanges and ctx.exchanges[-1].seq == row.get("seq"):
+            self.silent.append((row, ctx.exchanges[-1].at))
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        for row, at in self.silent:
+            if ctx.t - float(row["t"]) > ctx.th.silence + EPS:
+                self.found.append(Silence(int(row["seq"]), float(row["t"]),
+                                          str(row.get("app")), None, at))
+        return sorted(self.found, key=lambda s: s.seq)
+
+
+def _silence_line(s: Silence) -> str:
+    gap = "until the end" if s.gap is None else f"{s.gap:g} s"
+    return f"seq {s.seq} t={s.t:g} after {s.app}'s answer{_where(s.at)}: silent {gap}"
+
+
+# ---------------------------------------------------------------- stuck
+
+@dataclass
+class _Command:
+    id: int
+    app: str
+    t: float
+    seq: int
+    pred: int | None
+    """The Command ahead of it in its stream, if known."""
+    done: bool = False
+
+
+@dataclass
+class _Running:
+    """A Command's ABs (feedback iterations) as they run."""
+
+    running: set[int] = field(default_factory=set)
+    streak: float = 0.0
+    """When its current run of back-to-back ABs began."""
+    last_end: float = -1.0
+    iterated: bool = False
+    """An iteration (not the first AB) started in the current streak."""
+
+
+class _Stuck:
+    """An application whose Commands wait behind its own endless loop, that searches
+    for a user it never sees, whose Commands are still waiting at the end, or an
+    atomic behavior that starts and never ends."""
+
+    def __init__(self) -> None:
+        self.commands: dict[int, _Command] = {}
+        self.waiting: dict[str, dict[int, _Command]] = {}
+        self.behind: dict[int, list[int]] = {}
+        self.runs: dict[int, _Running] = {}
+        self.checks: list[tuple[float, int, int]] = []
+        self.stuck: dict[str, Stuck] = {}
+        self.t = 0.0
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        t = float(row["t"])
+        if t > self.t + EPS:
+            self._check(ctx, before=t)
+            self.t = t
+        kind = row["kind"]
+        if kind == "request" and row.get("reason") != "restart":
+            # (a Command cut to start again has started once, as a feedback Command's
+            # next iteration has: it is not counted as waiting again)
+            self._requested(row, ctx)
+        elif kind == "start":
+            self._started(row, ctx)
+        elif kind == "end":
+            ab = row.get("ab")
+            cid = (row.get("detail") or {}).get("command_id")
+            run = self.runs.get(cid) if isinstance(cid, int) else None
+            if run is not None and isinstance(ab, int):
+                run.running.discard(ab)
+                run.last_end = t
+        elif kind == "cancel":
+            for cid in command_ids(row):
+                self._done(cid)
+        elif kind == "unload":
+            for command in list(self.waiting.pop(str(row.get("app") or ""), {}).values()):
+                command.done = True
+
+    def _requested(self, row: Row, ctx: Context) -> None:
+        app = str(row.get("app") or "")
+        before = row.get("before")
+        pred = None
+        if isinstance(before, int) and before in ctx.abs:
+            pred = ctx.abs[before].ids[0]
+        t = float(row["t"])
+        for cid in command_ids(row):
+            command = _Command(cid, app, t, int(row["seq"]), pred)
+            self.commands[cid] = command
+            self.waiting.setdefault(app, {})[cid] = command
+            if pred is not None:
+                self.behind.setdefault(pred, []).append(cid)
+            heapq.heappush(self.checks, (t + ctx.th.stuck_after, int(row["seq"]), cid))
+            pred = cid
+
+    def _done(self, cid: int) -> None:
+        command = self.commands.get(cid)
+        if command is not None and not command.done:
+            command.done = True
+            self.waiting.get(command.app, {}).pop(cid, None)
+
+    def _started(self, row: Row, ctx: Context) -> None:
+        t = float(row["t"])
+        iteration = (row.get("detail") or {}).get("iteration")
+        for cid in command_ids(row):
+            self._done(cid)
+            run = self.runs.setdefault(cid, _Running())
+            if not run.running and abs(run.last_end - t) > EPS:
+                run.streak, run.iterated = t, False  # a new run of back-to-back ABs
+                for waiter in self.behind.get(cid, ()):
+                    command = self.commands[waiter]
+                    if not command.done:
+                        due = max(command.t, t) + ctx.th.stuck_after
+                        heapq.heappush(self.checks, (due, command.seq, waiter))
+            if iteration:
+                run.iterated = True
+                if SEARCH_DEVICE in (row.get("devices") or ()):
+                    self._searching(row, cid, run, ctx)
+            ab = row.get("ab")
+            if isinstance(ab, int):
+                run.running.add(ab)
+
+    def _searching(self, row: Row, cid: int, run: _Running, ctx: Context) -> None:
+        app = str(row.get("app") or "")
+        since = max(run.streak, ctx.last_seen)
+        t = float(row["t"])
+        if app not in self.stuck and t - since > ctx.th.search_after + EPS:
+            self.stuck[app] = Stuck(app, round(since + ctx.th.search_after, 3),
+                                    int(row["seq"]), cid, round(since, 3), "search",
+                                    ctx.cmd_at.get(cid, ""))
+
+    def _check(self, ctx: Context, before: float) -> None:
+        while self.checks and self.checks[0][0] < before - EPS:
+            due, _, cid = heapq.heappop(self.checks)
+            command = self.commands[cid]
+            if command.done or command.app in self.stuck or command.pred is None:
+                continue
+            run = self.runs.get(command.pred)
+            if run is None or not run.running or not run.iterated:
+                continue  # not behind a loop now: a new run of it schedules a new check
+            since = max(command.t, run.streak) + ctx.th.stuck_after
+            if since > due + EPS:
+                heapq.heappush(self.checks, (since, command.seq, cid))
+                continue
+            loop = ctx.abs.get(ctx.cmd_ab.get(command.pred, -1))
+            self.stuck[command.app] = Stuck(
+                command.app, round(since, 3), command.seq, cid, command.t, "loop",
+                ctx.cmd_at.get(cid, ""),
+                None if loop is None else Blame(loop.app, loop.id, loop.command,
+                                                ctx.at(loop), "its own loop"))
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        end = ctx.t
+        self._check(ctx, before=end)
+        for ab in sorted(ctx.running.values(), key=lambda a: a.seq):
+            if end - ab.start > ctx.th.stuck_after + EPS and ab.app not in self.stuck:
+                self.stuck[ab.app] = Stuck(
+                    ab.app, round(ab.start + ctx.th.stuck_after, 3), ab.seq, ab.ids[0],
+                    ab.start, "ab", ctx.at(ab),
+                    Blame(ab.app, ab.id, ab.command, ctx.at(ab), "never ended"))
+        for app, waiting in self.waiting.items():
+            late = [c for c in waiting.values()
+                    if not c.done and end - c.t > ctx.th.stuck_after + EPS]
+            if late and app not in self.stuck:
+                first = min(late, key=lambda c: c.seq)
+                self.stuck[app] = Stuck(app, round(first.t + ctx.th.stuck_after, 3),
+                                        first.seq, first.id, first.t, "end",
+                                        ctx.cmd_at.get(first.id, ""), self._in_way(ctx, first))
+        return sorted(self.stuck.values(), key=lambda s: (s.t, s.seq))
+
+    @staticmethod
+    def _in_way(ctx: Context, command: _Command) -> Blame | None:
+        """What ran when the trace ended on the devices a waiting Command's AB needs."""
+        mine = next((ab for ab in ctx.abs.values() if command.id in ab.ids), None)
+        devices = mine.devices if mine is not None else frozenset()
+        for ab in ctx.running.values():
+            if ab.devices & devices or not devices:
+                return Blame(ab.app, ab.id, ab.command, ctx.at(ab), "ran at the end")
+        return None
+
+
+def _stuck_line(s: Stuck) -> str:
+    why = {"loop": "behind its own feedback loop", "search": "searching for an unseen user",
+           "end": "still waiting at the end", "ab": "an atomic behavior that never ends"}
+    behind = f"; {s.behind}" if s.behind is not None and s.kind != "ab" else ""
+    return (f"seq {s.seq} t={s.t:g} {s.app}: Command {s.command_id}{_where(s.at)} "
+            f"from {s.since:g} s, {why.get(s.kind, s.kind)}{behind}")
+
+
+# ---------------------------------------------------------------- the table
+
+_FINDERS: dict[str, tuple[Callable[[], Finder], Callable[[Any], str]]] = {
+    "late": (lambda: _Reactions(lambda r: r.late), _reaction_line),
+    "unheard": (lambda: _Reactions(lambda r: r.unheard), _unheard_line),
+    "unfaced": (_Unfaced, _unfaced_line),
+    "leaving": (_Leaving, _leaving_line),
+    "elsewhere": (_Elsewhere, _elsewhere_line),
+    "splits": (_Splits, _split_line),
+    "silences": (_Silences, _silence_line),
+    "stuck": (_Stuck, _stuck_line),
+}
+
+MEASURES: tuple[Measure, ...] = tuple(
+    Measure(m.key, m.title, m.allowed, m.finds, *_FINDERS[m.key]) for m in LIMITS)
+"""Every measure, in the order reports show them."""
+
+
+def measure(key: str) -> Measure:
+    """The measure of that key."""
+    for m in MEASURES:
+        if m.key == key:
+            return m
+    raise KeyError(key)

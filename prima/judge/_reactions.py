@@ -1,0 +1,470 @@
+"""How long each reaction waited, and how long the rules let it wait (MISSION.md 8).
+
+A reaction is *late* when it starts later than the rules of MISSION.md sections 5
+and 7 allow. From its event on, a device its first atomic behavior needs may be
+held, *rightly*, by:
+
+- an AB that was running at the event and that the reaction may not cut (a Q&A's
+  listening, a reply's words, a block's AB, a blended AB, one its request marked
+  uninterruptible, a restart, one whose Commands the robot cannot cut), until it
+  ends; one it may cut, until the end of the word under way (the interrupt policy
+  cuts speech at a word boundary, anything else at once);
+- an AB that goes first: a reply to another application's answer (7.4), the AB of
+  a reaction that the rules put first (the latest (4.2), or one to the user's own
+  action that has not yet said its first words (7.1)), an AB that keeps the
+  Communication Channel over a reaction's that breaks it (rule 4.1), one in
+  another application's begin/end block;
+- the reaction's own application, in its own stream (what it chose to do first);
+- a hold the mediator reports that the rules allow (a reaction's next AB that
+  goes first keeps its devices; a block);
+- anything, while the reacting application had lost its precedence (the wait
+  share).
+
+Everything else on its devices took them wrongly. The reaction's *residual* is
+the time its devices were rightly held; it is late when it was *free* (no device
+rightly held, and not started) for more than the slack, 0.2 s. Its first words
+are judged the same way from its first start, the reaction's own atomic
+behaviors before them excused (a filler, a turn to the user), with the slack
+and a second more; they count once said whole (an utterance cut counts when said
+again).
+"""
+
+from __future__ import annotations
+
+import bisect
+import dataclasses
+import math
+from collections.abc import Iterable, Sequence
+
+from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, ReactionState
+from prima.judge._findings import Blame, Reaction
+
+__all__ = ["analyse"]
+
+_TICK = 0.02
+"""A cut reaches its word boundary on the simulator's next step at the latest."""
+
+Span = tuple[float, float]
+
+
+def _measure(spans: Iterable[Span], lo: float, hi: float) -> float:
+    """How much of [lo, hi] the spans cover (counted once)."""
+    clipped = sorted((max(a, lo), min(b, hi)) for a, b in spans if b > lo and a < hi)
+    total, reach = 0.0, lo
+    for a, b in clipped:
+        if b <= reach:
+            continue
+        total += b - max(a, reach)
+        reach = b
+    return total
+
+
+def _gaps(spans: Iterable[Span], lo: float, hi: float) -> list[Span]:
+    """The parts of [lo, hi] the spans leave uncovered."""
+    out: list[Span] = []
+    reach = lo
+    for a, b in sorted((max(a, lo), min(b, hi)) for a, b in spans if b > lo and a < hi):
+        if a > reach + EPS:
+            out.append((reach, a))
+        reach = max(reach, b)
+    if hi > reach + EPS:
+        out.append((reach, hi))
+    return out
+
+
+class _Analyst:
+    """Works out every reaction's waits once the pass is over."""
+
+    def __init__(self, ctx: Context, end: float) -> None:
+        self.ctx = ctx
+        self.end = end
+        self.th = ctx.th
+        self.cmd_abs: dict[int, list[Ab]] = {}
+        for ab in ctx.abs.values():
+            for cid in ab.ids:
+                self.cmd_abs.setdefault(cid, []).append(ab)
+        self.policy_for: dict[int, list[int]] = {}
+        for cid, target in ctx.precedes.items():
+            self.policy_for.setdefault(target, []).append(cid)
+        self.starts = {d: [ab.start for ab in abs_] for d, abs_ in ctx.on_device.items()}
+        self.longest = max((ab.until(end) - ab.start for ab in ctx.abs.values()), default=0.0)
+        replies: set[int] = set()
+        for ex in ctx.exchanges:
+            if ex.kind == "words":
+                replies.update(ex.reply)
+                for cid in ex.reply:
+                    replies.update(self.policy_for.get(cid, ()))
+        self.replies = replies
+        self._user_until: dict[int, float] = {}
+        self._ready: dict[int, float] = {}
+
+    # ------------------------------------------------------------ precedence
+    def user_until(self, r: ReactionState) -> float:
+        """Until when a reaction to the user's own action goes first (7.1): the end of
+        the first utterance said whole in its trees."""
+        key = id(r)
+        found = self._user_until.get(key)
+        if found is None:
+            found = math.inf
+            for tree in r.trees:
+                for ab in self.ctx.tree_abs.get(tree, ()):
+                    if (ab.text and ab.end is not None and ab.end_reason == "completed"
+                            and ab.start >= r.t - EPS):
+                        found = min(found, ab.end)
+            self._user_until[key] = found
+        return found
+
+    def reaction_key(self, r: ReactionState, t: float) -> tuple[int, float]:
+        if r.answer:  # (the reply to an answer goes on in its Q&A's tree, with its rank)
+            return self.tree_key(r.trees[0], t) if r.trees else (1, math.inf)
+        user = r.user and self.user_until(r) > t + EPS
+        return (0 if user else 1, -r.order)
+
+    def tree_key(self, tree: int, t: float) -> tuple[int, float]:
+        taken = [r for r in self.ctx.tree_reactions.get(tree, ()) if r.t <= t + EPS]
+        if not taken:
+            return (1, math.inf)
+        return self.reaction_key(max(taken, key=lambda r: r.order), t)
+
+    def replies_to_answer(self, ab: Ab) -> bool:
+        return not self.replies.isdisjoint(ab.ids)
+
+    def is_reply(self, r: ReactionState) -> bool:
+        """``r`` answers a heard answer with words (7.4): the exchange's reply."""
+        return r.answer and not self.replies.isdisjoint(r.commands)
+
+    def goes_first(self, y: Ab, r: ReactionState, low: bool, t: float) -> str:
+        """Why ``y``, of another application, went first over the reaction ``r`` (whose
+        first AB breaks the channel if ``low``), starting at ``t``; empty if it did
+        not go first."""
+        ctx = self.ctx
+        if ctx.demoted_at(y.app, t):
+            return ""
+        if self.replies_to_answer(y):
+            return "a reply to its answer (7.4)"
+        if y.low and not low:
+            return ""
+        if low and not y.low:
+            return "keeps the channel (rule 4.1)"
+        if ctx.block_open(y.app, t):
+            return "its begin/end block (rule 3)"
+        if self.is_reply(r):
+            return ""  # (no other reaction goes before the words that reply to an answer)
+        theirs, mine = self.tree_key(y.tree, t), self.reaction_key(r, t)
+        if theirs < mine:
+            return ("the user's own action first (7.1)" if theirs[0] < mine[0]
+                    else "the latest reaction first (4.2)")
+        return ""
+
+    def may_cut(self, y: Ab, r: ReactionState, low: bool, t: float) -> str:
+        """Empty if the reaction may cut ``y`` (running at ``t``); else why not."""
+        ctx = self.ctx
+        if y.app == r.app:
+            return "its own application's"
+        if not y.cuttable:
+            return "uncut: not interruptible"
+        if y.reason == "restart":
+            return "uncut: a restart (cut at most once)"
+        if y.reason == "blend" or y.blended_over:
+            return "uncut: blended"
+        if self.replies_to_answer(y):
+            return "uncut: a reply to its answer (7.4)"
+        if ctx.block_open(y.app, t):
+            return "uncut: in a begin/end block"
+        if y.listens and (y.words is None or t >= y.words[1] - EPS):
+            return "uncut: a Q&A listening"
+        if ctx.demoted_at(r.app, t):
+            return "uncut: the reacting application lost its precedence"
+        if low and not y.low:
+            return "uncut: it keeps the channel"
+        if y.low and not low:
+            return ""
+        if ctx.demoted_at(y.app, t):
+            return ""
+        if self.reaction_key(r, t) < self.tree_key(y.tree, t):
+            return ""
+        return "uncut: a reaction that goes first"
+
+    @staticmethod
+    def boundary(y: Ab, t: float) -> float:
+        """Where a cut asked for at ``t`` ends ``y``: the end of the word under way, or
+        at once (a step later at most)."""
+        if y.words is not None and y.words[0] - EPS <= t < y.words[1] - EPS and y.text:
+            ws, we = y.words
+            n = max(1, len([w for w in y.text.split() if w != "/"]))
+            per = (we - ws) / n
+            k = math.floor((t - ws) / per + 1e-9) + 1
+            return min(we, ws + k * per) + _TICK
+        return t + _TICK
+
+    # ------------------------------------------------------------ waits
+    def near(self, devices: Iterable[str], lo: float, hi: float) -> list[Ab]:
+        """The ABs on these devices that ran at some time within [lo, hi]."""
+        found: dict[int, Ab] = {}
+        for d in devices:
+            abs_ = self.ctx.on_device.get(d)
+            if not abs_:
+                continue
+            starts = self.starts[d]
+            i = bisect.bisect_left(starts, lo - self.longest - EPS)
+            j = bisect.bisect_right(starts, hi + EPS)
+            for ab in abs_[i:j]:
+                if ab.until(self.end) > lo - EPS or ab.end is None:
+                    found[ab.id] = ab
+        return sorted(found.values(), key=lambda ab: ab.seq)
+
+    def waits(self, r: ReactionState, own: set[int], devices: frozenset[str], low: bool,
+              t0: float, seq0: int, t1: float, ready: float | None = None
+              ) -> tuple[list[tuple[float, float, Blame]], list[tuple[float, float, Ab]]]:
+        """What rightly held ``devices`` within [t0, t1], and what took them wrongly.
+        ``own``: the reaction's Commands (its own ABs never count against it);
+        ``ready``: when it could first ask for a cut (after its own AB before it)."""
+        ready = t0 if ready is None else max(t0, ready)
+        ctx = self.ctx
+        allowed: list[tuple[float, float, Blame]] = []
+        took: list[tuple[float, float, Ab]] = []
+        for y in self.near(devices, t0, t1):
+            y_end = y.until(self.end)
+            if y_end < t0 - EPS or y.start > t1 + EPS:
+                continue
+            if not own.isdisjoint(y.ids) or y.tree in r.trees:
+                allowed.append((y.start, y_end, self._blame(y, "its own")))
+                continue
+            running = y.start < t0 - EPS or (abs(y.start - t0) <= EPS and y.seq < seq0)
+            if running:
+                why = self.may_cut(y, r, low, ready)
+                stop = self.boundary(y, ready)
+                if not why and y.listens and y.words is not None \
+                        and stop >= y.words[1] - EPS:
+                    why = "uncut: a Q&A on the last word of its prompt, then listening"
+                if why:
+                    allowed.append((y.start, y_end, self._blame(y, why, y_end)))
+                else:
+                    stop = min(y_end, stop)
+                    allowed.append((y.start, stop, self._blame(y, "cut at a word boundary",
+                                                               stop)))
+                    if y_end > stop + EPS:
+                        took.append((stop, y_end, y))
+                continue
+            why = self.goes_first(y, r, low, y.start)
+            if why:
+                # it kept its devices from when it was ready (waiting, or next in a
+                # reaction's tree, MISSION.md 7.1): when the AB before it in its tree
+                # ended, or when it was asked for if later
+                allowed.append((self.ready(y), y_end, self._blame(y, why, y_end)))
+            else:
+                took.append((y.start, y_end, y))
+        allowed += self._holds(r, own, low, t0, t1)
+        if ctx.demoted_within(r.app, t0, t1):
+            for lo, hi in ctx.demoted.get(r.app, ()):
+                allowed.append((lo, hi, Blame(r.app, None, "", "", "it had lost its "
+                                              "precedence (its wait share)", hi)))
+        return allowed, took
+
+    def ready(self, y: Ab) -> float:
+        """When ``y`` was ready to start, as far as the trace tells: when the AB before it
+        in its tree ended (or when it was asked for, if that was later), else its
+        start."""
+        found = self._ready.get(y.id)
+        if found is None:
+            found = y.start
+            tree = self.ctx.tree_abs.get(y.tree, ())
+            i = next((k for k, ab in enumerate(tree) if ab is y), 0) - 1
+            precedes = self.ctx.precedes
+            # (a policy's AB put before it, a turn or a return, was part of its wait)
+            while i >= 0 and any(precedes.get(cid) in y.ids for cid in tree[i].ids):
+                i -= 1
+            if i >= 0:
+                found = min(y.start, tree[i].until(self.end))
+            asked = self.ctx.requested_at.get(y.id)
+            if asked is not None:
+                found = max(found, min(asked[0], y.start))
+            self._ready[y.id] = found
+        return found
+
+    def _holds(self, r: ReactionState, own: set[int], low: bool, t0: float,
+               t1: float) -> list[tuple[float, float, Blame]]:
+        """The holds the mediator reports on the reaction's ABs that the rules allow."""
+        out: list[tuple[float, float, Blame]] = []
+        for h in self.ctx.holds:
+            if h.t < t0 - EPS or h.t > t1 + EPS:
+                continue
+            held = self.ctx.abs.get(h.ab)
+            ids = held.ids if held is not None else self._requested_ids(h.ab)
+            if own.isdisjoint(ids):
+                continue
+            if h.reason == "reserved" and h.before is not None:
+                nxt = self.ctx.abs.get(h.before)
+                if nxt is None or not self.goes_first(nxt, r, low, h.t):
+                    continue
+                until = min(nxt.start, t1)
+                out.append((h.t, until, self._blame(nxt, "kept for a reaction's next AB "
+                                                          "(7.1)", until)))
+            elif h.reason == "block":
+                spans = self.ctx.blocks.get(h.holder, ())
+                until = next((hi for lo, hi in reversed(spans) if lo <= h.t + EPS), t1)
+                out.append((h.t, min(until, t1), Blame(h.holder, None, "", "",
+                                                       "its begin/end block (rule 3)",
+                                                       until)))
+            elif h.reason == "keep-channel" and low:
+                out.append((h.t, t1, Blame(h.holder, None, "", "",
+                                           "keeps the channel (rule 4.1)", t1)))
+        return out
+
+    def _requested_ids(self, ab: int) -> tuple[int, ...]:
+        return tuple(cid for cid, found in self.ctx.cmd_ab.items() if found == ab)
+
+    def _blame(self, y: Ab, rule: str, until: float | None = None) -> Blame:
+        return Blame(y.app, y.id, y.command, self.ctx.at(y), rule,
+                     None if until is None else round(until, 3))
+
+    # ------------------------------------------------------------ one reaction
+    def reaction(self, r: ReactionState) -> Reaction:
+        own = set(r.commands)
+        for cid in r.commands:
+            own.update(self.policy_for.get(cid, ()))
+        mine = [ab for cid in own for ab in self.cmd_abs.get(cid, ())]
+        mine.sort(key=lambda ab: ab.seq)
+        first = mine[0] if mine else None
+        devices = set(r.devices)
+        put: list[tuple[frozenset[str], float, int]] = []
+        """A policy's AB put before the first Command: its devices, from its request."""
+        for cid in self.policy_for.get(r.commands[0], ()) if r.commands else ():
+            for ab in self.cmd_abs.get(cid, ()):
+                asked = self.ctx.requested_at.get(ab.id, (r.t, r.seq))
+                put.append((ab.devices - devices, *asked))
+                devices |= ab.devices
+        low = any(ab.low for ab in mine[:1]) if first is not None else False
+        t1 = first.start if first is not None else self._over(r)
+        ready = r.t
+        behind = self.ctx.abs.get(r.before) if r.before is not None else None
+        if behind is not None and behind.app == r.app:  # after its own AB, still to end
+            ready = behind.until(self.end)
+        allowed, took = self.waits(r, own, frozenset(r.devices), low, r.t, r.seq, t1, ready)
+        for extra, t_put, seq_put in put:
+            if extra:  # (the turn's wheels count from when the turn was put in line)
+                more, taken = self.waits(r, own, extra, low, t_put, seq_put, t1,
+                                         max(ready, t_put))
+                allowed += [(max(a, t_put), b, blame) for a, b, blame in more]
+                took += [(max(a, t_put), b, y) for a, b, y in taken]
+        if behind is not None and ready > r.t:
+            allowed.append((r.t, ready, self._blame(behind, "after its own AB", ready)))
+        residual = _measure(((a, b) for a, b, _ in allowed), r.t, t1)
+        free = max(0.0, (t1 - r.t) - residual)
+        spoken = [ab for ab in mine if ab.text and not set(ab.ids).isdisjoint(r.commands)]
+        heard = next((ab for ab in spoken if ab.end_reason == "completed"), None)
+        words = r.words or bool(spoken)
+        words_free = 0.0
+        if first is not None and words:
+            words_free = self._words_free(r, own, mine, spoken, first, heard)
+        found = Reaction(
+            r.event, r.t, r.seq, r.app, r.order, tuple(r.commands), tuple(r.trees),
+            tuple(sorted(devices)), user=r.user, at=r.at, residual=round(residual, 3),
+            free=round(free, 3),
+            first_start=None if first is None else first.start,
+            first_start_seq=None if first is None else first.seq,
+            first_utterance=None if heard is None else heard.start,
+            first_utterance_seq=None if heard is None else heard.seq,
+            words=words, words_free=round(words_free, 3),
+            unheard=words and heard is None and self._unheard(r, spoken),
+            text=r.text, waits=self._top(allowed), took=self._culprit(took, allowed, r.t, t1))
+        why = self._why(found)
+        return dataclasses.replace(found, late=bool(why), why=why)
+
+    def _words_free(self, r: ReactionState, own: set[int], mine: Sequence[Ab],
+                    spoken: Sequence[Ab], first: Ab, heard: Ab | None) -> float:
+        """How long, after its first start, the reaction's first words were free to
+        start but did not. They are rightly kept while their devices are rightly held
+        (as a first start is), while one of the reaction's own ABs runs (a filler, a
+        turn to the user), and while one of its own ABs that was requested and waits
+        (a return put before the words, a restart) has its devices rightly held."""
+        t0 = first.start
+        t1 = heard.start if heard is not None else self.end
+        if t1 <= t0 + EPS:
+            return 0.0
+        target = heard or (spoken[0] if spoken else None)
+        devices = (target.devices if target is not None else frozenset()) | TALK_DEVICES
+        allowed, _took = self.waits(r, own, devices, False, t0, first.seq, t1)
+        spans = [(a, b) for a, b, _ in allowed]
+        for ab in mine:
+            spans.append((ab.start, ab.until(self.end)))
+            asked = self.ctx.requested_at.get(ab.id)
+            if asked is not None and asked[0] < ab.start - EPS and ab.start > t0 + EPS:
+                lo = max(asked[0], t0)
+                waiting, _ = self.waits(r, own, ab.devices, ab.low, lo, asked[1], ab.start)
+                spans += [(a, b) for a, b, _ in waiting]
+        return max(0.0, (t1 - t0) - _measure(spans, t0, t1))
+
+    def _over(self, r: ReactionState) -> float:
+        """When a reaction that never started was over: when its own application
+        cancelled the last of its Commands (a newer request replaced it), or the
+        trace's end."""
+        cancelled = self.ctx.cancelled
+        if r.commands and all(cid in cancelled for cid in r.commands):
+            return max(cancelled[cid] for cid in r.commands)
+        return self.end
+
+    def _unheard(self, r: ReactionState, spoken: Sequence[Ab]) -> bool:
+        """Its words were never heard whole: cut and never said again, or never said
+        long after the event; not if its own application cancelled them."""
+        words_cmds = {cid for ab in spoken for cid in ab.ids} or set(r.commands[:1])
+        if words_cmds <= self.ctx.cancelled.keys():
+            return False
+        if any(ab.end_reason == "interrupt" for ab in spoken):
+            return True
+        return self.end - r.t > self.th.stuck_after + EPS
+
+    @staticmethod
+    def _top(allowed: list[tuple[float, float, Blame]]) -> tuple[Blame, ...]:
+        """What it waited for, longest first (three at most), other than its own."""
+        longest: dict[object, tuple[float, Blame]] = {}
+        for a, b, blame in allowed:
+            if blame.rule == "its own":
+                continue
+            key = (blame.app, blame.ab, blame.rule)
+            if key not in longest or b - a > longest[key][0]:
+                longest[key] = (b - a, blame)
+        ranked = sorted(longest.values(), key=lambda item: -item[0])
+        return tuple(blame for _, blame in ranked[:3])
+
+    def _culprit(self, took: list[tuple[float, float, Ab]],
+                 allowed: list[tuple[float, float, Blame]], lo: float,
+                 hi: float) -> Blame | None:
+        """The AB that held its devices longest while it was free to start."""
+        free = _gaps(((a, b) for a, b, _ in allowed), lo, hi)
+        best: tuple[float, Ab] | None = None
+        for a, b, ab in took:
+            overlap = sum(max(0.0, min(b, fb) - max(a, fa)) for fa, fb in free)
+            if overlap > EPS and (best is None or overlap > best[0]):
+                best = (overlap, ab)
+        if best is None:
+            return None
+        return self._blame(best[1], "took its devices", best[1].until(self.end))
+
+    def _why(self, r: Reaction) -> str:
+        t = self.th
+        if t.react_within is not None:
+            if r.latency is None:
+                return "never started"
+            if r.latency > t.react_within + EPS:
+                return f"started after {r.latency:g} s (allowed {t.react_within:g} s)"
+            bound = t.react_within + t.utterance_slack
+            if r.utterance_latency is not None and r.utterance_latency > bound + EPS:
+                return f"spoke after {r.utterance_latency:g} s (allowed {bound:g} s)"
+            return ""
+        if r.free > t.reaction_slack + EPS:
+            what = "never started" if r.latency is None else f"started after {r.latency:g} s"
+            return (f"{what}: free to start for {r.free:g} s (the rules let it wait "
+                    f"{r.residual:g} s, and {t.reaction_slack:g} s more)")
+        if r.words_free > t.reaction_slack + t.utterance_slack + EPS:
+            said = ("its words never said whole" if r.first_utterance is None
+                    else f"spoke after {r.utterance_latency:g} s")
+            return (f"{said}: its words were free to start for {r.words_free:g} s "
+                    f"(allowed {t.reaction_slack + t.utterance_slack:g} s)")
+        return ""
+
+
+def analyse(ctx: Context, end: float) -> list[Reaction]:
+    """Every reaction of the trace, judged (in the order their events came)."""
+    analyst = _Analyst(ctx, end)
+    return [analyst.reaction(r) for r in ctx.reactions]
