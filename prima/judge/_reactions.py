@@ -138,10 +138,10 @@ class _Analyst:
         first AB breaks the channel if ``low``), starting at ``t``; empty if it did
         not go first."""
         ctx = self.ctx
-        if ctx.demoted_at(y.app, t):
-            return ""
         if self.replies_to_answer(y):
             return "a reply to its answer (7.4)"
+        if ctx.demoted_at(y.app, t):
+            return ""
         if y.low and not low:
             return ""
         if low and not y.low:

@@ -116,11 +116,12 @@ def _oldest(node: Node, _pjf: Collection[int]) -> Key:
 CRITERIA: tuple[Criterion, ...] = (
     Criterion(Rule.PRIORITY, Scope.NODE, _priority, standing=True),
     # 1. HIGH (keeps the Communication Channel) before LOW (breaks it).
+    Criterion(Rule.EXCHANGE, Scope.NODE, _exchange, standing=True),
+    # (MISSION.md 7.4) the words that reply to the user's answer belong to the exchange,
+    # also when their app lost its precedence: one AB per answer the user gave (the
+    # user paces it), and the wait share's bound allows one AB past the share.
     Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share, standing=True),
     # (budget) an app that kept the others waiting beyond its share ranks after them.
-    Criterion(Rule.EXCHANGE, Scope.NODE, _exchange, standing=True),
-    # (MISSION.md 7.4) the words that reply to the user's answer belong to the exchange
-    # (an app that lost its precedence lost this one too: its wait share bounds it).
     Criterion(Rule.USER_FIRST, Scope.TREE, _user_first, standing=True),
     # 2. ABs of a reaction first: a reaction to the user's own action until its first
     #    utterance is said in full (MISSION.md 7.1), ...

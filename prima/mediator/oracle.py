@@ -211,8 +211,8 @@ def rank_key(snap: Snapshot, streams: Streams) -> _RankKeyFn:
 
 def standing_key(snap: Snapshot, streams: Streams
                  ) -> Callable[[NodeView], tuple[int, int, int, int, tuple[int, int]]]:
-    """What an AB keeps whatever the waiting order: HIGH first; apps that lost their
-    precedence after the others; the reply to an answer (7.4); reactions to the user's
+    """What an AB keeps whatever the waiting order: HIGH first; the reply to an answer
+    (7.4); apps that lost their precedence after the others; reactions to the user's
     own action whose first words are not yet said; the latest reaction (7.1)."""
     demoted = set(snap.demoted)
     reaction = streams.reaction
@@ -222,8 +222,8 @@ def standing_key(snap: Snapshot, streams: Streams
     def key(n: NodeView) -> tuple[int, int, int, int, tuple[int, int]]:
         return (
             0 if n.priority is Priority.HIGH else 1,
-            1 if n.app in demoted else 0,
             0 if replying(n) else 1,
+            1 if n.app in demoted else 0,
             0 if n.tree in user and n.tree in reaction else 1,
             (0, -reaction[n.tree]) if n.tree in reaction else (1, 0),
         )
@@ -750,6 +750,11 @@ class Oracle:
                 devices = set(d.devices)
                 if not any(n.app != d.app and n.priority >= prio and devices & set(n.devices)
                            and n.ab not in gone for n in rivals + fresh):
+                    self._uncontended.add(d.ab)
+                elif d.ab in self.streams.replies and (
+                        d.app in prev.snap.demoted or d.app in v.snap.demoted):
+                    # the words that reply to an answer go first past the share too
+                    # (7.4): one AB per answer the user gave, the user's pace
                     self._uncontended.add(d.ab)
                 gone.add(d.ab)
 

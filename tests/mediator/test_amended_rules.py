@@ -245,15 +245,17 @@ def test_a_reaction_during_the_reply_does_not_cut_it() -> None:
     assert first(h, "fa", "I've just got a message.") == 0.5 + 0.3
 
 
-def test_a_reply_is_not_cut_even_when_its_app_lost_its_precedence() -> None:
-    """7.3 (2): the reaction waits 1 s for the listening, then for the reply: with a
-    wait share of 1.2 s the EA loses its precedence at 3.2 s, while it replies. The
-    reaction then outranks the reply, and still does not cut it."""
+def test_a_reply_goes_first_even_when_its_app_lost_its_precedence() -> None:
+    """7.4 with the wait share: the reaction waits for the listening, so that with a
+    share of 0.5 s the EA loses its precedence at 2.5 s, before the user answers. Its
+    reply still goes first (one AB per answer, which the user paces) and is not cut;
+    the reaction follows it."""
     budgets = {Role.FA: DEFAULT_BUDGETS[Role.FA],
-               Role.EA: Budgets(wait_share=1.2, wait_window=60.0)}
+               Role.EA: Budgets(wait_share=0.5, wait_window=60.0)}
     h = exchange("words", cuts=True, config=MediatorConfig(budgets=budgets))
     lost = [d for d in h.kinds(DecisionKind.BUDGET) if d.app == "ea"]
-    assert lost and lost[0].t == 3.2
+    assert lost and lost[0].t == 2.5
+    assert first(h, "ea", "Nice to meet you, Hanako.") == 3.0
     assert first(h, "fa", "I've just got a message.") == 5.0
     assert not h.kinds(DecisionKind.INTERRUPT)
 
