@@ -244,6 +244,9 @@ class Run:
         """Command id -> where its request is written (``doc.pxml:line:col``) and whether
         the interrupt policy may cut it (the request did not say ``never``), while it is
         in working memory."""
+        self._elsewhere: set[int] = set()
+        """Commands whose request said their words are about something else
+        (``face_user`` false), while they are in working memory."""
         self.catalog = self.profile.catalog()
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
                                            catalog=self.catalog)
@@ -420,6 +423,7 @@ class Run:
         elif kind is DecisionKind.CANCEL:
             for cid in d.command_ids:
                 self._requested.pop(cid, None)
+                self._elsewhere.discard(cid)
         spoken = [words for c in d.calls for words in self.catalog[c.command].spoken(c.args)]
         text = " / ".join(spoken) if spoken else None
         if (kind is DecisionKind.START and d.iteration and d.command_id is not None
@@ -462,6 +466,7 @@ class Run:
         if d.detail not in ("not terminal", "to restart"):  # its Commands are over
             for cid in d.command_ids:
                 self._requested.pop(cid, None)
+                self._elsewhere.discard(cid)
 
     def _where(self, d: Decision, detail: dict[str, Value]) -> None:
         """A request line says where it is written (``at``): the application's request
@@ -476,14 +481,20 @@ class Run:
             cuttable = request.on_interrupt is not OnInterrupt.NEVER
             for cid in ids:
                 self._requested[cid] = (at, cuttable)
+            if not request.face_user:
+                self._elsewhere.update(ids)
         else:
             for_command = d.precedes if d.precedes is not None else d.command_id
             at, _cuttable = self._requested.get(for_command or 0, ("", True))
             for cid in ids:
                 self._requested.setdefault(cid, (at, True))
+            if d.rule is Rule.RESTART and for_command in self._elsewhere:
+                self._elsewhere.update(ids)  # (said again, its words are still about that)
         found = self._requested.get(ids[0]) if ids else None
         if found is not None and found[0]:
             detail["at"] = found[0]
+        if ids and ids[0] in self._elsewhere:
+            detail["face_user"] = False  # (its words are about something else)
 
     def _starting(self, d: Decision, detail: dict[str, Value]) -> None:
         """A start line says whether the interrupt policy may cut the AB (its Commands

@@ -1132,6 +1132,32 @@ def test_words_after_an_aiming_command_are_about_what_it_aims_at() -> None:
     assert (after("Turn"), after("Gesture")) == (0, 1)
 
 
+def test_words_whose_request_says_they_are_about_something_else_are_not_unfaced() -> None:
+    """FA7's "Look where the red dot is." (face-user="false": about the spot its laser
+    shows): its request line says so, and it is not counted; the same words asked for
+    without it are."""
+    def said(face_user: bool) -> int:
+        tr = Trace()
+        tr.user = {"x": 0.0, "y": 1.0, "heading": 0.0, "detectable": True}
+        tr.request(0.0, "fa", 1, 1, text="Look where the red dot is.")
+        if not face_user:
+            tr.rows[-1]["detail"]["face_user"] = False
+        tr.start(0.0, "fa", 1, 1, text="Look where the red dot is.", words=(0.0, 2.0))
+        tr.end(2.0, "fa", 1, 1)
+        return len(tr.judge().of("unfaced"))
+
+    assert (said(face_user=False), said(face_user=True)) == (0, 1)
+
+
+def test_a_request_line_says_when_its_words_are_about_something_else() -> None:
+    from prima.run import Run
+
+    lines = Run(ROOT / "scenarios" / "examples" / "museum-laser.xml").run()
+    requests = {ln.text: ln for ln in lines if ln.kind.value == "request" and ln.text}
+    assert requests["Look where the red dot is."].detail.get("face_user") is False
+    assert "face_user" not in requests["Touch my head, and I will show you more."].detail
+
+
 @pytest.mark.parametrize("user, command, found", [
     ({"x": 0.0, "y": 1.0, "detectable": True}, "Speak", 1),          # 90 degrees off
     ({"x": 0.0, "y": 1.0, "detectable": False}, "Speak", 0),         # cannot be seen

@@ -208,6 +208,8 @@ class Context:
         self.cancelled: dict[int, float] = {}
         """Command -> when it was cancelled."""
         self.requested_at: dict[int, tuple[float, int]] = {}
+        self.elsewhere: set[int] = set()
+        """Commands whose request said their words are about something else."""
         """AB -> when (and at which line) it was requested: the root of a request, a
         policy's AB, a restart."""
         self.tree_app: dict[int, str] = {}
@@ -286,6 +288,8 @@ class Context:
             self.cmd_app[cid] = app
             if at:
                 self.cmd_at[cid] = at
+        if detail.get("face_user") is False:
+            self.elsewhere.update(ids)  # (its words are about something else)
         precedes = detail.get("precedes")
         if isinstance(precedes, int):
             for cid in ids:

@@ -118,7 +118,7 @@ def _about_something_else(row: Row, before: str | None) -> bool:
     """An utterance that is not for the user's face: its AB turns or points the robot
     itself (FaceHumanAndSpeak, a Speak grouped with a PointByHand), or the AB before
     it in its stream aimed the robot at something on purpose (a Turn, a PointByHand):
-    the words are about that."""
+    the words are about that. (Its request may say so too: ``face_user`` false.)"""
     if BODY_DEVICE in (row.get("devices") or ()) \
             or not _AIMING.isdisjoint(str(row.get("command")).split("+")):
         return True
@@ -140,7 +140,8 @@ class _Unfaced:
         before = self.last_command.get(tree) if isinstance(tree, int) else None
         if isinstance(tree, int):
             self.last_command[tree] = str(row.get("command"))
-        if not row.get("text") or _about_something_else(row, before):
+        if not row.get("text") or _about_something_else(row, before) \
+                or not ctx.elsewhere.isdisjoint(command_ids(row)):
             return
         robot, user = row.get("robot"), row.get("user")
         if robot is None or user is None or user.get("detectable") is not True:
