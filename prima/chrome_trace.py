@@ -20,10 +20,10 @@ where it is not blended: two slices of one device track must nest.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterable
 from typing import TextIO
 
+from prima.escape import json_line
 from prima.timeline import blended_devices
 from prima.trace import TraceLine
 
@@ -177,7 +177,7 @@ class ChromeTraceWriter:
 
     def _put(self, events: Iterable[dict[str, object]]) -> None:
         for event in events:
-            self._to.write(("\n" if self._first else ",\n") + json.dumps(event, ensure_ascii=False))
+            self._to.write(("\n" if self._first else ",\n") + json_line(event))
             self._first = False
 
     def write(self, line: TraceLine) -> None:

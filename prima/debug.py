@@ -17,6 +17,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TextIO
 
+from prima.escape import terminal
 from prima.run import Run
 from prima.trace import Kind, TraceLine, describe
 from prima.vocab import Value
@@ -158,7 +159,9 @@ class Debugger:
         return self._commands[found[0]] if len(found) == 1 else None
 
     def _say(self, text: str) -> None:
-        self._out.write(text + "\n")
+        """Write ``text``'s lines; what a document or a trace says, a control character
+        say, reaches the terminal as an escape."""
+        self._out.write("\n".join(map(terminal, text.split("\n"))) + "\n")
 
     def _say_command(self, words: list[str]) -> None:
         if not self._in.isatty():  # a scripted session shows what it typed

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import html
-import json
 from importlib import resources
 from typing import Any
 
@@ -11,6 +9,7 @@ import plotly.graph_objects as go
 import plotly.io as pio
 from plotly.colors import qualitative
 
+from prima.escape import markup, script_json
 from prima.show._model import Model
 from prima.sim import WorldMap
 from prima.timeline import Bar, ink, runs
@@ -30,8 +29,9 @@ _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": [
 
 
 def _esc(text: str) -> str:
-    """Text shown as itself (Plotly reads some HTML in its labels)."""
-    return html.escape(text, quote=False)
+    """Text shown as itself (Plotly reads some HTML in its labels, a forged trace's
+    device names too)."""
+    return markup(text)
 
 
 def _label(bar: Bar) -> str:
@@ -132,7 +132,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         traces["bars"].append(len(fig.data))
         # two applications blended on a device share its row: a half each
         fig.add_trace(go.Bar(
-            name=_esc(app), orientation="h", y=[b.device for b in bars],
+            name=_esc(app), orientation="h", y=[_esc(b.device) for b in bars],
             base=[b.t0 for b in bars], x=[_width(b.t0, b.t1) for b in bars],
             width=[0.4 if b.blended else 0.8 for b in bars],
             offset=[(0.0 if i % 2 else -0.4) if b.blended else -0.4 for b in bars],
@@ -147,7 +147,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         if repeated:  # over a run's bars, one bar without seams, labelled once; hovers and
             # clicks go through it to the iteration under the pointer
             fig.add_trace(go.Bar(
-                name=_esc(app), orientation="h", y=[r[0].device for r in repeated],
+                name=_esc(app), orientation="h", y=[_esc(r[0].device) for r in repeated],
                 base=[r[0].t0 for r in repeated],
                 x=[_width(r[0].t0, r[-1].t1) for r in repeated], width=0.8, offset=-0.4,
                 text=[f"{_esc(r[0].command)} x{len(r)}" for r in repeated],
@@ -161,7 +161,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             continue
         traces["spans"].append(len(fig.data))
         fig.add_trace(go.Bar(
-            name=what, orientation="h", y=[d for _, d in spans],
+            name=what, orientation="h", y=[_esc(d) for _, d in spans],
             base=[s.t0 for s, _ in spans], x=[_width(s.t0, s.t1) for s, _ in spans],
             customdata=[model.table[s.line] for s, _ in spans],
             hovertext=[f"{_esc(s.app)}: AB {s.ab} {what} {s.t0:.2f}-{s.t1:.2f} s"
@@ -177,7 +177,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             continue
         traces["marks"].append(len(fig.data))
         fig.add_trace(go.Scatter(
-            name=what, x=[m.t for m, _ in marks], y=[d for _, d in marks],
+            name=what, x=[m.t for m, _ in marks], y=[_esc(d) for _, d in marks],
             customdata=[model.table[m.line] for m, _ in marks], mode="markers",
             marker={"symbol": symbol, "size": 12, "color": colour, "line": {"width": 2,
                                                                             "color": colour}},
@@ -191,16 +191,10 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         legend={"orientation": "h", "y": -0.25 if len(tl.devices) > 3 else -0.5},
         xaxis={"title": "simulated time (s)", "range": [0, max(tl.end, 1.0)],
                "showgrid": True, "gridcolor": "#eee"},
-        yaxis={"categoryorder": "array", "categoryarray": tl.devices[::-1],
+        yaxis={"categoryorder": "array", "categoryarray": [_esc(d) for d in tl.devices[::-1]],
                "type": "category", "fixedrange": True},
         dragmode="pan")
     return fig, traces
-
-
-def _script_json(value: object) -> str:
-    """JSON safe inside a <script> element."""
-    text = json.dumps(value, ensure_ascii=False, separators=(",", ":"))
-    return text.replace("</", "<\\/").replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
 
 
 def page(model: Model, world: WorldMap | None, title: str) -> str:
@@ -223,7 +217,7 @@ def page(model: Model, world: WorldMap | None, title: str) -> str:
     style = files.joinpath("show.css").read_text(encoding="utf-8")
     speeds = "".join(f'<option value="{s}"{" selected" if s == "1" else ""}>{s}x</option>'
                      for s in ("0.5", "1", "2", "4", "8", "16", "32"))
-    name = html.escape(title)
+    name = markup(title)
     return f"""<!DOCTYPE html>
 <html lang="en">
 <head>
@@ -251,7 +245,7 @@ to jump there and see why the mediator decided it.</p></aside>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
 </main>
 <script>
-const PRIMA_SHOW = {_script_json(data)};
+const PRIMA_SHOW = {script_json(data)};
 </script>
 <script>
 {player}</script>
