@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, TextIO
 
 from prima import __version__
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
+from prima.escape import shown_path
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
@@ -520,12 +521,16 @@ def _run_usage(args: argparse.Namespace) -> str | None:
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
     if args.out:
-        target = Path(args.out)
-        if target.is_dir():
-            return f"--out {args.out} is a folder"
-        if not target.parent.is_dir():
-            return f"--out {args.out}: no such folder {target.parent}"
+        return _target(args.out)
     return None
+
+
+def _target(path: str) -> str | None:
+    """What stops ``--out PATH`` from being written, as a usage error."""
+    from prima.output import check_target
+
+    problem = check_target(path)
+    return f"--out {problem}" if problem else None
 
 
 def _policies(given: list[str]) -> dict[str, bool] | str:
@@ -545,6 +550,7 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
 
 
 def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.output import written
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
@@ -557,7 +563,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               seed=args.seed, until=args.until, sink=lambda line: write(line),
               pose_rate=args.pose_rate, policies=args.policy)
     with contextlib.ExitStack() as files:
-        to = files.enter_context(open(args.out, "w", encoding="utf-8")) if args.out else out
+        to = files.enter_context(written(args.out)) if args.out else out
         if args.format == "text":
             print(TextTrace.HEADER, file=to)
             text = TextTrace()
@@ -587,7 +593,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
                 chrome.close()  # the slices under way end where the run stopped
             to.flush()
             print(f"prima run: interrupted at t={run.sim.now():g} s; the trace up to then "
-                  f"is written{' to ' + args.out if args.out else ''}", file=err)
+                  f"is written{' to ' + shown_path(args.out) if args.out else ''}", file=err)
             return EXIT_INTERRUPTED
     return EXIT_OK
 
@@ -749,9 +755,11 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
         return "--jobs must be a whole number from 1 to 1024"
     if args.worst < 0:
         return "--worst must be a whole number from 0 up"
-    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
-        return f"--out {args.out} is a file"
-    return None
+    from prima.output import check_folder
+
+    # (without --out, a folder sweep-NAME in the current one)
+    problem = check_folder(args.out or "sweep-NAME") if args.worst else None
+    return f"--out {problem}" if problem else None
 
 
 def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -805,15 +813,12 @@ def _show_usage(args: argparse.Namespace) -> str | None:
         if not Path(args.scenario).is_file():
             return f"no such file: {args.scenario}"
     target = Path(args.out) if args.out else Path(source.with_suffix(".html").name)
-    if target.is_dir():
-        return f"--out {target} is a folder"
-    if not target.parent.is_dir():
-        return f"--out {target}: no such folder {target.parent}"
     args.out = str(target)
-    return None
+    return _target(args.out)
 
 
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.output import written
     from prima.show import read_rows, render
 
     problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show")
@@ -823,9 +828,10 @@ def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     rows = read_rows(source)
     scenario = source if source.suffix == ".xml" else args.scenario
     text = render(rows, scenario=scenario, title=source.stem)
-    Path(args.out).write_text(text, encoding="utf-8")
+    with written(args.out) as page:
+        page.write(text)
     abs_ = sum(1 for row in rows if row["kind"] == "start")
-    print(f"prima show: wrote {args.out} ({abs_} atomic behavior(s), "
+    print(f"prima show: wrote {shown_path(args.out)} ({abs_} atomic behavior(s), "
           f"{rows[-1]['t'] if rows else 0:g} s{'' if scenario else '; no map'})", file=err)
     return EXIT_OK
 
@@ -843,8 +849,8 @@ def _plot_usage(args: argparse.Namespace) -> str | None:
         return f"{args.input}: give a trace (*.jsonl) or a scenario (*.xml)"
     if target.suffix.lower() not in _PLOT_SUFFIXES:
         return f"--out {args.out}: name a {', '.join(_PLOT_SUFFIXES)} file"
-    if target.is_dir() or not target.parent.is_dir():
-        return f"--out {args.out}: not a file in an existing folder"
+    if _target(args.out):
+        return _target(args.out)
     until = args.until
     if until is not None and not (math.isfinite(until) and 0 < until <= MAX_RUN_TIME):
         return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
@@ -870,9 +876,9 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     source = Path(args.input)
     world = None
     if source.suffix == ".jsonl":
-        from prima.judge import load_trace
+        from prima.tracefile import read_trace
 
-        rows = [r for r in load_trace(source) if args.until is None or r["t"] <= args.until]
+        rows = [r for r in read_trace(source) if args.until is None or r["t"] <= args.until]
     else:
         from prima.run import Run
 
@@ -885,14 +891,15 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     drawn = timeline(rows)
     if Path(args.out).suffix.lower() != ".gif":
         save_timeline(drawn, args.out, title=source.stem)
-        print(f"{args.out}: {len(drawn.bars)} bars on {len(drawn.devices)} devices", file=err)
+        print(f"{shown_path(args.out)}: {len(drawn.bars)} bars on {len(drawn.devices)} "
+              "devices", file=err)
         return EXIT_OK
     if drawn.end / args.step >= _MAX_FRAMES:
         return _usage("plot", f"--step {args.step:g} makes more than {_MAX_FRAMES} frames "
                               f"of a {drawn.end:g} s run", err)
     frames = save_animation(drawn, args.out, world, title=source.stem, step=args.step,
                             fps=args.fps)
-    print(f"{args.out}: {frames} frames", file=err)
+    print(f"{shown_path(args.out)}: {frames} frames", file=err)
     return EXIT_OK
 
 

@@ -14,6 +14,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from prima.output import written
 from prima.run import Run
 from prima.trace import format_text
 
@@ -68,7 +69,8 @@ def check(scenario: Path, *, update: bool = False) -> Result:
     if update:
         if golden.exists() and golden.read_text(encoding="utf-8") == actual:
             return Result(scenario, Status.SAME)
-        golden.write_text(actual, encoding="utf-8")
+        with written(golden) as out:
+            out.write(actual)
         return Result(scenario, Status.UPDATED)
     if not golden.exists():
         return Result(scenario, Status.MISSING)

@@ -33,6 +33,7 @@ from lxml import etree
 
 from prima.errors import ScenarioError
 from prima.judge import Report, Thresholds, judge
+from prima.output import written
 from prima.sim import load_scenario
 from prima.xmlio import local_name, parse_xml, read_source
 
@@ -120,7 +121,8 @@ def write_variant(scenario: str | Path, path: str | Path, *, seed: int, index: i
             "shifted -->")
     text = "\n".join(['<?xml version="1.0" encoding="UTF-8"?>', *reversed(before), note,
                       etree.tostring(root, encoding="unicode")])
-    path.write_text(text + "\n", encoding="utf-8")
+    with written(path) as out:
+        out.write(text + "\n")
     return path
 
 

@@ -1,7 +1,7 @@
 """The device timeline of a run, as data: what ``prima show`` and ``prima plot`` draw.
 
 Pure Python (no drawing library): a run's jsonl records (``TraceLine.to_dict()``,
-or :func:`prima.judge.load_trace`), in trace order, become
+or :func:`prima.tracefile.read_trace`), in trace order, become
 
 - bars: one per atomic behavior and device it occupied, from its ``start`` to its
   ``end`` (or the trace's end, ``ended=False``); an AB that occupied no device has

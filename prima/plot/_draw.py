@@ -17,6 +17,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from prima.escape import PLAIN_TEXT
+from prima.output import written_bytes
 from prima.plot import abbreviate
 from prima.timeline import Bar, Timeline, ink, runs
 
@@ -195,4 +196,5 @@ def save_timeline(tl: Timeline, path: str | Path, title: str = "") -> None:
     with matplotlib.rc_context({"svg.hashsalt": "prima", "svg.fonttype": "none",
                                 "font.family": "DejaVu Sans", **PLAIN_TEXT}):
         fig = timeline_figure(tl, title)
-        fig.savefig(path, format=suffix[1:], dpi=150, metadata=_METADATA.get(suffix))
+        with written_bytes(path) as out:
+            fig.savefig(out, format=suffix[1:], dpi=150, metadata=_METADATA.get(suffix))

@@ -29,7 +29,7 @@ def read_rows(path: str | Path) -> list[dict[str, Any]]:
     """A run's rows: a jsonl trace read (located errors), or a scenario run in-process."""
     path = Path(path)
     if path.suffix == ".jsonl":
-        from prima.judge import load_trace
+        from prima.tracefile import load_trace
 
         return load_trace(path)
     from prima.run import Run
