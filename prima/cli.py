@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, TextIO
 from prima import __version__
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
 from prima.escape import shown_path
+from prima.suggest import unrecognized
+from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
@@ -266,10 +268,20 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     err = err or sys.stderr
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # as parse_args would say, with the option a misspelt one may be
+            _subparser(parser, args.command).error(unrecognized(extra, _subparser(
+                parser, args.command)))
     except SystemExit as exc:
         return int(exc.code or 0)
     command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
+    with terminate_as_interrupt() as signals:
+        status = _main(command, args, out, err)
+    return EXIT_TERMINATED if signals.terminated and status == EXIT_INTERRUPTED else status
+
+
+def _main(command: Callable[[argparse.Namespace, TextIO, TextIO], int],
+          args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     try:
         return command(args, out, err)
     except LocatedError as exc:
@@ -281,9 +293,15 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`: the reader had enough
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return EXIT_PIPE
-    except KeyboardInterrupt:  # Ctrl-C: what was written so far stays written
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: what was written so far stays written
         print(f"prima {args.command}: interrupted", file=err)
         return EXIT_INTERRUPTED
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    chosen: argparse.ArgumentParser = action.choices[command]
+    return chosen
 
 
 def _report(problems: Iterable[Problem], to: TextIO) -> None:
@@ -625,30 +643,36 @@ class _Deferred:
 
     def __init__(self) -> None:
         self.asked = False
+        self.terminated = False
 
-    def handle(self, _signum: int, _frame: object) -> None:
+    def handle(self, signum: int, _frame: object) -> None:
+        if signum == signal.SIGTERM:
+            self.terminated = True
+            note_terminated()
         if self.asked:  # a second Ctrl-C: at once
-            raise KeyboardInterrupt
+            self.check()
         self.asked = True
 
     def check(self) -> None:
         if self.asked:
-            raise KeyboardInterrupt
+            raise Terminated if self.terminated else KeyboardInterrupt
 
 
 @contextlib.contextmanager
 def _between_lines() -> Iterator[_Deferred]:
-    """While writing a file that a torn write would spoil (a chrome trace), Ctrl-C is
-    raised only between two trace lines (a second one at once)."""
+    """While writing a file that a torn write would spoil (a chrome trace), Ctrl-C and
+    SIGTERM are raised only between two trace lines (a second one at once)."""
     deferred = _Deferred()
     if threading.current_thread() is not threading.main_thread():
         yield deferred  # signals go to the main thread only
         return
     previous = signal.signal(signal.SIGINT, deferred.handle)
+    terminate = signal.signal(signal.SIGTERM, deferred.handle)
     try:
         yield deferred
     finally:
         signal.signal(signal.SIGINT, previous)
+        signal.signal(signal.SIGTERM, terminate)
 
 
 def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:

@@ -46,7 +46,7 @@ def test_a_target_that_cannot_be_written_is_a_message(tmp_path: Path, target: st
     scenario = speaking(tmp_path, "hello")
     status, _, err = _cli("run", str(scenario), "--out", target)
     assert status in (1, 2) and "Traceback" not in err
-    assert err.startswith(f"prima run: error: ") and target in err, err
+    assert err.startswith("prima run: error: ") and target in err, err
 
 
 def test_a_failed_run_leaves_no_file_and_keeps_the_old_one(
@@ -89,3 +89,33 @@ def test_a_sweep_checks_where_it_writes_before_it_runs(tmp_path: Path) -> None:
     status, out, err = _cli("sweep", str(scenario), "--runs", "2", "--jitter", "1",
                             "--out", str(tmp_path / "file" / "worst"))
     assert status == 2 and out == "" and "is not a folder" in err, err
+
+
+@pytest.mark.parametrize("form", ["text", "jsonl", "chrome-trace"])
+def test_sigterm_keeps_the_trace_written_so_far(tmp_path: Path, form: str) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    trace = tmp_path / "run.out"
+    scenario = Path(__file__).parents[1] / "scenarios" / "thesis" / "sample-03.xml"
+    child = subprocess.Popen([sys.executable, "-m", "prima", "run", str(scenario), "--until",
+                              "100000", "--format", form, "--out", str(trace)],
+                             stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not list(tmp_path.glob(".prima-*")):
+        time.sleep(0.05)
+    time.sleep(1.5)  # the run is under way (sample-03 ends at 60 s; this goes on and on)
+    child.send_signal(signal.SIGTERM)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == 143, err
+    assert "prima run: interrupted at t=" in err and "Traceback" not in err
+    text = trace.read_text(encoding="utf-8")
+    assert text.endswith("\n") and "Come on, follow me." in text  # said at 32.64 s
+    if form == "jsonl":
+        from prima.tracefile import load_trace
+        assert load_trace(trace)[-1]["t"] > 60
+    if form == "chrome-trace":
+        import json
+        assert json.loads(text)[-1]["ph"] in ("e", "X", "i", "M")
