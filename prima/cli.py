@@ -811,6 +811,10 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
               file=err)
         return EXIT_INTERRUPTED
+    if result.lost:
+        print(f"prima sweep: run(s) {', '.join(map(str, result.lost))} lost: the worker "
+              "process died each time, the run alone too (out of memory?); the other "
+              f"{len(result.runs)} run(s) are judged", file=err)
     if args.worst:
         folder = Path(args.out or f"sweep-{result.name}")
         worst = result.worst(args.worst)
@@ -821,7 +825,7 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             exceeded = ", ".join(report.exceeded()) or "no threshold exceeded"
             print(f"  {path}  {exceeded}; worst lateness {report.worst_lateness():.2f} s",
                   file=out)
-    return EXIT_ERRORS if result.breached else EXIT_OK
+    return EXIT_ERRORS if result.breached or result.lost else EXIT_OK
 
 
 def _show_usage(args: argparse.Namespace) -> str | None:
