@@ -86,3 +86,29 @@ def test_the_fixtures_fail_a_bad_input_with_its_message_not_a_traceback(
     result.stdout.fnmatch_lines([f"*{bad}:2:*map file 'nowhere.xml' not found*",
                                  "*prima_judge: no threshold 'max_unfacd'*"])
     assert "Traceback" not in result.stdout.str() and "prima/xmlio.py" not in result.stdout.str()
+
+
+def test_the_fixtures_fail_bad_values_and_forged_traces_with_a_message(
+        pytester: pytest.Pytester, tmp_path: Path) -> None:
+    forged = tmp_path / "forged.jsonl"
+    forged.write_text('{"t": 0, "seq": 0, "kind": "start", "detail": {"command_id": "x"}}\n')
+    sample = Path(__file__).parents[1] / "scenarios" / "thesis" / "sample-03.xml"
+    pytester.makepyfile(f"""
+        def test_threshold_value(prima_judge):
+            prima_judge({str(sample)!r}, max_late=-1)
+
+        def test_threshold_type(prima_judge):
+            prima_judge({str(sample)!r}, silence="long")
+
+        def test_forged(prima_judge):
+            prima_judge({str(forged)!r})
+
+        def test_folder(prima_golden):
+            prima_golden({str(tmp_path)!r})
+    """)
+    result = pytester.runpytest()
+    result.assert_outcomes(failed=4)
+    out = result.stdout.str()
+    assert "Traceback" not in out and "prima/judge.py" not in out, out
+    result.stdout.fnmatch_lines([f"*prima_judge('{sample}'): *max_late*",
+                                 f"*{forged}:1:1: error: detail 'command_id' has the wrong type*"])
