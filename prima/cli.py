@@ -507,7 +507,7 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     except FileNotFoundError as exc:
         return _usage("validate", f"no such file or folder: {exc}", err)
     robot = args.robot is not None
-    validation = Validation(_profile(args.robot),
+    validation = Validation(_profile(args.robot), follow_declared=not robot,
                             more_checkers=lambda: _scenario_checkers(validation, robot))
     with _fewer_collections():
         report = validation.run(files)
