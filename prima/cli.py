@@ -355,7 +355,7 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
     PRIMA's documents nor its robot profiles is met.
     """
     from prima.dsl import unknown_places
-    from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
+    from prima.sim import MAP_NS, SCENARIO_NS, late_inputs, load_map, load_scenario
 
     maps: dict[Path, WorldMap] = {}
     """The maps checked without errors, by resolved path."""
@@ -385,6 +385,7 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
         # problems loading the scenario found in its map are the map's own check's
         problems = _problems(load_scenario, path)
         own = [p for p in problems if Path(p.file).resolve() == path.resolve()]
+        own += late_inputs(path) if not problems else []
         return own + _check_named(validation, path, robot, MAP_NS, check_places)
 
     return {SCENARIO_NS: check_scenario, MAP_NS: check_map}

@@ -21,6 +21,7 @@ __all__ = [
     "MAX_SEED",
     "MAX_STREAM_HOLD",
     "MAX_TEXT",
+    "EVENT_FIELDS",
     "PREDEFINED_EVENTS",
     "INTERRUPTED_EVENT",
     "OnInterrupt",
@@ -102,6 +103,21 @@ PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
                    "restarts); not reactive",
 })
 """Events every robot posts, FA and EA alike; all are reactive but ``interrupted``."""
+
+EVENT_FIELDS = frozenset({
+    # every event, and the predefined events' data
+    "name", "distance", "sound", "sender", "text", "place", "kind", "command", "label",
+    "spoken", "unspoken", "restarts",
+    # a Q&A's answer
+    "utterance", "answer", "status",
+    # what Commands end with (their end handlers' event)
+    "error", "result", "angle", "blended", "blocked", "duration", "found", "gesture", "goal",
+    "heading", "lost", "pan", "picture", "reached", "remaining", "saw_user", "tilt", "toward",
+    "turned", "unseen", "waiting", "x", "y",
+})
+"""Every field an event of PRIMA's own carries (``event.field``): a field outside them
+is null unless a scenario's ``<event>`` sends it, so ``prima validate`` warns of it (a
+misspelling: ``event.eror == null`` is always true)."""
 
 INTERRUPTED_EVENT = "interrupted"
 """The event an application gets when the interrupt policy cut one of its atomic

@@ -65,6 +65,7 @@ from prima.vocab import (
     MAX_BLOCK_WATCHDOG,
     MAX_NUMBER,
     MAX_STREAM_HOLD,
+    EVENT_FIELDS,
     PREDEFINED_EVENTS,
     AppKind,
     OnInterrupt,
@@ -199,6 +200,13 @@ class Builder:
         el, where, base = spot
         for name, index in compiled.names:
             self.refs.variables.append((name, (el, where, base + index)))
+        for name, index in sorted(compiled.event_fields, key=lambda f: f[1]):
+            if name not in EVENT_FIELDS:
+                self.warning((el, where, base + index),
+                             f"event field '{name}' is not one PRIMA's events carry: it is "
+                             "null unless a scenario's <event> sends it"
+                             + (did_you_mean(name, sorted(EVENT_FIELDS))
+                                or " (fields: docs/pxml.md)"))
         if compiled.event_uses and not self.in_handler:
             self.error((el, where, base + compiled.event_uses[0]),
                        "'event' is only available inside an event handler")

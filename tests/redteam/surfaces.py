@@ -160,6 +160,20 @@ SURFACES = [
     Case("cli-misspelt-option", "a misspelt option",
          _speaker("hello"), Exits(2),  # (argparse's message: tests/test_suggest.py)
          command=("run", "{path}", "--fomat", "jsonl")),
+    Case("event-field-misspelt", "event.eror == null: a misspelt field, always true",
+         write("t.pxml", '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t"><state id="s" '
+                         'initial="true"><entry><chain>hi: Speak("hi")</chain></entry>'
+                         '<on-end of="hi" cond="event.eror == null"><log text="x"/></on-end>'
+                         "</state></pxml>\n"),
+         Exits(0, "warning: event field 'eror' is not one PRIMA's events carry"),
+         command=("validate", "{path}")),
+    Case("scenario-message-late", "a message timed after the run's end",
+         write("s.xml", '<scenario xmlns="urn:prima:scenario:1" name="s" until="10">'
+                        '<map href="map.xml"/><robot place="a"/>'
+                        '<message at="30" sender="h" text="late"/></scenario>\n',
+               lambda folder: (folder / "map.xml").write_text(MAP)),
+         Exits(0, "warning: this <message> at 30 s is timed at or after the run ends"),
+         command=("validate", "{path}")),
     # 9: the shipped files
     Case("validate-apps", "prima validate apps/ (FA7 is the guide robot's)",
          made(_shipped_apps), Accepted(), seconds=10),
