@@ -848,20 +848,17 @@ def _show_usage(args: argparse.Namespace) -> str | None:
 
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.output import written
-    from prima.show import read_rows, render
+    from prima.show import write_page
 
     problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show")
     if problem:
         return _usage("show", problem, err)
     source = Path(args.input)
-    rows = read_rows(source)
     scenario = source if source.suffix == ".xml" else args.scenario
-    text = render(rows, scenario=scenario, title=source.stem)
-    with written(args.out) as page:
-        page.write(text)
-    abs_ = sum(1 for row in rows if row["kind"] == "start")
+    with written(args.out) as page:  # a jsonl trace streamed: never held whole
+        abs_, end = write_page(source, page, scenario=scenario, title=source.stem)
     print(f"prima show: wrote {shown_path(args.out)} ({abs_} atomic behavior(s), "
-          f"{rows[-1]['t'] if rows else 0:g} s{'' if scenario else '; no map'})", file=err)
+          f"{end:g} s{'' if scenario else '; no map'})", file=err)
     return EXIT_OK
 
 

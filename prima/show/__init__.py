@@ -16,13 +16,15 @@ the ``show`` extra (``pip install 'prima[show]'``).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import io
+import tempfile
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from prima.errors import PrimaError
 
-__all__ = ["read_rows", "render"]
+__all__ = ["read_rows", "render", "write_page"]
 
 
 def read_rows(path: str | Path) -> list[dict[str, Any]]:
@@ -37,11 +39,36 @@ def read_rows(path: str | Path) -> list[dict[str, Any]]:
     return [line.to_dict() for line in Run(path).run()]
 
 
-def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None,
+def render(rows: Iterable[Mapping[str, Any]], scenario: str | Path | None = None,
            title: str = "run") -> str:
     """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any)."""
+    out = io.StringIO()
+    _write(rows, out, scenario, title)
+    return out.getvalue()
+
+
+def write_page(path: str | Path, out: TextIO, scenario: str | Path | None = None,
+               title: str = "run") -> tuple[int, float]:
+    """Write the page of a run to ``out``: a jsonl trace streamed (never held whole:
+    its table's rows are spooled to a temporary file), or a scenario run in-process.
+    Returns the atomic behaviors started and the run's end (s)."""
+    path = Path(path)
+    if path.suffix == ".jsonl":
+        from prima.tracefile import read_trace
+
+        rows: Iterable[Mapping[str, Any]] = read_trace(path)
+    else:
+        from prima.run import Run
+
+        rows = (line.to_dict() for line in Run(path).run())
+    with tempfile.TemporaryFile("w+", encoding="utf-8") as spool:
+        return _write(rows, out, scenario, title, spool)
+
+
+def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path | None,
+           title: str, spool: TextIO | None = None) -> tuple[int, float]:
     try:
-        from prima.show._page import page
+        from prima.show._page import write_page as page
     except ImportError as exc:  # the plotting library is an optional extra
         raise PrimaError(f"prima show needs Plotly ({exc.name} is missing): "
                          "pip install 'prima[show]'") from exc
@@ -49,4 +76,6 @@ def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None
     from prima.sim import load_scenario
 
     world = load_scenario(scenario).map if scenario is not None else None
-    return page(build(rows), world, title)
+    model = build(rows, spool)
+    page(model, world, title, out, spool)
+    return model.starts, model.timeline.end

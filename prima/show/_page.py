@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import io
+import shutil
 from importlib import resources
-from typing import Any
+from typing import Any, TextIO
 
 import plotly.graph_objects as go
 import plotly.io as pio
@@ -199,26 +201,31 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
 
 def page(model: Model, world: WorldMap | None, title: str) -> str:
     """The whole self-contained page (Plotly's JavaScript inlined)."""
+    out = io.StringIO()
+    write_page(model, world, title, out)
+    return out.getvalue()
+
+
+def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
+               spool: TextIO | None = None) -> None:
+    """Write the page to ``out`` piece by piece; the table's rows are ``model.rows``, or
+    the JSON :func:`~prima.show._model.build` spooled (copied in chunks, never read
+    whole)."""
     map_fig, who = map_figure(model, world)
-    timeline, traces = timeline_figure(model)
     map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
                            config=_CONFIG)
+    del map_fig
+    timeline, traces = timeline_figure(model)
     timeline_html = pio.to_html(timeline, include_plotlyjs=False, full_html=False,
                                 div_id="timeline", config=_CONFIG)
-    data = {
-        "end": model.timeline.end, "rows": model.rows, "robot": model.robot, "user": model.user,
-        "bubbles": [[b.who, b.start, b.end, b.text] for b in model.bubbles],
-        "abs": {str(k): v for k, v in model.abs.items()}, "robotTrace": who["robot"],
-        "userTrace": who["user"], "traces": traces,
-        "colours": _colours(model.timeline.apps),
-    }
+    del timeline
     files = resources.files("prima.show")
     player = files.joinpath("player.js").read_text(encoding="utf-8")
     style = files.joinpath("show.css").read_text(encoding="utf-8")
     speeds = "".join(f'<option value="{s}"{" selected" if s == "1" else ""}>{s}x</option>'
                      for s in ("0.5", "1", "2", "4", "8", "16", "32"))
     name = markup(title)
-    return f"""<!DOCTYPE html>
+    out.write(f"""<!DOCTYPE html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
@@ -236,19 +243,39 @@ def page(model: Model, world: WorldMap | None, title: str) -> str:
 </header>
 <main>
 <section id="top">
-<div id="map-box">{map_html}</div>
+<div id="map-box">""")
+    out.write(map_html)
+    del map_html
+    out.write("""</div>
 <aside id="details"><p class="hint">Click a bar of the timeline or a line of the trace
 to jump there and see why the mediator decided it.</p></aside>
 </section>
-<section id="timeline-box">{timeline_html}<div id="playhead"></div></section>
+<section id="timeline-box">""")
+    out.write(timeline_html)
+    del timeline_html
+    out.write("""<div id="playhead"></div></section>
 <section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
 </main>
 <script>
-const PRIMA_SHOW = {script_json(data)};
+const PRIMA_SHOW = {"end":""")
+    out.write(script_json(model.timeline.end) + ',"rows":[')
+    if spool is None:
+        out.write(",".join(script_json(row) for row in model.rows))
+    else:
+        spool.seek(0)
+        shutil.copyfileobj(spool, out)
+    out.write(f'],"robot":{script_json(model.robot)},"user":{script_json(model.user)},'
+              f'"bubbles":{script_json([[b.who, b.start, b.end, b.text] for b in model.bubbles])},'
+              '"abs":')
+    for piece in model.ab_json():
+        out.write(piece)
+    rest = {"robotTrace": who["robot"], "userTrace": who["user"], "traces": traces,
+            "colours": _colours(model.timeline.apps)}
+    out.write("," + script_json(rest)[1:] + f""";
 </script>
 <script>
 {player}</script>
 </body>
 </html>
-"""
+""")

@@ -638,7 +638,7 @@ class Simulator:
             self.world.stop()
 
 
-ON_THE_WAY = 1.0
+ON_THE_WAY = 0.5
 """A place this close (m) to the straight way from the robot to another place is on
 the way: a Topological Move started off the map's places visits it first."""
 
