@@ -234,6 +234,7 @@ class Builder:
         """The apps, in the order first seen (a dict as an ordered set)."""
         self.occupied: dict[str, None] = {}
         """The devices ABs occupied, in the order first occupied."""
+        self.names: dict[str, str] = {}
         self.still: dict[str, tuple[float, Pose]] = {}
         """Robot or user -> the last sample of a run of equal poses, not yet kept."""
         self.named: dict[str, None] = {}
@@ -241,9 +242,14 @@ class Builder:
         named."""
 
     def app(self, name: object) -> str:
-        app = str(name) if name is not None else "?"
+        app = self.name(str(name)) if name is not None else "?"
         self.apps[app] = None
         return app
+
+    def name(self, text: str) -> str:
+        """One string for all equal names and words: a long trace repeats the same few
+        (a parsed line's strings are each new)."""
+        return self.names.setdefault(text, text)
 
     def feed(self, i: int, row: Row) -> None:
         t = float(row["t"])
@@ -344,11 +350,13 @@ class Builder:
         blended = blended_devices(_detail(start).get("over"))
         text = start.get("text")
         app = self.app(start.get("app"))
+        command = self.name(str(start.get("command") or "AB"))
+        said = self.name(str(text)) if text else None
         for device in _devices(start):
             self.out.bars.append(Bar(
-                ab=int(start["ab"]), device=device, app=app,
-                command=str(start.get("command") or "AB"), t0=float(start["t"]), t1=t1,
-                text=str(text) if text else None, blended=device in blended, ended=ended))
+                ab=int(start["ab"]), device=self.name(device), app=app, command=command,
+                t0=float(start["t"]), t1=t1, text=said, blended=device in blended,
+                ended=ended))
 
     def finish(self) -> Timeline:
         out = self.out

@@ -116,8 +116,9 @@ def test_markup_in_a_forged_device_name_is_shown_as_itself(tmp_path: Path) -> No
     page = tmp_path / "run.html"
     assert _cli("show", str(trace), "-o", str(page))[0] == 0
     text = page.read_text(encoding="utf-8")
-    assert '"y":["&lt;b&gt;x&lt;\\u002fb&gt;"]' in text  # (Plotly's JSON writes '/' so)
-    assert "\"y\":[\"\\u003cb" not in text
+    # the label is the markup escaped ('&lt;b&gt;...'), its '&' written \u0026 in the JSON
+    assert '"y":["\\u0026lt;b\\u0026gt;x\\u0026lt;/b\\u0026gt;"' in text
+    assert '"y":["\\u003cb' not in text
 
 
 @pytest.mark.parametrize("suffix", [".svg", ".png", ".pdf", ".gif"])

@@ -50,7 +50,8 @@ class Model:
     """A trace line's index -> its row in the table (-1: a pose sample, not in it)."""
     bubbles: list[Bubble] = field(default_factory=list)
     robot: list[tuple[float, float, float, float]] = field(default_factory=list)
-    """(t, x, y, heading) of the robot, in time order."""
+    """(t, x, y, heading) of the robot, in time order (:func:`build` moves the timeline's
+    poses here)."""
     user: list[tuple[float, float, float, float]] = field(default_factory=list)
     abs: dict[int, list[int]] = field(default_factory=dict)
     """AB id -> its start row, its end row (-1 until it has one) and the rows of its
@@ -110,6 +111,7 @@ def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
     tl = builder.finish()
     model = Model(tl, kept, table, robot=_distinct(tl.robot), user=_distinct(tl.user),
                   abs=abs_, count=j, starts=starts)
+    tl.robot, tl.user = [], []  # moved into the model's robot and user (one copy is enough)
     model.bubbles = sorted(
         [Bubble("robot", b.t0, max(b.t1, b.t0 + ROBOT_SAYS_FOR), b.text or "")
          for b in tl.speech()]

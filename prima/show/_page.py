@@ -206,19 +206,30 @@ def page(model: Model, world: WorldMap | None, title: str) -> str:
     return out.getvalue()
 
 
+def _write_figure(fig: go.Figure, div_id: str, out: TextIO) -> None:
+    """The figure's div and the script that draws it, as ``plotly.io.to_html`` writes them
+    (without Plotly's JavaScript), one trace at a time: a long run's timeline is never
+    held as one JSON text (Plotly's own writer holds it three times over)."""
+    out.write(f'<div style="height:100%; width:100%;"><div id="{div_id}" '
+              'class="plotly-graph-div" style="height:100%; width:100%;"></div><script>'
+              'window.PLOTLYENV=window.PLOTLYENV || {};'
+              f'if (document.getElementById("{div_id}")) {{Plotly.newPlot("{div_id}",[')
+    for k, trace in enumerate(fig.data):
+        out.write(("," if k else "") + script_json(trace.to_plotly_json()))
+    layout = go.Figure(layout=fig.layout).to_dict()["layout"]  # with its template
+    out.write(f"],{script_json(layout)},{script_json({**_CONFIG, 'responsive': True})})}};"
+              "</script></div>")
+
+
 def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
                spool: TextIO | None = None) -> None:
     """Write the page to ``out`` piece by piece; the table's rows are ``model.rows``, or
     the JSON :func:`~prima.show._model.build` spooled (copied in chunks, never read
-    whole)."""
+    whole). The model is spent: its poses are let go once written."""
     map_fig, who = map_figure(model, world)
     map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
                            config=_CONFIG)
     del map_fig
-    timeline, traces = timeline_figure(model)
-    timeline_html = pio.to_html(timeline, include_plotlyjs=False, full_html=False,
-                                div_id="timeline", config=_CONFIG)
-    del timeline
     files = resources.files("prima.show")
     player = files.joinpath("player.js").read_text(encoding="utf-8")
     style = files.joinpath("show.css").read_text(encoding="utf-8")
@@ -246,13 +257,19 @@ def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
 <div id="map-box">""")
     out.write(map_html)
     del map_html
+    # the poses, written down and let go (the model is spent by this): a long run's
+    # samples take more room as tuples than the timeline's figure needs while it is made
+    robot, user = script_json(model.robot), script_json(model.user)
+    model.robot, model.user = [], []
+    model.timeline.robot, model.timeline.user = [], []
+    timeline, traces = timeline_figure(model)
     out.write("""</div>
 <aside id="details"><p class="hint">Click a bar of the timeline or a line of the trace
 to jump there and see why the mediator decided it.</p></aside>
 </section>
 <section id="timeline-box">""")
-    out.write(timeline_html)
-    del timeline_html
+    _write_figure(timeline, "timeline", out)
+    del timeline
     out.write("""<div id="playhead"></div></section>
 <section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
@@ -265,7 +282,7 @@ const PRIMA_SHOW = {"end":""")
     else:
         spool.seek(0)
         shutil.copyfileobj(spool, out)
-    out.write(f'],"robot":{script_json(model.robot)},"user":{script_json(model.user)},'
+    out.write(f'],"robot":{robot},"user":{user},'
               f'"bubbles":{script_json([[b.who, b.start, b.end, b.text] for b in model.bubbles])},'
               '"abs":')
     for piece in model.ab_json():
