@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import IO, Any, BinaryIO, TextIO, cast
 
 from prima.errors import OutputError
-from prima.escape import shown_path
+from prima.escape import shown_path, terminal
 
 __all__ = ["check_folder", "check_target", "written", "written_bytes"]
 
@@ -114,6 +114,10 @@ def _written(path: str | Path, *, binary: bool) -> Iterator[IO[Any]]:
     except OSError as exc:
         keep = False
         raise OutputError(f"cannot write {shown}: {_reason(exc)}") from exc
+    except UnicodeEncodeError as exc:  # a file name that is not UTF-8, written into it
+        keep = False
+        raise OutputError(f"cannot write {shown}: it would hold a name that is not UTF-8 "
+                          f"({terminal(exc.object[exc.start:exc.end])})") from exc
     finally:
         _settle(temp, target, keep)
 

@@ -35,6 +35,7 @@ from lxml import etree
 
 from prima.errors import ScenarioError
 from prima.judge import Report, Thresholds, judge
+from prima.escape import shown_path
 from prima.output import written
 from prima.sim import load_scenario
 from prima.xmlio import local_name, parse_xml, read_source
@@ -118,7 +119,8 @@ def write_variant(scenario: str | Path, path: str | Path, *, seed: int, index: i
     _jitter(root, _rng(seed, index), jitter)
     _repath(root, source, None if absolute else path.parent)
     before = [etree.tostring(c, encoding="unicode") for c in root.itersiblings(preceding=True)]
-    note = (f"<!-- prima sweep: run {index} of {source.name} (seed {seed}, jitter "
+    named = shown_path(source.name).replace("--", "- -")  # (no '--' inside a comment)
+    note = (f"<!-- prima sweep: run {index} of {named} (seed {seed}, jitter "
             f"{_number(jitter)} s): the user's actions, answer delays and scheduled inputs "
             "shifted -->")
     text = "\n".join(['<?xml version="1.0" encoding="UTF-8"?>', *reversed(before), note,

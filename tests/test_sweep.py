@@ -267,3 +267,18 @@ def test_never_more_workers_than_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(prima.sweep, "_pool", pool)
     result = sweep(SHORT, runs=2, jitter=1.0, jobs=1024)
     assert len(result.runs) == 2 and asked == [2]
+
+
+def test_a_scenario_named_in_bytes_that_are_not_utf8_or_with_dashes(tmp_path: Path) -> None:
+    import os
+
+    odd = tmp_path / os.fsdecode(b"run--\xff.xml")
+    text = SHORT.read_text().replace('href="../maps', f'href="{ROOT}/scenarios/maps')
+    text = text.replace('"../../apps', f'"{ROOT}/apps')
+    odd.write_text(text)
+    status, out, err = cli("sweep", str(odd), "--runs", "2", "--jitter", "1", "--jobs", "1",
+                           "--out", str(tmp_path / "worst"), "--worst", "1")
+    assert status in (0, 1) and "Traceback" not in err, err
+    written = next((tmp_path / "worst").iterdir())
+    assert load_scenario(written).name  # the variant is a scenario again
+    assert "run- -\\xff.xml" in written.read_text()
