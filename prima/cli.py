@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, TextIO
 from prima import __version__
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
 from prima.escape import shown_path
-from prima.suggest import unrecognized
+from prima.suggest import SuggestingParser, unrecognized
 from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
@@ -71,8 +71,8 @@ def _policy_argument(parser: argparse.ArgumentParser) -> None:
                              "docs/mediator.md, Policies)")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def build_parser() -> SuggestingParser:
+    parser = SuggestingParser(
         prog="prima",
         description="PRIMA: mediate two robot applications sharing one personal robot.",
     )
@@ -186,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _add_plot(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_plot(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
     plot = commands.add_parser(
         "plot",
         help="draw a run's device timeline (SVG, PNG, PDF) or animate it (GIF)",
@@ -267,6 +267,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     out = out or sys.stdout
     err = err or sys.stderr
     parser = build_parser()
+    given = list(sys.argv[1:] if argv is None else argv)
+    for each in (parser, *_subparsers(parser)):
+        each.given = given  # (for a did-you-mean in a "required" error)
     try:
         args, extra = parser.parse_known_args(argv)
         if extra:  # as parse_args would say, with the option a misspelt one may be
@@ -296,6 +299,11 @@ def _main(command: Callable[[argparse.Namespace, TextIO, TextIO], int],
     except KeyboardInterrupt:  # Ctrl-C or SIGTERM: what was written so far stays written
         print(f"prima {args.command}: interrupted", file=err)
         return EXIT_INTERRUPTED
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> list[SuggestingParser]:
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return [p for p in action.choices.values() if isinstance(p, SuggestingParser)]
 
 
 def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:

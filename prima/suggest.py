@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Iterable, Sequence
+from typing import NoReturn
 
-__all__ = ["did_you_mean", "similar", "unrecognized"]
+__all__ = ["SuggestingParser", "did_you_mean", "similar", "unrecognized"]
 
 
 def close(a: str, b: str) -> bool:
@@ -58,3 +59,20 @@ def unrecognized(extra: Sequence[str], parser: argparse.ArgumentParser) -> str:
             hints.append(f"{name}: did you mean {meant}?")
     said = f"unrecognized arguments: {' '.join(extra)}"
     return said + (f" ({'; '.join(hints)})" if hints else "")
+
+
+class SuggestingParser(argparse.ArgumentParser):
+    """An argument parser whose "required" error also says which option a misspelt one
+    given may be (``--jiter 5`` leaves ``--jitter`` missing: did you mean it?).
+    ``given`` is the command line, set before parsing."""
+
+    given: Sequence[str] = ()
+
+    def error(self, message: str) -> NoReturn:
+        if message.startswith("the following arguments are required"):
+            unknown = [w for w in self.given if w.startswith("-")
+                       and w.split("=", 1)[0] not in _options(self)]
+            hint = unrecognized(unknown, self) if unknown else ""
+            if "did you mean" in hint:
+                message += hint[hint.index(" ("):]
+        super().error(message)

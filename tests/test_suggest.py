@@ -78,3 +78,10 @@ def test_a_scenario_input_after_its_end_is_warned_of(tmp_path: Path) -> None:
         "(until=10 s): it never happens",
         f"{path}:6:16: warning: this <message> at 20 s is timed at or after the run ends "
         "(until=10 s): it never happens"]
+
+
+def test_a_misspelt_required_option(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["sweep", "x.xml", "--runs", "2", "--jiter", "3"]) == 2
+    err = capsys.readouterr().err
+    assert err.rstrip().endswith("prima sweep: error: the following arguments are required: "
+                                 "--jitter (--jiter: did you mean --jitter?)"), err
