@@ -15,7 +15,8 @@ overruns the oracle excuses, and the CPU time of all processes.
 from __future__ import annotations
 
 import argparse
-import multiprocessing
+import concurrent.futures
+import concurrent.futures.process
 import os
 import signal
 import sys
@@ -92,23 +93,40 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{args.scenarios} scenarios from seed {base}, {args.jobs} job(s)", flush=True)
     step = max(1, len(chunks) // 20)
     interrupted = False
-    # the workers leave Ctrl-C to this process, which stops them and reports what was done
-    with multiprocessing.Pool(args.jobs, initializer=signal.signal,
-                              initargs=(signal.SIGINT, signal.SIG_IGN)) as pool:
-        try:
-            for i, t in enumerate(pool.imap(run_range, chunks), 1):
-                for seed, v in t.violations[:3]:
-                    print(f"  VIOLATION seed {seed}: {v}", flush=True)
-                total.add(t)
-                if i % step == 0 or i == len(chunks):
-                    done = total.scenarios / args.scenarios
-                    left = (time.perf_counter() - wall) * (1 - done) / max(done, 1e-9)
-                    print(f"  {total.scenarios:>9} scenarios  {total.decisions:>11} decisions  "
-                          f"{total.failing} failing  {time.perf_counter() - wall:7.0f} s "
-                          f"(about {left:.0f} s to go)", flush=True)
-        except KeyboardInterrupt:
-            interrupted = True
-            pool.terminate()
+    lost: list[range] = []
+    # the workers leave Ctrl-C to this process, which stops them and reports what was done;
+    # a worker that dies (killed, out of memory) breaks the pool: the driver stops at once
+    # and names the seeds left unchecked
+    pool = concurrent.futures.ProcessPoolExecutor(
+        min(args.jobs, len(chunks)) or 1, initializer=signal.signal,
+        initargs=(signal.SIGINT, signal.SIG_IGN))
+    futures = {pool.submit(run_range, chunk): chunk for chunk in chunks}
+    try:
+        for i, future in enumerate(concurrent.futures.as_completed(futures), 1):
+            try:
+                t = future.result()
+            except concurrent.futures.process.BrokenProcessPool:
+                lost = sorted((c for f, c in futures.items() if not f.done() or f.exception()),
+                              key=lambda c: c.start)
+                break
+            for seed, v in t.violations[:3]:
+                print(f"  VIOLATION seed {seed}: {v}", flush=True)
+            total.add(t)
+            if i % step == 0 or i == len(chunks):
+                done = total.scenarios / args.scenarios
+                left = (time.perf_counter() - wall) * (1 - done) / max(done, 1e-9)
+                print(f"  {total.scenarios:>9} scenarios  {total.decisions:>11} decisions  "
+                      f"{total.failing} failing  {time.perf_counter() - wall:7.0f} s "
+                      f"(about {left:.0f} s to go)", flush=True)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in list((getattr(pool, "_processes", None) or {}).values()):
+            process.terminate()
+    if lost:
+        print(f"stopped: a worker process died (out of memory?); seeds not checked: "
+              f"{', '.join(f'{c.start}-{c.stop - 1}' for c in lost)}", flush=True)
     if interrupted:
         print(f"interrupted: the {total.scenarios} scenarios checked so far", flush=True)
     cpu = total.cpu + time.process_time() - cpu0
@@ -124,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  seed {seed}: {v}")
     print(f"CPU time:   {cpu:.0f} s ({1e6 * cpu / max(1, total.scenarios):.0f} µs per scenario), "
           f"wall {time.perf_counter() - wall:.0f} s")
-    return 1 if total.failing else 130 if interrupted else 0
+    return 1 if total.failing or lost else 130 if interrupted else 0
 
 
 if __name__ == "__main__":

@@ -20,10 +20,10 @@ where it is not blended: two slices of one device track must nest.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterable
 from typing import TextIO
 
+from prima.escape import json_line
 from prima.timeline import blended_devices
 from prima.trace import TraceLine
 
@@ -115,13 +115,18 @@ class ChromeTrace:
         return args
 
     def _async(self, ph: str, start: TraceLine, t: float,
-               out: list[dict[str, object]]) -> dict[str, object]:
-        """An application track's slice begins (``b``) or ends (``e``)."""
+               out: list[dict[str, object]], end: TraceLine | None = None) -> dict[str, object]:
+        """An application track's slice begins (``b``: what it is) or ends (``e``: how it
+        ended, which a viewer merges into the slice's arguments)."""
         tid = self._track(APPS, start.app or "?", out)
         event: dict[str, object] = {"name": self._name(start), "cat": "ab", "ph": ph,
                                     "id": start.ab, "pid": APPS, "tid": tid, "ts": _us(t)}
+        args = self._args(start, end)
         if ph == "b":
-            event["args"] = self._args(start, None)
+            del args["end_reason"]  # not known yet: the end says it
+        else:
+            args = {k: v for k, v in args.items() if k in ("end_reason", "result")}
+        event["args"] = args
         return event
 
     def _slices(self, start: TraceLine, t: float, end: TraceLine | None
@@ -137,7 +142,7 @@ class ChromeTrace:
                         "pid": DEVICES, "tid": tid, "ts": _us(start.t),
                         "dur": max(0, _us(t) - _us(start.t)), "args": args})
         if start.app is not None:
-            out.append(self._async("e", start, t, out))
+            out.append(self._async("e", start, t, out, end))
         return out
 
     def _instant(self, pid: int, track: str, name: str, line: TraceLine,
@@ -177,7 +182,7 @@ class ChromeTraceWriter:
 
     def _put(self, events: Iterable[dict[str, object]]) -> None:
         for event in events:
-            self._to.write(("\n" if self._first else ",\n") + json.dumps(event, ensure_ascii=False))
+            self._to.write(("\n" if self._first else ",\n") + json_line(event))
             self._first = False
 
     def write(self, line: TraceLine) -> None:

@@ -22,6 +22,9 @@ from typing import TYPE_CHECKING, TextIO
 
 from prima import __version__
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
+from prima.escape import shown_path
+from prima.suggest import SuggestingParser, unrecognized
+from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
@@ -77,8 +80,8 @@ def _policy_argument(parser: argparse.ArgumentParser) -> None:
                              "docs/mediator.md, Policies)")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def build_parser() -> SuggestingParser:
+    parser = SuggestingParser(
         prog="prima",
         description="PRIMA: mediate two robot applications sharing one personal robot.",
     )
@@ -196,7 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _add_plot(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _add_plot(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
     plot = commands.add_parser(
         "plot",
         help="draw a run's device timeline (SVG, PNG, PDF) or animate it (GIF)",
@@ -253,11 +256,24 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     out = out or sys.stdout
     err = err or sys.stderr
     parser = build_parser()
+    given = list(sys.argv[1:] if argv is None else argv)
+    for each in (parser, *_subparsers(parser)):
+        each.given = given  # (for a did-you-mean in a "required" error)
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # as parse_args would say, with the option a misspelt one may be
+            _subparser(parser, args.command).error(unrecognized(extra, _subparser(
+                parser, args.command)))
     except SystemExit as exc:
         return int(exc.code or 0)
     command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
+    with terminate_as_interrupt() as signals:
+        status = _main(command, args, out, err)
+    return EXIT_TERMINATED if signals.terminated and status == EXIT_INTERRUPTED else status
+
+
+def _main(command: Callable[[argparse.Namespace, TextIO, TextIO], int],
+          args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     try:
         return command(args, out, err)
     except LocatedError as exc:
@@ -269,9 +285,20 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`: the reader had enough
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return EXIT_PIPE
-    except KeyboardInterrupt:  # Ctrl-C: what was written so far stays written
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: what was written so far stays written
         print(f"prima {args.command}: interrupted", file=err)
         return EXIT_INTERRUPTED
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> list[SuggestingParser]:
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return [p for p in action.choices.values() if isinstance(p, SuggestingParser)]
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    chosen: argparse.ArgumentParser = action.choices[command]
+    return chosen
 
 
 def _report(problems: Iterable[Problem], to: TextIO) -> None:
@@ -325,7 +352,7 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
     PRIMA's documents nor its robot profiles is met.
     """
     from prima.dsl import unknown_places
-    from prima.sim import MAP_NS, SCENARIO_NS, load_map, load_scenario
+    from prima.sim import MAP_NS, SCENARIO_NS, late_inputs, load_map, load_scenario
 
     maps: dict[Path, WorldMap] = {}
     """The maps checked without errors, by resolved path."""
@@ -355,6 +382,7 @@ def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker
         # problems loading the scenario found in its map are the map's own check's
         problems = _problems(load_scenario, path)
         own = [p for p in problems if Path(p.file).resolve() == path.resolve()]
+        own += late_inputs(path) if not problems else []
         return own + _check_named(validation, path, robot, MAP_NS, check_places)
 
     return {SCENARIO_NS: check_scenario, MAP_NS: check_map}
@@ -477,7 +505,7 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     except FileNotFoundError as exc:
         return _usage("validate", f"no such file or folder: {exc}", err)
     robot = args.robot is not None
-    validation = Validation(_profile(args.robot),
+    validation = Validation(_profile(args.robot), follow_declared=not robot,
                             more_checkers=lambda: _scenario_checkers(validation, robot))
     with _fewer_collections():
         report = validation.run(files)
@@ -509,11 +537,7 @@ def _run_usage(args: argparse.Namespace) -> str | None:
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
     if args.out:
-        target = Path(args.out)
-        if target.is_dir():
-            return f"--out {args.out} is a folder"
-        if not target.parent.is_dir():
-            return f"--out {args.out}: no such folder {target.parent}"
+        return _target(args.out)
     return None
 
 
@@ -537,6 +561,14 @@ def _scenario_only(args: argparse.Namespace, source: Path) -> str | None:
     return None
 
 
+def _target(path: str) -> str | None:
+    """What stops ``--out PATH`` from being written, as a usage error."""
+    from prima.output import check_target
+
+    problem = check_target(path)
+    return f"--out {problem}" if problem else None
+
+
 def _policies(given: list[str]) -> dict[str, bool] | str:
     """``--policy NAME=on|off`` switches, in order (a later one wins), or what is wrong."""
     out: dict[str, bool] = {}
@@ -554,6 +586,7 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
 
 
 def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.output import written
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
@@ -566,7 +599,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               seed=args.seed, until=args.until, sink=lambda line: write(line),
               pose_rate=args.pose_rate, policies=args.policy)
     with contextlib.ExitStack() as files:
-        to = files.enter_context(open(args.out, "w", encoding="utf-8")) if args.out else out
+        to = files.enter_context(written(args.out)) if args.out else out
         if args.format == "text":
             print(TextTrace.HEADER, file=to)
             text = TextTrace()
@@ -596,7 +629,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
                 chrome.close()  # the slices under way end where the run stopped
             to.flush()
             print(f"prima run: interrupted at t={run.sim.now():g} s; the trace up to then "
-                  f"is written{' to ' + args.out if args.out else ''}", file=err)
+                  f"is written{' to ' + shown_path(args.out) if args.out else ''}", file=err)
             return EXIT_INTERRUPTED
     return EXIT_OK
 
@@ -628,30 +661,36 @@ class _Deferred:
 
     def __init__(self) -> None:
         self.asked = False
+        self.terminated = False
 
-    def handle(self, _signum: int, _frame: object) -> None:
+    def handle(self, signum: int, _frame: object) -> None:
+        if signum == signal.SIGTERM:
+            self.terminated = True
+            note_terminated()
         if self.asked:  # a second Ctrl-C: at once
-            raise KeyboardInterrupt
+            self.check()
         self.asked = True
 
     def check(self) -> None:
         if self.asked:
-            raise KeyboardInterrupt
+            raise Terminated if self.terminated else KeyboardInterrupt
 
 
 @contextlib.contextmanager
 def _between_lines() -> Iterator[_Deferred]:
-    """While writing a file that a torn write would spoil (a chrome trace), Ctrl-C is
-    raised only between two trace lines (a second one at once)."""
+    """While writing a file that a torn write would spoil (a chrome trace), Ctrl-C and
+    SIGTERM are raised only between two trace lines (a second one at once)."""
     deferred = _Deferred()
     if threading.current_thread() is not threading.main_thread():
         yield deferred  # signals go to the main thread only
         return
     previous = signal.signal(signal.SIGINT, deferred.handle)
+    terminate = signal.signal(signal.SIGTERM, deferred.handle)
     try:
         yield deferred
     finally:
         signal.signal(signal.SIGINT, previous)
+        signal.signal(signal.SIGTERM, terminate)
 
 
 def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -768,9 +807,11 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
         return "--jobs must be a whole number from 1 to 1024"
     if args.worst < 0:
         return "--worst must be a whole number from 0 up"
-    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
-        return f"--out {args.out} is a file"
-    return None
+    from prima.output import check_folder
+
+    # (without --out, a folder sweep-NAME in the current one)
+    problem = check_folder(args.out or "sweep-NAME") if args.worst else None
+    return f"--out {problem}" if problem else None
 
 
 def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -801,6 +842,10 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
               file=err)
         return EXIT_INTERRUPTED
+    if result.lost:
+        print(f"prima sweep: run(s) {', '.join(map(str, result.lost))} lost: the worker "
+              "process died each time, the run alone too (out of memory?); the other "
+              f"{len(result.runs)} run(s) are judged", file=err)
     if args.worst:
         folder = Path(args.out or f"sweep-{result.name}")
         worst = result.worst(args.worst)
@@ -811,7 +856,7 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             exceeded = ", ".join(report.exceeded()) or "no threshold exceeded"
             print(f"  {path}  {exceeded}; worst lateness {report.worst_lateness():.2f} s",
                   file=out)
-    return EXIT_ERRORS if result.breached else EXIT_OK
+    return EXIT_ERRORS if result.breached or result.lost else EXIT_OK
 
 
 def _show_usage(args: argparse.Namespace) -> str | None:
@@ -827,16 +872,13 @@ def _show_usage(args: argparse.Namespace) -> str | None:
         if not Path(args.scenario).is_file():
             return f"no such file: {args.scenario}"
     target = Path(args.out) if args.out else Path(source.with_suffix(".html").name)
-    if target.is_dir():
-        return f"--out {target} is a folder"
-    if not target.parent.is_dir():
-        return f"--out {target}: no such folder {target.parent}"
     args.out = str(target)
-    return None
+    return _target(args.out)
 
 
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.show import read_rows, render
+    from prima.output import written
+    from prima.show import write_page
 
     problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show") \
         or _scenario_only(args, Path(args.input))
@@ -846,13 +888,12 @@ def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     if isinstance(switches, str):
         return _usage("show", switches, err)
     source = Path(args.input)
-    rows = read_rows(source, switches)
     scenario = source if source.suffix == ".xml" else args.scenario
-    text = render(rows, scenario=scenario, title=source.stem)
-    Path(args.out).write_text(text, encoding="utf-8")
-    abs_ = sum(1 for row in rows if row["kind"] == "start")
-    print(f"prima show: wrote {args.out} ({abs_} atomic behavior(s), "
-          f"{rows[-1]['t'] if rows else 0:g} s{'' if scenario else '; no map'})", file=err)
+    with written(args.out) as page:  # a jsonl trace streamed: never held whole
+        abs_, end = write_page(source, page, scenario=scenario, title=source.stem,
+                               switches=switches)
+    print(f"prima show: wrote {shown_path(args.out)} ({abs_} atomic behavior(s), "
+          f"{end:g} s{'' if scenario else '; no map'})", file=err)
     return EXIT_OK
 
 
@@ -869,8 +910,8 @@ def _plot_usage(args: argparse.Namespace) -> str | None:
         return f"{args.input}: give a trace (*.jsonl) or a scenario (*.xml)"
     if target.suffix.lower() not in _PLOT_SUFFIXES:
         return f"--out {args.out}: name a {', '.join(_PLOT_SUFFIXES)} file"
-    if target.is_dir() or not target.parent.is_dir():
-        return f"--out {args.out}: not a file in an existing folder"
+    if _target(args.out):
+        return _target(args.out)
     until = args.until
     if until is not None and not (math.isfinite(until) and 0 < until <= MAX_RUN_TIME):
         return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
@@ -900,9 +941,9 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     source = Path(args.input)
     world = None
     if source.suffix == ".jsonl":
-        from prima.judge import load_trace
+        from prima.tracefile import read_trace
 
-        rows = [r for r in load_trace(source) if args.until is None or r["t"] <= args.until]
+        rows = [r for r in read_trace(source) if args.until is None or r["t"] <= args.until]
     else:
         from prima.run import Run
 
@@ -915,14 +956,15 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     drawn = timeline(rows)
     if Path(args.out).suffix.lower() != ".gif":
         save_timeline(drawn, args.out, title=source.stem)
-        print(f"{args.out}: {len(drawn.bars)} bars on {len(drawn.devices)} devices", file=err)
+        print(f"{shown_path(args.out)}: {len(drawn.bars)} bars on {len(drawn.devices)} "
+              "devices", file=err)
         return EXIT_OK
     if drawn.end / args.step >= _MAX_FRAMES:
         return _usage("plot", f"--step {args.step:g} makes more than {_MAX_FRAMES} frames "
                               f"of a {drawn.end:g} s run", err)
     frames = save_animation(drawn, args.out, world, title=source.stem, step=args.step,
                             fps=args.fps)
-    print(f"{args.out}: {frames} frames", file=err)
+    print(f"{shown_path(args.out)}: {frames} frames", file=err)
     return EXIT_OK
 
 

@@ -17,7 +17,10 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TextIO
 
+from prima.escape import terminal
+from prima.dsl import Document
 from prima.run import Run
+from prima.suggest import did_you_mean
 from prima.trace import Kind, TraceLine, describe
 from prima.vocab import Value
 
@@ -90,6 +93,7 @@ class Debugger:
         """Lines to go before stopping (0: run to a breakpoint)."""
         self._history: deque[TraceLine] = deque(maxlen=200)
         self._at: TraceLine | None = None
+        self._documents: list[Document] | None = None
         # pose samples at prima run's rate (never a stopping point), so that a line's
         # seq is the one a jsonl trace, prima judge and prima show give it
         self.run = Run(scenario, sink=self._line, **run_options)  # type: ignore[arg-type]
@@ -139,7 +143,12 @@ class Debugger:
             if not text:
                 self._say("")
                 raise _Quit  # end of input: stop here
-            words = shlex.split(text, comments=True) if text.strip() else []
+            try:
+                words = shlex.split(text, comments=True) if text.strip() else []
+            except ValueError as exc:  # an unclosed quote: "don't" said as a word
+                self._say(f"cannot read that line: {str(exc).lower()} (quote a name "
+                          "with an apostrophe in double quotes)")
+                continue
             if not words:
                 continue
             self._say_command(words)
@@ -158,7 +167,9 @@ class Debugger:
         return self._commands[found[0]] if len(found) == 1 else None
 
     def _say(self, text: str) -> None:
-        self._out.write(text + "\n")
+        """Write ``text``'s lines; what a document or a trace says, a control character
+        say, reaches the terminal as an escape."""
+        self._out.write("\n".join(map(terminal, text.split("\n"))) + "\n")
 
     def _say_command(self, words: list[str]) -> None:
         if not self._in.isatty():  # a scripted session shows what it typed
@@ -183,6 +194,10 @@ class Debugger:
                       "break time SECONDS")
             return False
         value = " ".join(args[1:])
+        unknown = self._unknown(args[0], value)
+        if unknown:
+            self._say(unknown)
+            return False
         if args[0] == "time":
             try:
                 float(value)
@@ -192,6 +207,30 @@ class Debugger:
         self.breaks.append(Break(args[0], value))
         self._say(f"breakpoint {len(self.breaks)}: {self.breaks[-1]}")
         return False
+
+    def _known(self, kind: str) -> list[str]:
+        """The names a breakpoint of ``kind`` can stop at in this run (apps, Commands,
+        states; other kinds are not checked)."""
+        if kind == "command":
+            return [c.name for c in self.run.catalog]
+        if self._documents is None:
+            self._documents = self.run.documents()
+        if kind == "app":
+            return list(dict.fromkeys(d.name for d in self._documents))
+        if kind == "state":
+            return list(dict.fromkeys(s for d in self._documents for s in d.states))
+        return []
+
+    def _unknown(self, kind: str, value: str) -> str | None:
+        """Why a breakpoint on ``value`` could never stop the run, if it could not."""
+        if kind not in ("app", "command", "state"):
+            return None
+        known = self._known(kind)
+        if value in known:
+            return None
+        what = {"app": "application", "command": "Command", "state": "state"}[kind]
+        hint = did_you_mean(value, known) or f" (known: {', '.join(known[:20])})"
+        return f"no {what} {value!r} in this run, no breakpoint set{hint}"
 
     def _list_breaks(self, _args: list[str]) -> bool:
         if not self.breaks:

@@ -13,7 +13,8 @@ Every exception PRIMA raises on purpose derives from :class:`PrimaError`::
     │   └── CommandError            a Command's argument the robot cannot use
     ├── MediationError (ValueError) the mediator refused an operation
     ├── SimulationError (ValueError) the simulator was asked something impossible
-    └── RunError (RuntimeError)     a run cannot go on
+    ├── RunError (RuntimeError)     a run cannot go on
+    └── OutputError (OSError)       a file a command writes cannot be written
 
 Every error a user can cause in an input file carries one or more
 :class:`Problem` objects, each printed as ``file:line:col: error: message`` so
@@ -37,6 +38,7 @@ __all__ = [
     "ExpressionError",
     "LocatedError",
     "MediationError",
+    "OutputError",
     "PrimaError",
     "Problem",
     "RunError",
@@ -173,3 +175,9 @@ class SimulationError(PrimaError, ValueError):
 
 class RunError(PrimaError, RuntimeError):
     """A run cannot go on (the run loop stopped making progress)."""
+
+
+class OutputError(PrimaError, OSError):
+    """A file a command writes (a trace, a page, a picture, a golden trace, a sweep's
+    worst runs) cannot be written: its folder is missing or not writable, the disk is
+    full. Nothing is left half-written (:mod:`prima.output`)."""

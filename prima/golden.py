@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import difflib
 import enum
+import os
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from prima.output import written
 from prima.run import Run, Switches
 from prima.trace import format_text
 
@@ -61,23 +64,88 @@ class Result:
     diff: str = ""
 
 
+_ABSOLUTE = re.compile(r"(?<![\w.])/[^\s:\"'()]+\.(?:pxml|xml)\b")
+"""An absolute path to a document or scenario file, as an error in a trace names it."""
+
+
+def portable(text: str, folder: Path) -> str:
+    """``text`` with every absolute path to a file written relative to ``folder`` (the
+    golden trace's): a golden pinning a runtime error (``/home/me/apps/a.pxml:3:5: ...``)
+    reads the same on every checkout."""
+    base = folder.resolve()
+    return _ABSOLUTE.sub(lambda m: os.path.relpath(m.group(), base), text)
+
+
 def check(scenario: Path, *, update: bool = False, switches: Switches | None = None) -> Result:
     """Run ``scenario`` and compare its trace with the golden one (or rewrite it);
     ``switches``: its FA, EA, robot or policies changed (``prima test --policy ...``)."""
     options = switches.run_options() if switches else {}
-    actual = format_text(Run(scenario, **options).run())
+    actual = portable(format_text(Run(scenario, **options).run()), scenario.parent)
     golden = golden_path(scenario)
     if update:
         if golden.exists() and golden.read_text(encoding="utf-8") == actual:
             return Result(scenario, Status.SAME)
-        golden.write_text(actual, encoding="utf-8")
+        with written(golden) as out:
+            out.write(actual)
         return Result(scenario, Status.UPDATED)
     if not golden.exists():
         return Result(scenario, Status.MISSING)
     expected = golden.read_text(encoding="utf-8")
     if expected == actual:
         return Result(scenario, Status.SAME)
-    diff = "".join(difflib.unified_diff(
-        expected.splitlines(keepends=True), actual.splitlines(keepends=True),
-        fromfile=str(golden), tofile=f"{scenario} (this run)", n=2))
-    return Result(scenario, Status.DIFFERENT, diff)
+    return Result(scenario, Status.DIFFERENT,
+                  shifted_diff(expected, actual, str(golden), f"{scenario} (this run)"))
+
+
+_ROW = re.compile(r"^(?P<no>\s*\d+) +(?P<t>\d+\.\d+)(?P<rest>   .*)$")
+"""A text trace row: its number, its time and the rest."""
+
+
+def _parts(line: str) -> tuple[str, float | None]:
+    """A row without its number and time (what is compared), and its time."""
+    m = _ROW.match(line)
+    return (m.group("rest"), float(m.group("t"))) if m else (line, None)
+
+
+def shifted_diff(expected: str, actual: str, fromfile: str, tofile: str) -> str:
+    """A unified diff of two text traces in which a shift of every later time reads as
+    one change: rows are compared without their numbers and times; where they match
+    but their times moved, one hunk says by how much, for how many rows, with the
+    first of them as it was and as it is."""
+    old, new = expected.splitlines(), actual.splitlines()
+    old_keys, new_keys = [_parts(x)[0] for x in old], [_parts(x)[0] for x in new]
+    out = [f"--- {fromfile}\n", f"+++ {tofile}\n"]
+    matcher = difflib.SequenceMatcher(None, old_keys, new_keys, autojunk=False)
+    for tag, i1, i2, j1, j2 in matcher.get_opcodes():
+        if tag == "equal":
+            out += _shifts(old, new, i1, i2, j1)
+            continue
+        out.append(f"@@ -{i1 + 1},{i2 - i1} +{j1 + 1},{j2 - j1} @@\n")
+        out += [f"-{x}\n" for x in old[i1:i2]] + [f"+{x}\n" for x in new[j1:j2]]
+    return "".join(out)
+
+
+def _shifts(old: list[str], new: list[str], i1: int, i2: int, j1: int) -> list[str]:
+    """For rows that match but for their times, one line per run of rows whose time
+    moved by the same amount."""
+    out: list[str] = []
+    run: tuple[int, int, float] | None = None  # first row (new), last row, shift
+
+    def close() -> None:
+        if run is not None:
+            first, last, shift = run
+            rows = last - first + 1
+            out.append(f"@@ +{first + 1},{rows} @@ {'every' if rows > 1 else 'the'} time "
+                       f"{abs(shift):.2f} s {'later' if shift > 0 else 'earlier'}, "
+                       f"otherwise the same{', as in' if rows > 1 else ''}:\n")
+            out.append(f"-{old[first - j1 + i1]}\n+{new[first]}\n")
+    for k in range(i2 - i1):
+        t_old, t_new = _parts(old[i1 + k])[1], _parts(new[j1 + k])[1]
+        shift = round(t_new - t_old, 2) if t_old is not None and t_new is not None else 0.0
+        if run is not None and (shift != run[2] or run[1] != j1 + k - 1):
+            close()
+            run = None
+        if shift:
+            run = (run[0] if run else j1 + k, j1 + k, shift)
+    close()
+    return out

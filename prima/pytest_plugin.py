@@ -48,7 +48,7 @@ def prima_golden(request: pytest.FixtureRequest) -> Callable[[str | Path], None]
 
     def compare(scenario: str | Path) -> None:
         path = here / scenario  # an absolute scenario path stays as it is
-        result = _located(lambda: check(path, update=update))
+        result = _located(lambda: check(path, update=update), f"prima_golden({str(scenario)!r})")
         if result.status is Status.MISSING:
             pytest.fail(f"{scenario}: no golden trace yet; review a run and create it with "
                         "pytest --prima-update-goldens", pytrace=False)
@@ -79,7 +79,7 @@ def prima_judge(request: pytest.FixtureRequest) -> Callable[..., Report]:
             pytest.fail(f"prima_judge: no threshold {', '.join(map(repr, unknown))} (the "
                         f"thresholds: {', '.join(sorted(known))})", pytrace=False)
         report = _located(lambda: judge_file(here / path, thresholds=Thresholds(**thresholds),
-                                             name=str(path)))
+                                             name=str(path)), f"prima_judge({str(path)!r})")
         if not report.ok:
             pytest.fail(f"{path}: {'; '.join(report.breaches())}\n\n{format_table([report])}",
                         pytrace=False)
@@ -91,9 +91,10 @@ def prima_judge(request: pytest.FixtureRequest) -> Callable[..., Report]:
 _T = TypeVar("_T")
 
 
-def _located(work: Callable[[], _T]) -> _T:
+def _located(work: Callable[[], _T], what: str) -> _T:
     """``work()``; a bad scenario, document or trace fails the test with PRIMA's located
-    messages (``file:line:col: error: ...``), not a traceback through PRIMA."""
+    messages (``file:line:col: error: ...``), a bad threshold or path with its message,
+    never a traceback through PRIMA."""
     from prima.errors import LocatedError, PrimaError
 
     try:
@@ -101,4 +102,6 @@ def _located(work: Callable[[], _T]) -> _T:
     except LocatedError as exc:
         pytest.fail("\n".join(str(p) for p in exc.problems), pytrace=False)
     except (PrimaError, OSError) as exc:
-        pytest.fail(str(exc), pytrace=False)
+        pytest.fail(f"{what}: {exc}", pytrace=False)
+    except Exception as exc:  # noqa: BLE001 - a bad threshold value, or a fault: said so
+        pytest.fail(f"{what}: {type(exc).__name__}: {exc}", pytrace=False)

@@ -296,6 +296,17 @@ class Run:
 
     # ------------------------------------------------------------ applications
 
+    def documents(self) -> list[Document]:
+        """The documents this run may run: those running from the start, then the zones'
+        EAs (loaded now; one that cannot be loaded is left out, as it fails on entry)."""
+        found = list(self._documents.values())
+        for zone in self.scenario.zones:
+            try:
+                found.append(load_document(self.scenario.resolve(zone.ea), self.profile))
+            except LocatedError:
+                continue
+        return found
+
     def _checked(self, path: Path, role: AppKind) -> Document:
         """A document loaded for ``role``, its places written by name on the scenario's map
         (as ``prima validate`` of the scenario checks them): else the problems."""

@@ -17,6 +17,8 @@ be written out and replayed with ``prima run`` or ``prima judge``.
 
 from __future__ import annotations
 
+import concurrent.futures
+import concurrent.futures.process
 import copy
 import math
 import multiprocessing
@@ -33,7 +35,9 @@ from typing import TYPE_CHECKING
 from lxml import etree
 
 from prima.errors import ScenarioError
+from prima.escape import shown_path
 from prima.judge import MEASURES, Report, Thresholds, judge
+from prima.output import written
 from prima.sim import load_scenario
 from prima.xmlio import local_name, parse_xml, read_source
 
@@ -149,12 +153,14 @@ def write_variant(scenario: str | Path, path: str | Path, *, seed: int, index: i
         _switch(root, switches)
     _repath(root, source, None if absolute else path.parent)
     before = [etree.tostring(c, encoding="unicode") for c in root.itersiblings(preceding=True)]
-    note = (f"<!-- prima sweep: run {index} of {source.name} (seed {seed}, jitter "
+    named = shown_path(source.name).replace("--", "- -")  # (no '--' inside a comment)
+    note = (f"<!-- prima sweep: run {index} of {named} (seed {seed}, jitter "
             f"{_number(jitter)} s): the user's actions, answer delays and scheduled inputs "
             "shifted -->")
     text = "\n".join(['<?xml version="1.0" encoding="UTF-8"?>', *reversed(before), note,
                       etree.tostring(root, encoding="unicode")])
-    path.write_text(text + "\n", encoding="utf-8")
+    with written(path) as out:
+        out.write(text + "\n")
     return path
 
 
@@ -201,17 +207,60 @@ def _quiet() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _results(tasks: list[_Task], jobs: int) -> Iterator[SweepRun]:
+def _pool(jobs: int) -> concurrent.futures.Executor:
+    """Where a sweep's runs go: ``jobs`` worker processes (the seam for another
+    :class:`concurrent.futures.Executor`)."""
+    return concurrent.futures.ProcessPoolExecutor(
+        jobs, mp_context=multiprocessing.get_context(), initializer=_quiet)
+
+
+def _stop(pool: concurrent.futures.Executor) -> None:
+    """Stop a pool now: cancel what has not started, end the workers (they ignore
+    Ctrl-C), wait for nothing."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    processes = getattr(pool, "_processes", None) or {}
+    for process in list(processes.values()):
+        process.terminate()
+
+
+def _round(tasks: dict[int, _Task], jobs: int) -> Iterator[SweepRun]:
+    """Run ``tasks`` on a pool of ``jobs`` workers, each result as it comes (its task
+    taken out of ``tasks``); a worker that dies breaks the pool: the round ends there,
+    its unfinished tasks left in ``tasks``."""
+    pool = _pool(min(jobs, len(tasks)))
+    try:
+        futures = [pool.submit(_work, task) for task in tasks.values()]
+        for future in concurrent.futures.as_completed(futures):
+            try:
+                result = future.result()
+            except concurrent.futures.process.BrokenProcessPool:
+                continue  # a worker died: every run not finished is lost with it
+            del tasks[result.index]
+            yield result
+    except BaseException:  # Ctrl-C, a run's own error: stop the workers now
+        _stop(pool)
+        raise
+    pool.shutdown()
+
+
+def _results(tasks: list[_Task], jobs: int, lost: list[int]) -> Iterator[SweepRun]:
+    """Every task's run, as each finishes. A worker process that dies (killed, out of
+    memory) takes the runs not finished with it: they are run again in a fresh pool;
+    if a worker dies again, each run still not finished is run alone, and one whose
+    worker dies even so is named in ``lost`` (the others finish)."""
     if jobs <= 1 or len(tasks) <= 1:
         yield from map(_work, tasks)
         return
-    pool = multiprocessing.get_context().Pool(jobs, initializer=_quiet)
-    try:
-        yield from pool.imap_unordered(_work, tasks)
-        pool.close()
-    finally:
-        pool.terminate()
-        pool.join()
+    pending = {task.index: task for task in tasks}
+    for _ in range(2):
+        yield from _round(pending, jobs)
+        if not pending:
+            return
+    for index, task in sorted(pending.items()):
+        alone = {index: task}
+        yield from _round(alone, 1)
+        if alone:
+            lost.append(index)
 
 
 @dataclass(frozen=True)
@@ -227,6 +276,8 @@ class Sweep:
     thresholds: Thresholds
     runs: tuple[SweepRun, ...] = ()
     interrupted: bool = False
+    lost: tuple[int, ...] = ()
+    """Runs whose worker process died each time they ran, alone too (never judged)."""
     switches: Switches | None = None
     """The command line's FA, EA, robot and policies, if any (the worst runs' files
     have them written in)."""
@@ -268,21 +319,22 @@ def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
         raise ValueError("runs must be 1 or more and jitter a number of seconds from 0 up")
     source = Path(scenario)
     name = load_scenario(source).name  # a bad scenario stops here, located
-    jobs = jobs or os.cpu_count() or 1
+    jobs = min(jobs or os.cpu_count() or 1, runs)  # never more workers than runs
     done: dict[int, SweepRun] = {}
+    lost: list[int] = []
     interrupted = False
     with tempfile.TemporaryDirectory(prefix="prima-sweep-") as folder:
         tasks = [_Task(source, Path(folder), seed, i, jitter, thresholds, switches)
                  for i in range(runs)]
         try:
-            for result in _results(tasks, jobs):
+            for result in _results(tasks, jobs, lost):
                 done[result.index] = result
                 if progress is not None:
                     progress(len(done), runs)
         except KeyboardInterrupt:
             interrupted = True
     return Sweep(source, name, runs, jitter, seed, thresholds,
-                 tuple(done[i] for i in sorted(done)), interrupted, switches)
+                 tuple(done[i] for i in sorted(done)), interrupted, tuple(lost), switches)
 
 
 # ---------------------------------------------------------------------------- the summary
@@ -339,6 +391,8 @@ def format_sweep(result: Sweep) -> str:
             f"±{_number(result.jitter)} s, seed {result.seed}")
     if result.interrupted:
         head += " (interrupted)"
+    if result.lost:
+        head += f" ({len(result.lost)} lost)"
     if not result.runs:
         return head + "\n"
     table = _Table()

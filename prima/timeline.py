@@ -1,7 +1,7 @@
 """The device timeline of a run, as data: what ``prima show`` and ``prima plot`` draw.
 
 Pure Python (no drawing library): a run's jsonl records (``TraceLine.to_dict()``,
-or :func:`prima.judge.load_trace`), in trace order, become
+or :func:`prima.tracefile.read_trace`), in trace order, become
 
 - bars: one per atomic behavior and device it occupied, from its ``start`` to its
   ``end`` (or the trace's end, ``ended=False``); an AB that occupied no device has
@@ -28,8 +28,8 @@ from typing import Any
 
 from prima.trace import Pose, user_words
 
-__all__ = ["JOIN", "NO_DEVICE", "Bar", "Mark", "Span", "Tick", "Timeline", "blended_devices",
-           "ink", "runs", "timeline"]
+__all__ = ["JOIN", "NO_DEVICE", "Bar", "Builder", "Mark", "Span", "Tick", "Timeline",
+           "blended_devices", "ink", "runs", "timeline"]
 
 Row = Mapping[str, Any]
 
@@ -51,7 +51,7 @@ _MARKS = frozenset({"release", "cancel", "interrupt", "failure", "error", "unloa
 """Instant decisions, marked where they happened."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Bar:
     """An atomic behavior on one device, from its ``start`` to its ``end``."""
 
@@ -68,7 +68,7 @@ class Bar:
     """False: still running when the trace ended (``t1`` is the trace's end)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Span:
     """A while an application's AB waited: ``suspend`` (its stream lost a device) or
     ``hold`` (another application's hold, or the channel rule, kept it back)."""
@@ -89,7 +89,7 @@ class Span:
     names it (empty: unnamed, the channel rule's, or a suspension)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Mark:
     """An instant decision: release, cancel, interrupt, failure, error or unload."""
 
@@ -104,7 +104,7 @@ class Mark:
     reason: str = ""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Tick:
     """A moment on a top row: ``user`` (what the user did) or ``event``."""
 
@@ -214,7 +214,10 @@ def _holder(hold: Row) -> str | None:
     return holder.group(1) if holder else ""  # ("": unnamed, any release ends it)
 
 
-class _Builder:
+class Builder:
+    """Builds a :class:`Timeline` line by line (``feed``), so a trace need not be held
+    whole; ``finish`` closes what is still open."""
+
     def __init__(self) -> None:
         self.out = Timeline()
         self.running: dict[int, Row] = {}
@@ -231,14 +234,22 @@ class _Builder:
         """The apps, in the order first seen (a dict as an ordered set)."""
         self.occupied: dict[str, None] = {}
         """The devices ABs occupied, in the order first occupied."""
+        self.names: dict[str, str] = {}
+        self.still: dict[str, tuple[float, Pose]] = {}
+        """Robot or user -> the last sample of a run of equal poses, not yet kept."""
         self.named: dict[str, None] = {}
         """The devices of the ABs' lines (:data:`NO_DEVICE` for none), in the order first
         named."""
 
     def app(self, name: object) -> str:
-        app = str(name) if name is not None else "?"
+        app = self.name(str(name)) if name is not None else "?"
         self.apps[app] = None
         return app
+
+    def name(self, text: str) -> str:
+        """One string for all equal names and words: a long trace repeats the same few
+        (a parsed line's strings are each new)."""
+        return self.names.setdefault(text, text)
 
     def feed(self, i: int, row: Row) -> None:
         t = float(row["t"])
@@ -247,7 +258,7 @@ class _Builder:
         for who, poses in (("robot", self.out.robot), ("user", self.out.user)):
             pose = _pose(row.get(who))
             if pose is not None:
-                poses.append((t, pose))
+                self.posed(who, poses, t, pose)
         ab = row.get("ab")
         ab = ab if isinstance(ab, int) else None
         app = None if row.get("app") is None else self.app(row.get("app"))
@@ -274,6 +285,17 @@ class _Builder:
             self.out.ticks.append(Tick("event", t, str(row.get("text") or "event")))
         if kind in _MARKS and app is not None:
             self.mark(i, row, kind, app, ab, t)
+
+    def posed(self, who: str, poses: list[tuple[float, Pose]], t: float, pose: Pose) -> None:
+        """A pose sample; of a run of equal ones, only the first and the last are kept
+        (what lies between them is the same pose, however it is interpolated)."""
+        if poses and poses[-1][1] == pose:
+            self.still[who] = (t, poses[-1][1])  # the run's last, for now
+            return
+        last = self.still.pop(who, None)
+        if last is not None:
+            poses.append(last)
+        poses.append((t, pose))
 
     def wait(self, key: _Wait, i: int, row: Row) -> None:
         """A suspend or hold line begins a wait (unless that AB's is under way)."""
@@ -328,14 +350,20 @@ class _Builder:
         blended = blended_devices(_detail(start).get("over"))
         text = start.get("text")
         app = self.app(start.get("app"))
+        command = self.name(str(start.get("command") or "AB"))
+        said = self.name(str(text)) if text else None
         for device in _devices(start):
             self.out.bars.append(Bar(
-                ab=int(start["ab"]), device=device, app=app,
-                command=str(start.get("command") or "AB"), t0=float(start["t"]), t1=t1,
-                text=str(text) if text else None, blended=device in blended, ended=ended))
+                ab=int(start["ab"]), device=self.name(device), app=app, command=command,
+                t0=float(start["t"]), t1=t1, text=said, blended=device in blended,
+                ended=ended))
 
     def finish(self) -> Timeline:
         out = self.out
+        for who, poses in (("robot", out.robot), ("user", out.user)):
+            last = self.still.pop(who, None)
+            if last is not None:
+                poses.append(last)
         for start in self.running.values():
             self.bars(start, out.end, ended=False)
         self.running.clear()
@@ -352,7 +380,7 @@ class _Builder:
 
 def timeline(rows: Iterable[Row]) -> Timeline:
     """The timeline of a run's jsonl records, in trace order."""
-    builder = _Builder()
+    builder = Builder()
     for i, row in enumerate(rows):
         builder.feed(i, row)
     return builder.finish()

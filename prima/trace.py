@@ -9,10 +9,10 @@ one per line); :func:`format_text` renders them like the thesis' own tables
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
+from prima.escape import json_line, terminal
 from prima.mediator import DecisionKind
 from prima.vocab import TraceKind, Value
 
@@ -211,15 +211,10 @@ def format_jsonl(lines: Iterable[TraceLine]) -> str:
     return "".join(map(jsonl_row, lines))
 
 
-_CONTROL = {c: f"\\x{c:02x}" for c in (*range(0x20), 0x7F, 0x85)}
-_CONTROL.update({ord("\n"): "\\n", ord("\r"): "\\r", ord("\t"): "\\t",
-                 0x2028: "\\u2028", 0x2029: "\\u2029"})
-
-
 def _escape(row: str) -> str:
-    """Control characters (a newline in a Speak text, an escape sequence) as escapes:
+    """Control characters (a newline in a Speak text, an escape sequence, C1) as escapes:
     a document cannot forge a row of the text trace or drive the terminal."""
-    return row.translate(_CONTROL)
+    return terminal(row)
 
 
 class TextTrace:
@@ -263,7 +258,7 @@ def format_text(lines: Iterable[TraceLine]) -> str:
 
 def jsonl_row(line: TraceLine) -> str:
     """One line of the jsonl form (with its newline)."""
-    return json.dumps(line.to_dict(), ensure_ascii=False) + "\n"
+    return json_line(line.to_dict()) + "\n"
 
 
 def device_overlaps(lines: Iterable[TraceLine]) -> list[str]:

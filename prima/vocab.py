@@ -21,6 +21,7 @@ __all__ = [
     "MAX_SEED",
     "MAX_STREAM_HOLD",
     "MAX_TEXT",
+    "EVENT_FIELDS",
     "PREDEFINED_EVENTS",
     "INTERRUPTED_EVENT",
     "ANSWERED",
@@ -107,6 +108,21 @@ PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
 ANSWERED = "answered"
 """The ``status`` with which a Command that listens (a Q&A) ends when the user
 answered it (the others: ``noinput``); its ``utterance`` holds the words."""
+
+EVENT_FIELDS = frozenset({
+    # every event, and the predefined events' data
+    "name", "distance", "sound", "sender", "text", "place", "kind", "command", "label",
+    "spoken", "unspoken", "restarts",
+    # a Q&A's answer
+    "utterance", "answer", "status",
+    # what Commands end with (their end handlers' event)
+    "error", "result", "angle", "blended", "blocked", "duration", "found", "gesture", "goal",
+    "heading", "lost", "pan", "picture", "reached", "remaining", "saw_user", "sways", "tilt",
+    "toward", "turned", "unseen", "waiting", "x", "y",
+})
+"""Every field an event of PRIMA's own carries (``event.field``): a field outside them
+is null unless a scenario's ``<event>`` sends it, so ``prima validate`` warns of it (a
+misspelling: ``event.eror == null`` is always true)."""
 
 INTERRUPTED_EVENT = "interrupted"
 """The event an application gets when the interrupt policy cut one of its atomic

@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 
 from lxml import etree
 
+from prima.suggest import similar
 from prima.errors import LocatedError, Problem, Severity
 
 if TYPE_CHECKING:
@@ -579,19 +580,37 @@ def _problems(doc: XmlDocument, xsd: xmlschema.XMLSchema, hint: Hint | None) -> 
             if el not in children:
                 children[el] = [c for c in el if isinstance(c.tag, str)]
             yield _unexpected(doc, el, children[el], int(m.group("pos")) - 1,
-                              _clean(m.group("tag")))
+                              _clean(m.group("tag")), _element_names(xsd))
             continue
         yield _reworded(doc, el, reason, hint, _wanted(err.validator))
 
 
+def _element_names(xsd: xmlschema.XMLSchema) -> tuple[str, ...]:
+    """Every element name a schema declares (to say which one a misspelt one may be)."""
+    import xmlschema  # (loaded already: it made ``xsd``)
+
+    names = _ELEMENT_NAMES.get(id(xsd))
+    if names is None:
+        names = _ELEMENT_NAMES[id(xsd)] = tuple(sorted({
+            c.local_name for c in xsd.iter_components()
+            if isinstance(c, xmlschema.XsdElement) and c.local_name}))
+    return names
+
+
+_ELEMENT_NAMES: dict[int, tuple[str, ...]] = {}
+
+
 def _unexpected(doc: XmlDocument, parent: etree._Element, children: list[etree._Element],
-                pos: int, tag: str) -> Problem:
-    """A child element the parent's content does not allow."""
+                pos: int, tag: str, known: Iterable[str] = ()) -> Problem:
+    """A child element the parent's content does not allow (and the element its name may
+    be a misspelling of)."""
     child = children[pos] if 0 <= pos < len(children) else parent
     child_tag = local_name(child) if child is not parent else tag
     where = "at the top of the document" if parent is doc.root else \
         f"inside <{local_name(parent)}>"
-    return doc.problem(child, f"<{child_tag}> is not allowed {where}")
+    meant = similar(child_tag, known)
+    return doc.problem(child, f"<{child_tag}> is not allowed {where}"
+                              + (f"; did you mean <{meant}>?" if meant else ""))
 
 
 def _reworded(doc: XmlDocument, el: etree._Element, reason: str, hint: Hint | None,

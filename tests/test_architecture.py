@@ -31,7 +31,8 @@ import prima
 
 ROOT = Path(prima.__file__).parent
 SUBPACKAGES = sorted(p.name for p in ROOT.iterdir() if (p / "__init__.py").exists())
-NEUTRAL = ("prima.vocab", "prima.catalog", "prima.errors")
+NEUTRAL = ("prima.vocab", "prima.catalog", "prima.errors", "prima.escape", "prima.suggest",
+           "prima.signals")
 LIGHT = ("prima.judge", "prima.judge._thresholds")
 """What `prima --help` may import beyond the CLI and the neutral modules: the table of
 thresholds its commands' options are made from."""
@@ -51,7 +52,10 @@ ONLY: dict[str, set[str]] = {
     "prima.vocab": set(),
     "prima.errors": set(),
     "prima.catalog": {"prima.vocab"},
-    "prima.xmlio": {"prima.errors"},
+    "prima.xmlio": {"prima.errors", "prima.suggest"},
+    "prima.escape": set(),
+    "prima.suggest": set(),
+    "prima.signals": set(),
 }
 """Shared modules -> the only PRIMA units they may import."""
 

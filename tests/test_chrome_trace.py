@@ -80,3 +80,17 @@ def test_a_trace_cut_short_still_loads_and_open_abs_end_with_it() -> None:
                and e["args"]["end_reason"] == "still running when the trace ended"]
     assert running  # the move under way at 30 s, ended with the trace
     assert all(e["ts"] + e["dur"] <= 30_000_000 for e in running)
+
+
+def test_application_slices_say_how_they_ended() -> None:
+    from prima.run import Run
+
+    events = chrome_trace_events(Run(ROOT / "scenarios" / "thesis" / "sample-03.xml").run())
+    ends = [e for e in events if e["ph"] == "e"]
+    assert ends and all("end_reason" in e["args"] for e in ends)  # type: ignore[operator]
+    assert {e["args"]["end_reason"] for e in ends} >= {"completed"}  # type: ignore[index]
+    assert all("end_reason" not in e["args"] for e in events  # type: ignore[operator]
+               if e["ph"] == "b")
+    still = sum(e["args"]["end_reason"] == "still running when the trace ended"  # type: ignore[index]
+                for e in ends)
+    assert still <= 2  # (the ABs running at the run's end)

@@ -136,7 +136,7 @@ def test_shipped_scenarios_and_maps_validate() -> None:
 def test_documents_a_scenario_names_are_checked_against_its_robot_in_any_order() -> None:
     # fa7-spotlight is the guide robot's (guide-spotlight.xml names it with that robot)
     apps, scenarios = str(ROOT / "apps"), str(ROOT / "scenarios")
-    assert run("validate", apps)[0] == 1  # alone, against the home robot: unknown Command
+    assert run("validate", apps)[0] == 0  # alone too: FA7 names its robot (<pxml robot>)
     first, second = run("validate", apps, scenarios), run("validate", scenarios, apps)
     assert first[:2] == second[:2] == (0, "")
     assert " files checked: 0 error(s)" in first[2] and first[2] == second[2]
@@ -154,7 +154,7 @@ def test_a_document_is_checked_against_its_scenarios_robot_whatever_its_file_is_
     text = text.replace('profile="../../robots/guide-robot.xml"',
                         f'profile="{ROOT}/robots/guide-robot.xml"')
     scenario.write_text(text)
-    assert run("validate", str(app))[0] == 1  # alone, against the home robot: unknown Command
+    assert run("validate", str(app))[0] == 1  # alone: the robot it names is not beside it
     code, out, err = run("validate", str(app), str(scenario))
     assert (code, out) == (0, ""), out
     assert "4 files checked: 0 error(s)" in err  # the app, the scenario, its map, its robot

@@ -88,3 +88,20 @@ def test_lines_are_numbered_as_the_jsonl_trace_numbers_them() -> None:
     touch = next(line for line in Run(SAMPLE_03).run() if line.action == "touch")
     out = session("break user touch\ncontinue\nquit\n")
     assert f"{touch.seq:5d}    26.34   U                touches the robot" in out
+
+
+@pytest.mark.parametrize("typed, said", [
+    ("break state guid", "no state 'guid' in this run, no breakpoint set; did you mean 'guide'?"),
+    ("break app ea3-navigat", "no application 'ea3-navigat' in this run, no breakpoint set; "
+                              "did you mean 'ea3-navigate'?"),
+    ("break command Speek", "no Command 'Speek' in this run, no breakpoint set; did you mean "
+                            "'Speak'?"),
+    ("break command Nope", "no Command 'Nope' in this run, no breakpoint set (known: "
+                           "ActiveSensingHuman, FaceHuman, QA,"),
+    ("break app don't", "cannot read that line: no closing quotation"),
+    ("break state \"don't\"", "no state \"don't\" in this run"),
+])
+def test_a_breakpoint_that_could_never_stop_is_refused(typed: str, said: str) -> None:
+    out = session(f"{typed}\nbreaks\nquit\n")
+    assert said in out, out
+    assert "no breakpoints" in out and "Traceback" not in out

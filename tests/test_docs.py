@@ -212,3 +212,15 @@ def test_the_readme_demo_output_is_a_real_runs() -> None:
     real = format_text(Run(ROOT / "scenarios" / "thesis" / "sample-03.xml").run())
     shown = block.group(1).splitlines()
     assert shown == real.splitlines()[:len(shown)]
+
+
+def test_the_readme_names_the_system_tools_the_tests_need_beside_the_test_command() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    command = readme.index("python -m pip install -e '.[test]' && python -m pytest")
+    beside = readme[command: command + 800]
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    packages = {p for group in re.findall(r"apt-get install -y -q ([\w -]+)", ci)
+                for p in group.split()}
+    assert packages >= {"libxml2-utils", "chromium", "chromium-driver"}, packages
+    for package in packages:
+        assert package in beside, package

@@ -86,3 +86,64 @@ def test_the_fixtures_fail_a_bad_input_with_its_message_not_a_traceback(
     result.stdout.fnmatch_lines([f"*{bad}:2:*map file 'nowhere.xml' not found*",
                                  "*prima_judge: no threshold 'max_unfacd'*"])
     assert "Traceback" not in result.stdout.str() and "prima/xmlio.py" not in result.stdout.str()
+
+
+def test_the_fixtures_fail_bad_values_and_forged_traces_with_a_message(
+        pytester: pytest.Pytester, tmp_path: Path) -> None:
+    forged = tmp_path / "forged.jsonl"
+    forged.write_text('{"t": 0, "seq": 0, "kind": "start", "detail": {"command_id": "x"}}\n')
+    sample = Path(__file__).parents[1] / "scenarios" / "thesis" / "sample-03.xml"
+    pytester.makepyfile(f"""
+        def test_threshold_value(prima_judge):
+            prima_judge({str(sample)!r}, max_late=-1)
+
+        def test_threshold_type(prima_judge):
+            prima_judge({str(sample)!r}, silence="long")
+
+        def test_forged(prima_judge):
+            prima_judge({str(forged)!r})
+
+        def test_folder(prima_golden):
+            prima_golden({str(tmp_path)!r})
+    """)
+    result = pytester.runpytest()
+    result.assert_outcomes(failed=4)
+    out = result.stdout.str()
+    assert "Traceback" not in out and "prima/judge.py" not in out, out
+    result.stdout.fnmatch_lines([f"*prima_judge('{sample}'): *max_late*",
+                                 f"*{forged}:1:1: error: detail 'command_id' has the wrong type*"])
+
+
+def _talker(folder: Path, words: str, fault: bool = False) -> Path:
+    """A scenario whose EA says ``words``, then three more things (each later as the
+    first takes longer), and, with ``fault``, divides by zero at run time."""
+    (folder / "map.xml").write_text('<map xmlns="urn:prima:map:1" name="m">'
+                                    '<place name="a" x="0" y="0"/></map>\n')
+    more = "".join(f'<speak text="and then {k}"/>' for k in range(3))
+    crash = '<assign name="x" expr="1 / 0"/>' if fault else ""
+    (folder / "ea.pxml").write_text(
+        '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t"><var name="x" expr="0"/>'
+        f'<state id="s" initial="true"><entry><request><speak text="{words}"/>{more}'
+        f"</request>{crash}</entry></state></pxml>\n")
+    path = folder / "talk.xml"
+    path.write_text('<scenario xmlns="urn:prima:scenario:1" name="s" until="30">'
+                    '<map href="map.xml"/><apps ea="ea.pxml"/><robot place="a"/></scenario>\n')
+    return path
+
+
+def test_a_longer_utterance_is_one_change_and_one_shift_in_the_diff(tmp_path: Path) -> None:
+    path = _talker(tmp_path, "Hello.")
+    check(path, update=True)
+    _talker(tmp_path, "Hello, and welcome to the museum of many things.")
+    diff = check(path).diff
+    changed = [x for x in diff.splitlines() if x.startswith(("-", "+"))
+               and not x.startswith(("---", "+++"))]
+    assert len(changed) == 4, diff  # the utterance, and the first of the rows it delays
+    assert "every time" in diff and "s later, otherwise the same" in diff
+
+
+def test_a_golden_pinning_a_runtime_error_names_no_absolute_path(tmp_path: Path) -> None:
+    path = _talker(tmp_path, "Hello.", fault=True)
+    check(path, update=True)
+    golden = golden_path(path).read_text()
+    assert "ERROR: ea.pxml:" in golden and str(tmp_path) not in golden, golden

@@ -199,3 +199,87 @@ def test_the_progress_bar_is_redrawn_on_a_terminal_and_a_line_a_tenth_in_a_log()
         assert all(("\r" in w) == live for w in written)
         assert written[-1].endswith("[##########] 200/200 runs\n")
     assert written[0] == "[..........] 1/200 runs\n"
+
+
+# ------------------------------------------------------------ a worker process dies
+
+DEATHS = Path("/nonexistent")
+"""A file the dying worker below counts its deaths in (set by the tests)."""
+
+
+def dying_work(task: Any) -> Any:
+    """Run 1's worker is killed (as by the kernel's out-of-memory killer) as long as the
+    count of deaths in the task's folder is below the count asked for there."""
+    import os
+    import signal
+
+    marks = task.folder.parent / "deaths"
+    allowed = int((task.folder.parent / "allowed").read_text())
+    if task.index == 1 and len(marks.read_text()) < allowed:
+        with marks.open("a") as out:
+            out.write("x")
+        os.kill(os.getpid(), signal.SIGKILL)
+    return _real_work(task)
+
+
+_real_work = prima.sweep._work
+
+
+@pytest.fixture
+def dying(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.setattr(prima.sweep, "_work", dying_work)
+    monkeypatch.setattr(prima.sweep.tempfile, "tempdir", str(tmp_path))
+    (tmp_path / "deaths").write_text("")
+    return tmp_path
+
+
+def test_a_run_whose_worker_died_is_run_again(dying: Path,
+                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    (dying / "allowed").write_text("1")
+    monkeypatch.chdir(dying)
+    status, out, err = cli("sweep", str(SHORT), "--runs", "4", "--jitter", "3", "--jobs", "2",
+                           "--worst", "0")
+    assert status == 0, err
+    assert "4 of 4 runs" in out and (dying / "deaths").read_text() == "x"
+
+
+def test_a_run_whose_worker_always_dies_is_named_and_the_others_finish(dying: Path,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    (dying / "allowed").write_text("9")
+    monkeypatch.chdir(dying)
+    status, out, err = cli("sweep", str(SHORT), "--runs", "4", "--jitter", "3", "--jobs", "2",
+                           "--worst", "1", "--out", "worst")
+    assert status == 1, err
+    assert "prima sweep: run(s) 1 lost: the worker process died" in err, err
+    assert "the other 3 run(s) are judged" in err and "Traceback" not in err
+    assert "3 of 4 runs" in out and "(1 lost)" in out
+    assert len(list((dying / "worst").iterdir())) == 1  # the finished runs are kept
+    assert (dying / "deaths").read_text() == "xxx"  # with the pool, again, and alone
+
+
+def test_never_more_workers_than_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    asked: list[int] = []
+    real = prima.sweep._pool
+
+    def pool(jobs: int) -> Any:
+        asked.append(jobs)
+        return real(jobs)
+
+    monkeypatch.setattr(prima.sweep, "_pool", pool)
+    result = sweep(SHORT, runs=2, jitter=1.0, jobs=1024)
+    assert len(result.runs) == 2 and asked == [2]
+
+
+def test_a_scenario_named_in_bytes_that_are_not_utf8_or_with_dashes(tmp_path: Path) -> None:
+    import os
+
+    odd = tmp_path / os.fsdecode(b"run--\xff.xml")
+    text = SHORT.read_text().replace('href="../maps', f'href="{ROOT}/scenarios/maps')
+    text = text.replace('"../../apps', f'"{ROOT}/apps')
+    odd.write_text(text)
+    status, out, err = cli("sweep", str(odd), "--runs", "2", "--jitter", "1", "--jobs", "1",
+                           "--out", str(tmp_path / "worst"), "--worst", "1")
+    assert status in (0, 1) and "Traceback" not in err, err
+    written = next((tmp_path / "worst").iterdir())
+    assert load_scenario(written).name  # the variant is a scenario again
+    assert "run- -\\xff.xml" in written.read_text()

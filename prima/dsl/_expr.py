@@ -77,6 +77,8 @@ class Compiled:
     """Indexes where ``event`` is read."""
     constant: bool = False
     """It reads nothing: its value was computed when it was compiled."""
+    event_fields: frozenset[tuple[str, int]] = frozenset()
+    """Fields of ``event`` read (``event.text``), each with the index of its name."""
 
     def evaluate(self, scope: Scope) -> Value:
         """The expression's value in ``scope``; raises ExecutionError on a bad value."""
@@ -649,12 +651,14 @@ def _closing_brace(text: str, i: int) -> int:
 
 def _shift(c: Compiled, by: int) -> Compiled:
     return Compiled(c.source, c.fn, frozenset((n, i + by) for n, i in c.names),
-                    tuple(i + by for i in c.event_uses), c.constant)
+                    tuple(i + by for i in c.event_uses), c.constant,
+                    frozenset((f, i + by) for f, i in c.event_fields))
 
 
 def _join(source: str, parts: list[str | Compiled]) -> Compiled:
     names = frozenset().union(*(p.names for p in parts if isinstance(p, Compiled)))
     events = tuple(i for p in parts if isinstance(p, Compiled) for i in p.event_uses)
+    fields = frozenset().union(*(p.event_fields for p in parts if isinstance(p, Compiled)))
     texts = [p for p in parts if isinstance(p, str)]
     if len(texts) == len(parts):
         return constant("".join(texts), source)
@@ -663,7 +667,7 @@ def _join(source: str, parts: list[str | Compiled]) -> Compiled:
     def fn(scope: Scope) -> Value:
         return _bounded("".join(text if f is None else to_text(f(scope)) for text, f in pieces))
 
-    return Compiled(source, fn, names, events)
+    return Compiled(source, fn, names, events, event_fields=fields)
 
 
 # ---------------------------------------------------------------- chains
@@ -838,6 +842,7 @@ class _Compiler:
         """How deep the subtree being compiled is (at most MAX_NESTING: measured)."""
         self.names: set[tuple[str, int]] = set()
         self.events: list[int] = []
+        self.fields: set[tuple[str, int]] = set()
 
     def compile(self, tree: Node, *, whole: bool = False) -> Compiled:
         """Compile ``tree``; ``whole`` when it is all of the source (an expression, not
@@ -849,7 +854,8 @@ class _Compiler:
             start, end = span(tree, self.source)
             text = self.source[start:end]
         if not const:
-            return Compiled(text, fn, frozenset(self.names), tuple(self.events))
+            return Compiled(text, fn, frozenset(self.names), tuple(self.events),
+                            event_fields=frozenset(self.fields))
         value = self._value(fn, tree)
         if isinstance(value, str) and len(value) > self.max_text:
             raise ExpressionError(_start(tree), f"expression: text longer than "
@@ -932,6 +938,7 @@ class _Compiler:
         if base != "event":
             raise self.fault(tok, f"only 'event' has fields ('{base}.{attr}')")
         self.events.append(_pos(tok))
+        self.fields.add((attr, _pos(tok) + len(base) + 1))
         return (lambda s: None if s.event is None else s.event.get(attr)), False
 
     def call(self, ch: list[Node]) -> Part:
@@ -995,6 +1002,7 @@ class _Compiler:
             raise ExpressionError(at(fault.index), fault.message, self.source) from None
         self.names.update((n, at(i)) for n, i in t.names)
         self.events.extend(at(i) for i in t.event_uses)
+        self.fields.update((f, at(i)) for f, i in t.event_fields)
         return t
 
 

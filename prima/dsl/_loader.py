@@ -17,6 +17,7 @@ from pathlib import Path
 
 from lxml import etree
 
+from prima.suggest import did_you_mean, similar
 from prima.catalog import ParamKind
 from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
 from prima.dsl._elements import elements, flag
@@ -64,6 +65,7 @@ from prima.vocab import (
     MAX_BLOCK_WATCHDOG,
     MAX_NUMBER,
     MAX_STREAM_HOLD,
+    EVENT_FIELDS,
     PREDEFINED_EVENTS,
     AppKind,
     OnInterrupt,
@@ -198,6 +200,13 @@ class Builder:
         el, where, base = spot
         for name, index in compiled.names:
             self.refs.variables.append((name, (el, where, base + index)))
+        for name, index in sorted(compiled.event_fields, key=lambda f: f[1]):
+            if name not in EVENT_FIELDS:
+                self.warning((el, where, base + index),
+                             f"event field '{name}' is not one PRIMA's events carry: it is "
+                             "null unless a scenario's <event> sends it"
+                             + (did_you_mean(name, sorted(EVENT_FIELDS))
+                                or " (fields: docs/pxml.md)"))
         if compiled.event_uses and not self.in_handler:
             self.error((el, where, base + compiled.event_uses[0]),
                        "'event' is only available inside an event handler")
@@ -704,9 +713,7 @@ class Builder:
         self._hints += 1
         if self._hints > MAX_PROBLEMS:
             return None
-        folded = name.casefold()
-        return next((n for n in names if _similar(n, name) or
-                     (n != name and n.casefold() == folded)), None)
+        return similar(name, names)
 
     def _initial(self) -> str | None:
         initial = [s for s in self.states.values() if s.initial]
@@ -725,7 +732,8 @@ class Builder:
     def _check_gotos(self) -> None:
         for target, spot in self.refs.gotos:
             if target not in self.states:
-                self.error(spot, f"no state has the id '{target}'")
+                self.error(spot, f"no state has the id '{target}'"
+                                 + did_you_mean(target, self.states))
 
     def _check_entry_loops(self) -> None:
         """States whose ``<entry>`` goes on to the next without a condition, round to the
@@ -805,18 +813,6 @@ def _goto_targets(actions: Iterable[Action]) -> set[str]:
                 out |= _goto_targets(body)
             out |= _goto_targets(a.otherwise)
     return out
-
-
-def _similar(a: str, b: str) -> bool:
-    if a == b or abs(len(a) - len(b)) > 1:
-        return False
-    if len(a) == len(b):
-        diffs = [i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y]
-        swapped = len(diffs) == 2 and diffs[1] == diffs[0] + 1 and \
-            a[diffs[0]] == b[diffs[1]] and a[diffs[1]] == b[diffs[0]]
-        return len(diffs) == 1 or swapped
-    short, long_ = sorted((a, b), key=len)
-    return any(long_[:i] + long_[i + 1:] == short for i in range(len(long_)))
 
 
 # ---------------------------------------------------------------- entry points

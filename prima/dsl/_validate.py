@@ -123,9 +123,12 @@ class _Checked(NamedTuple):
 
 def _check(path: Path, profile: RobotProfile | None,
            checker_for: Callable[[str], Checker | None] | None,
-           skip_unknown: bool) -> _Checked:
+           skip_unknown: bool,
+           robot_for: Callable[[Path], RobotProfile | str | None] | None = None) -> _Checked:
     """:func:`check_file`, with the file's header and, for a document without errors, its
-    literal places; ``checker_for`` gives the checker of a namespace of another kind, if any."""
+    literal places; ``checker_for`` gives the checker of a namespace of another kind, if any;
+    ``robot_for`` the profile a document names in its ``robot`` attribute (None: it has
+    errors; a text: why it cannot be read), checked against instead of ``profile``."""
     skippable = skip_unknown and path.suffix != ".pxml"
     try:
         data = read_source(path, DocumentError)
@@ -154,9 +157,20 @@ def _check(path: Path, profile: RobotProfile | None,
         except DocumentError as exc:
             return _Checked(list(exc.problems), header)
         return _Checked(_missing_gestures(doc, robot), header)
+    declared: list[Problem] = []
     if namespace == PXML_NS:
         header = Header(namespace, doc.root.get("kind", ""), doc.root.get("name", ""))
+        written = doc.root.get("robot")
+        if written is not None and robot_for is not None:
+            found = robot_for(path.parent / written)
+            if isinstance(found, str):
+                declared.append(doc.problem(doc.root, found, attribute="robot"))
+            elif found is None:  # its own problems are reported in its own file
+                return _Checked(declared, header)
+            else:
+                profile = found
     document, problems = check_parsed(doc, profile)
+    problems = declared + problems
     return _Checked(problems, header, None if document is None else document.places)
 
 
@@ -181,8 +195,12 @@ class Validation:
 
     def __init__(self, profile: RobotProfile | None = None,
                  checkers: Mapping[str, Checker] | None = None, *,
-                 more_checkers: Callable[[], Mapping[str, Checker]] | None = None) -> None:
+                 more_checkers: Callable[[], Mapping[str, Checker]] | None = None,
+                 follow_declared: bool = True) -> None:
         self.profile = profile
+        self.follow_declared = follow_declared
+        """Whether a document is checked against the robot its ``robot`` attribute names
+        (unless a scenario runs it on another): not when a profile is given for all."""
         """The robot profile documents are checked against, unless one is named for them."""
         self.checkers: dict[str, Checker] = dict(checkers or {})
         self._more_checkers = more_checkers
@@ -214,9 +232,10 @@ class Validation:
         # a checker may check the files this one names: this one is reported before them
         files_at, problems_at = len(self.report.files), len(self.report.problems)
         self._checking.add(key)
+        declared = self._declared if profile is None and self.follow_declared else None
         try:
             problems, header, places = _check(path, profile or self.profile, self._checker,
-                                              skip_unknown=not explicit)
+                                              skip_unknown=not explicit, robot_for=declared)
         finally:
             self._checking.discard(key)
         if problems is None or key in self._seen:
@@ -228,6 +247,14 @@ class Validation:
         self._seen.add(key)
         self.report.files.insert(files_at, str(path))
         self.report.problems[problems_at:problems_at] = problems
+
+    def _declared(self, path: Path) -> RobotProfile | str | None:
+        """The robot profile a document names as the robot it is written for (checked
+        once); None if it has errors, or why it cannot be used."""
+        if not path.is_file():
+            return f"robot profile '{path}' not found (the robot attribute names it, " \
+                   "relative to the document)"
+        return self.robot(path)
 
     def _checker(self, namespace: str) -> Checker | None:
         """The checker of a file whose root is in ``namespace``, if another kind's."""

@@ -11,7 +11,7 @@ from prima.errors import TraceError
 from prima.judge._context import Context
 from prima.judge._measures import MEASURES
 from prima.judge._reactions import analyse
-from prima.judge._reading import as_rows, load_trace
+from prima.judge._reading import as_rows, read_trace
 from prima.judge._report import Report
 from prima.judge._thresholds import Thresholds
 
@@ -44,8 +44,8 @@ def judge_file(path: str | Path, *, thresholds: Thresholds | None = None,
     :class:`~prima.errors.LocatedError` for a bad file."""
     path = Path(path)
     name = str(path) if name is None else name
-    if path.suffix == ".jsonl":
-        return judge(load_trace(path), thresholds=thresholds, name=name)
+    if path.suffix == ".jsonl":  # streamed: a long trace is never held whole
+        return judge(read_trace(path), thresholds=thresholds, name=name)
     from prima.run import Run  # only now: the whole stack comes with it
 
     options = switches.run_options() if switches else {}

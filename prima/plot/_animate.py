@@ -20,6 +20,8 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Patch
 from PIL import Image
 
+from prima.escape import PLAIN_TEXT
+from prima.output import written_bytes
 from prima.plot._draw import app_colors, draw_timeline
 from prima.sim import WorldMap
 from prima.timeline import Timeline
@@ -173,7 +175,7 @@ def save_animation(tl: Timeline, path: str | Path, world: WorldMap | None = None
     """Write the run as a GIF, a frame every ``step`` simulated seconds shown at ``fps``
     frames per second; returns the number of frames."""
     count = int(math.floor(tl.end / step + 1e-9)) + 1
-    with matplotlib.rc_context({"font.family": "DejaVu Sans"}):
+    with matplotlib.rc_context({"font.family": "DejaVu Sans", **PLAIN_TEXT}):
         frames = _Frames(tl, world, title)
         images = [frames.draw(i * step) for i in range(count)]
     # one palette for every frame: taken from a strip of frames from the whole run
@@ -183,6 +185,7 @@ def save_animation(tl: Timeline, path: str | Path, world: WorldMap | None = None
         strip.paste(image, (0, i * image.height))
     palette = strip.quantize(colors=64, method=Image.Quantize.MEDIANCUT)
     indexed = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
-    indexed[0].save(path, format="GIF", save_all=True, append_images=indexed[1:],
-                    duration=max(20, round(1000 / fps)), loop=0, optimize=False)
+    with written_bytes(path) as out:
+        indexed[0].save(out, format="GIF", save_all=True, append_images=indexed[1:],
+                        duration=max(20, round(1000 / fps)), loop=0, optimize=False)
     return count

@@ -16,6 +16,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from prima.escape import PLAIN_TEXT
+from prima.output import written_bytes
 from prima.plot import abbreviate
 from prima.timeline import Bar, Timeline, ink, runs
 
@@ -192,6 +194,7 @@ def save_timeline(tl: Timeline, path: str | Path, title: str = "") -> None:
     """Draw ``tl`` and save it; the format is the file's suffix (.svg, .png, .pdf)."""
     suffix = Path(path).suffix.lower()
     with matplotlib.rc_context({"svg.hashsalt": "prima", "svg.fonttype": "none",
-                                "font.family": "DejaVu Sans"}):
+                                "font.family": "DejaVu Sans", **PLAIN_TEXT}):
         fig = timeline_figure(tl, title)
-        fig.savefig(path, format=suffix[1:], dpi=150, metadata=_METADATA.get(suffix))
+        with written_bytes(path) as out:
+            fig.savefig(out, format=suffix[1:], dpi=150, metadata=_METADATA.get(suffix))

@@ -16,18 +16,18 @@ the ``show`` extra (``pip install 'prima[show]'``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-from collections.abc import Mapping, Sequence
+import io
+import tempfile
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from prima.errors import PrimaError
 
 if TYPE_CHECKING:
     from prima.run import Switches
 
-__all__ = ["read_rows", "render"]
+__all__ = ["read_rows", "render", "write_page"]
 
 
 def read_rows(path: str | Path, switches: Switches | None = None) -> list[dict[str, Any]]:
@@ -35,7 +35,7 @@ def read_rows(path: str | Path, switches: Switches | None = None) -> list[dict[s
     (``switches``: its FA, EA, robot or policies changed)."""
     path = Path(path)
     if path.suffix == ".jsonl":
-        from prima.judge import load_trace
+        from prima.tracefile import load_trace
 
         return load_trace(path)
     from prima.run import Run
@@ -44,11 +44,38 @@ def read_rows(path: str | Path, switches: Switches | None = None) -> list[dict[s
     return [line.to_dict() for line in Run(path, **options).run()]
 
 
-def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None,
+def render(rows: Iterable[Mapping[str, Any]], scenario: str | Path | None = None,
            title: str = "run") -> str:
     """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any)."""
+    out = io.StringIO()
+    _write(rows, out, scenario, title)
+    return out.getvalue()
+
+
+def write_page(path: str | Path, out: TextIO, scenario: str | Path | None = None,
+               title: str = "run", switches: Switches | None = None) -> tuple[int, float]:
+    """Write the page of a run to ``out``: a jsonl trace streamed (never held whole:
+    its table's rows are spooled to a temporary file), or a scenario run in-process
+    (``switches``: its FA, EA, robot or policies changed). Returns the atomic
+    behaviors started and the run's end (s)."""
+    path = Path(path)
+    if path.suffix == ".jsonl":
+        from prima.tracefile import read_trace
+
+        rows: Iterable[Mapping[str, Any]] = read_trace(path)
+    else:
+        from prima.run import Run
+
+        options = switches.run_options() if switches else {}
+        rows = (line.to_dict() for line in Run(path, **options).run())
+    with tempfile.TemporaryFile("w+", encoding="utf-8") as spool:
+        return _write(rows, out, scenario, title, spool)
+
+
+def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path | None,
+           title: str, spool: TextIO | None = None) -> tuple[int, float]:
     try:
-        from prima.show._page import page
+        from prima.show._page import write_page as page
     except ImportError as exc:  # the plotting library is an optional extra
         raise PrimaError(f"prima show needs Plotly ({exc.name} is missing): "
                          "pip install 'prima[show]'") from exc
@@ -56,4 +83,6 @@ def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None
     from prima.sim import load_scenario
 
     world = load_scenario(scenario).map if scenario is not None else None
-    return page(build(rows), world, title)
+    model = build(rows, spool)
+    page(model, world, title, out, spool)
+    return model.starts, model.timeline.end

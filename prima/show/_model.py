@@ -1,14 +1,22 @@
 """What the page shows: the run's device timeline (:mod:`prima.timeline`, shared with
 ``prima plot``), and what the page adds to it: the trace table, the words in
-bubbles, and each AB's lines."""
+bubbles, and each AB's lines.
+
+Built in one pass over the trace's lines, none of them kept: the table's rows go,
+as the page's JSON, to a spool file (or a list) as they come, and only what the
+page needs of them stays (the timeline, each AB's line numbers), so a trace of a
+million lines is never held whole.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from array import array
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TextIO
 
-from prima.timeline import Timeline, timeline
+from prima.escape import script_json
+from prima.timeline import Builder, Timeline
 from prima.trace import Pose
 
 Row = Mapping[str, Any]
@@ -36,15 +44,34 @@ class Model:
 
     timeline: Timeline
     rows: list[dict[str, Any]]
-    """The trace's lines but its pose samples: the table's rows."""
-    table: dict[int, int] = field(default_factory=dict)
-    """A trace line's index -> its row in the table."""
+    """The trace's lines but its pose samples: the table's rows (empty when they were
+    spooled: :func:`build`)."""
+    table: Sequence[int] = field(default_factory=list)
+    """A trace line's index -> its row in the table (-1: a pose sample, not in it)."""
     bubbles: list[Bubble] = field(default_factory=list)
     robot: list[tuple[float, float, float, float]] = field(default_factory=list)
-    """(t, x, y, heading) of the robot, in time order."""
+    """(t, x, y, heading) of the robot, in time order (:func:`build` moves the timeline's
+    poses here)."""
     user: list[tuple[float, float, float, float]] = field(default_factory=list)
-    abs: dict[int, dict[str, Any]] = field(default_factory=dict)
-    """AB id -> its start row, end row (if it ended) and the indices of its lines."""
+    abs: dict[int, list[int]] = field(default_factory=dict)
+    """AB id -> its start row, its end row (-1 until it has one) and the rows of its
+    lines (:meth:`ab_json` writes them as the page reads them)."""
+    count: int = 0
+    """The table's rows."""
+    starts: int = 0
+    """The atomic behaviors started (start lines)."""
+
+    def ab_json(self) -> Iterator[str]:
+        """The ABs as the page's JSON object, in pieces."""
+        yield "{"
+        for k, (ab, (start, end, *lines)) in enumerate(self.abs.items()):
+            info: dict[str, Any] = {"lines": lines}
+            if start >= 0:
+                info["start"] = start
+            if end >= 0:
+                info["end"] = end
+            yield f'{"," if k else ""}"{ab}":{script_json(info)}'
+        yield "}"
 
 
 def _distinct(poses: Sequence[tuple[float, Pose]]) -> list[tuple[float, float, float, float]]:
@@ -52,26 +79,43 @@ def _distinct(poses: Sequence[tuple[float, Pose]]) -> list[tuple[float, float, f
     return [(t, *pose) for k, (t, pose) in enumerate(poses) if k == 0 or poses[k - 1] != (t, pose)]
 
 
-def build(rows: Sequence[Row]) -> Model:
-    """Digest a trace's rows (in trace order)."""
-    tl = timeline(rows)
-    kept = [i for i, row in enumerate(rows) if row["kind"] != "pose"]
-    model = Model(tl, [dict(rows[i]) for i in kept], {i: j for j, i in enumerate(kept)},
-                  robot=_distinct(tl.robot), user=_distinct(tl.user))
+def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
+    """Digest a trace's rows (in trace order); with ``spool``, the table's rows are
+    written there as JSON (comma-separated) instead of kept."""
+    builder = Builder()
+    table = array("q")
+    kept: list[dict[str, Any]] = []
+    abs_: dict[int, list[int]] = {}
+    j = starts = 0
+    for i, row in enumerate(rows):
+        builder.feed(i, row)
+        kind = row["kind"]
+        if kind == "pose":
+            table.append(-1)
+            continue
+        table.append(j)
+        starts += kind == "start"
+        if spool is None:
+            kept.append(dict(row))
+        else:
+            spool.write(("," if j else "") + script_json(row))
+        ab = row.get("ab")
+        if ab is not None:
+            info = abs_.setdefault(int(ab), [-1, -1])
+            info.append(j)
+            if kind == "start":
+                info[0], info[1] = j, -1
+            elif kind == "end" and info[0] >= 0 and info[1] < 0:
+                info[1] = j
+        j += 1
+    tl = builder.finish()
+    model = Model(tl, kept, table, robot=_distinct(tl.robot), user=_distinct(tl.user),
+                  abs=abs_, count=j, starts=starts)
+    tl.robot, tl.user = [], []  # moved into the model's robot and user (one copy is enough)
     model.bubbles = sorted(
         [Bubble("robot", b.t0, max(b.t1, b.t0 + ROBOT_SAYS_FOR), b.text or "")
          for b in tl.speech()]
         + [Bubble("user", k.t, k.t + USER_SAYS_FOR, k.label if k.text is not None
                   else f"[{k.label}]") for k in tl.ticks if k.row == "user"],
         key=lambda b: b.start)
-    for j, row in enumerate(model.rows):
-        if row.get("ab") is None:
-            continue
-        info = model.abs.setdefault(int(row["ab"]), {"lines": []})
-        info["lines"].append(j)
-        if row["kind"] == "start":
-            info["start"] = j
-            info.pop("end", None)
-        elif row["kind"] == "end" and "start" in info and "end" not in info:
-            info["end"] = j
     return model

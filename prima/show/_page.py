@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-import html
-import json
+import io
+import shutil
 from importlib import resources
-from typing import Any
+from typing import Any, TextIO
 
 import plotly.graph_objects as go
 import plotly.io as pio
 from plotly.colors import qualitative
 
+from prima.escape import markup, script_json
 from prima.show._model import Model
 from prima.sim import WorldMap
 from prima.timeline import Bar, ink, runs
@@ -30,8 +31,9 @@ _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": [
 
 
 def _esc(text: str) -> str:
-    """Text shown as itself (Plotly reads some HTML in its labels)."""
-    return html.escape(text, quote=False)
+    """Text shown as itself (Plotly reads some HTML in its labels, a forged trace's
+    device names too)."""
+    return markup(text)
 
 
 def _label(bar: Bar) -> str:
@@ -132,7 +134,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         traces["bars"].append(len(fig.data))
         # two applications blended on a device share its row: a half each
         fig.add_trace(go.Bar(
-            name=_esc(app), orientation="h", y=[b.device for b in bars],
+            name=_esc(app), orientation="h", y=[_esc(b.device) for b in bars],
             base=[b.t0 for b in bars], x=[_width(b.t0, b.t1) for b in bars],
             width=[0.4 if b.blended else 0.8 for b in bars],
             offset=[(0.0 if i % 2 else -0.4) if b.blended else -0.4 for b in bars],
@@ -147,7 +149,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         if repeated:  # over a run's bars, one bar without seams, labelled once; hovers and
             # clicks go through it to the iteration under the pointer
             fig.add_trace(go.Bar(
-                name=_esc(app), orientation="h", y=[r[0].device for r in repeated],
+                name=_esc(app), orientation="h", y=[_esc(r[0].device) for r in repeated],
                 base=[r[0].t0 for r in repeated],
                 x=[_width(r[0].t0, r[-1].t1) for r in repeated], width=0.8, offset=-0.4,
                 text=[f"{_esc(r[0].command)} x{len(r)}" for r in repeated],
@@ -161,7 +163,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             continue
         traces["spans"].append(len(fig.data))
         fig.add_trace(go.Bar(
-            name=what, orientation="h", y=[d for _, d in spans],
+            name=what, orientation="h", y=[_esc(d) for _, d in spans],
             base=[s.t0 for s, _ in spans], x=[_width(s.t0, s.t1) for s, _ in spans],
             customdata=[model.table[s.line] for s, _ in spans],
             hovertext=[f"{_esc(s.app)}: AB {s.ab} {what} {s.t0:.2f}-{s.t1:.2f} s"
@@ -177,7 +179,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             continue
         traces["marks"].append(len(fig.data))
         fig.add_trace(go.Scatter(
-            name=what, x=[m.t for m, _ in marks], y=[d for _, d in marks],
+            name=what, x=[m.t for m, _ in marks], y=[_esc(d) for _, d in marks],
             customdata=[model.table[m.line] for m, _ in marks], mode="markers",
             marker={"symbol": symbol, "size": 12, "color": colour, "line": {"width": 2,
                                                                             "color": colour}},
@@ -191,40 +193,50 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         legend={"orientation": "h", "y": -0.25 if len(tl.devices) > 3 else -0.5},
         xaxis={"title": "simulated time (s)", "range": [0, max(tl.end, 1.0)],
                "showgrid": True, "gridcolor": "#eee"},
-        yaxis={"categoryorder": "array", "categoryarray": tl.devices[::-1],
+        yaxis={"categoryorder": "array", "categoryarray": [_esc(d) for d in tl.devices[::-1]],
                "type": "category", "fixedrange": True},
         dragmode="pan")
     return fig, traces
 
 
-def _script_json(value: object) -> str:
-    """JSON safe inside a <script> element."""
-    text = json.dumps(value, ensure_ascii=False, separators=(",", ":"))
-    return text.replace("</", "<\\/").replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
-
-
 def page(model: Model, world: WorldMap | None, title: str) -> str:
     """The whole self-contained page (Plotly's JavaScript inlined)."""
+    out = io.StringIO()
+    write_page(model, world, title, out)
+    return out.getvalue()
+
+
+def _write_figure(fig: go.Figure, div_id: str, out: TextIO) -> None:
+    """The figure's div and the script that draws it, as ``plotly.io.to_html`` writes them
+    (without Plotly's JavaScript), one trace at a time: a long run's timeline is never
+    held as one JSON text (Plotly's own writer holds it three times over)."""
+    out.write(f'<div style="height:100%; width:100%;"><div id="{div_id}" '
+              'class="plotly-graph-div" style="height:100%; width:100%;"></div><script>'
+              'window.PLOTLYENV=window.PLOTLYENV || {};'
+              f'if (document.getElementById("{div_id}")) {{Plotly.newPlot("{div_id}",[')
+    for k, trace in enumerate(fig.data):
+        out.write(("," if k else "") + script_json(trace.to_plotly_json()))
+    layout = go.Figure(layout=fig.layout).to_dict()["layout"]  # with its template
+    out.write(f"],{script_json(layout)},{script_json({**_CONFIG, 'responsive': True})})}};"
+              "</script></div>")
+
+
+def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
+               spool: TextIO | None = None) -> None:
+    """Write the page to ``out`` piece by piece; the table's rows are ``model.rows``, or
+    the JSON :func:`~prima.show._model.build` spooled (copied in chunks, never read
+    whole). The model is spent: its poses are let go once written."""
     map_fig, who = map_figure(model, world)
-    timeline, traces = timeline_figure(model)
     map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
                            config=_CONFIG)
-    timeline_html = pio.to_html(timeline, include_plotlyjs=False, full_html=False,
-                                div_id="timeline", config=_CONFIG)
-    data = {
-        "end": model.timeline.end, "rows": model.rows, "robot": model.robot, "user": model.user,
-        "bubbles": [[b.who, b.start, b.end, b.text] for b in model.bubbles],
-        "abs": {str(k): v for k, v in model.abs.items()}, "robotTrace": who["robot"],
-        "userTrace": who["user"], "traces": traces,
-        "colours": _colours(model.timeline.apps),
-    }
+    del map_fig
     files = resources.files("prima.show")
     player = files.joinpath("player.js").read_text(encoding="utf-8")
     style = files.joinpath("show.css").read_text(encoding="utf-8")
     speeds = "".join(f'<option value="{s}"{" selected" if s == "1" else ""}>{s}x</option>'
                      for s in ("0.5", "1", "2", "4", "8", "16", "32"))
-    name = html.escape(title)
-    return f"""<!DOCTYPE html>
+    name = markup(title)
+    out.write(f"""<!DOCTYPE html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
@@ -242,19 +254,45 @@ def page(model: Model, world: WorldMap | None, title: str) -> str:
 </header>
 <main>
 <section id="top">
-<div id="map-box">{map_html}</div>
+<div id="map-box">""")
+    out.write(map_html)
+    del map_html
+    # the poses, written down and let go (the model is spent by this): a long run's
+    # samples take more room as tuples than the timeline's figure needs while it is made
+    robot, user = script_json(model.robot), script_json(model.user)
+    model.robot, model.user = [], []
+    model.timeline.robot, model.timeline.user = [], []
+    timeline, traces = timeline_figure(model)
+    out.write("""</div>
 <aside id="details"><p class="hint">Click a bar of the timeline or a line of the trace
 to jump there and see why the mediator decided it.</p></aside>
 </section>
-<section id="timeline-box">{timeline_html}<div id="playhead"></div></section>
+<section id="timeline-box">""")
+    _write_figure(timeline, "timeline", out)
+    del timeline
+    out.write("""<div id="playhead"></div></section>
 <section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
 </main>
 <script>
-const PRIMA_SHOW = {_script_json(data)};
+const PRIMA_SHOW = {"end":""")
+    out.write(script_json(model.timeline.end) + ',"rows":[')
+    if spool is None:
+        out.write(",".join(script_json(row) for row in model.rows))
+    else:
+        spool.seek(0)
+        shutil.copyfileobj(spool, out)
+    out.write(f'],"robot":{robot},"user":{user},'
+              f'"bubbles":{script_json([[b.who, b.start, b.end, b.text] for b in model.bubbles])},'
+              '"abs":')
+    for piece in model.ab_json():
+        out.write(piece)
+    rest = {"robotTrace": who["robot"], "userTrace": who["user"], "traces": traces,
+            "colours": _colours(model.timeline.apps)}
+    out.write("," + script_json(rest)[1:] + f""";
 </script>
 <script>
 {player}</script>
 </body>
 </html>
-"""
+""")

@@ -31,6 +31,7 @@ from prima.sim._scenario import (
     load_map,
     load_scenario,
     scenario_references,
+    late_inputs,
 )
 from prima.sim._simulator import Simulator
 from prima.sim._spec import DEFAULT_GESTURES, RobotSpec
@@ -65,6 +66,7 @@ __all__ = [
     "WorldMap",
     "Zone",
     "ZoneEntry",
+    "late_inputs",
     "load_map",
     "load_scenario",
     "main",

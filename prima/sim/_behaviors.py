@@ -608,6 +608,19 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
         yield sleep(sim.ticks(sim.spec.control_period))
         return {"waiting": "user", "toward": nxt.name, "goal": goal.name, **_pose(sim)}, False
     outcome = yield from _period_toward(sim, nxt.x, nxt.y)
+    if outcome is BLOCKED and math.dist(sim.world.robot.position, (nxt.x, nxt.y)) <= PASS_BY:
+        # someone stands on the place: the robot is there, as near as it can get
+        state["blocked"] = 0
+        sim.emit("place-reached", {"place": nxt.name, "kind": nxt.kind.value})
+        done = nxt.name == goal.name
+        if done:
+            state["toward"] = None
+            sim.end_loop(cid)
+        else:  # on to the next place, from here (not back to this one)
+            state["toward"] = path[1].name
+            state["x"], state["y"] = sim.world.robot.position
+        return {"place": nxt.name, "kind": nxt.kind.value, "goal": goal.name,
+                "remaining": len(path) - 1, "occupied": True}, done
     if outcome is BLOCKED:
         blocked = int(state.get("blocked") or 0) + 1
         state["blocked"] = blocked
@@ -671,6 +684,11 @@ def _route(sim: Simulator, goal: Place,
                 return None, places
     return sim.plan(goal.name)
 
+
+PASS_BY = 0.5
+"""A move blocked this close (m) to the place it heads for (its user stands on it, say)
+has reached it: it reports it and goes on to the next place, instead of waiting for
+the place to clear."""
 
 MAX_BLOCKED = 30
 """Blocked iterations in a row after which a move gives up (about 30 s of waiting)."""

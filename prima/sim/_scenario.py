@@ -29,7 +29,7 @@ from types import MappingProxyType
 import pymunk
 from lxml import etree
 
-from prima.errors import Problem, ScenarioError
+from prima.errors import Problem, ScenarioError, Severity
 from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
 from prima.sim._user import AnswerRule, TimedAction, UserScript
@@ -645,6 +645,43 @@ def scenario_references(path: str | Path) -> list[Reference]:
                     found.append(Reference(role, named, value,
                                            *doc.where.attribute(named_by, attribute)))
     return found
+
+
+_TIMED = ("message", "sound", "event")
+"""A scenario's inputs scheduled at a time (``at``)."""
+
+
+def late_inputs(path: str | Path) -> list[Problem]:
+    """A warning for each message, sound, event or user action a scenario times at or after
+    its ``until``: the run ends before it, so it never happens (read from the XML alone;
+    empty if the file cannot be read or its times are not numbers)."""
+    path = Path(path)
+    try:
+        doc = parse_xml(read_source(path, ScenarioError), str(path), ScenarioError)
+        until = float(doc.root.get("until", "inf"))
+    except (ScenarioError, ValueError):
+        return []
+    if etree.QName(doc.root).namespace != SCENARIO_NS:
+        return []
+    timed = [el for el in _children(doc.root) if local_name(el) in _TIMED]
+    for user in (el for el in _children(doc.root) if local_name(el) == "user"):
+        timed += [el for el in _children(user) if el.get("at") is not None]
+    out = []
+    users = {id(el) for user in _children(doc.root) if local_name(user) == "user"
+             for el in _children(user)}
+    order = {id(e): i for i, e in enumerate(doc.root.iter())}
+    for el in sorted(timed, key=lambda e: order[id(e)]):
+        try:
+            at = float(el.get("at", ""))
+        except ValueError:
+            continue
+        if at >= until:
+            what = "the user's" if id(el) in users else "this"
+            out.append(doc.problem(
+                el, f"{what} <{local_name(el)}> at {at:g} s is timed at or after the run ends "
+                    f"(until={until:g} s): it never happens", severity=Severity.WARNING,
+                attribute="at"))
+    return out
 
 
 def load_scenario(path: str | Path) -> Scenario:

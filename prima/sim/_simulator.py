@@ -559,14 +559,20 @@ class Simulator:
         if at is not None:
             starts = {at.name: 0.0}
         else:
+            # off the map's places, the robot joins the map at a place it can drive to
+            # straight and that passes no other place on the way (within ON_THE_WAY):
+            # every place on its way is visited and reported
             radius = self.spec.radius / 2
-            starts = {p.name: d for d, _, p in near if self.world.clear(x, y, p.x, p.y, radius)}
+            starts = {p.name: d for d, _, p in near
+                      if self.world.clear(x, y, p.x, p.y, radius)
+                      and not any(_on_the_way(x, y, p, q) for q in self.map.places)}
         names = self.map.shortest_path(starts, {goal: 0.0})
         if at is not None and names:
             names = names[1:]
         return at, [p for p in (self.map.place(n) for n in names) if p is not None]
 
     # ---- internals ------------------------------------------------------------------
+
 
     def _moving(self) -> bool:
         w = self.world
@@ -678,3 +684,22 @@ class Simulator:
         if self.world.mode and not any(ab in self._driving and ab not in self._blends
                                        for ab in self._running):
             self.world.stop()
+
+
+ON_THE_WAY = 0.5
+"""A place this close (m) to the straight way from the robot to another place is on
+the way: a Topological Move started off the map's places visits it first."""
+
+
+def _on_the_way(x: float, y: float, to: Place, other: Place) -> bool:
+    """Whether ``other`` lies on the straight way from (x, y) to ``to`` (not at its ends)."""
+    if other.name == to.name:
+        return False
+    dx, dy = to.x - x, to.y - y
+    length2 = dx * dx + dy * dy
+    if length2 == 0.0:
+        return False
+    k = ((other.x - x) * dx + (other.y - y) * dy) / length2
+    if not 0.0 < k < 1.0:
+        return False
+    return math.hypot(x + k * dx - other.x, y + k * dy - other.y) <= ON_THE_WAY

@@ -51,7 +51,18 @@ class Accepted:
     """Validation passes (warnings allowed)."""
 
 
-Verdict = Rejected | Accepted
+@dataclass(frozen=True)
+class Exits:
+    """Another command (``Case.command``) ends with ``code`` and says ``fragment`` (on
+    standard output or error), and nothing it says matches ``absent`` (a regular
+    expression: raw control characters, say)."""
+
+    code: int
+    fragment: str = ""
+    absent: str = ""
+
+
+Verdict = Rejected | Accepted | Exits
 
 
 @dataclass(frozen=True)
@@ -70,6 +81,11 @@ class Case:
     megabytes: int = 512
     then: Callable[[Path], object] | None = None
     """More work on an accepted input, inside the same limits."""
+    command: tuple[str, ...] = ()
+    """Another command than ``prima validate``, whole (``{path}``: the input, ``{dir}``:
+    its folder), with an :class:`Exits` verdict."""
+    stdin: str = ""
+    """What ``prima debug`` reads as typed."""
 
 
 @dataclass(frozen=True)
@@ -95,8 +111,16 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
         argv = [a.replace("{dir}", str(path.parent)) for a in case.argv]
         out, err = io.StringIO(), io.StringIO()
         start = time.process_time()
-        code = main(["validate", *argv, str(path)], out=out, err=err)
-        if case.then is not None and code == 0:
+        if case.command:
+            import prima.cli
+
+            prima.cli._stdin = lambda: io.StringIO(case.stdin)  # type: ignore[attr-defined]
+            command = [a.replace("{path}", str(path)).replace("{dir}", str(path.parent))
+                       for a in case.command]
+            code = main(command, out=out, err=err)
+        else:
+            code = main(["validate", *argv, str(path)], out=out, err=err)
+        if case.then is not None and (code == 0 or case.command):
             case.then(path)
         conn.send(Outcome(code, out.getvalue(), err.getvalue(), time.process_time() - start))
     except BaseException:  # noqa: BLE001 - everything is a failure of the case, reported

@@ -12,7 +12,8 @@ import pytest
 from prima.dsl import default_profile, parser
 from prima.xmlio import schema, verdict_schema
 from tests.redteam.cases import CASES, STATE, pxml, write
-from tests.redteam.runner import Accepted, Case, position, run_case
+from tests.redteam.surfaces import SURFACES
+from tests.redteam.runner import Accepted, Case, Exits, position, run_case
 
 _PROBLEM = re.compile(r"^(?P<file>.*):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.*)$")
 
@@ -28,12 +29,13 @@ def _built_once() -> None:
 
 
 def test_the_corpus_is_large_and_each_case_says_what_it_attacks() -> None:
-    assert len(CASES) >= 60
-    assert len({c.id for c in CASES}) == len(CASES)
-    assert all(c.attack for c in CASES)
+    every = [*CASES, *SURFACES]
+    assert len(CASES) >= 60 and len(SURFACES) >= 20
+    assert len({c.id for c in every}) == len(every)
+    assert all(c.attack for c in every)
 
 
-@pytest.mark.parametrize("case", CASES, ids=lambda c: c.id)
+@pytest.mark.parametrize("case", [*CASES, *SURFACES], ids=lambda c: c.id)
 def test_case(case: Case, tmp_path: Path) -> None:
     path, outcome = run_case(case, tmp_path)
     assert not outcome.crash, outcome.crash
@@ -41,6 +43,11 @@ def test_case(case: Case, tmp_path: Path) -> None:
     assert "Traceback" not in shown, shown
     assert outcome.seconds <= case.seconds, f"{outcome.seconds:.2f} s"
     errors = [m for m in map(_PROBLEM.match, shown.splitlines()) if m]
+    if isinstance(case.expect, Exits):
+        assert outcome.code == case.expect.code, shown[:2000]
+        assert case.expect.fragment in shown, shown[:2000]
+        assert not (case.expect.absent and re.search(case.expect.absent, shown)), shown[:2000]
+        return
     if isinstance(case.expect, Accepted):
         assert (outcome.code, errors) == (0, []), shown[:2000]
         return

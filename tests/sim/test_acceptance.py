@@ -299,3 +299,11 @@ def test_a_server_replying_at_once_still_lets_time_move() -> None:
     sim.send("srv", "ping")
     sim.advance_to(1.0)  # would never return if the reply came at the same instant
     assert len(pongs) == 50 and pongs[0] == pytest.approx(0.02)
+
+
+def test_topological_move_from_off_the_map_visits_every_place_on_its_way() -> None:
+    r = runner("office", Pose(2, 3, 0))  # between the entrance and the hall, not at a place
+    r.queue(call("TopologicalMove", to="corner"))
+    r.run(120)
+    reached = [e.data["place"] for e in r.events("place-reached")]
+    assert reached == ["hall", "poster", "corner"]  # it headed straight for the corner

@@ -1,0 +1,182 @@
+"""Reading a jsonl trace back: one reader for every reader (``prima judge``, ``show``,
+``plot``, the timeline, the Chrome trace, golden checks).
+
+A trace file may be damaged (cut short, edited by hand) or forged (written by
+someone else entirely). :func:`read_trace` streams it line by line, so a trace of
+a million lines is never held as text, and checks every line before a reader
+sees it: each field a reader uses has the type it expects, so what reads a
+trace never fails on a value of the wrong type. Bad lines are reported located
+(``file:line:col``) as one :class:`~prima.errors.TraceError` once the file is
+read (at most :data:`MAX_PROBLEMS` of them: reading stops there). Lines are
+split at ``\\n`` only (a ``\\r`` before it is allowed), never at the other
+characters ``str.splitlines`` takes for line ends: a writer escapes those
+(:func:`prima.escape.json_line`) and a reader does not split a line there.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+from prima.errors import Problem, Severity, TraceError
+
+__all__ = ["MAX_PROBLEMS", "MAX_LINE", "Row", "check_row", "load_trace", "read_trace", "rows"]
+
+Row = Mapping[str, Any]
+"""One line of a trace, as its jsonl dict."""
+
+MAX_PROBLEMS = 20
+"""Bad lines reported before reading stops."""
+
+MAX_LINE = 1 << 20
+"""The longest trace line read, in characters (1 MiB; a run's longest is a few kB)."""
+
+_EPS = 1e-6
+"""Times are rounded to the millisecond: a time this much earlier is not earlier."""
+
+_FIELD_TYPES: dict[str, tuple[type, ...]] = {
+    "app": (str,), "ab": (int,), "tree": (int,), "command": (str,), "text": (str,),
+    "reactive": (bool,), "reason": (str,), "action": (str,), "detail": (dict,),
+    "devices": (list,), "command_ids": (list,), "before": (int,),
+    "robot": (dict,), "user": (dict,),
+}
+"""The optional fields of a line and their types (a bool is not a number here)."""
+
+_DETAIL_TYPES: dict[str, tuple[type, ...]] = {
+    "command_id": (int,), "iteration": (int,), "precedes": (int,), "heard": (bool,),
+    "dropped": (str, int, bool), "result": (str,), "error": (str,), "spoken": (str,),
+    "interrupt": (str,), "over": (str,), "args": (str,), "document": (str,), "role": (str,),
+    "to": (str,), "place": (str,), "kind": (str,), "goal": (str,), "toward": (str,),
+    "unspoken": (str,), "at": (str,), "cuttable": (bool,), "face_user": (bool,),
+    "words_start": (int, float), "words_end": (int, float),
+}
+"""Details a reader uses, and their types; any other detail is a JSON scalar."""
+
+
+def _number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) \
+        and math.isfinite(value)
+
+
+def _typed(value: object, kinds: tuple[type, ...]) -> bool:
+    return (bool in kinds or not isinstance(value, bool)) and isinstance(value, kinds)
+
+
+def _check_detail(detail: Mapping[str, object]) -> str | None:
+    for key, value in detail.items():
+        kinds = _DETAIL_TYPES.get(key)
+        if value is None:
+            continue
+        if kinds is not None and not _typed(value, kinds):
+            return f"detail '{key}' has the wrong type ({type(value).__name__})"
+        if kinds is None and not isinstance(value, (str, int, float, bool)):
+            return f"detail '{key}' must be a text, a number or true/false"
+        if isinstance(value, float) and not math.isfinite(value):
+            return f"detail '{key}' must be a finite number"
+    return None
+
+
+def check_row(row: object) -> str | None:
+    """What is wrong with one decoded jsonl line (None: nothing)."""
+    if not isinstance(row, dict):
+        return "a trace line must be a JSON object"
+    required: tuple[tuple[str, tuple[type, ...]], ...] = (
+        ("t", (int, float)), ("seq", (int,)), ("kind", (str,)))
+    for key, kinds in required:
+        value = row.get(key)
+        if value is None:
+            return f"missing field '{key}'"
+        if not _typed(value, kinds):
+            return f"field '{key}' has the wrong type ({type(value).__name__})"
+    if not math.isfinite(row["t"]) or row["t"] < 0:
+        return f"field 't' must be a time from 0 up, not {row['t']}"
+    for key, kinds in _FIELD_TYPES.items():
+        value = row.get(key)
+        if value is not None and not _typed(value, kinds):
+            return f"field '{key}' has the wrong type ({type(value).__name__})"
+    for key in ("robot", "user"):
+        pose = row.get(key)
+        if pose is not None and not all(_number(pose.get(k)) for k in ("x", "y", "heading")):
+            return f"field '{key}' needs numbers x, y and heading"
+    if not all(isinstance(d, str) for d in row.get("devices") or ()):
+        return "field 'devices' must be a list of names"
+    ids = row.get("command_ids") or ()
+    if not all(_typed(c, (int,)) for c in ids):
+        return "field 'command_ids' must be a list of numbers"
+    return _check_detail(row.get("detail") or {})
+
+
+def _problem(name: str, line: int, col: int, message: str) -> Problem:
+    return Problem(name, line, col, Severity.ERROR, message)
+
+
+def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
+    """The lines of a jsonl trace file (``prima run --format jsonl``), checked, one at
+    a time (blank lines skipped).
+
+    Once the file is read, raises :class:`~prima.errors.TraceError` with every bad
+    line located as ``file:line:col`` (the bad lines are not yielded), or for a file
+    that cannot be read or has no lines.
+    """
+    path = Path(path)
+    name = str(path)
+    problems: list[Problem] = []
+    last_t = 0.0
+    count = 0
+    try:
+        with path.open(encoding="utf-8", newline="\n") as lines:
+            for number, line in enumerate(lines, start=1):
+                if len(line) > MAX_LINE:
+                    problems.append(_problem(name, number, 1, "the line is longer than "
+                                                              f"{MAX_LINE:,} characters"))
+                elif line.strip():
+                    row, wrong, col = _decode(line.removesuffix("\n").removesuffix("\r"))
+                    if wrong is None and row["t"] < last_t - _EPS:
+                        wrong = f"time goes backwards ({row['t']} after {last_t})"
+                    if wrong is not None:
+                        problems.append(_problem(name, number, col, wrong))
+                    else:
+                        last_t = row["t"]
+                        count += 1
+                        yield row
+                if len(problems) >= MAX_PROBLEMS:
+                    break
+    except (OSError, UnicodeDecodeError) as exc:
+        message = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        problems.append(_problem(name, 1, 1, f"cannot read the trace: {message}"))
+    if not count and not problems:
+        problems.append(_problem(name, 1, 1, "the trace has no lines"))
+    if problems:
+        raise TraceError(problems)
+
+
+def _decode(line: str) -> tuple[Any, str | None, int]:
+    """A line's JSON value, what is wrong with it, and where."""
+    try:
+        row = json.loads(line)
+    except json.JSONDecodeError as exc:
+        return None, f"not a JSON object: {exc.msg}", exc.colno
+    except RecursionError:
+        return None, "not a JSON object: nested too deep", 1
+    return row, check_row(row), 1
+
+
+def load_trace(path: str | Path) -> list[dict[str, Any]]:
+    """Every line of a jsonl trace file, checked (:func:`read_trace`), as a list."""
+    return list(read_trace(path))
+
+
+def rows(trace: Iterable[object]) -> Iterator[Row]:
+    """A trace's lines as jsonl dicts: TraceLine objects as the line each writes, dicts
+    as they are."""
+    for line in trace:
+        if isinstance(line, Mapping):
+            yield line
+        else:
+            to_dict = getattr(line, "to_dict", None)
+            if to_dict is None:
+                raise TypeError(f"a trace line is a TraceLine or a dict, not {type(line).__name__}")
+            yield to_dict()

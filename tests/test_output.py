@@ -1,0 +1,121 @@
+"""Every command writes its file through one path (:mod:`prima.output`): a file that
+cannot be written is a message, never a traceback, and nothing is left half-written;
+file names that are not UTF-8 are written and shown."""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+
+import pytest
+
+from prima.cli import main
+from tests.test_escape import speaking
+
+NOT_UTF8 = os.fsdecode(b"run-\xff")
+
+
+def _cli(*argv: str) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    return main(list(argv), out=out, err=err), out.getvalue(), err.getvalue()
+
+
+def _commands(scenario: Path, target: str) -> list[list[str]]:
+    plots = [["plot", str(scenario), "-o", target + suffix] for suffix in (".svg", ".gif")]
+    return [["run", str(scenario), "--out", target + ".txt"],
+            ["run", str(scenario), "--format", "jsonl", "--out", target + ".jsonl"],
+            ["run", str(scenario), "--format", "chrome-trace", "--out", target + ".json"],
+            ["show", str(scenario), "-o", target + ".html"], *plots]
+
+
+def test_a_full_disk_is_a_message(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("plotly")
+    scenario = speaking(tmp_path, "hello")
+    for argv in _commands(scenario, "/dev/full"):
+        argv[-1] = "/dev/full"
+        status, _, err = _cli(*argv)
+        assert (status, err.splitlines()) == (
+            1, [f"prima {argv[0]}: error: cannot write /dev/full: No space left on device"]
+        ) or (argv[0] == "plot" and status == 2), (argv, err)
+
+
+@pytest.mark.parametrize("target", ["/proc/version", "/proc/no/such/folder/x"])
+def test_a_target_that_cannot_be_written_is_a_message(tmp_path: Path, target: str) -> None:
+    scenario = speaking(tmp_path, "hello")
+    status, _, err = _cli("run", str(scenario), "--out", target)
+    assert status in (1, 2) and "Traceback" not in err
+    assert err.startswith("prima run: error: ") and target in err, err
+
+
+def test_a_failed_run_leaves_no_file_and_keeps_the_old_one(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    scenario = speaking(tmp_path, "hello")
+    kept = tmp_path / "kept.txt"
+    kept.write_text("the old trace\n")
+
+    def fails(_self: object) -> None:
+        from prima.errors import RunError
+        raise RunError("the run loop stopped making progress")
+
+    monkeypatch.setattr("prima.run.Run.run", fails)
+    status, _, err = _cli("run", str(scenario), "--out", str(kept))
+    assert status == 1 and "stopped making progress" in err
+    assert kept.read_text() == "the old trace\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ea.pxml", "kept.txt", "map.xml",
+                                                           "s.xml"]
+
+
+def test_file_names_that_are_not_utf8(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("plotly")
+    scenario = speaking(tmp_path, "hello").rename(tmp_path / f"{NOT_UTF8}.xml")
+    for argv in _commands(scenario, str(tmp_path / NOT_UTF8)):
+        status, out, err = _cli(*argv)
+        assert status == 0, (argv, err)
+        assert Path(argv[-1]).stat().st_size > 0
+        assert "\udcff" not in out + err
+    status, _, err = _cli("show", str(tmp_path / f"{NOT_UTF8}.jsonl"), "-o",
+                          str(tmp_path / "page.html"))
+    assert status == 0 and "\\xff" not in err
+    page = (tmp_path / "page.html").read_text(encoding="utf-8")
+    assert "<title>prima show: run-\\xff</title>" in page
+
+
+def test_a_sweep_checks_where_it_writes_before_it_runs(tmp_path: Path) -> None:
+    scenario = speaking(tmp_path, "hello")
+    (tmp_path / "file").write_text("")
+    status, out, err = _cli("sweep", str(scenario), "--runs", "2", "--jitter", "1",
+                            "--out", str(tmp_path / "file" / "worst"))
+    assert status == 2 and out == "" and "is not a folder" in err, err
+
+
+@pytest.mark.parametrize("form", ["text", "jsonl", "chrome-trace"])
+def test_sigterm_keeps_the_trace_written_so_far(tmp_path: Path, form: str) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    trace = tmp_path / "run.out"
+    scenario = Path(__file__).parents[1] / "scenarios" / "thesis" / "sample-03.xml"
+    child = subprocess.Popen([sys.executable, "-m", "prima", "run", str(scenario), "--until",
+                              "100000", "--format", form, "--out", str(trace)],
+                             stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not list(tmp_path.glob(".prima-*")):
+        time.sleep(0.05)
+    time.sleep(1.5)  # the run is under way (sample-03 ends at 60 s; this goes on and on)
+    child.send_signal(signal.SIGTERM)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == 143, err
+    assert "prima run: interrupted at t=" in err and "Traceback" not in err
+    text = trace.read_text(encoding="utf-8")
+    assert text.endswith("\n") and "Come on, follow me." in text  # said at 32.64 s
+    if form == "jsonl":
+        from prima.tracefile import load_trace
+        assert load_trace(trace)[-1]["t"] > 60
+    if form == "chrome-trace":
+        import json
+        assert json.loads(text)[-1]["ph"] in ("e", "X", "i", "M")
