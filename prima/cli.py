@@ -180,6 +180,19 @@ def build_parser() -> argparse.ArgumentParser:
                       help="the page to write (default: RUN's name with .html, in the "
                            "current folder)")
     _add_plot(commands)
+    lsp = commands.add_parser(
+        "lsp",
+        help="serve the language server protocol on stdio (for editors)",
+        description="A language server for PXML documents, robot profiles, scenarios and "
+                    "maps: diagnostics as prima validate words them, completion, hover and "
+                    "go-to-definition (docs/editors.md). An editor starts it; it talks "
+                    "the Language Server Protocol on stdin and stdout. Needs the lsp extra: "
+                    "pip install 'prima[lsp]'.",
+    )
+    lsp.add_argument("--robot", metavar="PROFILE",
+                     help="robot hardware profile documents are checked against, over a "
+                          "scenario's (as prima validate --robot; default: the scenario's "
+                          "that runs the document, else the home robot)")
     return parser
 
 
@@ -503,6 +516,18 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         print(f"{n} file{'s' if n != 1 else ''} checked: {report.errors} error(s), "
               f"{report.warnings} warning(s)", file=err)
     return EXIT_ERRORS if report.errors else EXIT_OK
+
+
+def make_validation(profile: RobotProfile, *, robot: bool = False) -> Validation:
+    """A validation as ``prima validate`` makes one: documents and robot profiles, and
+    scenarios and maps with every file they name (``robot``: the documents a scenario
+    runs are checked against ``profile``, as ``--robot`` asks, not the scenario's
+    robot). ``prima lsp`` checks an editor's buffer with it."""
+    from prima.dsl import Validation
+
+    made: Validation = Validation(profile,
+                                  more_checkers=lambda: _scenario_checkers(made, robot))
+    return made
 
 
 def _run_usage(args: argparse.Namespace) -> str | None:
@@ -896,6 +921,18 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
+def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    problem = _missing_extra("pygls", "pygls", "lsp")
+    if problem is None and args.robot is not None and not Path(args.robot).is_file():
+        problem = f"no such file: {args.robot}"
+    if problem:
+        return _usage("lsp", problem, err)
+    from prima.lsp import serve
+
+    serve(Path(args.robot).resolve() if args.robot else None)
+    return EXIT_OK
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
@@ -905,5 +942,6 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "sweep": _sweep,
     "plot": _plot,
     "show": _show,
+    "lsp": _lsp,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

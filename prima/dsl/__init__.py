@@ -30,6 +30,7 @@ on) are private. In the direction data flows:
 from prima.dsl._build_schema import command_elements, schema_source
 from prima.dsl._commands import element_name
 from prima.dsl._expr import (
+    CLOCK_FUNCTIONS,
     FUNCTIONS,
     ChainArg,
     ChainStep,
@@ -100,6 +101,7 @@ from prima.dsl._validate import (
 )
 
 __all__ = [
+    "CLOCK_FUNCTIONS",
     "FUNCTIONS",
     "NAMESPACE",
     "ROBOT_NAMESPACE",
