@@ -97,10 +97,13 @@ def build_parser() -> argparse.ArgumentParser:
                     "one JSON object per line (jsonl).",
     )
     _scenario_arguments(run)
-    run.add_argument("--format", choices=("text", "jsonl", "chrome-trace"), default="text",
+    run.add_argument("--format", choices=("text", "jsonl", "chrome-trace", "mcap"),
+                     default="text",
                      help="trace format (default: text); chrome-trace: the Trace Event "
-                          "Format, for Perfetto or chrome://tracing")
-    run.add_argument("--out", metavar="FILE", help="write the trace to FILE instead of stdout")
+                          "Format, for Perfetto or chrome://tracing; mcap: a recording for "
+                          "Foxglove (with --out; the mcap extra)")
+    run.add_argument("-o", "--out", metavar="FILE",
+                     help="write the trace to FILE instead of stdout")
     run.add_argument("--pose-rate", type=float, default=2.0, metavar="HZ",
                      help="pose samples per simulated second in the jsonl trace "
                           "(default: 2; 0: none)")
@@ -553,6 +556,13 @@ def _run_usage(args: argparse.Namespace) -> str | None:
     return None
 
 
+def _mcap_usage(args: argparse.Namespace) -> str | None:
+    """What ``prima run --format mcap`` needs besides: a file to write, and foxglove-sdk."""
+    if not args.out:
+        return "--format mcap writes a binary file: give --out FILE"
+    return _missing_extra("foxglove", "foxglove-sdk", "mcap")
+
+
 def _policies(given: list[str]) -> dict[str, bool] | str:
     """``--policy NAME=on|off`` switches, in order (a later one wins), or what is wrong."""
     out: dict[str, bool] = {}
@@ -573,7 +583,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
-    problem = _run_usage(args)
+    problem = _run_usage(args) or (_mcap_usage(args) if args.format == "mcap" else None)
     if problem:
         return _usage("run", problem, err)
     # Everything is loaded and checked before the output is opened; then each trace
@@ -582,7 +592,8 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               seed=args.seed, until=args.until, sink=lambda line: write(line),
               pose_rate=args.pose_rate, policies=args.policy)
     with contextlib.ExitStack() as files:
-        to = files.enter_context(open(args.out, "w", encoding="utf-8")) if args.out else out
+        to = files.enter_context(open(args.out, "w", encoding="utf-8")) \
+            if args.out and args.format != "mcap" else out
         if args.format == "text":
             print(TextTrace.HEADER, file=to)
             text = TextTrace()
@@ -600,6 +611,15 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             def write(line: TraceLine) -> None:
                 chrome.write(line)
                 ctrl_c.check()  # Ctrl-C lands between two lines: the file stays whole
+        elif args.format == "mcap":
+            from prima.mcap import Recorder
+
+            recorder = files.enter_context(Recorder(args.out, run.scenario.map))
+            ctrl_c = files.enter_context(_between_lines())
+
+            def write(line: TraceLine) -> None:
+                recorder.write(line)
+                ctrl_c.check()  # Ctrl-C lands between two lines: the file is finished whole
         else:
             def write(line: TraceLine) -> None:
                 to.write(jsonl_row(line))
