@@ -182,6 +182,10 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("-o", "--out", metavar="FILE",
                       help="the page to write (default: RUN's name with .html, in the "
                            "current folder)")
+    show.add_argument("--audio", action="store_true",
+                      help="put each utterance in the page as sound, synthesised by "
+                           "espeak-ng, played with the playhead (needs espeak-ng: "
+                           "apt-get install espeak-ng)")
     _add_plot(commands)
     lsp = commands.add_parser(
         "lsp",
@@ -862,12 +866,16 @@ def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.show import read_rows, render
 
     problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show")
+    if not problem and args.audio:
+        from prima.audio import available
+
+        problem = available()
     if problem:
         return _usage("show", problem, err)
     source = Path(args.input)
     rows = read_rows(source)
     scenario = source if source.suffix == ".xml" else args.scenario
-    text = render(rows, scenario=scenario, title=source.stem)
+    text = render(rows, scenario=scenario, title=source.stem, audio=args.audio)
     Path(args.out).write_text(text, encoding="utf-8")
     abs_ = sum(1 for row in rows if row["kind"] == "start")
     print(f"prima show: wrote {args.out} ({abs_} atomic behavior(s), "

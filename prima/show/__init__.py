@@ -8,7 +8,8 @@ its Command, suspensions and holds hatched, releases, cancels and cuts marked
 trace table.
 One playhead drives all three. Plotly draws the map and the timeline (its
 JavaScript is inlined: the page works offline, from ``file://``); a small
-player script moves the playhead.
+player script moves the playhead. With ``audio``, every utterance is in the page
+as sound too (:mod:`prima.audio`, espeak-ng), played in time with the playhead.
 
 A viewer, apart from the core: only ``prima show`` imports it, and it needs
 the ``show`` extra (``pip install 'prima[show]'``).
@@ -38,8 +39,10 @@ def read_rows(path: str | Path) -> list[dict[str, Any]]:
 
 
 def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None,
-           title: str = "run") -> str:
-    """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any)."""
+           title: str = "run", *, audio: bool = False) -> str:
+    """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any).
+    With ``audio``, each utterance is in the page as sound (espeak-ng), played with the
+    playhead."""
     try:
         from prima.show._page import page
     except ImportError as exc:  # the plotting library is an optional extra
@@ -49,4 +52,9 @@ def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None
     from prima.sim import load_scenario
 
     world = load_scenario(scenario).map if scenario is not None else None
-    return page(build(rows), world, title)
+    sounds = ""
+    if audio:
+        from prima.show._sound import clips, elements
+
+        sounds = elements(clips(rows, scenario))
+    return page(build(rows), world, title, sounds)

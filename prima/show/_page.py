@@ -25,6 +25,9 @@ _MARK_STYLE = {
     "interrupt": ("star-triangle-down", "#8e44ad", "cut"),
     "cancel": ("x", "#7f8c8d", "cancelled"),
 }
+_SOUND_TOGGLE = ('<label title="the words, heard at 0.5x to 4x"><input id="sound" '
+                 'type="checkbox" checked> sound</label>')
+"""With sound in the page: a switch for it beside the playback controls."""
 _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": ["select2d",
                                                                                "lasso2d"]}
 
@@ -203,8 +206,9 @@ def _script_json(value: object) -> str:
     return text.replace("</", "<\\/").replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
 
 
-def page(model: Model, world: WorldMap | None, title: str) -> str:
-    """The whole self-contained page (Plotly's JavaScript inlined)."""
+def page(model: Model, world: WorldMap | None, title: str, sounds: str = "") -> str:
+    """The whole self-contained page (Plotly's JavaScript inlined); ``sounds``: the
+    utterances' audio elements (``prima show --audio``), if any."""
     map_fig, who = map_figure(model, world)
     timeline, traces = timeline_figure(model)
     map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
@@ -239,6 +243,7 @@ def page(model: Model, world: WorldMap | None, title: str) -> str:
 <label>speed <select id="speed">{speeds}</select></label>
 <input id="scrub" type="range" min="0" max="{model.timeline.end}" step="0.01" value="0">
 <span id="clock">0.00 s</span>
+{_SOUND_TOGGLE if sounds else ""}
 </header>
 <main>
 <section id="top">
@@ -249,6 +254,7 @@ to jump there and see why the mediator decided it.</p></aside>
 <section id="timeline-box">{timeline_html}<div id="playhead"></div></section>
 <section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
+<div id="sounds" hidden>{sounds}</div>
 </main>
 <script>
 const PRIMA_SHOW = {_script_json(data)};
