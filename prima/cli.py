@@ -186,6 +186,10 @@ def build_parser() -> argparse.ArgumentParser:
                       help="put each utterance in the page as sound, synthesised by "
                            "espeak-ng, played with the playhead (needs espeak-ng: "
                            "apt-get install espeak-ng)")
+    show.add_argument("--speech-timing", choices=("model", "tts"), default="model",
+                      help="how long utterances take in a scenario's run: model (default): "
+                           "the robot's speech rate, as every other command; tts: as "
+                           "espeak-ng says them, their words cut where it ends them")
     _add_plot(commands)
     lsp = commands.add_parser(
         "lsp",
@@ -863,19 +867,23 @@ def _show_usage(args: argparse.Namespace) -> str | None:
 
 
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.show import read_rows, render
+    from prima.show import read_rows, render, speech_timing
 
     problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show")
-    if not problem and args.audio:
+    tts = args.speech_timing == "tts"
+    if not problem and tts and Path(args.input).suffix != ".xml":
+        problem = "--speech-timing tts times a run: give a scenario, not a trace"
+    if not problem and (args.audio or tts):
         from prima.audio import available
 
         problem = available()
     if problem:
         return _usage("show", problem, err)
     source = Path(args.input)
-    rows = read_rows(source)
+    timing = speech_timing(source) if tts else None
+    rows = read_rows(source, speech=timing)
     scenario = source if source.suffix == ".xml" else args.scenario
-    text = render(rows, scenario=scenario, title=source.stem, audio=args.audio)
+    text = render(rows, scenario=scenario, title=source.stem, audio=args.audio, timing=timing)
     Path(args.out).write_text(text, encoding="utf-8")
     abs_ = sum(1 for row in rows if row["kind"] == "start")
     print(f"prima show: wrote {args.out} ({abs_} atomic behavior(s), "

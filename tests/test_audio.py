@@ -142,3 +142,38 @@ def test_audio_needs_espeak_ng(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
     page = tmp_path / "x.html"
     assert main(["show", str(SAMPLE_10), "--audio", "-o", str(page)], err=err) == 2
     assert "espeak-ng is not installed" in err.getvalue() and not page.exists()
+
+
+def test_speech_timed_by_the_synthesiser_cuts_where_the_voice_ends_a_word() -> None:
+    """``--speech-timing tts``: a run's utterances take as long as espeak-ng's voice
+    takes, and the interrupt policy cuts one where the voice ends the word under way;
+    the page's sound is then the voice itself, up to the cut."""
+    from prima.audio import SynthesisedTiming
+    from prima.show._sound import clips
+
+    timing = SynthesisedTiming(2.5)
+    rows = [line.to_dict() for line in Run(INTERRUPT, speech=timing).run()]
+    tick = 1 / 50
+    speak = next(r for r in rows if r["kind"] == "end" and r["command"] == "Speak")
+    start = next(r for r in rows if r["kind"] == "start" and r["ab"] == speak["ab"])
+    said = float(speak["detail"]["result"].split("duration=")[1].split(",")[0])
+    assert said == pytest.approx(timing.said(start["text"])[0], abs=tick)
+    assert said != pytest.approx(MODEL(start["text"]), abs=tick)  # not the 2.5 words/s model
+    [cut] = [r for r in rows if r["kind"] == "end" and r.get("reason") == "interrupt"]
+    whole = cut["text"]
+    k = len(cut["detail"]["spoken"].split())
+    assert cut["detail"]["spoken"] == " ".join(whole.split()[:k])
+    [made] = [c for c in clips(rows, INTERRUPT, timing) if c.utterance.cut]
+    assert made.utterance.duration == pytest.approx(timing.said(whole)[1][k - 1], abs=tick)
+    voice = timing.speech(whole).samples
+    halved = [(a + b) // 2 for a, b in zip(voice[0:40:2], voice[1:40:2], strict=True)]
+    assert list(made.samples[:20]) == halved  # the voice itself, from its start
+
+
+def test_tts_timing_runs_a_scenario(tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    assert main(["run", str(SAMPLE_10), "--format", "jsonl", "--out", str(trace)]) == 0
+    err = io.StringIO()
+    assert main(["show", str(trace), "--speech-timing", "tts", "-o",
+                 str(tmp_path / "x.html")], err=err) == 2
+    assert "--speech-timing tts times a run: give a scenario, not a trace" in err.getvalue()

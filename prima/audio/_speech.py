@@ -17,17 +17,19 @@ from __future__ import annotations
 
 import os
 import pickle
+import re
 import struct
 import sys
 from array import array
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from prima.audio._espeak import RATE_MAX, RATE_MIN, Speech, SpeechError, _engine, _LOCK
 from prima.catalog import Catalog
 
-__all__ = ["OUTPUT_RATE", "Clip", "Utterance", "clip", "synthesise", "utterances", "wav"]
+__all__ = ["OUTPUT_RATE", "Clip", "Ends", "SynthesisedTiming", "Utterance", "clip", "synthesise",
+           "utterances", "wav"]
 
 OUTPUT_RATE = 11_025
 """Samples per second of the page's sound (espeak-ng's 22,050 halved: its voice is
@@ -92,7 +94,12 @@ def _speaks_last(command: str) -> bool:
     return last is not None and not last.listens and "speaker" in last.devices
 
 
-def _said(start: Row, end: Row, model: Callable[[str], float]) -> Utterance | None:
+Ends = Callable[[str], Sequence[float]]
+"""When each word of a text ends, from its start (s): a synthesiser's word boundaries."""
+
+
+def _said(start: Row, end: Row, model: Callable[[str], float],
+          ends: Ends | None = None) -> Utterance | None:
     whole = " ".join(str(start["text"]).split(" / "))
     t0, t1 = float(start["t"]), float(end["t"])
     ab, app, command = int(start["ab"]), str(start.get("app") or ""), str(start.get("command"))
@@ -102,8 +109,10 @@ def _said(start: Row, end: Row, model: Callable[[str], float]) -> Utterance | No
         k, n = len(spoken.split()), len(whole.split())
         if not k or not n:
             return None  # cut before its first word
-        return Utterance(ab, app, command, max(t0, round(t1 - full * k / n, 6)), t1, spoken,
-                         whole, cut=True)
+        bounds = ends(whole) if ends is not None else ()
+        took = bounds[k - 1] if len(bounds) == n else full * k / n
+        return Utterance(ab, app, command, max(t0, round(t1 - took, 6)), t1, spoken, whole,
+                         cut=True)
     said = _result(end).get("duration")
     if said is not None and _speaks_last(command):
         duration = float(said)
@@ -111,9 +120,11 @@ def _said(start: Row, end: Row, model: Callable[[str], float]) -> Utterance | No
     return Utterance(ab, app, command, t0, round(min(t1, t0 + full), 6), whole, whole)
 
 
-def utterances(rows: Iterable[Row], model: Callable[[str], float]) -> list[Utterance]:
+def utterances(rows: Iterable[Row], model: Callable[[str], float],
+               ends: Ends | None = None) -> list[Utterance]:
     """Every utterance of a run's trace rows, by start; ``model`` gives how long saying a
-    text takes (the robot's ``speech_duration``). An utterance still under way when the
+    text takes (the robot's ``speech_duration``), ``ends`` when each of its words ends
+    (None: evenly, as the speech rate has it). An utterance still under way when the
     trace ends is kept up to there."""
     running: dict[int, Row] = {}
     out: list[Utterance] = []
@@ -124,11 +135,11 @@ def utterances(rows: Iterable[Row], model: Callable[[str], float]) -> list[Utter
         if row["kind"] == "start" and row.get("text") and isinstance(ab, int):
             running[ab] = row
         elif row["kind"] == "end" and isinstance(ab, int) and ab in running:
-            found = _said(running.pop(ab), row, model)
+            found = _said(running.pop(ab), row, model, ends)
             if found is not None and found.end > found.start:
                 out.append(found)
     for start in running.values():
-        found = _said(start, {"t": last, "detail": {}}, model)
+        found = _said(start, {"t": last, "detail": {}}, model, ends)
         if found is not None and found.end > found.start:
             out.append(found)
     return sorted(out, key=lambda u: (u.start, u.ab))
@@ -189,18 +200,22 @@ def _rate(wpm: float) -> int:
     return max(RATE_MIN, min(RATE_MAX, round(wpm)))
 
 
-def clip(utterance: Utterance) -> Clip:
+def clip(utterance: Utterance, timing: SynthesisedTiming | None = None) -> Clip:
     """The utterance's words synthesised to last exactly its span: said at the rate that
     fills it (espeak-ng's words per minute, 80 to 450; a second try corrects the first
     guess), then the silence at its end trimmed or padded; what is still too long is cut
-    with a 20 ms fade."""
+    with a 20 ms fade. With ``timing`` (the run was timed by the synthesiser), the whole
+    utterance as ``timing`` said it, up to the end of its span (a cut one: its cut word)."""
     duration = utterance.duration
     target = max(1, round(duration * OUTPUT_RATE))
-    wpm = _rate(60 * max(1, len(utterance.text.split())) / duration)
-    speech = synthesise(utterance.text, wpm)
-    better = _rate(wpm * _voiced(speech.samples) / speech.rate / duration)
-    if better != wpm:
-        speech = synthesise(utterance.text, better)
+    if timing is not None:
+        speech = timing.speech(utterance.whole)
+    else:
+        wpm = _rate(60 * max(1, len(utterance.text.split())) / duration)
+        speech = synthesise(utterance.text, wpm)
+        better = _rate(wpm * _voiced(speech.samples) / speech.rate / duration)
+        if better != wpm:
+            speech = synthesise(utterance.text, better)
     samples = _halve(speech.samples[:_voiced(speech.samples)])
     if len(samples) >= target:
         samples = samples[:target]
@@ -211,6 +226,48 @@ def clip(utterance: Utterance) -> Clip:
         samples.extend([0] * (target - len(samples)))
     words = tuple(round(at / speech.rate, 3) for _, _, at in speech.words)
     return Clip(utterance, samples, words)
+
+
+class SynthesisedTiming:
+    """Utterances timed by espeak-ng (``prima show --speech-timing tts``): saying a text
+    takes as long as espeak-ng's voice takes at the robot's speech rate (2.5 words a
+    second: 150 words a minute), and its words end where the voice ends them. A
+    :class:`~prima.sim.SpeechTiming` for the simulator; each text is synthesised once."""
+
+    def __init__(self, words_per_second: float) -> None:
+        self.wpm = _rate(60 * words_per_second)
+        self._said: dict[str, tuple[Speech, float, tuple[float, ...]]] = {}
+
+    def _say(self, text: str) -> tuple[Speech, float, tuple[float, ...]]:
+        if text not in self._said:
+            speech = synthesise(text, self.wpm)
+            voiced = _voiced(speech.samples) / speech.rate
+            self._said[text] = (speech, voiced, _word_ends(text, speech, voiced))
+        return self._said[text]
+
+    def speech(self, text: str) -> Speech:
+        """``text`` as the voice says it."""
+        return self._say(text)[0]
+
+    def said(self, text: str) -> tuple[float, tuple[float, ...]]:
+        _speech, voiced, ends = self._say(text)
+        return voiced, ends
+
+
+def _word_ends(text: str, speech: Speech, voiced: float) -> tuple[float, ...]:
+    """When each word of ``text`` (split on white space) ends in ``speech``: where the
+    voice begins the next one (its word events, by character), the last at the end."""
+    starts = [m.start() for m in re.finditer(r"\S+", text)]
+    events = sorted(speech.words)
+    out = []
+    for nxt in starts[1:]:
+        at = next((sample for char, _length, sample in events if char >= nxt), None)
+        out.append(voiced if at is None else min(voiced, at / speech.rate))
+    if starts:
+        out.append(voiced)
+    for i in range(1, len(out)):  # never backwards
+        out[i] = max(out[i], out[i - 1])
+    return tuple(round(t, 6) for t in out)
 
 
 def wav(samples: array[int], rate: int = OUTPUT_RATE) -> bytes:

@@ -19,15 +19,20 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from prima.errors import PrimaError
 
-__all__ = ["read_rows", "render"]
+if TYPE_CHECKING:
+    from prima.audio import SynthesisedTiming
+    from prima.sim import SpeechTiming
+
+__all__ = ["read_rows", "render", "speech_timing"]
 
 
-def read_rows(path: str | Path) -> list[dict[str, Any]]:
-    """A run's rows: a jsonl trace read (located errors), or a scenario run in-process."""
+def read_rows(path: str | Path, speech: SpeechTiming | None = None) -> list[dict[str, Any]]:
+    """A run's rows: a jsonl trace read (located errors), or a scenario run in-process
+    (its utterances timed by ``speech``, if given: :func:`speech_timing`)."""
     path = Path(path)
     if path.suffix == ".jsonl":
         from prima.judge import load_trace
@@ -35,14 +40,23 @@ def read_rows(path: str | Path) -> list[dict[str, Any]]:
         return load_trace(path)
     from prima.run import Run
 
-    return [line.to_dict() for line in Run(path).run()]
+    return [line.to_dict() for line in Run(path, speech=speech).run()]
+
+
+def speech_timing(scenario: str | Path) -> SynthesisedTiming:
+    """Utterances timed by espeak-ng at the speech rate of the scenario's robot
+    (``prima show --speech-timing tts``), for :func:`read_rows` and :func:`render`."""
+    from prima.show._sound import speech_timing as timing
+
+    return timing(scenario)
 
 
 def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None,
-           title: str = "run", *, audio: bool = False) -> str:
+           title: str = "run", *, audio: bool = False,
+           timing: SynthesisedTiming | None = None) -> str:
     """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any).
     With ``audio``, each utterance is in the page as sound (espeak-ng), played with the
-    playhead."""
+    playhead; ``timing``: the one the run was timed by, if it was by the synthesiser."""
     try:
         from prima.show._page import page
     except ImportError as exc:  # the plotting library is an optional extra
@@ -56,5 +70,5 @@ def render(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None = None
     if audio:
         from prima.show._sound import clips, elements
 
-        sounds = elements(clips(rows, scenario))
+        sounds = elements(clips(rows, scenario, timing))
     return page(build(rows), world, title, sounds)

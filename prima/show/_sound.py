@@ -7,23 +7,41 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from prima.audio import Clip, clip, utterances, wav
+from prima.audio import Clip, SynthesisedTiming, clip, utterances, wav
+from prima.dsl import RobotProfile
 
 
-def clips(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None) -> list[Clip]:
-    """Every utterance of the trace, synthesised to last as long as the run says it, by
-    the speech model of the scenario's robot (the home robot's without a scenario)."""
+def _profile(scenario: str | Path | None) -> RobotProfile:
+    """The scenario's robot (the home robot without a scenario, or without a profile)."""
     from prima.dsl import default_profile, load_profile
-    from prima.run import spec_from_profile
     from prima.sim import load_scenario
 
-    profile = default_profile()
     if scenario is not None:
         loaded = load_scenario(scenario)
         if loaded.profile:
-            profile = load_profile(loaded.resolve(loaded.profile))
-    model = spec_from_profile(profile).speech_duration
-    return [clip(u) for u in utterances(rows, model)]
+            return load_profile(loaded.resolve(loaded.profile))
+    return default_profile()
+
+
+def speech_timing(scenario: str | Path) -> SynthesisedTiming:
+    """Utterances timed by espeak-ng at the speech rate of the scenario's robot."""
+    return SynthesisedTiming(_profile(scenario).speech_rate)
+
+
+def clips(rows: Sequence[Mapping[str, Any]], scenario: str | Path | None,
+          timing: SynthesisedTiming | None = None) -> list[Clip]:
+    """Every utterance of the trace, synthesised to last as long as the run says it: by
+    the speech model of the scenario's robot (the home robot's without a scenario), or
+    by ``timing`` when the run was timed by the synthesiser."""
+    from prima.run import spec_from_profile
+
+    spec = spec_from_profile(_profile(scenario))
+    if timing is None:
+        said = utterances(rows, spec.speech_duration)
+    else:
+        said = utterances(rows, lambda text: max(spec.min_utterance, timing.said(text)[0]),
+                          lambda text: timing.said(text)[1])
+    return [clip(u, timing) for u in said]
 
 
 def elements(found: Sequence[Clip]) -> str:

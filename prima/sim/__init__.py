@@ -33,7 +33,7 @@ from prima.sim._scenario import (
     scenario_references,
 )
 from prima.sim._simulator import Simulator
-from prima.sim._spec import DEFAULT_GESTURES, RobotSpec
+from prima.sim._spec import DEFAULT_GESTURES, RobotSpec, SpeechTiming
 from prima.sim._user import AnswerRule, ScriptedUser, TimedAction, UserScript
 
 __all__ = [
@@ -56,6 +56,7 @@ __all__ = [
     "ScheduledEvent",
     "ScriptedUser",
     "Simulator",
+    "SpeechTiming",
     "TimedAction",
     "TraceEntry",
     "UserAction",
