@@ -139,6 +139,17 @@ class Param:
     shown: bool = True
     """Shown among the Command's arguments in the trace (a Q&A's timeout is not)."""
 
+    def describe(self) -> str:
+        """One line for people: its kind, unit, whether it may be left out and its default,
+        and what it is (``number in deg, optional, default 90: how far ...``). The schema's
+        documentation of the attribute and the language server's hover both show it."""
+        head = self.kind.value + (f" in {self.unit}" if self.unit else "")
+        if not self.required:
+            head += ", optional"
+            if self.default is not None and self.default != "":
+                head += f", default {_shown_value(self.default)}"
+        return f"{head}: {self.doc}" if self.doc else head
+
 
 @dataclass(frozen=True)
 class ArgRef:
@@ -264,6 +275,38 @@ class CommandSpec:
             return self.priority_override
         return Priority.LOW if self.breaks_cc else Priority.HIGH
 
+    def signature(self) -> str:
+        """How a chain writes it: ``QA(prompt, grammar, into?, timeout=8)`` (``?``: it
+        may be left out; ``=``: its default)."""
+        parts = []
+        for p in self.params:
+            if p.required:
+                parts.append(p.name)
+            elif p.default is None or p.default == "":
+                parts.append(f"{p.name}?")
+            else:
+                parts.append(f"{p.name}={_shown_value(p.default)}")
+        return f"{self.name}({', '.join(parts)})"
+
+    def describe(self) -> str:
+        """A paragraph for people: what it does, how a chain writes it, its devices and how
+        it is scheduled. The one text a Command has: ``schemas/pxml.xsd`` documents its
+        element with it (generated: ``python -m prima.dsl._build_schema``) and the
+        language server's hover shows it."""
+        text = [self.doc or f"The robot's own Command {self.name}.",
+                f"Chain: {self.signature()}."]
+        text += [f"Give exactly one of {' or '.join(sorted(g))}." for g in self.one_of]
+        text.append(f"Devices: {', '.join(sorted(self.devices)) or 'none'}.")
+        if self.feedback:
+            text.append("A feedback loop: one atomic behavior per iteration, and the other "
+                        "application may act between two.")
+        if self.breaks_cc:
+            text.append("It breaks the Communication Channel: low priority, delayed while the "
+                        "other application talks with the user.")
+        if self.robot_specific:
+            text.append("Robot-specific: only an FA may use it.")
+        return " ".join(text)
+
     def param(self, name: str) -> Param | None:
         for p in self.params:
             if p.name == name:
@@ -293,6 +336,15 @@ class CommandSpec:
             return []
         return [str(args[p.name]) for p in self.params
                 if p.kind is ParamKind.TEXT and args.get(p.name)]
+
+
+def _shown_value(value: Value) -> str:
+    """A default as a chain would write it: ``90``, ``1.5``, ``""``, ``user``."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and value.is_integer():
+        return str(int(value))
+    return str(value)
 
 
 def _spec(name: str, devices: str, *, fb: bool = False, breaks: bool = False,
@@ -326,7 +378,7 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
               "turn the view and retry."),
     _spec("FaceHuman", "human-detection locomotion", doc="Turn the body to face the user."),
     _spec("QA", "speaker speech-recognition", listens=True,
-          params=[_P("prompt", _T),
+          params=[_P("prompt", _T, doc="the question said before listening"),
                   _P("grammar", ParamKind.GRAMMAR, doc="answer grammar declared in the document"),
                   _P("into", ParamKind.VARIABLE, False, doc="variable that receives the answer"),
                   _P("timeout", _N, False, 8.0, "s", "how long to listen for an answer",
@@ -336,9 +388,11 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
           params=[_P("distance", _N, False, 1.0, "m", "comfortable distance to keep")],
           doc="Follow the user at a comfortable distance, one iteration at a time, until stopped."),
     _spec("FaceHumanAndSpeak", "human-detection locomotion speaker",
-          params=[_P("text", _T)], doc="Face the user, then speak."),
+          params=[_P("text", _T, doc="the words said once the robot faces the user")],
+          doc="Face the user, then speak."),
     _spec("TurnAndSpeak", "locomotion localization speaker",
-          params=[_P("angle", _N, unit="deg", doc="counter-clockwise turn"), _P("text", _T)],
+          params=[_P("angle", _N, unit="deg", doc="counter-clockwise turn"),
+                  _P("text", _T, doc="the words said while turning")],
           doc="Turn by an angle while speaking."),
     _spec("SetDirection", "locomotion localization",
           params=[_P("heading", _N, False, unit="deg", doc="map heading, 0 = east, 90 = north"),
@@ -348,13 +402,16 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
     _spec("Turn", "locomotion", params=[_P("angle", _N, unit="deg", doc="counter-clockwise")],
           doc="Turn the body in place by an angle.", aims=True),
     _spec("SetSpeedAndTime", "locomotion", travels=True,
-          params=[_P("speed", _N, unit="m/s"), _P("time", _N, unit="s"),
+          params=[_P("speed", _N, unit="m/s", doc="forward speed (negative: backward)"),
+                  _P("time", _N, unit="s", doc="how long to drive"),
                   _P("spin", _N, False, 0.0, "deg/s", "turning rate while moving")],
           doc="Drive at a speed for a time."),
     _spec("StopMoving", "locomotion", doc="Stop the wheels."),
-    _spec("Speak", "speaker", params=[_P("text", _T)], doc="Say an utterance."),
+    _spec("Speak", "speaker", params=[_P("text", _T, doc="the words said")],
+          doc="Say an utterance."),
     _spec("MoveHead", "neck",
-          params=[_P("pan", _N, unit="deg"), _P("tilt", _N, False, 0.0, "deg")],
+          params=[_P("pan", _N, unit="deg", doc="left (positive) or right, relative to the body"),
+                  _P("tilt", _N, False, 0.0, "deg", "up (positive) or down")],
           doc="Point the head (pan left/right, tilt up/down).", aims=True),
     _spec("PointByHand", "arm",
           params=[_P("toward", _PL, False, doc="a place to point at"),
@@ -367,11 +424,14 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
           params=[_P("to", _PL, doc="goal place on the building's map")],
           doc="Drive to a named place over the map's place graph, one leg per iteration."),
     _spec("SetPosition", "locomotion localization", fb=True, breaks=True,
-          params=[_P("x", _N, unit="m"), _P("y", _N, unit="m")],
+          params=[_P("x", _N, unit="m", doc="map x (east)"),
+                  _P("y", _N, unit="m", doc="map y (north)")],
           doc="Drive to map coordinates."),
     _spec("SetPositionAndDirection", "locomotion localization", fb=True, breaks=True,
-          params=[_P("x", _N, unit="m"), _P("y", _N, unit="m"),
-                  _P("heading", _N, unit="deg")],
+          params=[_P("x", _N, unit="m", doc="map x (east)"),
+                  _P("y", _N, unit="m", doc="map y (north)"),
+                  _P("heading", _N, unit="deg",
+                     doc="map heading at the end, 0 = east, 90 = north")],
           doc="Drive to map coordinates, then turn to a heading.", aims=True),
 )
 

@@ -109,10 +109,13 @@ def build_parser() -> SuggestingParser:
                     "one JSON object per line (jsonl).",
     )
     _scenario_arguments(run)
-    run.add_argument("--format", choices=("text", "jsonl", "chrome-trace"), default="text",
+    run.add_argument("--format", choices=("text", "jsonl", "chrome-trace", "mcap"),
+                     default="text",
                      help="trace format (default: text); chrome-trace: the Trace Event "
-                          "Format, for Perfetto or chrome://tracing")
-    run.add_argument("--out", metavar="FILE", help="write the trace to FILE instead of stdout")
+                          "Format, for Perfetto or chrome://tracing; mcap: a recording for "
+                          "Foxglove (with --out; the mcap extra)")
+    run.add_argument("-o", "--out", metavar="FILE",
+                     help="write the trace to FILE instead of stdout")
     run.add_argument("--pose-rate", type=float, default=2.0, metavar="HZ",
                      help="pose samples per simulated second in the jsonl trace "
                           "(default: 2; 0: none)")
@@ -195,7 +198,28 @@ def build_parser() -> SuggestingParser:
     show.add_argument("-o", "--out", metavar="FILE",
                       help="the page to write (default: RUN's name with .html, in the "
                            "current folder)")
+    show.add_argument("--audio", action="store_true",
+                      help="put each utterance in the page as sound, synthesised by "
+                           "espeak-ng, played with the playhead (needs espeak-ng: "
+                           "apt-get install espeak-ng)")
+    show.add_argument("--speech-timing", choices=("model", "tts"), default="model",
+                      help="how long utterances take in a scenario's run: model (default): "
+                           "the robot's speech rate, as every other command; tts: as "
+                           "espeak-ng says them, their words cut where it ends them")
     _add_plot(commands)
+    lsp = commands.add_parser(
+        "lsp",
+        help="serve the language server protocol on stdio (for editors)",
+        description="A language server for PXML documents, robot profiles, scenarios and "
+                    "maps: diagnostics as prima validate words them, completion, hover and "
+                    "go-to-definition (docs/editors.md). An editor starts it; it talks "
+                    "the Language Server Protocol on stdin and stdout. Needs the lsp extra: "
+                    "pip install 'prima[lsp]'.",
+    )
+    lsp.add_argument("--robot", metavar="PROFILE",
+                     help="robot hardware profile documents are checked against, over a "
+                          "scenario's (as prima validate --robot; default: the scenario's "
+                          "that runs the document, else the home robot)")
     return parser
 
 
@@ -522,6 +546,18 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_ERRORS if report.errors else EXIT_OK
 
 
+def make_validation(profile: RobotProfile, *, robot: bool = False) -> Validation:
+    """A validation as ``prima validate`` makes one: documents and robot profiles, and
+    scenarios and maps with every file they name (``robot``: the documents a scenario
+    runs are checked against ``profile``, as ``--robot`` asks, not the scenario's
+    robot). ``prima lsp`` checks an editor's buffer with it."""
+    from prima.dsl import Validation
+
+    made: Validation = Validation(profile,
+                                  more_checkers=lambda: _scenario_checkers(made, robot))
+    return made
+
+
 def _run_usage(args: argparse.Namespace) -> str | None:
     """What is wrong with ``prima run``'s options, checked before anything runs."""
     until = args.until
@@ -569,6 +605,13 @@ def _target(path: str) -> str | None:
     return f"--out {problem}" if problem else None
 
 
+def _mcap_usage(args: argparse.Namespace) -> str | None:
+    """What ``prima run --format mcap`` needs besides: a file to write, and foxglove-sdk."""
+    if not args.out:
+        return "--format mcap writes a binary file: give --out FILE"
+    return _missing_extra("foxglove", "foxglove-sdk", "mcap")
+
+
 def _policies(given: list[str]) -> dict[str, bool] | str:
     """``--policy NAME=on|off`` switches, in order (a later one wins), or what is wrong."""
     out: dict[str, bool] = {}
@@ -590,7 +633,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
-    problem = _run_usage(args)
+    problem = _run_usage(args) or (_mcap_usage(args) if args.format == "mcap" else None)
     if problem:
         return _usage("run", problem, err)
     # Everything is loaded and checked before the output is opened; then each trace
@@ -599,7 +642,9 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               seed=args.seed, until=args.until, sink=lambda line: write(line),
               pose_rate=args.pose_rate, policies=args.policy)
     with contextlib.ExitStack() as files:
-        to = files.enter_context(written(args.out)) if args.out else out
+        # (an MCAP recording is written by its recorder, a binary file of its own)
+        to = files.enter_context(written(args.out)) \
+            if args.out and args.format != "mcap" else out
         if args.format == "text":
             print(TextTrace.HEADER, file=to)
             text = TextTrace()
@@ -617,6 +662,15 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             def write(line: TraceLine) -> None:
                 chrome.write(line)
                 ctrl_c.check()  # Ctrl-C lands between two lines: the file stays whole
+        elif args.format == "mcap":
+            from prima.mcap import Recorder
+
+            recorder = files.enter_context(Recorder(args.out, run.scenario.map))
+            ctrl_c = files.enter_context(_between_lines())
+
+            def write(line: TraceLine) -> None:
+                recorder.write(line)
+                ctrl_c.check()  # Ctrl-C lands between two lines: the file is finished whole
         else:
             def write(line: TraceLine) -> None:
                 to.write(jsonl_row(line))
@@ -878,20 +932,28 @@ def _show_usage(args: argparse.Namespace) -> str | None:
 
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.output import written
-    from prima.show import write_page
+    from prima.show import speech_timing, write_page
 
     problem = _show_usage(args) or _missing_extra("plotly", "Plotly", "show") \
         or _scenario_only(args, Path(args.input))
+    tts = args.speech_timing == "tts"
+    if not problem and tts and Path(args.input).suffix != ".xml":
+        problem = "--speech-timing tts times a run: give a scenario, not a trace"
+    if not problem and (args.audio or tts):
+        from prima.audio import available
+
+        problem = available()
     if problem:
         return _usage("show", problem, err)
     switches = _switches(args)
     if isinstance(switches, str):
         return _usage("show", switches, err)
     source = Path(args.input)
+    timing = speech_timing(source) if tts else None
     scenario = source if source.suffix == ".xml" else args.scenario
     with written(args.out) as page:  # a jsonl trace streamed: never held whole
         abs_, end = write_page(source, page, scenario=scenario, title=source.stem,
-                               switches=switches)
+                               switches=switches, audio=args.audio, timing=timing)
     print(f"prima show: wrote {shown_path(args.out)} ({abs_} atomic behavior(s), "
           f"{end:g} s{'' if scenario else '; no map'})", file=err)
     return EXIT_OK
@@ -968,6 +1030,18 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
+def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    problem = _missing_extra("pygls", "pygls", "lsp")
+    if problem is None and args.robot is not None and not Path(args.robot).is_file():
+        problem = f"no such file: {args.robot}"
+    if problem:
+        return _usage("lsp", problem, err)
+    from prima.lsp import serve
+
+    serve(Path(args.robot).resolve() if args.robot else None)
+    return EXIT_OK
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
@@ -977,5 +1051,6 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "sweep": _sweep,
     "plot": _plot,
     "show": _show,
+    "lsp": _lsp,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

@@ -42,7 +42,15 @@ from prima.mediator import (
     Request,
     Rule,
 )
-from prima.sim import RobotSpec, Scenario, Simulator, UserAction, ZoneEntry, load_scenario
+from prima.sim import (
+    RobotSpec,
+    Scenario,
+    Simulator,
+    SpeechTiming,
+    UserAction,
+    ZoneEntry,
+    load_scenario,
+)
 from prima.trace import Kind, RecordKind, TraceLine
 from prima.vocab import (
     FACE_TOLERANCE,
@@ -193,7 +201,8 @@ class Run:
                  seed: int | None = None, until: float | None = None,
                  sink: Callable[[TraceLine], None] | None = None,
                  pose_rate: float = POSE_RATE,
-                 policies: Mapping[str, bool] | None = None) -> None:
+                 policies: Mapping[str, bool] | None = None,
+                 speech: SpeechTiming | None = None) -> None:
         loaded = load_scenario(scenario)
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
@@ -250,6 +259,7 @@ class Run:
         self.catalog = self.profile.catalog()
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
                                            catalog=self.catalog)
+        self.sim.speech = speech  # None: the profile's speech rate times every utterance
         self.mediator = Mediator(
             self.catalog, self.sim, self.sim, record=self._decision,
             config=MediatorConfig(budgets=self.budgets,

@@ -34,8 +34,9 @@ import os
 import re
 import stat
 from bisect import bisect_right
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
@@ -68,6 +69,7 @@ __all__ = [
     "parse_xml",
     "read_source",
     "schema",
+    "unsaved",
     "validate",
     "verdict_schema",
 ]
@@ -387,17 +389,49 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
+_UNSAVED: ContextVar[Mapping[Path, bytes] | None] = ContextVar("prima_unsaved", default=None)
+"""What :func:`unsaved` put in place of files, by resolved path."""
+
+
+@contextmanager
+def unsaved(sources: Mapping[Path, bytes]) -> Iterator[None]:
+    """While inside, :func:`read_source` reads these bytes for these files instead of
+    what is on disk: what an editor holds and has not saved, which ``prima lsp``
+    checks exactly as the saved files would be checked (the files a scenario
+    names included). Within this context only (and this thread or task)."""
+    token = _UNSAVED.set({_resolved(Path(p)): data for p, data in sources.items()})
+    try:
+        yield
+    finally:
+        _UNSAVED.reset(token)
+
+
+def _resolved(path: Path) -> Path:
+    try:
+        return path.resolve()
+    except (OSError, RuntimeError):  # a symlink loop
+        return path.absolute()
+
+
 def read_source(path: Path, error: type[LocatedError]) -> bytes:
     """Read a regular file's bytes, at most :data:`MAX_BYTES` of them.
 
     A named pipe, a device or a directory is refused before it is opened (and
     it is opened without blocking, should it change in between), and no more
     than the limit plus one byte is read, so a file that grows cannot get past
-    the limit. Every failure is a problem at ``path:1:1``.
+    the limit. Every failure is a problem at ``path:1:1``. Inside :func:`unsaved`,
+    a file it names is read from there (under the same size limit).
     """
     def fail(message: str) -> LocatedError:
         return error([Problem(str(path), 1, 1, Severity.ERROR, message)])
 
+    overlay = _UNSAVED.get()
+    if overlay:
+        held = overlay.get(_resolved(Path(path)))
+        if held is not None:
+            if len(held) > MAX_BYTES:
+                raise fail(f"file is {len(held)} bytes; the limit is {MAX_BYTES}")
+            return held
     try:
         info = os.stat(path)
         if not stat.S_ISREG(info.st_mode):

@@ -21,11 +21,16 @@ on) are private. In the direction data flows:
   (:func:`prebuilt_parser`; :func:`build_parser` builds it from the grammar);
   :func:`fast_parse` builds the tree lark would of a valid text, as a
   :class:`ParseTree` of :class:`ParseToken`, without importing lark, or
-  declines (and lark parses it, wording any fault).
+  declines (and lark parses it, wording any fault);
+- the schema: :func:`command_elements` is the common Commands' part of
+  ``schemas/pxml.xsd``, generated from the catalog, and :func:`schema_source`
+  the schema's text with that part made anew (``python -m prima.dsl._build_schema``).
 """
 
+from prima.dsl._build_schema import command_elements, schema_source
 from prima.dsl._commands import element_name
 from prima.dsl._expr import (
+    CLOCK_FUNCTIONS,
     FUNCTIONS,
     ChainArg,
     ChainStep,
@@ -96,6 +101,7 @@ from prima.dsl._validate import (
 )
 
 __all__ = [
+    "CLOCK_FUNCTIONS",
     "FUNCTIONS",
     "NAMESPACE",
     "ROBOT_NAMESPACE",
@@ -141,6 +147,7 @@ __all__ = [
     "build_parser",
     "check_parsed",
     "collect",
+    "command_elements",
     "compile_expression",
     "compile_template",
     "default_profile",
@@ -157,6 +164,7 @@ __all__ = [
     "prebuilt_parser",
     "profile_from_xml",
     "root_namespace",
+    "schema_source",
     "to_text",
     "truthy",
     "validate_paths",

@@ -8,7 +8,8 @@ its Command, suspensions and holds hatched, releases, cancels and cuts marked
 trace table.
 One playhead drives all three. Plotly draws the map and the timeline (its
 JavaScript is inlined: the page works offline, from ``file://``); a small
-player script moves the playhead.
+player script moves the playhead. With ``audio``, every utterance is in the page
+as sound too (:mod:`prima.audio`, espeak-ng), played in time with the playhead.
 
 A viewer, apart from the core: only ``prima show`` imports it, and it needs
 the ``show`` extra (``pip install 'prima[show]'``).
@@ -25,55 +26,78 @@ from typing import TYPE_CHECKING, Any, TextIO
 from prima.errors import PrimaError
 
 if TYPE_CHECKING:
+    from prima.audio import SynthesisedTiming
     from prima.run import Switches
+    from prima.sim import SpeechTiming
 
-__all__ = ["read_rows", "render", "write_page"]
+__all__ = ["read_rows", "render", "speech_timing", "write_page"]
 
 
-def read_rows(path: str | Path, switches: Switches | None = None) -> list[dict[str, Any]]:
+def read_rows(path: str | Path, switches: Switches | None = None,
+              speech: SpeechTiming | None = None) -> list[dict[str, Any]]:
     """A run's rows: a jsonl trace read (located errors), or a scenario run in-process
-    (``switches``: its FA, EA, robot or policies changed)."""
+    (``switches``: its FA, EA, robot or policies changed; its utterances timed by
+    ``speech``, if given: :func:`speech_timing`)."""
     path = Path(path)
     if path.suffix == ".jsonl":
         from prima.tracefile import load_trace
 
         return load_trace(path)
+    return list(_run_rows(path, switches, speech))
+
+
+def _run_rows(path: Path, switches: Switches | None,
+              speech: SpeechTiming | None) -> Iterable[dict[str, Any]]:
     from prima.run import Run
 
     options = switches.run_options() if switches else {}
-    return [line.to_dict() for line in Run(path, **options).run()]
+    return (line.to_dict() for line in Run(path, speech=speech, **options).run())
+
+
+def speech_timing(scenario: str | Path) -> SynthesisedTiming:
+    """Utterances timed by espeak-ng at the speech rate of the scenario's robot
+    (``prima show --speech-timing tts``), for :func:`read_rows` and :func:`render`."""
+    from prima.show._sound import speech_timing as timing
+
+    return timing(scenario)
 
 
 def render(rows: Iterable[Mapping[str, Any]], scenario: str | Path | None = None,
-           title: str = "run") -> str:
-    """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any)."""
+           title: str = "run", *, audio: bool = False,
+           timing: SynthesisedTiming | None = None) -> str:
+    """The page of a run whose trace lines are ``rows``; the map is ``scenario``'s (if any).
+    With ``audio``, each utterance is in the page as sound (espeak-ng), played with the
+    playhead; ``timing``: the one the run was timed by, if it was by the synthesiser."""
     out = io.StringIO()
-    _write(rows, out, scenario, title)
+    _write(rows, out, scenario, title, audio=audio, timing=timing)
     return out.getvalue()
 
 
 def write_page(path: str | Path, out: TextIO, scenario: str | Path | None = None,
-               title: str = "run", switches: Switches | None = None) -> tuple[int, float]:
+               title: str = "run", switches: Switches | None = None, *,
+               audio: bool = False, timing: SynthesisedTiming | None = None
+               ) -> tuple[int, float]:
     """Write the page of a run to ``out``: a jsonl trace streamed (never held whole:
-    its table's rows are spooled to a temporary file), or a scenario run in-process
-    (``switches``: its FA, EA, robot or policies changed). Returns the atomic
-    behaviors started and the run's end (s)."""
+    its table's rows are spooled to a temporary file; with ``audio``, held whole, the
+    sound of every utterance being made before the page), or a scenario run in-process
+    (``switches``: its FA, EA, robot or policies changed; ``timing``: its utterances
+    timed by the synthesiser). Returns the atomic behaviors started and the run's end
+    (s)."""
     path = Path(path)
+    rows: Iterable[Mapping[str, Any]]
     if path.suffix == ".jsonl":
         from prima.tracefile import read_trace
 
-        rows: Iterable[Mapping[str, Any]] = read_trace(path)
+        rows = read_trace(path)
     else:
-        from prima.run import Run
-
-        options = switches.run_options() if switches else {}
-        rows = (line.to_dict() for line in Run(path, **options).run())
+        rows = _run_rows(path, switches, timing)
     with tempfile.TemporaryFile("w+", encoding="utf-8") as spool:
-        return _write(rows, out, scenario, title, spool)
+        return _write(rows, out, scenario, title, spool, audio=audio, timing=timing)
 
 
 def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path | None,
-           title: str, spool: TextIO | None = None) -> tuple[int, float]:
+           title: str, spool: TextIO | None = None, *, audio: bool = False,
+           timing: SynthesisedTiming | None = None) -> tuple[int, float]:
     try:
         from prima.show._page import write_page as page
     except ImportError as exc:  # the plotting library is an optional extra
@@ -83,6 +107,12 @@ def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path 
     from prima.sim import load_scenario
 
     world = load_scenario(scenario).map if scenario is not None else None
+    sounds = ""
+    if audio:
+        from prima.show._sound import clips, elements
+
+        rows = list(rows)  # (every utterance's sound is made before the page)
+        sounds = elements(clips(rows, scenario, timing))
     model = build(rows, spool)
-    page(model, world, title, out, spool)
+    page(model, world, title, out, spool, sounds)
     return model.starts, model.timeline.end

@@ -26,6 +26,9 @@ _MARK_STYLE = {
     "interrupt": ("star-triangle-down", "#8e44ad", "cut"),
     "cancel": ("x", "#7f8c8d", "cancelled"),
 }
+_SOUND_TOGGLE = ('<label title="the words, heard at 0.5x to 4x"><input id="sound" '
+                 'type="checkbox" checked> sound</label>')
+"""With sound in the page: a switch for it beside the playback controls."""
 _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": ["select2d",
                                                                                "lasso2d"]}
 
@@ -199,10 +202,11 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
     return fig, traces
 
 
-def page(model: Model, world: WorldMap | None, title: str) -> str:
-    """The whole self-contained page (Plotly's JavaScript inlined)."""
+def page(model: Model, world: WorldMap | None, title: str, sounds: str = "") -> str:
+    """The whole self-contained page (Plotly's JavaScript inlined); ``sounds``: the
+    utterances' audio elements (``prima show --audio``), if any."""
     out = io.StringIO()
-    write_page(model, world, title, out)
+    write_page(model, world, title, out, sounds=sounds)
     return out.getvalue()
 
 
@@ -222,10 +226,11 @@ def _write_figure(fig: go.Figure, div_id: str, out: TextIO) -> None:
 
 
 def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
-               spool: TextIO | None = None) -> None:
+               spool: TextIO | None = None, sounds: str = "") -> None:
     """Write the page to ``out`` piece by piece; the table's rows are ``model.rows``, or
     the JSON :func:`~prima.show._model.build` spooled (copied in chunks, never read
-    whole). The model is spent: its poses are let go once written."""
+    whole); ``sounds``: the utterances' audio elements (``prima show --audio``), if
+    any. The model is spent: its poses are let go once written."""
     map_fig, who = map_figure(model, world)
     map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
                            config=_CONFIG)
@@ -251,6 +256,7 @@ def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
 <label>speed <select id="speed">{speeds}</select></label>
 <input id="scrub" type="range" min="0" max="{model.timeline.end}" step="0.01" value="0">
 <span id="clock">0.00 s</span>
+{_SOUND_TOGGLE if sounds else ""}
 </header>
 <main>
 <section id="top">
@@ -273,6 +279,9 @@ to jump there and see why the mediator decided it.</p></aside>
     out.write("""<div id="playhead"></div></section>
 <section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
+<div id="sounds" hidden>""")
+    out.write(sounds)
+    out.write("""</div>
 </main>
 <script>
 const PRIMA_SHOW = {"end":""")

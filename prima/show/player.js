@@ -14,6 +14,9 @@
   const timelineBox = document.getElementById("timeline-box");
   const head = document.getElementById("playhead");
   const times = D.rows.map(function (r) { return r.t; });
+  const soundOn = document.getElementById("sound");
+  const sounds = Array.prototype.map.call(document.querySelectorAll("#sounds audio"),
+    function (el) { return {el: el, start: Number(el.dataset.start), end: Number(el.dataset.end)}; });
   let now = 0, playing = false, last = null, shownRow = -1, shownBubbles = "";
 
   function esc(text) {
@@ -119,6 +122,7 @@
       Plotly.relayout(mapDiv, {annotations: bubbles});
     }
     placeHead();
+    voice();
     const row = lastRowAt(now);
     if (row !== shownRow) {
       const lo = Math.min(row, shownRow), hi = Math.max(row, shownRow);
@@ -134,6 +138,28 @@
       }
       shownRow = row;
     }
+  }
+
+  /* The words, heard: each utterance's sound plays while the playhead is inside it, from
+     where the playhead is, at the playback speed (up to 4x; faster, it is silent). */
+  function voice() {
+    const rate = Number(speed.value);
+    const on = playing && rate <= 4 && (!soundOn || soundOn.checked);
+    sounds.forEach(function (s) {
+      const el = s.el, at = now - s.start;
+      if (on && s.start <= now && now < s.end) {
+        if (el.playbackRate !== rate) el.playbackRate = rate;
+        if (el.paused) {
+          el.currentTime = at;
+          const started = el.play();
+          if (started) started.catch(function () {});
+        } else if (Math.abs(el.currentTime - at) > 0.3) {
+          el.currentTime = at;
+        }
+      } else if (!el.paused) {
+        el.pause();
+      }
+    });
   }
 
   /* The playhead: a line over the timeline's plot area (moving it redraws nothing). */
@@ -172,7 +198,7 @@
     requestAnimationFrame(frame);
   }
 
-  function pause() { playing = false; playButton.textContent = "Play"; }
+  function pause() { playing = false; playButton.textContent = "Play"; voice(); }
 
   playButton.addEventListener("click", function () { if (playing) pause(); else play(); });
   scrub.addEventListener("input", function () { seek(Number(scrub.value)); });
@@ -244,6 +270,13 @@
     abs: Object.keys(D.abs).filter(function (k) { return D.abs[k].start != null; }),
     seek: seek, play: play, pause: pause, chooseAb: chooseAb,
     time: function () { return now; },
+    sounds: function () {
+      return sounds.map(function (s) {
+        return {start: s.start, end: s.end, duration: s.el.duration, ready: s.el.readyState,
+                error: s.el.error ? s.el.error.code : 0, paused: s.el.paused,
+                at: s.el.currentTime, expected: Number(s.el.dataset.duration)};
+      });
+    },
   };
   render();
 })();

@@ -34,7 +34,7 @@ from prima.sim._scenario import (
     late_inputs,
 )
 from prima.sim._simulator import Simulator
-from prima.sim._spec import DEFAULT_GESTURES, RobotSpec
+from prima.sim._spec import DEFAULT_GESTURES, RobotSpec, SpeechTiming
 from prima.sim._user import AnswerRule, ScriptedUser, TimedAction, UserScript
 
 __all__ = [
@@ -57,6 +57,7 @@ __all__ = [
     "ScheduledEvent",
     "ScriptedUser",
     "Simulator",
+    "SpeechTiming",
     "TimedAction",
     "TraceEntry",
     "UserAction",

@@ -173,7 +173,7 @@ def _heading_to(sim: Simulator, place: Place) -> float | None:
 
 def speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     text = _text(sim, call, "text")
-    n = sim.ticks(sim.spec.speech_duration(text))
+    n = sim.ticks(sim.speech_duration(text))
     sim.utter(cid, text, n)
     yield sleep(n)
     return {"duration": n / sim.kernel.hz}, True
@@ -184,7 +184,7 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     timeout = _req(sim, call, "timeout")
     if timeout < 0:
         raise CommandError(f"timeout must not be negative, not {timeout:g}")
-    n = sim.ticks(sim.spec.speech_duration(prompt))
+    n = sim.ticks(sim.speech_duration(prompt))
     sim.asking(prompt)
     sim.utter(cid, prompt, n)
     yield sleep(n)
@@ -230,7 +230,7 @@ def turn(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     angle = _req(sim, call, "angle")
     text = _text(sim, call, "text")
-    n = sim.ticks(sim.spec.speech_duration(text))
+    n = sim.ticks(sim.speech_duration(text))
     sim.utter(cid, text, n)
     end = sim.kernel.tick + n
     yield from _turn(sim, math.radians(angle))
@@ -503,7 +503,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
         if watched == 0:
             sim.search()
             if say:
-                speech_end += sim.ticks(sim.spec.speech_duration(say))
+                speech_end += sim.ticks(sim.speech_duration(say))
                 sim.utter(cid, say, speech_end - k.tick)
         period = min(sim.ticks(sim.spec.control_period), search - watched)
         start = k.tick
@@ -767,7 +767,7 @@ duration by :func:`hold_for_duration`."""
 
 def _said(sim: Simulator, call: Call, name: str) -> float:
     text = _text(sim, call, name)
-    return sim.spec.speech_duration(text) if text else 0.0
+    return sim.speech_duration(text) if text else 0.0
 
 
 def _turning(sim: Simulator, degrees: float) -> float:

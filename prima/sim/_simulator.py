@@ -41,7 +41,7 @@ from prima.sim._records import (
     Zone,
     ZoneEntry,
 )
-from prima.sim._spec import RobotSpec
+from prima.sim._spec import RobotSpec, SpeechTiming
 from prima.sim._user import ScriptedUser, UserScript
 from prima.sim._world import World
 from prima.vocab import MAX_TEXT, Value
@@ -131,10 +131,14 @@ class Simulator:
         self._running: dict[int, AtomicBehavior] = {}
         self._procs: dict[int, Process] = {}
         """The process performing each running atomic behavior (to cut it)."""
-        self._speech: dict[int, tuple[int, tuple[str, ...], int]] = {}
+        self.speech: SpeechTiming | None = None
+        """Where utterances take their time and their words' ends from, if not from the
+        speech rate (:meth:`speech_duration`)."""
+        self._speech: dict[int, tuple[int, tuple[str, ...], int, tuple[int, ...] | None]] = {}
+        """Command id -> what it is saying: the tick it began, its words, its ticks, and
+        the tick (from its start) each word ends at when :attr:`speech` says so."""
         self._said: dict[int, tuple[float, float]] = {}
         """AB -> when its words began and ended (s), once it has ended (``said``)."""
-        """Command id -> what it is saying: the tick it began, its words, its ticks."""
         self._cutting: set[int] = set()
         self._driving: set[int] = set()
         """Running atomic behaviors performing a call that uses the wheels now."""
@@ -302,12 +306,18 @@ class Simulator:
             said = self._speech.get(cid)
             if said is None:
                 continue
-            start, saying, ticks = said
+            start, saying, ticks, ends = said
             if now >= start + ticks or not saying:
                 if any(c.command in self.catalog and self.catalog[c.command].listens
                        for c in ab.calls):
                     return None  # a Q&A listening: the user's turn is never cut
                 return now, " ".join(words), ""  # all said
+            if ends is not None and len(ends) == len(saying):  # the synthesiser's words
+                k = next((i + 1 for i, end in enumerate(ends) if end > now - start),
+                         len(saying))
+                if k >= len(saying):
+                    return None
+                return start + ends[k - 1], " ".join(saying[:k]), " ".join(saying[k:])
             per = ticks / len(saying)
             k = min(len(saying), int((now - start) // per) + 1)  # the word under way ends
             if k >= len(saying):
@@ -329,7 +339,17 @@ class Simulator:
     def utter(self, command_id: int, text: str, ticks: int) -> None:
         """A behavior of this Command starts saying ``text`` over ``ticks``: a cut
         (the interrupt policy) waits for the end of the word under way."""
-        self._speech[command_id] = (self.kernel.tick, tuple(text.split()), ticks)
+        ends = None
+        if self.speech is not None:
+            ends = tuple(min(ticks, self.ticks(at)) for at in self.speech.said(text)[1])
+        self._speech[command_id] = (self.kernel.tick, tuple(text.split()), ticks, ends)
+
+    def speech_duration(self, text: str) -> float:
+        """How long saying ``text`` takes: by :attr:`speech` if given, else by the speech
+        rate (:meth:`RobotSpec.speech_duration`); never less than the shortest utterance."""
+        if self.speech is None:
+            return self.spec.speech_duration(text)
+        return max(self.spec.min_utterance, self.speech.said(text)[0])
 
     # ---- discrete-event API -------------------------------------------------------
 
@@ -485,7 +505,7 @@ class Simulator:
         words = spec.spoken(call.args) if spec is not None else []
         if not words:
             return None
-        return self.ticks(self.spec.speech_duration(" ".join(words))) / self.kernel.hz
+        return self.ticks(self.speech_duration(" ".join(words))) / self.kernel.hz
 
     def quiet(self, command_id: int) -> bool:
         """The next iteration of this feedback Command says none of its words (a
@@ -663,7 +683,7 @@ class Simulator:
         for cid in ab.command_ids:
             said = self._speech.pop(cid, None)
             if said is not None and ab.id not in self._said:
-                start, _words, ticks = said  # (as planned: a cut one's words end earlier)
+                start, _words, ticks, _ends = said  # (as planned: a cut one's end earlier)
                 self._said[ab.id] = (start / self.kernel.hz, (start + ticks) / self.kernel.hz)
         if "human-detection" in ab.devices:
             self._sensing -= 1

@@ -11,10 +11,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Protocol
 
 from prima.errors import SimulationError
 
-__all__ = ["DEFAULT_GESTURES", "RobotSpec"]
+__all__ = ["DEFAULT_GESTURES", "RobotSpec", "SpeechTiming"]
 
 DEFAULT_GESTURES: Mapping[str, float] = MappingProxyType({
     "nod": 1.0,
@@ -27,6 +28,17 @@ DEFAULT_GESTURES: Mapping[str, float] = MappingProxyType({
     "dance": 8.0,
 })
 """Gestures every default robot knows, with their durations in seconds."""
+
+
+class SpeechTiming(Protocol):
+    """How long words take to say, from elsewhere than the speech rate (a synthesiser:
+    ``prima show --speech-timing tts``); a :class:`Simulator` given one times every
+    utterance by it, and cuts one (the interrupt policy) at the end of its word."""
+
+    def said(self, text: str) -> tuple[float, tuple[float, ...]]:
+        """How long saying ``text`` takes (s), and when each of its words (``text.split()``)
+        ends, from its start (s, non-decreasing, the last at most the whole)."""
+        ...
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from prima.xmlio import (
     limit,
     parse_xml,
     read_source,
+    unsaved,
 )
 
 HEAD = '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t">\n'
@@ -262,3 +263,21 @@ def test_libxml2_bounds_read_as_xmlschema_holds_them() -> None:
                           "value allowed ('0.50')") == "must be 0.5 or more"
     assert _libxml2_value("[facet 'maxExclusive'] The value '9' must be less than '5'") == (
         "must be less than 5")
+
+
+# ---------------------------------------------------------------- unsaved buffers
+
+def test_unsaved_text_is_read_in_place_of_the_file_and_only_meanwhile(tmp_path: Path) -> None:
+    """What ``prima lsp`` checks: an editor's buffer, by the file's path however it is
+    written; the file itself is untouched, and read again once the context ends."""
+    path = tmp_path / "a.pxml"
+    path.write_bytes(b"on disk")
+    with unsaved({path: b"in the editor"}):
+        assert read_source(tmp_path / "." / "a.pxml", DocumentError) == b"in the editor"
+        assert read_source(path, DocumentError) == b"in the editor"
+        with pytest.raises(DocumentError):  # another file: the disk, as ever
+            read_source(tmp_path / "b.pxml", DocumentError)
+        with unsaved({path: b"x" * (MAX_BYTES + 1)}), pytest.raises(DocumentError) as info:
+            read_source(path, DocumentError)
+        assert "the limit is" in str(info.value)
+    assert read_source(path, DocumentError) == b"on disk"

@@ -1,0 +1,37 @@
+"""``prima lsp``: a language server for PXML documents, robot profiles, scenarios and maps.
+
+An editor starts ``prima lsp`` and talks to it over stdio (the Language Server
+Protocol). The server
+
+- checks each file as you type exactly as ``prima validate`` does (the same
+  loader and validator, the same messages, did-you-mean included; a document
+  with the first scenario of the workspace that runs it, so with that
+  scenario's robot and map);
+- completes the Commands of the robot in force inside ``<chain>`` (with their
+  arguments, and the map's places, the robot's gestures, the document's grammars
+  and variables as their values), state ids in ``<goto>``, events and their
+  fields in ``<on event>`` and after ``event.``, Command ids in ``of``, the
+  places of the scenario's map in a scenario, and the elements and attributes
+  the schemas allow;
+- shows on hover the documentation of every element, attribute and Command,
+  from the schemas and the Command catalog (the one place each is written);
+- goes to the definition of a state, a Command id (a label), a variable, a
+  grammar, a timer, a place on the map, a file a scenario names.
+
+A server, apart from the core: only ``prima lsp`` imports it, and it needs the
+``lsp`` extra (``pip install 'prima[lsp]'``: pygls). Settings for VS Code and
+Neovim: ``docs/editors.md``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ["serve"]
+
+
+def serve(robot: Path | None = None) -> None:
+    """Serve the protocol on stdin and stdout until the editor says exit."""
+    from prima.lsp._server import build_server
+
+    build_server(robot).start_io()

@@ -1,0 +1,251 @@
+"""A forgiving reading of XML text as it is being typed: tags, attributes, where the
+cursor is.
+
+The language server answers about a buffer that is often not well formed (a tag
+half written, a quote not yet closed), so it never parses it with an XML parser
+for completion, hover or go-to-definition: one pass of regular expressions finds
+every start tag with its attributes and every end tag, an element stack pairs
+them as well as it can, and :func:`locate` says what an offset is in. Offsets
+are Python string indices (code points) into the text.
+"""
+
+from __future__ import annotations
+
+import enum
+import html
+import re
+from dataclasses import dataclass, field
+
+__all__ = ["Attr", "Spot", "Tag", "Where", "XmlText", "locate", "scan"]
+
+_MARKUP = re.compile(r"<!--.*?(?:-->|\Z)|<\?.*?(?:\?>|\Z)|<!\[CDATA\[.*?(?:\]\]>|\Z)"
+                     r"|<!.*?(?:>|\Z)|</(?P<end>[^\s<>]*)[^<>]*>?|<(?P<start>[^\s<>/!?]*)", re.S)
+_ATTR = re.compile(r"""\s*(?P<name>[^\s=<>/"']+)"""
+                   r"""(?:\s*=\s*(?:"(?P<dq>[^"<]*)"?|'(?P<sq>[^'<]*)'?))?""")
+_TAG_END = re.compile(r"\s*(/?>)?")
+
+
+@dataclass
+class Attr:
+    """An attribute as written (its value undecoded; ``value_end`` is where the value
+    stops, before its closing quote or where the text stops)."""
+
+    name: str
+    name_start: int
+    value_start: int
+    """-1: no value written yet."""
+    value_end: int
+    raw: str
+
+    @property
+    def value(self) -> str:
+        """The value as XML reads it (entities decoded)."""
+        return html.unescape(self.raw)
+
+    @property
+    def name_end(self) -> int:
+        return self.name_start + len(self.name)
+
+
+@dataclass
+class Tag:
+    """A start tag (and the element it opens)."""
+
+    name: str
+    """Its local name (a prefix dropped)."""
+    start: int
+    """Offset of its ``<``."""
+    end: int
+    """Offset just after its ``>`` (or where it stops, when not closed)."""
+    closed: bool
+    empty: bool
+    attrs: list[Attr] = field(default_factory=list)
+    parent: Tag | None = None
+    content_end: int = -1
+    """Where its content ends (its end tag's ``<``; the text's end if never closed)."""
+    children: list[Tag] = field(default_factory=list)
+
+    @property
+    def name_start(self) -> int:
+        return self.start + 1
+
+    @property
+    def name_end(self) -> int:
+        return self.start + 1 + len(self.raw_name)
+
+    raw_name: str = ""
+
+    def attr(self, name: str) -> Attr | None:
+        return next((a for a in self.attrs if a.name == name), None)
+
+    def get(self, name: str, default: str = "") -> str:
+        found = self.attr(name)
+        return default if found is None else found.value
+
+    def path(self) -> list[str]:
+        """The names of the elements from the root down to this one."""
+        out: list[str] = []
+        tag: Tag | None = self
+        while tag is not None:
+            out.append(tag.name)
+            tag = tag.parent
+        return out[::-1]
+
+    def text(self, source: str) -> tuple[int, str]:
+        """Its text content before its first child tag or comment: where it starts,
+        and the text as written (undecoded)."""
+        if self.empty or not self.closed:
+            return self.end, ""
+        stop = source.find("<", self.end)
+        stop = len(source) if stop < 0 or stop > self.content_end >= 0 else stop
+        return self.end, source[self.end:stop]
+
+
+class Where(enum.Enum):
+    """What an offset is in."""
+
+    TAG_NAME = "tag-name"
+    END_TAG_NAME = "end-tag-name"
+    ATTR_NAME = "attr-name"
+    ATTR_VALUE = "attr-value"
+    TEXT = "text"
+    OTHER = "other"
+    """A comment, a processing instruction, a declaration."""
+
+
+@dataclass
+class Spot:
+    """What an offset is in: a tag's name, an attribute's name or value, or the text
+    content of ``tag`` (None: outside the root)."""
+
+    where: Where
+    tag: Tag | None
+    attr: Attr | None = None
+    index: int = 0
+    """Within an attribute value or a text: the offset from its first character."""
+
+
+@dataclass
+class XmlText:
+    """A buffer read: its tags in document order."""
+
+    source: str
+    tags: list[Tag]
+    ends: list[tuple[int, int, str]]
+    """End tags: (start, end, name)."""
+    others: list[tuple[int, int]]
+    """Comments, processing instructions, CDATA sections, declarations."""
+
+    @property
+    def root(self) -> Tag | None:
+        return next((t for t in self.tags if t.parent is None), None)
+
+    def named(self, name: str) -> list[Tag]:
+        return [t for t in self.tags if t.name == name]
+
+
+def _local(name: str) -> str:
+    return name.rpartition(":")[2]
+
+
+def _start_tag(source: str, at: int, raw_name: str) -> Tag:
+    pos = at + 1 + len(raw_name)
+    attrs: list[Attr] = []
+    while True:
+        m = _ATTR.match(source, pos)
+        if not m or m.end() == pos:
+            break
+        if m.group("dq") is not None or m.group("sq") is not None:
+            group = "dq" if m.group("dq") is not None else "sq"
+            attrs.append(Attr(m.group("name"), m.start("name"), m.start(group), m.end(group),
+                              m.group(group)))
+        else:
+            attrs.append(Attr(m.group("name"), m.start("name"), -1, -1, ""))
+        pos = m.end()
+    end = _TAG_END.match(source, pos)
+    closer = end.group(1) if end else None
+    stop = end.end() if end else pos
+    if closer is None:  # not closed: the tag stops where the next markup begins
+        nxt = source.find("<", pos)
+        stop = len(source) if nxt < 0 else nxt
+        stop = max(stop, pos)
+    tag = Tag(_local(raw_name), at, stop, closer is not None, closer == "/>", attrs)
+    tag.raw_name = raw_name
+    return tag
+
+
+def scan(source: str) -> XmlText:
+    """Every tag of ``source``, paired as well as the text allows."""
+    tags: list[Tag] = []
+    ends: list[tuple[int, int, str]] = []
+    others: list[tuple[int, int]] = []
+    stack: list[Tag] = []
+    pos = 0
+    while True:
+        m = _MARKUP.search(source, pos)
+        if m is None:
+            break
+        if m.group("start") is not None:
+            tag = _start_tag(source, m.start(), m.group("start"))
+            tag.parent = stack[-1] if stack else None
+            if tag.parent is not None:
+                tag.parent.children.append(tag)
+            tags.append(tag)
+            if tag.closed and not tag.empty:
+                stack.append(tag)
+            pos = max(tag.end, m.end())
+        elif m.group("end") is not None:
+            name = _local(m.group("end"))
+            ends.append((m.start(), m.end(), name))
+            for i in range(len(stack) - 1, -1, -1):
+                if stack[i].name == name:
+                    for open_tag in stack[i:]:
+                        open_tag.content_end = m.start()
+                    del stack[i:]
+                    break
+            pos = m.end()
+        else:
+            others.append((m.start(), m.end()))
+            pos = m.end()
+    for tag in stack:
+        tag.content_end = len(source)
+    return XmlText(source, tags, ends, others)
+
+
+def _innermost(text: XmlText, offset: int) -> Tag | None:
+    """The innermost element whose content holds ``offset``."""
+    found: Tag | None = None
+    for tag in text.tags:
+        if tag.start > offset:
+            break
+        if tag.closed and not tag.empty and tag.end <= offset <= tag.content_end:
+            found = tag
+    return found
+
+
+def locate(text: XmlText, offset: int) -> Spot:
+    """What ``offset`` (a cursor: between two characters) is in."""
+    for start, end in text.others:
+        if start < offset < end:
+            return Spot(Where.OTHER, None)
+    for tag in text.tags:
+        if tag.start > offset:
+            break
+        if not tag.start < offset <= tag.end or (tag.closed and offset == tag.end):
+            continue
+        if offset <= tag.name_end:
+            return Spot(Where.TAG_NAME, tag, index=offset - tag.name_start)
+        for attr in tag.attrs:
+            if attr.value_start >= 0 and attr.value_start <= offset <= attr.value_end:
+                return Spot(Where.ATTR_VALUE, tag, attr, offset - attr.value_start)
+            if attr.name_start <= offset <= attr.name_end:
+                return Spot(Where.ATTR_NAME, tag, attr, offset - attr.name_start)
+        return Spot(Where.ATTR_NAME, tag, None)
+    for start, end, _name in text.ends:
+        if start < offset <= end:
+            inner = _innermost(text, start)
+            return Spot(Where.END_TAG_NAME, inner, index=offset - start - 2)
+    inner = _innermost(text, offset)
+    if inner is None:
+        return Spot(Where.TEXT, None)
+    return Spot(Where.TEXT, inner, index=offset - inner.end)

@@ -1,0 +1,179 @@
+"""A run you can hear: the utterances of a trace, synthesised by espeak-ng to last as
+long as the run says them, and ``prima show --audio``'s page playing them in Chromium."""
+
+from __future__ import annotations
+
+import io
+import shutil
+import time
+import wave
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from prima.audio import OUTPUT_RATE, available, clip, utterances, wav
+from prima.cli import main
+from prima.dsl import default_profile
+from prima.run import Run, spec_from_profile
+
+if available() is not None:
+    pytest.skip(f"{available()} (.ci/run installs it)", allow_module_level=True)
+
+ROOT = Path(__file__).parents[1]
+SAMPLE_10 = ROOT / "scenarios" / "thesis" / "sample-10.xml"
+INTERRUPT = ROOT / "scenarios" / "policies" / "interrupt-on.xml"
+MODEL = spec_from_profile(default_profile()).speech_duration
+CHROMIUM, CHROMEDRIVER = shutil.which("chromium"), shutil.which("chromedriver")
+
+
+def _rows(scenario: Path) -> list[dict[str, Any]]:
+    return [line.to_dict() for line in Run(scenario).run()]
+
+
+def test_the_utterances_are_when_the_words_are_said() -> None:
+    rows = _rows(INTERRUPT)
+    said = utterances(rows, MODEL)
+    ends = {r["ab"]: r for r in rows if r["kind"] == "end"}
+    starts = {r["ab"]: r for r in rows if r["kind"] == "start"}
+    # a Speak: the whole atomic behavior; a Q&A: its prompt, then it listens
+    speak = next(u for u in said if u.command == "Speak")
+    assert (speak.start, speak.end) == (starts[speak.ab]["t"], ends[speak.ab]["t"])
+    qa = next(u for u in said if u.command == "QA")
+    assert qa.start == starts[qa.ab]["t"] and qa.duration == MODEL(qa.text) < \
+        ends[qa.ab]["t"] - qa.start
+    # a FaceHumanAndSpeak turns first: its words end with it
+    face = next(u for u in said if u.command == "FaceHumanAndSpeak" and not u.cut)
+    assert face.end == ends[face.ab]["t"] and face.duration == MODEL(face.text)
+    # the cut one: the words said before the cut, ending at the cut
+    [cut] = [u for u in said if u.cut]
+    assert cut.text == "This panel shows" == ends[cut.ab]["detail"]["spoken"]
+    assert cut.whole == "This panel shows research points of our laboratory."
+    assert cut.end == ends[cut.ab]["t"]
+    assert cut.duration == pytest.approx(MODEL(cut.whole) * 3 / 8, abs=0.03)
+
+
+def test_a_clip_lasts_exactly_its_utterance_and_is_the_same_every_time() -> None:
+    said = utterances(_rows(INTERRUPT), MODEL)
+    for u in said[:4] + [u for u in said if u.cut]:
+        made = clip(u)
+        assert len(made.samples) == round(u.duration * OUTPUT_RATE), u
+        assert max(abs(s) for s in made.samples) > 1000  # words, not silence
+        assert made.samples == clip(u).samples
+        with wave.open(io.BytesIO(wav(made.samples))) as read:
+            assert (read.getnchannels(), read.getsampwidth(), read.getframerate()) == \
+                (1, 2, OUTPUT_RATE)
+            assert read.getnframes() == len(made.samples)
+
+
+# ------------------------------------------------------------ the page in a browser
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    if not (CHROMIUM and CHROMEDRIVER):
+        pytest.skip("Chromium and its driver are not installed (apt-get install chromium "
+                    "chromium-driver; .ci/run does)")
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+
+    options = Options()
+    options.binary_location = CHROMIUM
+    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
+                     "--disable-background-networking", "--disable-dev-shm-usage",
+                     "--autoplay-policy=no-user-gesture-required", "--window-size=1400,1000"):
+        options.add_argument(argument)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(options=options, service=Service(CHROMEDRIVER))
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def _sounds(browser: Any, page: Path) -> list[dict[str, Any]]:
+    """Open the page from file://; its sounds, once every one has loaded its metadata."""
+    browser.get(page.as_uri())
+    sounds: list[dict[str, Any]] = []
+    for _ in range(200):
+        if browser.execute_script("return !!window.primaShow"):
+            sounds = browser.execute_script("return window.primaShow.sounds()")
+            if sounds and all(s["ready"] >= 1 or s["error"] for s in sounds):
+                break
+        time.sleep(0.05)
+    return sounds
+
+
+@pytest.mark.parametrize("scenario", [SAMPLE_10, INTERRUPT], ids=lambda p: p.stem)
+def test_the_page_plays_each_utterance_offline_as_long_as_it_is_said(
+        browser: Any, scenario: Path, tmp_path: Path) -> None:
+    page = tmp_path / f"{scenario.stem}.html"
+    err = io.StringIO()
+    assert main(["show", str(scenario), "--audio", "-o", str(page)], err=err) == 0, err.getvalue()
+    said = utterances(_rows(scenario), MODEL)
+    sounds = _sounds(browser, page)
+    assert len(sounds) == len(said) > 10
+    for sound, u in zip(sounds, said, strict=True):
+        assert sound["error"] == 0 and sound["ready"] >= 1  # loaded, from the page itself
+        assert (sound["start"], sound["end"]) == pytest.approx((u.start, u.end))
+        assert sound["duration"] == pytest.approx(u.duration, abs=1e-3)
+        assert sound["expected"] == pytest.approx(u.duration, abs=1e-4)
+    # played with the playhead: inside an utterance, its sound plays from there
+    u = said[len(said) // 2]
+    browser.execute_script(f"window.primaShow.seek({u.start + 0.3}); window.primaShow.play();")
+    time.sleep(0.4)
+    playing = browser.execute_script("return window.primaShow.sounds()")
+    index = said.index(u)
+    assert not playing[index]["paused"] and playing[index]["at"] > 0.4
+    assert all(s["paused"] for i, s in enumerate(playing) if i != index)
+    state = browser.execute_script("window.primaShow.pause(); return window.primaShow.sounds()")
+    assert all(s["paused"] for s in state)  # paused with the playhead
+    errors = [e["message"] for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert errors == []
+
+
+def test_audio_needs_espeak_ng(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without the library, a usage error that says how to install it, before anything runs."""
+    import prima.audio
+
+    monkeypatch.setattr(prima.audio, "available", lambda: "espeak-ng is not installed")
+    err = io.StringIO()
+    page = tmp_path / "x.html"
+    assert main(["show", str(SAMPLE_10), "--audio", "-o", str(page)], err=err) == 2
+    assert "espeak-ng is not installed" in err.getvalue() and not page.exists()
+
+
+def test_speech_timed_by_the_synthesiser_cuts_where_the_voice_ends_a_word() -> None:
+    """``--speech-timing tts``: a run's utterances take as long as espeak-ng's voice
+    takes, and the interrupt policy cuts one where the voice ends the word under way;
+    the page's sound is then the voice itself, up to the cut."""
+    from prima.audio import SynthesisedTiming
+    from prima.show._sound import clips
+
+    timing = SynthesisedTiming(2.5)
+    rows = [line.to_dict() for line in Run(INTERRUPT, speech=timing).run()]
+    tick = 1 / 50
+    speak = next(r for r in rows if r["kind"] == "end" and r["command"] == "Speak")
+    start = next(r for r in rows if r["kind"] == "start" and r["ab"] == speak["ab"])
+    said = float(speak["detail"]["result"].split("duration=")[1].split(",")[0])
+    assert said == pytest.approx(timing.said(start["text"])[0], abs=tick)
+    assert said != pytest.approx(MODEL(start["text"]), abs=tick)  # not the 2.5 words/s model
+    [cut] = [r for r in rows if r["kind"] == "end" and r.get("reason") == "interrupt"]
+    whole = cut["text"]
+    k = len(cut["detail"]["spoken"].split())
+    assert cut["detail"]["spoken"] == " ".join(whole.split()[:k])
+    [made] = [c for c in clips(rows, INTERRUPT, timing) if c.utterance.cut]
+    assert made.utterance.duration == pytest.approx(timing.said(whole)[1][k - 1], abs=tick)
+    voice = timing.speech(whole).samples
+    halved = [(a + b) // 2 for a, b in zip(voice[0:40:2], voice[1:40:2], strict=True)]
+    assert list(made.samples[:20]) == halved  # the voice itself, from its start
+
+
+def test_tts_timing_runs_a_scenario(tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    assert main(["run", str(SAMPLE_10), "--format", "jsonl", "--out", str(trace)]) == 0
+    err = io.StringIO()
+    assert main(["show", str(trace), "--speech-timing", "tts", "-o",
+                 str(tmp_path / "x.html")], err=err) == 2
+    assert "--speech-timing tts times a run: give a scenario, not a trace" in err.getvalue()
