@@ -84,10 +84,10 @@ def test_same_seed_same_output_whatever_the_jobs(tmp_path: Path,
                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
     args = ["sweep", str(SHORT), "--runs", "4", "--jitter", "3", "--seed", "7", "--worst", "2"]
-    one = cli(*args, "--jobs", "1", "--out", "one")
-    two = cli(*args, "--jobs", "2", "--out", "two")
+    one = cli(*args, "--jobs", "1", "--out", "worst-of-jobs-1")
+    two = cli(*args, "--jobs", "2", "--out", "worst-of-jobs-2")
     assert one[0] == two[0]
-    assert one[1].replace("one", "X") == two[1].replace("two", "X")
+    assert one[1].replace("worst-of-jobs-1", "X") == two[1].replace("worst-of-jobs-2", "X")
     assert "4 of 4 runs, jitter ±3 s, seed 7" in one[1]
     assert "4/4 runs" in one[2]  # the progress bar
     assert sorted(p.name for p in (tmp_path / "one").iterdir()) == sorted(
