@@ -90,10 +90,11 @@ def test_same_seed_same_output_whatever_the_jobs(tmp_path: Path,
     assert one[1].replace("worst-of-jobs-1", "X") == two[1].replace("worst-of-jobs-2", "X")
     assert "4 of 4 runs, jitter ±3 s, seed 7" in one[1]
     assert "4/4 runs" in one[2]  # the progress bar
-    assert sorted(p.name for p in (tmp_path / "one").iterdir()) == sorted(
-        p.name for p in (tmp_path / "two").iterdir())
-    for name in (p.name for p in (tmp_path / "one").iterdir()):
-        assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes()
+    assert sorted(p.name for p in (tmp_path / "worst-of-jobs-1").iterdir()) == sorted(
+        p.name for p in (tmp_path / "worst-of-jobs-2").iterdir())
+    for name in (p.name for p in (tmp_path / "worst-of-jobs-1").iterdir()):
+        assert (tmp_path / "worst-of-jobs-1" / name).read_bytes() == \
+            (tmp_path / "worst-of-jobs-2" / name).read_bytes()
 
 
 def test_a_written_worst_run_replays_its_measures(tmp_path: Path) -> None:
