@@ -113,6 +113,9 @@ class _Driver:
     def cut(self, ab_id: int) -> bool:
         return False
 
+    def stop_words(self, ab_id: int) -> bool:
+        return False
+
 
 class _App:
     """A listener whose end handler requests what ``World.plans`` says."""
@@ -132,6 +135,9 @@ class _App:
 
     def command_cancelled(self, command_id: CommandId) -> None:
         pass
+
+    def takes(self, words: str) -> bool:
+        return False
 
 
 class World:

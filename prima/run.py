@@ -57,6 +57,7 @@ from prima.vocab import (
     MAX_EAS,
     RESTORE_ANGLE,
     RESTORE_DISTANCE,
+    SPEECH_EVENT,
     Budgets,
     OnInterrupt,
     Value,
@@ -260,6 +261,8 @@ class Run:
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
                                            catalog=self.catalog)
         self.sim.speech = speech  # None: the profile's speech rate times every utterance
+        self.sim.hears_always = self.policies["barge-in"]  # else only while a Q&A listens
+        self.sim.backchannel = self.profile.hearing.backchannel
         self.mediator = Mediator(
             self.catalog, self.sim, self.sim, record=self._decision,
             config=MediatorConfig(budgets=self.budgets,
@@ -268,7 +271,9 @@ class Run:
                                   interrupt=self.policies["interrupt"],
                                   blend=self.policies["blend"],
                                   reactions=self.policies["reactions"],
-                                  exchange=self.policies["exchange"]),
+                                  exchange=self.policies["exchange"],
+                                  barge_in=self.policies["barge-in"],
+                                  resume_pause=self.profile.hearing.pause),
             channel=_Channel(self.sim))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
@@ -477,14 +482,14 @@ class Run:
             detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
             if "error" in outcome.values:
                 detail["error"] = outcome.values["error"]
-            if d.rule is Rule.INTERRUPT:
+            if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
                 detail["interrupt"] = d.detail
                 detail["spoken"] = outcome.values.get("spoken")
                 detail["unspoken"] = outcome.values.get("unspoken")
         said = self._said.pop(d.ab or 0, None)
         if said is not None:
             detail["words_start"], detail["words_end"] = round(said[0], 3), round(said[1], 3)
-        if d.detail not in ("not terminal", "to restart"):  # its Commands are over
+        if d.detail not in ("not terminal", "to restart", "to go on"):  # its Commands are over
             for cid in d.command_ids:
                 self._requested.pop(cid, None)
                 self._elsewhere.discard(cid)
@@ -551,7 +556,10 @@ class Run:
 
     def _event(self, event: Event) -> None:
         self._line(Kind.EVENT, text=event.name, detail=dict(event.data))
-        self.mediator.post(event)
+        if event.name == SPEECH_EVENT:
+            self.mediator.hear(event)  # to one application (MISSION.md 7.5)
+        else:
+            self.mediator.post(event)
 
     def _user(self, action: UserAction) -> None:
         detail: dict[str, object] = {}

@@ -7,7 +7,8 @@ delays (``after``) and its scheduled messages, sounds and events (``at``)
 shifted by random offsets uniform in ±jitter, and judges each run
 (:mod:`prima.judge`). The order the scenario gives is kept: a shifted user
 action is never earlier than the previous shifted one (messages likewise among
-themselves), no time goes below 0 and an answer's delay stays at least 0.1 s.
+themselves), no time goes below 0 and an answer's delay stays at least 0.1 s (an
+early answer, said over the prompt, stays at least 0.1 s before the prompt's end).
 
 Run ``i``'s offsets come from ``random.Random`` seeded with the sweep's seed and
 ``i``, so results are the same whatever the number of parallel jobs. Each
@@ -76,8 +77,11 @@ def _jitter(root: etree._Element, rng: random.Random, jitter: float) -> None:
         if not isinstance(el.tag, str):
             continue
         if local_name(el) == "answer":
-            after = float(el.get("after", "1.0")) + rng.uniform(-jitter, jitter)
-            el.set("after", _number(max(after, MIN_ANSWER_DELAY)))
+            given = float(el.get("after", "1.0"))
+            after = given + rng.uniform(-jitter, jitter)
+            # an early answer (over the prompt) stays early, a late one late
+            el.set("after", _number(max(after, MIN_ANSWER_DELAY) if given >= 0
+                                    else min(after, -MIN_ANSWER_DELAY)))
         elif local_name(el) in _TIMED:
             last = max(last, float(el.get("at", "0")) + rng.uniform(-jitter, jitter))
             el.set("at", _number(last))

@@ -119,7 +119,7 @@ def _describe_end(line: TraceLine) -> str | None:
         error = str(line.detail["error"])
         own = f"{line.command}: "  # the simulator names the Command (of a group, which)
         return f"{line.command} fails: {error.removeprefix(own)}"
-    if line.reason == "interrupt":
+    if line.reason in ("interrupt", "barge-in"):
         said, then = line.detail.get("spoken") or "", line.detail.get("interrupt") or ""
         if said:
             return f'{line.command} cut after "{said}", {then}'
@@ -148,6 +148,7 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
     DecisionKind.RELEASE: lambda line: f"releases its hold ({line.reason})",
     DecisionKind.FAILURE: lambda line: f"ERROR: {line.text}",
     DecisionKind.BUDGET: lambda line: f"budget: {line.text}",
+    DecisionKind.HEAR: lambda line: f"hears {line.text}",
     Kind.EVENT: _describe_event,
     Kind.USER: lambda line: user_words(line.action, line.text, line.detail),
     Kind.ERROR: lambda line: f"ERROR: {line.text}",
@@ -165,7 +166,7 @@ _DESCRIBE: Mapping[RecordKind, Callable[[TraceLine], str | None]] = {
 
 _REASON_SHOWN = frozenset({DecisionKind.START, DecisionKind.CANCEL, DecisionKind.SUSPEND,
                            DecisionKind.RESUME, DecisionKind.HOLD, DecisionKind.BUDGET,
-                           DecisionKind.INTERRUPT})
+                           DecisionKind.INTERRUPT, DecisionKind.HEAR})
 """Kinds whose text line ends with the mediation rule in brackets."""
 
 

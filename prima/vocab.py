@@ -24,6 +24,10 @@ __all__ = [
     "EVENT_FIELDS",
     "PREDEFINED_EVENTS",
     "INTERRUPTED_EVENT",
+    "NEWS_EVENTS",
+    "MAX_NEWS_PER_INSTANT",
+    "SPEECH_EVENT",
+    "NOMATCH_EVENT",
     "ANSWERED",
     "OnInterrupt",
     "DEFAULT_BUDGETS",
@@ -99,11 +103,21 @@ PREDEFINED_EVENTS: Mapping[str, str] = MappingProxyType({
     "sound-heard": "a sound the robot recognises, e.g. a tune (data: sound)",
     "message": "a network message arrived from the environment's server (data: sender, text)",
     "place-reached": "a place on the map was reached while moving (data: place, kind)",
-    "interrupted": "one of the application's own atomic behaviors was cut for the other "
-                   "application's reaction (data: command, label, spoken, unspoken, "
-                   "restarts); not reactive",
+    "interrupted": "one of the application's own atomic behaviors was cut, for the other "
+                   "application's reaction or by the user speaking over it (data: command, "
+                   "label, spoken, unspoken, restarts, resumes, by, reason); not reactive",
+    "speech": "the user said something outside a Q&A that this application's always-on "
+              "grammar took (data: words, answer, grammar); the user's own action",
+    "nomatch": "the user said something that no application took (data: words); every "
+               "application sees it; not reactive",
+    "suspended": "the application's stream lost its devices to another application's "
+                 "atomic behavior (data: by, rule); not reactive",
+    "resumed": "the application's suspended stream goes on (data: rule); not reactive",
+    "held": "one of the application's atomic behaviors is held back by another "
+            "application (data: by, rule); not reactive",
 })
-"""Events every robot posts, FA and EA alike; all are reactive but ``interrupted``."""
+"""Events every robot posts, FA and EA alike; all are reactive but the news of
+:data:`NEWS_EVENTS`."""
 
 ANSWERED = "answered"
 """The ``status`` with which a Command that listens (a Q&A) ends when the user
@@ -112,7 +126,8 @@ answered it (the others: ``noinput``); its ``utterance`` holds the words."""
 EVENT_FIELDS = frozenset({
     # every event, and the predefined events' data
     "name", "distance", "sound", "sender", "text", "place", "kind", "command", "label",
-    "spoken", "unspoken", "restarts",
+    "spoken", "unspoken", "restarts", "resumes", "by", "reason", "rule", "words",
+    "grammar",
     # a Q&A's answer
     "utterance", "answer", "status",
     # what Commands end with (their end handlers' event)
@@ -125,17 +140,38 @@ is null unless a scenario's ``<event>`` sends it, so ``prima validate`` warns of
 misspelling: ``event.eror == null`` is always true)."""
 
 INTERRUPTED_EVENT = "interrupted"
-"""The event an application gets when the interrupt policy cut one of its atomic
-behaviors; the only predefined event that is not reactive (it is news about the
-application's own Command, not the user)."""
+"""The event an application gets when the interrupt policy or the user's barge-in cut
+one of its atomic behaviors (news about the application's own Command: not reactive)."""
+
+SPEECH_EVENT = "speech"
+"""What the robot heard the user say outside a Q&A, given to the one application whose
+always-on grammar takes it (MISSION.md 7.5): reactive, the user's own action."""
+
+NOMATCH_EVENT = "nomatch"
+"""What the robot heard the user say that no application took: every application
+sees it, not reactive."""
+
+MAX_NEWS_PER_INSTANT = 20
+"""Most news events (suspended, resumed, held) one application is told at one simulated
+instant: an application whose news handlers make requests that are held or suspended
+again cannot keep the robot at that instant forever; later news of that instant is
+not told (its decisions are in the trace all the same)."""
+
+NEWS_EVENTS = frozenset({INTERRUPTED_EVENT, NOMATCH_EVENT, "suspended", "resumed", "held"})
+"""The predefined events that are not reactive: news about the application's own
+Commands and stream, or speech no application took."""
 
 
 class OnInterrupt(str, enum.Enum):
-    """What a request says of its atomic behaviors under the interrupt policy."""
+    """What a request says of its atomic behaviors under the interrupt policy and the
+    user's barge-in."""
 
     RESTART = "restart"
     """They may be cut for another application's reaction, and then start again
     from their beginning after it (the default)."""
+    RESUME = "resume"
+    """They may be cut, and then go on after the reaction from the beginning of the
+    sentence their first unspoken word falls in."""
     DROP = "drop"
     """They may be cut, and then are dropped: their Command ends, interrupted."""
     NEVER = "never"
@@ -243,6 +279,13 @@ POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
                               "heard speech) goes before another application's later "
                               "reaction to a perception or network event until it has "
                               "said its first words"),
+    Policy("barge-in", False, "the robot hears its user at any time, not only while a "
+                              "Q&A listens: what it hears goes to the application whose "
+                              "always-on grammar takes it, and speech over the robot's "
+                              "utterance cuts it at a word boundary (a backchannel does "
+                              "not); on by default on a robot whose profile declares "
+                              '<hearing always="true"> (thesis Sec. 5.3: stop and answer '
+                              "at once)"),
     Policy("exchange", True, "the words with which an application replies to the answer "
                              "of its own Q&A go before every other application's talk, "
                              "reactions included, and are never cut"),

@@ -1654,15 +1654,15 @@ def test_every_measure_has_a_threshold_and_an_option() -> None:
     """The measures, the report's counts, the thresholds and the options of ``prima
     judge`` all come from one table."""
     keys = ["late", "unheard", "unfaced", "leaving", "elsewhere", "splits", "silences",
-            "stuck"]
+            "barge_in", "ignored", "recovery", "stuck"]
     assert [m.key for m in MEASURES] == [m.key for m in LIMITS] == keys
     assert list(clean().judge().counts()) == keys
-    assert [m.option for m in MEASURES] == [f"--max-{k}" for k in keys]
+    assert [m.option for m in MEASURES] == [f"--max-{k.replace('_', '-')}" for k in keys]
     assert Thresholds().limits == {f"max_{k}": 0 for k in keys}
     assert [p.option for p in PARAMETERS] == [
         "--reaction-slack", "--utterance-slack", "--react-within", "--face-tolerance",
-        "--leave-distance", "--resume-distance", "--silence", "--stuck-after",
-        "--search-after"]
+        "--leave-distance", "--resume-distance", "--barge-in-slack", "--answer-slack",
+        "--recovery-slack", "--silence", "--stuck-after", "--search-after"]
 
 
 def test_thresholds_allow_what_they_say() -> None:
@@ -1691,10 +1691,10 @@ def test_report_dict_has_stable_keys_and_is_json() -> None:
     d = report.to_dict()
     assert list(d) == ["name", "end", "lines", "thresholds", "counts", "reactions", "late",
                        "unheard", "unfaced", "leaving", "elsewhere", "splits", "silences",
-                       "stuck", "breaches", "ok"]
+                       "barge_in", "ignored", "recovery", "stuck", "breaches", "ok"]
     assert d["counts"] == {"reactions": 1, "late": 1, "unheard": 0, "unfaced": 0,
                            "leaving": 0, "elsewhere": 0, "splits": 0, "silences": 0,
-                           "stuck": 0}
+                           "barge_in": 0, "ignored": 0, "recovery": 0, "stuck": 0}
     assert d["late"] == [d["reactions"][0]]
     assert json.loads(json.dumps(d)) == d
 

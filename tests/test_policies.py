@@ -34,7 +34,8 @@ def test_every_policy_has_a_default_and_all_switches_every_one() -> None:
     # ``all`` first in its layer, then that layer's named ones; later layers win
     assert policy_settings({"all": False, "streams": True}) == \
         {"restore-state": False, "interrupt": False, "blend": False, "streams": True,
-         "connect-channel": False, "reactions": False, "exchange": False}
+         "connect-channel": False, "reactions": False, "exchange": False,
+         "barge-in": False}
     assert policy_settings({"streams": False}, {"all": True})["streams"] is True
     assert policy_settings({"no-such-policy": False}) == policy_settings()
 
@@ -107,7 +108,7 @@ def test_streams_off_is_the_thesis_prima(tmp_path: Path) -> None:
     ("teleport=on",
      "--policy teleport=on: no policy 'teleport' "
      "(known: all, restore-state, interrupt, blend, streams, connect-channel, reactions, "
-     "exchange)"),
+     "barge-in, exchange)"),
     ("streams=maybe", "--policy streams=maybe: say streams=on or streams=off"),
     ("streams", "--policy streams: say streams=on or streams=off"),
 ])

@@ -67,6 +67,7 @@ from prima.vocab import (
     MAX_STREAM_HOLD,
     EVENT_FIELDS,
     PREDEFINED_EVENTS,
+    SPEECH_EVENT,
     AppKind,
     OnInterrupt,
     RunningOrder,
@@ -518,7 +519,14 @@ class Builder:
             actions = self._actions(el)
         finally:
             self.in_handler = False
-        return Handler(kind, key, cond, reactive, actions, self.loc_of(el))
+        match = el.get("match") if kind is HandlerKind.EVENT else None
+        if match is not None:
+            if key != SPEECH_EVENT:
+                self.error((el, "match", 0), 'match is an always-on grammar: it belongs on '
+                                             f'<on event="{SPEECH_EVENT}">, not on '
+                                             f'<on event="{key}">')
+            self.refs.grammars.append((match, (el, "match", 0)))
+        return Handler(kind, key, cond, reactive, actions, self.loc_of(el), match)
 
     def _actions(self, parent: etree._Element) -> tuple[Action, ...]:
         return self._sequence(elements(parent))

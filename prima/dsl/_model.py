@@ -176,6 +176,9 @@ class Handler:
     """For ``on``: the author's choice; None means the event's own default."""
     actions: tuple[Action, ...]
     loc: Loc
+    match: str | None = None
+    """For ``on event="speech"``: the always-on grammar it listens for (None: any
+    words the application is given)."""
 
 
 # ---------------------------------------------------------------- grammars

@@ -23,6 +23,7 @@ evaluated.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
@@ -53,6 +54,7 @@ from prima.catalog import (
     SwayBody,
 )
 from prima.dsl._elements import elements, flag
+from prima.dsl._model import words
 from prima.errors import DocumentError, Problem
 from prima.vocab import (
     DEFAULT_BUDGETS,
@@ -80,6 +82,43 @@ DEFAULT_PROFILE = "home-robot.xml"
 
 STANDARD_GESTURES = frozenset({"nod", "shake-head", "wave", "bow", "happy", "sad", "surprised"})
 """Gestures every robot offers; an EA may use only these."""
+
+
+BACKCHANNELS = ("uh-huh", "mm-hmm", "mhm", "yes", "yeah", "okay", "ok", "right", "i see",
+                "sure")
+"""What a user says to show they follow, not to take the turn: a robot that hears at any
+time goes on talking over these (``<hearing backchannels>`` replaces them)."""
+
+RESUME_PAUSE = 0.6
+"""Seconds a robot waits, after user speech no application took cut its utterance (a
+false interruption: a cough, a remark to someone else), before it goes on."""
+
+MAX_BACKCHANNELS = 100
+"""Most phrases ``<hearing backchannels>`` may list."""
+
+
+@dataclass(frozen=True)
+class Hearing:
+    """When the robot hears its user (``<hearing>``, MISSION.md 7.5)."""
+
+    always: bool = False
+    """It hears at any time (the barge-in policy, on by default then); else only while
+    a Q&A listens, as the thesis' PaPeRo did."""
+    backchannels: frozenset[tuple[str, ...]] = frozenset(
+        tuple(words(b)) for b in BACKCHANNELS)
+    """Phrases (as normalised words) it talks on over."""
+    pause: float = RESUME_PAUSE
+    """Seconds before an utterance cut by speech no application took goes on."""
+
+    def backchannel(self, text: str) -> bool:
+        """Whether the user saying ``text`` only shows they follow: every phrase of it
+        (split at punctuation) is a backchannel."""
+        said = [tuple(words(part)) for part in _PHRASES.split(text)]
+        said = [p for p in said if p]
+        return bool(said) and all(p in self.backchannels for p in said)
+
+
+_PHRASES = re.compile(r"[.,;:!?]+")
 
 
 @dataclass(frozen=True)
@@ -130,6 +169,8 @@ class RobotProfile:
     devices, and with a ``<perform>`` if it gives one."""
     joints: Mapping[str, JointSpec] = field(default_factory=dict)
     """Joints the profile declares (``<joint>``), beyond :data:`BUILTIN_JOINTS`."""
+    hearing: Hearing = Hearing()
+    """When it hears its user (``<hearing>``): by default only while a Q&A listens."""
     _catalog: Catalog = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -178,6 +219,7 @@ FIGURES: Mapping[tuple[str, str], Bound] = {
     ("gesture", "duration"): Bound(3_600.0, "s"),
     ("command", "duration"): Bound(3_600.0, "s"),
     ("blend", "max-user-distance"): Bound(1_000.0, "m"),
+    ("hearing", "resume-after"): Bound(60.0, "s", 0.0, positive=False),
     ("blend", "slowdown"): Bound(1.0, "", positive=True),
     ("joint", "min"): Bound(360.0, "deg", -360.0, positive=False),
     ("joint", "max"): Bound(360.0, "deg", -360.0, positive=False),
@@ -313,8 +355,10 @@ class _Reader:
                                         if local_name(el) == "budgets"]),
             interruptible=(interruptible := self._interruptible(root)),
             blends=(blends := self._blends(root)),
+            hearing=(hearing := self._hearing(root)),
             policies=MappingProxyType(self._declared_on(interruptible=bool(interruptible),
-                                                        blend=bool(blends))),
+                                                        blend=bool(blends),
+                                                        hearing=hearing.always)),
         )
 
     def _declared_on(self, **declared: bool) -> dict[str, bool]:
@@ -322,7 +366,8 @@ class _Reader:
         (``<interruptible>``, ``<blend>``) is on unless a ``<policy>`` says otherwise."""
         if "all" in self.policies:
             return self.policies
-        on = {"interrupt": declared["interruptible"], "blend": declared["blend"]}
+        on = {"interrupt": declared["interruptible"], "blend": declared["blend"],
+              "barge-in": declared["hearing"]}
         return {**{name: True for name, yes in on.items() if yes}, **self.policies}
 
     def _blends(self, root: etree._Element) -> tuple[Blend, ...]:
@@ -413,6 +458,22 @@ class _Reader:
                 self.error(parent, f"a PRIMA robot needs the device '{missing}' "
                                    f"(used by {_listed(users)}; a robot without it "
                                    "must <implement> those on devices of its own)")
+
+    def _hearing(self, root: etree._Element) -> Hearing:
+        """``<hearing>``: when the robot hears, the phrases it talks on over, its pause."""
+        el = next((e for e in elements(root) if local_name(e) == "hearing"), None)
+        if el is None:
+            return Hearing()
+        listed = el.get("backchannels")
+        phrases = Hearing().backchannels
+        if listed is not None:
+            found = [tuple(words(p)) for p in listed.split("|")]
+            phrases = frozenset(p for p in found if p)
+            if len(found) > MAX_BACKCHANNELS:
+                self.error(el, f"backchannels lists {len(found)} phrases; at most "
+                               f"{MAX_BACKCHANNELS}", "backchannels")
+        pause = self.number(el, "resume-after", RESUME_PAUSE)
+        return Hearing(always=el.get("always") == "true", backchannels=phrases, pause=pause)
 
     def _interruptible(self, root: etree._Element) -> frozenset[str]:
         """The Commands named by ``<interruptible commands="...">``, each one known."""

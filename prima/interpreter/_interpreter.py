@@ -48,8 +48,9 @@ from prima.mediator import Call, Clock, CommandId, Event, Outcome
 from prima.mediator import Request as MediatorRequest
 from prima.vocab import (
     DEFAULT_BUDGETS,
-    INTERRUPTED_EVENT,
+    NEWS_EVENTS,
     PREDEFINED_EVENTS,
+    SPEECH_EVENT,
     AppKind,
     Budgets,
     TraceKind,
@@ -196,8 +197,36 @@ class Interpreter:
         if self.stopped or not self._handlers(HandlerKind.EVENT, event.name):
             return  # most of the robot's events concern an application in few of its states
         data = {"name": event.name, **event.data}
+        handlers = None
+        if event.name == SPEECH_EVENT:  # the handlers whose always-on grammar took it
+            handlers = self._listening(to_text(event.data.get("words")), data)
         self._guard(self._dispatch, HandlerKind.EVENT, event.name, data,
-                    self._default_reactivity(event.name), None, event.name in self.user_events)
+                    self._default_reactivity(event.name), None,
+                    event.name in self.user_events or event.name == SPEECH_EVENT, handlers)
+
+    def takes(self, words: str) -> bool:
+        """Whether a ``<on event="speech">`` of the current state takes ``words``: its
+        always-on grammar matches them, or it names none (it takes any words)."""
+        if self.stopped:
+            return False
+        return bool(self._listening(words, {}))
+
+    def _listening(self, words: str, data: dict[str, Value]) -> tuple[Handler, ...]:
+        """The speech handlers that take ``words``, in the order they are tried; ``data``
+        gets the first match's ``answer`` and ``grammar``."""
+        out: list[Handler] = []
+        for handler in self._handlers(HandlerKind.EVENT, SPEECH_EVENT):
+            if handler.match is None:
+                out.append(handler)
+                continue
+            answer = self.document.grammars[handler.match].match(words)
+            if answer is not None:
+                if "answer" not in data:
+                    data["answer"], data["grammar"] = answer, handler.match
+                out.append(handler)
+        data.setdefault("answer", None)
+        data.setdefault("grammar", None)
+        return tuple(out)
 
     def command_ended(self, command_id: CommandId, outcome: Outcome) -> None:
         call = self._commands.pop(command_id, None)
@@ -262,7 +291,7 @@ class Interpreter:
 
     def _default_reactivity(self, name: str) -> bool:
         if name in PREDEFINED_EVENTS:
-            return name != INTERRUPTED_EVENT
+            return name not in NEWS_EVENTS
         if name in self.robot_events:
             return self.robot_events[name]
         declared = self.document.events.get(name)
@@ -285,10 +314,11 @@ class Interpreter:
         raise AppFailure(message) from exc
 
     def _dispatch(self, kind: HandlerKind, key: str, data: dict[str, Value],
-                  reactive: bool, follows: CommandId | None, user: bool = False) -> None:
+                  reactive: bool, follows: CommandId | None, user: bool = False,
+                  handlers: tuple[Handler, ...] | None = None) -> None:
         previous, self._handling = self._handling, _Handling(reactive, follows, user=user)
         try:
-            self._handle(kind, key, data)
+            self._handle(kind, key, data, handlers)
             self._drain_raised()
         finally:
             self._handling = previous
@@ -307,8 +337,10 @@ class Interpreter:
             self._dispatch(HandlerKind.EVENT, name, {"name": name},
                            self._default_reactivity(name), None)
 
-    def _handle(self, kind: HandlerKind, key: str, data: dict[str, Value]) -> None:
-        handlers = self._handlers(kind, key)
+    def _handle(self, kind: HandlerKind, key: str, data: dict[str, Value],
+                handlers: tuple[Handler, ...] | None = None) -> None:
+        if handlers is None:
+            handlers = self._handlers(kind, key)
         if not handlers:
             return
         scope = self._scope(data)

@@ -265,7 +265,9 @@ class Context:
         user = (last is not None and last.get("kind") == "user"
                 and last.get("action") in USER_ACTIONS
                 and abs(float(last["t"]) - float(row["t"])) <= EPS)
-        self._window = _Window(name, float(row["t"]), int(row["seq"]), user)
+        words = (row.get("detail") or {}).get("words") if name == "speech" else None
+        self._window = _Window(name, float(row["t"]), int(row["seq"]), user,
+                               text=str(words or ""))
 
     def _user(self, row: Row) -> None:
         self._window = None

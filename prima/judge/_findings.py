@@ -12,8 +12,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-__all__ = ["Blame", "Elsewhere", "Finding", "Leaving", "Reaction", "Silence", "Split", "Stuck",
-           "Unfaced"]
+__all__ = ["BargeIn", "Blame", "Elsewhere", "Finding", "Ignored", "Leaving", "Reaction",
+           "Recovery", "Silence", "Split", "Stuck", "Unfaced"]
 
 
 @dataclass(frozen=True)
@@ -255,5 +255,70 @@ class Stuck:
         return out
 
 
-Finding = Reaction | Unfaced | Leaving | Elsewhere | Split | Silence | Stuck
+@dataclass(frozen=True)
+class BargeIn:
+    """The robot talked on over its user for longer than a word and the slack."""
+
+    seq: int
+    """The user's say line."""
+    t: float
+    text: str
+    """What the user said."""
+    app: str
+    """Whose utterance ran on."""
+    command: str
+    stopped: float | None
+    """When its words stopped (None: they ran to their end)."""
+    latency: float
+    """Seconds from the user's first word to the robot's stopping."""
+    allowed: float
+    """The slack plus the word under way (s)."""
+    at: str = ""
+
+    def to_dict(self) -> dict[str, object]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class Ignored:
+    """User speech an application took, and did not answer in time."""
+
+    seq: int
+    """The user's say line."""
+    t: float
+    text: str
+    app: str
+    """The application that took the words."""
+    answered: float | None
+    """When its first words in reply began (None: never)."""
+    allowed: float
+    """The slack plus what the rules put first (s)."""
+    at: str = ""
+
+    def to_dict(self) -> dict[str, object]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class Recovery:
+    """An utterance cut by words no application took (a false interruption) that did not
+    go on within the robot's pause and the slack."""
+
+    seq: int
+    """The cut line."""
+    t: float
+    """When its words stopped."""
+    app: str
+    command: str
+    resumed: float | None
+    """When it went on (None: never)."""
+    allowed: float
+    at: str = ""
+
+    def to_dict(self) -> dict[str, object]:
+        return dataclasses.asdict(self)
+
+
+Finding = (Reaction | Unfaced | Leaving | Elsewhere | Split | Silence | Stuck | BargeIn | Ignored
+           | Recovery)
 """Anything a measure finds."""

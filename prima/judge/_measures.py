@@ -11,19 +11,24 @@ the sweep's rows and the docs' table all come from this table.
 
 from __future__ import annotations
 
+import bisect
 import heapq
 import math
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from prima.catalog import BODY_DEVICE, STANDARD_COMMANDS
-from prima.judge._context import EPS, Context, command_ids, xy
+from prima.judge._context import EPS, Ab, Context, command_ids, xy
 from prima.judge._findings import (
+    BargeIn,
     Blame,
     Elsewhere,
     Finding,
+    Ignored,
     Leaving,
+    Recovery,
     Reaction,
     Silence,
     Split,
@@ -622,6 +627,166 @@ def _stuck_line(s: Stuck) -> str:
             f"from {s.since:g} s, {why.get(s.kind, s.kind)}{behind}")
 
 
+# ---------------------------------------------------------------- the user's voice
+
+@dataclass
+class _Said:
+    seq: int
+    t: float
+    text: str
+    backchannel: bool = False
+
+
+class _BargeIn:
+    """The robot's words running on over its user (MISSION.md 7.5): from the user's
+    first word over an utterance to its words stopping, more than the slack plus the
+    word under way. A backchannel is no barge-in; speech the robot cannot hear (out of
+    range, or a robot that hears only in its Q&As) is not measured."""
+
+    def __init__(self) -> None:
+        self.found: list[BargeIn] = []
+        self.said: list[_Said] = []
+        self.times: list[float] = []
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        kind = row["kind"]
+        if kind == "user":
+            if row.get("action") == "say" and (row.get("detail") or {}).get("heard"):
+                said = _Said(int(row["seq"]), float(row["t"]), str(row.get("text") or ""))
+                self.said.append(said)
+                self.times.append(said.t)
+        elif kind == "hear" and row.get("reason") == "backchannel" and self.said:
+            self.said[-1].backchannel = True
+        elif kind == "end":
+            ab = ctx.abs.get(row.get("ab", -1))
+            if ab is not None and ab.text and ab.words is not None and ab.end is not None:
+                self._ended(ab, ctx)
+
+    def _ended(self, ab: Ab, ctx: Context) -> None:
+        ws, we = ab.words or (0.0, 0.0)
+        words = len(ab.text.split()) or 1
+        per_word = (we - ws) / words
+        stopped = min(ab.end or we, we)
+        allowed = ctx.th.barge_in_slack + per_word
+        i = bisect.bisect_right(self.times, ws + EPS)  # (over its words: after they began)
+        while i < len(self.said) and self.said[i].t < stopped - EPS:
+            said = self.said[i]
+            i += 1
+            if said.backchannel:
+                continue
+            latency = stopped - said.t
+            if latency > allowed + EPS:
+                self.found.append(BargeIn(said.seq, said.t, said.text, ab.app, ab.command,
+                                          stopped if stopped < we - EPS else None,
+                                          round(latency, 3), round(allowed, 3), ctx.at(ab)))
+            break  # (the first words over it are what it had to stop for)
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        return sorted(self.found, key=lambda b: b.seq)
+
+
+def _barge_in_line(b: BargeIn) -> str:
+    ran = "ran to its end" if b.stopped is None else f"stopped at t={b.stopped:g}"
+    return (f"seq {b.seq} t={b.t:g} \"{_short(b.text, 20)}\" over {b.app} {b.command}"
+            f"{_where(b.at)}: {ran}, {b.latency:g} s (allowed {b.allowed:g} s)")
+
+
+class _Ignored:
+    """User speech an application took (a hear line names it) that it did not answer:
+    its reaction's first start came more than the answer slack after what the rules
+    put before it, or it asked for nothing."""
+
+    def __init__(self) -> None:
+        self.taken: list[tuple[int, float, str, str]] = []
+        self.user: tuple[int, str] | None = None
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        kind = row["kind"]
+        if kind == "user" and row.get("action") == "say":
+            self.user = (int(row["seq"]), str(row.get("text") or ""))
+        elif kind == "hear" and row.get("app") and self.user is not None:
+            self.taken.append((self.user[0], float(row["t"]), self.user[1], str(row["app"])))
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        mine = {(r.t, r.app): r for r in reactions if r.event == "speech"}
+        found: list[Finding] = []
+        for seq, t, text, app in self.taken:
+            r = mine.get((t, app))
+            allowed = ctx.th.answer_slack + (r.residual if r is not None else 0.0)
+            answered = r.first_start if r is not None else None
+            if answered is None and ctx.t - t <= allowed + EPS:
+                continue  # (the trace ended before it was due)
+            if answered is None or answered - t > allowed + EPS:
+                found.append(Ignored(seq, t, text, app, answered, round(allowed, 3),
+                                     r.at if r is not None else ""))
+        return found
+
+
+def _ignored_line(x: Ignored) -> str:
+    when = "never answered" if x.answered is None else \
+        f"answered {x.answered - x.t:.3g} s later"
+    return (f"seq {x.seq} t={x.t:g} \"{_short(x.text, 20)}\" taken by {x.app}"
+            f"{_where(x.at)}: {when} (allowed {x.allowed:g} s)")
+
+
+_PAUSE = re.compile(r"goes on after ([0-9.]+) s")
+
+
+class _Recovery:
+    """An utterance cut by user speech no application took (a hear line ``nomatch``, then
+    its barge-in cut) that does not start again within the pause the cut line gives
+    plus the slack."""
+
+    def __init__(self) -> None:
+        self.pauses: dict[int, float] = {}
+        """A falsely cut AB -> the robot's pause."""
+        self.cut: dict[int, tuple[int, float]] = {}
+        """A falsely cut AB -> its end line and when its words stopped."""
+        self.again: dict[int, int] = {}
+        """The AB that starts it again -> the cut AB."""
+        self.found: list[Recovery] = []
+
+    def feed(self, row: Row, ctx: Context) -> None:
+        kind = row["kind"]
+        ab = row.get("ab")
+        if not isinstance(ab, int):
+            return
+        reason = row.get("reason")
+        if kind == "interrupt" and reason == "barge-in":
+            found = _PAUSE.search(str(row.get("text") or ""))
+            if found is not None:
+                self.pauses[ab] = float(found.group(1))
+        elif kind == "end" and reason == "barge-in" and ab in self.pauses:
+            self.cut[ab] = (int(row["seq"]), float(row["t"]))
+        elif kind == "request" and reason == "restart":
+            before = row.get("before")
+            if isinstance(before, int) and before in self.cut:
+                self.again[ab] = before
+        elif kind == "start" and ab in self.again:
+            self._check(self.again.pop(ab), float(row["t"]), ctx)
+
+    def _check(self, cut: int, started: float | None, ctx: Context) -> None:
+        seq, t = self.cut.pop(cut)
+        allowed = self.pauses.pop(cut) + ctx.th.recovery_slack
+        if started is None and ctx.t - t <= allowed + EPS:
+            return  # (the trace ended before it was due)
+        if started is None or started - t > allowed + EPS:
+            ab = ctx.abs.get(cut)
+            self.found.append(Recovery(seq, t, ab.app if ab else "", ab.command if ab else "",
+                                       started, round(allowed, 3), ctx.at(ab) if ab else ""))
+
+    def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
+        for cut in sorted(self.cut):
+            self._check(cut, None, ctx)
+        return sorted(self.found, key=lambda r: r.seq)
+
+
+def _recovery_line(x: Recovery) -> str:
+    when = "never went on" if x.resumed is None else f"went on {x.resumed - x.t:.3g} s later"
+    return (f"seq {x.seq} t={x.t:g} {x.app} {x.command}{_where(x.at)}: cut by words no "
+            f"application took, {when} (allowed {x.allowed:g} s)")
+
+
 # ---------------------------------------------------------------- the table
 
 _FINDERS: dict[str, tuple[Callable[[], Finder], Callable[[Any], str]]] = {
@@ -633,6 +798,9 @@ _FINDERS: dict[str, tuple[Callable[[], Finder], Callable[[Any], str]]] = {
     "splits": (_Splits, _split_line),
     "silences": (_Silences, _silence_line),
     "stuck": (_Stuck, _stuck_line),
+    "barge_in": (_BargeIn, _barge_in_line),
+    "ignored": (_Ignored, _ignored_line),
+    "recovery": (_Recovery, _recovery_line),
 }
 
 MEASURES: tuple[Measure, ...] = tuple(

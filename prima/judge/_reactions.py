@@ -355,7 +355,8 @@ class _Analyst:
         heard = next((ab for ab in spoken if ab.end_reason == "completed"), None)
         words = r.words or bool(spoken)
         words_free = 0.0
-        if first is not None and words:
+        cut_by_user = heard is None and any(ab.end_reason == "barge-in" for ab in spoken)
+        if first is not None and words and not cut_by_user:  # (the user's own cut: 7.5)
             words_free = self._words_free(r, own, mine, spoken, first, heard)
         found = Reaction(
             r.event, r.t, r.seq, r.app, r.order, tuple(r.commands), tuple(r.trees),
@@ -406,12 +407,15 @@ class _Analyst:
 
     def _unheard(self, r: ReactionState, spoken: Sequence[Ab]) -> bool:
         """Its words were never heard whole: cut and never said again, or never said
-        long after the event; not if its own application cancelled them."""
+        long after the event; not if its own application cancelled them, nor if the
+        user spoke over them."""
         words_cmds = {cid for ab in spoken for cid in ab.ids} or set(r.commands[:1])
         if words_cmds <= self.ctx.cancelled.keys():
             return False
         if any(ab.end_reason == "interrupt" for ab in spoken):
             return True
+        if any(ab.end_reason == "barge-in" for ab in spoken):
+            return False  # (the user spoke over them: theirs to cut, MISSION.md 7.5)
         return self.end - r.t > self.th.stuck_after + EPS
 
     @staticmethod

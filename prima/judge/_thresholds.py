@@ -38,7 +38,7 @@ class Limit:
 
     @property
     def option(self) -> str:
-        return f"--max-{self.key}"
+        return f"--max-{self.key.replace('_', '-')}"
 
 
 LIMITS: tuple[Limit, ...] = (
@@ -62,6 +62,17 @@ LIMITS: tuple[Limit, ...] = (
           "stream"),
     Limit("silences", "silences", "silences after an answer allowed",
           "no robot output for longer than the silence after a user's answer"),
+    Limit("barge_in", "talking over the user", "utterances run on over the user allowed",
+          "the robot's words running on after its user began to speak over them for more "
+          "than the barge-in slack plus the word under way (a backchannel excepted)"),
+    Limit("ignored", "ignored speech", "ignored user speech allowed",
+          "user speech an application took and did not answer: its first words in reply "
+          "began more than the answer slack after what the rules put before them"),
+    Limit("recovery", "unrecovered interruptions", "false interruptions not recovered "
+          "allowed",
+          "an utterance cut by user speech that no application took (a false "
+          "interruption: a cough) that did not go on within the robot's pause plus the "
+          "slack"),
     Limit("stuck", "stuck", "stuck applications allowed",
           "an application whose Commands cannot start, that searches for a user it "
           "never sees, or an atomic behavior that never ends"),
@@ -101,6 +112,15 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter("resume_distance", RESTORE_DISTANCE, "METRES",
               "how far from where it was suspended a stream may resume speaking "
               "(default 0.3)"),
+    Parameter("barge_in_slack", 0.3, "SECONDS",
+              "how long the robot may talk on over its user besides the word under way "
+              "(default 0.3)"),
+    Parameter("answer_slack", 1.0, "SECONDS",
+              "how long after what the rules put first an application that took user "
+              "speech may begin to answer it (default 1)"),
+    Parameter("recovery_slack", 0.2, "SECONDS",
+              "how long after the robot's pause an utterance cut by a false interruption "
+              "may go on (default 0.2)"),
     Parameter("silence", 2.0, "SECONDS",
               "longest pause without output after an answer (default 2)"),
     Parameter("stuck_after", 60.0, "SECONDS",
@@ -128,12 +148,16 @@ class Thresholds:
     table of measures, 0 by default: no fault allowed), and the measures'
     parameters (:data:`PARAMETERS`)."""
 
-    __slots__ = ("face_tolerance", "leave_distance", "limits", "react_within",
-                 "reaction_slack", "resume_distance", "search_after", "silence",
-                 "stuck_after", "utterance_slack")
+    __slots__ = ("answer_slack", "barge_in_slack", "face_tolerance", "leave_distance",
+                 "limits", "react_within", "reaction_slack", "recovery_slack",
+                 "resume_distance", "search_after", "silence", "stuck_after",
+                 "utterance_slack")
 
     reaction_slack: float
     utterance_slack: float
+    barge_in_slack: float
+    answer_slack: float
+    recovery_slack: float
     react_within: float | None
     face_tolerance: float
     leave_distance: float

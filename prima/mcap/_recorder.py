@@ -28,6 +28,7 @@ from foxglove.channels import (
 from foxglove.mcap import MCAPWriteOptions
 
 from prima.judge import Report, judge
+from prima.mediator import DecisionKind
 from prima.sim import WorldMap
 from prima.trace import TraceLine, describe
 
@@ -332,8 +333,8 @@ class Recorder:
         self.close()
 
 
-_DECISIONS = frozenset({"load", "unload", "request", "start", "end", "interrupt", "cancel",
-                        "suspend", "resume", "hold", "release", "failure", "budget"})
+_DECISIONS = frozenset(kind.value for kind in DecisionKind)
+"""The kinds of the mediator's decision lines (the ``/prima/decisions`` topic)."""
 
 
 def _is_decision(kind: str) -> bool:

@@ -46,6 +46,9 @@ class DecisionKind(str, enum.Enum):
     INTERRUPT = "interrupt"
     """A reaction's AB had the driver cut another application's running AB (the
     interrupt policy); the cut AB's end follows at a word boundary."""
+    HEAR = "hear"
+    """The robot heard its user outside a Q&A (MISSION.md 7.5): which application takes
+    the words (``rule`` says why), or that none does."""
     BUDGET = "budget"
     """An application's share of the others' waiting ran out (it loses its
     precedence for a while), or came back."""
@@ -91,7 +94,26 @@ class Rule(str, enum.Enum):
     """A reaction's AB cuts another application's running interruptible AB (an
     interrupt decision, and the cut AB's end)."""
     RESTART = "restart"
-    """A cut AB starts again from its beginning (its request and its start)."""
+    """A cut AB starts again, from its beginning or, if its request says ``resume``,
+    from the sentence it was cut in (its request and its start)."""
+    BARGE_IN = "barge-in"
+    """The user spoke over the robot's utterance: it is cut at a word boundary (an
+    interrupt decision, and the cut AB's end; MISSION.md 7.5)."""
+    # --- who takes what the user says (MISSION.md 7.5) ----------------------------
+    STREAM_RUNS = "stream-runs"
+    """The words go to the application whose stream runs, whose grammar takes them."""
+    STREAM_SUSPENDED = "stream-suspended"
+    """The words go to the application whose stream was suspended most recently, of
+    those whose grammar takes them."""
+    GRAMMAR = "grammar"
+    """The words go to the first application (the FA, then the EAs as loaded) whose
+    grammar takes them."""
+    NOMATCH = "nomatch"
+    """No application takes the words: every application sees a ``nomatch`` event; an
+    utterance they cut goes on after the robot's pause (a false interruption)."""
+    BACKCHANNEL = "backchannel"
+    """The user only showed they follow (the robot profile's backchannels): the robot
+    talks on."""
     BLEND = "blend"
     """An AB started over another running AB on a device they share, as the robot
     profile declares (a local motion over a global one, speech over quieter sound)."""

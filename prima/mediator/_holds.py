@@ -326,6 +326,7 @@ class Holds:
             self._log.emit(DecisionKind.HOLD, Rule.RESERVED, node,
                            detail=f"devices kept for {by.app.name}'s {what} (AB{by.id} next)",
                            before=by.id)
+            self._log.tell(node.app.name, "held", by=by.app.name, rule=Rule.RESERVED.value)
 
     def note(self, node: Node, rule: Rule, holder: App) -> None:
         """Record that ``holder`` keeps ``node`` waiting (once per hold)."""
@@ -333,6 +334,7 @@ class Holds:
             if node.id not in self._channel_held:
                 self._channel_held.add(node.id)
                 self._log.ab(DecisionKind.HOLD, rule, node, f"{holder.name} is talking")
+                self._log.tell(node.app.name, "held", by=holder.name, rule=rule.value)
             return
         box: Block | Stream | None = (self._blocks.get(holder.name) if rule is Rule.BLOCK
                                       else self._streams.get(holder.name))
@@ -340,6 +342,7 @@ class Holds:
             return
         box.held.add(node.id)
         self._log.ab(DecisionKind.HOLD, rule, node, f"devices kept for {holder.name}")
+        self._log.tell(node.app.name, "held", by=holder.name, rule=rule.value)
 
     # ----------------------------------------------------------- deadlines
     def next_deadline(self) -> float | None:

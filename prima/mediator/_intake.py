@@ -323,6 +323,8 @@ class Intake:
                 if n.state is _RUNNING:
                     if n.feedback and not n.commands[0].cut:
                         n.commands[0].cut = True
+                    if n.cutting:
+                        n.dropped = True  # (what is being cut goes: it does not restart)
                     if n.devices & devices and (running is None or n.id > running.id):
                         running = n
                 elif n.state in IN_MEMORY:
@@ -336,7 +338,12 @@ class Intake:
         return _ASAP_NEW_TREE, cancelled  # nothing shares a device: a new tree at once
 
     def _link_after_latest(self, app: App) -> Link:
-        """Rule 3, after latest (with the explicit-stream exception, rule 6c)."""
+        """Rule 3, after latest (with the explicit-stream exception, rule 6c); the first
+        request of a reaction to the user's words the app took starts a stream of its
+        own (MISSION.md 7.5: ``App.fresh``)."""
+        if app.fresh:
+            app.fresh = False
+            return _NEW_TREE
         latest = app.latest
         node = latest.node if latest is not None else None
         if node is not None and node.state in IN_MEMORY:

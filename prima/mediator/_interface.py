@@ -193,6 +193,12 @@ class Driver(Protocol):
         last word, or not running): it ends on its own, as usual."""
 
 
+    def stop_words(self, ab_id: AbId) -> bool:
+        """Cut the running ``ab_id`` at the end of the word under way, if it is saying
+        words now (the user spoke over it: MISSION.md 7.5), as :meth:`cut` does. False
+        if it says nothing now (it turns before its words, say) or is on its last word."""
+
+
 class Channel(Protocol):
     """What the connect-channel and restore-state policies ask of the robot (the run
     answers from the simulator): the mediator never looks at poses itself."""
@@ -232,3 +238,8 @@ class AppListener(Protocol):
 
     def command_cancelled(self, command_id: CommandId) -> None:
         """A requested Command was cancelled before it started."""
+
+    def takes(self, words: str) -> bool:
+        """Whether this application takes what the user said outside a Q&A (an
+        always-on grammar of its current state matches ``words``: MISSION.md 7.5). The
+        mediator asks before it gives the words to one application."""

@@ -23,10 +23,17 @@ class DecisionLog:
         self._record = record
         self.count = 0
         """How many decisions were made so far."""
+        self.news: list[tuple[str, str, dict[str, str]]] = []
+        """What applications are to be told once the operation under way settles: an
+        app's name, an event's name (suspended, resumed, held) and its data."""
         self.now = 0.0
         """The instant of the operation under way, which every decision carries: the
         mediator reads the clock when an operation begins (one made from a callback
         too, which reads it again)."""
+
+    def tell(self, app: str, event: str, **data: str) -> None:
+        """Tell ``app`` (a non-reactive event, once the operation settles)."""
+        self.news.append((app, event, data))
 
     def ab(self, kind: DecisionKind, rule: Rule, node: Node, detail: str = "") -> None:
         """Record one decision about the AB ``node`` itself (most decisions: a start, an

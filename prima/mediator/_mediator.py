@@ -24,11 +24,12 @@ makes an operation after moving it.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import TracebackType
 
-from prima.catalog import CONNECT_COMMAND, Catalog
+from prima.catalog import CONNECT_COMMAND, SPEAKER, Catalog, ParamKind
 from prima.errors import MediationError
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._fairness import Fairness
@@ -37,6 +38,7 @@ from prima.mediator._intake import Intake
 from prima.mediator._interface import (
     AbId,
     AppListener,
+    Call,
     Channel,
     Clock,
     CommandId,
@@ -56,7 +58,10 @@ from prima.vocab import (
     DEFAULT_BUDGETS,
     INTERRUPTED_EVENT,
     MAX_BLOCK_WATCHDOG,
+    NOMATCH_EVENT,
+    SPEECH_EVENT,
     MAX_EAS,
+    MAX_NEWS_PER_INSTANT,
     MAX_STREAM_HOLD,
     AppKind,
     Budgets,
@@ -114,6 +119,15 @@ class MediatorConfig:
     of its own Q&A goes before every other application's AB on its devices, and is
     never cut."""
 
+    barge_in: bool = False
+    """The barge-in policy (MISSION.md 7.5): what the user says outside a Q&A
+    (:meth:`Mediator.hear`) cuts the robot's utterance under way at a word boundary,
+    unless it is a backchannel."""
+
+    resume_pause: float = 0.6
+    """Seconds after which an utterance cut by words no application took goes on (a
+    false interruption: the robot profile's ``<hearing resume-after>``)."""
+
     max_eas: int = MAX_EAS
     """Most EAs registered at once (besides the one FA): each has its own budgets."""
 
@@ -144,6 +158,8 @@ class _Operation:
         m._depth -= 1
         if exc_type is None and self._outer:
             m._settle()
+            if m._log.news:
+                m._tell_news()
 
 
 class Mediator:
@@ -174,6 +190,12 @@ class Mediator:
         self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
+        self._telling = False
+        self._told: dict[str, int] = {}
+        self._told_at = -1.0
+        """News told per application at ``_told_at`` (:data:`MAX_NEWS_PER_INSTANT`)."""
+        self._resting: list[Node] = []
+        """Restarts that wait out the pause after a false interruption (``not_before``)."""
 
     # ================================================================ looking
     @property
@@ -288,22 +310,37 @@ class Mediator:
             self._depth -= 1
         if outer:
             self._settle()
+            if self._log.news:
+                self._tell_news()
         return ids
 
     def _interrupted(self, node: Node, outcome: Outcome) -> None:
-        """A cut AB ended at a word boundary: start it again from its beginning, in its
-        place in its tree (it waits, and the reaction that cut it outranks it), or, if
-        its request said so, drop it (its Commands end, interrupted). Its application
-        gets an ``interrupted`` event either way, before anything else of it."""
+        """A cut AB ended at a word boundary: start it again in its place in its tree (it
+        waits, and the reaction that cut it outranks it), from its beginning or, if its
+        request says ``resume``, from the sentence it was cut in; or, if its request
+        says ``drop``, drop it (its Commands end, interrupted). Cut by words of the user's
+        that no application took (a false interruption), it goes on after the robot's
+        pause, and is never dropped. Its application gets an ``interrupted`` event
+        either way, before anything else of it."""
         now = self._log.now
         wm = self._wm
         children = wm.end(node, now)
         self._holds.ended(node)
         app = node.app
+        by_user = node.by_user
+        false_cut = by_user and node.taker is None
+        modes = {c.on_interrupt for c in node.commands}
         # (an unloaded app's AB still running is cut for good: nobody would restart it)
-        drop = not app.alive or any(c.on_interrupt is OnInterrupt.DROP for c in node.commands)
-        self._log.ab(DecisionKind.END, Rule.INTERRUPT, node,
-                     "dropped" if drop else "to restart")
+        drop = not app.alive or node.dropped or (OnInterrupt.DROP in modes and not false_cut)
+        values = outcome.values
+        resumed = None
+        if not drop and (OnInterrupt.RESUME in modes
+                         or (false_cut and OnInterrupt.DROP in modes)):
+            resumed = _resumed(node, str(values.get("spoken") or ""),
+                               str(values.get("unspoken") or ""))
+        reason = Rule.BARGE_IN if by_user else Rule.INTERRUPT
+        self._log.ab(DecisionKind.END, reason, node,
+                     "dropped" if drop else "to go on" if resumed is not None else "to restart")
         ended: tuple[Command, ...] = ()
         if drop:
             ended = node.commands
@@ -317,14 +354,24 @@ class Mediator:
             again = wm.new_node(app, node.tree, node.commands, node.devices, node.priority,
                                 node.reactive, node.seq, node.iteration)
             again.restarts = node.id
+            again.once = node.once or not by_user  # (one cut by another app at most)
             # it starts like any other AB: turned to the user first, where it applies
             again.turnable = again.faces = node.faces
             again.parent = node.id
             again.children = children
             for c in children:
                 c.parent = again.id
-            self._log.emit(DecisionKind.REQUEST, Rule.RESTART, again,
-                           detail=f"starts AB{node.id} again from its beginning",
+            detail = f"starts AB{node.id} again from its beginning"
+            if resumed is not None:
+                again.calls = resumed[0]
+                again.plain = again.facts + ("", again.calls, None, None)
+                detail = f"AB{node.id} goes on from {resumed[1]!r}"
+            if false_cut:
+                again.not_before = self._clock.after(self._config.resume_pause)
+                detail += (f" after {self._config.resume_pause:g} s (no application took "
+                           "the user's words)")
+                self._resting.append(again)
+            self._log.emit(DecisionKind.REQUEST, Rule.RESTART, again, detail=detail,
                            before=node.id)
             wm.enter_waiting(again, False)  # (its parent has not)
         wm.leave(node)
@@ -332,11 +379,12 @@ class Mediator:
         if cutter is not None and cutter.alive and now > node.started_at:
             # the time the cut throws away counts against the cutting app's wait share
             self._fairness.charge(cutter, now - node.started_at)
-        values = outcome.values
+        by = "user" if by_user else (cutter.name if cutter is not None else "")
         event = Event(INTERRUPTED_EVENT, {
             "command": node.name, "label": node.commands[0].call.label or "",
             "spoken": str(values.get("spoken") or ""),
-            "unspoken": str(values.get("unspoken") or ""), "restarts": not drop}, now)
+            "unspoken": str(values.get("unspoken") or ""), "restarts": not drop,
+            "resumes": resumed is not None, "by": by, "reason": reason.value}, now)
         self._call(app, lambda listener: listener.event(event), "event")
         for cmd in ended:
             if not cmd.internal:
@@ -372,6 +420,8 @@ class Mediator:
             self._depth -= 1
         if outer:
             self._settle()
+            if self._log.news:
+                self._tell_news()
 
     def _end(self, node: Node, outcome: Outcome) -> None:
         if node.cutting and outcome.values.get("interrupted") is True \
@@ -455,6 +505,116 @@ class Mediator:
             for app in list(self._apps.values()):
                 self._call(app, lambda listener: listener.event(event), "event")
 
+    def hear(self, event: Event) -> None:
+        """The robot heard its user outside a Q&A (MISSION.md 7.5): ``event`` carries the
+        ``words`` and whether they are a ``backchannel``. One application takes them:
+        the one whose stream runs (on the speaker first), else the one whose stream was
+        suspended most recently, else the first (the FA, then the EAs as loaded), of
+        those whose always-on grammar takes them (:meth:`AppListener.takes`); it gets a
+        reactive ``speech`` event. If none takes them, every application gets a
+        ``nomatch`` event. With the barge-in policy, words over the robot's utterance
+        cut it at a word boundary, unless they are a backchannel: cut for a taker, it
+        waits for the taker's reaction; cut for nothing (a false interruption), it goes
+        on after the robot's pause."""
+        with self._operation():
+            now = self._log.now
+            words = str(event.data.get("words") or "")
+            shown = _quoted(words)
+            talking = self._talking() if self._config.barge_in else []
+            if talking and event.data.get("backchannel"):
+                self._log.emit(DecisionKind.HEAR, Rule.BACKCHANNEL,
+                               detail=f"{shown}: the robot talks on")
+                return
+            taker, rule = self._taker(words)
+            self._log.emit(DecisionKind.HEAR, rule, app=taker.name if taker else None,
+                           detail=(f"{shown}: {taker.name} takes it" if taker is not None
+                                   else f"{shown}: no application takes it"))
+            for y in talking:
+                if not y.cutting and self._driver.stop_words(y.id):
+                    y.cutting = y.by_user = True
+                    y.taker = taker
+                    y.cut_by = None
+                    self._log.ab(DecisionKind.INTERRUPT, Rule.BARGE_IN, y,
+                                 "as the user spoke over it" + (
+                                     "" if taker is not None else
+                                     f"; it goes on after {self._config.resume_pause:g} s"))
+            if taker is not None:
+                heard = Event(SPEECH_EVENT, {"words": words}, now)
+                taker.fresh = True
+                try:
+                    self._call(taker, lambda listener: listener.event(heard), "event")
+                finally:
+                    taker.fresh = False
+                return
+            missed = Event(NOMATCH_EVENT, {"words": words}, now)
+            for app in list(self._apps.values()):
+                self._call(app, lambda listener: listener.event(missed), "event")
+
+    def _talking(self) -> list[Node]:
+        """The running ABs with words this robot can stop (an interruptible Command that
+        says them), oldest first: the driver stops those saying them now."""
+        seen = {n.id: n for n in self._wm.busy.values()}
+        return [n for _id, n in sorted(seen.items())
+                if any(c.spec.interruptible and c.spec.spoken(call.args)
+                       for c, call in zip(n.commands, n.calls, strict=True))]
+
+    def _taker(self, words: str) -> tuple[App | None, Rule]:
+        """Who takes the user's ``words`` (MISSION.md 7.5), and why."""
+        busy = self._wm.busy
+        speaking = busy.get(SPEAKER)
+        running = sorted({n.app.name: n.app for n in busy.values()}.values(),
+                         key=lambda a: (speaking is None or a is not speaking.app, a.order))
+        asked: set[str] = set()
+        for app in running:
+            asked.add(app.name)
+            if app.alive and self._takes(app, words):
+                return app, Rule.STREAM_RUNS
+        for tree in self._wm.stack():
+            app = tree.app
+            if app.name not in asked:
+                asked.add(app.name)
+                if app.alive and self._takes(app, words):
+                    return app, Rule.STREAM_SUSPENDED
+        for app in sorted(self._apps.values(), key=lambda a: (a.kind is not AppKind.FA,
+                                                               a.order)):
+            if app.name not in asked and self._takes(app, words):
+                return app, Rule.GRAMMAR
+        return None, Rule.NOMATCH
+
+    def _takes(self, app: App, words: str) -> bool:
+        try:
+            return bool(app.listener.takes(words))
+        except Exception as exc:  # noqa: BLE001 - a failing app must not stop the robot
+            self._failed(app, "takes", exc)
+            return False
+
+    def _tell_news(self) -> None:
+        """Tell applications what happened to their streams in the operation that just
+        settled (suspended, resumed, held back: MISSION.md 7.5), in order; what they
+        request meanwhile settles as usual, and its own news is told after. At most
+        :data:`MAX_NEWS_PER_INSTANT` news per application and instant."""
+        if self._telling:
+            return
+        self._telling = True
+        try:
+            news = self._log.news
+            while news:
+                name, what, data = news.pop(0)
+                app = self._apps.get(name)
+                if app is None:
+                    continue
+                now = self._clock.now()
+                if now != self._told_at:
+                    self._told_at, self._told = now, {}
+                told_here = self._told[name] = self._told.get(name, 0) + 1
+                if told_here > MAX_NEWS_PER_INSTANT:
+                    continue  # (its handlers keep making news: enough for this instant)
+                told = Event(what, dict(data), self._clock.now())
+                with self._operation():
+                    self._call(app, functools.partial(_tell_event, told), "event")
+        finally:
+            self._telling = False
+
     # ======================================================== streams, blocks
     def open_stream(self, app: str, hold: float) -> None:
         """Begin an explicit stream block (rule 6c): one CS, held while the app waits."""
@@ -506,15 +666,29 @@ class Mediator:
 
     # ============================================================== deadlines
     def next_deadline(self) -> float | None:
-        """The earliest pending hold timeout, watchdog or budget deadline, if any."""
-        times = (self._holds.next_deadline(), self._fairness.next_deadline())
+        """The earliest pending hold timeout, watchdog, budget deadline or end of a pause
+        after a false interruption, if any."""
+        times = (self._holds.next_deadline(), self._fairness.next_deadline(),
+                 self._rest_deadline())
         return min((t for t in times if t is not None), default=None)
+
+    def _rest_deadline(self) -> float | None:
+        resting = self._resting
+        if resting:
+            resting[:] = [n for n in resting if n.state is NodeState.WAITING]
+        return min((n.not_before for n in resting), default=None)
 
     def advance(self) -> None:
         """Handle every deadline that has passed, then run selection."""
         with self._operation():
-            self._holds.expire(self._log.now)
+            now = self._log.now
+            self._holds.expire(now)
             self._fairness.expire()
+            if self._resting:
+                for node in [n for n in self._resting if n.not_before <= now]:
+                    self._resting.remove(node)
+                    if node.state is NodeState.WAITING:
+                        self._wm.dirty.update(node.devices)  # (its pause is over)
 
     # ================================================================ plumbing
     def _operation(self) -> _Operation:
@@ -528,3 +702,43 @@ class Mediator:
                 self._selector.settle()
         finally:
             self._settling = False
+
+
+_SENTENCE_END = (".", "!", "?")
+
+
+def _resumed(node: Node, spoken: str, unspoken: str) -> tuple[tuple[Call, ...], str] | None:
+    """The calls with which a cut utterance goes on, from the beginning of the sentence
+    its first unspoken word falls in, and those words; None if it says everything
+    again (the cut fell in its first sentence, or its words are in several texts). A
+    grouped AB goes on with its other Commands as they were (a turn toward a panel
+    that the robot already faces takes no time)."""
+    if not unspoken:
+        return None
+    said = spoken.split()
+    back = len(said)
+    while back > 0 and not said[back - 1].endswith(_SENTENCE_END):
+        back -= 1
+    if back == 0:
+        return None  # (the first sentence: from the beginning)
+    rest = " ".join(said[back:] + unspoken.split())
+    said_by = [(i, [p.name for p in c.spec.params
+                    if p.kind is ParamKind.TEXT and call.args.get(p.name)])
+               for i, (c, call) in enumerate(zip(node.commands, node.calls, strict=True))
+               if c.spec.spoken(call.args)]
+    if len(said_by) != 1 or len(said_by[0][1]) != 1:
+        return None  # (words in more than one Command: said again from the beginning)
+    i, (name,) = said_by[0]
+    call = node.calls[i]
+    again = Call(call.command, {**call.args, name: rest}, call.extra, call.label,
+                 call.extra_devices)
+    return node.calls[:i] + (again,) + node.calls[i + 1:], rest
+
+
+def _quoted(words: str) -> str:
+    """The user's words in a decision's detail (long ones shortened)."""
+    return repr(words if len(words) <= 60 else words[:57] + "...")
+
+
+def _tell_event(event: Event, listener: AppListener) -> None:
+    listener.event(event)

@@ -147,7 +147,7 @@ class Policies:
         """A turn to the user before ``x`` may wait for the running ``y`` on the wheels:
         an iteration of a move that breaks the channel (it ends within a control
         period, and the turn, keeping the channel, outranks the move's next one); for
-        a reaction's utterance, another application's iteration with the body still
+        a reaction's utterance, another stream's iteration with the body still
         (a search's watch: one control period, and the reaction outranks its next
         one), or an AB the interrupt policy will cut for the turn; or a turn to the user
         already under way (another application's: this one then has nothing to turn)."""
@@ -158,8 +158,8 @@ class Policies:
                 and self.cuttable(y, x)
         if y.priority < x.priority:
             return True
-        if x.tree.reaction is None or y.app is x.app:
-            return False
+        if x.tree.reaction is None or y.tree is x.tree:
+            return False  # (the app's own reaction to the user's words is another tree)
         return (self._channel is not None and self._channel.still()) or \
             (self._config.interrupt and self.cuttable(y, x))
 
@@ -227,8 +227,8 @@ class Policies:
         """Whether the reaction's AB ``x`` may cut the running ``y`` (MISSION.md 7.3 (2)):
         another application's, outranked, of interruptible Commands its request lets
         be cut, in no block, not blended; never a reply to an answer (7.4), and never
-        twice (a restart is not cut again)."""
-        if y.app is x.app or y.restarts is not None or y.protected or not preempts(x, y):
+        twice by another application (a restart is not cut again)."""
+        if y.app is x.app or y.once or y.protected or not preempts(x, y):
             return False
         if y.blended or any(d in self._wm.blending for d in y.devices):
             return False  # blended ABs are never cut

@@ -409,6 +409,8 @@ class Selector:
         return True
 
     def _startable(self, x: Node, view: _Round) -> bool:
+        if x.not_before > self._log.now:
+            return False  # (its pause after a false interruption: it keeps its rank)
         wm = self._wm
         holds = self._holds
         held = holds.holder(x) if holds.opened or x.priority is _LOW else None
@@ -490,6 +492,7 @@ class Selector:
         self._holds.started(x)  # a block it starts takes force: what it holds steps aside
         if x.tree.suspended is not None:
             log.ab(_RESUME, rule, x, "resumed from the suspended IU")
+            log.tell(x.app.name, "resumed", rule=rule.value)
             later.append((False, x.tree))
         if losers:
             self._suspend_losers(x, losers, rule, started, later)
@@ -512,4 +515,5 @@ class Selector:
                 if self._holds.holder(loser) is None:
                     self._log.ab(_SUSPEND, rule, loser,
                                  f"lost to AB{x.id} ({x.app.name})")
+                    self._log.tell(loser.app.name, "suspended", by=x.app.name, rule=rule.value)
                     later.append((True, tree))

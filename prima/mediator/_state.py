@@ -51,7 +51,7 @@ class App:
     """One registration of an application."""
 
     __slots__ = ("name", "kind", "listener", "alive", "order", "latest", "active",
-                 "idle_since", "trees", "trees_on", "live", "demoted", "budgets")
+                 "idle_since", "trees", "trees_on", "live", "demoted", "budgets", "fresh")
 
     def __init__(self, name: str, kind: AppKind, listener: AppListener, order: int,
                  budgets: Budgets) -> None:
@@ -77,6 +77,10 @@ class App:
         """Its ABs in working memory (pending, waiting or running): the waiting budget."""
         self.demoted = False
         """It kept others waiting beyond its wait-share budget: it has lost its precedence."""
+        self.fresh = False
+        """It is handling words of the user's it took (MISSION.md 7.5): its first request
+        after latest starts a stream of its own, which goes before the stream it talked
+        in, as another application's reaction would."""
 
 
 class Command:
@@ -174,7 +178,7 @@ class Node:
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
-                 "looked")
+                 "looked", "once", "by_user", "taker", "not_before", "dropped")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -241,6 +245,20 @@ class Node:
         """The application whose reaction had it cut (the interrupt policy)."""
         self.parked: App | None = None
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
+        self.once = False
+        """Another application's reaction cut it, or the AB it starts again: it is not
+        cut again by another application (MISSION.md 7.3 (2)); the user may."""
+        self.by_user = False
+        """Running, and being cut because the user spoke over it (barge-in)."""
+        self.taker: App | None = None
+        """With ``by_user``: the application that took the user's words (None: none
+        did, a false interruption)."""
+        self.dropped = False
+        """Being cut, and its application asked for what shares its devices to go (a
+        request ``order="asap"``): it is dropped, not started again."""
+        self.not_before = 0.0
+        """It may not start before this instant (an utterance a false interruption cut
+        goes on after the robot's pause)."""
         first = commands[0]
         call = first.call
         calls: tuple[Call, ...]

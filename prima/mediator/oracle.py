@@ -162,11 +162,12 @@ class _View:
                 return r
         return None
 
-    def keepers(self, n: NodeView) -> list[str]:
-        """The apps whose reaction's (or reply's) next AB keeps a device from ``n``."""
+    def keepers(self, n: NodeView, excused: Collection[AbId] = ()) -> list[str]:
+        """The apps whose reaction's (or reply's) next AB keeps a device from ``n``
+        (but the ``excused`` ones)."""
         mine = self.standing(n)
         return [r.app for r in self.nexts
-                if r.app != n.app and set(r.devices) & set(n.devices)
+                if r.app != n.app and r.ab not in excused and set(r.devices) & set(n.devices)
                 and (theirs := self.standing(r))[0] <= mine[0] and theirs[1:] < mine[1:]]
 
     def channel_held(self, n: NodeView) -> bool:
@@ -261,7 +262,8 @@ def keeping(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,
     return _keeping(_View.of(snap, talk, streams), uncontended)
 
 
-def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
+def _keeping(v: _View, uncontended: Collection[AbId] = (),
+             excused: Collection[AbId] = ()) -> set[str]:
     """App A keeps another waiting when, on some device, another app has a waiting,
     unparked AB whose priority is not lower than that of A's AB holding the device
     (running on it or, on a free device, the best-ranked waiting unparked AB), or
@@ -269,7 +271,9 @@ def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
     is not a budget matter; of several apps whose holds apply, the one that parked
     it). A running AB in ``uncontended`` (it started while no
     other app's AB wanted its devices) keeps nobody: waiting for it is first come,
-    first served, not a precedence taken."""
+    first served, not a precedence taken. A reply's next AB in ``excused`` (its
+    application lost its precedence: the reply goes first past the share, 7.4) keeps
+    nobody either."""
     out: set[str] = set()
     wanting: dict[str, list[NodeView]] = {}
     for n in v.waiting:
@@ -281,7 +285,7 @@ def _keeping(v: _View, uncontended: Collection[AbId] = ()) -> set[str]:
             # parking hold's doing; the others would keep nothing it did not.
             holders = v.holders(n)
             if not holders:  # kept for another app's reaction (7.1): its precedence
-                holders = v.keepers(n)
+                holders = v.keepers(n, excused)
             out.update([n.parked_by] if n.parked_by in holders else holders)
     for d, ws in wanting.items():
         holder = v.busy.get(d) or ws[0]
@@ -403,7 +407,16 @@ class Oracle:
         self._heard: list[Decision] = []
         """The ends in this operation that said a user reaction's first words in full."""
         self._restarts: set[AbId] = set()
-        """ABs that start a cut AB again: never cut (7.3 (2): at most one cut)."""
+        """ABs that start a cut AB again: never cut by another application (7.3 (2): at
+        most one cut; the user's barge-in may cut them, 7.5)."""
+        self._by_user: dict[AbId, Decision] = {}
+        """ABs cut because the user spoke over them, with the hear decision (7.5)."""
+        self._rest: dict[AbId, float] = {}
+        """Cut by words no app took, ended: when the robot's pause is over."""
+        self._resting: dict[AbId, float] = {}
+        """ABs that start such a cut AB again, and the instant they may start."""
+        self._hear: Decision | None = None
+        """The latest hear decision of the operation under way."""
         self._requests = 0
         self._exempt: set[AbId] = set()
         """ABs that started in a reaction or a stream under way (no stream hold applies)."""
@@ -475,7 +488,9 @@ class Oracle:
             self._check_holds(self._prev, v, new)
             self._check_outranked(self._prev, v, new)
             self._contention(self._prev, v, new)
-        left = _left_waiting(v)
+        # (what waits out the robot's pause after a false interruption may wait)
+        left = [ab for ab in _left_waiting(v)
+                if self._resting.get(ab, snap.t) <= snap.t + self._tolerance]
         if left:
             self.fail(f"t={snap.t:g}: AB{left[0]} could start but waits "
                       f"({self._describe(v, left[0])})")
@@ -488,6 +503,8 @@ class Oracle:
             b.kinds[d.app] = AppKind[d.detail]
         elif d.kind is DecisionKind.UNLOAD and d.app is not None:
             b.unloaded.add(d.app)
+        elif d.kind is DecisionKind.HEAR:
+            self._hear = d
         elif d.kind is DecisionKind.INTERRUPT or (d.kind is DecisionKind.REQUEST
                                                   and d.rule is Rule.RESTART):
             self._interrupt(d)
@@ -548,7 +565,7 @@ class Oracle:
                 and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
             self.streams.user.discard(d.tree)  # the reaction's first words were said in full
             self._heard.append(d)
-        if d.rule is Rule.INTERRUPT:
+        if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
             self._interrupt(d)
         b.ended.add(ab)
         b.commands.pop(ab, None)
@@ -567,18 +584,16 @@ class Oracle:
         if d.kind is DecisionKind.INTERRUPT:
             if ab not in self.books.running or ab in self._cutting:
                 self.fail(f"t={d.t:g}: AB{ab} was cut while not running, or twice")
-            if ab in self._restarts:
-                self.fail(f"t={d.t:g}: AB{ab} was cut again (it restarts a cut AB)")
-            if ab in self.streams.replies:
-                self.fail(f"t={d.t:g}: AB{ab} was cut, but it replies to an answer")
+            if d.rule is Rule.BARGE_IN:
+                self._barge_in(ab, d)
+            else:
+                if ab in self._restarts:
+                    self.fail(f"t={d.t:g}: AB{ab} was cut again (it restarts a cut AB)")
+                if ab in self.streams.replies:
+                    self.fail(f"t={d.t:g}: AB{ab} was cut, but it replies to an answer")
             self._cutting.add(ab)
         elif d.kind is DecisionKind.END:
-            if ab not in self._cutting or ab in self._interrupted:
-                self.fail(f"t={d.t:g}: AB{ab} ended cut, but was not being cut")
-            if d.detail == "dropped":
-                self._interrupted.add(ab)
-            else:
-                self._to_restart.add(ab)
+            self._cut_ended(ab, d)
         elif d.kind is DecisionKind.REQUEST:
             self._requests += 1
             cut = d.before if d.before is not None else -1
@@ -587,10 +602,47 @@ class Oracle:
             self._to_restart.discard(cut)
             self._interrupted.add(cut)
             if d.ab is not None:
-                self._restarts.add(d.ab)
+                if cut not in self._by_user or cut in self._restarts:
+                    self._restarts.add(d.ab)  # (the bound of one cut by another app)
+                if cut in self._rest:
+                    self._resting[d.ab] = self._rest.pop(cut)
+
+    def _cut_ended(self, ab: AbId, d: Decision) -> None:
+        """A cut AB ended: it was being cut (for the user's words if its end says so),
+        and is restarted or dropped; cut for words no app took, not before the pause."""
+        if ab not in self._cutting or ab in self._interrupted:
+            self.fail(f"t={d.t:g}: AB{ab} ended cut, but was not being cut")
+        if (d.rule is Rule.BARGE_IN) != (ab in self._by_user):
+            self.fail(f"t={d.t:g}: AB{ab} ended cut for {d.rule.value}, but it was cut "
+                      f"{'by the user' if ab in self._by_user else 'for a reaction'}")
+        hear = self._by_user.get(ab)
+        if hear is not None and hear.rule is Rule.NOMATCH:
+            self._rest[ab] = d.t + self._config.resume_pause
+        if d.detail == "dropped":
+            self._interrupted.add(ab)
+        else:
+            self._to_restart.add(ab)
+
+    def _barge_in(self, ab: AbId, d: Decision) -> None:
+        """A cut for the user's words (7.5): asked after the operation's hear decision,
+        which was not a backchannel, with the barge-in policy on, of an AB with words."""
+        hear = self._hear
+        if not self._config.barge_in:
+            self.fail(f"t={d.t:g}: AB{ab} was cut for the user's words with barge-in off")
+        if hear is None or hear.t != d.t or hear.rule is Rule.BACKCHANNEL:
+            self.fail(f"t={d.t:g}: AB{ab} was cut for the user's words, but none were heard "
+                      "(or only a backchannel)")
+        elif not any(self._catalog[c.command].spoken(c.args) for c in d.calls):
+            self.fail(f"t={d.t:g}: AB{ab} was cut for the user's words, but says none")
+        if hear is not None:
+            self._by_user[ab] = hear
 
     def _start(self, ab: AbId, d: Decision, suspended: set[TreeId]) -> None:
         b = self.books
+        due = self._resting.pop(ab, None)
+        if due is not None and d.t < due - self._tolerance:
+            self.fail(f"t={d.t:g}: AB{ab} went on after a false interruption before the "
+                      f"robot's pause was over (at {due:g})")
         if ab in b.started:
             self.fail(f"t={d.t:g}: AB{ab} started twice")
         if ab in b.cancelled:
@@ -772,7 +824,11 @@ class Oracle:
         running = {ab for ab, _ in v.snap.running}
         self._uncontended &= running
         self._kept.update(v.snap.t, _keeping(v))
-        self._took.update(v.snap.t, _keeping(v, self._uncontended))
+        # (a demoted app's reply goes first past its share, and its turn before it, 7.4:
+        # what is kept for it is not a precedence taken within the share)
+        excused = {r.ab for r in v.nexts
+                   if r.ab in self.streams.replies and r.app in v.snap.demoted}
+        self._took.update(v.snap.t, _keeping(v, self._uncontended, excused))
         self._demoted.update(v.snap.t, v.snap.demoted)
 
     def budgets(self, app: str) -> Budgets:

@@ -41,7 +41,7 @@ from prima.mediator import (
 from prima.mediator.oracle import Oracle
 from prima.mediator.testing import Harness
 from prima.catalog import Blend, Catalog
-from prima.vocab import ANSWERED, Budgets, OnInterrupt
+from prima.vocab import ANSWERED, NEWS_EVENTS, Budgets, OnInterrupt
 
 __all__ = ["Act", "AppScript", "Result", "Scenario", "play", "replay", "scenario"]
 
@@ -75,7 +75,7 @@ DEVICES = ("human-detection", "locomotion", "localization", "speaker", "speech-r
            "neck", "arm")
 DURATIONS = (0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0)
 EVENTS = ("human-found", "touched", "message")
-USER_EVENTS = frozenset({"touched"})
+USER_EVENTS = frozenset({"touched", "speech"})
 """The user's own actions among them (MISSION.md 7.1)."""
 FEEDBACK = frozenset({"ActiveSensingHuman", "ActiveSensingHuman+say", "TrackingHuman",
                       "TopologicalMove", "SetPosition", "SetPositionAndDirection"})
@@ -103,6 +103,9 @@ class AppScript:
     """``event``, ``ended`` or ``cancelled``: that callback raises ..."""
     raise_at: int = 1
     """... the ``raise_at``-th time."""
+    takes: bool = False
+    """It takes the user's words (an always-on grammar that matches: MISSION.md 7.5),
+    but a cough."""
     reply: str = ""
     """Requested at once from the end handler of each of its Q&As the user answered
     (MISSION.md 7.4: words reply within the exchange; a question ends it); nothing
@@ -117,7 +120,8 @@ class Act:
     role: str
     """``fa``, ``ea`` (the EA loaded at the time) or ``eb`` (the EA beside it)."""
     kind: str
-    """``submit``, ``event``, ``stream`` or ``block`` (open, or close if open), ``swap``."""
+    """``submit``, ``event``, ``speech`` (the user says ``commands[0]``), ``stream`` or
+    ``block`` (open, or close if open), ``swap``."""
     commands: tuple[str, ...] = ()
     asap: bool = False
     reactive: bool = False
@@ -132,6 +136,8 @@ class Act:
     """What its request lets the interrupt policy do (``restart``, ``drop``, ``never``)."""
 
     def __str__(self) -> str:
+        if self.kind == "speech":
+            return f"t={self.t:g} user says {self.commands[0]!r}"
         if self.kind != "submit":
             extra = "" if self.kind in ("event", "swap") else f" {self.hold:g}s"
             devs = f" {list(self.devices)}" if self.devices else ""
@@ -165,6 +171,9 @@ class Scenario:
     """The interrupt policy: reactions cut utterances, gestures and feedback
     iterations, which end ``cut_after`` seconds after the cut is asked for."""
     cut_after: float = 0.0
+    hearing: bool = False
+    """The barge-in policy: acts of kind ``speech`` have the user speak outside a Q&A;
+    words over an utterance cut it (utterances are interruptible then)."""
     blends: tuple[Blend, ...] = ()
     """The blend policy: what the robot runs together on shared devices."""
 
@@ -200,6 +209,8 @@ class Scenario:
             lines += [f"  script eb: {self.beside}"]
         if self.interrupt:
             lines += [f"  interrupt: cuts end after {self.cut_after:g} s"]
+        if self.hearing:
+            lines += [f"  barge-in: resumes after {self.config.resume_pause:g} s"]
         lines += [f"  blend: {b}" for b in self.blends]
         lines += [f"  {a}" for a in self.acts]
         return "\n".join(lines)
@@ -268,7 +279,7 @@ def scenario(seed: int) -> Scenario:
         iterations=tuple(r.randint(1, 5) for _ in range(r.randint(1, 3))),
         immediate=r.random() < 0.3, config=config, horizon=horizon,
     )
-    return _replying(_blending(_interrupting(_beside(sc))))
+    return _hearing(_replying(_blending(_interrupting(_beside(sc)))))
 
 
 REPLIES = ("Speak", "Speak", "FaceHumanAndSpeak", "QA", "Gesture", "")
@@ -315,10 +326,37 @@ def _interrupting(sc: Scenario) -> Scenario:
     if r.random() >= 0.4:
         return sc
     acts = tuple(dataclasses.replace(a, on_interrupt=r.choice(("restart",) * 3
-                                                              + ("drop", "never")))
+                                                              + ("drop", "never", "resume")))
                  if a.kind == "submit" else a for a in sc.acts)
     return dataclasses.replace(sc, acts=acts, interrupt=True,
                                cut_after=r.choice((0.0, 0.1, 0.25, 0.4)))
+
+
+WORDS = ("stop", "stop", "ahem", "uh-huh")
+"""What the user says outside a Q&A: words an app may take, a cough no app takes, a
+backchannel."""
+
+
+def _hearing(sc: Scenario) -> Scenario:
+    """In about three seeds in ten, the robot hears its user at any time (the barge-in
+    policy): about half the events become the user speaking (``speech`` acts), and
+    each app takes words or not. From a generator of its own (the other draws stay)."""
+    r = random.Random(f"prima-hearing:{sc.seed}")
+    if r.random() >= 0.3:
+        return sc
+    acts = [dataclasses.replace(a, kind="speech", commands=(r.choice(WORDS),))
+            if a.kind == "event" and r.random() < 0.6 else a for a in sc.acts]
+    grid = int(sc.horizon * 4)
+    acts += [Act(r.randint(0, grid) / 4, "fa", "speech", (r.choice(WORDS),))
+             for _ in range(r.randint(1, 4))]  # (the user speaks whatever the robot does)
+    acts.sort(key=lambda a: a.t)
+    fa, ea, eb = (dataclasses.replace(s, takes=r.random() < 0.5) for s in sc.scripts)
+    scripts = (fa, ea, eb)
+    beside = dataclasses.replace(sc.beside, takes=r.random() < 0.5) if sc.beside else None
+    config = dataclasses.replace(sc.config, barge_in=True,
+                                 resume_pause=r.choice((0.0, 0.25, 0.6)))
+    return dataclasses.replace(sc, acts=tuple(acts), scripts=scripts, beside=beside,
+                               config=config, hearing=True)
 
 
 def _beside(sc: Scenario) -> Scenario:
@@ -361,6 +399,8 @@ class _Listener:
             raise RuntimeError(f"{self.name}: scripted failure in its {what} handler")
 
     def event(self, event: Event) -> None:
+        if event.name in NEWS_EVENTS:
+            return  # (news of its own stream: not reactive, it requests nothing here)
         self._maybe_raise("event")
         s = self.script
         if s.react and self.run.live():
@@ -374,6 +414,9 @@ class _Listener:
             if rest:
                 self.run.submit(Request(self.name, tuple(call(c) for c in rest),
                                         reaction=True, user=user))
+
+    def takes(self, words: str) -> bool:
+        return self.script.takes and words != "ahem"
 
     def command_ended(self, command_id: CommandId, outcome: Outcome) -> None:
         self.run.told(self.name, command_id, "ended")
@@ -440,8 +483,8 @@ class _Run:
     def __init__(self, sc: Scenario, tolerance: float) -> None:
         self.sc = sc
         standard = Catalog.standard()
-        catalog = standard.interruptible(standard.usually_interruptible()) if sc.interrupt \
-            else standard
+        catalog = standard.interruptible(standard.usually_interruptible()) \
+            if sc.interrupt or sc.hearing else standard
         catalog = catalog.with_blends(sc.blends)
         self.h = Harness(catalog, duration=sc.duration, outcome=sc.outcome, config=sc.config,
                          immediate=sc.immediate,
@@ -489,6 +532,9 @@ class _Run:
         name = self.names[a.role]
         if a.kind == "swap":
             self.swap(a.role)
+        elif a.kind == "speech":  # (the user, whoever is loaded)
+            words = a.commands[0]
+            self.m.hear(Event("speech", {"words": words, "backchannel": words == "uh-huh"}))
         elif name not in self.m.apps():
             return
         elif a.kind == "submit":

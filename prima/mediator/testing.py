@@ -106,6 +106,14 @@ class ScriptedDriver:
             self.on_cut(ab)
         return True
 
+    def stop_words(self, ab_id: AbId) -> bool:
+        """As :meth:`cut`, for an AB that says words (this driver keeps no time: they are
+        always under way)."""
+        ab = self.running.get(ab_id)
+        if ab is None or not any(c.args.get(k) for c in ab.calls for k in _SAID):
+            return False
+        return self.cut(ab_id)
+
     def ended(self, ab_id: AbId) -> AtomicBehavior:
         return self.running.pop(ab_id)
 
@@ -124,6 +132,8 @@ class ScriptedApp:
         self.events: list[Event] = []
         self.ended: list[tuple[CommandId, Outcome]] = []
         self.cancelled: list[CommandId] = []
+        self.listens_for: tuple[str, ...] = ()
+        """What it takes when the user speaks outside a Q&A (lower-case fragments)."""
 
     def event(self, event: Event) -> None:
         self.events.append(event)
@@ -139,6 +149,10 @@ class ScriptedApp:
         self.cancelled.append(command_id)
         if self.on_cancelled is not None:
             self.on_cancelled(command_id)
+
+    def takes(self, words: str) -> bool:
+        """Whether it takes the user's ``words`` (any of :attr:`listens_for` in them)."""
+        return any(w in words.lower() for w in self.listens_for)
 
     @property
     def ended_ids(self) -> list[CommandId]:
@@ -271,3 +285,7 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
         out.append(n.id)
         busy |= n.devices
     return out
+
+
+_SAID = ("text", "prompt", "say")
+"""The arguments that are words said (of the common Commands)."""

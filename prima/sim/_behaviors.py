@@ -185,9 +185,15 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     if timeout < 0:
         raise CommandError(f"timeout must not be negative, not {timeout:g}")
     n = sim.ticks(sim.speech_duration(prompt))
-    sim.asking(prompt)
+    sim.asking(prompt, n)
     sim.utter(cid, prompt, n)
-    yield sleep(n)
+    early = yield signal(functools.partial(sim.open_prompt, cid), n, timeout=None)
+    sim.close_prompt(cid)
+    if early is not None:  # answered over the prompt: it stops at a word boundary
+        text, at, spoken, unspoken = early
+        yield sleep(max(0, at - sim.kernel.tick))
+        return {"status": "answered", "utterance": str(text), "barge_in": True,
+                "spoken": spoken, "unspoken": unspoken}, True
     sim.ask(prompt)
     heard = yield signal(sim.open_mic, sim.ticks(timeout), timeout=None)
     sim.close_mic()

@@ -73,7 +73,7 @@ _SIZE = Bound(10_000.0, "m")
 
 BOUNDS: Mapping[str, Bound] = {
     "until": Bound(MAX_UNTIL, "s"),
-    "at": _TIME, "after": _TIME,
+    "at": _TIME, "after": Bound(_TIME.high, "s", -60.0, positive=False),
     "x": _COORDINATE, "y": _COORDINATE,
     "x1": _COORDINATE, "y1": _COORDINATE, "x2": _COORDINATE, "y2": _COORDINATE,
     "heading": _HEADING, "facing": _HEADING,

@@ -140,12 +140,23 @@ class Simulator:
         self._said: dict[int, tuple[float, float]] = {}
         """AB -> when its words began and ended (s), once it has ended (``said``)."""
         self._cutting: set[int] = set()
+        self._hushed: set[int] = set()
+        """Being cut for the user's words before their own words began (:meth:`utter`)."""
         self._driving: set[int] = set()
         """Running atomic behaviors performing a call that uses the wheels now."""
         self._blends: dict[int, Blend] = {}
         """Running atomic behaviors blended over another (the blend policy)."""
         self._loops: dict[int, dict[str, Value]] = {}
         self._mic: Waker | None = None
+        self._prompting: dict[int, Waker] = {}
+        """Command id -> the Q&A asking its prompt, which an early answer wakes."""
+        self.hears_always = False
+        """The robot hears its user at any time (the barge-in policy), not only while a
+        Q&A listens: words said outside a Q&A are a ``speech`` event, and an answer said
+        over a Q&A's prompt answers it, stopping the prompt at a word boundary."""
+        self.backchannel: Callable[[str], bool] = _never
+        """Whether words only show that the user follows (the robot profile's
+        backchannels): they answer no prompt."""
         self._sense_every = hz // SENSE_HZ
         self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
         self._zones = tuple(zones)
@@ -294,6 +305,31 @@ class Simulator:
         self.kernel.at(at, lambda: self._cut_now(ab, spoken, unspoken))
         return True
 
+    def stop_words(self, ab_id: int) -> bool:
+        """The user spoke over ``ab_id``: cut it at the end of the word under way if it
+        is saying words now; if its words are still to come (it turns toward a panel
+        first, say), it is cut as they would begin, before the first word. False if it
+        says nothing, has said its words, or is on its last word."""
+        ab = self._running.get(ab_id)
+        if ab is None:
+            return False
+        if ab_id in self._cutting:
+            return True
+        now = self.kernel.tick
+        started = False
+        for cid in ab.command_ids:
+            said = self._speech.get(cid)
+            if said is not None and said[1]:
+                started = True
+                if said[0] <= now < said[0] + said[2]:
+                    return self.cut(ab_id)
+        if started or not any(c.command in self.catalog
+                              and self.catalog[c.command].spoken(c.args) for c in ab.calls):
+            return False
+        self._cutting.add(ab_id)
+        self._hushed.add(ab_id)  # (:meth:`utter` cuts it as its words would begin)
+        return True
+
     def _boundary(self, ab: AtomicBehavior) -> tuple[int, str, str] | None:
         """When to cut ``ab`` and the words it will have said and not said then."""
         now = self.kernel.tick
@@ -338,7 +374,17 @@ class Simulator:
 
     def utter(self, command_id: int, text: str, ticks: int) -> None:
         """A behavior of this Command starts saying ``text`` over ``ticks``: a cut
-        (the interrupt policy) waits for the end of the word under way."""
+        (the interrupt policy) waits for the end of the word under way; one the user's
+        words asked for before this one's began ends it now, before its first word."""
+        if self._hushed:
+            ab = next((a for a in self._running.values()
+                       if command_id in a.command_ids and a.id in self._hushed), None)
+            if ab is not None:
+                self._hushed.discard(ab.id)
+                words = " ".join(w for c in ab.calls if c.command in self.catalog
+                                 for w in self.catalog[c.command].spoken(c.args))
+                self.kernel.at(self.kernel.tick, lambda: self._cut_now(ab, "", words))
+                return
         ends = None
         if self.speech is not None:
             ends = tuple(min(ticks, self.ticks(at)) for at in self.speech.said(text)[1])
@@ -512,10 +558,10 @@ class Simulator:
         search says ``say`` once per retry, in the retry's first iteration)."""
         return bool(self._loops.get(command_id, {}).get("quiet"))
 
-    def asking(self, prompt: str) -> None:
-        """The robot starts asking ``prompt``."""
+    def asking(self, prompt: str, ticks: int = 0) -> None:
+        """The robot starts asking ``prompt``, which takes ``ticks``."""
         if self.user is not None:
-            self.user.begin_question(prompt)
+            self.user.begin_question(prompt, ticks)
 
     def ask(self, prompt: str) -> None:
         """The robot finished asking ``prompt`` and starts listening."""
@@ -529,14 +575,55 @@ class Simulator:
     def close_mic(self) -> None:
         self._mic = None
 
+    def listening(self) -> bool:
+        """Whether a Q&A listens now (its prompt said)."""
+        return self._mic is not None
+
+    def hearable(self) -> bool:
+        """Whether the robot would hear the user speak now: a Q&A listens, or it hears
+        at any time, and the user is within hearing range."""
+        return (self._mic is not None or self.hears_always) \
+            and self.world.user_distance() <= self.spec.hearing_range
+
     def hear(self, text: str) -> bool:
-        """The user says ``text``: True if a listening Q&A heard it."""
-        mic = self._mic
-        if mic is None or self.world.user_distance() > self.spec.hearing_range:
+        """The user says ``text``: True if the robot heard it. A listening Q&A takes it;
+        else, if the robot hears at any time, an answer said over a Q&A's prompt
+        answers it (not a backchannel), and anything else is a ``speech`` event with
+        its ``words`` and whether it is a ``backchannel``."""
+        if not self.hearable():
             return False
-        self._mic = None
-        mic(text)
+        mic = self._mic
+        if mic is not None:
+            self._mic = None
+            mic(text)
+            return True
+        backchannel = self.backchannel(text)
+        if self._prompting and not backchannel:
+            cid, wake = next(iter(self._prompting.items()))
+            del self._prompting[cid]
+            wake((text, *self._stop_prompt(cid)))
+            return True
+        self.emit("speech", {"words": text, "backchannel": backchannel})
         return True
+
+    def open_prompt(self, command_id: int, waker: Waker) -> bool:
+        """A Q&A begins its prompt: an early answer wakes it (:meth:`hear`)."""
+        if self.hears_always:
+            self._prompting[command_id] = waker
+        return True
+
+    def close_prompt(self, command_id: int) -> None:
+        self._prompting.pop(command_id, None)
+
+    def _stop_prompt(self, command_id: int) -> tuple[int, str, str]:
+        """An answer over a prompt: the tick its words stop (the end of the word under
+        way), the words said and not said; its utterance is shortened to match."""
+        start, saying, ticks, ends = self._speech[command_id]
+        ab = next(a for a in self._running.values() if command_id in a.command_ids)
+        boundary = self._boundary(ab)
+        at, spoken, unspoken = boundary or (start + ticks, " ".join(saying), "")
+        self._speech[command_id] = (start, saying, at - start, ends)
+        return at, spoken, unspoken
 
     def announce_lost(self) -> None:
         """Post human-lost, unless it is the last of found/lost already posted."""
@@ -677,6 +764,7 @@ class Simulator:
         if self.world.sway_owner and self.world.sway_owner in ab.command_ids:
             self.world.end_sway()  # (cut before its sway was over)
         self._cutting.discard(ab.id)
+        self._hushed.discard(ab.id)
         self._driving.discard(ab.id)
         if self._blends.pop(ab.id, None) is not None:
             self._pace()
@@ -723,3 +811,7 @@ def _on_the_way(x: float, y: float, to: Place, other: Place) -> bool:
     if not 0.0 < k < 1.0:
         return False
     return math.hypot(x + k * dx - other.x, y + k * dy - other.y) <= ON_THE_WAY
+
+
+def _never(_text: str) -> bool:
+    return False

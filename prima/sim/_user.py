@@ -129,7 +129,7 @@ class ScriptedUser:
 
     # ---- hearing and speaking ---------------------------------------------------
 
-    def begin_question(self, prompt: str) -> None:
+    def begin_question(self, prompt: str, ticks: int = 0) -> None:
         """The robot starts asking ``prompt``: which rule answers it is decided now, so
         that ``nth`` counts the times the robot asks (a prompt cut and asked again
         counts twice: the user heard it begin). Asked out of hearing range, it counts
@@ -145,6 +145,10 @@ class ScriptedUser:
             if rule.nth is not None and self._matched[i] != rule.nth:
                 continue
             self._asked = (prompt, rule)
+            if rule.after < 0 and rule.say is not None:  # over the prompt, before its end
+                k = sim.kernel
+                at = k.tick + max(1, ticks + round(rule.after * k.hz))
+                k.at(at, functools.partial(self.say, rule.say))
             return
 
     def hear_question(self, prompt: str) -> None:
@@ -156,15 +160,20 @@ class ScriptedUser:
             self.begin_question(prompt)  # (a prompt asked without its beginning heard)
             asked, self._asked = self._asked, None
         rule = asked[1] if asked is not None else None
-        if rule is None or sim.world.user_distance() > sim.spec.hearing_range:
-            return
+        if rule is None or rule.after < 0 or sim.world.user_distance() > sim.spec.hearing_range:
+            return  # (an early answer was said over the prompt, heard or not)
         if rule.say is not None:
             k = sim.kernel
             k.at(k.tick + round(rule.after * k.hz), functools.partial(self.say, rule.say))
 
     def say(self, text: str) -> None:
-        heard = self._sim.hear(text)
-        self._record(UserActionKind.SAY, text=text, heard=heard)
+        sim = self._sim
+        if sim.listening():  # a Q&A's answer: it ends the Q&A, then the line follows
+            self._record(UserActionKind.SAY, text=text, heard=sim.hear(text))
+            return
+        # (said outside a Q&A: the line first, then what the robot makes of it)
+        self._record(UserActionKind.SAY, text=text, heard=sim.hearable())
+        sim.hear(text)
 
     # ---- actions ----------------------------------------------------------------
 

@@ -59,9 +59,11 @@ def test_a_reaction_cuts_the_utterance_which_then_starts_again() -> None:
     assert (first_end.t, first_end.rule, first_end.detail) == (1.3, Rule.INTERRUPT, "to restart")
     (again,) = [d for d in h.kinds(DecisionKind.REQUEST) if d.rule is Rule.RESTART]
     assert again.command_ids == first_end.command_ids  # the same Command, not a new one
-    (event,) = events
-    assert (event.name, event.data["restarts"], event.data["command"]) == (
-        "interrupted", True, "Speak")
+    (event,) = [e for e in events if e.name == "interrupted"]
+    assert (event.data["restarts"], event.data["command"]) == (True, "Speak")
+    # its application also hears that its stream lost the speaker, and got it back
+    assert [(e.name, e.data.get("by")) for e in events if e.name != "interrupted"] == [
+        ("suspended", "fa"), ("resumed", None)]
     assert len(ended) == 2  # each Command ends once, after its restart
 
 

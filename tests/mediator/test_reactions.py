@@ -157,8 +157,10 @@ def test_a_reaction_behind_a_held_ab_takes_it_along() -> None:
     m = h.mediator
     h.app("fa", AppKind.FA)
 
-    def react(_e: Event) -> None:
-        m.submit(Request("ea", (speak("A message for you."),), reactive=True, reaction=True))
+    def react(e: Event) -> None:
+        if e.name == "message":  # (not the news that its AB is held)
+            m.submit(Request("ea", (speak("A message for you."),), reactive=True,
+                             reaction=True))
 
     h.app("ea", AppKind.EA, on_event=react)
     m.open_stream("fa", hold=20.0)
