@@ -7,6 +7,7 @@ Imports nothing of PRIMA (any module may use it).
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Iterable, Sequence
 from typing import NoReturn
 
@@ -64,9 +65,11 @@ def unrecognized(extra: Sequence[str], parser: argparse.ArgumentParser) -> str:
 class SuggestingParser(argparse.ArgumentParser):
     """An argument parser whose "required" error also says which option a misspelt one
     given may be (``--jiter 5`` leaves ``--jitter`` missing: did you mean it?).
-    ``given`` is the command line, set before parsing."""
+    ``given`` is the command line, set before parsing; ``error_word`` the word its
+    error messages begin with (coloured for a terminal)."""
 
     given: Sequence[str] = ()
+    error_word = "error"
 
     def error(self, message: str) -> NoReturn:
         if message.startswith("the following arguments are required"):
@@ -75,4 +78,5 @@ class SuggestingParser(argparse.ArgumentParser):
             hint = unrecognized(unknown, self) if unknown else ""
             if "did you mean" in hint:
                 message += hint[hint.index(" ("):]
-        super().error(message)
+        self.print_usage(sys.stderr)
+        self.exit(2, f"{self.prog}: {self.error_word}: {message}\n")
