@@ -187,7 +187,8 @@ def build_parser() -> SuggestingParser:
     sweep.add_argument("--jobs", type=int, metavar="J",
                        help="parallel processes (default: every core)")
     sweep.add_argument("--out", metavar="DIR",
-                       help="where to write the worst runs (default: sweep-<scenario name>/)")
+                       help="where to write the worst runs, made if missing (default: "
+                            "sweep-NAME/ in the current folder, NAME the scenario file's)")
     sweep.add_argument("--worst", type=int, default=3, metavar="K",
                        help="how many of the worst runs to write (default 3; 0: none)")
     add_threshold_options(sweep)
@@ -206,8 +207,8 @@ def build_parser() -> SuggestingParser:
                       help="the scenario a jsonl trace was run from: its map is drawn "
                            "(a trace does not name it)")
     show.add_argument("-o", "--out", metavar="FILE",
-                      help="the page to write (default: RUN's name with .html, in the "
-                           "current folder)")
+                      help="the page to write, its folder made if missing (default: "
+                           "RUN's name with .html, in the current folder)")
     show.add_argument("--audio", action="store_true",
                       help="put each utterance in the page as sound, synthesised by "
                            "espeak-ng, played with the playhead (needs espeak-ng: "
@@ -682,7 +683,7 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
 
 
 def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.output import written
+    from prima.output import make_folder, written
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
@@ -718,6 +719,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         elif args.format == "mcap":
             from prima.mcap import Recorder
 
+            make_folder(Path(args.out).parent, args.out)  # (the rule of every output: prima.output)
             recorder = files.enter_context(Recorder(args.out, run.scenario.map))
             ctrl_c = files.enter_context(_between_lines())
 
@@ -936,10 +938,10 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
         return "--jobs must be a whole number from 1 to 1024"
     if args.worst < 0:
         return "--worst must be a whole number from 0 up"
-    from prima.output import check_folder
+    from prima.output import check_folder, named_after
 
-    # (without --out, a folder sweep-NAME in the current one)
-    problem = check_folder(args.out or "sweep-NAME") if args.worst else None
+    args.out = args.out or str(named_after(args.scenario, "sweep-{stem}"))
+    problem = check_folder(args.out) if args.worst else None
     return f"--out {problem}" if problem else None
 
 
@@ -977,7 +979,7 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               "process died each time, the run alone too (out of memory?); the other "
               f"{len(result.runs)} run(s) are judged", file=err)
     if args.worst:
-        folder = Path(args.out or f"sweep-{result.name}")
+        folder = Path(args.out)
         worst = result.worst(args.worst)
         paths = result.write_worst(args.worst, folder)
         print(f"worst {len(paths)} run(s), written to {folder}/:", file=out)
@@ -1001,8 +1003,9 @@ def _show_usage(args: argparse.Namespace) -> str | None:
             return "--scenario goes with a jsonl trace; a scenario brings its own map"
         if not Path(args.scenario).is_file():
             return f"no such file: {args.scenario}"
-    target = Path(args.out) if args.out else Path(source.with_suffix(".html").name)
-    args.out = str(target)
+    from prima.output import named_after
+
+    args.out = args.out or str(named_after(source, "{stem}.html"))
     return _target(args.out)
 
 

@@ -37,7 +37,7 @@ from lxml import etree
 from prima.errors import ScenarioError
 from prima.escape import shown_path
 from prima.judge import MEASURES, Report, Thresholds, judge
-from prima.output import written
+from prima.output import make_folder, written
 from prima.sim import load_scenario
 from prima.term import BOLD, GREEN, PLAIN, RED, Cell, Paint, layout
 from prima.xmlio import local_name, parse_xml, read_source
@@ -295,9 +295,9 @@ class Sweep:
         return ranked[:k]
 
     def write_worst(self, k: int, folder: str | Path) -> list[Path]:
-        """Write the ``k`` worst runs as scenario files in ``folder`` (created if need be)."""
+        """Write the ``k`` worst runs as scenario files in ``folder`` (made if need be)."""
         folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        make_folder(folder)
         width = len(str(max(self.asked - 1, 0)))
         return [write_variant(self.scenario, folder / (f"{self.scenario.stem}-run"
                                                        f"{run.index:0{width}d}-seed{self.seed}.xml"),
