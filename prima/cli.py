@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, TextIO
 from prima import __version__
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
 from prima.escape import shown_path, terminal
-from prima.suggest import SuggestingParser, unrecognized
+from prima.suggest import SuggestingParser, did_you_mean, unrecognized
 from prima.term import BOLD, CYAN, GREEN, RED, WHEN, YELLOW, Paint, columns, is_terminal, \
     wants_colour
 from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
@@ -673,13 +673,17 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
         name, _, state = text.partition("=")
         if name not in POLICIES and name != "all":
             return (f"--policy {text}: no policy {name!r} "
-                    f"(known: all, {', '.join(POLICIES)})")
+                    f"(known: all, {', '.join(POLICIES)}){did_you_mean(name, POLICY_NAMES)}")
         if state not in ("on", "off"):
             return f"--policy {text}: say {name}=on or {name}=off"
         if name == "all":
             out.clear()
         out[name] = state == "on"
     return out
+
+
+POLICY_NAMES = ("all", *POLICIES)
+"""What ``--policy NAME=on|off`` may name: every mediation policy, or all of them."""
 
 
 def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:

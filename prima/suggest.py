@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Iterable, Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
 __all__ = ["SuggestingParser", "did_you_mean", "similar", "unrecognized"]
 
@@ -63,10 +63,11 @@ def unrecognized(extra: Sequence[str], parser: argparse.ArgumentParser) -> str:
 
 
 class SuggestingParser(argparse.ArgumentParser):
-    """An argument parser whose "required" error also says which option a misspelt one
-    given may be (``--jiter 5`` leaves ``--jitter`` missing: did you mean it?).
-    ``given`` is the command line, set before parsing; ``error_word`` the word its
-    error messages begin with (coloured for a terminal)."""
+    """An argument parser whose errors say which name a misspelt one may be: an option
+    given (``--jiter 5`` leaves ``--jitter`` missing: did you mean it?) and a choice
+    (``prima valdiate``, ``--format jsnol``). ``given`` is the command line, set before
+    parsing; ``error_word`` the word its error messages begin with (coloured for a
+    terminal)."""
 
     given: Sequence[str] = ()
     error_word = "error"
@@ -80,3 +81,11 @@ class SuggestingParser(argparse.ArgumentParser):
                 message += hint[hint.index(" ("):]
         self.print_usage(sys.stderr)
         self.exit(2, f"{self.prog}: {self.error_word}: {message}\n")
+
+    def _check_value(self, action: argparse.Action, value: Any) -> None:
+        try:
+            super()._check_value(action, value)
+        except argparse.ArgumentError as exc:
+            hint = did_you_mean(value, map(str, action.choices or ())) \
+                if isinstance(value, str) else ""
+            raise argparse.ArgumentError(action, exc.message + hint) from None
