@@ -233,7 +233,23 @@ def build_parser() -> SuggestingParser:
                      help="robot hardware profile documents are checked against, over a "
                           "scenario's (as prima validate --robot; default: the scenario's "
                           "that runs the document, else the home robot)")
+    completion = commands.add_parser(
+        "completion",
+        help="print the code that makes a shell complete prima's command lines",
+        description="Print the code that makes SHELL complete prima's commands, options, "
+                    "their values (policy names among them) and the files each argument "
+                    "takes (argcomplete). Load it from the shell's start-up file: "
+                    "eval \"$(prima completion bash)\" in ~/.bashrc (zsh: in ~/.zshrc, "
+                    "after compinit); prima completion fish | source in fish's "
+                    "config.fish.",
+    )
+    completion.add_argument("shell", choices=SHELLS, metavar="SHELL",
+                            help=f"the shell: {', '.join(SHELLS)}")
     return parser
+
+
+SHELLS = ("bash", "zsh", "fish")
+"""The shells ``prima completion`` writes the code for."""
 
 
 def _add_plot(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
@@ -295,6 +311,12 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     err = err or sys.stderr
     parser = build_parser()
     given = list(sys.argv[1:] if argv is None else argv)
+    if "_ARGCOMPLETE" in os.environ:  # the shell asks what may come next (prima completion)
+        try:
+            from prima.completion import autocomplete
+        except ImportError:  # (no argcomplete: the shell completes file names instead)
+            return EXIT_ERRORS
+        autocomplete(parser)
     _colour = _colour_asked(given)
     error = _paint(sys.stderr)("error", RED, BOLD)
     for each in (parser, *_subparsers(parser)):
@@ -1125,6 +1147,16 @@ def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
+def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    try:
+        from prima.completion import shellcode
+    except ImportError:
+        return _usage("completion", "argcomplete is not installed (PRIMA needs it to "
+                                    "complete): pip install argcomplete", err)
+    out.write(shellcode(args.shell))
+    return EXIT_OK
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
@@ -1135,5 +1167,6 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "plot": _plot,
     "show": _show,
     "lsp": _lsp,
+    "completion": _completion,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

@@ -94,6 +94,7 @@ def test_a_misspelt_required_option(capsys: pytest.CaptureFixture[str]) -> None:
      "jsonl"),
     (["judge", "x.jsonl", "--color", "alwyas"], "argument --color: invalid choice: 'alwyas'",
      "always"),
+    (["completion", "bahs"], "argument SHELL: invalid choice: 'bahs'", "bash"),
 ])
 def test_a_misspelt_choice(argv: list[str], hint: str, meant: str,
                            capsys: pytest.CaptureFixture[str]) -> None:
