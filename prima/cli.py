@@ -415,10 +415,6 @@ def _usage(command: str, message: str, err: TextIO) -> int:
     return EXIT_USAGE
 
 
-def _is_terminal(stream: TextIO) -> bool:
-    return is_terminal(stream)
-
-
 def _missing_extra(module: str, library: str, extra: str) -> str | None:
     """Why a viewer cannot run here: the optional extra it needs is not installed
     (checked before anything runs, like a usage error)."""
@@ -991,11 +987,11 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
     result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
                    jobs=args.jobs, thresholds=thresholds,
-                   progress=progress_bar(show, live=_is_terminal(err)), switches=switches)
+                   progress=progress_bar(show, live=is_terminal(err)), switches=switches)
     paint = _paint(out)
     out.write(format_sweep(result, paint))
     if result.interrupted:
-        if result.runs and _is_terminal(err):
+        if result.runs and is_terminal(err):
             err.write("\n")  # after the progress bar
         print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
               file=err)
