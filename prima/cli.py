@@ -22,8 +22,10 @@ from typing import TYPE_CHECKING, TextIO
 
 from prima import __version__
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
-from prima.escape import shown_path
-from prima.suggest import SuggestingParser, unrecognized
+from prima.escape import shown_path, terminal
+from prima.suggest import SuggestingParser, did_you_mean, unrecognized
+from prima.term import BOLD, CYAN, GREEN, RED, WHEN, YELLOW, Paint, columns, is_terminal, \
+    wants_colour
 from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
@@ -80,12 +82,20 @@ def _policy_argument(parser: argparse.ArgumentParser) -> None:
                              "docs/mediator.md, Policies)")
 
 
+def _colour_argument(parser: argparse.ArgumentParser, default: str = argparse.SUPPRESS) -> None:
+    """``--color``, before the command or after it (there, only when given)."""
+    parser.add_argument("--color", choices=WHEN, default=default,
+                        help="colour the output: auto (default: on a terminal, unless "
+                             "NO_COLOR is set; FORCE_COLOR forces it), always or never")
+
+
 def build_parser() -> SuggestingParser:
     parser = SuggestingParser(
         prog="prima",
         description="PRIMA: mediate two robot applications sharing one personal robot.",
     )
     parser.add_argument("--version", action="version", version=f"prima {__version__}")
+    _colour_argument(parser, "auto")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     validate = commands.add_parser(
@@ -177,7 +187,8 @@ def build_parser() -> SuggestingParser:
     sweep.add_argument("--jobs", type=int, metavar="J",
                        help="parallel processes (default: every core)")
     sweep.add_argument("--out", metavar="DIR",
-                       help="where to write the worst runs (default: sweep-<scenario name>/)")
+                       help="where to write the worst runs, made if missing (default: "
+                            "sweep-NAME/ in the current folder, NAME the scenario file's)")
     sweep.add_argument("--worst", type=int, default=3, metavar="K",
                        help="how many of the worst runs to write (default 3; 0: none)")
     add_threshold_options(sweep)
@@ -196,8 +207,8 @@ def build_parser() -> SuggestingParser:
                       help="the scenario a jsonl trace was run from: its map is drawn "
                            "(a trace does not name it)")
     show.add_argument("-o", "--out", metavar="FILE",
-                      help="the page to write (default: RUN's name with .html, in the "
-                           "current folder)")
+                      help="the page to write, its folder made if missing (default: "
+                           "RUN's name with .html, in the current folder)")
     show.add_argument("--audio", action="store_true",
                       help="put each utterance in the page as sound, synthesised by "
                            "espeak-ng, played with the playhead (needs espeak-ng: "
@@ -207,6 +218,8 @@ def build_parser() -> SuggestingParser:
                            "the robot's speech rate, as every other command; tts: as "
                            "espeak-ng says them, their words cut where it ends them")
     _add_plot(commands)
+    for name in ("validate", "run", "debug", "test", "judge", "sweep", "show", "plot"):
+        _colour_argument(commands.choices[name])
     lsp = commands.add_parser(
         "lsp",
         help="serve the language server protocol on stdio (for editors)",
@@ -220,7 +233,23 @@ def build_parser() -> SuggestingParser:
                      help="robot hardware profile documents are checked against, over a "
                           "scenario's (as prima validate --robot; default: the scenario's "
                           "that runs the document, else the home robot)")
+    completion = commands.add_parser(
+        "completion",
+        help="print the code that makes a shell complete prima's command lines",
+        description="Print the code that makes SHELL complete prima's commands, options, "
+                    "their values (policy names among them) and the files each argument "
+                    "takes (argcomplete). Load it from the shell's start-up file: "
+                    "eval \"$(prima completion bash)\" in ~/.bashrc (zsh: in ~/.zshrc, "
+                    "after compinit); prima completion fish | source in fish's "
+                    "config.fish.",
+    )
+    completion.add_argument("shell", choices=SHELLS, metavar="SHELL",
+                            help=f"the shell: {', '.join(SHELLS)}")
     return parser
+
+
+SHELLS = ("bash", "zsh", "fish")
+"""The shells ``prima completion`` writes the code for."""
 
 
 def _add_plot(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
@@ -277,12 +306,22 @@ def thresholds_from(args: argparse.Namespace) -> object:
 
 def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
          err: TextIO | None = None) -> int:
+    global _colour
     out = out or sys.stdout
     err = err or sys.stderr
     parser = build_parser()
     given = list(sys.argv[1:] if argv is None else argv)
+    if "_ARGCOMPLETE" in os.environ:  # the shell asks what may come next (prima completion)
+        try:
+            from prima.completion import autocomplete
+        except ImportError:  # (no argcomplete: the shell completes file names instead)
+            return EXIT_ERRORS
+        autocomplete(parser)
+    _colour = _colour_asked(given)
+    error = _paint(sys.stderr)("error", RED, BOLD)
     for each in (parser, *_subparsers(parser)):
         each.given = given  # (for a did-you-mean in a "required" error)
+        each.error_word = error
     try:
         args, extra = parser.parse_known_args(argv)
         if extra:  # as parse_args would say, with the option a misspelt one may be
@@ -290,10 +329,38 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
                 parser, args.command)))
     except SystemExit as exc:
         return int(exc.code or 0)
+    _colour = args.color
     command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
     with terminate_as_interrupt() as signals:
         status = _main(command, args, out, err)
     return EXIT_TERMINATED if signals.terminated and status == EXIT_INTERRUPTED else status
+
+
+_colour = "auto"
+"""``--color`` as this command line gives it (``main`` sets it first)."""
+
+
+def _colour_asked(given: Sequence[str]) -> str:
+    """``--color WHEN`` as the words of a command line give it, before they are parsed
+    (an error parsing them is coloured as asked)."""
+    when = "auto"
+    for i, word in enumerate(given):
+        if word == "--":
+            break
+        value = word.partition("=")[2] if word.startswith("--color=") else \
+            given[i + 1] if word == "--color" and i + 1 < len(given) else None
+        when = value if value in WHEN else when
+    return when
+
+
+def _paint(stream: TextIO) -> Paint:
+    """Colour for what goes to ``stream`` (:func:`prima.term.wants_colour`)."""
+    return Paint(wants_colour(stream, _colour))
+
+
+def _error(command: str, stream: TextIO) -> str:
+    """``prima COMMAND: error:``, coloured for a terminal."""
+    return f"prima {command}: {_paint(stream)('error', RED, BOLD)}:"
 
 
 def _main(command: Callable[[argparse.Namespace, TextIO, TextIO], int],
@@ -304,7 +371,7 @@ def _main(command: Callable[[argparse.Namespace, TextIO, TextIO], int],
         _report(exc.problems, err)
         return EXIT_ERRORS
     except PrimaError as exc:  # a user's error is a message, never a traceback
-        print(f"prima {args.command}: error: {exc}", file=err)
+        print(f"{_error(args.command, err)} {exc}", file=err)
         return EXIT_ERRORS
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`: the reader had enough
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
@@ -326,24 +393,26 @@ def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.Argume
 
 
 def _report(problems: Iterable[Problem], to: TextIO) -> None:
-    """One line per problem; under a fault inside an expression, its line and a caret."""
+    """One line per problem; under a fault inside an expression, its line and a caret.
+    On a terminal, ``file:line:col:`` in bold, ``error`` in red, ``warning`` in yellow."""
+    paint = _paint(to)
     for problem in problems:
-        print(problem, file=to)
+        if paint.on:
+            where = f"{problem.file}:{problem.line}:{problem.col}:"
+            severity = problem.severity.value
+            print(paint(where, BOLD), paint(severity, RED if problem.severity is Severity.ERROR
+                                             else YELLOW, BOLD) + ":",
+                  terminal(problem.message), file=to)
+        else:
+            print(problem, file=to)
         caret = problem.caret()
         if caret:
             print(caret, file=to)
 
 
 def _usage(command: str, message: str, err: TextIO) -> int:
-    print(f"prima {command}: error: {message}", file=err)
+    print(f"{_error(command, err)} {message}", file=err)
     return EXIT_USAGE
-
-
-def _is_terminal(stream: TextIO) -> bool:
-    try:
-        return stream.isatty()
-    except (AttributeError, ValueError):  # (a closed or unusual stream)
-        return False
 
 
 def _missing_extra(module: str, library: str, extra: str) -> str | None:
@@ -540,9 +609,12 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         out.write("\n")
     else:
         _report(report.problems, out)
-        n = len(report.files)
-        print(f"{n} file{'s' if n != 1 else ''} checked: {report.errors} error(s), "
-              f"{report.warnings} warning(s)", file=err)
+        n, paint = len(report.files), _paint(err)
+        errors = paint(f"{report.errors} error(s)", RED, BOLD) if report.errors \
+            else f"{report.errors} error(s)"
+        warnings = paint(f"{report.warnings} warning(s)", YELLOW) if report.warnings \
+            else f"{report.warnings} warning(s)"
+        print(f"{n} file{'s' if n != 1 else ''} checked: {errors}, {warnings}", file=err)
     return EXIT_ERRORS if report.errors else EXIT_OK
 
 
@@ -619,7 +691,7 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
         name, _, state = text.partition("=")
         if name not in POLICIES and name != "all":
             return (f"--policy {text}: no policy {name!r} "
-                    f"(known: all, {', '.join(POLICIES)})")
+                    f"(known: all, {', '.join(POLICIES)}){did_you_mean(name, POLICY_NAMES)}")
         if state not in ("on", "off"):
             return f"--policy {text}: say {name}=on or {name}=off"
         if name == "all":
@@ -628,8 +700,12 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
     return out
 
 
+POLICY_NAMES = ("all", *POLICIES)
+"""What ``--policy NAME=on|off`` may name: every mediation policy, or all of them."""
+
+
 def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.output import written
+    from prima.output import make_folder, written
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
@@ -646,8 +722,8 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         to = files.enter_context(written(args.out)) \
             if args.out and args.format != "mcap" else out
         if args.format == "text":
-            print(TextTrace.HEADER, file=to)
-            text = TextTrace()
+            text = TextTrace(run.app_names(), paint=_paint(to))
+            print(text.header, file=to)
 
             def write(line: TraceLine) -> None:
                 row = text.row(line)
@@ -665,6 +741,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         elif args.format == "mcap":
             from prima.mcap import Recorder
 
+            make_folder(Path(args.out).parent, args.out)  # (the rule of every output: prima.output)
             recorder = files.enter_context(Recorder(args.out, run.scenario.map))
             ctrl_c = files.enter_context(_between_lines())
 
@@ -760,6 +837,9 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     if not scenarios:
         return _usage("test", f"no scenario with a golden trace in {' '.join(args.paths)}", err)
     failed = 0
+    paint = _paint(out)
+    styles = {Status.SAME: (GREEN,), Status.DIFFERENT: (RED, BOLD), Status.MISSING: (YELLOW,),
+              Status.UPDATED: (CYAN,)}
     for scenario in scenarios:
         try:
             result = check(scenario, update=args.update, switches=switches)
@@ -768,15 +848,32 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             failed += 1
             continue
         except Exception as exc:  # noqa: BLE001 - report it, and test the other scenarios
-            print(f"error     {scenario}: {type(exc).__name__}: {exc}", file=out)
+            print(f"{paint('error', RED, BOLD)}     {scenario}: {type(exc).__name__}: {exc}",
+                  file=out)
             failed += 1
             continue
-        print(f"{result.status.value:9} {scenario}", file=out)
+        status = result.status.value
+        print(f"{paint(status, *styles[result.status])}{' ' * (9 - len(status))} {scenario}",
+              file=out)
         if result.status in (Status.DIFFERENT, Status.MISSING):
             failed += 1
-            out.write(result.diff)
-    print(f"{len(scenarios)} scenario(s): {failed} failed", file=err)
+            out.write(_diff(result.diff, paint))
+    summary = f"{failed} failed"
+    print(f"{len(scenarios)} scenario(s): "
+          f"{_paint(err)(summary, RED, BOLD) if failed else summary}", file=err)
     return EXIT_ERRORS if failed else EXIT_OK
+
+
+def _diff(diff: str, paint: Paint) -> str:
+    """A golden trace's diff, its lines coloured as git colours them, for a terminal."""
+    if not paint.on:
+        return diff
+    styles = {"---": (BOLD,), "+++": (BOLD,), "@@": (CYAN,), "-": (RED,), "+": (GREEN,)}
+    out = []
+    for line in diff.splitlines():
+        mark = next((m for m in styles if line.startswith(m)), None)
+        out.append(paint(line, *styles[mark]) if mark else terminal(line))
+    return "".join(f"{line}\n" for line in out)
 
 
 def _thresholds(command: str, args: argparse.Namespace, err: TextIO) -> object:
@@ -835,17 +932,19 @@ def _judge(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             _report(exc.problems, err)
             failed += 1
         except Exception as exc:  # noqa: BLE001 - report it, and judge the other runs
-            print(f"prima judge: error: {path}: {type(exc).__name__}: {exc}", file=err)
+            print(f"{_error('judge', err)} {path}: {type(exc).__name__}: {exc}", file=err)
             failed += 1
     if args.format == "json":
         json.dump({"runs": [r.to_dict() for r in reports], "errors": failed,
                    "ok": not failed and all(r.ok for r in reports)}, out, indent=2)
         out.write("\n")
     elif reports:
-        out.write(format_table(reports))
+        out.write(format_table(reports, _paint(out), columns(out)))
     breached = sum(not r.ok for r in reports)
-    print(f"{len(reports)} run(s) judged: {breached} exceeded a threshold"
-          + (f", {failed} could not be judged" if failed else ""), file=err)
+    paint = _paint(err)
+    said = f"{breached} exceeded a threshold"
+    print(f"{len(reports)} run(s) judged: {paint(said, RED, BOLD) if breached else said}"
+          + (paint(f", {failed} could not be judged", RED, BOLD) if failed else ""), file=err)
     return EXIT_ERRORS if failed or breached else EXIT_OK
 
 
@@ -861,10 +960,10 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
         return "--jobs must be a whole number from 1 to 1024"
     if args.worst < 0:
         return "--worst must be a whole number from 0 up"
-    from prima.output import check_folder
+    from prima.output import check_folder, named_after
 
-    # (without --out, a folder sweep-NAME in the current one)
-    problem = check_folder(args.out or "sweep-NAME") if args.worst else None
+    args.out = args.out or str(named_after(args.scenario, "sweep-{stem}"))
+    problem = check_folder(args.out) if args.worst else None
     return f"--out {problem}" if problem else None
 
 
@@ -888,10 +987,11 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
     result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
                    jobs=args.jobs, thresholds=thresholds,
-                   progress=progress_bar(show, live=_is_terminal(err)), switches=switches)
-    out.write(format_sweep(result))
+                   progress=progress_bar(show, live=is_terminal(err)), switches=switches)
+    paint = _paint(out)
+    out.write(format_sweep(result, paint))
     if result.interrupted:
-        if result.runs and _is_terminal(err):
+        if result.runs and is_terminal(err):
             err.write("\n")  # after the progress bar
         print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
               file=err)
@@ -901,13 +1001,13 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               "process died each time, the run alone too (out of memory?); the other "
               f"{len(result.runs)} run(s) are judged", file=err)
     if args.worst:
-        folder = Path(args.out or f"sweep-{result.name}")
+        folder = Path(args.out)
         worst = result.worst(args.worst)
         paths = result.write_worst(args.worst, folder)
         print(f"worst {len(paths)} run(s), written to {folder}/:", file=out)
         for run, path in zip(worst, paths, strict=True):
             report = run.report
-            exceeded = ", ".join(report.exceeded()) or "no threshold exceeded"
+            exceeded = paint(", ".join(report.exceeded()), RED) or "no threshold exceeded"
             print(f"  {path}  {exceeded}; worst lateness {report.worst_lateness():.2f} s",
                   file=out)
     return EXIT_ERRORS if result.breached or result.lost else EXIT_OK
@@ -925,8 +1025,9 @@ def _show_usage(args: argparse.Namespace) -> str | None:
             return "--scenario goes with a jsonl trace; a scenario brings its own map"
         if not Path(args.scenario).is_file():
             return f"no such file: {args.scenario}"
-    target = Path(args.out) if args.out else Path(source.with_suffix(".html").name)
-    args.out = str(target)
+    from prima.output import named_after
+
+    args.out = args.out or str(named_after(source, "{stem}.html"))
     return _target(args.out)
 
 
@@ -1042,6 +1143,16 @@ def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
+def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    try:
+        from prima.completion import shellcode
+    except ImportError:
+        return _usage("completion", "argcomplete is not installed (PRIMA needs it to "
+                                    "complete): pip install argcomplete", err)
+    out.write(shellcode(args.shell))
+    return EXIT_OK
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
@@ -1052,5 +1163,6 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "plot": _plot,
     "show": _show,
     "lsp": _lsp,
+    "completion": _completion,
 }
 """What each subcommand does: ``prima COMMAND`` calls ``_COMMANDS[COMMAND]``."""

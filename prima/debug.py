@@ -21,7 +21,7 @@ from prima.escape import terminal
 from prima.dsl import Document
 from prima.run import Run
 from prima.suggest import did_you_mean
-from prima.trace import Kind, TraceLine, describe
+from prima.trace import APP_WIDTH, Kind, TraceLine, describe
 from prima.vocab import Value
 
 __all__ = ["Break", "Debugger", "HELP"]
@@ -94,6 +94,7 @@ class Debugger:
         self._history: deque[TraceLine] = deque(maxlen=200)
         self._at: TraceLine | None = None
         self._documents: list[Document] | None = None
+        self._width: int | None = None
         # pose samples at prima run's rate (never a stopping point), so that a line's
         # seq is the one a jsonl trace, prima judge and prima show give it
         self.run = Run(scenario, sink=self._line, **run_options)  # type: ignore[arg-type]
@@ -309,10 +310,12 @@ class Debugger:
         raise _Quit
 
     # ---------------------------------------------------------------- showing
-    @staticmethod
-    def _describe(line: TraceLine) -> str:
+    def _describe(self, line: TraceLine) -> str:
         who = "U" if line.kind is Kind.USER else "R"
-        return f"{line.seq:5d} {line.t:8.2f}   {who}   {line.app or '':<12} {describe(line)}"
+        if self._width is None:  # (the text trace's app column: as wide as its longest app)
+            self._width = max([APP_WIDTH, *map(len, self._known("app"))])
+        return f"{line.seq:5d} {line.t:8.2f}   {who}   {line.app or '':<{self._width}} " \
+            f"{describe(line)}"
 
 
 def _shown(value: Value) -> str:

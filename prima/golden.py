@@ -80,7 +80,9 @@ def check(scenario: Path, *, update: bool = False, switches: Switches | None = N
     """Run ``scenario`` and compare its trace with the golden one (or rewrite it);
     ``switches``: its FA, EA, robot or policies changed (``prima test --policy ...``)."""
     options = switches.run_options() if switches else {}
-    actual = portable(format_text(Run(scenario, **options).run()), scenario.parent)
+    run = Run(scenario, **options)
+    apps = run.app_names()
+    actual = portable(format_text(run.run(), apps), scenario.parent)
     golden = golden_path(scenario)
     if update:
         if golden.exists() and golden.read_text(encoding="utf-8") == actual:

@@ -1,5 +1,15 @@
 """Writing a command's output file: one path for every command that writes one.
 
+Where output goes, the same rule in every command: a folder that an output file
+(``--out``, ``-o``) or an output folder (``prima sweep --out``) needs is made, with
+its parents, when the output is written (and removed again if nothing could be
+written in it); a path that cannot become one (a file in its way, a folder that is
+not writable) is refused before any work (:func:`check_target`,
+:func:`check_folder`). A command that writes a file or folder its command line
+does not name writes it in the current folder, named after its input
+(:func:`named_after`: ``prima show RUN`` writes ``NAME.html``, ``prima sweep``
+``sweep-NAME/``).
+
 ``prima run --out``, ``show -o``, ``plot -o``, ``sweep --out`` and ``test --update``
 all write through :func:`written`: into a temporary file beside the target,
 renamed over it once written, so a run that fails half-way (or a full disk)
@@ -24,7 +34,8 @@ from typing import IO, Any, BinaryIO, TextIO, cast
 from prima.errors import OutputError
 from prima.escape import shown_path, terminal
 
-__all__ = ["check_folder", "check_target", "written", "written_bytes"]
+__all__ = ["check_folder", "check_target", "make_folder", "named_after", "written",
+           "written_bytes"]
 
 
 def _reason(exc: OSError) -> str:
@@ -32,17 +43,16 @@ def _reason(exc: OSError) -> str:
 
 
 def check_target(path: str | Path) -> str | None:
-    """What stops ``path`` from being written (checked before any work), or None."""
+    """What stops the file ``path`` from being written (checked before any work), or
+    None; a missing folder is not in the way (it is made)."""
     target = Path(path)
     shown = shown_path(target)
     if target.is_dir():
         return f"{shown} is a folder"
-    folder = target.parent
-    if not folder.is_dir():
-        return f"{shown}: no such folder {shown_path(folder)}"
-    if not (target.exists() and not target.is_file()) and not os.access(folder, os.W_OK | os.X_OK):
-        return f"{shown}: the folder {shown_path(folder)} is not writable"
-    return None
+    if target.exists() and not target.is_file():
+        return None  # /dev/stdout, a named pipe: written directly
+    problem = _in_the_way(target.parent)
+    return f"{shown}: {problem}" if problem else None
 
 
 def check_folder(path: str | Path) -> str | None:
@@ -52,14 +62,57 @@ def check_folder(path: str | Path) -> str | None:
     shown = shown_path(folder)
     if folder.exists() and not folder.is_dir():
         return f"{shown} is a file"
+    problem = _in_the_way(folder)
+    return f"{shown}: {problem}" if problem else None
+
+
+def _in_the_way(folder: Path) -> str | None:
+    """What stops ``folder`` from being made or written in: its nearest existing
+    parent is a file, or is not writable."""
     existing = folder
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
     if not existing.is_dir():
-        return f"{shown}: {shown_path(existing)} is not a folder"
+        return f"{shown_path(existing)} is not a folder"
     if not os.access(existing, os.W_OK | os.X_OK):
-        return f"{shown}: the folder {shown_path(existing)} is not writable"
+        return f"the folder {shown_path(existing)} is not writable"
     return None
+
+
+def named_after(source: str | Path, pattern: str) -> Path:
+    """Where a command writes what its command line does not name: in the current
+    folder, ``pattern`` with ``{stem}`` the input's name without its suffix
+    (``"{stem}.html"``, ``"sweep-{stem}"``)."""
+    return Path(pattern.format(stem=Path(source).stem))
+
+
+def make_folder(path: str | Path, target: str | Path | None = None) -> list[Path]:
+    """Make the folder ``path`` and its missing parents; the folders made, innermost
+    first (:class:`~prima.errors.OutputError`, naming ``target`` if given, if it cannot
+    be made)."""
+    folder = Path(path)
+    shown = shown_path(path if target is None else target)
+    missing = []
+    while not folder.is_dir() and folder != folder.parent:
+        missing.append(folder)
+        folder = folder.parent
+    for each in reversed(missing):
+        try:
+            each.mkdir()
+        except FileExistsError:
+            if not each.is_dir():
+                raise OutputError(f"cannot write {shown}: {shown_path(each)} is not a "
+                                  "folder") from None
+        except OSError as exc:
+            raise OutputError(f"cannot write {shown}: {_reason(exc)}") from exc
+    return missing
+
+
+def _unmake(folders: list[Path]) -> None:
+    """Remove the folders :func:`make_folder` made, if they are still empty."""
+    for folder in folders:
+        with contextlib.suppress(OSError):
+            folder.rmdir()
 
 
 def _mode() -> int:
@@ -95,9 +148,11 @@ def _written(path: str | Path, *, binary: bool) -> Iterator[IO[Any]]:
     problem = check_target(target)
     if problem:
         raise OutputError(f"cannot write {problem}")
+    made = make_folder(target.parent, target)
     try:
         fd, temp = tempfile.mkstemp(prefix=".prima-", suffix=".part", dir=target.parent)
     except OSError as exc:
+        _unmake(made)
         raise OutputError(f"cannot write {shown}: {_reason(exc)}") from exc
     keep = False
     try:
@@ -119,11 +174,12 @@ def _written(path: str | Path, *, binary: bool) -> Iterator[IO[Any]]:
         raise OutputError(f"cannot write {shown}: it would hold a name that is not UTF-8 "
                           f"({terminal(exc.object[exc.start:exc.end])})") from exc
     finally:
-        _settle(temp, target, keep)
+        _settle(temp, target, keep, made)
 
 
-def _settle(temp: str, target: Path, keep: bool) -> None:
-    """Put the written file in place (``keep``), or remove it."""
+def _settle(temp: str, target: Path, keep: bool, made: list[Path]) -> None:
+    """Put the written file in place (``keep``), or remove it, and the folders made
+    for it."""
     if keep:
         try:
             os.chmod(temp, _mode())
@@ -132,6 +188,8 @@ def _settle(temp: str, target: Path, keep: bool) -> None:
         except OSError as exc:
             with contextlib.suppress(OSError):
                 os.unlink(temp)
+            _unmake(made)
             raise OutputError(f"cannot write {shown_path(target)}: {_reason(exc)}") from exc
     with contextlib.suppress(OSError):
         os.unlink(temp)
+    _unmake(made)

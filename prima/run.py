@@ -322,6 +322,11 @@ class Run:
                 continue
         return found
 
+    def app_names(self) -> list[str]:
+        """The names of the applications this run may load (the text trace's app column
+        is as wide as the longest)."""
+        return [document.name for document in self.documents()]
+
     def _checked(self, path: Path, role: AppKind) -> Document:
         """A document loaded for ``role``, its places written by name on the scenario's map
         (as ``prima validate`` of the scenario checks them): else the problems."""

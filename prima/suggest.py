@@ -7,8 +7,9 @@ Imports nothing of PRIMA (any module may use it).
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Iterable, Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
 __all__ = ["SuggestingParser", "did_you_mean", "similar", "unrecognized"]
 
@@ -62,11 +63,14 @@ def unrecognized(extra: Sequence[str], parser: argparse.ArgumentParser) -> str:
 
 
 class SuggestingParser(argparse.ArgumentParser):
-    """An argument parser whose "required" error also says which option a misspelt one
-    given may be (``--jiter 5`` leaves ``--jitter`` missing: did you mean it?).
-    ``given`` is the command line, set before parsing."""
+    """An argument parser whose errors say which name a misspelt one may be: an option
+    given (``--jiter 5`` leaves ``--jitter`` missing: did you mean it?) and a choice
+    (``prima valdiate``, ``--format jsnol``). ``given`` is the command line, set before
+    parsing; ``error_word`` the word its error messages begin with (coloured for a
+    terminal)."""
 
     given: Sequence[str] = ()
+    error_word = "error"
 
     def error(self, message: str) -> NoReturn:
         if message.startswith("the following arguments are required"):
@@ -75,4 +79,13 @@ class SuggestingParser(argparse.ArgumentParser):
             hint = unrecognized(unknown, self) if unknown else ""
             if "did you mean" in hint:
                 message += hint[hint.index(" ("):]
-        super().error(message)
+        self.print_usage(sys.stderr)
+        self.exit(2, f"{self.prog}: {self.error_word}: {message}\n")
+
+    def _check_value(self, action: argparse.Action, value: Any) -> None:
+        try:
+            super()._check_value(action, value)
+        except argparse.ArgumentError as exc:
+            hint = did_you_mean(value, map(str, action.choices or ())) \
+                if isinstance(value, str) else ""
+            raise argparse.ArgumentError(action, exc.message + hint) from None

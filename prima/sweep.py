@@ -29,7 +29,7 @@ import signal
 import statistics
 import tempfile
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -38,8 +38,9 @@ from lxml import etree
 from prima.errors import ScenarioError
 from prima.escape import shown_path
 from prima.judge import MEASURES, Report, Thresholds, judge
-from prima.output import written
+from prima.output import make_folder, written
 from prima.sim import load_scenario
+from prima.term import BOLD, GREEN, PLAIN, RED, Cell, Paint, layout
 from prima.xmlio import local_name, parse_xml, read_source
 
 if TYPE_CHECKING:
@@ -298,9 +299,9 @@ class Sweep:
         return ranked[:k]
 
     def write_worst(self, k: int, folder: str | Path) -> list[Path]:
-        """Write the ``k`` worst runs as scenario files in ``folder`` (created if need be)."""
+        """Write the ``k`` worst runs as scenario files in ``folder`` (made if need be)."""
         folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        make_folder(folder)
         width = len(str(max(self.asked - 1, 0)))
         return [write_variant(self.scenario, folder / (f"{self.scenario.stem}-run"
                                                        f"{run.index:0{width}d}-seed{self.seed}.xml"),
@@ -379,18 +380,10 @@ _MEASURES = (
 """The rows of a sweep's table: two of times, then one per measure (its table's row)."""
 
 
-@dataclass
-class _Table:
-    rows: list[str] = field(default_factory=list)
-
-    def add(self, *cells: str) -> None:
-        name, *numbers = cells
-        row = f"  {name:<22}" + "".join(f"{c:>9}" for c in numbers)
-        self.rows.append(row.rstrip())
-
-
-def format_sweep(result: Sweep) -> str:
-    """Min / median / p95 / max of each measure over the runs, and how many breached."""
+def format_sweep(result: Sweep, paint: Paint = PLAIN) -> str:
+    """Min / median / p95 / max of each measure over the runs, and how many breached;
+    each column as wide as its content (``paint``: the header and what exceeded a
+    threshold in colour, for a terminal)."""
     head = (f"{result.scenario}: {len(result.runs)} of {result.asked} runs, jitter "
             f"±{_number(result.jitter)} s, seed {result.seed}")
     if result.interrupted:
@@ -399,16 +392,20 @@ def format_sweep(result: Sweep) -> str:
         head += f" ({len(result.lost)} lost)"
     if not result.runs:
         return head + "\n"
-    table = _Table()
-    table.add("measure", "min", "median", "p95", "max", "over max")
+    table: list[list[str | Cell]] = [
+        [Cell(name, (BOLD,)) for name in ("measure", "min", "median", "p95", "max",
+                                           "over max")]]
     reports = [run.report for run in result.runs]
     for m in _MEASURES:
         values = [float(m.value(r)) for r in reports]
-        over = "" if m.limit is None else str(sum(v > m.limit(result.thresholds) for v in values))
-        table.add(m.name, *(_cell(f(values), m.seconds) for f in
-                            (min, statistics.median, _p95, max)), over)
-    rows = [head, "", *table.rows, "",
-            f"runs exceeding a threshold: {result.breached} of {len(result.runs)}"]
+        over = 0 if m.limit is None else sum(v > m.limit(result.thresholds) for v in values)
+        table.append([m.name, *(_cell(f(values), m.seconds) for f in
+                                (min, statistics.median, _p95, max)),
+                      Cell("" if m.limit is None else str(over), (RED, BOLD) if over else ())])
+    breached = f"{result.breached} of {len(result.runs)}"
+    rows = [head, "", *layout(table, right=range(1, 6), minimum=(22, 8, 8, 8, 8, 8),
+                              indent="  ", paint=paint), "",
+            "runs exceeding a threshold: " + paint(breached, RED if result.breached else GREEN)]
     return "\n".join(rows) + "\n"
 
 

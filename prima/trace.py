@@ -14,9 +14,10 @@ from dataclasses import dataclass, field
 
 from prima.escape import json_line, terminal
 from prima.mediator import DecisionKind
+from prima.term import BOLD, DIM, PLAIN, Paint
 from prima.vocab import TraceKind, Value
 
-__all__ = ["Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "describe",
+__all__ = ["APP_WIDTH", "Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "describe",
            "device_overlaps", "format_jsonl", "format_text", "jsonl_row", "user_words"]
 
 
@@ -218,14 +219,27 @@ def _escape(row: str) -> str:
     return terminal(row)
 
 
+APP_WIDTH = 12
+"""The text trace's app column: at least this wide, wider for a longer name."""
+
+
 class TextTrace:
-    """The text form of a trace, one row at a time: a run streams through it."""
+    """The text form of a trace, one row at a time: a run streams through it.
 
-    HEADER = "  No.     time  R/U  app          behavior"
+    The app column is as wide as the longest of ``apps`` (the applications the run
+    may load), and at least :data:`APP_WIDTH`; ``paint`` colours the header and the
+    rules' names for a terminal."""
 
-    def __init__(self) -> None:
+    def __init__(self, apps: Iterable[str] = (), paint: Paint = PLAIN) -> None:
         self._n = 0
         self._last_start: dict[str | None, object] = {}
+        self.width = max([APP_WIDTH, *map(len, map(terminal, apps))])
+        self._paint = paint
+
+    @property
+    def header(self) -> str:
+        """The table's header row."""
+        return self._paint(f"  No.     time  R/U  {'app':<{self.width}} behavior", BOLD)
 
     def row(self, line: TraceLine) -> str | None:
         """The row for ``line``, or None if the text form does not show it."""
@@ -242,17 +256,20 @@ class TextTrace:
         who = "U" if line.kind is Kind.USER else "R"
         reactive_start = line.kind is DecisionKind.START and line.reactive
         mark = " (o)" if line.kind is Kind.EVENT or reactive_start else ""
-        why = f"  [{line.reason}]" if line.reason and line.kind in _REASON_SHOWN else ""
-        app = line.app or ""
-        row = f"{self._n:5d} {line.t:8.2f}   {who}   {app:<12} {text}{mark}{why}"
+        why = f"[{line.reason}]" if line.reason and line.kind in _REASON_SHOWN else ""
+        app = _escape(line.app or "")
+        row = _escape(f"{self._n:5d} {line.t:8.2f}   {who}   ") + f"{app:<{self.width}} " \
+            + _escape(f"{text}{mark}")
         self._n += 1
-        return _escape(row)
+        return row + ("  " + self._paint(_escape(why), DIM) if why else "")
 
 
-def format_text(lines: Iterable[TraceLine]) -> str:
-    """The trace as a table like the thesis' figures (one behavior per row)."""
-    trace = TextTrace()
-    rows = [TextTrace.HEADER]
+def format_text(lines: Iterable[TraceLine], apps: Iterable[str] = ()) -> str:
+    """The trace as a table like the thesis' figures (one behavior per row); the app
+    column as wide as the longest name among ``apps`` and the lines'."""
+    lines = list(lines)
+    trace = TextTrace([*apps, *(line.app or "" for line in lines)])
+    rows = [trace.header]
     rows += [row for row in map(trace.row, lines) if row is not None]
     return "\n".join(rows) + "\n"
 

@@ -32,7 +32,7 @@ import prima
 ROOT = Path(prima.__file__).parent
 SUBPACKAGES = sorted(p.name for p in ROOT.iterdir() if (p / "__init__.py").exists())
 NEUTRAL = ("prima.vocab", "prima.catalog", "prima.errors", "prima.escape", "prima.suggest",
-           "prima.signals")
+           "prima.signals", "prima.term")
 LIGHT = ("prima.judge", "prima.judge._thresholds")
 """What `prima --help` may import beyond the CLI and the neutral modules: the table of
 thresholds its commands' options are made from."""
@@ -40,13 +40,14 @@ HEAVY = {"lxml", "lark", "pymunk", "xmlschema"}
 
 FORBIDDEN: dict[str, set[str]] = {
     "prima.mediator": {"prima.dsl", "prima.interpreter", "prima.sim", "prima.run", "prima.trace",
-                       "prima.cli", "prima.xmlio"},
-    "prima.sim": {"prima.dsl", "prima.interpreter", "prima.run", "prima.trace", "prima.cli"},
+                       "prima.cli", "prima.xmlio", "prima.term"},
+    "prima.sim": {"prima.dsl", "prima.interpreter", "prima.run", "prima.trace", "prima.cli",
+                  "prima.term"},
     "prima.dsl": {"prima.mediator", "prima.interpreter", "prima.sim", "prima.run",
-                  "prima.trace", "prima.cli"},
-    "prima.interpreter": {"prima.sim", "prima.run", "prima.trace", "prima.cli"},
+                  "prima.trace", "prima.cli", "prima.term"},
+    "prima.interpreter": {"prima.sim", "prima.run", "prima.trace", "prima.cli", "prima.term"},
 }
-"""Importer unit -> PRIMA units it must not import."""
+"""Importer unit -> PRIMA units it must not import (the core knows no terminal)."""
 
 ONLY: dict[str, set[str]] = {
     "prima.vocab": set(),
@@ -56,6 +57,7 @@ ONLY: dict[str, set[str]] = {
     "prima.escape": set(),
     "prima.suggest": set(),
     "prima.signals": set(),
+    "prima.term": {"prima.escape"},
 }
 """Shared modules -> the only PRIMA units they may import."""
 

@@ -177,8 +177,9 @@ def test_run_refuses_an_until_that_is_not_a_sensible_time(until: str) -> None:
 
 
 def test_run_checks_its_output_path_before_running(tmp_path: Path) -> None:
-    code, _, err = run("run", str(OFFICE), "--out", str(tmp_path / "missing" / "trace.txt"))
-    assert code == 2 and "no such folder" in err
+    (tmp_path / "file").write_text("")
+    code, _, err = run("run", str(OFFICE), "--out", str(tmp_path / "file" / "trace.txt"))
+    assert code == 2 and f"{tmp_path / 'file'} is not a folder" in err
     code, _, err = run("run", str(OFFICE), "--out", str(tmp_path))
     assert code == 2 and "is a folder" in err
 

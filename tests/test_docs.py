@@ -41,7 +41,7 @@ def test_every_command_is_documented_in_both_forms() -> None:
                                           ("test", "running.md"), ("judge", "judging.md"),
                                           ("sweep", "judging.md"), ("debug", "running.md"),
                                           ("plot", "running.md"), ("show", "show.md"),
-                                          ("lsp", "editors.md")])
+                                          ("lsp", "editors.md"), ("completion", "cli.md")])
 def test_every_cli_option_is_documented(command: str, doc: str) -> None:
     text = (ROOT / "docs" / doc).read_text()
     assert f"prima {command}" in text

@@ -119,3 +119,66 @@ def test_sigterm_keeps_the_trace_written_so_far(tmp_path: Path, form: str) -> No
     if form == "chrome-trace":
         import json
         assert json.loads(text)[-1]["ph"] in ("e", "X", "i", "M")
+
+
+# ------------------------------------------------------------ where output goes: one rule
+
+def _every_output(scenario: Path, target: str) -> list[list[str]]:
+    """Every command line that writes an output named ``target`` (a file, or sweep's
+    folder), the optional viewers' only if their extra is installed."""
+    import importlib.util
+
+    lines = [["run", str(scenario), "--out", target + ".txt"],
+             ["run", str(scenario), "--format", "chrome-trace", "--out", target + ".json"],
+             ["sweep", str(scenario), "--runs", "1", "--jitter", "0", "--jobs", "1", "--worst",
+              "1", "--out", target]]
+    extras = [("plotly", ["show", str(scenario), "-o", target + ".html"]),
+              ("matplotlib", ["plot", str(scenario), "-o", target + ".svg"]),
+              ("foxglove", ["run", str(scenario), "--format", "mcap", "--out", target + ".mcap"])]
+    return lines + [argv for module, argv in extras if importlib.util.find_spec(module)]
+
+
+def test_every_command_makes_a_missing_output_folder(tmp_path: Path) -> None:
+    scenario = speaking(tmp_path, "hello", until=2)
+    for i, argv in enumerate(_every_output(scenario, "{new}")):
+        argv[-1] = argv[-1].format(new=tmp_path / f"new{i}" / "deeper" / "x")
+        status, _, err = _cli(*argv)
+        assert status == 0, (argv, err)
+        made = Path(argv[-1])
+        assert made.is_file() or any(made.iterdir()), argv
+
+
+def test_every_command_refuses_a_file_in_the_way_alike(tmp_path: Path) -> None:
+    scenario = speaking(tmp_path, "hello", until=2)
+    (tmp_path / "file").write_text("")
+    for argv in _every_output(scenario, str(tmp_path / "file" / "deeper" / "x")):
+        status, out, err = _cli(*argv)
+        assert (status, out) == (2, ""), (argv, err)
+        assert err == f"prima {argv[0]}: error: --out {argv[-1]}: {tmp_path / 'file'} is not a " \
+                      "folder\n", err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ea.pxml", "file", "map.xml", "s.xml"]
+
+
+def test_a_failed_write_takes_away_the_folders_it_made(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    scenario = speaking(tmp_path, "hello")
+
+    def fails(_self: object) -> None:
+        from prima.errors import RunError
+        raise RunError("the run loop stopped making progress")
+
+    monkeypatch.setattr("prima.run.Run.run", fails)
+    status, _, err = _cli("run", str(scenario), "--out", str(tmp_path / "a" / "b" / "t.txt"))
+    assert status == 1 and "stopped making progress" in err
+    assert not (tmp_path / "a").exists()
+
+
+def test_what_the_command_line_does_not_name_goes_to_the_current_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    pytest.importorskip("plotly")
+    (tmp_path / "in").mkdir()
+    scenario = speaking(tmp_path / "in", "hello", until=2)
+    monkeypatch.chdir(tmp_path)
+    assert _cli("show", str(scenario))[0] == 0
+    assert _cli("sweep", str(scenario), "--runs", "1", "--jitter", "0", "--jobs", "1")[0] == 0
+    assert (tmp_path / "s.html").is_file() and (tmp_path / "sweep-s").is_dir()

@@ -142,7 +142,8 @@ def test_without_plotly_it_says_which_extra_to_install(
     (["missing.jsonl"], "no such file: missing.jsonl"),
     (["README.md"], "give a trace (*.jsonl) or a scenario (*.xml)"),
     ([str(SAMPLE_03), "--scenario", str(SAMPLE_03)], "--scenario goes with a jsonl trace"),
-    ([str(SAMPLE_03), "-o", "no/such/folder/x.html"], "no such folder"),
+    ([str(SAMPLE_03), "-o", "README.md/x.html"], "--out README.md/x.html: README.md is not "
+                                                 "a folder"),
     ([str(SAMPLE_03), "-o", "."], "is a folder"),
 ])
 def test_usage_errors(argv: list[str], message: str, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -85,3 +85,32 @@ def test_a_misspelt_required_option(capsys: pytest.CaptureFixture[str]) -> None:
     err = capsys.readouterr().err
     assert err.rstrip().endswith("prima sweep: error: the following arguments are required: "
                                  "--jitter (--jiter: did you mean --jitter?)"), err
+
+
+@pytest.mark.parametrize("argv, hint, meant", [
+    (["valdiate", "apps"], "argument COMMAND: invalid choice: 'valdiate' (choose from ",
+     "validate"),
+    (["run", "x.xml", "--format", "jsnol"], "argument --format: invalid choice: 'jsnol'",
+     "jsonl"),
+    (["judge", "x.jsonl", "--color", "alwyas"], "argument --color: invalid choice: 'alwyas'",
+     "always"),
+    (["completion", "bahs"], "argument SHELL: invalid choice: 'bahs'", "bash"),
+])
+def test_a_misspelt_choice(argv: list[str], hint: str, meant: str,
+                           capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.rstrip()
+    assert hint in err and err.endswith(f"; did you mean '{meant}'?"), err
+
+
+@pytest.mark.parametrize("command", ["run", "debug", "test", "judge", "sweep", "show", "plot"])
+def test_a_misspelt_policy_name(command: str) -> None:
+    scenario = Path(__file__).parents[1] / "scenarios" / "thesis" / "sample-03.xml"
+    argv = [command, str(scenario), "--policy", "interupt=on"]
+    argv += {"sweep": ["--runs", "1", "--jitter", "0"], "plot": ["-o", "x.svg"]}.get(command, [])
+    err = io.StringIO()
+    assert main(argv, out=io.StringIO(), err=err) == 2
+    assert err.getvalue() == (
+        f"prima {command}: error: --policy interupt=on: no policy 'interupt' (known: all, "
+        "restore-state, interrupt, blend, streams, connect-channel, reactions, exchange); "
+        "did you mean 'interrupt'?\n")

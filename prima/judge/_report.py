@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from prima.judge._findings import Finding, Reaction
 from prima.judge._measures import MEASURES
 from prima.judge._thresholds import Thresholds
+from prima.term import BOLD, GREEN, PLAIN, RED, YELLOW, Cell, Paint, layout
 
 __all__ = ["Report", "format_summary", "format_table"]
 
@@ -108,47 +109,88 @@ def _short(text: str, width: int) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
-def _reaction_rows(report: Report) -> list[str]:
-    width = max([len(r.app) for r in report.reactions] + [3])
-    rows = [f"  {'time':>7}  {'event':<22} {'app':<{width}} {'start':>6} {'words':>6} "
-            f"{'rules':>6} {'free':>6}  late"]
-    for r in report.reactions:
-        cause = f'speech "{_short(r.text, 13)}"' if r.event == "speech" else r.event
-        late = f"LATE: {r.why}" if r.late else ("UNHEARD" if r.unheard else "")
-        rows.append(f"  {r.t:7.2f}  {_short(cause, 22):<22} {r.app:<{width}} "
-                    f"{_num(r.latency):>6} {_num(r.utterance_latency):>6} {r.residual:6.2f} "
-                    f"{r.free:6.2f}  {late}".rstrip())
-    return rows
+EVENT_WIDTH = 22
+"""The event column of the reactions' table, a speech's words cut to fit (a terminal
+wider than the table gives it more)."""
 
 
-def _block(report: Report) -> list[str]:
-    rows = [f"{report.name}  ({report.end:g} s, {report.lines} lines, "
+def _cause(reaction: Reaction, width: int) -> str:
+    if reaction.event == "speech":  # (speech "...": 9 characters besides the words)
+        return _short(f'speech "{_short(reaction.text, width - 9)}"', width)
+    return _short(reaction.event, width)
+
+
+def _reaction_rows(report: Report, paint: Paint, columns: int | None) -> list[str]:
+    def rows(width: int, paint: Paint) -> list[str]:
+        table: list[list[str | Cell]] = [[Cell(h, (BOLD,)) for h in (
+            "time", "event", "app", "start", "words", "rules", "free", "late")]]
+        for r in report.reactions:
+            late = Cell(f"LATE: {r.why}", (RED,)) if r.late else \
+                Cell("UNHEARD", (YELLOW,)) if r.unheard else ""
+            table.append([f"{r.t:.2f}", _cause(r, width), r.app, _num(r.latency),
+                          _num(r.utterance_latency), f"{r.residual:.2f}", f"{r.free:.2f}",
+                          late])
+        return layout(table, right=(0, 3, 4, 5, 6), minimum=(7, width, 3, 6, 6, 6, 6),
+                      sep=("  ", " ", " ", " ", " ", " ", "  "), indent="  ", paint=paint)
+
+    width = EVENT_WIDTH
+    if columns is not None and report.reactions:  # a terminal: the room it has left
+        room = columns - max(map(len, rows(width, PLAIN)))
+        longest = max(len(_cause(r, 10_000)) for r in report.reactions)
+        width = max(width, min(width + room, longest))
+    return rows(width, paint)
+
+
+def _count_style(n: int, limit: int) -> tuple[str, ...]:
+    return (RED, BOLD) if n > limit else (YELLOW,) if n else ()
+
+
+def _block(report: Report, paint: Paint, columns: int | None) -> list[str]:
+    rows = [f"{paint(report.name, BOLD)}  ({report.end:g} s, {report.lines} lines, "
             f"{len(report.reactions)} reactions)"]
-    rows += _reaction_rows(report)
+    rows += _reaction_rows(report, paint, columns)
     for m in MEASURES:
         items: Sequence[Finding] = report.of(m.key)
         limit = report.thresholds.limit(m.key)
         mark = "  > max " + str(limit) if len(items) > limit else ""
-        rows.append(f"  {m.title:<22} {len(items)}{mark}")
+        rows += layout([[m.title, Cell(f"{len(items)}{mark}",
+                                       _count_style(len(items), limit))]],
+                       minimum=(22,), indent="  ", paint=paint)
         rows += [f"      {m.line(item)}" for item in items[:10]]
         if len(items) > 10:
             rows.append(f"      ... and {len(items) - 10} more")
     return rows
 
 
+def _summary_rows(reports: Sequence[Report], width: int, paint: Paint) -> list[str]:
+    """A line per run: its counts and whether it passes, in columns as wide as the
+    longest name and the largest counts."""
+    table: list[list[str | Cell]] = []
+    for report in reports:
+        row: list[str | Cell] = [report.name, "reactions", str(len(report.reactions))]
+        for key, n in report.counts().items():
+            row += [key, Cell(str(n), _count_style(n, report.thresholds.limit(key)))]
+        row.append(Cell("ok", (GREEN,)) if report.ok else
+                   Cell("FAIL: " + ", ".join(report.exceeded()), (RED, BOLD)))
+        table.append(row)
+    keys = len(MEASURES)
+    return layout(table, minimum=(width, 0, 3, *(0, 2) * keys),
+                  sep=("  ", " ", " ", *(" ", "  ") * keys), paint=paint)
+
+
 def format_summary(report: Report, width: int = 0) -> str:
     """One line: the run's counts and whether it passes (``width``: pad the name to it)."""
-    counts = "  ".join(f"{key} {n:<2}" for key, n in report.counts().items())
-    verdict = "ok" if report.ok else "FAIL: " + ", ".join(report.exceeded())
-    return f"{report.name:<{width}}  reactions {len(report.reactions):<3} {counts}  {verdict}"
+    return _summary_rows([report], width, PLAIN)[0]
 
 
-def format_table(reports: Iterable[Report]) -> str:
-    """A block per run (its reactions, then each measure), then a summary line per run."""
+def format_table(reports: Iterable[Report], paint: Paint = PLAIN,
+                 columns: int | None = None) -> str:
+    """A block per run (its reactions, then each measure), then a summary line per run;
+    columns as wide as their content (``paint``: colour for a terminal, ``columns``: its
+    width, which a long utterance may fill)."""
     reports = list(reports)
     rows: list[str] = []
     for report in reports:
-        rows += _block(report) + [""]
-    width = max((len(r.name) for r in reports), default=0)
-    rows += [format_summary(r, width) for r in reports]
+        rows += _block(report, paint, columns) + [""]
+    rows += _summary_rows(reports, 0, paint)
     return "\n".join(rows) + "\n"
