@@ -409,8 +409,6 @@ class Selector:
         return True
 
     def _startable(self, x: Node, view: _Round) -> bool:
-        if x.not_before > self._log.now:
-            return False  # (its pause after a false interruption: it keeps its rank)
         wm = self._wm
         holds = self._holds
         held = holds.holder(x) if holds.opened or x.priority is _LOW else None
@@ -426,6 +424,8 @@ class Selector:
                     holds.reserved(x, r)
                 holds.park(x, Rule.RESERVED, r.app)
                 return False
+        if held is None and x.not_before > self._log.now:
+            return False  # (its pause after a false interruption: it keeps its rank)
         x.blended = _NO_DEVICES
         policies = self._policies
         if ready:
