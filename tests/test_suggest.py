@@ -112,5 +112,5 @@ def test_a_misspelt_policy_name(command: str) -> None:
     assert main(argv, out=io.StringIO(), err=err) == 2
     assert err.getvalue() == (
         f"prima {command}: error: --policy interupt=on: no policy 'interupt' (known: all, "
-        "restore-state, interrupt, blend, streams, connect-channel, reactions, exchange); "
-        "did you mean 'interrupt'?\n")
+        "restore-state, interrupt, blend, streams, connect-channel, reactions, barge-in, "
+        "exchange); did you mean 'interrupt'?\n")
