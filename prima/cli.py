@@ -28,6 +28,7 @@ from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminat
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
+    from prima.batch import Pool
     from prima.dsl import Checker, Header, RobotProfile, Validation
     from prima.run import Switches
     from prima.sim import WorldMap
@@ -174,8 +175,7 @@ def build_parser() -> SuggestingParser:
                        help="largest shift of a timing, either way")
     sweep.add_argument("--seed", type=_seed, default=0, metavar="S",
                        help="seed of the shifts (default 0); run i uses (S, i)")
-    sweep.add_argument("--jobs", type=int, metavar="J",
-                       help="parallel processes (default: every core)")
+    _batch_arguments(sweep)
     sweep.add_argument("--out", metavar="DIR",
                        help="where to write the worst runs (default: sweep-<scenario name>/)")
     sweep.add_argument("--worst", type=int, default=3, metavar="K",
@@ -221,6 +221,21 @@ def build_parser() -> SuggestingParser:
                           "scenario's (as prima validate --robot; default: the scenario's "
                           "that runs the document, else the home robot)")
     return parser
+
+
+def _batch_arguments(parser: argparse.ArgumentParser) -> None:
+    """Where many runs go and where their records are kept (``sweep``, ``check``)."""
+    parser.add_argument("--jobs", type=int, metavar="J",
+                        help="parallel processes on this machine (default: every core)")
+    parser.add_argument("--executor", metavar="WHERE",
+                        help="where the runs go: processes (default: this machine's, --jobs) "
+                             "or dask://HOST:PORT, a Dask cluster's scheduler (the dask "
+                             "extra; docs/running.md, Many runs)")
+    parser.add_argument("--results", metavar="FILE",
+                        help="write every run's record to FILE (jsonl) as it comes")
+    parser.add_argument("--resume", metavar="FILE",
+                        help="go on with the batch whose results FILE holds: the runs it "
+                             "has are not run again, the others are added to it")
 
 
 def _add_plot(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
@@ -853,12 +868,13 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
     """What is wrong with ``prima sweep``'s options, checked before anything runs."""
     if not Path(args.scenario).is_file():
         return f"no such file: {args.scenario}"
-    if not 1 <= args.runs <= 100_000:
-        return "--runs must be a whole number from 1 to 100000"
+    if not 1 <= args.runs <= MAX_RUNS:
+        return f"--runs must be a whole number from 1 to {MAX_RUNS}"
     if not (math.isfinite(args.jitter) and 0 <= args.jitter <= MAX_RUN_TIME):
         return f"--jitter must be a number of seconds from 0 to {MAX_RUN_TIME:g}"
-    if args.jobs is not None and not 1 <= args.jobs <= 1024:
-        return "--jobs must be a whole number from 1 to 1024"
+    problem = _batch_usage(args)
+    if problem:
+        return problem
     if args.worst < 0:
         return "--worst must be a whole number from 0 up"
     from prima.output import check_folder
@@ -866,6 +882,45 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
     # (without --out, a folder sweep-NAME in the current one)
     problem = check_folder(args.out or "sweep-NAME") if args.worst else None
     return f"--out {problem}" if problem else None
+
+
+MAX_RUNS = 1_000_000
+"""The most runs one sweep or check cell may ask for."""
+
+
+def _batch_usage(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``--jobs``, ``--executor``, ``--results`` and ``--resume``."""
+    from prima.batch import executor_problem
+
+    if args.jobs is not None and not 1 <= args.jobs <= 1024:
+        return "--jobs must be a whole number from 1 to 1024"
+    problem = executor_problem(args.executor)
+    if problem:
+        return problem
+    if args.results and args.resume:
+        return "--resume FILE goes on writing FILE: give it alone, without --results"
+    if args.resume and not Path(args.resume).is_file():
+        return f"--resume: no such file: {args.resume}"
+    target = args.results or args.resume
+    if target:
+        from prima.output import check_target
+
+        problem = check_target(target)
+        if problem:
+            return f"--{'results' if args.results else 'resume'} {problem}"
+    return None
+
+
+def _pool(args: argparse.Namespace, runs: int) -> Pool:
+    """The pool the options ask for; a Dask scheduler that cannot be reached is a
+    PrimaError (a message)."""
+    from prima.batch import pool_for
+    from prima.errors import RunError
+
+    try:
+        return pool_for(args.executor, args.jobs, runs)
+    except OSError as exc:
+        raise RunError(str(exc)) from exc
 
 
 def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -886,31 +941,36 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         err.write(text)
         err.flush()
 
+    pool = _pool(args, args.runs)
     result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
                    jobs=args.jobs, thresholds=thresholds,
-                   progress=progress_bar(show, live=_is_terminal(err)), switches=switches)
+                   progress=progress_bar(show, live=_is_terminal(err)), switches=switches,
+                   pool=pool,
+                   results=args.results or args.resume, resume=bool(args.resume),
+                   keep=args.worst)
     out.write(format_sweep(result))
     if result.interrupted:
-        if result.runs and _is_terminal(err):
+        if result.done and _is_terminal(err):
             err.write("\n")  # after the progress bar
-        print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
+        print(f"prima sweep: interrupted after {result.done} of {result.asked} runs",
               file=err)
         return EXIT_INTERRUPTED
     if result.lost:
-        print(f"prima sweep: run(s) {', '.join(map(str, result.lost))} lost: the worker "
-              "process died each time, the run alone too (out of memory?); the other "
-              f"{len(result.runs)} run(s) are judged", file=err)
+        print(f"prima sweep: run(s) {', '.join(map(str, result.lost[:20]))} lost: the "
+              "worker process died each time, the run alone too (out of memory?); the other "
+              f"{result.done} run(s) are judged", file=err)
+    for index, error in result.errors:
+        print(f"prima sweep: run {index} failed: {error}", file=err)
     if args.worst:
         folder = Path(args.out or f"sweep-{result.name}")
         worst = result.worst(args.worst)
         paths = result.write_worst(args.worst, folder)
         print(f"worst {len(paths)} run(s), written to {folder}/:", file=out)
         for run, path in zip(worst, paths, strict=True):
-            report = run.report
-            exceeded = ", ".join(report.exceeded()) or "no threshold exceeded"
-            print(f"  {path}  {exceeded}; worst lateness {report.worst_lateness():.2f} s",
+            exceeded = ", ".join(run.exceeded()) or "no threshold exceeded"
+            print(f"  {path}  {exceeded}; worst lateness {run.worst_lateness():.2f} s",
                   file=out)
-    return EXIT_ERRORS if result.breached or result.lost else EXIT_OK
+    return EXIT_ERRORS if result.breached or result.lost or result.failed else EXIT_OK
 
 
 def _show_usage(args: argparse.Namespace) -> str | None:
