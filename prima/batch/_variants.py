@@ -106,6 +106,9 @@ def _switch(root: etree._Element, switches: Switches) -> None:
     children = [c for c in root if isinstance(c.tag, str)]
     named = {local_name(c): c for c in children}
     apps = named.get("apps")
+    if apps is None and (switches.fa or switches.ea) and "map" in named:
+        apps = etree.Element(f"{{{ns}}}apps" if ns else "apps")  # (a scenario without apps)
+        named["map"].addnext(apps)
     if apps is not None:
         for attribute, value in (("fa", switches.fa), ("ea", switches.ea)):
             if value is not None:
