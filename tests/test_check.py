@@ -48,7 +48,7 @@ def test_a_failure_the_fa_causes_is_the_fas_and_the_check_passes(tmp_path: Path)
     assert ("leaving in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
             "took the robot away from the user while talker spoke") in out
     assert ("unfaced in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
-            "held the wheels") in out
+            "moved the robot") in out
     assert "0 failed by the EA, 1 by others only" in out
 
 

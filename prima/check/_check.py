@@ -145,9 +145,11 @@ class Cell:
         self.ea_measures.update(mine)
         self.by_ea += bool(mine)
         seen: set[tuple[str, ...]] = set()
-        for f in failures:
-            key = (f["measure"], f["app"], f["role"], f["rule"], f["waited"], f["at"])
-            kept = self.failures.setdefault(key, Failure(*key, f["finding"]))
+        for f in failures:  # (alike when the measure, culprit, rule and place are)
+            key = (f["measure"], f["app"], f["role"], f["rule"], f["at"])
+            kept = self.failures.setdefault(key, Failure(
+                f["measure"], f["app"], f["role"], f["rule"], f["waited"], f["at"],
+                f["finding"]))
             if key not in seen:
                 kept.runs += 1
                 seen.add(key)

@@ -16,6 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from prima.catalog import STANDARD_COMMANDS
 from prima.judge import (
     MEASURES,
     Blame,
@@ -34,6 +35,10 @@ __all__ = ["MAX_FAILURES", "CheckAnalysis", "attribute"]
 
 MAX_FAILURES = 5
 """Failures noted per measure exceeded, per run."""
+
+_MOVES = frozenset(c.name for c in STANDARD_COMMANDS if c.travels or c.aims)
+"""Commands that take the robot somewhere or turn it on purpose: one of another
+application that holds the wheels keeps the robot from turning to its user."""
 
 
 def _blame(b: Blame | None) -> str:
@@ -59,8 +64,8 @@ def _whose(f: Finding, wheels: Mapping[int, Blame]) -> tuple[str, str, str, str]
     if isinstance(f, Unfaced):
         held = wheels.get(f.seq)
         if held is not None:  # the robot could not be turned to the user first
-            return held.app, f"its {held.command} held the wheels: {f.app}'s {f.command} was " \
-                             "said with the user off to the side", str(held), held.at
+            return held.app, f"its {held.command} moved the robot: {f.app}'s {f.command} " \
+                             "was said with the user off to the side", "", held.at
         return f.app, f"{f.command} \"{f.text}\" said with the user off to the side", "", f.at
     if isinstance(f, Leaving):
         if f.moved_by is not None:
@@ -116,9 +121,10 @@ class _Observer:
         self.asked: dict[int, str] = {}
         """Command id -> where its application's document asks for it (every app's)."""
         self.running: dict[int, Blame] = {}
-        """The ABs on the wheels now."""
+        """The ABs that move or turn the robot now."""
         self.wheels: dict[int, Blame] = {}
-        """An utterance's start line -> another application's AB on the wheels then."""
+        """An utterance's start line -> another application's AB moving or turning the
+        robot then."""
 
     def feed(self, row: Mapping[str, Any]) -> None:
         kind, app = row["kind"], row.get("app")
@@ -165,7 +171,8 @@ class _Observer:
             other = next((b for b in self.running.values() if b.app != app), None)
             if other is not None:
                 self.wheels[int(row["seq"])] = other
-        if "locomotion" in (row.get("devices") or ()):
+        if "locomotion" in (row.get("devices") or ()) and \
+                not _MOVES.isdisjoint(str(row.get("command") or "").split("+")):
             self.running[ab] = Blame(app, ab, str(row.get("command")),
                                      self.asked.get(ids[0], "") if ids else "", "on the wheels")
 
