@@ -1147,8 +1147,13 @@ def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
 
 def _shipped(*parts: str) -> Path:
-    """A folder shipped beside the package (a checkout's apps/fa, robots, scenarios/maps)."""
-    return Path(__file__).resolve().parent.parent.joinpath(*parts)
+    """A folder shipped beside the package (a checkout's apps/fa, robots, scenarios/maps),
+    relative to the current folder when it is inside it (messages name it so)."""
+    folder = Path(__file__).resolve().parent.parent.joinpath(*parts)
+    try:
+        return folder.relative_to(Path.cwd())
+    except ValueError:
+        return folder
 
 
 def _check_usage(args: argparse.Namespace) -> str | None:

@@ -215,3 +215,12 @@ def test_a_broken_ea_is_located_not_a_traceback(tmp_path: Path) -> None:
     code, _, err = cli("check", str(bad), "--fa", str(QUIET), "--robot", str(HOME),
                        "--runs", "1")
     assert code == 1 and f"{bad}:2:" in err and "Traceback" not in err
+
+
+def test_the_example_ea_written_from_the_docs_passes_every_cell(tmp_path: Path) -> None:
+    result = check(ROOT / "scenarios" / "examples" / "info-desk.pxml",
+                   fas=sorted((ROOT / "apps" / "fa").glob("*.pxml")),
+                   robots=[HOME, GUIDE], maps=MAPS, runs=1, pool=Processes(2))
+    assert result.failed_by_ea == []
+    assert {c.verdict for c in result.cells} <= {Verdict.OK, Verdict.OTHER, Verdict.NA}
+    assert sum(c.verdict == Verdict.OK for c in result.cells) >= 8

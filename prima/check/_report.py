@@ -92,10 +92,10 @@ def format_coverage(result: Check) -> str:
             f"{len(cov.items)})"]
     for kind in KINDS:
         every, missed = cov.of(kind), cov.missed(kind)
-        rows.append(f"  {kind:<9} {len(every) - len(missed):>3}/{len(every):<3}"
-                    + (f" never: {', '.join(f'{i.label} ({i.line})' for i in missed[:6])}"
-                       if missed else "")
-                    + (f", ... {len(missed) - 6} more" if len(missed) > 6 else ""))
+        rows.append((f"  {kind:<9} {len(every) - len(missed):>3}/{len(every):<3}"
+                     + (f" never: {', '.join(f'{i.label} ({i.line})' for i in missed[:6])}"
+                        if missed else "")
+                     + (f", ... {len(missed) - 6} more" if len(missed) > 6 else "")).rstrip())
     lines = cov.lines()
     rows.append(f"  lines never reached: {spans(lines)}" if lines else "  every line reached")
     return "\n".join(rows) + "\n"
