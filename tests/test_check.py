@@ -207,6 +207,15 @@ def test_check_usage_errors_exit_2(extra: list[str], fragment: str) -> None:
     assert code == 2 and fragment in err, err
 
 
+def test_a_broken_scenario_of_the_eas_own_is_located(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<scenario xmlns="urn:prima:scenario:1" name="x" until="10">\n'
+                   '  <map href="nowhere.xml"/>\n  <robot x="0" y="0"/>\n</scenario>\n')
+    code, _, err = cli("check", str(TALKER), "--fa", str(QUIET), "--robot", str(HOME),
+                       "--scenario", str(bad), "--runs", "1")
+    assert code == 1 and f"{bad}:2:" in err and "Traceback" not in err
+
+
 def test_a_broken_ea_is_located_not_a_traceback(tmp_path: Path) -> None:
     bad = tmp_path / "bad.pxml"
     bad.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="bad">\n'

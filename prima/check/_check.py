@@ -258,6 +258,8 @@ def check(ea: str | Path, *, fas: Sequence[Path], robots: Sequence[Path],
     visitors (default: all of :data:`VISITS`)."""
     ea_path = Path(ea)
     document = load_document(ea_path, load_profile(robots[0]))
+    for scenario in scenarios:  # a scenario of the EA's own with errors stops the check
+        load_scenario(scenario)
     world = None
     if not scenarios:
         world = map_for(document, _maps(maps, map_file))
