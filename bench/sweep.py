@@ -7,20 +7,20 @@ Usage: python bench/sweep.py [--repeats 5] [--runs 10] [SCENARIO ...]
 Each round runs, for each scenario (default: samples 3, 7 and 10 of the thesis), a
 cold process that does what a sweep's worker does for ``--runs`` runs: each run's
 variant jittered by 5 s (new run indices every round: distinct inputs), run, judged,
-its record made (``prima.batch.run_one``). The process times its runs alone
-(``time.process_time``, its imports left out) and says how many physics steps they
-took; the peer, measured in the same rounds in this process, steps a bare pymunk
-space of the same world (walls, robot, user) as many times. Printed per scenario:
-both medians, their ratio, and runs per CPU second; with ``--against TREE`` (a checkout
-of an earlier build: ``git worktree add /tmp/before <commit>``), that build's runs of
-the same scenarios in the same rounds, and the speed-up over it, against the target
-of 2x.
+its record made (``prima.batch.run_chunk``: one task of that many runs). The process
+times its runs alone (``time.process_time``, its imports left out) and says how many
+physics steps they took; the peer, measured in the same rounds in this process,
+steps a bare pymunk space of the same world (walls, robot, user) as many times.
+Printed per scenario: both medians, their ratio, and runs per CPU second; with
+``--against TREE`` (a checkout of an earlier build: ``git worktree add /tmp/before
+<commit>``), that build's runs of the same scenarios in the same rounds, and the
+speed-up over it, against the target of 2x.
 
 ``--memory N,M`` runs ``prima sweep`` of N and then M runs of ``--scenario``
 (default fig5-7, a one-minute scenario) with ``--results`` to a file, each in its
-own process, and prints each one's peak resident memory (the sweeping process's:
-``ru_maxrss`` of the process waited for) and their ratio, against the promise that
-the larger stays within 10% of the smaller.
+own process, and prints each one's peak resident memory (``ru_maxrss`` of the
+process waited for: the largest of the sweeping process and its worker processes)
+and their ratio, against the promise that the larger stays within 10% of the smaller.
 """
 
 from __future__ import annotations
@@ -46,8 +46,6 @@ TARGET = 2.0
 def child(scenario: Path, runs: int, first: int) -> None:
     """In a cold process: ``runs`` judged runs of a sweep of ``scenario`` (indices from
     ``first``); print their CPU time and physics steps as JSON."""
-    from lxml import etree
-
     import prima.sim._simulator as simulator
     from prima.judge import Thresholds
 
@@ -61,7 +59,7 @@ def child(scenario: Path, runs: int, first: int) -> None:
 
     simulator.Simulator.advance_to = counted  # type: ignore[method-assign]
     try:
-        from prima.batch import Job, bundle_scenario, run_one
+        from prima.batch import Chunk, Job, bundle_scenario, run_chunk
     except ImportError:  # an earlier build (--against): its sweep's own worker function
         from prima.sweep import _Task, _work  # type: ignore[attr-defined]
 
@@ -73,13 +71,10 @@ def child(scenario: Path, runs: int, first: int) -> None:
                 _work(task)
             print(json.dumps({"cpu": time.process_time() - start, "steps": steps[0]}))
         return
-    job = Job(bundle_scenario(scenario), runs, 0, JITTER, Thresholds())
-    with tempfile.TemporaryDirectory() as scratch:
-        folder = Path(scratch)
-        root = etree.fromstring(job.bundle.unpack(folder).read_bytes())
-        start = time.process_time()
-        records = [run_one(job, first + i, root, folder) for i in range(runs)]
-        spent = time.process_time() - start
+    job = Job(bundle_scenario(scenario), first + runs, 0, JITTER, Thresholds())
+    start = time.process_time()
+    records = run_chunk(Chunk(0, job, first, runs))  # (what a worker does with a task)
+    spent = time.process_time() - start
     failed = [r for r in records if "error" in r]
     if failed:
         sys.exit(f"a run failed: {failed[0]['error']}")
@@ -175,7 +170,7 @@ def memory(args: argparse.Namespace) -> int:
             mib, spent = peak(argv)
             peaks.append(mib)
             print(f"prima sweep --runs {n:>7,}: peak {mib:7.1f} MiB, {spent:8.1f} s of CPU "
-                  f"(the sweeping process), {time.perf_counter() - start:7.1f} s")
+                  f"(with its workers), {time.perf_counter() - start:7.1f} s")
     growth = peaks[-1] / peaks[0]
     ok = growth <= 1.10
     print(f"peak of {counts[-1]:,} runs / peak of {counts[0]:,} runs: {growth:.3f} "
