@@ -30,6 +30,7 @@ from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminat
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
+    from prima.batch import Pool
     from prima.dsl import Checker, Header, RobotProfile, Validation
     from prima.run import Switches
     from prima.sim import WorldMap
@@ -184,14 +185,14 @@ def build_parser() -> SuggestingParser:
                        help="largest shift of a timing, either way")
     sweep.add_argument("--seed", type=_seed, default=0, metavar="S",
                        help="seed of the shifts (default 0); run i uses (S, i)")
-    sweep.add_argument("--jobs", type=int, metavar="J",
-                       help="parallel processes (default: every core)")
+    _batch_arguments(sweep)
     sweep.add_argument("--out", metavar="DIR",
                        help="where to write the worst runs, made if missing (default: "
                             "sweep-NAME/ in the current folder, NAME the scenario file's)")
     sweep.add_argument("--worst", type=int, default=3, metavar="K",
                        help="how many of the worst runs to write (default 3; 0: none)")
     add_threshold_options(sweep)
+    _add_check(commands)
     show = commands.add_parser(
         "show",
         help="write a run as one HTML page: the map, a timeline per device, the trace",
@@ -250,6 +251,64 @@ def build_parser() -> SuggestingParser:
 
 SHELLS = ("bash", "zsh", "fish")
 """The shells ``prima completion`` writes the code for."""
+
+
+def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
+    check = commands.add_parser(
+        "check",
+        help="judge an EA beside every FA and robot, at jittered timings, with coverage",
+        description="Run an EA beside every shipped FA (or --fa) on every robot profile "
+                    "(or --robot), on its own scenarios (--scenario) or on generated visits, "
+                    "each swept with jittered timings; print a matrix of verdicts (rows FA, "
+                    "columns robot) with the worst measure per cell, say whose each failure "
+                    "is, write the worst runs as scenarios, and list what of the EA never "
+                    "ran (docs/checking.md). Exit status 1 when a cell fails by the EA's "
+                    "doing, or the coverage is below --min-coverage.",
+    )
+    check.add_argument("eas", nargs="+", metavar="EA", help="the EA documents to check")
+    check.add_argument("--fa", action="append", default=[], metavar="DOC",
+                       help="an FA to check beside (repeatable; default: every apps/fa/*.pxml)")
+    check.add_argument("--robot", action="append", default=[], metavar="PROFILE",
+                       help="a robot profile to check on (repeatable; default: every robots/*.xml)")
+    check.add_argument("--scenario", action="append", default=[], metavar="FILE",
+                       help="the EA's own scenario (repeatable; default: generated visits)")
+    check.add_argument("--map", metavar="MAP",
+                       help="the map of the generated visits (default: the first shipped map "
+                            "with every place the EA names)")
+    check.add_argument("--runs", type=int, default=20, metavar="N",
+                       help="runs per scenario and cell (default 20)")
+    check.add_argument("--jitter", type=float, default=5.0, metavar="SECONDS",
+                       help="largest shift of a timing, either way (default 5)")
+    check.add_argument("--seed", type=_seed, default=0, metavar="S",
+                       help="seed of the shifts (default 0); run i uses (S, i)")
+    check.add_argument("--until", type=float, default=180.0, metavar="SECONDS",
+                       help="how long a generated visit lasts (default 180)")
+    check.add_argument("--min-coverage", type=float, metavar="PERCENT",
+                       help="exit 1 when less of the EA than this ran (0 to 100)")
+    check.add_argument("--junit", metavar="FILE", help="write JUnit XML: a test case per cell")
+    check.add_argument("--summary", metavar="FILE", help="write a short Markdown summary")
+    check.add_argument("--out", metavar="DIR",
+                       help="where to write the worst runs of failing cells (default: "
+                            "check-<EA name>/)")
+    check.add_argument("--worst", type=int, default=1, metavar="K",
+                       help="worst runs written per failing cell (default 1; 0: none)")
+    _batch_arguments(check)
+    add_threshold_options(check)
+
+
+def _batch_arguments(parser: argparse.ArgumentParser) -> None:
+    """Where many runs go and where their records are kept (``sweep``, ``check``)."""
+    parser.add_argument("--jobs", type=int, metavar="J",
+                        help="parallel processes on this machine (default: every core)")
+    parser.add_argument("--executor", metavar="WHERE",
+                        help="where the runs go: processes (default: this machine's, --jobs) "
+                             "or dask://HOST:PORT, a Dask cluster's scheduler (the dask "
+                             "extra; docs/running.md, Many runs)")
+    parser.add_argument("--results", metavar="FILE",
+                        help="write every run's record to FILE (jsonl) as it comes")
+    parser.add_argument("--resume", metavar="FILE",
+                        help="go on with the batch whose results FILE holds: the runs it "
+                             "has are not run again, the others are added to it")
 
 
 def _add_plot(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
@@ -952,12 +1011,13 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
     """What is wrong with ``prima sweep``'s options, checked before anything runs."""
     if not Path(args.scenario).is_file():
         return f"no such file: {args.scenario}"
-    if not 1 <= args.runs <= 100_000:
-        return "--runs must be a whole number from 1 to 100000"
+    if not 1 <= args.runs <= MAX_RUNS:
+        return f"--runs must be a whole number from 1 to {MAX_RUNS}"
     if not (math.isfinite(args.jitter) and 0 <= args.jitter <= MAX_RUN_TIME):
         return f"--jitter must be a number of seconds from 0 to {MAX_RUN_TIME:g}"
-    if args.jobs is not None and not 1 <= args.jobs <= 1024:
-        return "--jobs must be a whole number from 1 to 1024"
+    problem = _batch_usage(args)
+    if problem:
+        return problem
     if args.worst < 0:
         return "--worst must be a whole number from 0 up"
     from prima.output import check_folder, named_after
@@ -965,6 +1025,45 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
     args.out = args.out or str(named_after(args.scenario, "sweep-{stem}"))
     problem = check_folder(args.out) if args.worst else None
     return f"--out {problem}" if problem else None
+
+
+MAX_RUNS = 1_000_000
+"""The most runs one sweep or check cell may ask for."""
+
+
+def _batch_usage(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``--jobs``, ``--executor``, ``--results`` and ``--resume``."""
+    from prima.batch import executor_problem
+
+    if args.jobs is not None and not 1 <= args.jobs <= 1024:
+        return "--jobs must be a whole number from 1 to 1024"
+    problem = executor_problem(args.executor)
+    if problem:
+        return problem
+    if args.results and args.resume:
+        return "--resume FILE goes on writing FILE: give it alone, without --results"
+    if args.resume and not Path(args.resume).is_file():
+        return f"--resume: no such file: {args.resume}"
+    target = args.results or args.resume
+    if target:
+        from prima.output import check_target
+
+        problem = check_target(target)
+        if problem:
+            return f"--{'results' if args.results else 'resume'} {problem}"
+    return None
+
+
+def _pool(args: argparse.Namespace, runs: int) -> Pool:
+    """The pool the options ask for; a Dask scheduler that cannot be reached is a
+    PrimaError (a message)."""
+    from prima.batch import pool_for
+    from prima.errors import RunError
+
+    try:
+        return pool_for(args.executor, args.jobs, runs)
+    except OSError as exc:
+        raise RunError(str(exc)) from exc
 
 
 def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -985,32 +1084,37 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         err.write(text)
         err.flush()
 
+    pool = _pool(args, args.runs)
     result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
                    jobs=args.jobs, thresholds=thresholds,
-                   progress=progress_bar(show, live=is_terminal(err)), switches=switches)
+                   progress=progress_bar(show, live=is_terminal(err)), switches=switches,
+                   pool=pool,
+                   results=args.results or args.resume, resume=bool(args.resume),
+                   keep=args.worst)
     paint = _paint(out)
     out.write(format_sweep(result, paint))
     if result.interrupted:
-        if result.runs and is_terminal(err):
+        if result.done and is_terminal(err):
             err.write("\n")  # after the progress bar
-        print(f"prima sweep: interrupted after {len(result.runs)} of {result.asked} runs",
+        print(f"prima sweep: interrupted after {result.done} of {result.asked} runs",
               file=err)
         return EXIT_INTERRUPTED
     if result.lost:
-        print(f"prima sweep: run(s) {', '.join(map(str, result.lost))} lost: the worker "
-              "process died each time, the run alone too (out of memory?); the other "
-              f"{len(result.runs)} run(s) are judged", file=err)
+        print(f"prima sweep: run(s) {', '.join(map(str, result.lost[:20]))} lost: the "
+              "worker process died each time, the run alone too (out of memory?); the other "
+              f"{result.done} run(s) are judged", file=err)
+    for index, error in result.errors:
+        print(f"prima sweep: run {index} failed: {error}", file=err)
     if args.worst:
         folder = Path(args.out)
         worst = result.worst(args.worst)
         paths = result.write_worst(args.worst, folder)
         print(f"worst {len(paths)} run(s), written to {folder}/:", file=out)
         for run, path in zip(worst, paths, strict=True):
-            report = run.report
-            exceeded = paint(", ".join(report.exceeded()), RED) or "no threshold exceeded"
-            print(f"  {path}  {exceeded}; worst lateness {report.worst_lateness():.2f} s",
+            exceeded = paint(", ".join(run.exceeded()), RED) or "no threshold exceeded"
+            print(f"  {path}  {exceeded}; worst lateness {run.worst_lateness():.2f} s",
                   file=out)
-    return EXIT_ERRORS if result.breached or result.lost else EXIT_OK
+    return EXIT_ERRORS if result.breached or result.lost or result.failed else EXIT_OK
 
 
 def _show_usage(args: argparse.Namespace) -> str | None:
@@ -1153,6 +1257,107 @@ def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
+def _shipped(*parts: str) -> Path:
+    """A folder shipped beside the package (a checkout's apps/fa, robots, scenarios/maps),
+    relative to the current folder when it is inside it (messages name it so)."""
+    folder = Path(__file__).resolve().parent.parent.joinpath(*parts)
+    try:
+        return folder.relative_to(Path.cwd())
+    except ValueError:
+        return folder
+
+
+def _check_usage(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``prima check``'s arguments, checked before anything runs."""
+    for path in [*args.eas, *args.fa, *args.robot, *args.scenario, args.map]:
+        if path is not None and not Path(path).is_file():
+            return f"no such file: {path}"
+    if not args.fa and not sorted(_shipped("apps", "fa").glob("*.pxml")):
+        return "no shipped FAs (apps/fa/*.pxml) here: name them with --fa"
+    if not args.robot and not sorted(_shipped("robots").glob("*.xml")):
+        return "no shipped robot profiles (robots/*.xml) here: name them with --robot"
+    if not 1 <= args.runs <= MAX_RUNS:
+        return f"--runs must be a whole number from 1 to {MAX_RUNS}"
+    if not (math.isfinite(args.jitter) and 0 <= args.jitter <= MAX_RUN_TIME):
+        return f"--jitter must be a number of seconds from 0 to {MAX_RUN_TIME:g}"
+    if not (math.isfinite(args.until) and 0 < args.until <= MAX_RUN_TIME):
+        return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
+    if args.min_coverage is not None and not 0 <= args.min_coverage <= 100:
+        return "--min-coverage must be a percentage from 0 to 100"
+    if args.worst < 0:
+        return "--worst must be a whole number from 0 up"
+    for option in ("junit", "summary"):
+        if getattr(args, option):
+            problem = _target(getattr(args, option))
+            if problem:
+                return problem.replace("--out", f"--{option}", 1)
+    from prima.output import check_folder
+
+    problem = check_folder(args.out or "check-NAME") if args.worst else None
+    return f"--out {problem}" if problem else _batch_usage(args)
+
+
+def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    from prima.judge import Thresholds
+
+    problem = _check_usage(args)
+    if problem:
+        return _usage("check", problem, err)
+    if len(args.eas) > 1 and (args.results or args.resume):
+        return _usage("check", "--results and --resume take one EA at a time", err)
+    thresholds = _thresholds("check", args, err)
+    if not isinstance(thresholds, Thresholds):
+        return EXIT_USAGE
+    from prima.check import Verdict, check, format_check, junit, markdown
+    from prima.output import written
+    from prima.sweep import progress_bar
+
+    fas = [Path(p) for p in args.fa] or sorted(_shipped("apps", "fa").glob("*.pxml"))
+    robots = [Path(p) for p in args.robot] or sorted(_shipped("robots").glob("*.xml"))
+
+    def show(text: str) -> None:
+        err.write(text)
+        err.flush()
+
+    results = []
+    status = EXIT_OK
+    for ea in args.eas:
+        pool = _pool(args, args.runs * len(fas) * len(robots))
+        try:
+            result = check(ea, fas=fas, robots=robots, scenarios=[Path(s) for s in args.scenario],
+                           maps=_shipped("scenarios", "maps"),
+                           map_file=Path(args.map) if args.map else None, runs=args.runs,
+                           jitter=args.jitter, seed=args.seed, until=args.until,
+                           thresholds=thresholds, pool=pool,
+                           results=args.results or args.resume, resume=bool(args.resume),
+                           out=Path(args.out) if args.out else Path(f"check-{Path(ea).stem}"),
+                           worst=args.worst,
+                           progress=progress_bar(show, live=is_terminal(err)))
+        except ValueError as exc:
+            if isinstance(exc, LocatedError):
+                raise
+            return _usage("check", str(exc), err)
+        results.append(result)
+        out.write(format_check(result))
+        if result.interrupted:
+            print(f"prima check: interrupted after {result.total_runs} runs", file=err)
+            status = EXIT_INTERRUPTED
+            break
+        if result.failed_by_ea or any(c.verdict == Verdict.ERROR for c in result.cells):
+            status = EXIT_ERRORS
+        if args.min_coverage is not None and result.coverage.percent < args.min_coverage:
+            print(f"prima check: {result.ea.name}: coverage {result.coverage.percent:.0f}% is "
+                  f"below --min-coverage {args.min_coverage:g}", file=err)
+            status = EXIT_ERRORS
+    if args.junit:
+        with written(args.junit) as file:
+            file.write(junit(results))
+    if args.summary:
+        with written(args.summary) as file:
+            file.write("\n".join(markdown(r) for r in results))
+    return status
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "validate": _validate,
     "run": _run,
@@ -1160,6 +1365,7 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace, TextIO, TextIO], int]] = {
     "test": _test,
     "judge": _judge,
     "sweep": _sweep,
+    "check": _check,
     "plot": _plot,
     "show": _show,
     "lsp": _lsp,

@@ -7,7 +7,8 @@ Every exception PRIMA raises on purpose derives from :class:`PrimaError`::
     │   ├── DocumentError           a PXML document or robot profile
     │   │   └── ExpressionError     an expression or command chain inside one
     │   ├── ScenarioError           a scenario or map file
-    │   └── TraceError              a jsonl trace file (``prima judge``)
+    │   ├── TraceError              a jsonl trace file (``prima judge``)
+    │   └── ResultsError            a results file resumed (``--resume``)
     ├── ExecutionError              a running application did something impossible
     │   ├── AppFailure              ... and was stopped (the failure is already reported)
     │   └── CommandError            a Command's argument the robot cannot use
@@ -41,6 +42,7 @@ __all__ = [
     "OutputError",
     "PrimaError",
     "Problem",
+    "ResultsError",
     "RunError",
     "ScenarioError",
     "Severity",
@@ -141,6 +143,11 @@ class ScenarioError(LocatedError):
 class TraceError(LocatedError):
     """A jsonl trace file cannot be read: a line is not JSON, or lacks what a trace
     line has (``t``, ``seq``, ``kind``), or its time goes backwards."""
+
+
+class ResultsError(LocatedError):
+    """A results file cannot be resumed: it is of another batch (other documents, seed,
+    jitter or thresholds), or a line of it is not a run's record."""
 
 
 class ExecutionError(PrimaError):

@@ -65,8 +65,9 @@ class TraceLine:
 
     def to_dict(self) -> dict[str, object]:
         out: dict[str, object] = {"t": round(self.t, 3), "seq": self.seq, "kind": self.kind.value}
-        for name in ("app", "ab", "tree", "command", "text", "reactive", "reason", "action"):
-            value = getattr(self, name)
+        fields = self.__dict__  # (read directly: a judged run makes a dict of every line)
+        for name in _PLAIN:
+            value = fields[name]
             if value is not None:
                 out[name] = value
         if self.devices is not None:
@@ -85,6 +86,10 @@ class TraceLine:
                 user["detectable"] = self.detectable
             out["user"] = user
         return out
+
+
+_PLAIN = ("app", "ab", "tree", "command", "text", "reactive", "reason", "action")
+"""The fields a jsonl line writes as they are, in its order."""
 
 
 def _pose(pose: Pose) -> dict[str, float]:

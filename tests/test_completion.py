@@ -46,7 +46,7 @@ def complete(line: str, cwd: Path = ROOT) -> list[str]:
 
 def test_commands() -> None:
     assert complete("prima ") == ["validate", "run", "debug", "test", "judge", "sweep",
-                                  "show", "plot", "lsp", "completion"]
+                                  "check", "show", "plot", "lsp", "completion"]
     assert complete("prima ju") == ["judge"]
 
 

@@ -40,6 +40,7 @@ def test_every_command_is_documented_in_both_forms() -> None:
 @pytest.mark.parametrize("command, doc", [("validate", "pxml.md"), ("run", "running.md"),
                                           ("test", "running.md"), ("judge", "judging.md"),
                                           ("sweep", "judging.md"), ("debug", "running.md"),
+                                          ("check", "checking.md"),
                                           ("plot", "running.md"), ("show", "show.md"),
                                           ("lsp", "editors.md"), ("completion", "cli.md")])
 def test_every_cli_option_is_documented(command: str, doc: str) -> None:

@@ -4,16 +4,19 @@ whatever the parallelism, and a written worst run replays exactly."""
 from __future__ import annotations
 
 import io
+import json
 from pathlib import Path
 from typing import Any
 
 import pytest
 from lxml import etree
 
+import prima.batch._work
 import prima.sweep
 from prima.cli import main
 from prima.judge import judge_file
 from prima.sim import load_scenario
+from prima.batch import pool_for, record_of
 from prima.sweep import MIN_ANSWER_DELAY, format_sweep, sweep, write_variant
 
 ROOT = Path(__file__).parents[1]
@@ -102,11 +105,8 @@ def test_a_written_worst_run_replays_its_measures(tmp_path: Path) -> None:
     (worst,) = result.worst(1)
     (path,) = result.write_worst(1, tmp_path / "out")
     assert path.name == f"sample-05-run{worst.index}-seed3.xml"
-
-    def measures(d: dict[str, Any]) -> dict[str, Any]:
-        return {k: v for k, v in d.items() if k != "name"}
-
-    assert measures(judge_file(path).to_dict()) == measures(worst.report.to_dict())
+    replayed = record_of(judge_file(path))
+    assert replayed == {k: v for k, v in worst.record.items() if k not in ("job", "run")}
     code, out, _ = cli("judge", str(path))
     assert code == (1 if worst.breaches else 0)
 
@@ -126,7 +126,7 @@ def test_an_interrupted_sweep_keeps_what_was_done() -> None:
             raise KeyboardInterrupt
 
     result = sweep(SHORT, runs=3, jitter=1.0, jobs=1, progress=stop)
-    assert result.interrupted and len(result.runs) == 1
+    assert result.interrupted and result.done == 1
     assert "1 of 3 runs" in format_sweep(result) and "(interrupted)" in format_sweep(result)
 
 
@@ -205,31 +205,31 @@ def test_the_progress_bar_is_redrawn_on_a_terminal_and_a_line_a_tenth_in_a_log()
 # ------------------------------------------------------------ a worker process dies
 
 DEATHS = Path("/nonexistent")
-"""A file the dying worker below counts its deaths in (set by the tests)."""
+"""The folder the dying worker below counts its deaths in (set by the fixture)."""
 
 
-def dying_work(task: Any) -> Any:
+def dying_run(job: Any, index: int, root: Any, folder: Path) -> Any:
     """Run 1's worker is killed (as by the kernel's out-of-memory killer) as long as the
-    count of deaths in the task's folder is below the count asked for there."""
+    count of deaths is below the count allowed."""
     import os
     import signal
 
-    marks = task.folder.parent / "deaths"
-    allowed = int((task.folder.parent / "allowed").read_text())
-    if task.index == 1 and len(marks.read_text()) < allowed:
+    marks = DEATHS / "deaths"
+    allowed = int((DEATHS / "allowed").read_text())
+    if index == 1 and len(marks.read_text()) < allowed:
         with marks.open("a") as out:
             out.write("x")
         os.kill(os.getpid(), signal.SIGKILL)
-    return _real_work(task)
+    return _real_run(job, index, root, folder)
 
 
-_real_work = prima.sweep._work
+_real_run = prima.batch._work.run_one
 
 
 @pytest.fixture
 def dying(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    monkeypatch.setattr(prima.sweep, "_work", dying_work)
-    monkeypatch.setattr(prima.sweep.tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(prima.batch._work, "run_one", dying_run)
+    monkeypatch.setitem(globals(), "DEATHS", tmp_path)
     (tmp_path / "deaths").write_text("")
     return tmp_path
 
@@ -249,26 +249,23 @@ def test_a_run_whose_worker_always_dies_is_named_and_the_others_finish(dying: Pa
     (dying / "allowed").write_text("9")
     monkeypatch.chdir(dying)
     status, out, err = cli("sweep", str(SHORT), "--runs", "4", "--jitter", "3", "--jobs", "2",
-                           "--worst", "1", "--out", "worst")
+                           "--worst", "1", "--out", "worst", "--results", "all.jsonl")
     assert status == 1, err
     assert "prima sweep: run(s) 1 lost: the worker process died" in err, err
     assert "the other 3 run(s) are judged" in err and "Traceback" not in err
     assert "3 of 4 runs" in out and "(1 lost)" in out
     assert len(list((dying / "worst").iterdir())) == 1  # the finished runs are kept
     assert (dying / "deaths").read_text() == "xxx"  # with the pool, again, and alone
+    lines = (dying / "all.jsonl").read_text().splitlines()
+    assert [json.loads(line).get("run") for line in lines[1:]] == [0, 1, 2, 3]
+    assert json.loads(lines[2]) == {"job": 0, "run": 1, "lost": True}
 
 
-def test_never_more_workers_than_runs(monkeypatch: pytest.MonkeyPatch) -> None:
-    asked: list[int] = []
-    real = prima.sweep._pool
-
-    def pool(jobs: int) -> Any:
-        asked.append(jobs)
-        return real(jobs)
-
-    monkeypatch.setattr(prima.sweep, "_pool", pool)
+def test_never_more_workers_than_runs() -> None:
+    assert pool_for(None, 1024, 2).workers == 2
+    assert pool_for(None, 1, 5).workers == 1 and pool_for(None, 3, 5).workers == 3
     result = sweep(SHORT, runs=2, jitter=1.0, jobs=1024)
-    assert len(result.runs) == 2 and asked == [2]
+    assert result.done == 2
 
 
 def test_a_scenario_named_in_bytes_that_are_not_utf8_or_with_dashes(tmp_path: Path) -> None:

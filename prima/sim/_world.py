@@ -15,8 +15,10 @@ profiles keep their own progress instead of reading positions back.
 What is worked out from the poses is worked out once per pose: :attr:`World.version`
 moves on whenever a body may have moved or turned (every step, and every pose
 written through the world's methods), and human detection keeps its answer
-until the version, the tick or the camera's pan changes. A pose written on a
-body directly, from outside, must be followed by :meth:`World.moved`.
+until the version, the tick or the camera's pan changes; then it looks again
+only if something moved: the robot, the user or the camera (a step in which
+nothing moved keeps the answer). A pose written on a body directly, from outside,
+must be followed by :meth:`World.moved`.
 
 The map's places sit in a pymunk space of their own (never stepped, so the
 physics is the same with or without it): :meth:`World.places_near` asks its
@@ -130,9 +132,11 @@ class World:
         self.human_moving = False
         self.version = 0
         """Moves on whenever a body may have moved or turned (see the module's doc)."""
-        self._sight: dict[bool, tuple[int, int, float, tuple[bool, float]]] = {}
+        self._sight: dict[bool, tuple[int, int, float, tuple[float, ...],
+                                      tuple[bool, float]]] = {}
         """Human detection's last answer with and without ``any_direction``: the tick,
-        the version and the camera's pan it was worked out for, and the answer."""
+        the version, the camera's pan and the poses it was worked out for, and the
+        answer."""
         self._places = pymunk.Space()
         self._place_of: dict[pymunk.Shape, int] = {}
         for i, place in enumerate(world_map.places):
@@ -222,14 +226,20 @@ class World:
         pan = 0.0 if any_direction else self.head_pan.at(tick)
         kept = self._sight.get(any_direction)
         if kept is not None and kept[0] == tick and kept[1] == self.version and kept[2] == pan:
-            return kept[3]
-        seen = self._look(pan, any_direction)
-        self._sight[any_direction] = (tick, self.version, pan, seen)
-        return seen
-
-    def _look(self, pan: float, any_direction: bool) -> tuple[bool, float]:
+            return kept[4]
         rx, ry = self.robot.position
         ux, uy = self.human.position
+        angle = 0.0 if any_direction else self.robot.angle
+        poses = (rx, ry, angle, ux, uy)
+        if kept is not None and kept[2] == pan and kept[3] == poses:
+            seen = kept[4]  # nothing moved since it last looked
+        else:
+            seen = self._look(pan, any_direction, rx, ry, ux, uy)
+        self._sight[any_direction] = (tick, self.version, pan, poses, seen)
+        return seen
+
+    def _look(self, pan: float, any_direction: bool, rx: float, ry: float, ux: float,
+              uy: float) -> tuple[bool, float]:
         dx = ux - rx
         dy = uy - ry
         d = math.hypot(dx, dy)

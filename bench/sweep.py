@@ -1,0 +1,205 @@
+"""Benchmark: judged sweep runs per CPU second, against bare pymunk stepping the same
+worlds; and the peak memory of a sweep as its runs grow.
+
+Usage: python bench/sweep.py [--repeats 5] [--runs 10] [SCENARIO ...]
+       python bench/sweep.py --memory 1000,100000 [--scenario S] [--jobs 2]
+
+Each round runs, for each scenario (default: samples 3, 7 and 10 of the thesis), a
+cold process that does what a sweep's worker does for ``--runs`` runs: each run's
+variant jittered by 5 s (new run indices every round: distinct inputs), run, judged,
+its record made (``prima.batch.run_chunk``: one task of that many runs). The process
+times its runs alone (``time.process_time``, its imports left out) and says how many
+physics steps they took; the peer, measured in the same rounds in this process,
+steps a bare pymunk space of the same world (walls, robot, user) as many times.
+Printed per scenario: both medians, their ratio, and runs per CPU second; with
+``--against TREE`` (a checkout of an earlier build: ``git worktree add /tmp/before
+<commit>``), that build's runs of the same scenarios in the same rounds, and the
+speed-up over it, against the target of 2x.
+
+``--memory N,M`` runs ``prima sweep`` of N and then M runs of ``--scenario``
+(default fig5-7, a one-minute scenario) with ``--results`` to a file, each in its
+own process, and prints each one's peak resident memory (``ru_maxrss`` of the
+process waited for: the largest of the sweeping process and its worker processes)
+and their ratio, against the promise that the larger stays within 10% of the smaller.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _measure import ROOT, cpu, interleaved, interpreter, report
+
+SCENARIOS = {name: ROOT / "scenarios" / "thesis" / f"{name}.xml"
+             for name in ("sample-03", "sample-07", "sample-10")}
+JITTER = 5.0
+TARGET = 2.0
+"""The speed-up in runs per CPU second the sweep must reach over the baseline."""
+
+
+def child(scenario: Path, runs: int, first: int) -> None:
+    """In a cold process: ``runs`` judged runs of a sweep of ``scenario`` (indices from
+    ``first``); print their CPU time and physics steps as JSON."""
+    import prima.sim._simulator as simulator
+    from prima.judge import Thresholds
+
+    steps = [0]
+    real = simulator.Simulator.advance_to
+
+    def counted(self: simulator.Simulator, t: float, *, stop_on_report: bool = False) -> None:
+        before = self.steps
+        real(self, t, stop_on_report=stop_on_report)
+        steps[0] += self.steps - before
+
+    simulator.Simulator.advance_to = counted  # type: ignore[method-assign]
+    try:
+        from prima.batch import Chunk, Job, bundle_scenario, run_chunk
+    except ImportError:  # an earlier build (--against): its sweep's own worker function
+        from prima.sweep import _Task, _work  # type: ignore[attr-defined]
+
+        with tempfile.TemporaryDirectory() as scratch:
+            tasks = [_Task(scenario, Path(scratch), 0, first + i, JITTER, Thresholds())
+                     for i in range(runs)]
+            start = time.process_time()
+            for task in tasks:
+                _work(task)
+            print(json.dumps({"cpu": time.process_time() - start, "steps": steps[0]}))
+        return
+    job = Job(bundle_scenario(scenario), first + runs, 0, JITTER, Thresholds())
+    start = time.process_time()
+    records = run_chunk(Chunk(0, job, first, runs))  # (what a worker does with a task)
+    spent = time.process_time() - start
+    failed = [r for r in records if "error" in r]
+    if failed:
+        sys.exit(f"a run failed: {failed[0]['error']}")
+    print(json.dumps({"cpu": spent, "steps": steps[0]}))
+
+
+class Case:
+    """One scenario: its cold sweep runs, and its peer."""
+
+    def __init__(self, name: str, path: Path, runs: int, tree: Path = ROOT) -> None:
+        self.name, self.path, self.runs, self.tree = name, path, runs, tree
+        self.round = 0
+        self.steps = 0
+
+    def sweep(self) -> float:
+        first = self.round * self.runs  # distinct runs every round
+        self.round += 1
+        done = subprocess.run([sys.executable, __file__, "--child", str(self.path),
+                               "--runs", str(self.runs), "--first", str(first)],
+                              capture_output=True, text=True, check=False,
+                              env={**os.environ, "PYTHONPATH": str(self.tree)})
+        if done.returncode:
+            sys.exit(done.stderr)
+        out = json.loads(done.stdout)
+        self.steps = int(out["steps"])
+        return float(out["cpu"])
+
+    def bare(self) -> float:
+        from prima.sim import Simulator, load_scenario
+
+        world = Simulator.from_scenario(load_scenario(self.path)).world
+        space, dt, steps = world.space, world.dt, self.steps or 1
+
+        def step() -> None:
+            for _ in range(steps):
+                space.step(dt)
+        return cpu(step)
+
+
+def speed(args: argparse.Namespace) -> int:
+    named = {p.stem: p for p in args.scenarios} if args.scenarios else SCENARIOS
+    cases = {name: Case(name, path, args.runs) for name, path in named.items()}
+    earlier = {name: Case(name, path, args.runs, args.against.resolve())
+               for name, path in named.items()} if args.against else {}
+    for case in [*cases.values(), *earlier.values()]:
+        case.sweep()  # (a round not counted: the bytecode cache, the steps for the peer)
+    work = {}
+    for name, case in cases.items():
+        work[f"{name} sweep runs"] = case.sweep
+        if name in earlier:
+            work[f"{name} earlier build"] = earlier[name].sweep
+        work[f"{name} bare pymunk"] = case.bare
+    medians = interleaved(work, args.repeats)
+    met = True
+    for name, case in cases.items():
+        report(f"{name}: {case.runs} judged runs a round, {case.steps:,} physics steps",
+               {key: v for key, v in medians.items() if key.startswith(f"{name} ")},
+               f"{name} bare pymunk", repeats=args.repeats)
+        rate = case.runs / medians[f"{name} sweep runs"]
+        line = f"  runs per CPU second: {rate:.1f}"
+        if name in earlier:
+            before = case.runs / medians[f"{name} earlier build"]
+            ratio = rate / before
+            met = met and ratio >= TARGET
+            line += (f"; the earlier build's {before:.1f}: {ratio:.2f}x (target {TARGET:g}x: "
+                     f"{'met' if ratio >= TARGET else 'NOT met'})")
+        print(line)
+    print(interpreter())
+    return 0 if met else 1
+
+
+def peak(argv: list[str]) -> tuple[float, float]:
+    """The peak resident memory (MiB) and CPU seconds of one process running argv."""
+    process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               env={**os.environ, "PYTHONPATH": str(ROOT)})
+    _, status, usage = os.wait4(process.pid, 0)
+    if os.waitstatus_to_exitcode(status) not in (0, 1):
+        sys.exit(f"{' '.join(argv)} failed")
+    return usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
+
+
+def memory(args: argparse.Namespace) -> int:
+    counts = [int(n) for n in args.memory.split(",")]
+    peaks = []
+    with tempfile.TemporaryDirectory() as scratch:
+        for n in counts:
+            argv = [sys.executable, "-m", "prima", "sweep", str(args.scenario), "--runs", str(n),
+                    "--jitter", str(JITTER), "--worst", "0", "--results",
+                    str(Path(scratch) / f"{n}.jsonl")]
+            if args.jobs:
+                argv += ["--jobs", str(args.jobs)]
+            start = time.perf_counter()
+            mib, spent = peak(argv)
+            peaks.append(mib)
+            print(f"prima sweep --runs {n:>7,}: peak {mib:7.1f} MiB, {spent:8.1f} s of CPU "
+                  f"(with its workers), {time.perf_counter() - start:7.1f} s")
+    growth = peaks[-1] / peaks[0]
+    ok = growth <= 1.10
+    print(f"peak of {counts[-1]:,} runs / peak of {counts[0]:,} runs: {growth:.3f} "
+          f"(the promise: at most 1.10): {'met' if ok else 'NOT met'}")
+    return 0 if ok else 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scenarios", nargs="*", type=Path,
+                        help="scenario files (default: samples 3, 7 and 10)")
+    parser.add_argument("--repeats", type=int, default=5, help="interleaved rounds (default 5)")
+    parser.add_argument("--runs", type=int, default=10,
+                        help="judged runs per scenario and round (default 10)")
+    parser.add_argument("--against", type=Path, metavar="TREE",
+                        help="an earlier build of PRIMA (a checkout) measured in the same "
+                             "rounds: the speed-up over it, against the target of 2x")
+    parser.add_argument("--memory", metavar="N,M", help="peak memory of sweeps of N and M runs")
+    parser.add_argument("--scenario", type=Path, default=ROOT / "scenarios" / "thesis" /
+                        "fig5-7.xml", help="the scenario --memory sweeps (default fig5-7)")
+    parser.add_argument("--jobs", type=int, help="--memory: the sweeps' --jobs")
+    parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument("--first", type=int, default=0, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child is not None:
+        child(args.child, args.runs, args.first)
+        return 0
+    return memory(args) if args.memory else speed(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,277 @@
+"""Where a batch's runs go: one :class:`concurrent.futures.Executor` seam.
+
+A :class:`Pool` hands out an executor: this process (:class:`Inline`), worker
+processes on this machine (:class:`Processes`, the default), or a Dask cluster
+(``prima.batch._dask``, imported only when asked for). :func:`dispatch` sends the
+jobs' runs to it in chunks, and yields every run's record in the order of the runs,
+whatever order they finish in, so that what a batch writes is the same whatever
+runs it. A chunk whose worker is lost (killed, out of memory, its machine gone) is
+sent again; lost again, each of its runs is sent alone; a run lost even alone is a
+record that says so (``"lost": true``) and the others go on.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import concurrent.futures
+import concurrent.futures.process
+import math
+import multiprocessing
+import signal
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any, Protocol
+
+from prima.batch._work import Chunk, Job, run_chunk
+
+__all__ = ["CHUNK", "Inline", "Pool", "Processes", "chunk_size", "dispatch", "plan"]
+
+CHUNK = 50
+"""Runs per task at most: a Dask task costs about 3 ms against a run's 50-130 ms."""
+
+Record = dict[str, Any]
+
+
+class Pool(Protocol):
+    """Where runs go: an executor, and how to recover when it breaks."""
+
+    @property
+    def workers(self) -> int:
+        """How many runs it runs at once."""
+
+    @property
+    def chunk(self) -> int:
+        """The most runs it takes in one task."""
+
+    def executor(self) -> concurrent.futures.Executor:
+        """An executor to submit to (a fresh one once the last is broken)."""
+
+    def broken(self, exc: BaseException) -> bool:
+        """Whether ``exc``, a task's failure, left the executor unable to take more."""
+
+    def stop(self) -> None:
+        """Stop now (Ctrl-C): cancel what has not started, end what runs."""
+
+    def close(self) -> None:
+        """Done: let the workers go."""
+
+
+class _Now(concurrent.futures.Executor):
+    """An executor that runs each task as it is submitted, in this process."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any,
+               **kwargs: Any) -> concurrent.futures.Future[Any]:
+        future: concurrent.futures.Future[Any] = concurrent.futures.Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except Exception as exc:  # noqa: BLE001 - a task's failure goes in its future
+            future.set_exception(exc)
+        return future
+
+
+class Inline:
+    """Every run in this process, one after another (``--jobs 1``)."""
+
+    workers = 1
+    chunk = 1
+
+    def executor(self) -> concurrent.futures.Executor:
+        return _Now()
+
+    def broken(self, exc: BaseException) -> bool:
+        return False
+
+    def stop(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _quiet() -> None:
+    """Workers leave Ctrl-C to the parent, which stops the pool."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class Processes:
+    """``jobs`` worker processes on this machine. A worker that dies breaks the pool
+    (every task not finished fails with it): a fresh pool takes the work on."""
+
+    chunk = CHUNK
+
+    def __init__(self, jobs: int) -> None:
+        self.workers = jobs
+        self._pool: concurrent.futures.ProcessPoolExecutor | None = None
+        self._broken = False
+
+    def executor(self) -> concurrent.futures.Executor:
+        if self._pool is None or self._broken:
+            if self._pool is not None:
+                self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = concurrent.futures.ProcessPoolExecutor(
+                self.workers, mp_context=multiprocessing.get_context(), initializer=_quiet)
+            self._broken = False
+        return self._pool
+
+    def broken(self, exc: BaseException) -> bool:
+        if isinstance(exc, concurrent.futures.process.BrokenProcessPool):
+            self._broken = True
+        return self._broken
+
+    def stop(self) -> None:
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        pool.shutdown(wait=False, cancel_futures=True)
+        processes = getattr(pool, "_processes", None) or {}
+        for process in list(processes.values()):
+            process.terminate()
+
+    def close(self) -> None:
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown()
+
+
+def chunk_size(runs: int, workers: int, largest: int = CHUNK) -> int:
+    """Runs per task: at most ``largest``, and small enough that every worker gets
+    several tasks (a progress bar moves, a lost task costs little)."""
+    return max(1, min(largest, math.ceil(runs / max(1, workers * 4))))
+
+
+def plan(jobs: Sequence[Job], size: int, skip: int = 0) -> list[Chunk]:
+    """The jobs' runs in chunks of ``size``, in order, the first ``skip`` runs of the
+    whole batch left out (done already)."""
+    out: list[Chunk] = []
+    for number, job in enumerate(jobs):
+        start = min(job.runs, max(0, skip))
+        skip -= job.runs
+        for first in range(start, job.runs, size):
+            out.append(Chunk(number, job, first, min(size, job.runs - first)))
+    return out
+
+
+class _Order:
+    """Records put back in the order of the runs: each job's runs in turn."""
+
+    def __init__(self, jobs: Sequence[Job], skip: int) -> None:
+        self.offsets: list[int] = []
+        total = 0
+        for job in jobs:
+            self.offsets.append(total)
+            total += job.runs
+        self.total = total
+        self.next = skip
+        self.waiting: dict[int, Record] = {}
+
+    def position(self, chunk: Chunk) -> int:
+        return self.offsets[chunk.job] + chunk.first
+
+    def add(self, records: Sequence[Record]) -> Iterator[Record]:
+        for record in records:
+            self.waiting[self.offsets[record["job"]] + record["run"]] = record
+        while self.next in self.waiting:
+            yield self.waiting.pop(self.next)
+            self.next += 1
+
+
+_ALONE = 2
+"""The attempt from which a chunk's runs are sent one at a time, each alone."""
+_LOST = 3
+"""The attempt at which a run is given up for lost."""
+
+
+class _Flight:
+    """A batch's chunks: those to send (the first run's first), and those out."""
+
+    def __init__(self, jobs: Sequence[Job], pool: Pool, size: int, skip: int) -> None:
+        self.pool = pool
+        self.order = _Order(jobs, skip)
+        self.queue: list[tuple[int, int, int, Chunk]] = []
+        """(position, attempt, count, chunk): the chunks to send, the first run's first."""
+        self.pushed = itertools.count()
+        for chunk in plan(jobs, size, skip):
+            self.push(chunk, 0)
+        self.window = 2 * pool.workers if pool.workers > 1 else 1
+        self.ahead = self.window * size * 4
+        self.flying: dict[concurrent.futures.Future[list[Record]], tuple[int, Chunk]] = {}
+        self.executor = pool.executor()
+
+    def push(self, chunk: Chunk, attempt: int) -> None:
+        heapq.heappush(self.queue, (self.order.position(chunk), attempt, next(self.pushed),
+                                    chunk))
+
+    def again(self, chunk: Chunk, attempt: int) -> list[Record]:
+        """Send a lost chunk again: whole, then each run alone; lost alone, it is lost."""
+        if attempt >= _LOST:
+            return [{"job": chunk.job, "run": chunk.first, "lost": True}]
+        for one in chunk.single() if attempt >= _ALONE else [chunk]:
+            self.push(one, attempt)
+        return []
+
+    def send(self) -> None:
+        """Send chunks while the window allows: at most ``window`` out, none too far
+        ahead of the first run not finished, a chunk sent alone alone."""
+        while self.queue and len(self.flying) < self.window:
+            position, attempt, _, chunk = self.queue[0]
+            alone = attempt >= _ALONE
+            if self.flying and (alone or position >= self.order.next + self.ahead):
+                return
+            entry = heapq.heappop(self.queue)
+            try:
+                self.flying[self.executor.submit(run_chunk, chunk)] = (attempt, chunk)
+            except Exception as exc:  # noqa: BLE001 - the executor broke meanwhile
+                if not self.pool.broken(exc):
+                    raise
+                heapq.heappush(self.queue, entry)
+                self.executor = self.pool.executor()
+                continue
+            if alone:
+                return
+
+    def collect(self) -> list[Record]:
+        """Wait for a chunk to finish: the records of every chunk finished (a lost one's
+        runs sent again)."""
+        done, _ = concurrent.futures.wait(self.flying,
+                                          return_when=concurrent.futures.FIRST_COMPLETED)
+        broke = False
+        records: list[Record] = []
+        for future in done:
+            attempt, chunk = self.flying.pop(future)
+            try:
+                records += future.result()
+            except Exception as exc:  # noqa: BLE001 - its worker was lost: again
+                broke = self.pool.broken(exc) or broke
+                records += self.again(chunk, attempt + 1)
+        if broke:  # every task still out fails with the broken pool: take them back
+            for future, (attempt, chunk) in self.flying.items():
+                future.cancel()
+                records += self.again(chunk, attempt + 1)
+            self.flying.clear()
+            self.executor = self.pool.executor()
+        return records
+
+
+def dispatch(jobs: Sequence[Job], pool: Pool, *, size: int, skip: int = 0,
+             progress: Callable[[int], None] | None = None) -> Iterator[Record]:
+    """Every run's record of ``jobs`` after the first ``skip``, in the order of the runs.
+
+    Chunks of ``size`` runs go to ``pool``, at most twice its workers at once (and never
+    so far ahead of the first run not finished that many records wait to be put in
+    order). ``progress(finished)`` is called as runs finish. Ctrl-C stops the pool; the
+    records yielded so far are the batch's first runs, in order.
+    """
+    finished = skip
+    try:
+        flight = _Flight(jobs, pool, size, skip)
+        while flight.queue or flight.flying:
+            flight.send()
+            records = flight.collect()
+            yield from flight.order.add(records)
+            finished += len(records)
+            if records and progress is not None:
+                progress(finished)
+    except BaseException:  # Ctrl-C, or a fault of the batch's own: stop the workers now
+        pool.stop()
+        raise
+    pool.close()

@@ -1,0 +1,115 @@
+"""A batch's results file: one JSON object per line, a header, then every run's record
+in the order of the runs.
+
+Records are written as the runs finish (put back in order), so a batch keeps none of
+them in memory, and what it writes is the same whatever ran it. A batch stopped
+half-way (Ctrl-C, a machine lost) leaves its first runs' records: resumed
+(:meth:`ResultsFile.previous`), it checks the header is its own, reads them back,
+drops a last line cut short, and goes on from the next run, so the file ends as
+the one an uninterrupted batch writes.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import IO, Any
+
+from prima.errors import OutputError, Problem, ResultsError, Severity
+from prima.escape import json_line, shown_path
+from prima.output import make_folder
+
+__all__ = ["ResultsFile"]
+
+
+def _problem(path: Path, line: int, message: str) -> ResultsError:
+    return ResultsError([Problem(str(path), line, 1, Severity.ERROR, message)])
+
+
+def _differs(found: Mapping[str, Any], wanted: Mapping[str, Any]) -> str:
+    """Which field of a header differs, readably."""
+    for key in wanted:
+        if found.get(key) != wanted[key]:
+            return f"its {key} is {json.dumps(found.get(key))[:80]}, not " \
+                   f"{json.dumps(wanted[key])[:80]}"
+    return "its header differs"
+
+
+class ResultsFile:
+    """The results file at ``path`` of the batch whose header is ``header``."""
+
+    def __init__(self, path: str | Path, header: Mapping[str, Any]) -> None:
+        self.path = Path(path)
+        self.header: dict[str, Any] = json.loads(json_line(dict(header)))
+        self.kept = 0
+        """Bytes of the file that hold the header and whole records (resumed)."""
+        self._out: IO[str] | None = None
+
+    def previous(self, counts: Sequence[int]) -> Iterator[dict[str, Any]]:
+        """The records of the runs done, in order, checked (a missing file: none).
+        Raises ResultsError for a file of another batch, or a line that is not the
+        next run's record."""
+        try:
+            source = self.path.open("rb")
+        except FileNotFoundError:
+            return
+        except OSError as exc:
+            raise _problem(self.path, 1, f"cannot read: {exc.strerror or exc}") from exc
+        with source:
+            self.kept = 0
+            order = _runs(counts)
+            for number, raw in enumerate(source, start=1):
+                if not raw.endswith(b"\n"):
+                    return  # cut short as it was written: run again
+                try:
+                    row = json.loads(raw.decode("utf-8"))
+                except (UnicodeDecodeError, ValueError):
+                    raise _problem(self.path, number, "not a JSON object") from None
+                if not isinstance(row, dict):
+                    raise _problem(self.path, number, "not a JSON object")
+                if number == 1:
+                    if row != self.header:
+                        raise _problem(self.path, 1, "these are the results of another "
+                                       f"batch: {_differs(row, self.header)}")
+                else:
+                    if (row.get("job"), row.get("run")) != next(order, None):
+                        raise _problem(self.path, number, "not the next run's record")
+                    yield row
+                self.kept += len(raw)
+
+    def open(self, *, resume: bool) -> None:
+        """Start writing: a new file with its header, or (``resume``) after the records
+        :meth:`previous` read."""
+        try:
+            if resume and self.kept:
+                with self.path.open("r+b") as old:
+                    old.truncate(self.kept)
+                self._out = self.path.open("a", encoding="utf-8", newline="\n")
+            else:
+                make_folder(self.path.parent, self.path)  # (every command's rule: made)
+                self._out = self.path.open("w", encoding="utf-8", newline="\n")
+                self._out.write(json_line(self.header) + "\n")
+                self._out.flush()
+        except OSError as exc:
+            raise OutputError(f"cannot write {shown_path(self.path)}: "
+                              f"{exc.strerror or exc}") from exc
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        """One run's record, at the end of the file (flushed: a stop keeps it)."""
+        if self._out is None:
+            raise RuntimeError("the results file is not open")
+        self._out.write(json_line(dict(record)) + "\n")
+        self._out.flush()
+
+    def close(self) -> None:
+        if self._out is not None:
+            self._out.close()
+            self._out = None
+
+
+def _runs(counts: Sequence[int]) -> Iterator[tuple[int, int]]:
+    """Every run of jobs of these many runs, in order, as (job, run)."""
+    for job, n in enumerate(counts):
+        for run in range(n):
+            yield job, run

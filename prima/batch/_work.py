@@ -1,0 +1,163 @@
+"""What a worker does: run a chunk of a job's runs, judge each, and say what it found as
+a record (a JSON object) that is the same on any machine, in any worker.
+
+A :class:`Job` is one scenario swept: its :class:`~._variants.Bundle`, how many runs,
+the seed and jitter of their timings, the thresholds they are judged by, and what
+else each record says (an :class:`Analysis`: ``prima check`` adds whose each failure
+is and what of the EA ran). A :class:`Chunk` is some of a job's runs, sent to a worker
+as one task (:func:`run_chunk`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import gc
+import math
+import tempfile
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+from lxml import etree
+
+from prima.batch._variants import Bundle, rng, shift_timings
+from prima.errors import LocatedError
+from prima.judge import Report, Thresholds
+
+__all__ = ["Analysis", "Chunk", "Job", "Observer", "record_of", "run_chunk", "run_one"]
+
+
+class Observer(Protocol):
+    """Sees every line of one run's trace (as its jsonl dict), then its judged report."""
+
+    def feed(self, row: Mapping[str, Any]) -> None: ...
+
+    def finish(self, report: Report) -> Any:
+        """What the run's record says under the analysis' key (JSON)."""
+
+
+class Analysis(Protocol):
+    """What a job's records say beyond the judge's counts (picklable: it goes to the
+    workers with the job)."""
+
+    @property
+    def key(self) -> str:
+        """The record's key for what it finds."""
+
+    def observer(self) -> Observer:
+        """A fresh observer for one run."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """One scenario swept: ``runs`` runs, run ``i`` jittered by ``(seed, i)``."""
+
+    bundle: Bundle
+    runs: int
+    seed: int
+    jitter: float
+    thresholds: Thresholds
+    analysis: Analysis | None = None
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Runs ``first`` to ``first + count - 1`` of job number ``job``: one task."""
+
+    job: int
+    spec: Job
+    first: int
+    count: int
+
+    def single(self) -> list[Chunk]:
+        """The chunk as chunks of one run each."""
+        return [Chunk(self.job, self.spec, i, 1) for i in range(self.first,
+                                                                 self.first + self.count)]
+
+
+def _finite(value: float) -> float | None:
+    """A time for JSON: None stands for infinite (a reaction that never started)."""
+    return None if math.isinf(value) else value
+
+
+def record_of(report: Report) -> dict[str, Any]:
+    """What a sweep keeps of a judged run: each measure's count, the worst times, the
+    thresholds exceeded."""
+    return {
+        "end": report.end,
+        "reactions": len(report.reactions),
+        "counts": report.counts(),
+        "worst_lateness": _finite(report.worst_lateness()),
+        "worst_latency": _finite(report.worst_latency()),
+        "breaches": report.breaches(),
+    }
+
+
+def _tee(rows: Iterable[Mapping[str, Any]], observer: Observer) -> Iterator[Mapping[str, Any]]:
+    for row in rows:
+        observer.feed(row)
+        yield row
+
+
+def run_one(job: Job, index: int, root: etree._Element, folder: Path) -> dict[str, Any]:
+    """Run ``index`` of ``job`` (its scenario's parsed ``root``, unpacked in ``folder``),
+    judged: its record (without its job's number). A run that fails is a record with
+    its ``error``."""
+    from prima.judge import judge
+    from prima.run import Run
+    from prima.tracefile import rows
+
+    variant = copy.deepcopy(root)
+    shift_timings(variant, rng(job.seed, index), job.jitter)
+    path = folder / f"run-{index}.xml"
+    path.write_bytes(etree.tostring(variant, encoding="UTF-8", xml_declaration=True))
+    record: dict[str, Any] = {"run": index}
+    try:
+        lines: Iterable[Mapping[str, Any]] = rows(Run(path).run())
+        observer = job.analysis.observer() if job.analysis is not None else None
+        if observer is not None:
+            lines = _tee(lines, observer)
+        report = judge(lines, thresholds=job.thresholds, name=f"run {index}")
+        record.update(record_of(report))
+        if observer is not None and job.analysis is not None:
+            record[job.analysis.key] = observer.finish(report)
+    except LocatedError as exc:
+        record["error"] = str(exc.problems[0]) if exc.problems else str(exc)
+    except Exception as exc:  # noqa: BLE001 - a run's fault is its record, not the batch's
+        record["error"] = f"{type(exc).__name__}: {exc}"
+    finally:
+        path.unlink(missing_ok=True)
+    return record
+
+
+RUNS_GC_THRESHOLD = 20_000
+"""Objects allocated between two collections of the youngest generation while a chunk
+runs (Python's default is 700): a run allocates many short-lived objects and few
+cycles; at the default, the collector's passes cost about 5% of a run's CPU time."""
+
+
+@contextlib.contextmanager
+def _fewer_collections() -> Iterator[None]:
+    before = gc.get_threshold()
+    gc.set_threshold(RUNS_GC_THRESHOLD, *before[1:])
+    try:
+        yield
+    finally:
+        gc.set_threshold(*before)
+
+
+def run_chunk(chunk: Chunk) -> list[dict[str, Any]]:
+    """Run a chunk's runs in order (in a worker, or in this process): their records,
+    each with its job's number."""
+    spec = chunk.spec
+    with tempfile.TemporaryDirectory(prefix="prima-runs-") as scratch, _fewer_collections():
+        folder = Path(scratch)
+        scenario = spec.bundle.unpack(folder)
+        root = etree.fromstring(scenario.read_bytes())
+        out = []
+        for index in range(chunk.first, chunk.first + chunk.count):
+            record = run_one(spec, index, root, folder)
+            out.append({"job": chunk.job, **record})
+        return out

@@ -1,0 +1,247 @@
+"""Many runs at once (prima.batch): the records are the same whatever runs them and in
+whatever order the runs finish; a results file is written in the order of the runs,
+resumed where it stopped, refused when it is another batch's; a chunk whose worker is
+lost is sent again; a sweep keeps no run's report."""
+
+from __future__ import annotations
+
+import concurrent.futures
+import io
+import json
+import math
+import random
+import statistics
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import prima.batch._dispatch
+import prima.batch._work
+from prima.batch import Chunk, Inline, Job, Processes, bundle_scenario, dispatch, plan
+from prima.cli import main
+from prima.judge import MEASURES, Thresholds
+from prima.sweep import Spread, sweep
+
+ROOT = Path(__file__).parents[1]
+SHORT = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
+"""A 60-second scenario: a run takes a fraction of a second."""
+TOUCHED = ROOT / "scenarios" / "thesis" / "sample-08.xml"
+"""Two applications, touches, answers: the records differ from run to run."""
+
+
+def cli(*argv: str) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    code = main(list(argv), out=out, err=err)
+    return code, out.getvalue(), err.getvalue()
+
+
+def job(runs: int = 6, scenario: Path = SHORT) -> Job:
+    return Job(bundle_scenario(scenario), runs, 5, 3.0, Thresholds())
+
+
+# ------------------------------------------------------------ the order of the runs
+
+class _Backwards(concurrent.futures.Executor):
+    """Runs every task at once but finishes them in reverse order, four at a time (and
+    the last ones when the ``total``-th task comes)."""
+
+    def __init__(self, total: int) -> None:
+        self.held: list[tuple[concurrent.futures.Future[Any], Any]] = []
+        self.left = total
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any,
+               **kwargs: Any) -> concurrent.futures.Future[Any]:
+        future: concurrent.futures.Future[Any] = concurrent.futures.Future()
+        self.held.append((future, fn(*args, **kwargs)))
+        self.left -= 1
+        if len(self.held) == 4 or not self.left:
+            self.release()
+        return future
+
+    def release(self) -> None:
+        for future, value in reversed(self.held):
+            future.set_result(value)
+        self.held = []
+
+
+class _BackwardsPool:
+    workers = 2
+    chunk = 1
+
+    def __init__(self, total: int) -> None:
+        self.made = _Backwards(total)
+
+    def executor(self) -> concurrent.futures.Executor:
+        return self.made
+
+    def broken(self, exc: BaseException) -> bool:
+        return False
+
+    def stop(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def test_records_come_in_the_order_of_the_runs_whatever_order_they_finish() -> None:
+    jobs = [job(3), job(2)]
+    pool = _BackwardsPool(5)
+    got = [(r["job"], r["run"]) for r in dispatch(jobs, pool, size=1)]
+    assert got == [(0, 0), (0, 1), (0, 2), (1, 0), (1, 1)]
+
+
+def test_a_plan_skips_the_runs_done_and_never_spans_two_jobs() -> None:
+    jobs = [job(5), job(3)]
+    chunks = plan(jobs, 2, skip=3)
+    assert [(c.job, c.first, c.count) for c in chunks] == [(0, 3, 2), (1, 0, 2), (1, 2, 1)]
+    assert sum(c.count for c in plan(jobs, 50)) == 8
+
+
+# ------------------------------------------------------------ the same whatever runs it
+
+def _results(tmp_path: Path, name: str, **options: Any) -> bytes:
+    target = tmp_path / name
+    result = sweep(TOUCHED, runs=6, jitter=5.0, seed=2, results=target, **options)
+    assert result.done == 6
+    return target.read_bytes()
+
+
+def test_the_results_are_the_same_in_this_process_and_in_worker_processes(
+        tmp_path: Path) -> None:
+    inline = _results(tmp_path, "inline.jsonl", pool=Inline())
+    processes = _results(tmp_path, "processes.jsonl", pool=Processes(2))
+    assert inline == processes
+    records = [json.loads(line) for line in inline.splitlines()[1:]]
+    assert [r["run"] for r in records] == list(range(6))
+    assert len({json.dumps(r["counts"]) + str(r["worst_latency"]) for r in records}) > 1
+
+
+def test_the_results_are_the_same_on_a_dask_cluster(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    from prima.batch._dask import Dask
+
+    inline = _results(tmp_path, "inline.jsonl", pool=Inline())
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        on_dask = _results(tmp_path, "dask.jsonl", pool=Dask(cluster.scheduler_address))
+    assert on_dask == inline
+
+
+def test_a_task_lost_on_a_dask_cluster_is_sent_again(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    distributed = pytest.importorskip("distributed")
+    from prima.batch._dask import Dask
+
+    inline = _results(tmp_path, "inline.jsonl", pool=Inline())
+    real = prima.batch._dispatch.run_chunk
+    mark = tmp_path / "lost"  # (a file: Dask may copy the function and what it holds)
+
+    def flaky(chunk: Chunk) -> list[dict[str, Any]]:
+        if chunk.first == 0 and not mark.exists():  # as a worker killed once too often
+            mark.write_text("x")
+            raise distributed.comm.CommClosedError("the worker went away")
+        return real(chunk)
+
+    monkeypatch.setattr(prima.batch._dispatch, "run_chunk", flaky)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        on_dask = _results(tmp_path, "dask.jsonl", pool=Dask(cluster.scheduler_address))
+    assert mark.exists() and on_dask == inline
+
+
+# ------------------------------------------------------------ results files, resumed
+
+def _counting(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    ran: list[int] = []
+    real = prima.batch._work.run_one
+
+    def counted(spec: Job, index: int, root: Any, folder: Path) -> dict[str, Any]:
+        ran.append(index)
+        return real(spec, index, root, folder)
+
+    monkeypatch.setattr(prima.batch._work, "run_one", counted)
+    return ran
+
+
+def test_a_resumed_sweep_runs_only_the_rest_and_writes_the_same_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    whole = _results(tmp_path, "whole.jsonl", pool=Inline())
+    target = tmp_path / "stopped.jsonl"
+
+    def stop(done: int, total: int) -> None:
+        if done == 4:
+            raise KeyboardInterrupt
+
+    first = sweep(TOUCHED, runs=6, jitter=5.0, seed=2, results=target, pool=Inline(),
+                  progress=stop)
+    assert first.interrupted and first.done == 4
+    with target.open("ab") as torn:  # a record cut short as the machine went down
+        torn.write(b'{"job": 0, "run": 4, "en')
+    ran = _counting(monkeypatch)
+    rest = sweep(TOUCHED, runs=6, jitter=5.0, seed=2, results=target, resume=True,
+                 pool=Inline())
+    assert ran == [4, 5] and rest.done == 6 and not rest.interrupted
+    assert target.read_bytes() == whole
+    assert rest.spread == sweep(TOUCHED, runs=6, jitter=5.0, seed=2, pool=Inline()).spread
+
+
+def test_resuming_the_results_of_another_sweep_is_refused(tmp_path: Path) -> None:
+    target = tmp_path / "seed1.jsonl"
+    assert cli("sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--seed", "1", "--jobs",
+               "1", "--worst", "0", "--results", str(target))[0] == 0
+    code, _, err = cli("sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--seed", "2",
+                       "--jobs", "1", "--worst", "0", "--resume", str(target))
+    assert code == 1 and "Traceback" not in err
+    assert f"{target}:1:1: error: these are the results of another batch: its jobs" in err
+
+
+def test_a_line_that_is_not_the_next_record_is_located(tmp_path: Path) -> None:
+    target = tmp_path / "r.jsonl"
+    assert cli("sweep", str(SHORT), "--runs", "3", "--jitter", "1", "--jobs", "1",
+               "--worst", "0", "--results", str(target))[0] == 0
+    lines = target.read_text().splitlines(keepends=True)
+    target.write_text(lines[0] + lines[2] + lines[1])
+    code, _, err = cli("sweep", str(SHORT), "--runs", "3", "--jitter", "1", "--jobs", "1",
+                       "--worst", "0", "--resume", str(target))
+    assert code == 1 and f"{target}:2:1: error: not the next run's record" in err
+
+
+@pytest.mark.parametrize("extra, fragment", [
+    (["--executor", "spark://x:1"], "--executor spark://x:1: give processes"),
+    (["--executor", "dask://host:99999"], "the port must be from 1 to 65535"),
+    (["--results", "a.jsonl", "--resume", "a.jsonl"], "give it alone"),
+    (["--resume", "no/such.jsonl"], "--resume: no such file"),
+    (["--results", "tests"], "--results tests is a folder"),
+])
+def test_batch_usage_errors_exit_2(extra: list[str], fragment: str) -> None:
+    code, _, err = cli("sweep", str(SHORT), "--runs", "2", "--jitter", "1", *extra)
+    assert code == 2 and fragment in err, err
+
+
+# ------------------------------------------------------------ memory flat in the runs
+
+def test_the_spread_gives_the_same_quantiles_as_every_value_kept() -> None:
+    draws = random.Random(4)
+    for n in (1, 2, 3, 10, 101):
+        values = [round(draws.choice([0.0, 0.5, 1.25, math.inf, draws.random()]), 3)
+                  for _ in range(n)]
+        spread = Spread()
+        for v in values:
+            spread.add({"counts": {m.key: 0 for m in MEASURES},
+                        "worst_lateness": None if math.isinf(v) else v, "worst_latency": 0})
+        ordered = sorted(values)
+        p95 = ordered[max(math.ceil(0.95 * n) - 1, 0)]
+        assert spread.quantiles("worst lateness (s)") == (
+            min(values), statistics.median(values), p95, max(values))
+
+
+def test_a_sweep_keeps_its_worst_runs_and_no_other(tmp_path: Path) -> None:
+    result = sweep(TOUCHED, runs=6, jitter=5.0, seed=2, pool=Inline(), keep=2)
+    assert result.done == 6 and len(result.kept) == 2
+    assert sum(result.spread.values["late reactions"].values()) == 6
+    ranked = sorted(result.kept, key=lambda r: r.rank())
+    assert result.kept == ranked
+

@@ -1,0 +1,235 @@
+"""prima check: an EA judged beside FAs on robots; each failure attributed to the
+application whose doing it is; the EA's coverage; JUnit and Markdown for CI; the worst
+runs written as scenarios that replay them; the same results whatever runs them."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import pytest
+from lxml import etree
+
+from prima.batch import Inline, Processes
+from prima.check import VISITS, Visit, Verdict, attribute, check, map_for, visit_scenario
+from prima.cli import main
+from prima.dsl import default_profile, load_document
+from prima.judge import Blame, Report, Split, Thresholds, Unfaced
+from prima.sim import load_map, load_scenario
+
+ROOT = Path(__file__).parents[1]
+DATA = ROOT / "tests" / "data" / "check"
+HOME = ROOT / "robots" / "home-robot.xml"
+GUIDE = ROOT / "robots" / "guide-robot.xml"
+TALKER, MUTE = DATA / "talker.pxml", DATA / "mute.pxml"
+"""An EA that behaves, and one that says nothing when it does not understand."""
+RUNAWAY, QUIET = DATA / "runaway.pxml", DATA / "quiet.pxml"
+"""An FA that drives the robot away at once, and one that does nothing."""
+STANDING = DATA / "standing.xml"
+"""The EA's own scenario: a visitor who stands behind the robot."""
+MAPS = ROOT / "scenarios" / "maps"
+
+
+def cli(*argv: str) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    code = main(list(argv), out=out, err=err)
+    return code, out.getvalue(), err.getvalue()
+
+
+# ------------------------------------------------------------ whose failure it is
+
+def test_a_failure_the_fa_causes_is_the_fas_and_the_check_passes(tmp_path: Path) -> None:
+    code, out, _ = cli("check", str(TALKER), "--fa", str(RUNAWAY), "--fa", str(QUIET),
+                       "--robot", str(HOME), "--scenario", str(STANDING), "--runs", "2",
+                       "--jobs", "1", "--out", str(tmp_path / "worst"))
+    assert code == 0, out
+    assert "runaway     fail FA" in out and "quiet       ok" in out
+    assert ("leaving in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
+            "took the robot away from the user while talker spoke") in out
+    assert ("unfaced in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
+            "moved the robot") in out
+    assert "0 failed by the EA, 1 by others only" in out
+
+
+def test_a_failure_the_ea_causes_is_the_eas_and_the_check_fails(tmp_path: Path) -> None:
+    code, out, _ = cli("check", str(MUTE), "--fa", str(QUIET), "--robot", str(HOME),
+                       "--runs", "2", "--jobs", "1", "--out", str(tmp_path / "worst"))
+    assert code == 1
+    assert "quiet       FAIL EA  silences 2/8" in out
+    assert ("silences in 2 run(s): the EA's, mute mute.pxml:11:12: said nothing after the "
+            "user's answer") in out
+
+
+def _report(findings: dict[str, tuple[object, ...]]) -> Report:
+    return Report("r", 10.0, 5, Thresholds(), (), findings)  # type: ignore[arg-type]
+
+
+def test_a_split_is_the_intruders_and_an_unfaced_utterance_the_wheels_holders() -> None:
+    split = Split(12, 3.0, "guide", "emotions", "Hee-hee!", "reply", 10, "fa1.pxml:38:7")
+    unfaced = Unfaced(20, 5.0, "guide", "Speak", "Look.", 120.0, "guide.pxml:9:7")
+    roles = {"guide": "ea", "emotions": "fa"}
+    found = attribute(_report({"splits": (split,), "unfaced": (unfaced,)}), roles)
+    assert [(f["measure"], f["app"], f["role"], f["at"]) for f in found] == [
+        ("unfaced", "guide", "ea", "guide.pxml:9:7"),
+        ("splits", "emotions", "fa", "fa1.pxml:38:7")]
+    held = {20: Blame("emotions", 4, "Turn", "fa1.pxml:50:7", "on the wheels")}
+    found = attribute(_report({"unfaced": (unfaced,)}), roles, held)
+    assert (found[0]["app"], found[0]["role"], found[0]["at"]) == ("emotions", "fa",
+                                                                   "fa1.pxml:50:7")
+    assert attribute(_report({"splits": (split,)}), roles | {"emotions": "other"})[0][
+        "role"] == "other"
+
+
+# ------------------------------------------------------------ coverage
+
+def test_coverage_names_what_never_ran_and_min_coverage_fails_the_check(
+        tmp_path: Path) -> None:
+    result = check(TALKER, fas=[QUIET], robots=[HOME], maps=MAPS, runs=1, pool=Inline())
+    missed = {(i.kind, i.label, i.line) for i in result.coverage.missed()}
+    assert missed == {("states", "state 'never'", 23), ("commands", "Speak", 24)}
+    assert result.coverage.lines() == [23, 24]
+    assert round(result.coverage.percent) == 89
+    code, out, err = cli("check", str(TALKER), "--fa", str(QUIET), "--robot", str(HOME),
+                         "--runs", "1", "--jobs", "1", "--min-coverage", "95",
+                         "--out", str(tmp_path))
+    assert code == 1 and "coverage 89% is below --min-coverage 95" in err
+    assert "lines never reached: 23-24" in out
+    assert cli("check", str(TALKER), "--fa", str(QUIET), "--robot", str(HOME), "--runs", "1",
+               "--jobs", "1", "--min-coverage", "80", "--out", str(tmp_path))[0] == 0
+
+
+def test_each_visitor_reaches_an_answer_the_others_do_not() -> None:
+    answers = {}
+    for visitor in VISITS:
+        result = check(TALKER, fas=[QUIET], robots=[HOME], maps=MAPS, runs=1, pool=Inline(),
+                       visitors=(visitor,))
+        answers[visitor] = {i.key[2] for i in result.coverage.items
+                            if i.kind == "answers" and result.coverage.covered(i)}
+    assert answers == {"willing": {"choice:yes"}, "declining": {"choice:no"},
+                       "hesitant": {"nomatch"}, "silent": {"noinput"}}
+
+
+# ------------------------------------------------------------ generated visits
+
+def test_a_visit_answers_from_the_grammars_and_sends_what_the_ea_listens_for(
+        tmp_path: Path) -> None:
+    ea = load_document(ROOT / "apps" / "ea" / "cafe.pxml", default_profile())
+    fa = load_document(ROOT / "apps" / "fa" / "fa1-emotions.pxml", default_profile())
+    maps = [(MAPS / "museum.xml", load_map(MAPS / "museum.xml"))]
+    world = map_for(ea, maps)
+    assert world is not None
+    text = visit_scenario(Visit("willing"), ea, fa, world,
+                          (ROOT / "apps" / "ea" / "cafe.pxml", ROOT / "apps" / "fa" /
+                           "fa1-emotions.pxml"))
+    path = tmp_path / "visit.xml"
+    path.write_text(text)
+    scenario = load_scenario(path)  # a valid scenario
+    assert scenario.user is not None
+    root = etree.fromstring(text.encode())
+    ns = {"s": "urn:prima:scenario:1"}
+    said = [(a.get("contains"), a.get("nth"), a.get("say")) for a in root.iterfind(
+        "s:user/s:answer", ns)]
+    assert said == [("Shall I keep a table for you?", "1", "Yes."),
+                    ("Shall I keep a table for you?", None, "No.")]
+    assert [(m.get("sender")) for m in root.iterfind("s:message", ns)] == ["cafe"]
+    (reply,) = root.iterfind("s:reply", ns)
+    assert reply.get("to") == "cafe" and reply.get("text", "").startswith("reserved")
+    actions = [etree.QName(a).localname for a in root.find("s:user", ns) if
+               etree.QName(a).localname != "answer"]
+    assert actions == ["follow", "touch", "leave", "follow", "touch"]
+
+
+def test_no_map_with_the_eas_places_is_a_usage_error(tmp_path: Path) -> None:
+    code, _, err = cli("check", str(ROOT / "apps" / "ea" / "ea1-museum.pxml"), "--fa",
+                       str(QUIET), "--robot", str(HOME), "--map",
+                       str(MAPS / "office.xml"), "--runs", "1")
+    assert code == 2 and "no map has every place ea1-museum names (panel-1, panel-2)" in err
+
+
+# ------------------------------------------------------------ the matrix and CI
+
+def test_the_matrix_has_a_row_per_fa_and_a_column_per_robot_and_ci_files(
+        tmp_path: Path) -> None:
+    fa7 = ROOT / "apps" / "fa" / "fa7-spotlight.pxml"
+    code, out, err = cli("check", str(MUTE), "--fa", str(QUIET), "--fa", str(fa7),
+                         "--robot", str(HOME), "--robot", str(GUIDE), "--runs", "1",
+                         "--jobs", "1", "--out", str(tmp_path / "worst"),
+                         "--junit", str(tmp_path / "j.xml"),
+                         "--summary", str(tmp_path / "s.md"))
+    assert code == 1, err
+    lines = out.splitlines()
+    head = next(i for i, line in enumerate(lines) if "FA \\ robot" in line)
+    assert lines[head].split() == ["FA", "\\", "robot", "home-robot", "guide-robot"]
+    assert lines[head + 2].split()[:2] == ["fa7-spotlight", "n/a"]  # FA7 needs the guide
+    assert "unknown Command 'Spotlight'" in out
+    suite = etree.parse(str(tmp_path / "j.xml")).getroot()[0]
+    cases = {c.get("name"): c for c in suite.iter("testcase")}
+    assert set(cases) == {"quiet on home-robot", "quiet on guide-robot",
+                          "fa7-spotlight on home-robot", "fa7-spotlight on guide-robot"}
+    assert suite.get("tests") == "4"
+    assert cases["fa7-spotlight on home-robot"].find("skipped") is not None
+    assert cases["quiet on home-robot"].find("failure") is not None
+    summary = (tmp_path / "s.md").read_text()
+    assert "| FA | home-robot | guide-robot |" in summary and "| quiet | FAIL EA" in summary
+
+
+def test_a_written_worst_run_replays_the_failure(tmp_path: Path) -> None:
+    result = check(MUTE, fas=[QUIET], robots=[HOME], maps=MAPS, runs=2, pool=Inline(),
+                   out=tmp_path, worst=1)
+    cell = result.cell(QUIET, HOME)
+    assert cell.verdict == Verdict.EA
+    (path,) = cell.written
+    code, out, _ = cli("judge", str(path))
+    assert code == 1 and "silences               1  > max 0" in out
+
+
+def test_the_results_are_the_same_whatever_runs_them(tmp_path: Path) -> None:
+    files = []
+    for name, pool in (("inline", Inline()), ("processes", Processes(2))):
+        target = tmp_path / f"{name}.jsonl"
+        check(MUTE, fas=[QUIET, RUNAWAY], robots=[HOME], maps=MAPS, runs=2, pool=pool,
+              results=target)
+        files.append(target.read_bytes())
+    assert files[0] == files[1]
+    records = [json.loads(line) for line in files[0].splitlines()[1:]]
+    assert len(records) == 2 * len(VISITS) * 2 and all("check" in r for r in records)
+
+
+@pytest.mark.parametrize("extra, fragment", [
+    (["--min-coverage", "120"], "--min-coverage must be a percentage"),
+    (["--runs", "0"], "--runs must be"),
+    (["--fa", "no/such.pxml"], "no such file: no/such.pxml"),
+    (["--worst", "-1"], "--worst must be"),
+])
+def test_check_usage_errors_exit_2(extra: list[str], fragment: str) -> None:
+    code, _, err = cli("check", str(MUTE), "--robot", str(HOME), *extra)
+    assert code == 2 and fragment in err, err
+
+
+def test_a_broken_scenario_of_the_eas_own_is_located(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<scenario xmlns="urn:prima:scenario:1" name="x" until="10">\n'
+                   '  <map href="nowhere.xml"/>\n  <robot x="0" y="0"/>\n</scenario>\n')
+    code, _, err = cli("check", str(TALKER), "--fa", str(QUIET), "--robot", str(HOME),
+                       "--scenario", str(bad), "--runs", "1")
+    assert code == 1 and f"{bad}:2:" in err and "Traceback" not in err
+
+
+def test_a_broken_ea_is_located_not_a_traceback(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.pxml"
+    bad.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="bad">\n'
+                   '  <state id="a" initial="true"><entry><goto state="b"/></entry></state>\n'
+                   "</pxml>\n")
+    code, _, err = cli("check", str(bad), "--fa", str(QUIET), "--robot", str(HOME),
+                       "--runs", "1")
+    assert code == 1 and f"{bad}:2:" in err and "Traceback" not in err
+
+
+def test_the_example_ea_written_from_the_docs_passes_every_cell(tmp_path: Path) -> None:
+    result = check(ROOT / "scenarios" / "examples" / "info-desk.pxml",
+                   fas=sorted((ROOT / "apps" / "fa").glob("*.pxml")),
+                   robots=[HOME, GUIDE], maps=MAPS, runs=1, pool=Processes(2))
+    assert result.failed_by_ea == []
+    assert {c.verdict for c in result.cells} <= {Verdict.OK, Verdict.OTHER, Verdict.NA}
+    assert sum(c.verdict == Verdict.OK for c in result.cells) >= 8
