@@ -34,8 +34,7 @@ from prima.batch import (
     Pool,
     ResultsFile,
     bundle_scenario,
-    chunk_size,
-    dispatch,
+    collect,
     number,
     pool_for,
     write_variant,
@@ -223,27 +222,8 @@ def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
     job = Job(bundle_scenario(source, switches), runs, seed, jitter, thresholds)
     result = Sweep(source, name, runs, jitter, seed, thresholds, keep=keep, switches=switches)
     out = ResultsFile(results, results_header("sweep", [job], [name])) if results else None
-    skip = 0
-    if out is not None and resume:
-        for record in out.previous([runs]):
-            result.add(record)
-            skip += 1
-    if out is not None:
-        out.open(resume=resume)
-    pool = pool or pool_for(None, jobs, runs - skip)
-    size = chunk_size(runs - skip, pool.workers, pool.chunk)
-    try:
-        for record in dispatch([job], pool, size=size, skip=skip,
-                               progress=None if progress is None
-                               else (lambda done: progress(done, runs))):
-            result.add(record)
-            if out is not None:
-                out.write(record)
-    except KeyboardInterrupt:
-        result.interrupted = True
-    finally:
-        if out is not None:
-            out.close()
+    result.interrupted = collect([job], result.add, out=out, resume=resume, progress=progress,
+                                 pool=lambda left: pool or pool_for(None, jobs, left))
     return result
 
 

@@ -11,7 +11,16 @@ sent again. :class:`ResultsFile` writes them as they come and reads them back to
 resume a batch.
 """
 
-from prima.batch._dispatch import CHUNK, Inline, Pool, Processes, chunk_size, dispatch, plan
+from prima.batch._dispatch import (
+    CHUNK,
+    Inline,
+    Pool,
+    Processes,
+    chunk_size,
+    collect,
+    dispatch,
+    plan,
+)
 from prima.batch._pools import executor_problem, pool_for
 from prima.batch._results import ResultsFile
 from prima.batch._variants import (
@@ -39,6 +48,7 @@ __all__ = [
     "ResultsFile",
     "bundle_scenario",
     "chunk_size",
+    "collect",
     "dispatch",
     "executor_problem",
     "number",

@@ -22,9 +22,10 @@ import signal
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol
 
+from prima.batch._results import ResultsFile
 from prima.batch._work import Chunk, Job, run_chunk
 
-__all__ = ["CHUNK", "Inline", "Pool", "Processes", "chunk_size", "dispatch", "plan"]
+__all__ = ["CHUNK", "Inline", "Pool", "Processes", "chunk_size", "collect", "dispatch", "plan"]
 
 CHUNK = 50
 """Runs per task at most: a Dask task costs about 3 ms against a run's 50-130 ms."""
@@ -275,3 +276,37 @@ def dispatch(jobs: Sequence[Job], pool: Pool, *, size: int, skip: int = 0,
         pool.stop()
         raise
     pool.close()
+
+
+def collect(jobs: Sequence[Job], take: Callable[[Record], None], *,
+            pool: Callable[[int], Pool], out: ResultsFile | None = None,
+            resume: bool = False,
+            progress: Callable[[int, int], None] | None = None) -> bool:
+    """Every run's record of ``jobs`` to ``take``, in the order of the runs, and to the
+    results file ``out`` as it comes; with ``resume``, the records ``out`` holds already
+    are taken first and their runs not run again. ``pool(runs_left)`` gives the pool;
+    ``progress(done, total)`` is called as runs finish. True if Ctrl-C stopped it
+    (what was taken is the batch's first runs)."""
+    total = sum(j.runs for j in jobs)
+    skip = 0
+    if out is not None and resume:
+        for record in out.previous([j.runs for j in jobs]):
+            take(record)
+            skip += 1
+    if out is not None:
+        out.open(resume=resume)
+    chosen = pool(total - skip)
+    size = chunk_size(total - skip, chosen.workers, chosen.chunk)
+    try:
+        for record in dispatch(jobs, chosen, size=size, skip=skip,
+                               progress=None if progress is None
+                               else (lambda done: progress(done, total))):
+            take(record)
+            if out is not None:
+                out.write(record)
+    except KeyboardInterrupt:
+        return True
+    finally:
+        if out is not None:
+            out.close()
+    return False

@@ -18,13 +18,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from prima.batch import Job, Pool, ResultsFile, bundle_scenario, chunk_size, dispatch, pool_for
+from prima.batch import Job, Pool, ResultsFile, bundle_scenario, collect, pool_for
 from prima.check._coverage import Coverage
 from prima.check._observe import CheckAnalysis
 from prima.check._visits import VISITS, Visit, map_for, visit_scenario
 from prima.dsl import Document, load_document, load_profile
 from prima.errors import LocatedError
 from prima.judge import Thresholds
+from prima.output import make_folder
 from prima.sim import WorldMap, load_map, load_scenario
 from prima.sweep import SweepRun, results_header, write_variant
 
@@ -293,11 +294,9 @@ def _run(result: Check, pool: Pool | None, results: str | Path | None, resume: b
             owners.append((cell, number))
             jobs.append(scenario.job)
             names.append(f"{cell.fa.name} {cell.robot.name} {scenario.name}")
-    total = sum(j.runs for j in jobs)
     if not jobs:
         return
     out = ResultsFile(results, results_header("check", jobs, names)) if results else None
-    skip = 0
 
     def take(record: Mapping[str, Any]) -> None:
         cell, number = owners[int(record["job"])]
@@ -306,26 +305,9 @@ def _run(result: Check, pool: Pool | None, results: str | Path | None, resume: b
         if coverage:
             result.coverage.add(coverage)
 
-    if out is not None and resume:
-        for record in out.previous([j.runs for j in jobs]):
-            take(record)
-            skip += 1
-    if out is not None:
-        out.open(resume=resume)
-    pool = pool or pool_for(None, None, total - skip)
-    size = chunk_size(total - skip, pool.workers, pool.chunk)
-    try:
-        for record in dispatch(jobs, pool, size=size, skip=skip,
-                               progress=None if progress is None
-                               else (lambda done: progress(done, total))):
-            take(record)
-            if out is not None:
-                out.write(record)
-    except KeyboardInterrupt:
+    if collect(jobs, take, out=out, resume=resume, progress=progress,
+               pool=lambda left: pool or pool_for(None, None, left)):
         result.interrupted = True
-    finally:
-        if out is not None:
-            out.close()
 
 
 def _write_worst(result: Check, folder: Path, k: int) -> None:
@@ -335,7 +317,7 @@ def _write_worst(result: Check, folder: Path, k: int) -> None:
     for cell in result.cells:
         if cell.verdict not in (Verdict.EA, Verdict.OTHER):
             continue
-        folder.mkdir(parents=True, exist_ok=True)
+        make_folder(folder)
         switches = Switches(str(cell.fa), str(result.ea), str(cell.robot))
         for _rank, number, run in cell.worst[:k]:
             scenario = cell.scenarios[number]
