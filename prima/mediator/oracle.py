@@ -803,10 +803,12 @@ class Oracle:
                 if not any(n.app != d.app and n.priority >= prio and devices & set(n.devices)
                            and n.ab not in gone for n in rivals + fresh):
                     self._uncontended.add(d.ab)
-                elif d.ab in self.streams.replies and (
+                elif (d.ab in self.streams.replies
+                      or not self.streams.before_replies.isdisjoint(d.command_ids)) and (
                         d.app in prev.snap.demoted or d.app in v.snap.demoted):
                     # the words that reply to an answer go first past the share too
-                    # (7.4): one AB per answer the user gave, the user's pace
+                    # (7.4): one AB per answer the user gave, the user's pace (and what
+                    # a policy put before them: each iteration of a return)
                     self._uncontended.add(d.ab)
                 gone.add(d.ab)
 
@@ -827,7 +829,7 @@ class Oracle:
         # (a demoted app's reply goes first past its share, and its turn before it, 7.4:
         # what is kept for it is not a precedence taken within the share)
         excused = {r.ab for r in v.nexts
-                   if r.ab in self.streams.replies and r.app in v.snap.demoted}
+                   if self.streams.replying(r) and r.app in v.snap.demoted}
         self._took.update(v.snap.t, _keeping(v, self._uncontended, excused))
         self._demoted.update(v.snap.t, v.snap.demoted)
 
