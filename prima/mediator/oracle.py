@@ -489,8 +489,8 @@ class Oracle:
             self._check_outranked(self._prev, v, new)
             self._contention(self._prev, v, new)
         # (what waits out the robot's pause after a false interruption may wait)
-        left = [ab for ab in _left_waiting(v)
-                if self._resting.get(ab, snap.t) <= snap.t + self._tolerance]
+        # (exactly: the pause ends at the clock's own sum, which the mediator compares)
+        left = [ab for ab in _left_waiting(v) if self._resting.get(ab, snap.t) <= snap.t]
         if left:
             self.fail(f"t={snap.t:g}: AB{left[0]} could start but waits "
                       f"({self._describe(v, left[0])})")
