@@ -4,7 +4,6 @@ long as the run says them, and ``prima show --audio``'s page playing them in Chr
 from __future__ import annotations
 
 import io
-import shutil
 import time
 import wave
 from collections.abc import Iterator
@@ -17,6 +16,7 @@ from prima.audio import OUTPUT_RATE, available, clip, utterances, wav
 from prima.cli import main
 from prima.dsl import default_profile
 from prima.run import Run, spec_from_profile
+from tests.browser import headless_chromium
 
 if available() is not None:
     pytest.skip(f"{available()} (.ci/run installs it)", allow_module_level=True)
@@ -25,7 +25,6 @@ ROOT = Path(__file__).parents[1]
 SAMPLE_10 = ROOT / "scenarios" / "thesis" / "sample-10.xml"
 INTERRUPT = ROOT / "scenarios" / "policies" / "interrupt-on.xml"
 MODEL = spec_from_profile(default_profile()).speech_duration
-CHROMIUM, CHROMEDRIVER = shutil.which("chromium"), shutil.which("chromedriver")
 
 
 def _rows(scenario: Path) -> list[dict[str, Any]]:
@@ -71,25 +70,8 @@ def test_a_clip_lasts_exactly_its_utterance_and_is_the_same_every_time() -> None
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    if not (CHROMIUM and CHROMEDRIVER):
-        pytest.skip("Chromium and its driver are not installed (apt-get install chromium "
-                    "chromium-driver; .ci/run does)")
-    webdriver = pytest.importorskip("selenium.webdriver")
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
-
-    options = Options()
-    options.binary_location = CHROMIUM
-    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
-                     "--disable-background-networking", "--disable-dev-shm-usage",
-                     "--autoplay-policy=no-user-gesture-required", "--window-size=1400,1000"):
-        options.add_argument(argument)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(options=options, service=Service(CHROMEDRIVER))
-    try:
-        yield driver
-    finally:
-        driver.quit()
+    yield from headless_chromium("--disable-background-networking",
+                                 "--autoplay-policy=no-user-gesture-required")
 
 
 def _sounds(browser: Any, page: Path) -> list[dict[str, Any]]:

@@ -66,24 +66,16 @@ class _Backwards(concurrent.futures.Executor):
         self.held = []
 
 
-class _BackwardsPool:
+class _BackwardsPool(Inline):
+    """Inline's pool, with two workers whose tasks finish in the wrong order."""
+
     workers = 2
-    chunk = 1
 
     def __init__(self, total: int) -> None:
         self.made = _Backwards(total)
 
     def executor(self) -> concurrent.futures.Executor:
         return self.made
-
-    def broken(self, exc: BaseException) -> bool:
-        return False
-
-    def stop(self) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
 
 
 def test_records_come_in_the_order_of_the_runs_whatever_order_they_finish() -> None:

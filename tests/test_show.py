@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import io
-import shutil
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,12 +15,12 @@ from prima.cli import main
 pytest.importorskip("plotly", reason="prima show needs the show extra (plotly)")
 
 from prima.show import read_rows, render  # noqa: E402 - after the skip
+from tests.browser import headless_chromium
 
 ROOT = Path(__file__).parents[1]
 SCENARIOS = sorted(p for folder in ("thesis", "policies", "examples")
                    for p in (ROOT / "scenarios" / folder).glob("*.xml"))
 SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"
-CHROMIUM, CHROMEDRIVER = shutil.which("chromium"), shutil.which("chromedriver")
 
 
 def _cli(*argv: str) -> tuple[int, str]:
@@ -156,24 +155,7 @@ def test_usage_errors(argv: list[str], message: str, monkeypatch: pytest.MonkeyP
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    if not (CHROMIUM and CHROMEDRIVER):
-        pytest.skip("Chromium and its driver are not installed (apt-get install chromium "
-                    "chromium-driver; .ci/run does)")
-    webdriver = pytest.importorskip("selenium.webdriver")
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
-
-    options = Options()
-    options.binary_location = CHROMIUM
-    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
-                     "--disable-dev-shm-usage", "--window-size=1400,1000"):
-        options.add_argument(argument)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(options=options, service=Service(CHROMEDRIVER))
-    try:
-        yield driver
-    finally:
-        driver.quit()
+    yield from headless_chromium()
 
 
 def _open(browser: Any, scenario: Path, folder: Path) -> list[dict[str, Any]]:
