@@ -546,9 +546,7 @@ class Mediator:
                 finally:
                     taker.fresh = False
                 return
-            missed = Event(NOMATCH_EVENT, {"words": words}, now)
-            for app in list(self._apps.values()):
-                self._call(app, lambda listener: listener.event(missed), "event")
+            self.post(Event(NOMATCH_EVENT, {"words": words}, now))  # (every app sees it)
 
     def _talking(self) -> list[Node]:
         """The running ABs with words this robot can stop (an interruptible Command that

@@ -323,21 +323,25 @@ class Simulator:
                 started = True
                 if said[0] <= now < said[0] + said[2]:
                     return self.cut(ab_id)
-        if started or not any(c.command in self.catalog
-                              and self.catalog[c.command].spoken(c.args) for c in ab.calls):
+        if started or not self._words(ab):
             return False
         self._cutting.add(ab_id)
         self._hushed.add(ab_id)  # (:meth:`utter` cuts it as its words would begin)
         return True
 
-    def _boundary(self, ab: AtomicBehavior) -> tuple[int, str, str] | None:
-        """When to cut ``ab`` and the words it will have said and not said then."""
-        now = self.kernel.tick
+    def _words(self, ab: AtomicBehavior) -> list[str]:
+        """Every word ``ab`` says, in order (its Commands' words said, split)."""
         words: list[str] = []
         for call in ab.calls:
             spec = self.catalog.get(call.command)
             for text in spec.spoken(call.args) if spec is not None else ():
                 words += text.split()
+        return words
+
+    def _boundary(self, ab: AtomicBehavior) -> tuple[int, str, str] | None:
+        """When to cut ``ab`` and the words it will have said and not said then."""
+        now = self.kernel.tick
+        words = self._words(ab)
         for cid in ab.command_ids:
             said = self._speech.get(cid)
             if said is None:
@@ -381,8 +385,7 @@ class Simulator:
                        if command_id in a.command_ids and a.id in self._hushed), None)
             if ab is not None:
                 self._hushed.discard(ab.id)
-                words = " ".join(w for c in ab.calls if c.command in self.catalog
-                                 for w in self.catalog[c.command].spoken(c.args))
+                words = " ".join(self._words(ab))
                 self.kernel.at(self.kernel.tick, lambda: self._cut_now(ab, "", words))
                 return
         ends = None
