@@ -743,8 +743,13 @@ class Oracle:
         # pending before it; it may have started since) may have been a reaction's next
         # AB, keeping its devices, while the operation's rounds ran (the ABs before it
         # ended meanwhile): what it kept then was no rival.
-        were_next = [n for n in v.nodes.values()
-                     if n.state is not NodeState.PENDING
+        # So may one pending before it and cancelled within it (its app unloaded
+        # after the rounds that kept its devices).
+        cancelled = [prev.nodes[d.ab] for d in new if d.kind is DecisionKind.CANCEL
+                     and d.ab is not None and d.ab in prev.nodes and d.ab not in v.nodes
+                     and prev.nodes[d.ab].state is NodeState.PENDING]
+        were_next = [n for n in [*v.nodes.values(), *cancelled]
+                     if (n.state is not NodeState.PENDING or n in cancelled)
                      and (n.ab not in prev.nodes or prev.nodes[n.ab].state is NodeState.PENDING)
                      and (n.tree in self.streams.reaction or self.streams.replying(n))]
         # A move is held while another app talks: one that talked within the operation

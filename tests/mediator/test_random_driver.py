@@ -199,7 +199,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
 @pytest.mark.parametrize("seed", [2102, 11446, 127444, 49640, 161195, 14252, 20281, 28347,
                                   587142, 5151, 6858, 14284, 38491, 40689, 63038, 117762,
                                   127791, 170836, 130517, 168125, 25391, 47859, 72202,
-                                  187334, 179257, 194091, 400414, 439133, 567432, 873008])
+                                  187334, 179257, 194091, 400414, 439133, 567432, 873008,
+                                  386988, 939197, 1000000000111027])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -244,7 +245,14 @@ def test_seeds_that_once_failed(seed: int) -> None:
     its precedence, the ABs its reaction's next AB now keeps were not looked at, and one
     still reserved a device it could not have. 567432: the oracle took a return put
     before a reply's later iteration for part of the reply. 873008: a move held back
-    while another app said something that took no time was judged a rival."""
+    while another app said something that took no time was judged a rival. 386988:
+    each iteration of a return put before a demoted app's reply goes first past the
+    share, as the reply does. 939197: a restart's pause ends exactly when the
+    mediator's clock says (1.1 + 0.6), not within a tolerance. 1000000000111027: a
+    reaction's next AB kept the speaker from another app's AB, which stepped aside (it
+    reserves nothing) so the reaction's own move took the wheels, and then the app was
+    unloaded in the same operation, cancelling that next AB: the oracle judged the move
+    by what held after the unload."""
     assert play(seed).violations == []
 
 
