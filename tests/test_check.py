@@ -137,7 +137,36 @@ def test_a_visit_answers_from_the_grammars_and_sends_what_the_ea_listens_for(
     assert reply.get("to") == "cafe" and reply.get("text", "").startswith("reserved")
     actions = [etree.QName(a).localname for a in root.find("s:user", ns) if
                etree.QName(a).localname != "answer"]
-    assert actions == ["follow", "touch", "leave", "follow", "touch"]
+    assert actions == ["follow", "touch", "leave", "follow", "say", "touch"]
+    (remark,) = root.iterfind("s:user/s:say", ns)  # (FA1 answers its name at any time)
+    assert (remark.get("at"), remark.get("text")) == ("115", "Papero.")
+
+
+@pytest.mark.parametrize("visitor, said", [
+    ("willing", [("115", "Toilet."), ("127", "Stop."), ("139", "Repeat that."),
+                 ("151", "Papero.")]),
+    ("declining", [("115", "Exit."), ("127", "Stop."), ("139", "Repeat that."),
+                   ("151", "Papero.")]),
+    ("hesitant", [("115", "Uh-huh.")]),
+    ("silent", [])])
+def test_a_visitor_speaks_of_their_own_accord_to_what_the_apps_hear_at_any_time(
+        visitor: str, said: list[tuple[str, str]]) -> None:
+    """EA1 listens for a place at any time (its places grammar: the willing visitor says
+    the first, the declining one the last) and for "stop" and "repeat" (its handlers
+    look for those answers: both said); FA1 for its name. In time order with the
+    second touch (135 s)."""
+    ea_path = ROOT / "apps" / "ea" / "ea1-museum.pxml"
+    fa_path = ROOT / "apps" / "fa" / "fa1-emotions.pxml"
+    ea = load_document(ea_path, default_profile())
+    fa = load_document(fa_path, default_profile())
+    world = map_for(ea, [(MAPS / "museum.xml", load_map(MAPS / "museum.xml"))])
+    assert world is not None
+    root = etree.fromstring(visit_scenario(Visit(visitor), ea, fa, world,
+                                           (ea_path, fa_path)).encode())
+    ns = {"s": "urn:prima:scenario:1"}
+    assert [(a.get("at"), a.get("text")) for a in root.iterfind("s:user/s:say", ns)] == said
+    times = [float(a.get("at", "0")) for a in root.find("s:user", ns) if a.get("at")]
+    assert times == sorted(times)
 
 
 def test_no_map_with_the_eas_places_is_a_usage_error(tmp_path: Path) -> None:

@@ -5,7 +5,8 @@ every place the EA names), the robot at its entrance, and a visitor who stands b
 it, follows it, answers both applications' questions from their own grammars,
 touches the robot, walks away to the far end of the building and comes back; a
 message from each sender the EA listens for, a server's reply to what either
-application sends, a sound either one listens for. Four visitors: a *willing* one
+application sends, a sound either one listens for, and words said of the visitor's
+own accord to what either application hears at any time. Four visitors: a *willing* one
 who answers every question at once, each time with the grammar's next choice (the
 first, then the second, ..., then the last again), a *declining* one who goes
 through the choices the other way round (the last first), a *hesitant* one who
@@ -32,6 +33,9 @@ VISITS = ("willing", "declining", "hesitant", "silent")
 
 NOMATCH = "Banana."
 """What the hesitant visitor first says: no grammar expects it."""
+
+BACKCHANNEL = "Uh-huh."
+"""What the hesitant visitor says of their own accord: a backchannel."""
 
 
 @dataclass(frozen=True)
@@ -107,6 +111,30 @@ def listens(document: Document, event: str, field: str) -> list[str]:
         for value in values or [""]:
             if value not in found:
                 found.append(value)
+    return found
+
+
+def remarks(document: Document, visitor: str) -> list[str]:
+    """What the visitor says of their own accord to what the document listens for at any
+    time (its ``<on event="speech" match="G">`` handlers): for a handler that looks for
+    some of G's answers (``event.answer == 'stop'``), one phrase of each; otherwise G's
+    first choice (the declining visitor: its last). In document order, each once."""
+    found: list[str] = []
+    for h in handlers(document):
+        if h.kind is not HandlerKind.EVENT or h.key != "speech" or h.match is None:
+            continue
+        grammar = document.grammars.get(h.match)
+        if grammar is None:
+            continue
+        wanted = _compared(h.cond.source, "answer") if h.cond is not None else []
+        choices = [c for c in grammar.choices if c.phrases
+                   and (not wanted or c.value in wanted)]
+        if not wanted:
+            choices = choices[-1:] if visitor == "declining" else choices[:1]
+        for choice in choices:
+            said = " ".join(choice.phrases[0]).capitalize() + "."
+            if said not in found:
+                found.append(said)
     return found
 
 
@@ -238,6 +266,28 @@ def _answer_rules(qs: list[tuple[str, list[str]]], visitor: str) -> list[str]:
     return rules
 
 
+def _user_actions(visit: Visit, far: str, said: list[str]) -> list[str]:
+    """The visitor's actions in time order: follow, touch, walk away to ``far``, come back,
+    touch again; and their own words (``said``) from 115 s on, 12 s apart, up to 10 s
+    before the end (on a robot that hears at any time, often over what it is saying: a
+    barge-in). The hesitant visitor's only words are "Uh-huh." (a backchannel), the
+    silent one says nothing."""
+    actions = [(2.0, "follow", ' distance="1.2"'), (30.0, "touch", ""),
+               (75.0, "leave", f" to={quoteattr(far)}"),
+               (100.0, "follow", ' distance="1.2"'), (135.0, "touch", "")]
+    if visit.visitor == "hesitant":
+        said = [BACKCHANNEL]
+    elif visit.visitor == "silent":
+        said = []
+    for k, words in enumerate(said):
+        if 115.0 + 12.0 * k > 170.0:
+            break
+        actions.append((115.0 + 12.0 * k, "say", f" text={quoteattr(words)}"))
+    actions.sort(key=lambda a: a[0])  # (stable: a touch before words said at its time)
+    t = visit.until / 180.0  # (the times are for a visit of 180 s)
+    return [f'    <{kind} at="{at * t:g}"{rest}/>' for at, kind, rest in actions]
+
+
 def visit_scenario(visit: Visit, ea: Document, fa: Document, world: tuple[Path, WorldMap],
                    paths: tuple[Path, Path]) -> str:
     """The visit's scenario file (its file names absolute: ``paths`` are the EA's and the
@@ -260,11 +310,8 @@ def visit_scenario(visit: Visit, ea: Document, fa: Document, world: tuple[Path, 
         f'  <robot place="{place}" heading="{heading:g}"/>',
         f'  <user x="{ux:g}" y="{uy:g}" heading="{round(facing, 1):g}" speed="0.4">',
         *_answer_rules(questions(ea) + questions(fa), visit.visitor),
-        f'    <follow at="{2 * t:g}" distance="1.2"/>',
-        f'    <touch at="{30 * t:g}"/>',
-        f'    <leave at="{75 * t:g}" to="{far.name}"/>',
-        f'    <follow at="{100 * t:g}" distance="1.2"/>',
-        f'    <touch at="{135 * t:g}"/>',
+        *_user_actions(visit, far.name, [r for doc in (ea, fa)
+                                         for r in remarks(doc, visit.visitor)]),
         "  </user>",
     ]
     for k, sender in enumerate(s for s in listens(ea, "message", "sender") if s):

@@ -377,9 +377,19 @@ class Selector:
             if on:
                 for r in on.values():
                     if r.app is not x.app and (found is None or r.id < found.id) \
-                            and keeps_for(r, x):
+                            and keeps_for(r, x) and not self._held_by(r, x.app):
                         found = r
         return found
+
+    def _held_by(self, r: Node, app: App) -> bool:
+        """Whether the reaction's next AB ``r`` waits behind an AB that ``app``'s block or
+        stream hold keeps: then it keeps nothing from ``app``, whose block must go on
+        for it to start (they would wait for each other)."""
+        before = self._wm.nodes.get(r.parent) if r.parent is not None else None
+        if before is None or before.state is not _WAITING:
+            return False
+        held = self._holds.holder(before)
+        return held is not None and held[1] is app and held[0] is not _KEEP_CHANNEL
 
     def _step_aside(self, y: Node) -> bool:
         """``y`` ranks best on a device another AB asks for, but it is kept for another

@@ -158,9 +158,17 @@ class _View:
         for r in self.nexts if nexts is None else nexts:
             theirs = self.standing(r)
             if r.app != n.app and set(r.devices) & set(n.devices) \
-                    and theirs[0] <= mine[0] and theirs[1:] < mine[1:]:
+                    and theirs[0] <= mine[0] and theirs[1:] < mine[1:] \
+                    and not self.behind_hold(r, n.app):
                 return r
         return None
+
+    def behind_hold(self, r: NodeView, app: str) -> bool:
+        """The next AB ``r`` waits behind an AB that ``app``'s block or stream hold keeps:
+        it keeps nothing from ``app`` (they would wait for each other)."""
+        before = self.nodes.get(r.parent) if r.parent is not None else None
+        return before is not None and before.state is NodeState.WAITING \
+            and app in self.holders(before)
 
     def keepers(self, n: NodeView, excused: Collection[AbId] = ()) -> list[str]:
         """The apps whose reaction's (or reply's) next AB keeps a device from ``n``
@@ -168,7 +176,8 @@ class _View:
         mine = self.standing(n)
         return [r.app for r in self.nexts
                 if r.app != n.app and r.ab not in excused and set(r.devices) & set(n.devices)
-                and (theirs := self.standing(r))[0] <= mine[0] and theirs[1:] < mine[1:]]
+                and (theirs := self.standing(r))[0] <= mine[0] and theirs[1:] < mine[1:]
+                and not self.behind_hold(r, n.app)]
 
     def channel_held(self, n: NodeView) -> bool:
         """A Command that breaks the channel waits while another app talks."""
@@ -769,8 +778,8 @@ class Oracle:
                 if w.app == x.app or not set(w.devices) & set(x.devices):
                     continue
                 theirs = v.standing(w)
-                if (theirs[0] <= mine[0] and theirs[1:] < mine[1:]) if w in nexts \
-                        else theirs < mine:
+                if (theirs[0] <= mine[0] and theirs[1:] < mine[1:]
+                        and not v.behind_hold(w, x.app)) if w in nexts else theirs < mine:
                     self.fail(f"t={d.t:g}: AB{x.ab} ({x.app} {x.command}) started on "
                               f"{', '.join(sorted(set(w.devices) & set(x.devices)))}, which "
                               f"AB{w.ab} ({w.app} {w.command}, {w.state.value}) outranks it "

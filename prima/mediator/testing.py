@@ -38,7 +38,7 @@ from prima.mediator._interface import (
 )
 from prima.mediator._mediator import Mediator, MediatorConfig
 from prima.mediator._ranking import outranks, rank
-from prima.mediator._state import NodeState
+from prima.mediator._state import Node, NodeState
 from prima.vocab import AppKind, Value
 
 __all__ = ["Harness", "ScriptedApp", "ScriptedDriver", "feedback_iterations", "plain_scan"]
@@ -278,13 +278,23 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
         if held is not None and held[0] is not Rule.KEEP_CHANNEL:
             continue  # held by a block or stream hold: it reserves nothing
         kept = any(r.app is not n.app and r.devices & n.devices and outranks(r, n)
-                   for r in nexts)
+                   and not _behind_hold(mediator, r, n) for r in nexts)
         if n.devices & busy or n.devices & reserved or held is not None or kept:
             reserved |= n.devices
             continue
         out.append(n.id)
         busy |= n.devices
     return out
+
+
+def _behind_hold(mediator: Mediator, r: Node, n: Node) -> bool:
+    """The next AB ``r`` waits behind an AB that ``n``'s app's block or stream hold
+    keeps: it keeps nothing from that app."""
+    before = mediator._wm.nodes.get(r.parent) if r.parent is not None else None
+    if before is None or before.state is not NodeState.WAITING:
+        return False
+    held = mediator._holds.holder(before)
+    return held is not None and held[1] is n.app and held[0] is not Rule.KEEP_CHANNEL
 
 
 _SAID = ("text", "prompt", "say")

@@ -2,7 +2,8 @@
 that it fails when its mechanism is taken out (checked once by taking it out).
 
 - 7.1: a reaction keeps the devices its next AB needs, also while that AB waits for
-  the reaction's own StopMoving or for a turn to the user put before it;
+  the reaction's own StopMoving or for a turn to the user put before it, but not from
+  the application whose block holds the reaction back;
 - 7.1: a reaction to the user's own action is not overtaken by another application's
   later reaction to a perception event until its first words are said in full;
 - 7.4: words that reply to an answer go before every other application's talk,
@@ -132,6 +133,35 @@ def test_a_reactions_words_keep_the_speaker_while_the_robot_turns_to_the_user() 
     asked = [t for t, said in text_starts(h, "ea") if said == "May I go on?"]
     assert turn.t == 2.0 and words == 3.5  # the EA's words end at 2.0; the turn takes 1.5
     assert asked[0] >= words + 2.0
+
+
+def test_a_reaction_held_by_a_block_keeps_nothing_from_the_blocks_app() -> None:
+    """7.1 beside 6c: the EA's reaction to a message arrives inside the FA's block (FA4's
+    picture dialogue): its first words are held until the block closes, so its next AB
+    keeps the speaker from the other apps meanwhile, but not from the FA, whose block
+    must go on for the reaction to start at all (else each waits for the other until
+    the EA's wait share runs out, the check's fa4-picture cell beside the cafe EA)."""
+    h = Harness(duration=2.0)
+    m = h.mediator
+
+    def react(e: Event) -> None:
+        if e.name == "message":  # (not the news of its own words held)
+            m.submit(Request("ea", (speak("A word from the cafe."),
+                                    speak("Shall I keep a table?")),
+                             reactive=True, reaction=True))
+
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA, on_event=react)
+    m.open_block("fa", watchdog=100.0)
+    m.submit(Request("fa", (speak("Which direction should I turn?"),)))
+    h.at(1.0, lambda: m.post(Event("message")))
+    h.at(2.5, lambda: m.submit(Request("fa", (speak("I just sent a picture."),))))
+    h.at(6.0, lambda: m.close_block("fa"))
+    h.run(until=20.0)
+    assert first(h, "fa", "I just sent a picture.") == 2.5
+    assert text_starts(h, "ea") == [(6.0, "A word from the cafe."),
+                                    (8.0, "Shall I keep a table?")]
+    assert [d.app for d in h.kinds(DecisionKind.HOLD)] == ["ea"]  # (the block, once)
 
 
 # ---------------------------------------------------------------- 7.1: the user's own action
