@@ -153,15 +153,26 @@ class Holds:
         if not self.opened:
             return None
         for other in self._apps.values():
-            if other is node.app or other.demoted:
-                continue
-            blk = self._blocks.get(other.name)
-            if blk is not None and blk.reserving and not node.devices.isdisjoint(blk.devices):
-                return _BLOCK, other
-            st = self._streams.get(other.name)
-            if (st is not None and st.armed and _new_stream(node.tree)
-                    and not node.devices.isdisjoint(st.devices)):
-                return _STREAM_HOLD, other
+            rule = self._holds_back(other, node)
+            if rule is not None:
+                return rule, other
+        return None
+
+    def holds_back(self, app: App, node: Node) -> bool:
+        """Whether ``app``'s block or armed stream hold keeps ``node`` from starting
+        (whatever the channel rule does meanwhile)."""
+        return self.opened and self._holds_back(app, node) is not None
+
+    def _holds_back(self, other: App, node: Node) -> Rule | None:
+        if other is node.app or other.demoted:
+            return None
+        blk = self._blocks.get(other.name)
+        if blk is not None and blk.reserving and not node.devices.isdisjoint(blk.devices):
+            return _BLOCK
+        st = self._streams.get(other.name)
+        if (st is not None and st.armed and _new_stream(node.tree)
+                and not node.devices.isdisjoint(st.devices)):
+            return _STREAM_HOLD
         return None
 
     # ----------------------------------------------------------- streams, blocks
@@ -294,7 +305,8 @@ class Holds:
             self._reserve_parked.append(node)
         else:
             self._parked.append(node)
-        if node.id not in self._kept:
+        if node.id not in self._kept and holder is not node.app:
+            # (kept for its own app's reaction: no other application keeps it waiting)
             self._kept[node.id] = holder.name
             self.keeping[holder.name] = self.keeping.get(holder.name, 0) + 1
 
@@ -400,6 +412,9 @@ class Holds:
         their ABs there: the ABs it parks, not the whole waiting list."""
         wm = self._wm
         wm.dirty.update(devices)
+        # (a reaction's next AB that waits behind what the hold keeps keeps nothing from
+        # the holder any more: what it kept is looked at again)
+        self.refile_reserved()
         found: dict[AbId, Node] = {}
         for d in devices:
             for tree, nodes in wm.on.get(d, {}).items():

@@ -167,6 +167,13 @@ class _Round:
         return heaps
 
 
+def _before(r: Node, found: Node, x: Node) -> bool:
+    """Of two next ABs that keep a device from ``x``, the one named for it: another
+    application's before one of ``x``'s own (that one is charged for the wait), then
+    the oldest."""
+    return (r.app is x.app, r.id) < (found.app is x.app, found.id)
+
+
 class Selector:
     """Runs selection rounds and hands the ABs they start to the driver."""
 
@@ -376,7 +383,7 @@ class Selector:
             on = reserving.get(d)
             if on:
                 for r in on.values():
-                    if r.app is not x.app and (found is None or r.id < found.id) \
+                    if r.tree is not x.tree and (found is None or _before(r, found, x)) \
                             and keeps_for(r, x) and not self._held_by(r, x.app):
                         found = r
         return found
@@ -386,10 +393,8 @@ class Selector:
         stream hold keeps: then it keeps nothing from ``app``, whose block must go on
         for it to start (they would wait for each other)."""
         before = self._wm.nodes.get(r.parent) if r.parent is not None else None
-        if before is None or before.state is not _WAITING:
-            return False
-        held = self._holds.holder(before)
-        return held is not None and held[1] is app and held[0] is not _KEEP_CHANNEL
+        return before is not None and before.state is _WAITING \
+            and self._holds.holds_back(app, before)
 
     def _step_aside(self, y: Node) -> bool:
         """``y`` ranks best on a device another AB asks for, but it is kept for another
@@ -500,7 +505,9 @@ class Selector:
         log = self._log
         log.ab(_START, rule, x, self._over(x) if x.blended else "")
         self._holds.started(x)  # a block it starts takes force: what it holds steps aside
-        if x.tree.suspended is not None:
+        if x.tree.suspended is not None or (later and any(
+                is_suspend and t is x.tree for is_suspend, t in later)):
+            # (suspended, or lost in this very round and now blended in after all)
             log.ab(_RESUME, rule, x, "resumed from the suspended IU")
             log.tell(x.app.name, "resumed", rule=rule.value)
             later.append((False, x.tree))

@@ -157,7 +157,7 @@ class _View:
         mine = self.standing(n)
         for r in self.nexts if nexts is None else nexts:
             theirs = self.standing(r)
-            if r.app != n.app and set(r.devices) & set(n.devices) \
+            if r.tree != n.tree and set(r.devices) & set(n.devices) \
                     and theirs[0] <= mine[0] and theirs[1:] < mine[1:] \
                     and not self.behind_hold(r, n.app):
                 return r
@@ -175,7 +175,7 @@ class _View:
         (but the ``excused`` ones)."""
         mine = self.standing(n)
         return [r.app for r in self.nexts
-                if r.app != n.app and r.ab not in excused and set(r.devices) & set(n.devices)
+                if r.tree != n.tree and r.ab not in excused and set(r.devices) & set(n.devices)
                 and (theirs := self.standing(r))[0] <= mine[0] and theirs[1:] < mine[1:]
                 and not self.behind_hold(r, n.app)]
 
@@ -294,7 +294,8 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
             # parking hold's doing; the others would keep nothing it did not.
             holders = v.holders(n)
             if not holders:  # kept for another app's reaction (7.1): its precedence
-                holders = v.keepers(n, excused)
+                # (its own app's reaction keeps no other application waiting)
+                holders = [a for a in v.keepers(n, excused) if a != n.app]
             out.update([n.parked_by] if n.parked_by in holders else holders)
     for d, ws in wanting.items():
         holder = v.busy.get(d) or ws[0]
@@ -775,7 +776,8 @@ class Oracle:
             x = v.nodes[d.ab if d.ab is not None else -1]
             mine = v.standing(x)
             for w in rivals + nexts:
-                if w.app == x.app or not set(w.devices) & set(x.devices):
+                if (w.tree == x.tree if w in nexts else w.app == x.app) \
+                        or not set(w.devices) & set(x.devices):
                     continue
                 theirs = v.standing(w)
                 if (theirs[0] <= mine[0] and theirs[1:] < mine[1:]

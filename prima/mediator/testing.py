@@ -277,7 +277,7 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
         held = mediator._holds.holder(n)
         if held is not None and held[0] is not Rule.KEEP_CHANNEL:
             continue  # held by a block or stream hold: it reserves nothing
-        kept = any(r.app is not n.app and r.devices & n.devices and outranks(r, n)
+        kept = any(r.tree is not n.tree and r.devices & n.devices and outranks(r, n)
                    and not _behind_hold(mediator, r, n) for r in nexts)
         if n.devices & busy or n.devices & reserved or held is not None or kept:
             reserved |= n.devices
@@ -291,10 +291,8 @@ def _behind_hold(mediator: Mediator, r: Node, n: Node) -> bool:
     """The next AB ``r`` waits behind an AB that ``n``'s app's block or stream hold
     keeps: it keeps nothing from that app."""
     before = mediator._wm.nodes.get(r.parent) if r.parent is not None else None
-    if before is None or before.state is not NodeState.WAITING:
-        return False
-    held = mediator._holds.holder(before)
-    return held is not None and held[1] is n.app and held[0] is not Rule.KEEP_CHANNEL
+    return before is not None and before.state is NodeState.WAITING \
+        and mediator._holds.holds_back(n.app, before)
 
 
 _SAID = ("text", "prompt", "say")

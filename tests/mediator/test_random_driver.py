@@ -200,7 +200,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   587142, 5151, 6858, 14284, 38491, 40689, 63038, 117762,
                                   127791, 170836, 130517, 168125, 25391, 47859, 72202,
                                   187334, 179257, 194091, 400414, 439133, 567432, 873008,
-                                  386988, 939197, 1000000000111027])
+                                  386988, 939197, 1000000000111027, 2000000000132388,
+                                  2000000000038255, 2000000000078627, 2000000000174220])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -252,7 +253,16 @@ def test_seeds_that_once_failed(seed: int) -> None:
     reaction's next AB kept the speaker from another app's AB, which stepped aside (it
     reserves nothing) so the reaction's own move took the wheels, and then the app was
     unloaded in the same operation, cancelling that next AB: the oracle judged the move
-    by what held after the unload."""
+    by what held after the unload. 2000000000132388: a reaction's next AB (its words,
+    behind a turn to the user) kept the speaker from the other app's reaction, but not
+    from its own app's other stream: that app's restart of a cut question took the
+    speaker before both (7.1: it keeps them from its own app's other streams too).
+    2000000000038255: a reaction's next AB behind an AB another app's block keeps kept
+    that app's move waiting (they waited for each other; it keeps nothing from that app
+    now), also while the channel rule holds that AB too; 2000000000078627: the same when
+    the block took force after the AB was kept (what was kept is looked at again).
+    2000000000174220: a stream suspended in a round whose later start blended its own
+    next AB in stayed suspended while it ran (it is resumed at once now)."""
     assert play(seed).violations == []
 
 
