@@ -1,4 +1,4 @@
-"""The Command catalog: MISSION.md section 4 (thesis Table 4.2) as data.
+"""The Command catalog: docs/rules.md section 4 (thesis Table 4.2) as data.
 
 This is the one place that knows what a Command is: the devices its atomic
 behaviors occupy, whether it is a feedback loop (one AB per iteration), whether
@@ -438,7 +438,7 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
 
 @dataclass(frozen=True)
 class Blend:
-    """Commands a robot runs together on a shared device (MISSION.md 7.3 (5)): a
+    """Commands a robot runs together on a shared device (docs/rules.md 7.3 (5)): a
     local motion over a global one (a dance step while it guides), speech over
     quieter sound (ducking). Declared by the robot profile's ``<blend>``."""
 
@@ -472,7 +472,7 @@ class Catalog:
 
     def usually_interruptible(self) -> frozenset[str]:
         """What a robot that declares nothing can cut when the interrupt policy is
-        switched on: utterances, gestures and feedback iterations (MISSION.md 7.3
+        switched on: utterances, gestures and feedback iterations (docs/rules.md 7.3
         (2)); ``<interruptible>`` in a robot profile says otherwise."""
         return frozenset(c.name for c in self.commands.values()
                          if c.feedback or c.name == "Gesture"

@@ -1,6 +1,6 @@
 """A simulated run: documents, interpreters, the mediator and the simulator joined.
 
-Data flows one way at a time (MISSION.md section 2): the simulator's events
+Data flows one way at a time (docs/rules.md section 2): the simulator's events
 go to the mediator, which posts them to the interpreters; their requests go to
 the mediator, which starts atomic behaviors on the simulator's devices; the
 simulator reports each end back. The simulator is the clock. Every decision,
@@ -214,7 +214,7 @@ class Run:
         self.policies: Mapping[str, bool] = policy_settings(
             self.profile.policies, loaded.policies, policies or {})
         """Every mediation policy's state: the defaults, switched by the profile, the
-        scenario and the caller, in that order (MISSION.md 7.3)."""
+        scenario and the caller, in that order (docs/rules.md 7.3)."""
         self.fa_path = Path(fa) if fa else (loaded.resolve(loaded.fa) if loaded.fa else None)
         self.ea_path = Path(ea) if ea else (loaded.resolve(loaded.ea) if loaded.ea else None)
         self.ea_paths: list[Path] = ([self.ea_path] if self.ea_path else []) + [
@@ -562,7 +562,7 @@ class Run:
     def _event(self, event: Event) -> None:
         self._line(Kind.EVENT, text=event.name, detail=dict(event.data))
         if event.name == SPEECH_EVENT:
-            self.mediator.hear(event)  # to one application (MISSION.md 7.5)
+            self.mediator.hear(event)  # to one application (docs/rules.md 7.5)
         else:
             self.mediator.post(event)
 

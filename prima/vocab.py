@@ -145,7 +145,7 @@ one of its atomic behaviors (news about the application's own Command: not react
 
 SPEECH_EVENT = "speech"
 """What the robot heard the user say outside a Q&A, given to the one application whose
-always-on grammar takes it (MISSION.md 7.5): reactive, the user's own action."""
+always-on grammar takes it (docs/rules.md 7.5): reactive, the user's own action."""
 
 NOMATCH_EVENT = "nomatch"
 """What the robot heard the user say that no application took: every application
@@ -247,7 +247,7 @@ for its user (following them, say), five minutes out of six."""
 
 @dataclass(frozen=True)
 class Policy:
-    """A mediation policy (MISSION.md 7.3): one of the thesis' future functions,
+    """A mediation policy (docs/rules.md 7.3): one of the thesis' future functions,
     switched by the robot profile, the scenario and ``prima run --policy``."""
 
     name: str

@@ -1,4 +1,4 @@
-"""The user's voice (MISSION.md 7.5): speech heard at any time, always-on grammars and
+"""The user's voice (docs/rules.md 7.5): speech heard at any time, always-on grammars and
 which application takes the words, barge-in and backchannels, restart/resume/drop of
 what the user cut, false interruptions, news of a stream, and the judge's measures.
 

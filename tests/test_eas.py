@@ -1,4 +1,4 @@
-"""One FA and several EAs at once (MISSION.md 7.3 item 6): a building's guide beside
+"""One FA and several EAs at once (docs/rules.md 7.3 item 6): a building's guide beside
 a shop's app, from the start (``<apps><ea href/></apps>``) or joining on entering a
 zone (``<zone join="true">``), at most ``MAX_EAS``; their suspended streams resume
 most recent first."""

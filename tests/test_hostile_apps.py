@@ -109,7 +109,7 @@ def test_an_endless_chain_of_utterances_keeps_the_fa_waiting_only_its_share(
           <entry><chain>say2: Speak("And there is more to say.")</chain></entry>
           <on-end of="say2"><goto state="a"/></on-end>
         </state>''')
-    # The FA's reaction takes over at once (MISSION.md 7.1, 7.3 (2)): the home robot
+    # The FA's reaction takes over at once (docs/rules.md 7.1, 7.3 (2)): the home robot
     # cuts the EA's utterance under way at its next word boundary (10.4 s, 70.4 s),
     # long before the EA's wait share would run out.
     assert fa_reactions(lines) == [10.4, 70.4]
@@ -124,7 +124,7 @@ def test_a_stream_hold_re_armed_after_every_request_is_bounded(tmp_path: Path) -
           <on event="t"><chain>Speak("psst")</chain><timer name="t" after="4"/></on>
         </state></stream>''')
     first, second = fa_reactions(lines)
-    # a stream hold never holds back a reaction (MISSION.md 7.2): at most the "psst"
+    # a stream hold never holds back a reaction (docs/rules.md 7.2): at most the "psst"
     # under way
     assert first <= 10 + 1.0 and second <= 70 + 1.0
 
@@ -230,7 +230,7 @@ STORY = ("Once upon a time a small robot lived in an office. Every morning it gr
 
 
 def test_an_ea_that_reacts_over_and_over_cuts_the_fas_story_once(tmp_path: Path) -> None:
-    """MISSION.md 7.3 (2): an EA that pings its server and reacts to every reply with a
+    """docs/rules.md 7.3 (2): an EA that pings its server and reacts to every reply with a
     word (a reaction every 3.2 s) cuts the FA's story once; the story's restart is not
     cut again, so it is said whole, and it starts facing the user like any utterance
     (no restart is said unfaced)."""

@@ -1,4 +1,4 @@
-"""Mediation policies (MISSION.md 7.3): their switches in the robot profile, the
+"""Mediation policies (docs/rules.md 7.3): their switches in the robot profile, the
 scenario and ``prima run --policy``, and what each one does to a run."""
 
 from __future__ import annotations
@@ -149,7 +149,7 @@ def test_a_policy_scenario_matches_its_reviewed_golden(  # type: ignore[no-untyp
 def test_streams_off_shows_the_split_the_stream_prevents() -> None:
     """With the stream off, EA2's question comes between FA5's "Connecting the video
     server." and its result (Fig. 5.9); the reply to the user's "Yes." stays whole (the
-    exchange policy, MISSION.md 7.4)."""
+    exchange policy, docs/rules.md 7.4)."""
     off = judge(Run(ROOT / "scenarios" / "policies" / "streams-off.xml").run())
     on = judge(Run(SAMPLE_05_STREAM).run())
     assert (len(off.of("splits")), len(on.of("splits"))) == (1, 0)

@@ -140,7 +140,7 @@ ZONES = Path(__file__).parent / "data" / "zones"
 
 
 def test_a_zone_loads_an_ea_and_the_next_zone_swaps_it() -> None:
-    """MISSION.md rule 7: an EA is loaded on entering its environment and replaced in
+    """docs/rules.md rule 7: an EA is loaded on entering its environment and replaced in
     the next one; unloading cancels its waiting work, its running AB is never cut."""
     lines = Run(ZONES / "swap.xml").run()
     loads = [(line.app, line.detail["role"]) for line in lines if line.kind is DecisionKind.LOAD]

@@ -1,4 +1,4 @@
-"""The thesis' own situations (MISSION.md section 6), pinned and checked.
+"""The thesis' own situations (docs/rules.md section 6), pinned and checked.
 
 Every scenario in scenarios/thesis has a reviewed golden trace, checked with
 the same ``prima_golden`` fixture application authors use. The mediated

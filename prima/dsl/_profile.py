@@ -4,7 +4,7 @@ A profile (``schemas/robot.xsd``) lists the robot's devices and physical
 figures, what one application may consume (its budgets), its gestures,
 robot-specific Commands, additional arguments of common Commands, and
 robot-specific events. Only an FA may use the robot-specific parts
-(MISSION.md section 4).
+(docs/rules.md section 4).
 
 Every number is checked as the run will use it: a decimal the schema accepts
 can still be infinite or zero once it is a float (``1`` followed by 400
@@ -99,7 +99,7 @@ MAX_BACKCHANNELS = 100
 
 @dataclass(frozen=True)
 class Hearing:
-    """When the robot hears its user (``<hearing>``, MISSION.md 7.5)."""
+    """When the robot hears its user (``<hearing>``, docs/rules.md 7.5)."""
 
     always: bool = False
     """It hears at any time (the barge-in policy, on by default then); else only while

@@ -5,7 +5,7 @@ One :class:`Interpreter` per loaded application. It is the application's
 events, end events and cancellations, and it answers by sending requests
 through a :class:`MediatorPort`. Every event is handled to completion at
 once (in no simulated time), so a request made while handling a Command's
-end event always reaches the mediator promptly (MISSION.md rule 6a).
+end event always reaches the mediator promptly (docs/rules.md rule 6a).
 
 A runtime error (a bad value, a goto loop) raises :class:`AppFailure` after
 recording it; the run loop then unloads this application alone.
@@ -125,7 +125,7 @@ class _Handling:
     follows: CommandId | None = None
     requested: bool = False
     user: bool = False
-    """The event handled is the user's own action (MISSION.md 7.1)."""
+    """The event handled is the user's own action (docs/rules.md 7.1)."""
 
 
 @dataclass
@@ -154,7 +154,7 @@ class Interpreter:
         self.robot_events = dict(robot_events or {})
         self.user_events = frozenset(user_events)
         """The events that are the user's own action (a touch): the reactions to them
-        go first (MISSION.md 7.1)."""
+        go first (docs/rules.md 7.1)."""
         self.gestures = frozenset(gestures) if gestures is not None else None
         """The robot's gestures (None: not checked here); an EA may use the common ones."""
         self.budgets = budgets or DEFAULT_BUDGETS[document.kind]
@@ -469,7 +469,7 @@ class Interpreter:
         self.last_request = request.loc
         calls = tuple(self._call(c, scope) for c in request.calls)
         handling = self._handling
-        # Both flags go on the first request of a handling only (MISSION.md rules 5
+        # Both flags go on the first request of a handling only (docs/rules.md rules 5
         # and 6a); later requests link after it (after-latest), in the same stream.
         first = not handling.requested
         reactive = handling.reactive and first

@@ -1,7 +1,7 @@
 """Naturalness, measured: what a user would notice, computed from a trace alone.
 
 The thesis judged naturalness by showing videos to people; :func:`judge`
-measures the same things on every jsonl trace (MISSION.md section 8), one
+measures the same things on every jsonl trace (docs/rules.md section 8), one
 measure per entry of :data:`MEASURES`: late and unheard reactions, talking
 unfaced, leaving while talking, resumed elsewhere, split exchanges, silences,
 stuck applications. Every finding names whose it is (the application, its

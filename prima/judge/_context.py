@@ -27,7 +27,7 @@ EPS = 1e-6
 
 UNMEASURED_EVENTS = frozenset({"place-reached"})
 """Reactive events whose reactions are not measured: the robot's own motion
-arriving, which nobody waits on the robot for (MISSION.md section 8 lists touch,
+arriving, which nobody waits on the robot for (docs/rules.md section 8 lists touch,
 heard speech, messages, the user found or lost)."""
 
 TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
@@ -35,7 +35,7 @@ TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
 
 USER_ACTIONS = frozenset({"touch", "say"})
 """The user's lines whose event, right after at the same instant, is the user's own
-action (MISSION.md 7.1: a touch, heard speech)."""
+action (docs/rules.md 7.1: a touch, heard speech)."""
 
 _ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
 
@@ -132,7 +132,7 @@ class ReactionState:
 
 @dataclass
 class Exchange:
-    """A Q&A the user answered, and how its application replied (MISSION.md 7.4)."""
+    """A Q&A the user answered, and how its application replied (docs/rules.md 7.4)."""
 
     app: str
     tree: int

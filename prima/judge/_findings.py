@@ -65,7 +65,7 @@ class Reaction:
     """Where its first request is written."""
     residual: float = 0.0
     """How long the rules let its first start wait (s): the running IUs it may not
-    cut, replies, reactions that go first (MISSION.md section 8)."""
+    cut, replies, reactions that go first (docs/rules.md section 8)."""
     free: float = 0.0
     """How long it was free to start but did not (s)."""
     first_start: float | None = None
@@ -183,7 +183,7 @@ class Elsewhere:
 
 @dataclass(frozen=True)
 class Split:
-    """Another application's utterance inside an exchange (MISSION.md 7.4) or an
+    """Another application's utterance inside an exchange (docs/rules.md 7.4) or an
     explicit stream, or a reply cut."""
 
     seq: int

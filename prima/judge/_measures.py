@@ -1,4 +1,4 @@
-"""The measures of naturalness (MISSION.md section 8): one entry each in :data:`MEASURES`.
+"""The measures of naturalness (docs/rules.md section 8): one entry each in :data:`MEASURES`.
 
 An entry names the measure (its key, which is also its threshold ``max_<key>`` and
 its option ``--max-<key>``), says what it finds, how ``prima judge`` shows one
@@ -330,7 +330,7 @@ def _elsewhere_line(x: Elsewhere) -> str:
 # ---------------------------------------------------------------- split exchanges
 
 class _Splits:
-    """Another application's utterance inside an exchange (MISSION.md 7.4): between an
+    """Another application's utterance inside an exchange (docs/rules.md 7.4): between an
     answer and the end of the words that reply to it (any utterance, a reaction's
     too; a reply cut splits it as well), or, when the app replies with its next
     question or with something else than words at once, a non-reactive one before
@@ -360,7 +360,7 @@ class _Splits:
         t = float(row["t"])
         ab = ctx.abs.get(row.get("ab", -1))
         # part of a reaction: of its requests, or of a tree a reaction took over (what it
-        # chains from its end and answer handlers is part of it too: MISSION.md 7.1)
+        # chains from its end and answer handlers is part of it too: docs/rules.md 7.1)
         reacting = ab is not None and (
             any(cid in ctx.reaction_cmds for cid in ab.ids)
             or any(r.t <= t + EPS for r in ctx.tree_reactions.get(ab.tree, ())))
@@ -638,7 +638,7 @@ class _Said:
 
 
 class _BargeIn:
-    """The robot's words running on over its user (MISSION.md 7.5): from the user's
+    """The robot's words running on over its user (docs/rules.md 7.5): from the user's
     first word over an utterance to its words stopping, more than the slack plus the
     word under way. A backchannel is no barge-in; speech the robot cannot hear (out of
     range, or a robot that hears only in its Q&As) is not measured."""

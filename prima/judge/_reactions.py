@@ -1,6 +1,6 @@
-"""How long each reaction waited, and how long the rules let it wait (MISSION.md 8).
+"""How long each reaction waited, and how long the rules let it wait (docs/rules.md section 8).
 
-A reaction is *late* when it starts later than the rules of MISSION.md sections 5
+A reaction is *late* when it starts later than the rules of docs/rules.md sections 5
 and 7 allow. From its event on, a device its first atomic behavior needs may be
 held, *rightly*, by:
 
@@ -249,7 +249,7 @@ class _Analyst:
             why = self.goes_first(y, r, low, y.start)
             if why:
                 # it kept its devices from when it was ready (waiting, or next in a
-                # reaction's tree, MISSION.md 7.1): when the AB before it in its tree
+                # reaction's tree, docs/rules.md 7.1): when the AB before it in its tree
                 # ended, or when it was asked for if later
                 allowed.append((self.ready(y), y_end, self._blame(y, why, y_end)))
             else:
@@ -415,7 +415,7 @@ class _Analyst:
         if any(ab.end_reason == "interrupt" for ab in spoken):
             return True
         if any(ab.end_reason == "barge-in" for ab in spoken):
-            return False  # (the user spoke over them: theirs to cut, MISSION.md 7.5)
+            return False  # (the user spoke over them: theirs to cut, docs/rules.md 7.5)
         return self.end - r.t > self.th.stuck_after + EPS
 
     @staticmethod

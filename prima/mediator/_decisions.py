@@ -47,7 +47,7 @@ class DecisionKind(str, enum.Enum):
     """A reaction's AB had the driver cut another application's running AB (the
     interrupt policy); the cut AB's end follows at a word boundary."""
     HEAR = "hear"
-    """The robot heard its user outside a Q&A (MISSION.md 7.5): which application takes
+    """The robot heard its user outside a Q&A (docs/rules.md 7.5): which application takes
     the words (``rule`` says why), or that none does."""
     BUDGET = "budget"
     """An application's share of the others' waiting ran out (it loses its
@@ -55,7 +55,7 @@ class DecisionKind(str, enum.Enum):
 
 
 class Rule(str, enum.Enum):
-    """Why the mediator decided what it did (MISSION.md section 5)."""
+    """Why the mediator decided what it did (docs/rules.md section 5)."""
 
     # --- how a request joined working memory (rule 3, rule 6) ---------------
     NEW_TREE = "new-tree"
@@ -76,11 +76,11 @@ class Rule(str, enum.Enum):
     EXCHANGE = "exchange"
     """It is an application's spoken reply to the answer of its own Q&A: it belongs to
     the exchange and goes before every other application's AB, reactions included
-    (MISSION.md 7.4)."""
+    (docs/rules.md 7.4)."""
     USER_FIRST = "user-first"
     """It belongs to a reaction to the user's own action (a touch, heard speech) that
     has not yet said its first utterance in full: another application's later reaction
-    to a perception or network event does not overtake it (MISSION.md 7.1)."""
+    to a perception or network event does not overtake it (docs/rules.md 7.1)."""
     REACTIVITY = "reactivity"
     """It is the latest reactive AB (response speed)."""
     PARENT_FINISHED = "parent-finished"
@@ -98,8 +98,8 @@ class Rule(str, enum.Enum):
     from the sentence it was cut in (its request and its start)."""
     BARGE_IN = "barge-in"
     """The user spoke over the robot's utterance: it is cut at a word boundary (an
-    interrupt decision, and the cut AB's end; MISSION.md 7.5)."""
-    # --- who takes what the user says (MISSION.md 7.5) ----------------------------
+    interrupt decision, and the cut AB's end; docs/rules.md 7.5)."""
+    # --- who takes what the user says (docs/rules.md 7.5) ----------------------------
     STREAM_RUNS = "stream-runs"
     """The words go to the application whose stream runs, whose grammar takes them."""
     STREAM_SUSPENDED = "stream-suspended"
@@ -138,7 +138,7 @@ class Rule(str, enum.Enum):
     RESERVED = "reserved"
     """Its devices are kept for the next AB of another application's reaction (or
     reply) that outranks it, even while that next AB cannot start yet: it waits for
-    the reaction's own StopMoving, or for a turn to the user (MISSION.md 7.1)."""
+    the reaction's own StopMoving, or for a turn to the user (docs/rules.md 7.1)."""
     KEEP_CHANNEL = "keep-channel"
     """It would break the Communication Channel while another app talks with the user:
     it waits until that talk ends (thesis Sec. 3.3, Fig. 3.3)."""

@@ -4,7 +4,7 @@ An application *keeps another waiting* while, on some device, another
 application has a waiting AB whose priority is not lower than that of the
 application's AB that holds the device (the AB running on it, or, on a free
 device, the best-ranked waiting AB, which reserves it), or while one of its
-stream holds or blocks, or a reaction's next AB that keeps its devices (MISSION.md
+stream holds or blocks, or a reaction's next AB that keeps its devices (docs/rules.md
 7.1), parks another application's AB. Priority aside: an AB
 that breaks the Communication Channel waiting for one that keeps it is the
 channel rule at work, not a budget matter.
@@ -65,7 +65,7 @@ class _Share:
         """Each interval's length (``end - begin``), in the same order."""
         self.charges: deque[tuple[float, float]] = deque()
         """Time charged at an instant, oldest first: (when, seconds). What the interrupt
-        policy threw away when the app's reaction had another's AB cut (MISSION.md
+        policy threw away when the app's reaction had another's AB cut (docs/rules.md
         7.3 (2)) counts against its share while the instant is within the window."""
         self.since: float | None = None
         """When the current interval began, if the app keeps others waiting now."""
@@ -432,7 +432,7 @@ class Fairness:
 
     def charge(self, app: App, seconds: float) -> None:
         """Charge ``seconds`` to ``app``'s share now (the time an AB its reaction had cut
-        had run in vain: MISSION.md 7.3 (2)); a share so spent takes its precedence at
+        had run in vain: docs/rules.md 7.3 (2)); a share so spent takes its precedence at
         once."""
         now = self._log.now
         share = self._shares.get(app.name)

@@ -7,7 +7,7 @@ Three things hold an AB back, and this module owns all their state:
   *new* streams that need the stream's devices wait (trees none of whose ABs
   has started, and suspended ones: resuming an interrupted dialogue is taking
   the floor anew); a reaction, and a stream under way (a reply to the app's
-  own Q&A, MISSION.md 7.2), do not. It lapses as soon as
+  own Q&A, docs/rules.md 7.2), do not. It lapses as soon as
   the app is busy again (its own ABs then compete as usual, the stream's
   continuation ranking as "parent just finished"), and is released by
   ``close_stream``, by the hold timeout, or by unloading the app.
@@ -331,7 +331,7 @@ class Holds:
 
     def reserved(self, node: Node, by: Node) -> None:
         """Record that the next AB ``by`` of another application's reaction (or reply)
-        keeps the ready ``node`` from its devices (once per AB: MISSION.md 7.1)."""
+        keeps the ready ``node`` from its devices (once per AB: docs/rules.md 7.1)."""
         if node.id not in self._reserved:
             self._reserved.add(node.id)
             what = "reply" if by.protected else "reaction"
@@ -459,5 +459,5 @@ class Holds:
 
 
 def _new_stream(tree: Tree) -> bool:
-    """A stream hold delays this tree: no reaction, and not under way (MISSION.md 7.2)."""
+    """A stream hold delays this tree: no reaction, and not under way (docs/rules.md 7.2)."""
     return tree.reaction is None and (not tree.started or tree.suspended is not None)

@@ -214,7 +214,7 @@ class Intake:
                 tree, seq, user and self._user_first):
             self._holds.reranked(tree)
         turns = self._turns and face_user
-        # (MISSION.md 7.4) words that follow the user's answer to the app's own Q&A
+        # (docs/rules.md 7.4) words that follow the user's answer to the app's own Q&A
         reply = self._exchange and rule is _END_EVENT and parent is not None and any(
             c.answered for c in parent.commands)
         if one or group:  # one AB: the usual request, or its calls grouped
@@ -340,7 +340,7 @@ class Intake:
     def _link_after_latest(self, app: App) -> Link:
         """Rule 3, after latest (with the explicit-stream exception, rule 6c); the first
         request of a reaction to the user's words the app took starts a stream of its
-        own (MISSION.md 7.5: ``App.fresh``)."""
+        own (docs/rules.md 7.5: ``App.fresh``)."""
         if app.fresh:
             app.fresh = False
             return _NEW_TREE
@@ -396,7 +396,7 @@ class Intake:
 
 def _replies(node: Node) -> bool:
     """The first AB an answer handler requested is the reply that belongs to the
-    exchange (MISSION.md 7.4): it has words, and is no question of its own (the app's
+    exchange (docs/rules.md 7.4): it has words, and is no question of its own (the app's
     next question ends the exchange: a reaction may take over before it)."""
     return (not any(c.spec.listens for c in node.commands)
             and any(c.spec.spoken(c.call.args) for c in node.commands))

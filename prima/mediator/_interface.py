@@ -83,7 +83,7 @@ class Request(NamedTuple):
     """The first Commands requested while handling a reactive event (rule 5); such a
     request also starts a reaction (see ``reaction``)."""
     reaction: bool = False
-    """Requested while handling a reactive event (MISSION.md 7.1): its tree takes over
+    """Requested while handling a reactive event (docs/rules.md 7.1): its tree takes over
     as a reaction, and keeps its precedence until it leaves working memory."""
     follows: CommandId | None = None
     """Made while handling this Command's end event or Q&A answer (rule 6a/6b):
@@ -96,7 +96,7 @@ class Request(NamedTuple):
     drop them, or never cut them."""
     user: bool = False
     """With ``reaction``: the reactive event was the user's own action (a touch, heard
-    speech), not a perception or network event (MISSION.md 7.1): the reaction is not
+    speech), not a perception or network event (docs/rules.md 7.1): the reaction is not
     overtaken by another application's later reaction to such an event until its
     first utterance has been said in full."""
 
@@ -195,7 +195,7 @@ class Driver(Protocol):
 
     def stop_words(self, ab_id: AbId) -> bool:
         """Cut the running ``ab_id`` at the end of the word under way, if it is saying
-        words now (the user spoke over it: MISSION.md 7.5), as :meth:`cut` does. False
+        words now (the user spoke over it: docs/rules.md 7.5), as :meth:`cut` does. False
         if it says nothing now (it turns before its words, say) or is on its last word."""
 
 
@@ -241,5 +241,5 @@ class AppListener(Protocol):
 
     def takes(self, words: str) -> bool:
         """Whether this application takes what the user said outside a Q&A (an
-        always-on grammar of its current state matches ``words``: MISSION.md 7.5). The
+        always-on grammar of its current state matches ``words``: docs/rules.md 7.5). The
         mediator asks before it gives the words to one application."""

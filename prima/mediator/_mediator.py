@@ -5,7 +5,7 @@
 - :class:`~._intake.Intake`: checks requests and links them (rules 3, 6);
 - :class:`~._holds.Holds`: explicit streams, blocks and the channel rule;
 - :class:`~._rounds.Selector`: selection rounds (rule 4), suspend and resume;
-- :class:`~._policies.Policies`: the mediation policies (MISSION.md 7.3) at work
+- :class:`~._policies.Policies`: the mediation policies (docs/rules.md 7.3) at work
   on an AB the selector weighs (restore-state, connect-channel, blend, interrupt);
 - :class:`~._fairness.Fairness`: the wait-share budget;
 - :class:`~._log.DecisionLog`: numbers and records every decision.
@@ -96,31 +96,31 @@ class MediatorConfig:
     a runaway block cannot starve the other application (rule 3)."""
 
     connect_channel: bool = True
-    """The connect-channel policy (MISSION.md 7.3 (4)), when there is a channel."""
+    """The connect-channel policy (docs/rules.md 7.3 (4)), when there is a channel."""
 
     restore_state: bool = True
-    """The restore-state policy (MISSION.md 7.3 (1)), when there is a channel."""
+    """The restore-state policy (docs/rules.md 7.3 (1)), when there is a channel."""
 
     blend: bool = True
-    """The blend policy (MISSION.md 7.3 (5)): on the blends the catalog declares (the
+    """The blend policy (docs/rules.md 7.3 (5)): on the blends the catalog declares (the
     robot profile's ``<blend>``)."""
 
     interrupt: bool = True
-    """The interrupt policy (MISSION.md 7.3 (2)): on the Commands the catalog says are
+    """The interrupt policy (docs/rules.md 7.3 (2)): on the Commands the catalog says are
     interruptible (the robot profile's ``<interruptible>``)."""
 
     reactions: bool = True
-    """The reactions policy (MISSION.md 7.1): a reaction keeps the devices its next AB
+    """The reactions policy (docs/rules.md 7.1): a reaction keeps the devices its next AB
     needs; a reaction to the user's own action goes first until it has said its first
     words."""
 
     exchange: bool = True
-    """The exchange policy (MISSION.md 7.4): an application's spoken reply to the answer
+    """The exchange policy (docs/rules.md 7.4): an application's spoken reply to the answer
     of its own Q&A goes before every other application's AB on its devices, and is
     never cut."""
 
     barge_in: bool = False
-    """The barge-in policy (MISSION.md 7.5): what the user says outside a Q&A
+    """The barge-in policy (docs/rules.md 7.5): what the user says outside a Q&A
     (:meth:`Mediator.hear`) cuts the robot's utterance under way at a word boundary,
     unless it is a backchannel."""
 
@@ -163,7 +163,7 @@ class _Operation:
 
 
 class Mediator:
-    """PRIMA's mediator (MISSION.md sections 3-5)."""
+    """PRIMA's mediator (docs/rules.md sections 3-5)."""
 
     def __init__(self, catalog: Catalog, driver: Driver, clock: Clock, *,
                  config: MediatorConfig = MediatorConfig(),
@@ -296,7 +296,7 @@ class Mediator:
 
     # ================================================================ requests
     def submit(self, request: Request) -> tuple[CommandId, ...]:
-        """Accept a request; returns one Command id per Call (MISSION.md rule 3). One
+        """Accept a request; returns one Command id per Call (docs/rules.md rule 3). One
         that fails its check changes nothing."""
         # (what ``with self._operation():`` does, written out: the hottest operation)
         outer = self._depth == 0 and not self._settling
@@ -406,7 +406,7 @@ class Mediator:
 
     # ================================================================= driver
     def finish(self, ab_id: AbId, outcome: Outcome = Outcome()) -> None:
-        """The driver reports an AB's end (MISSION.md rule 3, feedback iterations)."""
+        """The driver reports an AB's end (docs/rules.md rule 3, feedback iterations)."""
         node = self._wm.nodes.get(ab_id)
         if node is None or node.state is not _RUNNING:
             raise MediationError(f"AB{ab_id} is not running")
@@ -475,7 +475,7 @@ class Mediator:
 
     def _done(self, node: Node, children: list[Node]) -> None:
         """What the end of ``node`` tells its tree: a reaction to the user has said its
-        first utterance in full (MISSION.md 7.1); the robot faces the user for the ABs
+        first utterance in full (docs/rules.md 7.1); the robot faces the user for the ABs
         after a turn to the user, whatever happened before it."""
         tree = node.tree
         if tree.user and node.seq >= (tree.reaction or 0) \
@@ -506,7 +506,7 @@ class Mediator:
                 self._call(app, lambda listener: listener.event(event), "event")
 
     def hear(self, event: Event) -> None:
-        """The robot heard its user outside a Q&A (MISSION.md 7.5): ``event`` carries the
+        """The robot heard its user outside a Q&A (docs/rules.md 7.5): ``event`` carries the
         ``words`` and whether they are a ``backchannel``. One application takes them:
         the one whose stream runs (on the speaker first), else the one whose stream was
         suspended most recently, else the first (the FA, then the EAs as loaded), of
@@ -557,7 +557,7 @@ class Mediator:
                        for c, call in zip(n.commands, n.calls, strict=True))]
 
     def _taker(self, words: str) -> tuple[App | None, Rule]:
-        """Who takes the user's ``words`` (MISSION.md 7.5), and why."""
+        """Who takes the user's ``words`` (docs/rules.md 7.5), and why."""
         busy = self._wm.busy
         speaking = busy.get(SPEAKER)
         running = sorted({n.app.name: n.app for n in busy.values()}.values(),
@@ -588,7 +588,7 @@ class Mediator:
 
     def _tell_news(self) -> None:
         """Tell applications what happened to their streams in the operation that just
-        settled (suspended, resumed, held back: MISSION.md 7.5), in order; what they
+        settled (suspended, resumed, held back: docs/rules.md 7.5), in order; what they
         request meanwhile settles as usual, and its own news is told after. At most
         :data:`MAX_NEWS_PER_INSTANT` news per application and instant."""
         if self._telling:

@@ -35,7 +35,7 @@ class WorkingMemory:
 
     def __init__(self, keep_next: bool = True) -> None:
         self.keep_next = keep_next
-        """A reaction's next AB keeps its devices (the reactions policy, MISSION.md
+        """A reaction's next AB keeps its devices (the reactions policy, docs/rules.md
         7.1); replies and ABs a policy deferred keep theirs whatever it says."""
         self.nodes: dict[AbId, Node] = {}
         """Nodes pending, waiting or running."""
@@ -65,7 +65,7 @@ class WorkingMemory:
         taking force on the device looks at)."""
         self.beside: dict[str, dict[str, int]] = {}
         """Device -> the other devices its waiting, unparked ABs need, with how many
-        need each: what an AB kept from the device (MISSION.md 7.1) stops reserving."""
+        need each: what an AB kept from the device (docs/rules.md 7.1) stops reserving."""
         self.unreserved = False
         """Some AB stopped reserving its devices since the selector last looked: what it
         kept from others may go (``Holds`` re-files them)."""
@@ -73,7 +73,7 @@ class WorkingMemory:
         """Device -> the pending ABs that reserve it (``Node.reserving``): each is the
         next AB of a reaction (or a reply to an answer, or an AB a policy put an AB of
         its own before) right after one of its tree's waiting or running ABs
-        (MISSION.md 7.1, 7.4)."""
+        (docs/rules.md 7.1, 7.4)."""
         self._next_ab = 1
         self._next_tree = 0
         self._next_susp = 1
@@ -422,7 +422,7 @@ class WorkingMemory:
 
     def heard(self, tree: Tree) -> None:
         """A reaction to the user's own action said its first utterance in full: from now
-        on it ranks as any reaction (MISSION.md 7.1)."""
+        on it ranks as any reaction (docs/rules.md 7.1)."""
         if tree.user:
             tree.user = False
             if tree.live:

@@ -1,5 +1,5 @@
 """The mechanisms of the mediation policies that act when the selector weighs an AB
-(MISSION.md 7.3): restore-state and connect-channel put an AB of the mediator's own
+(docs/rules.md 7.3): restore-state and connect-channel put an AB of the mediator's own
 before a ready one; blend lets one share devices with a running AB; interrupt has
 the driver cut a running one. What the interrupt policy does when the cut AB ends
 is the mediator's (:meth:`Mediator._interrupted`): it needs the applications.
@@ -224,7 +224,7 @@ class Policies:
                              f"for {x.app.name}'s reaction (AB{x.id})")
 
     def cuttable(self, y: Node, x: Node) -> bool:
-        """Whether the reaction's AB ``x`` may cut the running ``y`` (MISSION.md 7.3 (2)):
+        """Whether the reaction's AB ``x`` may cut the running ``y`` (docs/rules.md 7.3 (2)):
         another application's, outranked, of interruptible Commands its request lets
         be cut, in no block, not blended; never a reply to an answer (7.4), and never
         twice by another application (a restart is not cut again)."""

@@ -1,4 +1,4 @@
-"""Ranking waiting ABs (MISSION.md rule 4): one ordered list of named criteria.
+"""Ranking waiting ABs (docs/rules.md rule 4): one ordered list of named criteria.
 
 A criterion's key is a tuple of ints, as many for every AB (its ``width``); a
 waiting AB's rank is its keys under :data:`CRITERIA`, in order, laid end to end
@@ -117,16 +117,16 @@ CRITERIA: tuple[Criterion, ...] = (
     Criterion(Rule.PRIORITY, Scope.NODE, _priority, standing=True),
     # 1. HIGH (keeps the Communication Channel) before LOW (breaks it).
     Criterion(Rule.EXCHANGE, Scope.NODE, _exchange, standing=True),
-    # (MISSION.md 7.4) the words that reply to the user's answer belong to the exchange,
+    # (docs/rules.md 7.4) the words that reply to the user's answer belong to the exchange,
     # also when their app lost its precedence: one AB per answer the user gave (the
     # user paces it), and the wait share's bound allows one AB past the share.
     Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share, standing=True),
     # (budget) an app that kept the others waiting beyond its share ranks after them.
     Criterion(Rule.USER_FIRST, Scope.TREE, _user_first, standing=True),
     # 2. ABs of a reaction first: a reaction to the user's own action until its first
-    #    utterance is said in full (MISSION.md 7.1), ...
+    #    utterance is said in full (docs/rules.md 7.1), ...
     Criterion(Rule.REACTIVITY, Scope.TREE, _reactivity, 2, standing=True),
-    #    ... then the latest reaction first (response speed; MISSION.md 7.1: a reaction
+    #    ... then the latest reaction first (response speed; docs/rules.md 7.1: a reaction
     #    takes over as a stream until its trees leave working memory).
     Criterion(Rule.PARENT_FINISHED, Scope.ROUND, _parent_finished),
     # 3. ABs whose before node just finished (keep the active stream).
@@ -155,13 +155,13 @@ def _standing(node: Node) -> tuple[Key, ...]:
 def outranks(x: Node, y: Node) -> bool:
     """Whether ``x`` outranks ``y`` on what an AB keeps whatever the waiting order (the
     standing criteria: priority, an exchange's reply, precedence, reactions): what a
-    reaction's reservation of the devices of its next AB compares (MISSION.md 7.1)."""
+    reaction's reservation of the devices of its next AB compares (docs/rules.md 7.1)."""
     return _standing(x) < _standing(y)
 
 
 def keeps_for(r: Node, x: Node) -> bool:
     """Whether the pending next AB ``r`` of a reaction (or a reply) keeps a device it
-    will use from the waiting ``x`` of another application (MISSION.md 7.1): ``r``'s
+    will use from the waiting ``x`` of another application (docs/rules.md 7.1): ``r``'s
     priority is not lower, and it outranks ``x`` on the rest of what an AB keeps
     whatever the waiting order (a reply, precedence, the user first, the latest
     reaction). Priority is compared apart, so that no two reactions keep devices from

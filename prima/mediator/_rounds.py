@@ -1,4 +1,4 @@
-"""Selection rounds (MISSION.md rule 4), suspension and resumption.
+"""Selection rounds (docs/rules.md rule 4), suspension and resumption.
 
 A round looks only at ABs that may have become startable since the last one:
 ABs that just entered the waiting list, and the best waiting AB on each
@@ -185,7 +185,7 @@ class Selector:
         self._driver = driver
         self._overrun = overrun
         self._policies = policies
-        """What the mediation policies decide about an AB weighed (MISSION.md 7.3)."""
+        """What the mediation policies decide about an AB weighed (docs/rules.md 7.3)."""
         self._instant = -1.0
         self._starts: dict[str, int] = {}
         """Starts per app at ``_instant`` (the starts-per-instant budget)."""
@@ -374,7 +374,7 @@ class Selector:
 
     def _reserved(self, x: Node) -> Node | None:
         """The pending next AB of another application's reaction (or reply) that
-        reserves one of ``x``'s devices and keeps it from ``x`` (MISSION.md 7.1,
+        reserves one of ``x``'s devices and keeps it from ``x`` (docs/rules.md 7.1,
         :func:`keeps_for`): ``x`` may not have that device now, whatever else holds it.
         None if there is none."""
         reserving = self._wm.reserving
@@ -398,7 +398,7 @@ class Selector:
 
     def _step_aside(self, y: Node) -> bool:
         """``y`` ranks best on a device another AB asks for, but it is kept for another
-        application's reaction (MISSION.md 7.1) on a device of its own, which this
+        application's reaction (docs/rules.md 7.1) on a device of its own, which this
         round may not have looked at: it steps aside now (parked), so that it reserves
         nothing. True if it did."""
         if y.parked is not None or self._holds.holder(y) is not None:
@@ -433,7 +433,7 @@ class Selector:
         if held is None and reserving:
             r = self._reserved(x)
             if r is not None:
-                # Kept for the reaction's next AB (MISSION.md 7.1): it steps aside, like
+                # Kept for the reaction's next AB (docs/rules.md 7.1): it steps aside, like
                 # an AB another app's hold keeps, so that it reserves nothing meanwhile.
                 if ready:
                     holds.reserved(x, r)

@@ -78,7 +78,7 @@ class App:
         self.demoted = False
         """It kept others waiting beyond its wait-share budget: it has lost its precedence."""
         self.fresh = False
-        """It is handling words of the user's it took (MISSION.md 7.5): its first request
+        """It is handling words of the user's it took (docs/rules.md 7.5): its first request
         after latest starts a stream of its own, which goes before the stream it talked
         in, as another application's reaction would."""
 
@@ -111,7 +111,7 @@ class Command:
         """What the interrupt policy may do to its ABs (its request said)."""
         self.answered = False
         """A Command that listens, which ended with the user's answer: a request that
-        follows it with words is the reply that belongs to the exchange (MISSION.md
+        follows it with words is the reply that belongs to the exchange (docs/rules.md
         7.4)."""
 
 
@@ -142,12 +142,12 @@ class Tree:
         None when they may have changed (the waiting index clears them whenever it
         re-ranks or forgets the tree)."""
         self.reaction: int | None = None
-        """The sequence number of the reaction it belongs to (MISSION.md 7.1: a reaction
+        """The sequence number of the reaction it belongs to (docs/rules.md 7.1: a reaction
         takes over as a stream), larger is later; None if it is no reaction."""
         self.user = False
         """A reaction to the user's own action (a touch, heard speech) that has not yet
         said its first utterance in full: no later reaction of another application to
-        a perception or network event overtakes it (MISSION.md 7.1)."""
+        a perception or network event overtakes it (docs/rules.md 7.1)."""
         self.started = False
         """Some AB of it has started: it is a stream under way, not a new one."""
         self.pose: Mapping[str, Value] | None = None
@@ -223,21 +223,21 @@ class Node:
         yet looked at by the policy."""
         self.faces = False
         """What ``turnable`` was when the AB was requested (a restart of it is looked at
-        again: it starts like any other AB, MISSION.md 7.3 (2))."""
+        again: it starts like any other AB, docs/rules.md 7.3 (2))."""
         self.looked = 0
         """Its tree's ``suspensions`` when the connect-channel policy last set
         ``turnable``: after a suspension, whether it faces the user is looked at anew
         (a turn made before it may have been undone meanwhile)."""
         self.protected = False
         """The words with which an application replies to the answer of its own Q&A: they
-        belong to the exchange (MISSION.md 7.4): they outrank every other application's
+        belong to the exchange (docs/rules.md 7.4): they outrank every other application's
         AB, reactions included, and are never cut."""
         self.deferred = False
         """A policy put an AB of its own before it when it was ready (a turn to the user,
         a return): it stays in line for its devices meanwhile."""
         self.reserving = False
         """Pending right after a waiting or running AB of a reaction, or behind a policy's
-        AB (``deferred``): its devices are kept from the ABs it outranks (MISSION.md
+        AB (``deferred``): its devices are kept from the ABs it outranks (docs/rules.md
         7.1), in ``WorkingMemory.reserving``."""
         self.started_at = 0.0
         """When it started (running, or done)."""
@@ -247,7 +247,7 @@ class Node:
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
         self.once = False
         """Another application's reaction cut it, or the AB it starts again: it is not
-        cut again by another application (MISSION.md 7.3 (2)); the user may."""
+        cut again by another application (docs/rules.md 7.3 (2)); the user may."""
         self.by_user = False
         """Running, and being cut because the user spoke over it (barge-in)."""
         self.taker: App | None = None

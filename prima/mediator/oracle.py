@@ -33,7 +33,7 @@ that started with no rival; such overruns of the literal bound are kept in
 :attr:`Oracle.notes`); at the end every started AB ended, working memory is
 empty, and every Command of an app still loaded got exactly one callback.
 
-Which trees are reactions (MISSION.md 7.1) and which streams are under way
+Which trees are reactions (docs/rules.md 7.1) and which streams are under way
 (7.2) the oracle works out itself (:class:`Streams`): a tree is a reaction
 from the moment a request the caller made while handling a reactive event
 (:meth:`Oracle.requested` with ``reaction=True``) files into it, unless that
@@ -97,10 +97,10 @@ class Streams:
     user: set[TreeId] = field(default_factory=set)
     """Reactions to the user's own action (a touch, heard speech) whose first utterance
     has not been said in full yet: no later reaction to a perception or network event
-    overtakes them (MISSION.md 7.1)."""
+    overtakes them (docs/rules.md 7.1)."""
     replies: set[AbId] = field(default_factory=set)
     """The words with which an app replied to its own Q&A's answer: they belong to the
-    exchange (MISSION.md 7.4): they go first, and are never cut."""
+    exchange (docs/rules.md 7.4): they go first, and are never cut."""
     before_replies: set[CommandId] = field(default_factory=set)
     """The Commands of a policy's ABs put before a reply (a return: each of its
     iterations ranks as the reply does)."""

@@ -76,7 +76,7 @@ DEVICES = ("human-detection", "locomotion", "localization", "speaker", "speech-r
 DURATIONS = (0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0)
 EVENTS = ("human-found", "touched", "message")
 USER_EVENTS = frozenset({"touched", "speech"})
-"""The user's own actions among them (MISSION.md 7.1)."""
+"""The user's own actions among them (docs/rules.md 7.1)."""
 FEEDBACK = frozenset({"ActiveSensingHuman", "ActiveSensingHuman+say", "TrackingHuman",
                       "TopologicalMove", "SetPosition", "SetPositionAndDirection"})
 
@@ -104,11 +104,11 @@ class AppScript:
     raise_at: int = 1
     """... the ``raise_at``-th time."""
     takes: bool = False
-    """It takes the user's words (an always-on grammar that matches: MISSION.md 7.5),
+    """It takes the user's words (an always-on grammar that matches: docs/rules.md 7.5),
     but a cough."""
     reply: str = ""
     """Requested at once from the end handler of each of its Q&As the user answered
-    (MISSION.md 7.4: words reply within the exchange; a question ends it); nothing
+    (docs/rules.md 7.4: words reply within the exchange; a question ends it); nothing
     if empty."""
 
 
@@ -405,7 +405,7 @@ class _Listener:
         s = self.script
         if s.react and self.run.live():
             # like a handler with two chains: the first is reactive, the second is
-            # part of the same reaction (MISSION.md 7.1)
+            # part of the same reaction (docs/rules.md 7.1)
             first, rest = (s.react, ()) if s.react_asap else (s.react[:1], s.react[1:])
             user = event.name in USER_EVENTS
             self.run.submit(Request(self.name, tuple(call(c) for c in first), reactive=True,

@@ -265,7 +265,7 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
     waiting = [n for n in wm.nodes.values() if n.state is NodeState.WAITING]
     waiting.sort(key=lambda n: rank(n, wm.pjf))
     busy = set(wm.busy)
-    # the next ABs of reactions (and replies) keep their devices (MISSION.md 7.1)
+    # the next ABs of reactions (and replies) keep their devices (docs/rules.md 7.1)
     nexts = [n for n in wm.nodes.values()
              if n.state is NodeState.PENDING and n.parent is not None
              and (n.tree.reaction is not None or n.protected or n.deferred)

@@ -24,7 +24,7 @@ def test_default_profile_extends_the_catalog() -> None:
     assert catalog["Speak"].duration is None
     assert catalog["TopologicalMove"].priority is Priority.LOW
     assert profile.events == {"touched": True}
-    assert profile.user_events == {"touched"}  # (the user's own action: MISSION 7.1)
+    assert profile.user_events == {"touched"}  # (the user's own action: docs/rules.md 7.1)
     assert "volume" in profile.extras["Speak"]
     assert profile.speech_rate == 2.5 and profile.gestures["nod"] == 1.0
 

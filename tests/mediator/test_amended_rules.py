@@ -1,4 +1,4 @@
-"""MISSION.md 7.1, 7.3 (2) and 7.4 as amended: one test per mechanism, each written so
+"""docs/rules.md 7.1, 7.3 (2) and 7.4 as amended: one test per mechanism, each written so
 that it fails when its mechanism is taken out (checked once by taking it out).
 
 - 7.1: a reaction keeps the devices its next AB needs, also while that AB waits for

@@ -1,4 +1,4 @@
-"""The blend policy (thesis Sec. 5.3 (5), MISSION.md 7.3 (5)): a robot profile may
+"""The blend policy (thesis Sec. 5.3 (5), docs/rules.md 7.3 (5)): a robot profile may
 declare Commands that run together on a shared device, a local motion over a global
 one (a dance step while it guides) or speech over quieter sound; blended ABs are never
 cut, and the robot stays within the blend's bound of its user."""

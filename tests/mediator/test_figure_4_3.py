@@ -75,7 +75,7 @@ def test_figure_4_3_runs_to_completion_and_resumes_the_loser() -> None:
     h.run()
     # AB4 (reactive) interrupts tree 0-3 between IUs; tree 4-7 keeps its stream
     # (AB5's parent just finished). When it leaves the speaker for the neck (AB6), the
-    # speaker stays kept for its next AB, AB7 (MISSION.md 7.1: a reaction keeps the
+    # speaker stays kept for its next AB, AB7 (docs/rules.md 7.1: a reaction keeps the
     # devices it needs next): tree 0-3 resumes from AB1 (the suspended IU) only when
     # the reaction has left working memory, never restarting AB0.
     order = [(d.t, d.ab) for d in h.starts()]

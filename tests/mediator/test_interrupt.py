@@ -1,4 +1,4 @@
-"""The interrupt policy (thesis Sec. 5.3 (2), MISSION.md 7.3 (2)): a reaction's AB cuts
+"""The interrupt policy (thesis Sec. 5.3 (2), docs/rules.md 7.3 (2)): a reaction's AB cuts
 the other application's running AB where the robot and the AB allow it; the cut AB
 starts again from its beginning after the reaction (or is dropped, if its request
 said so), and its application gets an ``interrupted`` event."""

@@ -87,7 +87,7 @@ def test_the_driver_exercises_the_connect_channel_policy() -> None:
 
 
 def test_the_driver_exercises_barge_in() -> None:
-    """Three seeds in ten run a robot that hears at any time (MISSION.md 7.5): the user
+    """Three seeds in ten run a robot that hears at any time (docs/rules.md 7.5): the user
     speaks outside Q&As, words some apps take, a cough nobody takes, a backchannel; the
     oracle checks every cut for the user's words and every false interruption's pause."""
     seeds = [seed for seed in SEEDS[:300] if scenario(seed).hearing]
@@ -228,7 +228,7 @@ def test_seeds_that_once_failed(seed: int) -> None:
     was not excused (the return, a LOW move, was the rival). 170836: an AB another
     app's stream hold kept was counted as a rival of a start on the idle device, so
     that start was not excused when the hold ended (the holder is charged for it).
-    With a reaction's next AB keeping its devices (MISSION.md 7.1): 130517, an AB kept
+    With a reaction's next AB keeping its devices (docs/rules.md 7.1): 130517, an AB kept
     for it that no round looked at still reserved its other device, the speaker, so a
     later request there waited for nothing; 168125, the same when the reservation began
     on one device of an AB that was best on another (the devices waiting ABs need
@@ -268,7 +268,7 @@ def test_seeds_that_once_failed(seed: int) -> None:
 
 def test_the_oracle_catches_a_reaction_that_loses_its_precedence(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    """MISSION.md 7.1 undone: only a reaction's first AB ranks as reactive (the rule
+    """docs/rules.md 7.1 undone: only a reaction's first AB ranks as reactive (the rule
     before 7.1), so its later ABs wait behind the other app's."""
     def reactivity(node: ranking_module.Node, _pjf: object) -> tuple[int, int]:
         return (0, -node.seq) if node.reactive else (1, 0)
@@ -281,7 +281,7 @@ def test_the_oracle_catches_a_reaction_that_loses_its_precedence(
 
 def test_the_oracle_catches_a_stream_hold_that_splits_a_stream_under_way(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    """MISSION.md 7.2 undone: a stream hold keeps every AB of the other apps but the
+    """docs/rules.md 7.2 undone: a stream hold keeps every AB of the other apps but the
     reactive ones, even those of a stream under way."""
     original = holds_module.Holds.holder
 
@@ -341,7 +341,7 @@ def test_with_every_policy_on_the_properties_hold() -> None:
 
 def test_the_oracle_catches_a_reaction_that_keeps_no_devices(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    """MISSION.md 7.1 undone: a reaction's next AB reserves nothing while it waits for
+    """docs/rules.md 7.1 undone: a reaction's next AB reserves nothing while it waits for
     the reaction's StopMoving or turn, so another app's AB slips in between."""
     from prima.mediator import _rounds as rounds_module
 
@@ -351,7 +351,7 @@ def test_the_oracle_catches_a_reaction_that_keeps_no_devices(
 
 def test_the_oracle_catches_a_later_perception_reaction_overtaking_the_users(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    """MISSION.md 7.1 undone: of two reactions the latest wins, even over a reaction to
+    """docs/rules.md 7.1 undone: of two reactions the latest wins, even over a reaction to
     the user's own action whose words are still to come."""
     criteria = tuple(c for c in ranking_module.CRITERIA if c.rule is not Rule.USER_FIRST)
     monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
@@ -360,7 +360,7 @@ def test_the_oracle_catches_a_later_perception_reaction_overtaking_the_users(
 
 def test_the_oracle_catches_a_reply_that_loses_to_a_reaction(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    """MISSION.md 7.4 undone: the words that reply to an answer rank like any AB."""
+    """docs/rules.md 7.4 undone: the words that reply to an answer rank like any AB."""
     criteria = tuple(c for c in ranking_module.CRITERIA if c.rule is not Rule.EXCHANGE)
     monkeypatch.setattr(ranking_module, "CRITERIA", criteria)
     assert any(what in v for v in caught() for what in WRONG_WINNER)
@@ -370,7 +370,7 @@ def test_the_oracle_catches_a_reply_that_loses_to_a_reaction(
                                            ("once", "cut again")])
 def test_the_oracle_catches_a_reply_cut_or_an_ab_cut_twice(
         monkeypatch: pytest.MonkeyPatch, undone: str, said: str) -> None:
-    """MISSION.md 7.4 and 7.3 (2) undone: the interrupt policy cuts the words that reply
+    """docs/rules.md 7.4 and 7.3 (2) undone: the interrupt policy cuts the words that reply
     to an answer, or cuts a restart again."""
     from prima.mediator import _policies as policies_module
 

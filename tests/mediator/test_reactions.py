@@ -1,4 +1,4 @@
-"""MISSION.md 7.1 and 7.2: a reaction takes over as a stream; a stream hold never
+"""docs/rules.md 7.1 and 7.2: a reaction takes over as a stream; a stream hold never
 splits a question from its reply, nor holds back a reaction."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The restore-state policy (thesis Sec. 5.3 (1), MISSION.md 7.3 (1)): when a suspended
+"""The restore-state policy (thesis Sec. 5.3 (1), docs/rules.md 7.3 (1)): when a suspended
 stream resumes with the robot moved away from where it was suspended, the mediator
 first returns the robot to that pose, as part of the resumed stream."""
 

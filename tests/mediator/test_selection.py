@@ -201,7 +201,7 @@ def test_a_cc_breaking_move_waits_while_the_other_app_talks_with_the_user() -> N
 
 def test_an_app_may_talk_while_it_moves_itself() -> None:
     """The channel rule is about the other application: the EA itself may say
-    hello while navigating (MISSION.md rule 2)."""
+    hello while navigating (docs/rules.md rule 2)."""
     h = _apps(Harness(duration=2.0))
     m = h.mediator
     m.submit(req("ea", call("Speak", text="Follow me.")))                             # AB1 0-2
@@ -217,7 +217,7 @@ def test_found_by_the_random_driver_a_remade_slot_never_ties_with_its_stale_entr
     with the old slot's stale one on (keys, tree, version): the heap compared the two
     slots and ``finish`` raised a TypeError (slot versions now come from one counter).
     The seed's FA request was reactive; since a reaction's whole tree outranks the
-    EA (MISSION.md 7.1) that takes another path, so here it is not."""
+    EA (docs/rules.md 7.1) that takes another path, so here it is not."""
     h = Harness(duration=lambda ab: 0.25 if ab.id % 2 else 1.5)
     m = h.mediator
     gesture = call("Gesture", name="bow")
