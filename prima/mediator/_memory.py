@@ -118,7 +118,7 @@ class WorkingMemory:
         state = parent.state
         if state in IN_MEMORY:
             parent.children.append(child)
-            if state is not _PENDING and (
+            if (state is not _PENDING or parent.deferred) and (
                     (self.keep_next and child.tree.reaction is not None)
                     or child.protected or child.deferred):
                 self._reserve(child)
@@ -245,12 +245,11 @@ class WorkingMemory:
             self.pjf[node.id] = node
 
     def unwait(self, node: Node) -> None:
-        """A waiting, unparked AB goes back to pending: an AB was put before it."""
+        """A waiting, unparked AB goes back to pending: an AB was put before it (a
+        policy's turn or return, after which it waits again: what its next ABs
+        reserve, they keep meanwhile)."""
         node.state = _PENDING
         node.version += 1
-        for child in node.children:  # (next after a pending AB: not next any more)
-            if child.reserving:
-                self._unreserve(child)
         self._rank_out(node)
         self.waiting -= 1
         node.app.active -= 1
@@ -415,7 +414,7 @@ class WorkingMemory:
                 self._rerank(tree)
                 if before is None and self.keep_next:  # its next ABs keep their devices
                     for node in list(tree.nodes.values()):
-                        if node.state is not _PENDING:
+                        if node.state is not _PENDING or node.deferred:
                             self._reserve_children(node)
             return True
         return False

@@ -141,9 +141,17 @@ class _View:
         busy = {d: nodes[ab] for d, ab in snap.busy}
         talkers = frozenset(n.app for d, n in busy.items() if d in talk)
         waiting = sorted((nodes[ab] for ab in snap.waiting), key=rank_key(snap, streams))
+        def in_line(p: NodeView) -> bool:
+            """Waiting or running, or pending behind a policy's AB put before it (that
+            AB is in line: what comes after it keeps its devices meanwhile)."""
+            return p.state in (NodeState.WAITING, NodeState.RUNNING) or (
+                p.state is NodeState.PENDING and p.parent in nodes
+                and not streams.deferred.isdisjoint(p.command_ids)
+                and nodes[p.parent].state in (NodeState.WAITING, NodeState.RUNNING))
+
         nexts = [n for n in nodes.values()
                  if n.state is NodeState.PENDING and n.parent in nodes
-                 and nodes[n.parent].state in (NodeState.WAITING, NodeState.RUNNING)
+                 and in_line(nodes[n.parent])
                  and (n.tree in streams.reaction or streams.replying(n)
                       or not streams.deferred.isdisjoint(n.command_ids))]
         return cls(snap, nodes, waiting, busy, talkers, streams, nexts,
@@ -780,8 +788,11 @@ class Oracle:
                         or not set(w.devices) & set(x.devices):
                     continue
                 theirs = v.standing(w)
+                # (behind x's app's hold after the operation, or before it: an unload
+                # within it ends the hold)
                 if (theirs[0] <= mine[0] and theirs[1:] < mine[1:]
-                        and not v.behind_hold(w, x.app)) if w in nexts else theirs < mine:
+                        and not v.behind_hold(w, x.app) and not prev.behind_hold(w, x.app)) \
+                        if w in nexts else theirs < mine:
                     self.fail(f"t={d.t:g}: AB{x.ab} ({x.app} {x.command}) started on "
                               f"{', '.join(sorted(set(w.devices) & set(x.devices)))}, which "
                               f"AB{w.ab} ({w.app} {w.command}, {w.state.value}) outranks it "

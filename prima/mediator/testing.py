@@ -270,7 +270,8 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
              if n.state is NodeState.PENDING and n.parent is not None
              and (n.tree.reaction is not None or n.protected or n.deferred)
              and (p := wm.nodes.get(n.parent)) is not None
-             and p.state in (NodeState.WAITING, NodeState.RUNNING)]
+             and (p.state in (NodeState.WAITING, NodeState.RUNNING)
+                  or p.state is NodeState.PENDING and p.deferred)]
     reserved: set[str] = set()
     out: list[AbId] = []
     for n in waiting:

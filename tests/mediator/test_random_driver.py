@@ -201,7 +201,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   127791, 170836, 130517, 168125, 25391, 47859, 72202,
                                   187334, 179257, 194091, 400414, 439133, 567432, 873008,
                                   386988, 939197, 1000000000111027, 2000000000132388,
-                                  2000000000038255, 2000000000078627, 2000000000174220])
+                                  2000000000038255, 2000000000078627, 2000000000174220,
+                                  3000000000010914, 3000000000030658, 3000000000025602])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -262,7 +263,13 @@ def test_seeds_that_once_failed(seed: int) -> None:
     now), also while the channel rule holds that AB too; 2000000000078627: the same when
     the block took force after the AB was kept (what was kept is looked at again).
     2000000000174220: a stream suspended in a round whose later start blended its own
-    next AB in stayed suspended while it ran (it is resumed at once now)."""
+    next AB in stayed suspended while it ran (it is resumed at once now).
+    3000000000010914: while a turn to the user put before a reaction's words ran (it
+    took no time), the AB after the words stopped keeping the neck (it keeps it now);
+    3000000000025602: the same for a tree that became a reaction while its words waited
+    behind the turn. 3000000000030658: a reaction's next AB behind an AB the other app's
+    block kept, that app unloaded within the operation (the oracle judged the start by
+    what held after the unload)."""
     assert play(seed).violations == []
 
 
