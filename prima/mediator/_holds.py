@@ -305,8 +305,7 @@ class Holds:
             self._reserve_parked.append(node)
         else:
             self._parked.append(node)
-        if node.id not in self._kept and holder is not node.app:
-            # (kept for its own app's reaction: no other application keeps it waiting)
+        if node.id not in self._kept:
             self._kept[node.id] = holder.name
             self.keeping[holder.name] = self.keeping.get(holder.name, 0) + 1
 
@@ -328,6 +327,10 @@ class Holds:
                 self.keeping[holder] = left
             else:
                 del self.keeping[holder]
+
+    def stepped_aside(self, node: Node) -> bool:
+        """Whether ``node`` is parked for another application's reaction's next AB."""
+        return node.parked is not None and node in self._reserve_parked
 
     def reserved(self, node: Node, by: Node) -> None:
         """Record that the next AB ``by`` of another application's reaction (or reply)

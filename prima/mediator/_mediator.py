@@ -355,6 +355,7 @@ class Mediator:
                                 node.reactive, node.seq, node.iteration)
             again.restarts = node.id
             again.once = node.once or not by_user  # (one cut by another app at most)
+            again.cut_for = None if by_user else node.cut_for
             # it starts like any other AB: turned to the user first, where it applies
             again.turnable = again.faces = node.faces
             again.parent = node.id
@@ -533,7 +534,7 @@ class Mediator:
                 if not y.cutting and self._driver.stop_words(y.id):
                     y.cutting = y.by_user = True
                     y.taker = taker
-                    y.cut_by = None
+                    y.cut_by = y.cut_for = None
                     self._log.ab(DecisionKind.INTERRUPT, Rule.BARGE_IN, y,
                                  "as the user spoke over it" + (
                                      "" if taker is not None else

@@ -219,9 +219,9 @@ class Policies:
         for y in running:
             if not y.cutting and self._driver.cut(y.id):
                 y.cutting = True
-                y.cut_by = x.app
-                self._log.ab(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
-                             f"for {x.app.name}'s reaction (AB{x.id})")
+                y.cut_by, y.cut_for = x.app, x
+                self._log.emit(DecisionKind.INTERRUPT, Rule.INTERRUPT, y,
+                               detail=f"for {x.app.name}'s reaction (AB{x.id})", before=x.id)
 
     def cuttable(self, y: Node, x: Node) -> bool:
         """Whether the reaction's AB ``x`` may cut the running ``y`` (docs/rules.md 7.3 (2)):

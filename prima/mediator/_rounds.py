@@ -27,7 +27,7 @@ from prima.mediator._interface import AbId, AtomicBehavior, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._policies import Policies
-from prima.mediator._ranking import Rank, keeps_for
+from prima.mediator._ranking import Rank, keeps_for, outranks
 from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
@@ -165,13 +165,6 @@ class _Round:
             if len(heap) > 1:
                 heapq.heapify(heap)
         return heaps
-
-
-def _before(r: Node, found: Node, x: Node) -> bool:
-    """Of two next ABs that keep a device from ``x``, the one named for it: another
-    application's before one of ``x``'s own (that one is charged for the wait), then
-    the oldest."""
-    return (r.app is x.app, r.id) < (found.app is x.app, found.id)
 
 
 class Selector:
@@ -383,7 +376,7 @@ class Selector:
             on = reserving.get(d)
             if on:
                 for r in on.values():
-                    if r.tree is not x.tree and (found is None or _before(r, found, x)) \
+                    if r.app is not x.app and (found is None or r.id < found.id) \
                             and keeps_for(r, x) and not self._held_by(r, x.app):
                         found = r
         return found
@@ -441,6 +434,13 @@ class Selector:
                 return False
         if held is None and x.not_before > self._log.now:
             return False  # (its pause after a false interruption: it keeps its rank)
+        cut_for = x.cut_for
+        if cut_for is not None and cut_for.state is _WAITING \
+                and self._holds.stepped_aside(cut_for) and outranks(cut_for, x):
+            # A restart comes after the reaction it was cut for (7.3 (2)), also while
+            # that reaction's AB steps aside for another reaction's next AB (7.1): it
+            # waits in its place meanwhile.
+            return False
         x.blended = _NO_DEVICES
         policies = self._policies
         if ready:

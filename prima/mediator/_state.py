@@ -178,7 +178,7 @@ class Node:
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
-                 "looked", "once", "by_user", "taker", "not_before", "dropped")
+                 "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -243,6 +243,9 @@ class Node:
         """When it started (running, or done)."""
         self.cut_by: App | None = None
         """The application whose reaction had it cut (the interrupt policy)."""
+        self.cut_for: Node | None = None
+        """The reaction's AB it was cut for; on its restart: that AB, which goes first
+        (docs/rules.md 7.3 (2): the restart comes after the reaction)."""
         self.parked: App | None = None
         """The app whose hold (block, stream hold, talk) keeps it: out of the ranking."""
         self.once = False

@@ -51,7 +51,7 @@ other, the callbacks, and the wait share.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from prima.mediator import (
@@ -165,7 +165,7 @@ class _View:
         mine = self.standing(n)
         for r in self.nexts if nexts is None else nexts:
             theirs = self.standing(r)
-            if r.tree != n.tree and set(r.devices) & set(n.devices) \
+            if r.app != n.app and set(r.devices) & set(n.devices) \
                     and theirs[0] <= mine[0] and theirs[1:] < mine[1:] \
                     and not self.behind_hold(r, n.app):
                 return r
@@ -183,7 +183,7 @@ class _View:
         (but the ``excused`` ones)."""
         mine = self.standing(n)
         return [r.app for r in self.nexts
-                if r.tree != n.tree and r.ab not in excused and set(r.devices) & set(n.devices)
+                if r.app != n.app and r.ab not in excused and set(r.devices) & set(n.devices)
                 and (theirs := self.standing(r))[0] <= mine[0] and theirs[1:] < mine[1:]
                 and not self.behind_hold(r, n.app)]
 
@@ -248,8 +248,10 @@ def standing_key(snap: Snapshot, streams: Streams
     return key
 
 
-def left_waiting(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK) -> list[AbId]:
-    """Waiting ABs a plain rank-order walk would start now (must be none).
+def left_waiting(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,
+                 cut_for: Mapping[AbId, AbId] | None = None) -> list[AbId]:
+    """Waiting ABs a plain rank-order walk would start now (must be none); ``cut_for``:
+    restarts -> the reaction's AB each was cut for (:func:`_after_its_reaction`).
 
     A held AB (another app's block or, for a new stream that is no reaction,
     stream hold; or, for a
@@ -257,20 +259,29 @@ def left_waiting(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK) 
     other AB whose devices are free and not reserved by a better-ranked waiting
     AB should be running; one that cannot start reserves its devices.
     """
-    return _left_waiting(_View.of(snap, talk, streams))
+    return _left_waiting(_View.of(snap, talk, streams), cut_for or {})
 
 
-def _left_waiting(v: _View) -> list[AbId]:
+def _left_waiting(v: _View, cut_for: Mapping[AbId, AbId]) -> list[AbId]:
     reserved: set[str] = set()
     out: list[AbId] = []
     for n in v.waiting:
         if v.held(n) or v.kept_for(n) is not None:
             continue  # (kept for a reaction's next AB, it steps aside too: 7.1)
         devices = set(n.devices)
-        if not devices & reserved and not any(d in v.busy for d in devices):
+        if not devices & reserved and not any(d in v.busy for d in devices) \
+                and not _after_its_reaction(v, n, cut_for):
             out.append(n.ab)
         reserved |= devices
     return out
+
+
+def _after_its_reaction(v: _View, n: NodeView, cut_for: Mapping[AbId, AbId]) -> bool:
+    """A restart waits (in its place) for the reaction's AB it was cut for while that AB
+    steps aside for another reaction's next AB and outranks it (7.3 (2), 7.1)."""
+    r = v.nodes.get(cut_for.get(n.ab, -1))
+    return r is not None and r.state is NodeState.WAITING and v.kept_for(r) is not None \
+        and v.standing(r) < v.standing(n)
 
 
 def keeping(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,
@@ -302,8 +313,7 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
             # parking hold's doing; the others would keep nothing it did not.
             holders = v.holders(n)
             if not holders:  # kept for another app's reaction (7.1): its precedence
-                # (its own app's reaction keeps no other application waiting)
-                holders = [a for a in v.keepers(n, excused) if a != n.app]
+                holders = v.keepers(n, excused)
             out.update([n.parked_by] if n.parked_by in holders else holders)
     for d, ws in wanting.items():
         holder = v.busy.get(d) or ws[0]
@@ -432,6 +442,8 @@ class Oracle:
         self._rest: dict[AbId, float] = {}
         """Cut by words no app took, ended: when the robot's pause is over."""
         self._resting: dict[AbId, float] = {}
+        self._cut_for: dict[AbId, AbId] = {}
+        """A cut AB, then its restart -> the reaction's AB it was cut for."""
         """ABs that start such a cut AB again, and the instant they may start."""
         self._hear: Decision | None = None
         """The latest hear decision of the operation under way."""
@@ -508,7 +520,8 @@ class Oracle:
             self._contention(self._prev, v, new)
         # (what waits out the robot's pause after a false interruption may wait)
         # (exactly: the pause ends at the clock's own sum, which the mediator compares)
-        left = [ab for ab in _left_waiting(v) if self._resting.get(ab, snap.t) <= snap.t]
+        left = [ab for ab in _left_waiting(v, self._cut_for)
+                if self._resting.get(ab, snap.t) <= snap.t]
         if left:
             self.fail(f"t={snap.t:g}: AB{left[0]} could start but waits "
                       f"({self._describe(v, left[0])})")
@@ -605,6 +618,8 @@ class Oracle:
             if d.rule is Rule.BARGE_IN:
                 self._barge_in(ab, d)
             else:
+                if d.before is not None:
+                    self._cut_for[ab] = d.before
                 if ab in self._restarts:
                     self.fail(f"t={d.t:g}: AB{ab} was cut again (it restarts a cut AB)")
                 if ab in self.streams.replies:
@@ -624,6 +639,8 @@ class Oracle:
                     self._restarts.add(d.ab)  # (the bound of one cut by another app)
                 if cut in self._rest:
                     self._resting[d.ab] = self._rest.pop(cut)
+                if cut in self._cut_for:
+                    self._cut_for[d.ab] = self._cut_for.pop(cut)
 
     def _cut_ended(self, ab: AbId, d: Decision) -> None:
         """A cut AB ended: it was being cut (for the user's words if its end says so),
@@ -780,19 +797,20 @@ class Oracle:
                   and not (n.priority is Priority.LOW and talked - {n.app})]
         kept = {n.ab for n in prev.nexts}
         nexts = [n for n in v.nexts if n.ab in kept]
+        unloaded = {d.app for d in new if d.kind is DecisionKind.UNLOAD}
         for d in starts:
             x = v.nodes[d.ab if d.ab is not None else -1]
             mine = v.standing(x)
             for w in rivals + nexts:
-                if (w.tree == x.tree if w in nexts else w.app == x.app) \
-                        or not set(w.devices) & set(x.devices):
+                if w.app == x.app or not set(w.devices) & set(x.devices):
                     continue
                 theirs = v.standing(w)
                 # (behind x's app's hold after the operation, or before it: an unload
-                # within it ends the hold)
+                # within it ends the hold; a hold of x's app that took force within it
+                # and ended with x's app's unload is seen in neither)
                 if (theirs[0] <= mine[0] and theirs[1:] < mine[1:]
-                        and not v.behind_hold(w, x.app) and not prev.behind_hold(w, x.app)) \
-                        if w in nexts else theirs < mine:
+                        and not v.behind_hold(w, x.app) and not prev.behind_hold(w, x.app)
+                        and x.app not in unloaded) if w in nexts else theirs < mine:
                     self.fail(f"t={d.t:g}: AB{x.ab} ({x.app} {x.command}) started on "
                               f"{', '.join(sorted(set(w.devices) & set(x.devices)))}, which "
                               f"AB{w.ab} ({w.app} {w.command}, {w.state.value}) outranks it "

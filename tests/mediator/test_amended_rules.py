@@ -2,9 +2,8 @@
 that it fails when its mechanism is taken out (checked once by taking it out).
 
 - 7.1: a reaction keeps the devices its next AB needs, also while that AB waits for
-  the reaction's own StopMoving or for a turn to the user put before it (from its own
-  application's other streams too: seed 2000000000132388 of the random driver's
-  test), but not from the application whose block holds the reaction back;
+  the reaction's own StopMoving or for a turn to the user put before it, but not from
+  the application whose block holds the reaction back;
 - 7.1: a reaction to the user's own action is not overtaken by another application's
   later reaction to a perception event until its first words are said in full;
 - 7.4: words that reply to an answer go before every other application's talk,

@@ -202,7 +202,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   187334, 179257, 194091, 400414, 439133, 567432, 873008,
                                   386988, 939197, 1000000000111027, 2000000000132388,
                                   2000000000038255, 2000000000078627, 2000000000174220,
-                                  3000000000010914, 3000000000030658, 3000000000025602])
+                                  3000000000010914, 3000000000030658, 3000000000025602,
+                                  4000000000437850])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -255,9 +256,10 @@ def test_seeds_that_once_failed(seed: int) -> None:
     reserves nothing) so the reaction's own move took the wheels, and then the app was
     unloaded in the same operation, cancelling that next AB: the oracle judged the move
     by what held after the unload. 2000000000132388: a reaction's next AB (its words,
-    behind a turn to the user) kept the speaker from the other app's reaction, but not
-    from its own app's other stream: that app's restart of a cut question took the
-    speaker before both (7.1: it keeps them from its own app's other streams too).
+    behind a turn to the user) kept the speaker from the other app's reaction, which
+    stepped aside; its own app's restart of the question that reaction had cut took
+    the speaker before both (a restart comes after the reaction it was cut for, 7.3 (2),
+    also while that reaction's AB steps aside).
     2000000000038255: a reaction's next AB behind an AB another app's block keeps kept
     that app's move waiting (they waited for each other; it keeps nothing from that app
     now), also while the channel rule holds that AB too; 2000000000078627: the same when
@@ -269,7 +271,8 @@ def test_seeds_that_once_failed(seed: int) -> None:
     3000000000025602: the same for a tree that became a reaction while its words waited
     behind the turn. 3000000000030658: a reaction's next AB behind an AB the other app's
     block kept, that app unloaded within the operation (the oracle judged the start by
-    what held after the unload)."""
+    what held after the unload). 4000000000437850: the same for a block that took
+    force within the operation and ended with its app's unload."""
     assert play(seed).violations == []
 
 
