@@ -15,7 +15,17 @@ from prima.batch import Inline, Processes
 from prima.check import VISITS, Visit, Verdict, attribute, check, map_for, visit_scenario
 from prima.cli import main
 from prima.dsl import default_profile, load_document
-from prima.judge import Blame, Report, Split, Thresholds, Unfaced
+from prima.judge import (
+    MEASURES,
+    BargeIn,
+    Blame,
+    Ignored,
+    Recovery,
+    Report,
+    Split,
+    Thresholds,
+    Unfaced,
+)
 from prima.sim import load_map, load_scenario
 
 ROOT = Path(__file__).parents[1]
@@ -79,6 +89,26 @@ def test_a_split_is_the_intruders_and_an_unfaced_utterance_the_wheels_holders() 
                                                                    "fa1.pxml:50:7")
     assert attribute(_report({"splits": (split,)}), roles | {"emotions": "other"})[0][
         "role"] == "other"
+
+
+def test_every_kind_of_finding_is_attributed() -> None:
+    """The user's voice's measures too (a check of an EA that takes the user's words and
+    leaves them unanswered failed every such run with 'not a finding')."""
+    roles = {"guide": "ea", "emotions": "fa"}
+    findings = {
+        "barge_in": (BargeIn(30, 4.0, "Stop.", "guide", "Speak", None, 1.2, 0.5,
+                             "guide.pxml:9:7"),),
+        "ignored": (Ignored(31, 5.0, "Repeat that.", "guide", None, 1.0, "guide.pxml:12:3"),),
+        "recovery": (Recovery(32, 6.0, "emotions", "Speak", None, 0.8, "fa1.pxml:38:7"),)}
+    found = attribute(_report(findings), roles)
+    assert [(f["measure"], f["app"], f["role"], f["rule"]) for f in found] == [
+        ("barge_in", "guide", "ea", "its Speak talked on over the user"),
+        ("ignored", "guide", "ea", "took the user's words and never answered them"),
+        ("recovery", "emotions", "fa", "its Speak did not go on after a false interruption")]
+    # (a new measure's findings need attributing too: this test names every measure)
+    assert {m.key for m in MEASURES} == {"late", "unheard", "unfaced", "leaving", "elsewhere",
+                                         "splits", "silences", "barge_in", "ignored",
+                                         "recovery", "stuck"}
 
 
 # ------------------------------------------------------------ coverage

@@ -19,11 +19,14 @@ from typing import Any
 from prima.catalog import STANDARD_COMMANDS
 from prima.judge import (
     MEASURES,
+    BargeIn,
     Blame,
     Elsewhere,
     Finding,
+    Ignored,
     Leaving,
     Reaction,
+    Recovery,
     Report,
     Silence,
     Split,
@@ -72,17 +75,29 @@ def _whose(f: Finding, wheels: Mapping[int, Blame]) -> tuple[str, str, str, str]
             return f.moved_by.app, f"its {f.moved_by.command} took the robot away from the " \
                                    f"user while {f.app} spoke", "", f.moved_by.at
         return f.app, "moved away from the user while speaking", "", f.at
+    if isinstance(f, Stuck):
+        if f.kind == "end" and f.behind is not None and f.behind.app != f.app:
+            return f.behind.app, f"its {f.behind.command} held the devices {f.app} waited " \
+                                 "for until the end", _blame(f.behind), f.behind.at
+        return f.app, f"stuck ({f.kind})", _blame(f.behind), f.at
+    return _plain(f)
+
+
+def _plain(f: Finding) -> tuple[str, str, str, str]:
+    """The findings whose culprit they name themselves, as :func:`_whose` says."""
     if isinstance(f, Elsewhere):
         return f.app, "resumed speaking away from where its stream was suspended", "", f.at
     if isinstance(f, Split):
         return f.by, f"\"{f.text}\" split {f.app}'s exchange ({f.kind})", "", f.at
     if isinstance(f, Silence):
         return f.app, "said nothing after the user's answer", "", f.at
-    if isinstance(f, Stuck):
-        if f.kind == "end" and f.behind is not None and f.behind.app != f.app:
-            return f.behind.app, f"its {f.behind.command} held the devices {f.app} waited " \
-                                 "for until the end", _blame(f.behind), f.behind.at
-        return f.app, f"stuck ({f.kind})", _blame(f.behind), f.at
+    if isinstance(f, BargeIn):
+        return f.app, f"its {f.command} talked on over the user", "", f.at
+    if isinstance(f, Ignored):
+        what = "never answered them" if f.answered is None else "answered them late"
+        return f.app, f"took the user's words and {what}", "", f.at
+    if isinstance(f, Recovery):
+        return f.app, f"its {f.command} did not go on after a false interruption", "", f.at
     raise TypeError(f"not a finding: {f!r}")  # (every kind of finding is above)
 
 

@@ -76,6 +76,9 @@ def format_check(result: Check) -> str:
             rows.append(f"{cell.name}: {cell.breached} of {cell.done} runs failed, {whose}")
             rows += _failures(cell)
             rows += [f"    worst run: {terminal(str(p))}" for p in cell.written]
+            if cell.failed or cell.lost:  # (shown too: a run that failed judges nothing)
+                rows += [f"    and {cell.failed} run(s) failed, {cell.lost} lost"]
+                rows += [f"    {terminal(e)}" for e in cell.errors]
     rows += ["", *format_coverage(result).rstrip("\n").splitlines()]
     failing = len(result.failed_by_ea)
     others = sum(c.verdict == Verdict.OTHER for c in result.cells)

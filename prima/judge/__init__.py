@@ -23,11 +23,14 @@ from prima.judge._thresholds import LIMITS, PARAMETERS, Limit, Parameter, Thresh
 
 if TYPE_CHECKING:
     from prima.judge._findings import (
+        BargeIn,
         Blame,
         Elsewhere,
         Finding,
+        Ignored,
         Leaving,
         Reaction,
+        Recovery,
         Silence,
         Split,
         Stuck,
@@ -38,14 +41,15 @@ if TYPE_CHECKING:
     from prima.judge._reading import load_trace
     from prima.judge._report import Report, format_summary, format_table
 
-__all__ = ["LIMITS", "MEASURES", "PARAMETERS", "Blame", "Elsewhere", "Finding", "Leaving",
-           "Limit", "Measure", "Parameter", "Reaction", "Report", "Silence", "Split",
-           "Stuck", "Thresholds", "Unfaced", "find_scenarios", "format_summary",
-           "format_table", "judge", "judge_file", "load_trace", "measure"]
+__all__ = ["LIMITS", "MEASURES", "PARAMETERS", "BargeIn", "Blame", "Elsewhere", "Finding",
+           "Ignored", "Leaving", "Limit", "Measure", "Parameter", "Reaction", "Recovery",
+           "Report", "Silence", "Split", "Stuck", "Thresholds", "Unfaced", "find_scenarios",
+           "format_summary", "format_table", "judge", "judge_file", "load_trace", "measure"]
 
 _WHERE = {
-    **dict.fromkeys(("Blame", "Elsewhere", "Finding", "Leaving", "Reaction", "Silence",
-                     "Split", "Stuck", "Unfaced"), "_findings"),
+    **dict.fromkeys(("BargeIn", "Blame", "Elsewhere", "Finding", "Ignored", "Leaving",
+                     "Reaction", "Recovery", "Silence", "Split", "Stuck", "Unfaced"),
+                    "_findings"),
     **dict.fromkeys(("find_scenarios", "judge", "judge_file"), "_judging"),
     **dict.fromkeys(("MEASURES", "Measure", "measure"), "_measures"),
     "load_trace": "_reading",
