@@ -260,6 +260,26 @@ def test_the_apps_own_running_ab_counts_in_the_residual() -> None:
     assert counts(report) == {}
 
 
+def test_the_apps_own_ab_said_again_counts_in_the_residual() -> None:
+    """The reaction queued after its application's own AB waits for that AB said again
+    when it was cut (its restart, 7.3 (2)), not only for the cut: a check's visitor who
+    spoke over the robot found a reaction 'free' between the cut and the restart."""
+    tr = Trace()
+    tr.speak(8.0, "fa", 1, 1, "My own long sentence.", lasts=5.0)
+    tr.rows.pop()  # (it does not end: it is cut)
+    tr.say(9.0, "Pardon?")
+    tr.end(9.2, "fa", 1, 1, reason="barge-in", result="spoken=My own, unspoken=long sentence.")
+    tr.request(9.2, "fa", 3, 1, text="My own long sentence.", reason="restart", before=1)
+    tr.touch(10.0)
+    tr.request(10.0, "fa", 2, 2, text="Yes?", reactive=True, reason="after-latest", before=1)
+    tr.start(10.5, "fa", 3, 1, text="My own long sentence.", reason="restart")
+    tr.end(13.5, "fa", 3, 1)
+    tr.speak(13.5, "fa", 2, 2, "Yes?", request=False)
+    [r] = [r for r in tr.judge().reactions if r.event == "touched"]
+    assert (r.residual, r.free, r.late) == (3.5, 0.0, False)
+    assert [w.rule for w in r.waits] == ["after its own AB"]
+
+
 def test_the_reactions_own_first_ab_is_no_residual() -> None:
     tr = Trace()
     tr.event(10.0, "touched")

@@ -203,6 +203,8 @@ class Context:
         self.cmd_at: dict[int, str] = {}
         """Command -> where its request is written."""
         self.cmd_app: dict[int, str] = {}
+        self.restarted: dict[int, int] = {}
+        """A cut AB -> the AB that starts it again (its restart, or its going on)."""
         self.precedes: dict[int, int] = {}
         """A policy's Command (a turn, a return) -> the Command it was put before."""
         self.cancelled: dict[int, float] = {}
@@ -301,6 +303,9 @@ class Context:
                     self.reaction_cmds[cid] = mine
             return
         if row.get("reason") == "restart":
+            cut, again = row.get("before"), row.get("ab")
+            if isinstance(cut, int) and isinstance(again, int):
+                self.restarted[cut] = again
             return
         self._exchange_request(row, app, ids)
         self._reaction_request(row, app, ids, at)

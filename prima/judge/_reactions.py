@@ -339,7 +339,7 @@ class _Analyst:
         ready = r.t
         behind = self.ctx.abs.get(r.before) if r.before is not None else None
         if behind is not None and behind.app == r.app:  # after its own AB, still to end
-            ready = behind.until(self.end)
+            ready = self._last_of(behind).until(self.end)  # (said again if cut: 7.3 (2))
         allowed, took = self.waits(r, own, frozenset(r.devices), low, r.t, r.seq, t1, ready)
         for extra, t_put, seq_put in put:
             if extra:  # (the turn's wheels count from when the turn was put in line)
@@ -395,6 +395,16 @@ class _Analyst:
                 waiting, _ = self.waits(r, own, ab.devices, ab.low, lo, asked[1], ab.start)
                 spans += [(a, b) for a, b, _ in waiting]
         return max(0.0, (t1 - t0) - _measure(spans, t0, t1))
+
+    def _last_of(self, ab: Ab) -> Ab:
+        """The AB that last starts ``ab`` again (a cut AB's restart, and its restart's),
+        or ``ab`` itself."""
+        seen = {ab.id}
+        while (again := self.ctx.abs.get(self.ctx.restarted.get(ab.id, -1))) is not None \
+                and again.id not in seen:
+            seen.add(again.id)
+            ab = again
+        return ab
 
     def _over(self, r: ReactionState) -> float:
         """When a reaction that never started was over: when its own application
