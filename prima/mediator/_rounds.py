@@ -402,6 +402,17 @@ class Selector:
         self._holds.park(y, Rule.RESERVED, r.app)
         return True
 
+    def _after_its_reaction(self, x: Node, cut_for: Node) -> bool:
+        """Whether the restart ``x`` waits, in its place, for the reaction's AB it was cut
+        for (7.3 (2)): while that AB steps aside for another reaction's next AB (7.1) and
+        outranks it; not for a next AB after ``x`` in its own tree (that one waits for
+        ``x``: they would wait for each other)."""
+        if cut_for.state is not _WAITING or not self._holds.stepped_aside(cut_for) \
+                or not outranks(cut_for, x):
+            return False
+        keeper = self._reserved(cut_for)
+        return keeper is not None and keeper.tree is not x.tree
+
     def _ready(self, x: Node, best: Callable[[str], Node | None]) -> bool:
         """Whether ``x``'s devices are free and it ranks best on each."""
         busy = self._wm.busy
@@ -434,12 +445,7 @@ class Selector:
                 return False
         if held is None and x.not_before > self._log.now:
             return False  # (its pause after a false interruption: it keeps its rank)
-        cut_for = x.cut_for
-        if cut_for is not None and cut_for.state is _WAITING \
-                and self._holds.stepped_aside(cut_for) and outranks(cut_for, x):
-            # A restart comes after the reaction it was cut for (7.3 (2)), also while
-            # that reaction's AB steps aside for another reaction's next AB (7.1): it
-            # waits in its place meanwhile.
+        if x.cut_for is not None and self._after_its_reaction(x, x.cut_for):
             return False
         x.blended = _NO_DEVICES
         policies = self._policies

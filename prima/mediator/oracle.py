@@ -278,10 +278,13 @@ def _left_waiting(v: _View, cut_for: Mapping[AbId, AbId]) -> list[AbId]:
 
 def _after_its_reaction(v: _View, n: NodeView, cut_for: Mapping[AbId, AbId]) -> bool:
     """A restart waits (in its place) for the reaction's AB it was cut for while that AB
-    steps aside for another reaction's next AB and outranks it (7.3 (2), 7.1)."""
+    steps aside for another reaction's next AB (not one after the restart in its own
+    tree) and outranks it (7.3 (2), 7.1)."""
     r = v.nodes.get(cut_for.get(n.ab, -1))
-    return r is not None and r.state is NodeState.WAITING and v.kept_for(r) is not None \
-        and v.standing(r) < v.standing(n)
+    if r is None or r.state is not NodeState.WAITING:
+        return False
+    keeper = v.kept_for(r)
+    return keeper is not None and keeper.tree != n.tree and v.standing(r) < v.standing(n)
 
 
 def keeping(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,

@@ -203,7 +203,7 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   386988, 939197, 1000000000111027, 2000000000132388,
                                   2000000000038255, 2000000000078627, 2000000000174220,
                                   3000000000010914, 3000000000030658, 3000000000025602,
-                                  4000000000437850])
+                                  4000000000437850, 5000000000233759])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -272,7 +272,10 @@ def test_seeds_that_once_failed(seed: int) -> None:
     behind the turn. 3000000000030658: a reaction's next AB behind an AB the other app's
     block kept, that app unloaded within the operation (the oracle judged the start by
     what held after the unload). 4000000000437850: the same for a block that took
-    force within the operation and ended with its app's unload."""
+    force within the operation and ended with its app's unload. 5000000000233759: a
+    restart waited for the reaction it was cut for, which was kept for the next AB
+    after the restart in its own tree (they waited for each other: it waits only for
+    another tree's next AB)."""
     assert play(seed).violations == []
 
 
