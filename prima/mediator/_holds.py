@@ -328,10 +328,6 @@ class Holds:
             else:
                 del self.keeping[holder]
 
-    def stepped_aside(self, node: Node) -> bool:
-        """Whether ``node`` is parked for another application's reaction's next AB."""
-        return node.parked is not None and node in self._reserve_parked
-
     def reserved(self, node: Node, by: Node) -> None:
         """Record that the next AB ``by`` of another application's reaction (or reply)
         keeps the ready ``node`` from its devices (once per AB: docs/rules.md 7.1)."""

@@ -365,11 +365,11 @@ class Selector:
             order.sort(key=view.rank)
         return order
 
-    def _reserved(self, x: Node) -> Node | None:
+    def _reserved(self, x: Node, besides: Tree | None = None) -> Node | None:
         """The pending next AB of another application's reaction (or reply) that
         reserves one of ``x``'s devices and keeps it from ``x`` (docs/rules.md 7.1,
         :func:`keeps_for`): ``x`` may not have that device now, whatever else holds it.
-        None if there is none."""
+        None if there is none (none of the tree ``besides``)."""
         reserving = self._wm.reserving
         found: Node | None = None
         for d in x.sorted_devices:
@@ -377,6 +377,7 @@ class Selector:
             if on:
                 for r in on.values():
                     if r.app is not x.app and (found is None or r.id < found.id) \
+                            and r.tree is not besides \
                             and keeps_for(r, x) and not self._held_by(r, x.app):
                         found = r
         return found
@@ -407,11 +408,10 @@ class Selector:
         for (7.3 (2)): while that AB steps aside for another reaction's next AB (7.1) and
         outranks it; not for a next AB after ``x`` in its own tree (that one waits for
         ``x``: they would wait for each other)."""
-        if cut_for.state is not _WAITING or not self._holds.stepped_aside(cut_for) \
-                or not outranks(cut_for, x):
+        if cut_for.state is not _WAITING or not outranks(cut_for, x):
             return False
-        keeper = self._reserved(cut_for)
-        return keeper is not None and keeper.tree is not x.tree
+        # (as it is now, ranks may have moved since; one in x's own tree waits for x)
+        return self._reserved(cut_for, besides=x.tree) is not None
 
     def _ready(self, x: Node, best: Callable[[str], Node | None]) -> bool:
         """Whether ``x``'s devices are free and it ranks best on each."""

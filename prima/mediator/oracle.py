@@ -157,15 +157,15 @@ class _View:
         return cls(snap, nodes, waiting, busy, talkers, streams, nexts,
                    standing_key(snap, streams))
 
-    def kept_for(self, n: NodeView, nexts: Sequence[NodeView] | None = None
-                 ) -> NodeView | None:
+    def kept_for(self, n: NodeView, nexts: Sequence[NodeView] | None = None,
+                 besides: TreeId | None = None) -> NodeView | None:
         """The next AB of another app's reaction (or reply) that keeps one of ``n``'s
         devices from it (7.1): its priority is not lower, and it outranks ``n`` on the
         rest of what an AB keeps whatever the waiting order (of ``nexts``, if given)."""
         mine = self.standing(n)
         for r in self.nexts if nexts is None else nexts:
             theirs = self.standing(r)
-            if r.app != n.app and set(r.devices) & set(n.devices) \
+            if r.app != n.app and r.tree != besides and set(r.devices) & set(n.devices) \
                     and theirs[0] <= mine[0] and theirs[1:] < mine[1:] \
                     and not self.behind_hold(r, n.app):
                 return r
@@ -283,8 +283,7 @@ def _after_its_reaction(v: _View, n: NodeView, cut_for: Mapping[AbId, AbId]) -> 
     r = v.nodes.get(cut_for.get(n.ab, -1))
     if r is None or r.state is not NodeState.WAITING:
         return False
-    keeper = v.kept_for(r)
-    return keeper is not None and keeper.tree != n.tree and v.standing(r) < v.standing(n)
+    return v.kept_for(r, besides=n.tree) is not None and v.standing(r) < v.standing(n)
 
 
 def keeping(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,
