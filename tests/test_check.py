@@ -91,6 +91,18 @@ def test_a_split_is_the_intruders_and_an_unfaced_utterance_the_wheels_holders() 
         "role"] == "other"
 
 
+def test_an_answer_over_a_prompt_hushed_before_its_words_runs() -> None:
+    """EA1 beside FA2 on the home robot: a visitor's words hushed a Q&A whose words had
+    not begun, and an answer came over that prompt at the same instant; the simulator
+    looked for the words it was saying and the run failed (KeyError). Every run of the
+    cell is judged now."""
+    result = check(ROOT / "apps" / "ea" / "ea1-museum.pxml",
+                   fas=[ROOT / "apps" / "fa" / "fa2-follow.pxml"], robots=[HOME], maps=MAPS,
+                   runs=1, pool=Inline())
+    (cell,) = result.cells
+    assert (cell.done, cell.failed, cell.errors) == (4, 0, [])
+
+
 def test_every_kind_of_finding_is_attributed() -> None:
     """The user's voice's measures too (a check of an EA that takes the user's words and
     leaves them unanswered failed every such run with 'not a finding')."""

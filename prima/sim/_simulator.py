@@ -385,6 +385,7 @@ class Simulator:
                        if command_id in a.command_ids and a.id in self._hushed), None)
             if ab is not None:
                 self._hushed.discard(ab.id)
+                self._speech.pop(command_id, None)  # (nothing of it is said)
                 words = " ".join(self._words(ab))
                 self.kernel.at(self.kernel.tick, lambda: self._cut_now(ab, "", words))
                 return
@@ -601,9 +602,11 @@ class Simulator:
             mic(text)
             return True
         backchannel = self.backchannel(text)
-        if self._prompting and not backchannel:
-            cid, wake = next(iter(self._prompting.items()))
-            del self._prompting[cid]
+        # (a prompt whose words were hushed before they began is being cut: not asking)
+        cid = next((c for c in self._prompting if c in self._speech), None) \
+            if self._prompting and not backchannel else None
+        if cid is not None:
+            wake = self._prompting.pop(cid)
             wake((text, *self._stop_prompt(cid)))
             return True
         self.emit("speech", {"words": text, "backchannel": backchannel})
