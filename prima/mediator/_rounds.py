@@ -445,8 +445,8 @@ class Selector:
                 return False
         if held is None and x.not_before > self._log.now:
             return False  # (its pause after a false interruption: it keeps its rank)
-        if x.cut_for is not None and self._after_its_reaction(x, x.cut_for):
-            return False
+        if held is None and x.cut_for is not None and self._after_its_reaction(x, x.cut_for):
+            return False  # (one a hold keeps is parked below: it reserves nothing)
         x.blended = _NO_DEVICES
         policies = self._policies
         if ready:
