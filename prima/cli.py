@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import gc
 import importlib
 import json
 import math
@@ -629,26 +628,6 @@ def _profile(path: str | None) -> RobotProfile:
     return load_profile(path) if path else default_profile()
 
 
-VALIDATE_GC_THRESHOLD = 20_000
-"""Objects allocated between two collections of the youngest generation while
-``prima validate`` checks files (Python's default is 700). Checking documents
-allocates many short-lived objects (trees, tokens, closures, lxml proxies)
-and few cycles; at the default, the collector's passes over them were about
-a fifth of the CPU time of validating 100 documents in one process."""
-
-
-@contextlib.contextmanager
-def _fewer_collections() -> Iterator[None]:
-    """Collect the youngest generation every :data:`VALIDATE_GC_THRESHOLD` allocations
-    meanwhile (cycles are still collected); the threshold is restored after."""
-    before = gc.get_threshold()
-    gc.set_threshold(VALIDATE_GC_THRESHOLD, *before[1:])
-    try:
-        yield
-    finally:
-        gc.set_threshold(*before)
-
-
 def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.dsl import Validation, collect
 
@@ -659,7 +638,9 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     robot = args.robot is not None
     validation = Validation(_profile(args.robot), follow_declared=not robot,
                             more_checkers=lambda: _scenario_checkers(validation, robot))
-    with _fewer_collections():
+    from prima.collecting import fewer_collections
+
+    with fewer_collections():
         report = validation.run(files)
     if not report.files:
         return _usage("validate", f"no PRIMA files in {' '.join(args.paths)}", err)

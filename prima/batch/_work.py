@@ -10,9 +10,7 @@ as one task (:func:`run_chunk`).
 
 from __future__ import annotations
 
-import contextlib
 import copy
-import gc
 import math
 import tempfile
 from collections.abc import Iterable, Iterator, Mapping
@@ -23,6 +21,7 @@ from typing import Any, Protocol
 from lxml import etree
 
 from prima.batch._variants import Bundle, rng, shift_timings
+from prima.collecting import fewer_collections
 from prima.errors import LocatedError
 from prima.judge import Report, Thresholds
 
@@ -132,27 +131,11 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path) -> dict[st
     return record
 
 
-RUNS_GC_THRESHOLD = 20_000
-"""Objects allocated between two collections of the youngest generation while a chunk
-runs (Python's default is 700): a run allocates many short-lived objects and few
-cycles; at the default, the collector's passes cost about 5% of a run's CPU time."""
-
-
-@contextlib.contextmanager
-def _fewer_collections() -> Iterator[None]:
-    before = gc.get_threshold()
-    gc.set_threshold(RUNS_GC_THRESHOLD, *before[1:])
-    try:
-        yield
-    finally:
-        gc.set_threshold(*before)
-
-
 def run_chunk(chunk: Chunk) -> list[dict[str, Any]]:
     """Run a chunk's runs in order (in a worker, or in this process): their records,
     each with its job's number."""
     spec = chunk.spec
-    with tempfile.TemporaryDirectory(prefix="prima-runs-") as scratch, _fewer_collections():
+    with tempfile.TemporaryDirectory(prefix="prima-runs-") as scratch, fewer_collections():
         folder = Path(scratch)
         scenario = spec.bundle.unpack(folder)
         root = etree.fromstring(scenario.read_bytes())

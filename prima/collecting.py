@@ -1,0 +1,31 @@
+"""Fewer passes of Python's cycle collector while a command does much short-lived work.
+
+``prima validate`` checking files and a sweep's worker running its runs both allocate
+many short-lived objects (trees, tokens, closures, lxml proxies, trace rows) and few
+cycles. At Python's default (a pass over the youngest generation every 700
+allocations) those passes were about a fifth of the CPU time of validating 100
+documents in one process, and about 5% of a judged run's.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+from collections.abc import Iterator
+
+__all__ = ["YOUNG_THRESHOLD", "fewer_collections"]
+
+YOUNG_THRESHOLD = 20_000
+"""Objects allocated between two collections of the youngest generation meanwhile."""
+
+
+@contextlib.contextmanager
+def fewer_collections() -> Iterator[None]:
+    """Collect the youngest generation every :data:`YOUNG_THRESHOLD` allocations
+    meanwhile (cycles are still collected); the threshold is restored after."""
+    before = gc.get_threshold()
+    gc.set_threshold(YOUNG_THRESHOLD, *before[1:])
+    try:
+        yield
+    finally:
+        gc.set_threshold(*before)
