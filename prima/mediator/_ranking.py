@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from operator import itemgetter
 from typing import NoReturn
 
+from prima.catalog import Priority
 from prima.mediator._decisions import Rule
 from prima.mediator._state import Node, Tree
 
@@ -78,8 +79,13 @@ class Criterion:
     (:func:`outranks`). The standing criteria come first in the table."""
 
 
+_AS_HIGH: Key = (-int(Priority.HIGH),)
+
+
 def _priority(node: Node, _pjf: Collection[int]) -> Key:
-    return (-int(node.priority),)
+    # (a reply to an answer ranks as an utterance, which keeps the channel; so does
+    # what a policy put before it, a return that moves the robot: docs/rules.md 7.4)
+    return _AS_HIGH if node.protected else (-int(node.priority),)
 
 
 def _exchange(node: Node, _pjf: Collection[int]) -> Key:

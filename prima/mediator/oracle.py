@@ -229,9 +229,10 @@ def rank_key(snap: Snapshot, streams: Streams) -> _RankKeyFn:
 
 def standing_key(snap: Snapshot, streams: Streams
                  ) -> Callable[[NodeView], tuple[int, int, int, int, tuple[int, int]]]:
-    """What an AB keeps whatever the waiting order: HIGH first; the reply to an answer
-    (7.4); apps that lost their precedence after the others; reactions to the user's
-    own action whose first words are not yet said; the latest reaction (7.1)."""
+    """What an AB keeps whatever the waiting order: HIGH first (a reply to an answer
+    ranks as HIGH, and so does a return put before it); the reply to an answer (7.4);
+    apps that lost their precedence after the others; reactions to the user's own
+    action whose first words are not yet said; the latest reaction (7.1)."""
     demoted = set(snap.demoted)
     reaction = streams.reaction
     user = streams.user
@@ -239,7 +240,7 @@ def standing_key(snap: Snapshot, streams: Streams
 
     def key(n: NodeView) -> tuple[int, int, int, int, tuple[int, int]]:
         return (
-            0 if n.priority is Priority.HIGH else 1,
+            0 if n.priority is Priority.HIGH or replying(n) else 1,
             0 if replying(n) else 1,
             1 if n.app in demoted else 0,
             0 if n.tree in user and n.tree in reaction else 1,

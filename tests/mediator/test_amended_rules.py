@@ -21,12 +21,14 @@ from collections.abc import Mapping
 from prima.catalog import Catalog
 from prima.mediator import (
     AppKind,
+    AtomicBehavior,
     DecisionKind,
     Event,
     MediatorConfig,
     Outcome,
     Request,
     Rule,
+    RunningOrder,
     Value,
 )
 from prima.mediator.testing import Harness
@@ -318,6 +320,58 @@ def test_the_exchange_policy_off_lets_the_reaction_cut_in() -> None:
     h.at(2.0, lambda: m.post(Event("message")))
     h.run(until=20.0)
     assert first(h, "fa", "I've just got a message.") == 3.0
+
+
+class Moved(Facing):
+    """A robot that faces its user and has always moved since a stream was suspended
+    (restore-state puts a return before the stream's next words)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.faced = True
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
+        return True
+
+
+def test_a_return_put_before_a_reply_ranks_as_the_reply() -> None:
+    """7.4 with restore-state: the EA's stream was suspended before its listening (the
+    FA's reaction spoke first), so a return (SetPosition, LOW) goes before the reply's
+    words. The return ranks as the reply does: the EA's own other stream, a HIGH
+    TrackingHuman loop on the wheels, does not keep it (and the words) waiting iteration
+    after iteration."""
+    def outcome(ab: AtomicBehavior) -> Outcome:
+        if ab.calls[0].command == "QA":
+            return Outcome({"status": "answered", "utterance": "Hanako"})
+        return Outcome(terminal=ab.calls[0].command != "TrackingHuman" or ab.iteration >= 4)
+
+    h = Harness(duration={"QA": 3.0, "*": 2.0}, outcome=outcome, channel=Moved())
+    m = h.mediator
+    asked: list[int] = []
+
+    def ended(cid: int, _o: Outcome) -> None:
+        if cid == said[0]:  # it asks its question (listening only: it said it already)
+            asked.extend(m.submit(Request("ea", (call("QA", prompt="", grammar="g"),),
+                                          follows=cid)))
+        elif cid in asked:
+            m.submit(Request("ea", (speak("Nice to meet you, Hanako."),), follows=cid))
+
+    h.app("ea", AppKind.EA, on_ended=ended)
+    h.app("fa", AppKind.FA)
+    said = m.submit(Request("ea", (speak("What's your name?"),)))
+    h.at(1.0, lambda: m.submit(Request("fa", (speak("I've just got a message."),),
+                                       reactive=True, reaction=True)))
+    h.at(4.5, lambda: m.submit(Request("ea", (call("TrackingHuman"),),
+                                       order=RunningOrder.ASAP)))
+    h.run(until=40.0)
+    suspended = [d for d in h.kinds(DecisionKind.SUSPEND) if d.app == "ea"]
+    assert suspended and suspended[0].t == 2.0
+    ret = next(d for d in h.starts() if d.rule is Rule.RESTORE_STATE)
+    loop = [d.t for d in h.starts() if d.app == "ea" and d.command == "TrackingHuman"]
+    assert loop[:2] == [4.5, 6.5]  # (the wheels were free: the loop runs)
+    assert ret.t == 8.5  # the return, right after the iteration under way at the answer
+    assert first(h, "ea", "Nice to meet you, Hanako.") == 10.5
+    assert loop[2] == 10.5  # (the loop goes on after the return)
 
 
 # ---------------------------------------------------------------- 7.3 (2): interrupting

@@ -204,7 +204,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   2000000000038255, 2000000000078627, 2000000000174220,
                                   3000000000010914, 3000000000030658, 3000000000025602,
                                   4000000000437850, 5000000000233759, 6000000000220037,
-                                  8000000000085618, 8000000000803102])
+                                  8000000000085618, 8000000000803102, 8000000000367237,
+                                  8000000000426130])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -283,7 +284,10 @@ def test_seeds_that_once_failed(seed: int) -> None:
     view and judged the other app's AB it held a rival (an app unloaded within the
     operation has its starts there left unjudged). 8000000000803102: a restart that
     waited for the reaction it was cut for while a block held it too stayed in the
-    ranking (it is parked, reserving nothing, like any AB a hold keeps)."""
+    ranking (it is parked, reserving nothing, like any AB a hold keeps).
+    8000000000367237, 8000000000426130: a return put before a reply (LOW) lost the
+    wheels on priority to its own app's HIGH stream again and again while the reply
+    kept the other app waiting past the share (it ranks as the reply does: 7.4)."""
     assert play(seed).violations == []
 
 
