@@ -302,9 +302,9 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
     is not a budget matter; of several apps whose holds apply, the one that parked
     it). A running AB in ``uncontended`` (it started while no
     other app's AB wanted its devices) keeps nobody: waiting for it is first come,
-    first served, not a precedence taken. A reply's next AB in ``excused`` (its
-    application lost its precedence: the reply goes first past the share, 7.4) keeps
-    nobody either."""
+    first served, not a precedence taken. A reply's AB in ``excused`` (its
+    application lost its precedence: the reply goes first past the share, 7.4), next
+    or waiting first in line, keeps nobody either."""
     out: set[str] = set()
     wanting: dict[str, list[NodeView]] = {}
     for n in v.waiting:
@@ -320,7 +320,7 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
             out.update([n.parked_by] if n.parked_by in holders else holders)
     for d, ws in wanting.items():
         holder = v.busy.get(d) or ws[0]
-        if holder.ab in uncontended:
+        if holder.ab in uncontended or holder.ab in excused:
             continue
         if any(w.app != holder.app and w.priority >= holder.priority for w in ws):
             out.add(holder.app)
@@ -878,8 +878,9 @@ class Oracle:
         self._uncontended &= running
         self._kept.update(v.snap.t, _keeping(v))
         # (a demoted app's reply goes first past its share, and its turn before it, 7.4:
-        # what is kept for it is not a precedence taken within the share)
-        excused = {r.ab for r in v.nexts
+        # what is kept for it, and what it keeps as it waits first in line for a device
+        # still busy, is not a precedence taken within the share)
+        excused = {r.ab for r in [*v.nexts, *v.waiting]
                    if self.streams.replying(r) and r.app in v.snap.demoted}
         self._took.update(v.snap.t, _keeping(v, self._uncontended, excused))
         self._demoted.update(v.snap.t, v.snap.demoted)

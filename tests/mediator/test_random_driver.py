@@ -205,7 +205,7 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   3000000000010914, 3000000000030658, 3000000000025602,
                                   4000000000437850, 5000000000233759, 6000000000220037,
                                   8000000000085618, 8000000000803102, 8000000000367237,
-                                  8000000000426130])
+                                  8000000000426130, 11000000000126716])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -287,7 +287,10 @@ def test_seeds_that_once_failed(seed: int) -> None:
     ranking (it is parked, reserving nothing, like any AB a hold keeps).
     8000000000367237, 8000000000426130: a return put before a reply (LOW) lost the
     wheels on priority to its own app's HIGH stream again and again while the reply
-    kept the other app waiting past the share (it ranks as the reply does: 7.4)."""
+    kept the other app waiting past the share (it ranks as the reply does: 7.4).
+    11000000000126716: a demoted app's reply waited first in line for the speaker while
+    the wheels it also needs were busy; the oracle charged that wait to its share (a
+    reply goes first past the share, 7.4, waiting as it runs)."""
     assert play(seed).violations == []
 
 
