@@ -14,7 +14,7 @@ import pytest
 
 from prima.catalog import Catalog
 from prima.judge import Thresholds, judge
-from prima.mediator import AppKind, Call, Event, MediatorConfig, Request
+from prima.mediator import AppKind, Call, Event, MediatorConfig, Request, RunningOrder
 from prima.mediator.testing import Harness
 from prima.run import Run
 from prima.trace import TraceLine
@@ -192,6 +192,33 @@ def test_the_words_go_to_the_running_stream_then_the_suspended_then_any() -> Non
                       (None, "nomatch")]
     for app in apps.values():
         assert "nomatch" in [e.name for e in app.events]  # type: ignore[attr-defined]
+
+
+def test_what_a_handler_of_the_users_words_asks_after_its_first_request_follows_it() -> None:
+    """The words' first request starts a stream of its own (7.5), also when it is made
+    as soon as possible; what the handler asks next follows it in that stream: "All
+    right." is said before the question, never after it."""
+    h = Harness(_catalog(), duration={"Speak": 1.0, "QA": 2.0},
+                config=MediatorConfig(barge_in=True))
+    m = h.mediator
+
+    def stop(e: Event) -> None:
+        if e.name == "speech":
+            m.submit(Request("ea", (call("StopMoving"), call("Speak", text="All right.")),
+                             order=RunningOrder.ASAP, reactive=True, reaction=True,
+                             user=True))
+            m.submit(Request("ea", (call("QA", prompt="May I go on?", grammar="g"),),
+                             reaction=True, user=True))
+
+    ea = h.app("ea", AppKind.EA, on_event=stop)
+    ea.listens_for = ("stop",)
+    h.app("fa", AppKind.FA)
+    m.submit(Request("ea", (call("TopologicalMove", to="panel-2"),)))
+    h.at(0.5, lambda: m.hear(Event("speech", {"words": "stop"})))
+    h.run(until=20.0)
+    said = [(d.t, d.command, d.tree) for d in h.starts() if d.command in ("Speak", "QA")]
+    assert [c for _t, c, _tree in said] == ["Speak", "QA"]
+    assert said[0][2] == said[1][2]  # (one stream)
 
 
 # ---------------------------------------------------------------- 3. barge-in

@@ -201,6 +201,7 @@ class Intake:
                 link = asap
         elif link is None:
             link = self._link_after_latest(app)
+        app.fresh = False  # (the words' first request took its place: the rest follow it)
         rule, parent, tree, enter_now, parent_finished, reactive_allowed = link
         wm = self._wm
         if tree is None:
