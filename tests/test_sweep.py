@@ -281,3 +281,32 @@ def test_a_scenario_named_in_bytes_that_are_not_utf8_or_with_dashes(tmp_path: Pa
     written = next((tmp_path / "worst").iterdir())
     assert load_scenario(written).name  # the variant is a scenario again
     assert "run- -\\xff.xml" in written.read_text()
+
+
+def _pid() -> int:
+    import os
+
+    return os.getpid()
+
+
+def test_worker_processes_are_replaced_every_few_tasks() -> None:
+    """A worker takes RECYCLE tasks, then a fresh process takes over (what runs leave
+    behind in a process goes with it: a long sweep's memory stays flat)."""
+    from prima.batch import Processes
+
+    pool = Processes(1, recycle=2)
+    executor = pool.executor()
+    pids = [executor.submit(_pid).result() for _ in range(6)]
+    pool.close()
+    assert pids[0] == pids[1] and pids[2] == pids[3] and pids[4] == pids[5]
+    assert len(set(pids)) == 3
+
+
+def test_a_sweep_whose_workers_are_replaced_says_the_same(tmp_path: Path) -> None:
+    from prima.batch import Processes
+
+    alone = sweep(SHORT, runs=6, jitter=3.0, seed=5, jobs=1, results=tmp_path / "one.jsonl")
+    recycled = sweep(SHORT, runs=6, jitter=3.0, seed=5, pool=Processes(2, recycle=1),
+                     results=tmp_path / "two.jsonl")
+    assert alone.done == recycled.done == 6
+    assert (tmp_path / "one.jsonl").read_bytes() == (tmp_path / "two.jsonl").read_bytes()

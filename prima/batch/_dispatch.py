@@ -25,7 +25,8 @@ from typing import Any, Protocol
 from prima.batch._results import ResultsFile
 from prima.batch._work import Chunk, Job, run_chunk
 
-__all__ = ["CHUNK", "Inline", "Pool", "Processes", "chunk_size", "collect", "dispatch", "plan"]
+__all__ = ["CHUNK", "RECYCLE", "Inline", "Pool", "Processes", "chunk_size", "collect", "dispatch",
+           "plan"]
 
 CHUNK = 50
 """Runs per task at most: a Dask task costs about 3 ms against a run's 50-130 ms."""
@@ -94,23 +95,81 @@ def _quiet() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+RECYCLE = 10
+"""Tasks a worker process takes before fresh ones take over (a pool's worth of such
+tasks per pool). What a run leaves behind in a process (C libraries' memory, which
+grows a little with every run, and pages the allocator never gives back) goes with
+it: a sweep's memory stays flat in its number of runs. At 50 runs a task, a fresh
+process costs one fork per 500 runs."""
+
+
+class _Recycling(concurrent.futures.Executor):
+    """Worker processes that are replaced after :data:`RECYCLE` tasks each: the tasks
+    go to one pool of ``workers`` processes until it has taken ``workers * RECYCLE``;
+    that pool then finishes what it took and lets its processes go, and a fresh pool
+    takes the next tasks."""
+
+    def __init__(self, workers: int, recycle: int) -> None:
+        self.workers = workers
+        self.limit = workers * recycle
+        self._pool: concurrent.futures.ProcessPoolExecutor | None = None
+        self._taken = 0
+        self._retired: list[tuple[concurrent.futures.ProcessPoolExecutor,
+                                  list[concurrent.futures.Future[Any]]]] = []
+        self._futures: list[concurrent.futures.Future[Any]] = []
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any,
+               **kwargs: Any) -> concurrent.futures.Future[Any]:
+        if self._pool is None or self._taken >= self.limit:
+            self._retire()
+            self._pool = concurrent.futures.ProcessPoolExecutor(
+                self.workers, mp_context=multiprocessing.get_context(), initializer=_quiet)
+            self._taken = 0
+        future = self._pool.submit(fn, *args, **kwargs)
+        self._taken += 1
+        self._futures.append(future)
+        return future
+
+    def _retire(self) -> None:
+        """Let the current pool finish what it took (its processes then exit); forget the
+        retired pools that have."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=False)
+            self._retired.append((self._pool, self._futures))
+            self._pool, self._futures = None, []
+        for pool, futures in list(self._retired):
+            if all(f.done() for f in futures):
+                pool.shutdown()  # (its processes are leaving: it waits for them to exit)
+                self._retired.remove((pool, futures))
+
+    def pools(self) -> list[concurrent.futures.ProcessPoolExecutor]:
+        """Every pool that may still have processes: the retired ones, then the current."""
+        return [p for p, _ in self._retired] + ([self._pool] if self._pool else [])
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        for pool in self.pools():
+            pool.shutdown(wait=wait, cancel_futures=cancel_futures)
+        self._pool, self._retired, self._futures = None, [], []
+
+
 class Processes:
-    """``jobs`` worker processes on this machine. A worker that dies breaks the pool
-    (every task not finished fails with it): a fresh pool takes the work on."""
+    """``jobs`` worker processes on this machine, replaced by fresh ones every
+    :data:`RECYCLE` tasks. A worker that dies breaks its pool (every task it took and
+    did not finish fails with it): a fresh pool takes the work on."""
 
     chunk = CHUNK
 
-    def __init__(self, jobs: int) -> None:
+    def __init__(self, jobs: int, recycle: int = RECYCLE) -> None:
         self.workers = jobs
-        self._pool: concurrent.futures.ProcessPoolExecutor | None = None
+        self.recycle = recycle
+        self._pool: _Recycling | None = None
         self._broken = False
 
     def executor(self) -> concurrent.futures.Executor:
         if self._pool is None or self._broken:
             if self._pool is not None:
                 self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = concurrent.futures.ProcessPoolExecutor(
-                self.workers, mp_context=multiprocessing.get_context(), initializer=_quiet)
+            self._pool = _Recycling(self.workers, self.recycle)
             self._broken = False
         return self._pool
 
@@ -123,10 +182,12 @@ class Processes:
         pool, self._pool = self._pool, None
         if pool is None:
             return
+        pools = pool.pools()
         pool.shutdown(wait=False, cancel_futures=True)
-        processes = getattr(pool, "_processes", None) or {}
-        for process in list(processes.values()):
-            process.terminate()
+        for each in pools:
+            processes = getattr(each, "_processes", None) or {}
+            for process in list(processes.values()):
+                process.terminate()
 
     def close(self) -> None:
         pool, self._pool = self._pool, None
