@@ -356,6 +356,8 @@ class Mediator:
             again.restarts = node.id
             again.once = node.once or not by_user  # (one cut by another app at most)
             again.cut_for = None if by_user else node.cut_for
+            if again.cut_for is not None:
+                wm.after_reactions[again.id] = again
             # it starts like any other AB: turned to the user first, where it applies
             again.turnable = again.faces = node.faces
             again.parent = node.id

@@ -74,6 +74,9 @@ class WorkingMemory:
         next AB of a reaction (or a reply to an answer, or an AB a policy put an AB of
         its own before) right after one of its tree's waiting or running ABs
         (docs/rules.md 7.1, 7.4)."""
+        self.after_reactions: dict[AbId, Node] = {}
+        """Restarts that may wait for the reaction's AB they were cut for (``Node.cut_for``):
+        whether they wait turns on ranks, so a re-ranked tree has them looked at again."""
         self._next_ab = 1
         self._next_tree = 0
         self._next_susp = 1
@@ -373,6 +376,12 @@ class WorkingMemory:
         its next ABs reserve are looked at again (whom they outrank changed)."""
         dirty = self.dirty
         dirty.update(self.index.rerank(tree))
+        if self.after_reactions:  # (whether a restart waits for its reaction may change with it)
+            for ab, n in list(self.after_reactions.items()):
+                if n.state is _WAITING:
+                    dirty.update(n.devices)
+                elif n.state is not _PENDING:
+                    del self.after_reactions[ab]
         if self.reserving:
             beside = self.beside
             for d, on in self.reserving.items():

@@ -205,7 +205,7 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   3000000000010914, 3000000000030658, 3000000000025602,
                                   4000000000437850, 5000000000233759, 6000000000220037,
                                   8000000000085618, 8000000000803102, 8000000000367237,
-                                  8000000000426130, 11000000000126716])
+                                  8000000000426130, 11000000000126716, 11000000000702366])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -290,7 +290,11 @@ def test_seeds_that_once_failed(seed: int) -> None:
     kept the other app waiting past the share (it ranks as the reply does: 7.4).
     11000000000126716: a demoted app's reply waited first in line for the speaker while
     the wheels it also needs were busy; the oracle charged that wait to its share (a
-    reply goes first past the share, 7.4, waiting as it runs)."""
+    reply goes first past the share, 7.4, waiting as it runs). 11000000000702366: a
+    restart waited for the reaction it was cut for while that reaction's AB was kept for
+    a third tree's next AB; the reaction's app regained its precedence and it no longer
+    was, but nothing looked at the restart again (a re-ranked tree now has every
+    restart that may wait for its reaction looked at again)."""
     assert play(seed).violations == []
 
 
