@@ -14,7 +14,15 @@ import pytest
 
 from prima.catalog import Catalog
 from prima.judge import Thresholds, judge
-from prima.mediator import AppKind, Call, Event, MediatorConfig, Request, RunningOrder
+from prima.mediator import (
+    AppKind,
+    Call,
+    Event,
+    MediatorConfig,
+    Outcome,
+    Request,
+    RunningOrder,
+)
 from prima.mediator.testing import Harness
 from prima.run import Run
 from prima.trace import TraceLine
@@ -304,6 +312,34 @@ def test_the_bound_of_one_cut_is_for_other_apps_not_for_the_user() -> None:
     cuts = [(d.t, d.rule.value) for d in h.decisions if d.kind.value == "interrupt"]
     # the user cut twice; the FA's first reaction cut the restart once, its second none
     assert cuts == [(1.0, "barge-in"), (2.0, "barge-in"), (3.0, "interrupt")]
+
+
+def test_a_reply_cut_by_words_no_app_took_goes_on_before_a_reaction() -> None:
+    """7.4 with 7.5: the user's words over the reply to their answer were taken by no
+    application (a false interruption); the reply goes on after the pause, still the
+    reply: the touch reaction that came meanwhile waits for its end."""
+    h = Harness(_catalog(), duration={"Speak": 4.0, "QA": 2.0}, cut_after=0.2,
+                outcome=lambda ab: Outcome({"status": "answered", "utterance": "yes"}),
+                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+    m = h.mediator
+    asked: list[int] = []
+
+    def replied(cid: int, _o: Outcome) -> None:
+        if cid in asked:
+            m.submit(Request("ea", (call("Speak", text="Nice to meet you, Hanako."),),
+                             follows=cid))
+
+    h.app("ea", AppKind.EA, on_ended=replied)
+    h.app("fa", AppKind.FA)
+    asked.extend(m.submit(Request("ea", (call("QA", prompt="Your name?", grammar="g"),))))
+    h.at(3.0, lambda: m.hear(Event("speech", {"words": "ahem"})))
+    h.at(3.3, lambda: m.submit(Request("fa", (call("Speak", text="That tickles."),),
+                                       reactive=True, reaction=True, user=True)))
+    h.run(until=20.0)
+    said = [(round(d.t, 3), d.calls[0].args["text"]) for d in h.starts()
+            if d.command == "Speak"]
+    assert said == [(2.0, "Nice to meet you, Hanako."), (3.8, "Nice to meet you, Hanako."),
+                    (7.8, "That tickles.")]
 
 
 # ---------------------------------------------------------------- 5. news of a stream

@@ -370,6 +370,7 @@ class Mediator:
                 again.plain = again.facts + ("", again.calls, None, None)
                 detail = f"AB{node.id} goes on from {resumed[1]!r}"
             if false_cut:
+                again.protected = node.protected  # (the exchange goes on: 7.4)
                 again.not_before = self._clock.after(self._config.resume_pause)
                 detail += (f" after {self._config.resume_pause:g} s (no application took "
                            "the user's words)")

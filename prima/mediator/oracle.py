@@ -631,19 +631,33 @@ class Oracle:
         elif d.kind is DecisionKind.END:
             self._cut_ended(ab, d)
         elif d.kind is DecisionKind.REQUEST:
-            self._requests += 1
-            cut = d.before if d.before is not None else -1
-            if cut not in self._to_restart:
-                self.fail(f"t={d.t:g}: AB{cut} was restarted but not cut to restart")
-            self._to_restart.discard(cut)
-            self._interrupted.add(cut)
-            if d.ab is not None:
-                if cut not in self._by_user or cut in self._restarts:
-                    self._restarts.add(d.ab)  # (the bound of one cut by another app)
-                if cut in self._rest:
-                    self._resting[d.ab] = self._rest.pop(cut)
-                if cut in self._cut_for:
-                    self._cut_for[d.ab] = self._cut_for.pop(cut)
+            self._restarted(d)
+
+    def _restarted(self, d: Decision) -> None:
+        """A cut AB's restart was asked for: it was cut to restart, once; it is bound by
+        the one cut by another app; cut by words no app took, it goes on after the pause,
+        and as the reply it was (7.4)."""
+        self._requests += 1
+        cut = d.before if d.before is not None else -1
+        if cut not in self._to_restart:
+            self.fail(f"t={d.t:g}: AB{cut} was restarted but not cut to restart")
+        self._to_restart.discard(cut)
+        self._interrupted.add(cut)
+        if d.ab is None:
+            return
+        if cut not in self._by_user or cut in self._restarts:
+            self._restarts.add(d.ab)  # (the bound of one cut by another app)
+        if cut in self._rest:
+            self._resting[d.ab] = self._rest.pop(cut)
+            if cut in self.streams.replies:
+                # a reply cut by words no app took goes on as the reply (7.4): the
+                # exchange is not over, and what a policy puts before it is part of it
+                self.streams.replies.add(d.ab)
+                for cid in d.command_ids:
+                    if cid in self._reply_commands:
+                        self._reply_commands[cid] = d.ab
+        if cut in self._cut_for:
+            self._cut_for[d.ab] = self._cut_for.pop(cut)
 
     def _cut_ended(self, ab: AbId, d: Decision) -> None:
         """A cut AB ended: it was being cut (for the user's words if its end says so),
