@@ -13,8 +13,9 @@ physics steps they took; the peer, measured in the same rounds in this process,
 steps a bare pymunk space of the same world (walls, robot, user) as many times.
 Printed per scenario: both medians, their ratio, and runs per CPU second; with
 ``--against TREE`` (a checkout of an earlier build: ``git worktree add /tmp/before
-<commit>``), that build's runs of the same scenarios in the same rounds, and the
-speed-up over it, against the target of 2x.
+<commit>``), that build's runs of the same scenarios in the same rounds (its own copy
+of each, with the documents as they were then), and the speed-up over it, against
+the target of 2x.
 
 ``--memory N,M`` runs ``prima sweep`` of N and then M runs of ``--scenario``
 (default fig5-7, a one-minute scenario) with ``--results`` to a file, each in its
@@ -114,10 +115,21 @@ class Case:
         return cpu(step)
 
 
+def _there(path: Path, tree: Path) -> Path:
+    """The earlier build's own copy of a scenario of this tree (with the documents it
+    names as they were then: today's may use what that build lacks), if it has one."""
+    try:
+        theirs = tree / path.resolve().relative_to(ROOT)
+    except ValueError:
+        return path
+    return theirs if theirs.exists() else path
+
+
 def speed(args: argparse.Namespace) -> int:
     named = {p.stem: p for p in args.scenarios} if args.scenarios else SCENARIOS
     cases = {name: Case(name, path, args.runs) for name, path in named.items()}
-    earlier = {name: Case(name, path, args.runs, args.against.resolve())
+    earlier = {name: Case(name, _there(path, args.against.resolve()), args.runs,
+                          args.against.resolve())
                for name, path in named.items()} if args.against else {}
     for case in [*cases.values(), *earlier.values()]:
         case.sweep()  # (a round not counted: the bytecode cache, the steps for the peer)
