@@ -305,7 +305,8 @@ class Holds:
             self._reserve_parked.append(node)
         else:
             self._parked.append(node)
-        if node.id not in self._kept:
+        if node.id not in self._kept and holder is not node.app:  # (an app's own waits
+            # for its reaction to the user's words are no budget matter)
             self._kept[node.id] = holder.name
             self.keeping[holder.name] = self.keeping.get(holder.name, 0) + 1
 

@@ -356,6 +356,7 @@ class Mediator:
             again.restarts = node.id
             again.once = node.once or not by_user  # (one cut by another app at most)
             again.cut_for = None if by_user else node.cut_for
+            again.taker = node.taker if by_user else None  # (it waits for its reaction)
             if again.cut_for is not None:
                 wm.after_reactions[again.id] = again
             # it starts like any other AB: turned to the user first, where it applies

@@ -369,14 +369,18 @@ class Selector:
         """The pending next AB of another application's reaction (or reply) that
         reserves one of ``x``'s devices and keeps it from ``x`` (docs/rules.md 7.1,
         :func:`keeps_for`): ``x`` may not have that device now, whatever else holds it.
-        None if there is none (none of the tree ``besides``)."""
+        None if there is none (none of the tree ``besides``). A restart of words the user
+        cut for a reaction of their own application's is kept by that reaction's next AB
+        too (7.5: it waits for the taker's reaction)."""
         reserving = self._wm.reserving
         found: Node | None = None
+        taker = x.taker  # (a restart of words the user cut for this app's reaction)
         for d in x.sorted_devices:
             on = reserving.get(d)
             if on:
                 for r in on.values():
-                    if r.app is not x.app and (found is None or r.id < found.id) \
+                    if (r.app is not x.app or (r.app is taker and r.tree is not x.tree)) \
+                            and (found is None or r.id < found.id) \
                             and r.tree is not besides \
                             and keeps_for(r, x) and not self._held_by(r, x.app):
                         found = r

@@ -111,6 +111,14 @@ class Streams:
     deferred: set[CommandId] = field(default_factory=set)
     """Commands a policy put an AB of its own before (a turn, a return): their AB stays
     in line for its devices meanwhile."""
+    taken_for: dict[AbId, str] = field(default_factory=dict)
+    """Restarts of words the user cut for the app that took them -> that app: they wait
+    for its reaction (7.5), whose next AB keeps their devices as another app's would."""
+
+    def keeps(self, r: NodeView, n: NodeView) -> bool:
+        """Whether ``r`` (a reaction's next AB) is of an app it may keep ``n`` from: another
+        application's, or, for a restart of words the user cut, the taker's reaction."""
+        return r.app != n.app or (self.taken_for.get(n.ab) == r.app and r.tree != n.tree)
 
     def held_by_stream(self, tree: TreeId, suspended: Collection[TreeId]) -> bool:
         """A stream hold delays only new streams that are no reaction (7.1, 7.2): trees
@@ -165,7 +173,8 @@ class _View:
         mine = self.standing(n)
         for r in self.nexts if nexts is None else nexts:
             theirs = self.standing(r)
-            if r.app != n.app and r.tree != besides and set(r.devices) & set(n.devices) \
+            if self.streams.keeps(r, n) and r.tree != besides \
+                    and set(r.devices) & set(n.devices) \
                     and theirs[0] <= mine[0] and theirs[1:] < mine[1:] \
                     and not self.behind_hold(r, n.app):
                 return r
@@ -183,7 +192,8 @@ class _View:
         (but the ``excused`` ones)."""
         mine = self.standing(n)
         return [r.app for r in self.nexts
-                if r.app != n.app and r.ab not in excused and set(r.devices) & set(n.devices)
+                if r.app != n.app and r.ab not in excused  # (an app's own: no budget matter)
+                and set(r.devices) & set(n.devices)
                 and (theirs := self.standing(r))[0] <= mine[0] and theirs[1:] < mine[1:]
                 and not self.behind_hold(r, n.app)]
 
@@ -311,6 +321,8 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
         if n.parked_by is None:
             for d in n.devices:
                 wanting.setdefault(d, []).append(n)
+        elif n.parked_by == n.app:
+            pass  # (a restart waiting for its own app's reaction to the user's words, 7.5)
         elif not v.channel_held(n):
             # Kept by several apps' holds (three apps or more): the wait is the
             # parking hold's doing; the others would keep nothing it did not.
@@ -647,6 +659,9 @@ class Oracle:
             return
         if cut not in self._by_user or cut in self._restarts:
             self._restarts.add(d.ab)  # (the bound of one cut by another app)
+        hear = self._by_user.get(cut)
+        if hear is not None and hear.app is not None:
+            self.streams.taken_for[d.ab] = hear.app  # (it waits for the taker's reaction)
         if cut in self._rest:
             self._resting[d.ab] = self._rest.pop(cut)
             if cut in self.streams.replies:

@@ -278,7 +278,8 @@ def plain_scan(mediator: Mediator) -> list[AbId]:
         held = mediator._holds.holder(n)
         if held is not None and held[0] is not Rule.KEEP_CHANNEL:
             continue  # held by a block or stream hold: it reserves nothing
-        kept = any(r.app is not n.app and r.devices & n.devices and outranks(r, n)
+        kept = any((r.app is not n.app or (r.app is n.taker and r.tree is not n.tree))
+                   and r.devices & n.devices and outranks(r, n)
                    and not _behind_hold(mediator, r, n) for r in nexts)
         if n.devices & busy or n.devices & reserved or held is not None or kept:
             reserved |= n.devices

@@ -205,7 +205,8 @@ def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> 
                                   3000000000010914, 3000000000030658, 3000000000025602,
                                   4000000000437850, 5000000000233759, 6000000000220037,
                                   8000000000085618, 8000000000803102, 8000000000367237,
-                                  8000000000426130, 11000000000126716, 11000000000702366])
+                                  8000000000426130, 11000000000126716, 11000000000702366,
+                                  14000000000418768])
 def test_seeds_that_once_failed(seed: int) -> None:
     """2102: the waiting index compared two slots (TypeError); 11446: an AB held by a
     newly reserving block still reserved a free device; 127444: the same for a newly
@@ -294,7 +295,11 @@ def test_seeds_that_once_failed(seed: int) -> None:
     restart waited for the reaction it was cut for while that reaction's AB was kept for
     a third tree's next AB; the reaction's app regained its precedence and it no longer
     was, but nothing looked at the restart again (a re-ranked tree now has every
-    restart that may wait for its reaction looked at again)."""
+    restart that may wait for its reaction looked at again). 14000000000418768: the user
+    cut an app's question with words the same app took; while a turn to the user went
+    before its answer, the question's restart took the speaker (the answer's
+    reservation kept only other apps' ABs): now the taker's reaction keeps it from the
+    restart too, and the oracle agrees (7.5)."""
     assert play(seed).violations == []
 
 
