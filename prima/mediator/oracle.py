@@ -457,9 +457,9 @@ class Oracle:
         self._rest: dict[AbId, float] = {}
         """Cut by words no app took, ended: when the robot's pause is over."""
         self._resting: dict[AbId, float] = {}
+        """ABs that start such a cut AB again, and the instant they may start."""
         self._cut_for: dict[AbId, AbId] = {}
         """A cut AB, then its restart -> the reaction's AB it was cut for."""
-        """ABs that start such a cut AB again, and the instant they may start."""
         self._hear: Decision | None = None
         """The latest hear decision of the operation under way."""
         self._requests = 0
