@@ -64,7 +64,7 @@ from prima.vocab import (
     policy_settings,
 )
 
-__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Run", "Switches", "spec_from_profile"]
+__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Loaded", "Run", "Switches", "spec_from_profile"]
 
 MAX_IDLE_ROUNDS = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
@@ -168,6 +168,42 @@ class _Port:
         self._run.mediator.close_block(app)
 
 
+class Loaded:
+    """Robot profiles and documents loaded for runs, kept by file and content, so that
+    runs of the same files (a sweep's) read and check each file once. Profiles and
+    documents are immutable: runs share them. A file that cannot be loaded is not
+    kept (each run reports it as it would alone)."""
+
+    def __init__(self) -> None:
+        self._profiles: dict[tuple[str, bytes], RobotProfile] = {}
+        self._documents: dict[tuple[str, bytes], tuple[RobotProfile, Document]] = {}
+
+    def profile(self, path: str | Path) -> RobotProfile:
+        """The robot profile in ``path`` (:func:`prima.dsl.load_profile`)."""
+        try:
+            key = (str(path), Path(path).read_bytes())
+        except OSError:
+            return load_profile(path)  # (which says what is wrong with the file)
+        found = self._profiles.get(key)
+        if found is None:
+            found = self._profiles[key] = load_profile(path)
+        return found
+
+    def document(self, path: str | Path, profile: RobotProfile) -> Document:
+        """The document in ``path``, checked for ``profile``
+        (:func:`prima.dsl.load_document`)."""
+        try:
+            key = (str(path), Path(path).read_bytes())
+        except OSError:
+            return load_document(path, profile)
+        found = self._documents.get(key)
+        if found is not None and found[0] is profile:
+            return found[1]
+        document = load_document(path, profile)
+        self._documents[key] = (profile, document)
+        return document
+
+
 @dataclass(frozen=True)
 class Switches:
     """What a command line may change of a scenario's own choices for its runs (``prima
@@ -194,7 +230,8 @@ class Run:
 
     The trace goes to ``sink`` line by line as the run goes, if one is given
     (then :attr:`lines` stays empty and memory stays flat however long the run);
-    otherwise it is kept in :attr:`lines`.
+    otherwise it is kept in :attr:`lines`. Runs given the same ``files`` share the
+    profiles and documents they load.
     """
 
     def __init__(self, scenario: str | Path, *, fa: str | Path | None = None,
@@ -203,14 +240,17 @@ class Run:
                  sink: Callable[[TraceLine], None] | None = None,
                  pose_rate: float = POSE_RATE,
                  policies: Mapping[str, bool] | None = None,
-                 speech: SpeechTiming | None = None) -> None:
+                 speech: SpeechTiming | None = None, files: Loaded | None = None) -> None:
+        self._files = files or Loaded()
+        """Where profiles and documents are loaded (shared by a sweep's runs)."""
         loaded = load_scenario(scenario)
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
         self.scenario: Scenario = loaded
         self.until = loaded.until if until is None else until
         profile_path = robot or (loaded.resolve(loaded.profile) if loaded.profile else None)
-        self.profile = load_profile(profile_path) if profile_path else default_profile()
+        self.profile = (self._files.profile(profile_path) if profile_path
+                        else default_profile())
         self.policies: Mapping[str, bool] = policy_settings(
             self.profile.policies, loaded.policies, policies or {})
         """Every mediation policy's state: the defaults, switched by the profile, the
@@ -292,14 +332,14 @@ class Run:
             self._load(path, AppKind.EA)
         if self.sim.sample_every:
             self._line(Kind.POSE)  # where everyone starts; the samples follow
-        sim, hz = self.sim, self.sim.kernel.hz
+        sim = self.sim
         idle, last = 0, -1.0
         while sim.now() < self.until:
-            deadlines = [sim.next_time(), self.mediator.next_deadline()]
+            # To the next deadline of the mediator or an application, or the first
+            # report (the simulator's own wake-ups on the way concern neither).
+            deadlines = [self.mediator.next_deadline()]
             deadlines += [a.interpreter.next_deadline() for a in list(self.apps.values())]
-            t = min([d for d in deadlines if d is not None] + [self.until])
-            t = max(math.ceil(t * hz - 1e-6) / hz, sim.now())
-            sim.advance_to(t, stop_on_report=True)
+            sim.advance_until(min([d for d in deadlines if d is not None] + [self.until]))
             self.mediator.advance()
             for app in list(self.apps.values()):
                 self._guard(app, app.interpreter.advance)
@@ -317,7 +357,7 @@ class Run:
         found = list(self._documents.values())
         for zone in self.scenario.zones:
             try:
-                found.append(load_document(self.scenario.resolve(zone.ea), self.profile))
+                found.append(self._files.document(self.scenario.resolve(zone.ea), self.profile))
             except LocatedError:
                 continue
         return found
@@ -330,7 +370,7 @@ class Run:
     def _checked(self, path: Path, role: AppKind) -> Document:
         """A document loaded for ``role``, its places written by name on the scenario's map
         (as ``prima validate`` of the scenario checks them): else the problems."""
-        document = _check_slot(load_document(path, self.profile), role)
+        document = _check_slot(self._files.document(path, self.profile), role)
         world = self.scenario.map
         problems = unknown_places(str(path), document.places, [p.name for p in world.places],
                                   world.name, world.source)

@@ -16,7 +16,7 @@ import tempfile
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from lxml import etree
 
@@ -24,6 +24,9 @@ from prima.batch._variants import Bundle, rng, shift_timings
 from prima.collecting import fewer_collections
 from prima.errors import LocatedError
 from prima.judge import Report, Thresholds
+
+if TYPE_CHECKING:
+    from prima.run import Loaded  # (imported where runs are made, as Run is)
 
 __all__ = ["Analysis", "Chunk", "Job", "Observer", "record_of", "run_chunk", "run_one"]
 
@@ -100,10 +103,11 @@ def _tee(rows: Iterable[Mapping[str, Any]], observer: Observer) -> Iterator[Mapp
         yield row
 
 
-def run_one(job: Job, index: int, root: etree._Element, folder: Path) -> dict[str, Any]:
+def run_one(job: Job, index: int, root: etree._Element, folder: Path,
+            files: Loaded | None = None) -> dict[str, Any]:
     """Run ``index`` of ``job`` (its scenario's parsed ``root``, unpacked in ``folder``),
     judged: its record (without its job's number). A run that fails is a record with
-    its ``error``."""
+    its ``error``. Runs given the same ``files`` load the job's documents once."""
     from prima.judge import judge
     from prima.run import Run
     from prima.tracefile import rows
@@ -114,7 +118,7 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path) -> dict[st
     path.write_bytes(etree.tostring(variant, encoding="UTF-8", xml_declaration=True))
     record: dict[str, Any] = {"run": index}
     try:
-        lines: Iterable[Mapping[str, Any]] = rows(Run(path).run())
+        lines: Iterable[Mapping[str, Any]] = rows(Run(path, files=files).run())
         observer = job.analysis.observer() if job.analysis is not None else None
         if observer is not None:
             lines = _tee(lines, observer)
@@ -139,8 +143,11 @@ def run_chunk(chunk: Chunk) -> list[dict[str, Any]]:
         folder = Path(scratch)
         scenario = spec.bundle.unpack(folder)
         root = etree.fromstring(scenario.read_bytes())
+        from prima.run import Loaded
+
+        files = Loaded()
         out = []
         for index in range(chunk.first, chunk.first + chunk.count):
-            record = run_one(spec, index, root, folder)
+            record = run_one(spec, index, root, folder, files)
             out.append({"job": chunk.job, **record})
         return out

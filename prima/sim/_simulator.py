@@ -412,6 +412,26 @@ class Simulator:
             nxt = horizon if nxt is None else min(nxt, horizon)
         return None if nxt is None else nxt / k.hz
 
+    def advance_until(self, t: float) -> None:
+        """Run up to time ``t`` (the first tick at or after it), returning as soon as
+        anything is reported (as :meth:`advance_to` with ``stop_on_report``).
+
+        On the way, the simulator wakes at its own times (:meth:`next_time`) and
+        settles there as it would if a caller's loop woke it then: it runs what is
+        due and, while human detection runs, looks for the user. So a caller whose
+        loop has nothing to do at those times (a run's mediator and applications)
+        sleeps through them, and the simulator sees the same at the same ticks.
+        """
+        hz = self.kernel.hz
+        before = self.reports
+        while True:
+            own = self.next_time()
+            step = t if own is None else min(own, t)
+            step = max(math.ceil(step * hz - 1e-6) / hz, self.now())
+            self.advance_to(step, stop_on_report=True)
+            if self.reports != before or step >= t or self.now() != step:
+                return
+
     def advance_to(self, t: float, *, stop_on_report: bool = False) -> None:
         """Run up to time ``t``, reporting everything on the way at its own time.
 
