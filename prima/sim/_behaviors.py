@@ -106,7 +106,7 @@ def _turn(sim: Simulator, delta: float) -> Generator[Wait, Any, None]:
 
 
 def _face(sim: Simulator, heading: float) -> Generator[Wait, Any, None]:
-    yield from _turn(sim, wrap_angle(heading - sim.world.robot.angle))
+    yield from _turn(sim, wrap_angle(heading - sim.world.robot_angle()))
 
 
 ARRIVED, UNDER_WAY, BLOCKED = "arrived", "under way", "blocked"
@@ -124,7 +124,7 @@ def _period_toward(sim: Simulator, x: float, y: float) -> Generator[Wait, Any, s
     world, k = sim.world, sim.kernel
     end = k.tick + sim.ticks(sim.spec.control_period)
     while True:
-        px, py = world.robot.position
+        px, py = world.robot_xy()
         if math.hypot(x - px, y - py) < 1e-6:
             return ARRIVED
         bearing = math.atan2(y - py, x - px)
@@ -140,7 +140,7 @@ def _period_toward(sim: Simulator, x: float, y: float) -> Generator[Wait, Any, s
         else:
             if world.mode:
                 yield from _stop(sim)
-            delta = wrap_angle(bearing - world.robot.angle)
+            delta = wrap_angle(bearing - world.robot_angle())
             if abs(delta) > math.radians(1.0):
                 turned = yield signal(functools.partial(_turn_by, world, delta), end - k.tick)
             else:
@@ -163,7 +163,7 @@ def _rewake(world: World, wake: Callable[..., None]) -> bool:
 
 def _heading_to(sim: Simulator, place: Place) -> float | None:
     """Map heading (radians) from the robot toward a place (its ``facing`` when there)."""
-    x, y = sim.world.robot.position
+    x, y = sim.world.robot_xy()
     if math.hypot(place.x - x, place.y - y) <= sim.spec.place_tolerance:
         return None if place.facing is None else math.radians(place.facing)
     return math.atan2(place.y - y, place.x - x)
@@ -307,7 +307,7 @@ def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
         raise CommandError("give exactly one of 'toward' and 'angle'")
     if toward is not None:
         target = _heading_to(sim, toward)
-        angle = 0.0 if target is None else math.degrees(wrap_angle(target - world.robot.angle))
+        angle = 0.0 if target is None else math.degrees(wrap_angle(target - world.robot_angle()))
     angle = _clamp(angle or 0.0, spec.arm_range)
     n = sim.ticks(abs(angle - world.arm.at(tick)) / spec.arm_rate)
     world.arm.move(angle, tick, n)
@@ -412,7 +412,7 @@ def _joint_target(sim: Simulator, call: Call, step: MoveJoint) -> float:
             raise CommandError(f"unknown place {toward!r} on map {sim.map.name!r}")
         target = _heading_to(sim, place)
         angle = 0.0 if target is None else math.degrees(
-            wrap_angle(target - sim.world.robot.angle))
+            wrap_angle(target - sim.world.robot_angle()))
     else:
         angle = _finite(to, f"joint {name!r}'s angle")
     return _clamp(angle, _joint_figures(sim, step.joint)[0])
@@ -614,7 +614,7 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
         yield sleep(sim.ticks(sim.spec.control_period))
         return {"waiting": "user", "toward": nxt.name, "goal": goal.name, **_pose(sim)}, False
     outcome = yield from _period_toward(sim, nxt.x, nxt.y)
-    if outcome is BLOCKED and math.dist(sim.world.robot.position, (nxt.x, nxt.y)) <= PASS_BY:
+    if outcome is BLOCKED and math.dist(sim.world.robot_xy(), (nxt.x, nxt.y)) <= PASS_BY:
         # someone stands on the place: the robot is there, as near as it can get
         state["blocked"] = 0
         sim.emit("place-reached", {"place": nxt.name, "kind": nxt.kind.value})
@@ -624,7 +624,7 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
             sim.end_loop(cid)
         else:  # on to the next place, from here (not back to this one)
             state["toward"] = path[1].name
-            state["x"], state["y"] = sim.world.robot.position
+            state["x"], state["y"] = sim.world.robot_xy()
         return {"place": nxt.name, "kind": nxt.kind.value, "goal": goal.name,
                 "remaining": len(path) - 1, "occupied": True}, done
     if outcome is BLOCKED:
@@ -638,7 +638,7 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
     state["blocked"] = 0
     if outcome is UNDER_WAY:
         state["toward"] = nxt.name
-        state["x"], state["y"] = sim.world.robot.position
+        state["x"], state["y"] = sim.world.robot_xy()
         return {"toward": nxt.name, "goal": goal.name, "remaining": len(path)}, False
     state["toward"] = None
     sim.emit("place-reached", {"place": nxt.name, "kind": nxt.kind.value})
@@ -655,8 +655,8 @@ def _would_leave(sim: Simulator, x: float, y: float, bound: float) -> bool:
     it could drive in the period at its speed limit, and then brake to a stop. Asked
     before each period, so the robot stops within the bound, ahead of time."""
     world = sim.world
-    px, py = world.robot.position
-    ux, uy = world.human.position
+    px, py = world.robot_xy()
+    ux, uy = world.user_xy()
     if math.hypot(ux - px, uy - py) > bound:
         return True
     left = math.hypot(x - px, y - py)
@@ -679,7 +679,7 @@ def _route(sim: Simulator, goal: Place,
     """
     toward = sim.map.place(str(state.get("toward") or ""))
     if toward is not None:
-        x, y = sim.world.robot.position
+        x, y = sim.world.robot_xy()
         lx, ly = state.get("x"), state.get("y")
         moving_on = sim.world.heading_to() == (toward.x, toward.y)
         if moving_on or (isinstance(lx, float) and isinstance(ly, float)
@@ -709,7 +709,7 @@ def _set_position(sim: Simulator, call: Call, cid: int,
     tx, ty = _req(sim, call, "x"), _req(sim, call, "y")
     world, spec = sim.world, sim.spec
     tol = spec.position_tolerance
-    x, y = world.robot.position
+    x, y = world.robot_xy()
     if math.hypot(tx - x, ty - y) > tol:
         points = sim.route(x, y, tx, ty, spec.radius / 2)
         if not points:
@@ -726,7 +726,7 @@ def _set_position(sim: Simulator, call: Call, cid: int,
             yield sleep(sim.ticks(1.0))
             return {"blocked": True, **_pose(sim)}, False
         sim.loop_state(cid)["blocked"] = 0
-        x, y = world.robot.position
+        x, y = world.robot_xy()
     reached = math.hypot(tx - x, ty - y) <= tol
     if reached and heading is not None:
         yield from _face(sim, math.radians(heading))

@@ -685,7 +685,7 @@ class Simulator:
 
     def plan(self, goal: str) -> tuple[Place | None, list[Place]]:
         """The place the robot is at (if any) and the places still to visit to ``goal``."""
-        x, y = self.world.robot.position
+        x, y = self.world.robot_xy()
         tol = self.spec.place_tolerance
         near = [(math.hypot(p.x - x, p.y - y), i, p) for i, p in enumerate(self.map.places)]
         at = min(near)[2] if near and min(near)[0] <= tol else None
@@ -753,7 +753,7 @@ class Simulator:
     def _check_passing(self) -> None:
         """Report places the robot passes while no Topological Move reports its route."""
         world = self.world
-        x, y = world.robot.position
+        x, y = world.robot_xy()
         px, py, clear = self._passing_probe
         if math.hypot(x - px, y - py) < clear:
             return  # no place can have come within the radius or left it
@@ -768,7 +768,7 @@ class Simulator:
                 self.emit("place-reached", {"place": place.name, "kind": place.kind.value})
 
     def _check_zones(self) -> None:
-        x, y = self.world.robot.position
+        x, y = self.world.robot_xy()
         for zone in self._zones:
             inside = zone.area.contains(x, y)
             if inside and zone.name not in self._inside:

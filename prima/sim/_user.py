@@ -215,7 +215,7 @@ class ScriptedUser:
 
     def _leg(self, x: float, y: float, speed: float) -> ProcGen:
         world = self._sim.world
-        hx, hy = world.human.position
+        hx, hy = world.user_xy()
         length = math.hypot(x - hx, y - hy)
         if length < 1e-6:
             return
@@ -233,7 +233,7 @@ class ScriptedUser:
             tx, ty = (place.x, place.y) if place is not None else (here.x, here.y)
         else:
             tx, ty = float(a.x or 0.0), float(a.y or 0.0)
-        hx, hy = sim.world.human.position
+        hx, hy = sim.world.user_xy()
         for x, y in sim.route(hx, hy, tx, ty, 0.0) or [(tx, ty)]:
             yield from self._leg(x, y, speed)
         self._set_velocity(0.0, 0.0)
@@ -243,8 +243,8 @@ class ScriptedUser:
         world = self._sim.world
         period = self._sim.kernel.ticks(_FOLLOW_PERIOD)
         while True:
-            rx, ry = world.robot.position
-            hx, hy = world.human.position
+            rx, ry = world.robot_xy()
+            hx, hy = world.user_xy()
             d = math.hypot(rx - hx, ry - hy)
             if d > distance + 0.1:
                 v = min(speed, (d - distance) * 2.0)
@@ -259,7 +259,7 @@ class ScriptedUser:
 
     def _in_the_way(self, rx: float, ry: float, hx: float, hy: float, d: float) -> bool:
         """The robot heads toward the user (within 45 degrees)."""
-        angle = self._sim.world.robot.angle
+        angle = self._sim.world.robot_angle()
         ahead = ((hx - rx) * math.cos(angle) + (hy - ry) * math.sin(angle)) / d
         return ahead > math.cos(math.radians(45))
 
@@ -267,7 +267,7 @@ class ScriptedUser:
                     speed: float) -> None:
         """Step sideways out of the robot's way, to the side the user already leans to
         (left of the robot's heading when squarely in front: people keep right)."""
-        angle = self._sim.world.robot.angle
+        angle = self._sim.world.robot_angle()
         fx, fy = math.cos(angle), math.sin(angle)
         side = fx * (hy - ry) - fy * (hx - rx)  # > 0: the user is left of the robot's path
         sign = 1.0 if side >= 0 else -1.0
@@ -288,8 +288,8 @@ class ScriptedUser:
         world = sim.world
         reach = sim.spec.radius + sim.spec.touch_reach + 0.25
         for _ in range(240):  # give up after about two minutes of chasing
-            rx, ry = world.robot.position
-            hx, hy = world.human.position
+            rx, ry = world.robot_xy()
+            hx, hy = world.user_xy()
             d = math.hypot(rx - hx, ry - hy)
             if d <= reach:
                 break

@@ -10,7 +10,11 @@ are driven by one of three controllers, all stepped at the fixed time step:
 
 Per-step Python work is kept small: pymunk property access costs more than a
 physics step here, so velocities are written only when they change and the
-profiles keep their own progress instead of reading positions back.
+profiles keep their own progress instead of reading positions back. What the
+world does at every step, and the poses it reads most, go straight to the
+Chipmunk functions that pymunk's properties and ``Space.step`` call (through
+pymunk's own binding of them): the same calls with the same numbers, without
+three to five times their cost in Python around each.
 
 What is worked out from the poses is worked out once per pose: :attr:`World.version`
 moves on whenever a body may have moved or turned (every step, and every pose
@@ -37,6 +41,7 @@ import math
 from collections.abc import Callable
 
 import pymunk
+from pymunk._chipmunk_cffi import lib as _cp  # (pymunk's binding of Chipmunk: see above)
 
 from prima.sim._maps import WorldMap
 from prima.sim._records import Pose
@@ -129,6 +134,8 @@ class World:
         hshape.filter = pymunk.ShapeFilter(categories=HUMAN)
         space.add(human, hshape)
         self.human = human
+        self._rb, self._hb, self._sp = body._body, human._body, space._space
+        """The robot, the user and the space as Chipmunk knows them."""
         self.human_moving = False
         self.version = 0
         """Moves on whenever a body may have moved or turned (see the module's doc)."""
@@ -195,17 +202,31 @@ class World:
         return self.joint(name).at(tick)
 
     def robot_pose(self) -> Pose:
-        x, y = self.robot.position
-        return Pose(x, y, math.degrees(self.robot.angle) % 360.0)
+        p = _cp.cpBodyGetPosition(self._rb)
+        return Pose(p.x, p.y, math.degrees(_cp.cpBodyGetAngle(self._rb)) % 360.0)
 
     def user_pose(self) -> Pose:
-        x, y = self.human.position
-        return Pose(x, y, math.degrees(self.human.angle) % 360.0)
+        p = _cp.cpBodyGetPosition(self._hb)
+        return Pose(p.x, p.y, math.degrees(_cp.cpBodyGetAngle(self._hb)) % 360.0)
+
+    def robot_xy(self) -> tuple[float, float]:
+        """Where the robot is (m): ``robot.position``, read for less."""
+        p = _cp.cpBodyGetPosition(self._rb)
+        return p.x, p.y
+
+    def user_xy(self) -> tuple[float, float]:
+        """Where the user is (m): ``human.position``, read for less."""
+        p = _cp.cpBodyGetPosition(self._hb)
+        return p.x, p.y
+
+    def robot_angle(self) -> float:
+        """The robot's body angle (radians): ``robot.angle``, read for less."""
+        return float(_cp.cpBodyGetAngle(self._rb))
 
     def user_distance(self) -> float:
-        rx, ry = self.robot.position
-        ux, uy = self.human.position
-        return math.hypot(ux - rx, uy - ry)
+        r = _cp.cpBodyGetPosition(self._rb)
+        u = _cp.cpBodyGetPosition(self._hb)
+        return math.hypot(u.x - r.x, u.y - r.y)
 
     def clear(self, ax: float, ay: float, bx: float, by: float, radius: float = 0.0) -> bool:
         """True if no wall lies on the segment from a to b (fattened by ``radius``)."""
@@ -213,7 +234,7 @@ class World:
 
     def camera_heading(self, tick: int) -> float:
         """Where the head camera looks (radians, map frame)."""
-        return self.robot.angle + math.radians(self.head_pan.at(tick))
+        return self.robot_angle() + math.radians(self.head_pan.at(tick))
 
     def sees_user(self, tick: int, *, any_direction: bool = False) -> tuple[bool, float]:
         """Human detection: in range, in the camera's field of view, in line of sight.
@@ -227,9 +248,10 @@ class World:
         kept = self._sight.get(any_direction)
         if kept is not None and kept[0] == tick and kept[1] == self.version and kept[2] == pan:
             return kept[4]
-        rx, ry = self.robot.position
-        ux, uy = self.human.position
-        angle = 0.0 if any_direction else self.robot.angle
+        r = _cp.cpBodyGetPosition(self._rb)
+        u = _cp.cpBodyGetPosition(self._hb)
+        rx, ry, ux, uy = r.x, r.y, u.x, u.y
+        angle = 0.0 if any_direction else _cp.cpBodyGetAngle(self._rb)
         poses = (rx, ry, angle, ux, uy)
         if kept is not None and kept[2] == pan and kept[3] == poses:
             seen = kept[4]  # nothing moved since it last looked
@@ -246,7 +268,8 @@ class World:
         if d > self.spec.camera_range:
             return False, d
         if not any_direction:
-            rel = wrap_angle(math.atan2(dy, dx) - (self.robot.angle + math.radians(pan)))
+            rel = wrap_angle(math.atan2(dy, dx)
+                             - (_cp.cpBodyGetAngle(self._rb) + math.radians(pan)))
             if abs(rel) > math.radians(self.spec.camera_fov) / 2:
                 return False, d
         return self.space.segment_query_first((rx, ry), (ux, uy), 0.0, _SIGHT) is None, d
@@ -275,9 +298,9 @@ class World:
 
     def user_bearing(self) -> float:
         """Direction from the robot to the user relative to the body (radians)."""
-        rx, ry = self.robot.position
-        ux, uy = self.human.position
-        return wrap_angle(math.atan2(uy - ry, ux - rx) - self.robot.angle)
+        r = _cp.cpBodyGetPosition(self._rb)
+        u = _cp.cpBodyGetPosition(self._hb)
+        return wrap_angle(math.atan2(u.y - r.y, u.x - r.x) - _cp.cpBodyGetAngle(self._rb))
 
     # ---- poses written from outside the step --------------------------------------
 
@@ -356,21 +379,21 @@ class World:
         """Step the physics, with the sway under way, if any, on top of the wheels."""
         sway = self._sway
         if sway is None:
-            self.space.step(dt)
+            _cp.cpSpaceStep(self._sp, dt)  # (Space.step: no callbacks, nothing added later)
             return
         amplitude, omega, steps = sway
         k = self._sway_k + 1
         offset = amplitude * math.sin(omega * k) if k < steps else 0.0
-        body = self.robot
+        rb = self._rb
         base = self._base_w()
-        body.angular_velocity = base + (offset - self._sway_offset) / dt
-        self.space.step(dt)
+        _cp.cpBodySetAngularVelocity(rb, base + (offset - self._sway_offset) / dt)
+        _cp.cpSpaceStep(self._sp, dt)
         self._sway_offset = offset
         self._sway_k = k
         if k >= steps:
             self._sway = None
             self.sway_owner = 0
-            body.angular_velocity = base
+            _cp.cpBodySetAngularVelocity(rb, base)
 
     def turning_to(self) -> float | None:
         """The body angle the running turn ends at (radians), if one runs."""
@@ -463,11 +486,12 @@ class World:
             last = v * dt >= rem
             if last:
                 v = rem / dt
-            body = self.robot
+            rb = self._rb
             vx, vy = self._ux * v, self._uy * v
-            if v != self._v or body.velocity != (vx, vy):
-                body.velocity = (vx, vy)  # (the wheels hold the course: a push sets it
-                self._v = v               # off the line for a step, never for good)
+            now = _cp.cpBodyGetVelocity(rb)
+            if v != self._v or now.x != vx or now.y != vy:
+                _cp.cpBodySetVelocity(rb, (vx, vy))  # (the wheels hold the course: a push
+                self._v = v                          # sets it off the line for a step)
             self._advance(dt)
             self._s += v * dt
             if last:
@@ -484,15 +508,14 @@ class World:
             if last:
                 w = rem / dt
             if w != self._v:
-                self.robot.angular_velocity = self._ux * w
+                _cp.cpBodySetAngularVelocity(self._rb, self._ux * w)
                 self._v = w
             self._advance(dt)
             self._hold()
             self._s += w * dt
             if last:
-                body = self.robot
-                body.angular_velocity = 0.0
-                body.angle = self._ta + self._sway_offset - self._ta_offset
+                _cp.cpBodySetAngularVelocity(self._rb, 0.0)
+                _cp.cpBodySetAngle(self._rb, self._ta + self._sway_offset - self._ta_offset)
                 return self._finish(True)
             return None
         if mode == _VELOCITY:
@@ -504,9 +527,9 @@ class World:
     def _hold(self) -> None:
         """Idle or turning in place, the wheels hold the body where it is: a push (the
         user walking into it) leaves it no speed to drift on with."""
-        body = self.robot
-        if body.velocity.length > 1e-9:
-            body.velocity = (0.0, 0.0)
+        v = _cp.cpBodyGetVelocity(self._rb)
+        if math.sqrt(v.x**2 + v.y**2) > 1e-9:  # (body.velocity.length)
+            _cp.cpBodySetVelocity(self._rb, (0.0, 0.0))
 
     @property
     def swaying(self) -> bool:
@@ -521,18 +544,18 @@ class World:
         al = self._alpha_dt
         nv = v + (dv if -a <= dv <= a else (a if dv > 0 else -a))
         nw = w + (dw if -al <= dw <= al else (al if dw > 0 else -al))
-        body = self.robot
+        rb = self._rb
         if nv != 0.0 and (nv != v or w != 0.0 or nw != w):
-            ang = body.angle
-            body.velocity = (math.cos(ang) * nv, math.sin(ang) * nv)
+            ang = _cp.cpBodyGetAngle(rb)
+            _cp.cpBodySetVelocity(rb, (math.cos(ang) * nv, math.sin(ang) * nv))
         elif nv == 0.0 and v != 0.0:
-            body.velocity = (0.0, 0.0)
+            _cp.cpBodySetVelocity(rb, (0.0, 0.0))
         if nw != w:
-            body.angular_velocity = nw
+            _cp.cpBodySetAngularVelocity(rb, nw)
         self._v, self._w = nv, nw
         self._advance(dt)
         if nv == 0.0 and nw == 0.0 and self._cmd_v == 0.0 and self._cmd_w == 0.0:
-            body.velocity = (0.0, 0.0)
+            _cp.cpBodySetVelocity(rb, (0.0, 0.0))
             self.mode = _IDLE
             waiting, self._on_stopped = self._on_stopped, []
             if waiting:
@@ -544,8 +567,8 @@ class World:
 
     def _lagging(self) -> bool:
         """The drive is well behind its plan: the body does not get where it is driven."""
-        x, y = self.robot.position
-        made = (x - self._x0) * self._ux + (y - self._y0) * self._uy
+        p = _cp.cpBodyGetPosition(self._rb)
+        made: float = (p.x - self._x0) * self._ux + (p.y - self._y0) * self._uy
         return self._s - made > _BLOCKED_LAG
 
     def _finish_linear(self) -> Callable[[], None] | None:

@@ -309,3 +309,22 @@ def test_a_cut_utterance_stops_at_the_end_of_the_word_under_way() -> None:
     sim.advance_to(30)
     assert ends[-1] == (pytest.approx(20.2), {"interrupted": True, "spoken": "",
                                               "unspoken": ""})
+
+
+def test_the_world_reads_and_writes_the_bodies_as_pymunk_does() -> None:
+    # The world steps and reads its bodies straight through Chipmunk (pymunk's own
+    # binding): what it reads is what pymunk's properties say, drive after drive.
+    r = runner("museum", Pose(1.5, 1.5, 0), Pose(3.0, 2.0, 180))
+    world = r.sim.world
+    r.queue(call("SetPosition", x=6.0, y=1.5), call("Turn", angle=90))
+    seen = set()
+    for t in range(1, 40):
+        r.run(t * 0.5)
+        assert world.robot_xy() == tuple(world.robot.position)
+        assert world.user_xy() == tuple(world.human.position)
+        assert world.robot_angle() == world.robot.angle
+        pose = world.robot_pose()
+        assert (pose.x, pose.y) == tuple(world.robot.position)
+        assert pose.heading == math.degrees(world.robot.angle) % 360.0
+        seen.add(world.robot_xy())
+    assert len(seen) > 20  # (it drove all along)
