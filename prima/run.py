@@ -457,13 +457,11 @@ class Run:
 
     def _line(self, kind: RecordKind, **fields: Any) -> None:
         if kind in _POSED:
-            robot = self.sim.robot_pose()
-            user = self.sim.user_pose()
-            fields["robot"] = (robot.x, robot.y, robot.heading)
+            fields["robot"], user = self.sim.poses()
             if user is not None:
-                fields["user"] = (user.x, user.y, user.heading)
+                fields["user"] = user
                 fields["detectable"] = self.sim.user_detectable()
-        self._sink(TraceLine(self.sim.now(), self._count, kind, **fields))
+        self._sink(TraceLine.made(self.sim.now(), self._count, kind, fields))
         self._count += 1
 
     def _decision(self, d: Decision) -> None:

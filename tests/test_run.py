@@ -270,3 +270,16 @@ def test_shared_loaded_files_are_read_again_when_they_change(tmp_path: Path) -> 
         files.document(fa, profile)
     with pytest.raises(DocumentError):
         files.document(tmp_path / "missing.pxml", profile)
+
+
+def test_a_line_made_in_one_go_is_the_line_the_class_makes() -> None:
+    fields = {"app": "fa", "ab": 3, "command": "Speak", "text": 'say "hi"\n',
+              "devices": ("speaker",), "detail": {"b": 1, "a": None},
+              "robot": (1.0, 2.0, 90.0), "user": (3.0, 4.0, 0.0), "detectable": True}
+    for given in ({}, fields, {"reason": "start", "before": 2}):
+        made = TraceLine.made(1.25, 7, DecisionKind.START, given)
+        assert made == TraceLine(1.25, 7, DecisionKind.START, **given)
+        assert made.to_dict() == TraceLine(1.25, 7, DecisionKind.START, **given).to_dict()
+    assert TraceLine.made(0.0, 0, Kind.POSE, {}).detail == {}
+    with pytest.raises(TypeError, match="no field 'colour'"):
+        TraceLine.made(0.0, 0, Kind.POSE, {"colour": "red"})

@@ -482,6 +482,17 @@ class Simulator:
     def robot_pose(self) -> Pose:
         return self.world.robot_pose()
 
+    def poses(self) -> tuple[tuple[float, float, float], tuple[float, float, float] | None]:
+        """The robot's pose and the user's (None in a scenario without a user) as
+        ``(x, y, heading)``: :meth:`robot_pose` and :meth:`user_pose` as tuples."""
+        world = self.world
+        x, y = world.robot_xy()
+        robot = (x, y, math.degrees(world.robot_angle()) % 360.0)
+        if not world.has_user:
+            return robot, None
+        x, y = world.user_xy()
+        return robot, (x, y, math.degrees(world.user_angle()) % 360.0)
+
     def user_detectable(self) -> bool:
         """Whether human detection could see the user now, if the robot looked their
         way (in camera range, nothing in between)."""

@@ -223,6 +223,10 @@ class World:
         """The robot's body angle (radians): ``robot.angle``, read for less."""
         return float(_cp.cpBodyGetAngle(self._rb))
 
+    def user_angle(self) -> float:
+        """The user's body angle (radians): ``human.angle``, read for less."""
+        return float(_cp.cpBodyGetAngle(self._hb))
+
     def user_distance(self) -> float:
         r = _cp.cpBodyGetPosition(self._rb)
         u = _cp.cpBodyGetPosition(self._hb)
