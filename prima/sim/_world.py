@@ -41,7 +41,8 @@ import math
 from collections.abc import Callable
 
 import pymunk
-from pymunk._chipmunk_cffi import lib as _cp  # (pymunk's binding of Chipmunk: see above)
+from pymunk._chipmunk_cffi import ffi as _ffi  # (pymunk's binding of Chipmunk: see above)
+from pymunk._chipmunk_cffi import lib as _cp
 
 from prima.sim._maps import WorldMap
 from prima.sim._records import Pose
@@ -234,7 +235,12 @@ class World:
 
     def clear(self, ax: float, ay: float, bx: float, by: float, radius: float = 0.0) -> bool:
         """True if no wall lies on the segment from a to b (fattened by ``radius``)."""
-        return self.space.segment_query_first((ax, ay), (bx, by), radius, _SIGHT) is None
+        return self._clear((ax, ay), (bx, by), radius)
+
+    def _clear(self, a: tuple[float, float], b: tuple[float, float], radius: float) -> bool:
+        # (Space.segment_query_first, without the result's Python objects)
+        hit = _cp.cpSpaceSegmentQueryFirst(self._sp, a, b, radius, _SIGHT, _ffi.NULL)
+        return bool(hit == _ffi.NULL)
 
     def camera_heading(self, tick: int) -> float:
         """Where the head camera looks (radians, map frame)."""
@@ -276,7 +282,7 @@ class World:
                              - (_cp.cpBodyGetAngle(self._rb) + math.radians(pan)))
             if abs(rel) > math.radians(self.spec.camera_fov) / 2:
                 return False, d
-        return self.space.segment_query_first((rx, ry), (ux, uy), 0.0, _SIGHT) is None, d
+        return self._clear((rx, ry), (ux, uy), 0.0), d
 
     def places_near(self, x: float, y: float, radius: float,
                     slack: float = 0.0) -> tuple[list[int], float]:
