@@ -70,9 +70,9 @@ class TraceLine:
         """The line ``TraceLine(t, seq, kind, **fields)`` makes, made at a third of the
         cost (a run makes one for everything that happens): its fields are stored at
         once rather than one by one through the frozen class's guard."""
-        unknown = fields.keys() - _DEFAULTS.keys()
-        if unknown:
-            raise TypeError(f"TraceLine has no field {sorted(unknown)[0]!r}")
+        if not fields.keys() <= _DEFAULTS.keys():
+            unknown = sorted(fields.keys() - _DEFAULTS.keys())
+            raise TypeError(f"TraceLine has no field {unknown[0]!r}")
         line = object.__new__(cls)
         state = dict(_DEFAULTS)
         state.update(fields)

@@ -1900,3 +1900,20 @@ def test_the_prima_judge_fixture(pytester: pytest.Pytester) -> None:
     result = pytester.runpytest()
     result.assert_outcomes(passed=1, failed=1)
     result.stdout.fnmatch_lines(["*late.jsonl: late reactions: 1 > 0*", "*LATE: started after*"])
+
+
+@pytest.mark.parametrize("scenario", [
+    "policies/connect-channel-off.xml", "policies/restore-state-off.xml",
+    "policies/streams-off.xml", "examples/barge-in-question.xml", "thesis/sample-08.xml"])
+def test_each_finder_is_fed_every_kind_of_line_it_needs(scenario: str,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    # A finder is fed only the kinds of line it names; fed every line, it finds the same.
+    from prima.run import Run
+
+    lines = Run(ROOT / "scenarios" / scenario).run()
+    narrow = judge(lines)
+    for m in MEASURES:
+        monkeypatch.setattr(type(m.finder()), "kinds", None)
+    every = judge(lines)
+    assert (every.reactions, dict(every.findings)) == (narrow.reactions, dict(narrow.findings))
+    assert any(narrow.findings.values()) or narrow.reactions

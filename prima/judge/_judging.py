@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from prima.errors import TraceError
 from prima.judge._context import Context
-from prima.judge._measures import MEASURES
+from prima.judge._measures import MEASURES, Finder
 from prima.judge._reactions import analyse
 from prima.judge._reading import as_rows, read_trace
 from prima.judge._report import Report
@@ -27,9 +27,14 @@ def judge(trace: Iterable[object], *, thresholds: Thresholds | None = None,
     th = thresholds if thresholds is not None else Thresholds()
     ctx = Context(th)
     finders = [(m, m.finder()) for m in MEASURES]
+    fed: dict[str, list[Finder]] = {}  # the finders each kind of line goes to, in order
     for row in as_rows(trace):
         ctx.feed(row)
-        for _m, finder in finders:
+        kind = row["kind"]
+        those = fed.get(kind)
+        if those is None:
+            those = fed[kind] = [f for _m, f in finders if f.kinds is None or kind in f.kinds]
+        for finder in those:
             finder.feed(row, ctx)
         ctx.fed(row)
     reactions = analyse(ctx, ctx.t)

@@ -53,7 +53,12 @@ is not leaving them."""
 
 
 class Finder(Protocol):
-    """What finds one measure's faults: every line, then the findings."""
+    """What finds one measure's faults: every line of the kinds it looks at, then the
+    findings."""
+
+    @property
+    def kinds(self) -> frozenset[str] | None:
+        """The kinds of line it is fed (None: every line; the others change nothing)."""
 
     def feed(self, row: Row, ctx: Context) -> None: ...
 
@@ -82,6 +87,8 @@ def _where(at: str) -> str:
 
 class _Reactions:
     """Late or unheard reactions: what :mod:`._reactions` found, filtered."""
+
+    kinds: frozenset[str] | None = frozenset()
 
     def __init__(self, keep: Callable[[Reaction], bool]) -> None:
         self.keep = keep
@@ -133,6 +140,8 @@ def _about_something_else(row: Row, before: str | None) -> bool:
 class _Unfaced:
     """Utterances started while the user is detectable and more than the tolerance off
     the robot's heading."""
+
+    kinds: frozenset[str] | None = frozenset({"start"})
 
     def __init__(self) -> None:
         self.found: list[Unfaced] = []
@@ -187,6 +196,8 @@ class _Talk:
 class _Leaving:
     """The robot moving more than ``leave_distance`` farther from the user on its own
     while words addressed to them run (following the user is not leaving)."""
+
+    kinds: frozenset[str] | None = None
 
     def __init__(self) -> None:
         self.found: list[Leaving] = []
@@ -274,6 +285,8 @@ class _Elsewhere:
     """A suspended stream's first utterance after it resumed, spoken more than
     ``resume_distance`` from where the stream was suspended."""
 
+    kinds: frozenset[str] | None = frozenset({"request", "suspend", "resume", "start"})
+
     def __init__(self) -> None:
         self.found: list[Elsewhere] = []
         self.suspended_at: dict[int, tuple[int, tuple[float, float]]] = {}
@@ -336,6 +349,8 @@ class _Splits:
     question or with something else than words at once, a non-reactive one before
     that; or a non-reactive one inside an explicit stream. An answer its app asks
     nothing for at once ends its exchange."""
+
+    kinds: frozenset[str] | None = frozenset({"stream", "unload", "start", "end"})
 
     def __init__(self) -> None:
         self.found: dict[int, Split] = {}
@@ -422,6 +437,8 @@ def _split_line(s: Split) -> str:
 class _Silences:
     """More than ``silence`` seconds with no robot output after a user's answer."""
 
+    kinds: frozenset[str] | None = frozenset({"start", "end"})
+
     def __init__(self) -> None:
         self.found: list[Silence] = []
         self.silent: list[tuple[Row, str]] = []
@@ -481,6 +498,8 @@ class _Stuck:
     """An application whose Commands wait behind its own endless loop, that searches
     for a user it never sees, whose Commands are still waiting at the end, or an
     atomic behavior that starts and never ends."""
+
+    kinds: frozenset[str] | None = None
 
     def __init__(self) -> None:
         self.commands: dict[int, _Command] = {}
@@ -643,6 +662,8 @@ class _BargeIn:
     word under way. A backchannel is no barge-in; speech the robot cannot hear (out of
     range, or a robot that hears only in its Q&As) is not measured."""
 
+    kinds: frozenset[str] | None = frozenset({"user", "hear", "end"})
+
     def __init__(self) -> None:
         self.found: list[BargeIn] = []
         self.said: list[_Said] = []
@@ -696,6 +717,8 @@ class _Ignored:
     its reaction's first start came more than the answer slack after what the rules
     put before it, or it asked for nothing."""
 
+    kinds: frozenset[str] | None = frozenset({"user", "hear"})
+
     def __init__(self) -> None:
         self.taken: list[tuple[int, float, str, str]] = []
         self.user: tuple[int, str] | None = None
@@ -736,6 +759,8 @@ class _Recovery:
     """An utterance cut by user speech no application took (a hear line ``nomatch``, then
     its barge-in cut) that does not start again within the pause the cut line gives
     plus the slack."""
+
+    kinds: frozenset[str] | None = frozenset({"interrupt", "end", "request", "start"})
 
     def __init__(self) -> None:
         self.pauses: dict[int, float] = {}
