@@ -51,7 +51,7 @@ from prima.sim import (
     ZoneEntry,
     load_scenario,
 )
-from prima.trace import Kind, RecordKind, TraceLine
+from prima.trace import Kind, RecordKind, TraceLine, row_of
 from prima.vocab import (
     FACE_TOLERANCE,
     MAX_EAS,
@@ -230,8 +230,10 @@ class Run:
 
     The trace goes to ``sink`` line by line as the run goes, if one is given
     (then :attr:`lines` stays empty and memory stays flat however long the run);
-    otherwise it is kept in :attr:`lines`. Runs given the same ``files`` share the
-    profiles and documents they load.
+    otherwise it is kept in :attr:`lines`. With ``rows``, each line goes there as its
+    jsonl dict instead (:func:`prima.trace.row_of`), and no :class:`TraceLine` is made:
+    what a judged run that writes no trace needs. Runs given the same ``files`` share
+    the profiles and documents they load.
     """
 
     def __init__(self, scenario: str | Path, *, fa: str | Path | None = None,
@@ -240,7 +242,8 @@ class Run:
                  sink: Callable[[TraceLine], None] | None = None,
                  pose_rate: float = POSE_RATE,
                  policies: Mapping[str, bool] | None = None,
-                 speech: SpeechTiming | None = None, files: Loaded | None = None) -> None:
+                 speech: SpeechTiming | None = None, files: Loaded | None = None,
+                 rows: Callable[[dict[str, object]], None] | None = None) -> None:
         self._files = files or Loaded()
         """Where profiles and documents are loaded (shared by a sweep's runs)."""
         loaded = load_scenario(scenario)
@@ -279,6 +282,7 @@ class Run:
             named[document.name] = (path, role)
         self.lines: list[TraceLine] = []
         self._sink = sink or self.lines.append
+        self._rows = rows
         self._count = 0
         self.budgets: Mapping[AppKind, Budgets] = self.profile.budgets
         self.apps: dict[str, _App] = {}
@@ -461,7 +465,10 @@ class Run:
             if user is not None:
                 fields["user"] = user
                 fields["detectable"] = self.sim.user_detectable()
-        self._sink(TraceLine.made(self.sim.now(), self._count, kind, fields))
+        if self._rows is not None:
+            self._rows(row_of(self.sim.now(), self._count, kind, fields))
+        else:
+            self._sink(TraceLine.made(self.sim.now(), self._count, kind, fields))
         self._count += 1
 
     def _decision(self, d: Decision) -> None:

@@ -20,7 +20,7 @@ from prima.term import BOLD, DIM, PLAIN, Paint
 from prima.vocab import TraceKind, Value
 
 __all__ = ["APP_WIDTH", "Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "describe",
-           "device_overlaps", "format_jsonl", "format_text", "jsonl_row", "user_words"]
+           "device_overlaps", "format_jsonl", "format_text", "jsonl_row", "row_of", "user_words"]
 
 
 Kind = TraceKind
@@ -83,43 +83,49 @@ class TraceLine:
         return line
 
     def to_dict(self) -> dict[str, object]:
-        fields = self.__dict__  # (read directly: a judged run makes a dict of every line)
-        out: dict[str, object] = {"t": round(fields["t"], 3), "seq": fields["seq"],
-                                  "kind": fields["kind"]._value_}
-        for name in _PLAIN:
-            value = fields[name]
-            if value is not None:
-                out[name] = value
-        value = fields["devices"]
-        if value is not None:
-            out["devices"] = list(value)
-        value = fields["command_ids"]
-        if value is not None:
-            out["command_ids"] = list(value)
-        value = fields["before"]
-        if value is not None:
-            out["before"] = value
-        value = fields["detail"]
-        if value:
-            out["detail"] = dict(sorted(value.items()))
-        value = fields["robot"]
-        if value is not None:
-            out["robot"] = {"x": round(value[0], 3), "y": round(value[1], 3),
-                            "heading": round(value[2], 1)}
-        value = fields["user"]
-        if value is not None:
-            user: dict[str, object] = {"x": round(value[0], 3), "y": round(value[1], 3),
-                                       "heading": round(value[2], 1)}
-            if fields["detectable"] is not None:
-                user["detectable"] = fields["detectable"]
-            out["user"] = user
-        return out
+        return row_of(self.t, self.seq, self.kind, self.__dict__)
 
 
 _DEFAULTS: dict[str, Any] = {
     f.name: None if f.default is dataclasses.MISSING else f.default
     for f in dataclasses.fields(TraceLine)}
 """Every field of a line, in order, with its default (``detail``'s is made per line)."""
+
+
+def row_of(t: float, seq: int, kind: RecordKind, fields: Mapping[str, Any]) -> dict[str, object]:
+    """The jsonl dict of ``TraceLine(t, seq, kind, **fields)`` (its :meth:`~TraceLine.to_dict`),
+    made without the line: a judged run that writes no trace makes only these."""
+    out: dict[str, object] = {"t": round(t, 3), "seq": seq, "kind": kind._value_}
+    get = fields.get
+    for name in _PLAIN:
+        value = get(name)
+        if value is not None:
+            out[name] = value
+    value = get("devices")
+    if value is not None:
+        out["devices"] = list(value)
+    value = get("command_ids")
+    if value is not None:
+        out["command_ids"] = list(value)
+    value = get("before")
+    if value is not None:
+        out["before"] = value
+    value = get("detail")
+    if value:
+        out["detail"] = dict(sorted(value.items()))
+    value = get("robot")
+    if value is not None:
+        out["robot"] = {"x": round(value[0], 3), "y": round(value[1], 3),
+                        "heading": round(value[2], 1)}
+    value = get("user")
+    if value is not None:
+        user: dict[str, object] = {"x": round(value[0], 3), "y": round(value[1], 3),
+                                   "heading": round(value[2], 1)}
+        detectable = get("detectable")
+        if detectable is not None:
+            user["detectable"] = detectable
+        out["user"] = user
+    return out
 
 _PLAIN = ("app", "ab", "tree", "command", "text", "reactive", "reason", "action")
 """The fields a jsonl line writes as they are, in its order."""

@@ -150,9 +150,9 @@ def _counting(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     ran: list[int] = []
     real = prima.batch._work.run_one
 
-    def counted(spec: Job, index: int, root: Any, folder: Path) -> dict[str, Any]:
+    def counted(spec: Job, index: int, root: Any, folder: Path, *files: Any) -> dict[str, Any]:
         ran.append(index)
-        return real(spec, index, root, folder)
+        return real(spec, index, root, folder, *files)
 
     monkeypatch.setattr(prima.batch._work, "run_one", counted)
     return ran

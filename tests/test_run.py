@@ -283,3 +283,12 @@ def test_a_line_made_in_one_go_is_the_line_the_class_makes() -> None:
     assert TraceLine.made(0.0, 0, Kind.POSE, {}).detail == {}
     with pytest.raises(TypeError, match="no field 'colour'"):
         TraceLine.made(0.0, 0, Kind.POSE, {"colour": "red"})
+
+
+@pytest.mark.parametrize("scenario", ["thesis/sample-03.xml", "examples/museum-cafe.xml",
+                                      "policies/interrupt-on.xml"])
+def test_a_run_made_as_rows_is_its_lines_jsonl_dicts(scenario: str) -> None:
+    made: list[dict[str, object]] = []
+    run = Run(ROOT / "scenarios" / scenario, rows=made.append)
+    assert run.run() == []
+    assert made == [line.to_dict() for line in Run(ROOT / "scenarios" / scenario).run()]

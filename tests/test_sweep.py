@@ -208,7 +208,7 @@ DEATHS = Path("/nonexistent")
 """The folder the dying worker below counts its deaths in (set by the fixture)."""
 
 
-def dying_run(job: Any, index: int, root: Any, folder: Path) -> Any:
+def dying_run(job: Any, index: int, root: Any, folder: Path, *files: Any) -> Any:
     """Run 1's worker is killed (as by the kernel's out-of-memory killer) as long as the
     count of deaths is below the count allowed."""
     import os
@@ -220,7 +220,7 @@ def dying_run(job: Any, index: int, root: Any, folder: Path) -> Any:
         with marks.open("a") as out:
             out.write("x")
         os.kill(os.getpid(), signal.SIGKILL)
-    return _real_run(job, index, root, folder)
+    return _real_run(job, index, root, folder, *files)
 
 
 _real_run = prima.batch._work.run_one

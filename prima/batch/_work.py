@@ -110,7 +110,6 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
     its ``error``. Runs given the same ``files`` load the job's documents once."""
     from prima.judge import judge
     from prima.run import Run
-    from prima.tracefile import rows
 
     variant = copy.deepcopy(root)
     shift_timings(variant, rng(job.seed, index), job.jitter)
@@ -118,7 +117,9 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
     path.write_bytes(etree.tostring(variant, encoding="UTF-8", xml_declaration=True))
     record: dict[str, Any] = {"run": index}
     try:
-        lines: Iterable[Mapping[str, Any]] = rows(Run(path, files=files).run())
+        made: list[Mapping[str, Any]] = []
+        Run(path, files=files, rows=made.append).run()
+        lines: Iterable[Mapping[str, Any]] = made
         observer = job.analysis.observer() if job.analysis is not None else None
         if observer is not None:
             lines = _tee(lines, observer)
