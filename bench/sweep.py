@@ -8,7 +8,9 @@ Each round runs, for each scenario (default: samples 3, 7 and 10 of the thesis),
 cold process that does what a sweep's worker does for ``--runs`` runs: each run's
 variant jittered by 5 s (new run indices every round: distinct inputs), run, judged,
 its record made (``prima.batch.run_chunk``: one task of that many runs). The process
-times its runs alone (``time.process_time``, its imports left out) and says how many
+times its runs alone (``time.process_time``, its imports left out: the run machinery,
+which both builds import on their first run, is imported before the clock starts, as
+a worker imports it once for all its runs) and says how many
 physics steps they took; the peer, measured in the same rounds in this process,
 steps a bare pymunk space of the same world (walls, robot, user) as many times.
 Printed per scenario: both medians, their ratio, and runs per CPU second; with
@@ -47,8 +49,9 @@ TARGET = 2.0
 def child(scenario: Path, runs: int, first: int) -> None:
     """In a cold process: ``runs`` judged runs of a sweep of ``scenario`` (indices from
     ``first``); print their CPU time and physics steps as JSON."""
-    import prima.sim._simulator as simulator
-    from prima.judge import Thresholds
+    import prima.run  # noqa: F401 (a worker imports the run machinery once, not per run:
+    import prima.sim._simulator as simulator  # it is imported before the clock starts)
+    from prima.judge import Thresholds, judge  # noqa: F401 (judge: imported lazily too)
 
     steps = [0]
     real = simulator.Simulator.advance_to

@@ -72,6 +72,9 @@ MAX_IDLE_ROUNDS = 10_000
 POSE_RATE = 2.0
 """Pose samples per simulated second in the trace, by default."""
 
+_SHOWN_KEPT = 1024
+"""How many calls' words and shown arguments a run keeps (:meth:`Run._shown`)."""
+
 _POSED = frozenset({DecisionKind.START, DecisionKind.END, Kind.USER, Kind.EVENT, Kind.POSE})
 """Lines that carry the robot's and the user's poses."""
 
@@ -298,6 +301,8 @@ class Run:
         """Command id -> where its request is written (``doc.pxml:line:col``) and whether
         the interrupt policy may cut it (the request did not say ``never``), while it is
         in working memory."""
+        self._shown_calls: dict[int, tuple[Call, tuple[str, ...], tuple[str, ...]]] = {}
+        """Calls shown in the trace -> their words and their arguments as shown."""
         self._elsewhere: set[int] = set()
         """Commands whose request said their words are about something else
         (``face_user`` false), while they are in working memory."""
@@ -500,12 +505,16 @@ class Run:
             for cid in d.command_ids:
                 self._requested.pop(cid, None)
                 self._elsewhere.discard(cid)
-        spoken = [words for c in d.calls for words in self.catalog[c.command].spoken(c.args)]
+        if len(d.calls) == 1:
+            spoken, others = self._shown(d.calls[0])
+        else:
+            shown = [self._shown(c) for c in d.calls]
+            spoken = tuple(words for said, _args in shown for words in said)
+            others = tuple(arg for _said, args in shown for arg in args)
         text = " / ".join(spoken) if spoken else None
         if (kind is DecisionKind.START and d.iteration and d.command_id is not None
                 and self.sim.quiet(d.command_id)):
             text = None  # an iteration that says nothing (a search's watch)
-        others = [arg for c in d.calls for arg in _shown_args(self.catalog, c)]
         if others:
             detail["args"] = " ".join(others)
         if d.calls and d.calls[0].label:
@@ -523,6 +532,21 @@ class Run:
                    reactive=d.reactive if d.ab is not None else None,
                    reason=d.rule.value, detail=detail, before=d.before,
                    command_ids=d.command_ids if len(d.command_ids) > 1 else None)
+
+    def _shown(self, call: Call) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """A call's words and its arguments as the trace shows them (:func:`_shown_args`),
+        kept for the call: a loop's iterations and its restarts show the same calls again
+        and again. (At most :data:`_SHOWN_KEPT` calls are kept, so that a long run's
+        memory stays flat.)"""
+        kept = self._shown_calls.get(id(call))
+        if kept is not None and kept[0] is call:
+            return kept[1], kept[2]
+        shown = (tuple(self.catalog[call.command].spoken(call.args)),
+                 tuple(_shown_args(self.catalog, call)))
+        if len(self._shown_calls) >= _SHOWN_KEPT:
+            self._shown_calls.clear()
+        self._shown_calls[id(call)] = (call, *shown)
+        return shown
 
     def _ended(self, d: Decision, detail: dict[str, Value]) -> None:
         """An end line says the AB's result (a cut one's words said and not), when its

@@ -158,6 +158,9 @@ class Simulator:
         """Whether words only show that the user follows (the robot profile's
         backchannels): they answer no prompt."""
         self._sense_every = hz // SENSE_HZ
+        self._poses: tuple[int, tuple[float, float, float],
+                           tuple[float, float, float] | None] = (-1, (0.0, 0.0, 0.0), None)
+        """:meth:`poses` at a world version."""
         self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
         self._zones = tuple(zones)
         self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
@@ -484,14 +487,21 @@ class Simulator:
 
     def poses(self) -> tuple[tuple[float, float, float], tuple[float, float, float] | None]:
         """The robot's pose and the user's (None in a scenario without a user) as
-        ``(x, y, heading)``: :meth:`robot_pose` and :meth:`user_pose` as tuples."""
+        ``(x, y, heading)``: :meth:`robot_pose` and :meth:`user_pose` as tuples (kept
+        while no body moves: the trace's lines of one instant, or of a still robot,
+        ask again and again)."""
         world = self.world
+        kept = self._poses
+        if kept[0] == world.version:
+            return kept[1], kept[2]
         x, y = world.robot_xy()
         robot = (x, y, math.degrees(world.robot_angle()) % 360.0)
-        if not world.has_user:
-            return robot, None
-        x, y = world.user_xy()
-        return robot, (x, y, math.degrees(world.user_angle()) % 360.0)
+        user = None
+        if world.has_user:
+            x, y = world.user_xy()
+            user = (x, y, math.degrees(world.user_angle()) % 360.0)
+        self._poses = (world.version, robot, user)
+        return robot, user
 
     def user_detectable(self) -> bool:
         """Whether human detection could see the user now, if the robot looked their
