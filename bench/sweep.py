@@ -8,9 +8,9 @@ Each round runs, for each scenario (default: samples 3, 7 and 10 of the thesis),
 cold process that does what a sweep's worker does for ``--runs`` runs: each run's
 variant jittered by 5 s (new run indices every round: distinct inputs), run, judged,
 its record made (``prima.batch.run_chunk``: one task of that many runs). The process
-times its runs alone (``time.process_time``, its imports left out: the run machinery,
-which both builds import on their first run, is imported before the clock starts, as
-a worker imports it once for all its runs) and says how many
+times its runs alone (``time.process_time``, its imports left out: the run machinery
+and the judge, which both builds import on their first run, are imported before the
+clock starts, as a worker imports them once for all its runs) and says how many
 physics steps they took; the peer, measured in the same rounds in this process,
 steps a bare pymunk space of the same world (walls, robot, user) as many times.
 Printed per scenario: both medians, their ratio, and runs per CPU second; with

@@ -2,7 +2,8 @@
 
 Build a :class:`Simulator` from a scenario file (:func:`load_scenario`,
 :meth:`Simulator.from_scenario`) or directly from a :class:`WorldMap`, wire
-its callbacks, then drive it with ``next_time()`` / ``advance_to(t)``.
+its callbacks, then drive it with ``next_time()`` / ``advance_to(t)``, or with
+``advance_until(t)`` when the driver has nothing to do at the simulator's own times.
 :class:`CommandRunner` drives it without documents or a mediator (tests,
 benchmarks, ``python -m prima.sim run``).
 
