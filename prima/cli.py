@@ -120,8 +120,8 @@ def build_parser() -> SuggestingParser:
     )
     _scenario_arguments(run)
     run.add_argument("--format", choices=("text", "jsonl", "chrome-trace", "mcap"),
-                     default="text",
-                     help="trace format (default: text); chrome-trace: the Trace Event "
+                     help="trace format (default: by --out's extension, .jsonl, .json for "
+                          "chrome-trace or .mcap; else text); chrome-trace: the Trace Event "
                           "Format, for Perfetto or chrome://tracing; mcap: a recording for "
                           "Foxglove (with --out; the mcap extra)")
     run.add_argument("-o", "--out", metavar="FILE",
@@ -670,6 +670,10 @@ def make_validation(profile: RobotProfile, *, robot: bool = False) -> Validation
     return made
 
 
+_FORMAT_OF = {".jsonl": "jsonl", ".json": "chrome-trace", ".mcap": "mcap"}
+"""``prima run``'s trace format when ``--out``'s extension says it and ``--format`` not."""
+
+
 def _run_usage(args: argparse.Namespace) -> str | None:
     """What is wrong with ``prima run``'s options, checked before anything runs."""
     until = args.until
@@ -681,6 +685,9 @@ def _run_usage(args: argparse.Namespace) -> str | None:
     if isinstance(switches, str):
         return switches
     args.policy = switches
+    if getattr(args, "format", "") is None:  # (by the file's extension: prima run's)
+        suffix = Path(args.out).suffix.lower() if args.out else ""
+        args.format = _FORMAT_OF.get(suffix, "text")
     for path in (args.scenario, args.fa, args.ea, args.robot):
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"

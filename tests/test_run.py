@@ -102,6 +102,17 @@ def test_cli_writes_text_or_jsonl(tmp_path: Path) -> None:
     assert json.loads(target.read_text().splitlines()[0])["kind"] == "load"
 
 
+def test_cli_writes_the_format_its_file_name_says(tmp_path: Path) -> None:
+    for name, first in (("t.jsonl", '{"t": 0.0'), ("t.JSONL", '{"t": 0.0'),
+                        ("t.json", "["), ("t.txt", "  No."), ("t", "  No.")):
+        assert run_cli("run", str(OFFICE), "--until", "5", "--out", str(tmp_path / name))[0] == 0
+        assert (tmp_path / name).read_text(encoding="utf-8").startswith(first), name
+    # (--format says otherwise: as it says)
+    assert run_cli("run", str(OFFICE), "--until", "5", "--format", "text",
+                   "--out", str(tmp_path / "x.jsonl"))[0] == 0
+    assert (tmp_path / "x.jsonl").read_text(encoding="utf-8").startswith("  No.")
+
+
 def test_cli_reports_bad_inputs(tmp_path: Path) -> None:
     assert run_cli("run", "nope.xml")[0] == 2
     assert run_cli("run", str(OFFICE), "--until", "-1")[0] == 2
