@@ -409,6 +409,10 @@ def test_the_judge_finds_speech_an_app_took_and_ignored(tmp_path: Path) -> None:
     trace = Run(scenario).run()
     assert [x.app for x in lines(trace, "hear")] == ["guide"]
     assert _judged(trace)["ignored"] == 1
+    # it asked for nothing: the finding names the handler that took the words
+    handler = next(x for x in lines(trace, "handler") if x.detail.get("key") == "speech")
+    found = judge([line.to_dict() for line in trace]).of("ignored")[0]
+    assert found.at == f"mute.pxml:{handler.detail['line']}:{handler.detail['col']}"
 
 
 def test_the_judge_finds_a_false_interruption_not_recovered(tmp_path: Path) -> None:

@@ -715,13 +715,19 @@ def _barge_in_line(b: BargeIn) -> str:
 class _Ignored:
     """User speech an application took (a hear line names it) that it did not answer:
     its reaction's first start came more than the answer slack after what the rules
-    put before it, or it asked for nothing."""
+    put before it, or it asked for nothing. Where its reaction asked for nothing, the
+    finding names the handler that took the words (its ``handler`` line, in the
+    document its ``load`` line names)."""
 
-    kinds: frozenset[str] | None = frozenset({"user", "hear"})
+    kinds: frozenset[str] | None = frozenset({"user", "hear", "handler", "load"})
 
     def __init__(self) -> None:
         self.taken: list[tuple[int, float, str, str]] = []
         self.user: tuple[int, str] | None = None
+        self.documents: dict[str, str] = {}
+        """Each application's document, by its load line."""
+        self.handled: dict[int, str] = {}
+        """A taking (its index) -> the handler that took the words (``doc:line:col``)."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
@@ -729,19 +735,31 @@ class _Ignored:
             self.user = (int(row["seq"]), str(row.get("text") or ""))
         elif kind == "hear" and row.get("app") and self.user is not None:
             self.taken.append((self.user[0], float(row["t"]), self.user[1], str(row["app"])))
+        elif kind == "handler" and self.taken and len(self.taken) - 1 not in self.handled:
+            _seq, t, _text, app = self.taken[-1]
+            detail = row.get("detail") or {}
+            line, col = detail.get("line"), detail.get("col")
+            document = self.documents.get(app)
+            if row.get("app") == app and abs(float(row["t"]) - t) <= EPS and document \
+                    and isinstance(line, int) and isinstance(col, int):
+                self.handled[len(self.taken) - 1] = f"{document}:{line}:{col}"
+        elif kind == "load":
+            document = (row.get("detail") or {}).get("document")
+            if isinstance(document, str):
+                self.documents[str(row.get("app") or "")] = document
 
     def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
         mine = {(r.t, r.app): r for r in reactions if r.event == "speech"}
         found: list[Finding] = []
-        for seq, t, text, app in self.taken:
+        for i, (seq, t, text, app) in enumerate(self.taken):
             r = mine.get((t, app))
             allowed = ctx.th.answer_slack + (r.residual if r is not None else 0.0)
             answered = r.first_start if r is not None else None
             if answered is None and ctx.t - t <= allowed + EPS:
                 continue  # (the trace ended before it was due)
             if answered is None or answered - t > allowed + EPS:
-                found.append(Ignored(seq, t, text, app, answered, round(allowed, 3),
-                                     r.at if r is not None else ""))
+                at = (r.at if r is not None else "") or self.handled.get(i, "")
+                found.append(Ignored(seq, t, text, app, answered, round(allowed, 3), at))
         return found
 
 
