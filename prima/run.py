@@ -335,12 +335,7 @@ class Run:
 
     def run(self) -> list[TraceLine]:
         """Run to the end; returns the trace (empty when it went to a sink)."""
-        if self.fa_path is not None:
-            self._load(self.fa_path, AppKind.FA)
-        for path in self.ea_paths:
-            self._load(path, AppKind.EA)
-        if self.sim.sample_every:
-            self._line(Kind.POSE)  # where everyone starts; the samples follow
+        self._begin()
         sim = self.sim
         idle, last = 0, -1.0
         while sim.now() < self.until:
@@ -357,6 +352,15 @@ class Run:
             if idle > MAX_IDLE_ROUNDS:
                 raise RunError(f"run loop stuck at t={last}")
         return self.lines
+
+    def _begin(self) -> None:
+        """Load the applications that run from the start; the first pose sample."""
+        if self.fa_path is not None:
+            self._load(self.fa_path, AppKind.FA)
+        for path in self.ea_paths:
+            self._load(path, AppKind.EA)
+        if self.sim.sample_every:
+            self._line(Kind.POSE)  # where everyone starts; the samples follow
 
     # ------------------------------------------------------------ applications
 

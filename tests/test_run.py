@@ -10,7 +10,7 @@ import pytest
 
 from prima.cli import main
 from prima.errors import DocumentError
-from prima.mediator import AppKind, DecisionKind
+from prima.mediator import DecisionKind
 from prima.run import Loaded, Run
 from prima.trace import Kind, TraceLine, device_overlaps, format_jsonl, format_text
 
@@ -230,12 +230,7 @@ class _WakingEveryTime(Run):
     def run(self) -> list[TraceLine]:
         import math
 
-        if self.fa_path is not None:
-            self._load(self.fa_path, AppKind.FA)
-        for path in self.ea_paths:
-            self._load(path, AppKind.EA)
-        if self.sim.sample_every:
-            self._line(Kind.POSE)
+        self._begin()
         sim, hz = self.sim, self.sim.kernel.hz
         while sim.now() < self.until:
             deadlines = [sim.next_time(), self.mediator.next_deadline()]
