@@ -201,6 +201,13 @@ def test_the_judging_python_example_says_what_it_gives() -> None:
     plain = judge(Run(ROOT / "scenarios" / "thesis" / "sample-05.xml").run())
     assert f'judge_file("scenarios/thesis/sample-05.xml").of("splits")   # {plain.of("splits")!r}' \
         in text
+    from prima.run import Loaded
+
+    rows: list[dict[str, object]] = []
+    Run(ROOT / "scenarios" / "thesis" / "sample-05.xml", policies={"all": False},
+        files=Loaded(), rows=rows.append).run()
+    assert "judge(rows).counts() == report.counts()   # True" in text
+    assert judge(rows).counts() == report.counts()
 
 
 def test_the_readme_demo_output_is_a_real_runs() -> None:
