@@ -115,17 +115,29 @@ def row_of(t: float, seq: int, kind: RecordKind, fields: Mapping[str, Any]) -> d
         out["detail"] = dict(sorted(value.items()))
     value = get("robot")
     if value is not None:
-        out["robot"] = {"x": round(value[0], 3), "y": round(value[1], 3),
-                        "heading": round(value[2], 1)}
+        out["robot"] = _rounded(value, 0)
     value = get("user")
     if value is not None:
-        user: dict[str, object] = {"x": round(value[0], 3), "y": round(value[1], 3),
-                                   "heading": round(value[2], 1)}
+        user: dict[str, object] = _rounded(value, 1)
         detectable = get("detectable")
         if detectable is not None:
             user["detectable"] = detectable
         out["user"] = user
     return out
+
+
+_ROUNDED: list[tuple[object, dict[str, float]]] = [(None, {}), (None, {})]
+"""The robot's and the user's last pose and its rounded dict: a run's lines of one
+instant, or of a still robot, carry the same pose tuple (``Simulator.poses``)."""
+
+
+def _rounded(pose: Pose, which: int) -> dict[str, Any]:
+    """A pose as a jsonl line writes it (a dict of its own)."""
+    kept = _ROUNDED[which]
+    if kept[0] is not pose:
+        kept = _ROUNDED[which] = (pose, {"x": round(pose[0], 3), "y": round(pose[1], 3),
+                                         "heading": round(pose[2], 1)})
+    return dict(kept[1])
 
 _PLAIN = ("app", "ab", "tree", "command", "text", "reactive", "reason", "action")
 """The fields a jsonl line writes as they are, in its order."""

@@ -19,7 +19,7 @@ three to five times their cost in Python around each.
 What is worked out from the poses is worked out once per pose: :attr:`World.version`
 moves on whenever a body may have moved or turned (every step, and every pose
 written through the world's methods), and human detection keeps its answer
-until the version, the tick or the camera's pan changes; then it looks again
+until the version or the camera's pan changes; then it looks again
 only if something moved: the robot, the user or the camera (a step in which
 nothing moved keeps the answer). A pose written on a body directly, from outside,
 must be followed by :meth:`World.moved`.
@@ -256,8 +256,8 @@ class World:
             return False, math.inf
         pan = 0.0 if any_direction else self.head_pan.at(tick)
         kept = self._sight.get(any_direction)
-        if kept is not None and kept[0] == tick and kept[1] == self.version and kept[2] == pan:
-            return kept[4]
+        if kept is not None and kept[1] == self.version and kept[2] == pan:
+            return kept[4]  # (the same poses, the camera the same way: at any tick)
         r = _cp.cpBodyGetPosition(self._rb)
         u = _cp.cpBodyGetPosition(self._hb)
         rx, ry, ux, uy = r.x, r.y, u.x, u.y
