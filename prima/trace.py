@@ -139,6 +139,7 @@ def _rounded(pose: Pose, which: int) -> dict[str, Any]:
                                          "heading": round(pose[2], 1)})
     return dict(kept[1])
 
+
 _PLAIN = ("app", "ab", "tree", "command", "text", "reactive", "reason", "action")
 """The fields a jsonl line writes as they are, in its order."""
 
