@@ -1,0 +1,54 @@
+"""``bench/same_traces.py``: two builds that make the same traces pass; a difference in
+any run is named, with a non-zero exit."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "bench" / "same_traces.py"
+
+
+def _bench() -> ModuleType:
+    sys.path.insert(0, str(BENCH.parent))  # (its _measure helper)
+    spec = importlib.util.spec_from_file_location("same_traces_bench", BENCH)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _other_build(tmp_path: Path, *, touch_at: str = "20") -> Path:
+    """A tree with this build's code and documents, and its own copy of sample 1 (the
+    user's touch at ``touch_at`` s)."""
+    tree = tmp_path / "other"
+    (tree / "scenarios" / "thesis").mkdir(parents=True)
+    for name in ("prima", "apps", "robots", "schemas"):
+        (tree / name).symlink_to(ROOT / name)
+    (tree / "scenarios" / "maps").symlink_to(ROOT / "scenarios" / "maps")
+    text = (ROOT / "scenarios" / "thesis" / "sample-01.xml").read_text(encoding="utf-8")
+    (tree / "scenarios" / "thesis" / "sample-01.xml").write_text(
+        text.replace('<touch at="20"/>', f'<touch at="{touch_at}"/>'), encoding="utf-8")
+    return tree
+
+
+def test_the_same_build_makes_the_same_traces(tmp_path: Path,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    scenario = str(ROOT / "scenarios" / "thesis" / "sample-01.xml")
+    code = _bench().main(["--against", str(_other_build(tmp_path)), "--runs", "2", scenario])
+    assert code == 0
+    assert "2 runs of 1 scenario(s): every trace the same in both builds" in capsys.readouterr().out
+
+
+def test_a_run_that_differs_is_named(tmp_path: Path,
+                                     capsys: pytest.CaptureFixture[str]) -> None:
+    scenario = str(ROOT / "scenarios" / "thesis" / "sample-01.xml")
+    other = _other_build(tmp_path, touch_at="21")
+    assert _bench().main(["--against", str(other), "--runs", "2", scenario]) == 1
+    out = capsys.readouterr().out
+    assert "scenarios/thesis/sample-01.xml run 0:" in out and "2 differ" in out
