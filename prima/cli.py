@@ -685,9 +685,6 @@ def _run_usage(args: argparse.Namespace) -> str | None:
     if isinstance(switches, str):
         return switches
     args.policy = switches
-    if getattr(args, "format", "") is None:  # (by the file's extension: prima run's)
-        suffix = Path(args.out).suffix.lower() if args.out else ""
-        args.format = _FORMAT_OF.get(suffix, "text")
     for path in (args.scenario, args.fa, args.ea, args.robot):
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
@@ -756,6 +753,8 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
+    if args.format is None:  # (the file's extension says, as its reader would read it)
+        args.format = _FORMAT_OF.get(Path(args.out).suffix.lower() if args.out else "", "text")
     problem = _run_usage(args) or (_mcap_usage(args) if args.format == "mcap" else None)
     if problem:
         return _usage("run", problem, err)
