@@ -31,6 +31,16 @@ except ModuleNotFoundError:  # running from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
 
+def in_tree(path: Path, tree: Path) -> Path | None:
+    """Another checkout's own copy of a file of this tree (an earlier build's scenario,
+    with the documents it names as they were then), if it has one."""
+    try:
+        theirs = tree / path.resolve().relative_to(ROOT)
+    except ValueError:
+        return None
+    return theirs if theirs.exists() else None
+
+
 def cpu(fn: Callable[[], object]) -> float:
     """CPU seconds this process spends in ``fn()``."""
     start = time.process_time()

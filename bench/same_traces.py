@@ -25,7 +25,7 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from _measure import ROOT
+from _measure import ROOT, in_tree
 
 JITTER = 5.0
 SEED = 7
@@ -85,11 +85,8 @@ def hashes(tree: Path, paths: list[Path]) -> list[str]:
 
 def compare(scenario: Path, tree: Path, runs: int) -> list[str]:
     """What differs between the two builds' runs of one scenario (one line each)."""
-    try:
-        theirs_source = tree / scenario.resolve().relative_to(ROOT)
-    except ValueError:
-        theirs_source = scenario
-    if not theirs_source.exists():
+    theirs_source = in_tree(scenario, tree)
+    if theirs_source is None:
         return [f"{scenario}: the other build has no such scenario"]
     with tempfile.TemporaryDirectory() as scratch:
         mine_dir, theirs_dir = Path(scratch, "this"), Path(scratch, "other")

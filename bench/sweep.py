@@ -37,7 +37,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _measure import ROOT, cpu, interleaved, interpreter, report
+from _measure import ROOT, cpu, in_tree, interleaved, interpreter, report
 
 SCENARIOS = {name: ROOT / "scenarios" / "thesis" / f"{name}.xml"
              for name in ("sample-03", "sample-07", "sample-10")}
@@ -118,20 +118,12 @@ class Case:
         return cpu(step)
 
 
-def _there(path: Path, tree: Path) -> Path:
-    """The earlier build's own copy of a scenario of this tree (with the documents it
-    names as they were then: today's may use what that build lacks), if it has one."""
-    try:
-        theirs = tree / path.resolve().relative_to(ROOT)
-    except ValueError:
-        return path
-    return theirs if theirs.exists() else path
-
-
 def speed(args: argparse.Namespace) -> int:
     named = {p.stem: p for p in args.scenarios} if args.scenarios else SCENARIOS
     cases = {name: Case(name, path, args.runs) for name, path in named.items()}
-    earlier = {name: Case(name, _there(path, args.against.resolve()), args.runs,
+    # (the earlier build runs its own copy of each scenario, if it has one: today's
+    # documents may use what that build lacks)
+    earlier = {name: Case(name, in_tree(path, args.against.resolve()) or path, args.runs,
                           args.against.resolve())
                for name, path in named.items()} if args.against else {}
     for case in [*cases.values(), *earlier.values()]:
