@@ -40,7 +40,18 @@ class Wait:
 
 def sleep(ticks: int) -> Wait:
     """Resume after ``ticks`` ticks (zero: later in the same tick)."""
-    return Wait(ticks=max(0, ticks))
+    wait = _SLEEPS.get(ticks)
+    if wait is None:
+        wait = Wait(ticks=max(0, ticks))
+        if len(_SLEEPS) < _SLEEPS_KEPT:
+            _SLEEPS[ticks] = wait
+    return wait
+
+
+_SLEEPS: dict[int, Wait] = {}
+"""The waits of :func:`sleep` by length (the kernel never changes a wait: processes
+share them; a behavior sleeps its control period again and again)."""
+_SLEEPS_KEPT = 1024
 
 
 def until(pred: Callable[[], bool], ticks: int | None = None) -> Wait:
@@ -75,7 +86,9 @@ class Kernel:
     def __init__(self, hz: int) -> None:
         self.hz = hz
         self.tick = 0
-        self._heap: list[tuple[int, int, Callable[[], None]]] = []
+        self._heap: list[tuple[int, int, Any, tuple[int, Any] | None]] = []
+        """(tick, insertion number, what, wake): a function to call (``wake`` None) or a
+        process to resume with ``wake``'s (token, value)."""
         self._seq = 0
         self._polls: list[tuple[Process, int, Callable[[], bool]]] = []
 
@@ -87,7 +100,14 @@ class Kernel:
     def at(self, tick: int, fn: Callable[[], None]) -> None:
         """Do ``fn`` at ``tick`` (never earlier than now)."""
         self._seq += 1
-        heapq.heappush(self._heap, (max(tick, self.tick), self._seq, fn))
+        heapq.heappush(self._heap, (max(tick, self.tick), self._seq, fn, None))
+
+    def _wake(self, tick: int, proc: Process, token: int, value: Any) -> None:
+        """Resume ``proc`` with ``value`` at ``tick`` (not earlier than now), unless it
+        was resumed since ``token``: what :meth:`at` does with a function that fires it,
+        without making one (a process wakes again and again)."""
+        self._seq += 1
+        heapq.heappush(self._heap, (max(tick, self.tick), self._seq, proc, (token, value)))
 
     def next_tick(self) -> int | None:
         return self._heap[0][0] if self._heap else None
@@ -100,7 +120,11 @@ class Kernel:
         heap = self._heap
         ran = False
         while heap and heap[0][0] <= self.tick:
-            heapq.heappop(heap)[2]()
+            _tick, _seq, what, wake = heapq.heappop(heap)
+            if wake is None:
+                what()
+            else:
+                self._fire(what, *wake)
             ran = True
         return ran
 
@@ -123,7 +147,7 @@ class Kernel:
     def spawn(self, gen: ProcGen, exit: Callable[[Any], None] | None = None) -> Process:
         """Start a process later in the current tick; ``exit`` gets its return value."""
         proc = Process(gen, exit)
-        self.at(self.tick, lambda: self._fire(proc, 0, None))
+        self._wake(self.tick, proc, 0, None)
         return proc
 
     def kill(self, proc: Process | None) -> None:
@@ -147,12 +171,11 @@ class Kernel:
         token = proc.token
         if wait.start is not None:
             def waker(v: Any = True) -> None:
-                self.at(self.tick, lambda: self._fire(proc, token, v))
+                self._wake(self.tick, proc, token, v)
             if wait.start(waker) is False:
-                self.at(self.tick, lambda: self._fire(proc, token, True))
+                self._wake(self.tick, proc, token, True)
                 return
         if wait.ticks is not None:
-            timeout = wait.timeout
-            self.at(self.tick + wait.ticks, lambda: self._fire(proc, token, timeout))
+            self._wake(self.tick + wait.ticks, proc, token, wait.timeout)
         if wait.pred is not None:
             self._polls.append((proc, token, wait.pred))
