@@ -48,7 +48,9 @@ from prima.sim import (
     Simulator,
     SpeechTiming,
     UserAction,
+    WorldMap,
     ZoneEntry,
+    load_map,
     load_scenario,
 )
 from prima.trace import Kind, RecordKind, TraceLine, row_of
@@ -172,14 +174,26 @@ class _Port:
 
 
 class Loaded:
-    """Robot profiles and documents loaded for runs, kept by file and content, so that
-    runs of the same files (a sweep's) read and check each file once. Profiles and
-    documents are immutable: runs share them. A file that cannot be loaded is not
-    kept (each run reports it as it would alone)."""
+    """Maps, robot profiles and documents loaded for runs, kept by file and content, so
+    that runs of the same files (a sweep's) read and check each file once. Maps,
+    profiles and documents are immutable: runs share them. A file that cannot be
+    loaded is not kept (each run reports it as it would alone)."""
 
     def __init__(self) -> None:
+        self._maps: dict[tuple[str, bytes], WorldMap] = {}
         self._profiles: dict[tuple[str, bytes], RobotProfile] = {}
         self._documents: dict[tuple[str, bytes], tuple[RobotProfile, Document]] = {}
+
+    def map(self, path: Path) -> WorldMap:
+        """The map in ``path`` (:func:`prima.sim.load_map`)."""
+        try:
+            key = (str(path), path.read_bytes())
+        except OSError:
+            return load_map(path)  # (which says what is wrong with the file)
+        found = self._maps.get(key)
+        if found is None:
+            found = self._maps[key] = load_map(path)
+        return found
 
     def profile(self, path: str | Path) -> RobotProfile:
         """The robot profile in ``path`` (:func:`prima.dsl.load_profile`)."""
@@ -249,7 +263,7 @@ class Run:
                  rows: Callable[[dict[str, object]], None] | None = None) -> None:
         self._files = files or Loaded()
         """Where profiles and documents are loaded (shared by a sweep's runs)."""
-        loaded = load_scenario(scenario)
+        loaded = load_scenario(scenario, self._files.map)
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
         self.scenario: Scenario = loaded

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from prima.cli import main
-from prima.errors import DocumentError
+from prima.errors import DocumentError, ScenarioError
 from prima.mediator import DecisionKind
 from prima.run import Loaded, Run
 from prima.trace import Kind, TraceLine, device_overlaps, format_jsonl, format_text
@@ -276,6 +276,18 @@ def test_shared_loaded_files_are_read_again_when_they_change(tmp_path: Path) -> 
         files.document(fa, profile)
     with pytest.raises(DocumentError):
         files.document(tmp_path / "missing.pxml", profile)
+    building = tmp_path / "map.xml"
+    plan = (ROOT / "scenarios" / "maps" / "office.xml").read_text(encoding="utf-8")
+    building.write_text(plan, encoding="utf-8")
+    first_map = files.map(building)
+    assert files.map(building) is first_map
+    building.write_text(plan + "<!-- changed -->\n", encoding="utf-8")
+    assert files.map(building) is not first_map and files.map(building) == first_map
+    building.write_text("<map", encoding="utf-8")
+    with pytest.raises(ScenarioError):
+        files.map(building)
+    with pytest.raises(ScenarioError):
+        files.map(tmp_path / "missing.xml")
 
 
 def test_a_line_made_in_one_go_is_the_line_the_class_makes() -> None:

@@ -299,7 +299,9 @@ _ACTIONS = {k.value: k for k in (UserActionKind.SAY, UserActionKind.TOUCH, UserA
 
 
 class _Loader:
-    def __init__(self, doc: XmlDocument, path: Path) -> None:
+    def __init__(self, doc: XmlDocument, path: Path,
+                 maps: Callable[[Path], WorldMap] = load_map) -> None:
+        self.maps = maps
         self.replies: list[ReplyRule] = []
         self.doc = doc
         self.path = path
@@ -363,7 +365,7 @@ class _Loader:
             self.bad(map_el, f"map file {href!r} {unusable} (looked for {_shown(map_path)})",
                      "href")
             raise ScenarioError(self.problems)
-        self.map = load_map(map_path)
+        self.map = self.maps(map_path)
         robot_el = kids["robot"]
         robot = self.where(robot_el)
         apps = kids.get("apps")
@@ -684,8 +686,10 @@ def late_inputs(path: str | Path) -> list[Problem]:
     return out
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Load and check a scenario file (and its map); raise ScenarioError on any problem."""
+def load_scenario(path: str | Path,
+                  maps: Callable[[Path], WorldMap] = load_map) -> Scenario:
+    """Load and check a scenario file (and its map: by ``maps``, which may keep the maps
+    it loaded for the runs of a sweep); raise ScenarioError on any problem."""
     path = Path(path)
     doc = _parse(path, "scenario.xsd", SCENARIO_NS, "scenario")
-    return _Loader(doc, path).load()
+    return _Loader(doc, path, maps).load()
