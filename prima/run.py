@@ -31,7 +31,6 @@ from prima.errors import AppFailure, DocumentError, LocatedError, Problem, RunEr
 from prima.interpreter import Interpreter, Note
 from prima.mediator import (
     AppKind,
-    AtomicBehavior,
     Call,
     Decision,
     DecisionKind,
@@ -484,10 +483,10 @@ class Run:
 
     def _line(self, kind: RecordKind, **fields: Any) -> None:
         if kind in _POSED:
-            fields["robot"], user = self.sim.poses()
+            fields["robot"], user, detectable = self.sim.poses()
             if user is not None:
                 fields["user"] = user
-                fields["detectable"] = self.sim.user_detectable()
+                fields["detectable"] = detectable
         if self._rows is not None:
             self._rows(row_of(self.sim.now(), self._count, kind, fields))
         else:
@@ -624,9 +623,7 @@ class Run:
                 and all(self._requested.get(cid, ("", True))[1] for cid in ids)):
             detail["cuttable"] = True
         if d.ab is not None:
-            ab = AtomicBehavior(d.ab, d.app or "", d.tree or 0, d.calls, ids,
-                                frozenset(d.devices), d.iteration)
-            ahead = self.sim.words_ahead(ab)
+            ahead = self.sim.words_ahead(d.calls, ids, d.iteration)
             if ahead is not None:
                 now = self.sim.now()
                 detail["words_start"], detail["words_end"] = round(now, 3), round(now + ahead, 3)

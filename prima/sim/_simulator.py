@@ -22,7 +22,7 @@ import functools
 import math
 import random
 from collections import deque
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
@@ -158,8 +158,8 @@ class Simulator:
         """Whether words only show that the user follows (the robot profile's
         backchannels): they answer no prompt."""
         self._sense_every = hz // SENSE_HZ
-        self._poses: tuple[int, tuple[float, float, float],
-                           tuple[float, float, float] | None] = (-1, (0.0, 0.0, 0.0), None)
+        self._poses: tuple[int, tuple[float, float, float], tuple[float, float, float] | None,
+                           bool | None] = (-1, (0.0, 0.0, 0.0), None, None)
         """:meth:`poses` at a world version."""
         self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
         self._zones = tuple(zones)
@@ -485,23 +485,27 @@ class Simulator:
     def robot_pose(self) -> Pose:
         return self.world.robot_pose()
 
-    def poses(self) -> tuple[tuple[float, float, float], tuple[float, float, float] | None]:
-        """The robot's pose and the user's (None in a scenario without a user) as
-        ``(x, y, heading)``: :meth:`robot_pose` and :meth:`user_pose` as tuples (kept
-        while no body moves: the trace's lines of one instant, or of a still robot,
-        ask again and again)."""
+    def poses(self) -> tuple[tuple[float, float, float], tuple[float, float, float] | None,
+                             bool | None]:
+        """The robot's pose, the user's (None in a scenario without a user) as
+        ``(x, y, heading)`` (:meth:`robot_pose` and :meth:`user_pose` as tuples), and
+        whether the user is detectable (:meth:`user_detectable`; None without a user):
+        kept while no body moves (the trace's lines of one instant, or of a still robot,
+        ask again and again; none of the three depends on anything else)."""
         world = self.world
         kept = self._poses
         if kept[0] == world.version:
-            return kept[1], kept[2]
+            return kept[1], kept[2], kept[3]
         x, y = world.robot_xy()
         robot = (x, y, math.degrees(world.robot_angle()) % 360.0)
         user = None
+        detectable = None
         if world.has_user:
             x, y = world.user_xy()
             user = (x, y, math.degrees(world.user_angle()) % 360.0)
-        self._poses = (world.version, robot, user)
-        return robot, user
+            detectable = self.user_detectable()
+        self._poses = (world.version, robot, user, detectable)
+        return robot, user, detectable
 
     def user_detectable(self) -> bool:
         """Whether human detection could see the user now, if the robot looked their
@@ -582,15 +586,18 @@ class Simulator:
         once."""
         return self._said.pop(ab_id, None)
 
-    def words_ahead(self, ab: AtomicBehavior) -> float | None:
-        """How long the words of ``ab`` take if it says them as soon as it starts (s): a
-        Speak, a Q&A's prompt, a Turn and Speak, a search's prompt (in an iteration
-        that says it), first in the atomic behavior; None otherwise (it says nothing,
-        or says it after something else: a turn, an earlier Command of a group)."""
-        call = ab.calls[0] if ab.calls else None
+    def words_ahead(self, calls: Sequence[Call], command_ids: Sequence[int],
+                    iteration: int = 0) -> float | None:
+        """How long the words of the atomic behavior of ``calls`` (for ``command_ids``;
+        its feedback ``iteration``, if any) take if it says them as soon as it starts
+        (s): a Speak, a Q&A's prompt, a Turn and Speak, a search's prompt (in an
+        iteration that says it), first in the atomic behavior; None otherwise (it says
+        nothing, or says it after something else: a turn, an earlier Command of a
+        group)."""
+        call = calls[0] if calls else None
         if call is None or call.command not in _SPEAK_AT_ONCE:
             return None
-        if ab.iteration and self.quiet(ab.command_ids[0]):
+        if iteration and self.quiet(command_ids[0]):
             return None
         spec = self.catalog.get(call.command)
         words = spec.spoken(call.args) if spec is not None else []
