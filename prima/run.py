@@ -570,7 +570,7 @@ class Run:
         words ran; its Commands are forgotten once they are over."""
         outcome = self._outcomes.pop(d.ab or 0, None)
         if outcome is not None and outcome.values:
-            detail["result"] = ", ".join(f"{k}={v}" for k, v in sorted(outcome.values.items()))
+            detail["result"] = ", ".join([f"{k}={v}" for k, v in sorted(outcome.values.items())])
             if "error" in outcome.values:
                 detail["error"] = outcome.values["error"]
             if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
