@@ -262,7 +262,7 @@ def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
                     "columns robot) with the worst measure per cell, say whose each failure "
                     "is, write the worst runs as scenarios, and list what of the EA never "
                     "ran (docs/checking.md). Exit status 1 when a cell fails by the EA's "
-                    "doing, or the coverage is below --min-coverage.",
+                    "doing, no cell can run, or the coverage is below --min-coverage.",
     )
     check.add_argument("eas", nargs="+", metavar="EA", help="the EA documents to check")
     check.add_argument("--fa", action="append", default=[], metavar="DOC",
@@ -1331,6 +1331,10 @@ def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             status = EXIT_INTERRUPTED
             break
         if result.failed_by_ea or any(c.verdict == Verdict.ERROR for c in result.cells):
+            status = EXIT_ERRORS
+        if all(c.verdict == Verdict.NA for c in result.cells):
+            print(f"prima check: {result.ea.name}: no cell can run (each is n/a): nothing "
+                  "was checked", file=err)
             status = EXIT_ERRORS
         if args.min_coverage is not None and result.coverage.percent < args.min_coverage:
             print(f"prima check: {result.ea.name}: coverage {result.coverage.percent:.0f}% is "

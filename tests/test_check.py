@@ -297,6 +297,30 @@ def test_a_broken_ea_is_located_not_a_traceback(tmp_path: Path) -> None:
     assert code == 1 and f"{bad}:2:" in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("text, fragment", [
+    ("this is not XML\n", ":1:1: error: malformed XML"),
+    ('<?xml version="1.0"?>\n<pxml xmlns="urn:prima:pxml:1" name="fa"><oops/></pxml>\n',
+     ":2:1: error: <pxml>: missing required attribute 'kind'"),
+])
+def test_an_fa_that_is_no_document_stops_the_check_located(tmp_path: Path, text: str,
+                                                            fragment: str) -> None:
+    # (on every robot alike: not a row of n/a cells and a check that passes unchecked)
+    bad = tmp_path / "bad.pxml"
+    bad.write_text(text)
+    code, out, err = cli("check", str(TALKER), "--fa", str(bad), "--robot", str(HOME),
+                         "--runs", "1")
+    assert code == 1 and f"{bad}{fragment}" in err and "Traceback" not in err
+    assert out == ""
+
+
+def test_a_check_in_which_no_cell_can_run_fails() -> None:
+    fa7 = ROOT / "apps" / "fa" / "fa7-spotlight.pxml"  # (it needs the guide robot)
+    code, out, err = cli("check", str(TALKER), "--fa", str(fa7), "--robot", str(HOME),
+                         "--runs", "1")
+    assert code == 1 and "fa7-spotlight / home-robot: n/a: " in out
+    assert "no cell can run (each is n/a): nothing was checked" in err
+
+
 def test_the_example_ea_written_from_the_docs_passes_every_cell(tmp_path: Path) -> None:
     result = check(ROOT / "scenarios" / "examples" / "info-desk.pxml",
                    fas=sorted((ROOT / "apps" / "fa").glob("*.pxml")),

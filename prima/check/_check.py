@@ -22,12 +22,13 @@ from prima.batch import Job, Pool, ResultsFile, bundle_scenario, collect, pool_f
 from prima.check._coverage import Coverage
 from prima.check._observe import CheckAnalysis
 from prima.check._visits import VISITS, Visit, map_for, visit_scenario
-from prima.dsl import Document, load_document, load_profile
-from prima.errors import LocatedError
+from prima.dsl import Document, load_document, load_profile, structure_problems
+from prima.errors import DocumentError, LocatedError
 from prima.judge import Thresholds
 from prima.output import make_folder
 from prima.sim import WorldMap, load_map, load_scenario
 from prima.sweep import SweepRun, results_header, write_variant
+from prima.xmlio import parse_xml, read_source
 
 __all__ = ["Cell", "Check", "Failure", "Verdict", "check"]
 
@@ -194,6 +195,15 @@ def _profiled(path: Path, robot: Path, profiles: dict[Path, Any]) -> Document:
     return load_document(path, profile)
 
 
+def _a_document(path: Path) -> None:
+    """Raise DocumentError (located) when ``path`` is no PXML document on any robot: not
+    XML, or not what the schema allows. (What a robot lacks makes only its cells n/a.)"""
+    doc = parse_xml(read_source(path, DocumentError), str(path), DocumentError)
+    problems = structure_problems(doc)
+    if problems:
+        raise DocumentError(problems)
+
+
 def _problem(exc: LocatedError) -> str:
     return str(exc.problems[0]) if exc.problems else str(exc)
 
@@ -255,10 +265,12 @@ def check(ea: str | Path, *, fas: Sequence[Path], robots: Sequence[Path],
     map in the folder ``maps`` that has every place the EA names): each swept ``runs``
     times with timings jittered by up to ``jitter`` s. The ``worst`` worst runs of each
     failing cell are written into ``out``. Raises LocatedError for an EA that cannot be
-    loaded, ValueError when no map has its places. ``visitors``: the generated visits'
-    visitors (default: all of :data:`VISITS`)."""
+    loaded or an FA that is no PXML document, ValueError when no map has its places.
+    ``visitors``: the generated visits' visitors (default: all of :data:`VISITS`)."""
     ea_path = Path(ea)
     document = load_document(ea_path, load_profile(robots[0]))
+    for fa in fas:  # (one that cannot run on a robot is that cell's n/a)
+        _a_document(fa)
     for scenario in scenarios:  # a scenario of the EA's own with errors stops the check
         load_scenario(scenario)
     world = None

@@ -48,7 +48,13 @@ from prima.dsl._grammar import parser
 from prima.dsl._grammar import prebuilt as prebuilt_parser
 from prima.dsl._syntax import Token as ParseToken
 from prima.dsl._syntax import Tree as ParseTree
-from prima.dsl._loader import NAMESPACE, check_document, check_parsed, load_document
+from prima.dsl._loader import (
+    NAMESPACE,
+    check_document,
+    check_parsed,
+    load_document,
+    structure_problems,
+)
 from prima.dsl._model import (
     Action,
     Assign,
@@ -165,6 +171,7 @@ __all__ = [
     "profile_from_xml",
     "root_namespace",
     "schema_source",
+    "structure_problems",
     "to_text",
     "truthy",
     "validate_paths",

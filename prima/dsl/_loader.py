@@ -858,15 +858,23 @@ def check_parsed(doc: XmlDocument,
                  profile: RobotProfile | None = None) -> tuple[Document | None, list[Problem]]:
     """Like :func:`check_document`, for a document already parsed securely."""
     profile = profile or default_profile()
-    if doc.root.tag != _NS + "pxml":
-        return None, [doc.problem(doc.root, f'not a PXML document: the root must be <pxml xmlns='
-                                            f'"{NAMESPACE}">, not <{local_name(doc.root)}>')]
-    problems = validate(doc, "pxml.xsd", _hint_for(profile))
+    problems = structure_problems(doc, profile)
     if problems:
         return None, problems
     builder = Builder(doc, profile)
     document = builder.build()
     return document, builder.reported()
+
+
+def structure_problems(doc: XmlDocument,
+                       profile: RobotProfile | None = None) -> list[Problem]:
+    """What is wrong with a parsed document on any robot: a root that is not ``<pxml>``,
+    or what the schema does not allow (``profile`` only words the hints). None of them:
+    it is a PXML document, which may still use what a robot lacks."""
+    if doc.root.tag != _NS + "pxml":
+        return [doc.problem(doc.root, f'not a PXML document: the root must be <pxml xmlns='
+                                      f'"{NAMESPACE}">, not <{local_name(doc.root)}>')]
+    return validate(doc, "pxml.xsd", _hint_for(profile or default_profile()))
 
 
 def load_document(path: str | Path, profile: RobotProfile | None = None) -> Document:
