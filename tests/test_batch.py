@@ -187,7 +187,22 @@ def test_resuming_the_results_of_another_sweep_is_refused(tmp_path: Path) -> Non
     code, _, err = cli("sweep", str(SHORT), "--runs", "2", "--jitter", "1", "--seed", "2",
                        "--jobs", "1", "--worst", "0", "--resume", str(target))
     assert code == 1 and "Traceback" not in err
-    assert f"{target}:1:1: error: these are the results of another batch: its jobs" in err
+    assert (f"{target}:1:1: error: these are the results of another batch: its "
+            "jobs[0].seed is 1, not 2") in err
+
+
+@pytest.mark.parametrize("found, wanted, said", [
+    ({"v": 1, "jobs": [{"runs": 2}]}, {"v": 1, "jobs": [{"runs": 3}]},
+     "its jobs[0].runs is 2, not 3"),
+    ({"jobs": [{}, {}]}, {"jobs": [{}]}, "it has 2 jobs, not 1"),
+    ({"v": 1, "extra": "x"}, {"v": 1}, 'its extra is "x", not null'),
+    ({"s": "a" * 100}, {"s": "b"}, 'its s is "' + "a" * 76 + '..., not "b"'),
+])
+def test_a_header_that_differs_is_named_by_its_innermost_field(
+        found: dict[str, object], wanted: dict[str, object], said: str) -> None:
+    from prima.batch._results import _differs
+
+    assert _differs(found, wanted) == said
 
 
 def test_a_line_that_is_not_the_next_record_is_located(tmp_path: Path) -> None:

@@ -27,13 +27,26 @@ def _problem(path: Path, line: int, message: str) -> ResultsError:
     return ResultsError([Problem(str(path), line, 1, Severity.ERROR, message)])
 
 
-def _differs(found: Mapping[str, Any], wanted: Mapping[str, Any]) -> str:
-    """Which field of a header differs, readably."""
-    for key in wanted:
-        if found.get(key) != wanted[key]:
-            return f"its {key} is {json.dumps(found.get(key))[:80]}, not " \
-                   f"{json.dumps(wanted[key])[:80]}"
-    return "its header differs"
+def _differs(found: Any, wanted: Any, where: str = "") -> str:
+    """Where a header differs, readably: its innermost field that does (``jobs[0].seed``,
+    the first job's seed), with both values."""
+    if isinstance(found, dict) and isinstance(wanted, dict):
+        for key in [*wanted, *(k for k in found if k not in wanted)]:
+            if found.get(key) != wanted.get(key):
+                return _differs(found.get(key), wanted.get(key),
+                                f"{where}.{key}" if where else str(key))
+    if isinstance(found, list) and isinstance(wanted, list) and len(found) == len(wanted):
+        for i, (a, b) in enumerate(zip(found, wanted, strict=True)):
+            if a != b:
+                return _differs(a, b, f"{where}[{i}]")
+    if isinstance(found, list) and isinstance(wanted, list):
+        return f"it has {len(found)} {where or 'entries'}, not {len(wanted)}"
+    return f"its {where or 'header'} is {_short(found)}, not {_short(wanted)}"
+
+
+def _short(value: Any) -> str:
+    text = json.dumps(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 class ResultsFile:
