@@ -197,6 +197,8 @@ def test_resuming_the_results_of_another_sweep_is_refused(tmp_path: Path) -> Non
     ({"jobs": [{}, {}]}, {"jobs": [{}]}, "it has 2 jobs, not 1"),
     ({"v": 1, "extra": "x"}, {"v": 1}, 'its extra is "x", not null'),
     ({"s": "a" * 100}, {"s": "b"}, 'its s is "' + "a" * 76 + '..., not "b"'),
+    ({"jobs": [{"digest": "1f"}]}, {"jobs": [{"digest": "2e"}]},
+     'its jobs[0].digest is "1f", not "2e" (the scenario, or a document it runs, changed)'),
 ])
 def test_a_header_that_differs_is_named_by_its_innermost_field(
         found: dict[str, object], wanted: dict[str, object], said: str) -> None:

@@ -41,7 +41,10 @@ def _differs(found: Any, wanted: Any, where: str = "") -> str:
                 return _differs(a, b, f"{where}[{i}]")
     if isinstance(found, list) and isinstance(wanted, list):
         return f"it has {len(found)} {where or 'entries'}, not {len(wanted)}"
-    return f"its {where or 'header'} is {_short(found)}, not {_short(wanted)}"
+    said = f"its {where or 'header'} is {_short(found)}, not {_short(wanted)}"
+    if where.endswith(".digest"):
+        said += " (the scenario, or a document it runs, changed)"
+    return said
 
 
 def _short(value: Any) -> str:
