@@ -36,6 +36,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 from _measure import ROOT, cpu, in_tree, interleaved, interpreter, report
 
@@ -54,14 +55,17 @@ def child(scenario: Path, runs: int, first: int) -> None:
     from prima.judge import Thresholds, judge  # noqa: F401 (judge: imported lazily too)
 
     steps = [0]
-    real = simulator.Simulator.advance_to
+    # (what every advance of the simulator goes through: _run_to, or in an earlier build
+    # advance_to, counted around it)
+    name = "_run_to" if hasattr(simulator.Simulator, "_run_to") else "advance_to"
+    real = getattr(simulator.Simulator, name)
 
-    def counted(self: simulator.Simulator, t: float, *, stop_on_report: bool = False) -> None:
+    def counted(self: simulator.Simulator, *args: Any, **kwargs: Any) -> None:
         before = self.steps
-        real(self, t, stop_on_report=stop_on_report)
+        real(self, *args, **kwargs)
         steps[0] += self.steps - before
 
-    simulator.Simulator.advance_to = counted  # type: ignore[method-assign]
+    setattr(simulator.Simulator, name, counted)
     try:
         from prima.batch import Chunk, Job, bundle_scenario, run_chunk
     except ImportError:  # an earlier build (--against): its sweep's own worker function

@@ -322,6 +322,7 @@ class Run:
         self.catalog = self.profile.catalog()
         self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
                                            catalog=self.catalog)
+        self.until = self.sim.on_grid(self.until)  # (the run ends at a tick)
         self.sim.speech = speech  # None: the profile's speech rate times every utterance
         self.sim.hears_always = self.policies["barge-in"]  # else only while a Q&A listens
         self.sim.backchannel = self.profile.hearing.backchannel

@@ -252,6 +252,13 @@ def test_a_run_is_the_same_when_its_loop_wakes_at_every_simulator_time(scenario:
     assert format_jsonl(Run(path).run()) == format_jsonl(_WakingEveryTime(path).run())
 
 
+def test_a_run_whose_end_is_a_hair_past_a_tick_ends_at_that_tick() -> None:
+    # (it went round and round, short of an end it could never reach)
+    lines = Run(ROOT / "scenarios" / "thesis" / "sample-03.xml", until=10.00000001).run()
+    assert lines[-1].t <= 10.0 and Run(ROOT / "scenarios" / "thesis" / "sample-03.xml",
+                                       until=10.0).run() == lines
+
+
 def test_runs_sharing_their_loaded_files_run_as_alone(tmp_path: Path) -> None:
     files = Loaded()
     for name in ("sample-03", "sample-10", "sample-03"):

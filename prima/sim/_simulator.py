@@ -408,31 +408,47 @@ class Simulator:
 
     def next_time(self) -> float | None:
         """When something next happens (at most one second ahead while anything moves)."""
+        nxt = self._next_tick()
+        return None if nxt is None else nxt / self.kernel.hz
+
+    def _next_tick(self) -> int | None:
+        """:meth:`next_time`, as a tick."""
         k = self.kernel
         nxt = k.next_tick()
         if self._moving():
             horizon = k.tick + k.hz
             nxt = horizon if nxt is None else min(nxt, horizon)
-        return None if nxt is None else nxt / k.hz
+        return nxt
+
+    def on_grid(self, t: float) -> float:
+        """The time of the first tick at or after ``t`` (a time less than a millionth of
+        a tick past one is that tick's): where :meth:`advance_until` stops."""
+        return self._first_tick(t) / self.kernel.hz
+
+    def _first_tick(self, t: float) -> int:
+        return math.ceil(t * self.kernel.hz - 1e-6)
 
     def advance_until(self, t: float) -> None:
-        """Run up to time ``t`` (the first tick at or after it), returning as soon as
-        anything is reported (as :meth:`advance_to` with ``stop_on_report``).
+        """Run up to time ``t`` (the first tick at or after it: :meth:`on_grid`),
+        returning as soon as anything is reported (as :meth:`advance_to` with
+        ``stop_on_report``).
 
         On the way, the simulator wakes at its own times (:meth:`next_time`) and
         settles there as it would if a caller's loop woke it then: it runs what is
         due and, while human detection runs, looks for the user. So a caller whose
         loop has nothing to do at those times (a run's mediator and applications)
         sleeps through them, and the simulator sees the same at the same ticks.
+        (Ticks are compared as whole numbers: a ``t`` a hair past a tick stops at that
+        tick, not again and again short of ``t``.)
         """
-        hz = self.kernel.hz
+        k = self.kernel
+        last = max(self._first_tick(t), k.tick)
         before = self.reports
         while True:
-            own = self.next_time()
-            step = t if own is None else min(own, t)
-            step = max(math.ceil(step * hz - 1e-6) / hz, self.now())
-            self.advance_to(step, stop_on_report=True)
-            if self.reports != before or step >= t or self.now() != step:
+            own = self._next_tick()
+            step = max(last if own is None else min(own, last), k.tick)
+            self._run_to(step, True)
+            if self.reports != before or step >= last or k.tick != step:
                 return
 
     def advance_to(self, t: float, *, stop_on_report: bool = False) -> None:
@@ -446,6 +462,11 @@ class Simulator:
         target = math.floor(t * k.hz + 1e-6)
         if target < k.tick:
             raise SimulationError(f"cannot go back from {self.now()} to {t}")
+        self._run_to(target, stop_on_report)
+
+    def _run_to(self, target: int, stop_on_report: bool) -> None:
+        """:meth:`advance_to` the tick ``target`` (not before now)."""
+        k = self.kernel
         world = self.world
         every = self._sense_every
         sample = self.sample_every

@@ -174,6 +174,27 @@ def test_finished_is_never_called_from_inside_start() -> None:
     assert calls == [1]
 
 
+@pytest.mark.parametrize("past", [1e-9, 1e-12])
+def test_advancing_until_a_hair_past_a_tick_stops_at_that_tick(
+        monkeypatch: pytest.MonkeyPatch, past: float) -> None:
+    # (12.3 + 0.3 is 12.600000000000001: such a time is the tick of 12.6, not one that
+    # is never reached; the simulator is stopped if it goes round and round instead)
+    sim = Simulator(world_map("museum"), robot=CENTER)
+    calls = [0]
+    real = Simulator._run_to
+
+    def counted(self: Simulator, target: int, stop_on_report: bool) -> None:
+        calls[0] += 1
+        if calls[0] > 100:
+            raise AssertionError("advance_until goes round and round")
+        real(self, target, stop_on_report)
+
+    monkeypatch.setattr(Simulator, "_run_to", counted)
+    sim.advance_until(12.6 + past)
+    assert sim.now() == 12.6 == sim.on_grid(12.6 + past) and calls[0] <= 2
+    assert sim.on_grid(12.61) == 12.62 and sim.on_grid(12.6 - past) == 12.6
+
+
 def test_misuse_raises_simulation_errors() -> None:
     museum = world_map("museum")
     with pytest.raises(SimulationError, match="multiple of 10"):
