@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from prima.catalog import Catalog, ParamKind
 from prima.dsl import (
@@ -185,25 +185,11 @@ class Loaded:
 
     def map(self, path: Path) -> WorldMap:
         """The map in ``path`` (:func:`prima.sim.load_map`)."""
-        try:
-            key = (str(path), path.read_bytes())
-        except OSError:
-            return load_map(path)  # (which says what is wrong with the file)
-        found = self._maps.get(key)
-        if found is None:
-            found = self._maps[key] = load_map(path)
-        return found
+        return _kept(self._maps, path, load_map)
 
     def profile(self, path: str | Path) -> RobotProfile:
         """The robot profile in ``path`` (:func:`prima.dsl.load_profile`)."""
-        try:
-            key = (str(path), Path(path).read_bytes())
-        except OSError:
-            return load_profile(path)  # (which says what is wrong with the file)
-        found = self._profiles.get(key)
-        if found is None:
-            found = self._profiles[key] = load_profile(path)
-        return found
+        return _kept(self._profiles, path, load_profile)
 
     def document(self, path: str | Path, profile: RobotProfile) -> Document:
         """The document in ``path``, checked for ``profile``
@@ -218,6 +204,22 @@ class Loaded:
         document = load_document(path, profile)
         self._documents[key] = (profile, document)
         return document
+
+
+_Loadable = TypeVar("_Loadable")
+
+
+def _kept(kept: dict[tuple[str, bytes], _Loadable], path: str | Path,
+          load: Callable[[str | Path], _Loadable]) -> _Loadable:
+    """What ``load`` makes of the file ``path``, kept by its path and content."""
+    try:
+        key = (str(path), Path(path).read_bytes())
+    except OSError:
+        return load(path)  # (which says what is wrong with the file)
+    found = kept.get(key)
+    if found is None:
+        found = kept[key] = load(path)
+    return found
 
 
 @dataclass(frozen=True)
