@@ -263,7 +263,7 @@ class Run:
                  speech: SpeechTiming | None = None, files: Loaded | None = None,
                  rows: Callable[[dict[str, object]], None] | None = None) -> None:
         self._files = files or Loaded()
-        """Where profiles and documents are loaded (shared by a sweep's runs)."""
+        """Where maps, profiles and documents are loaded (shared by a sweep's runs)."""
         loaded = load_scenario(scenario, self._files.map)
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
