@@ -157,7 +157,7 @@ class _Share:
         self.prune(now, window)
         start = now - window
         intervals = self.intervals
-        total: float = 0
+        total: float = 0.0
         if intervals:
             # Only the oldest interval can begin before the window (they follow one
             # another), so the others count whole: their lengths are summed in C, in
