@@ -50,22 +50,19 @@ TARGET = 2.0
 def child(scenario: Path, runs: int, first: int) -> None:
     """In a cold process: ``runs`` judged runs of a sweep of ``scenario`` (indices from
     ``first``); print their CPU time and physics steps as JSON."""
-    import prima.run  # noqa: F401 (a worker imports the run machinery once, not per run:
-    import prima.sim._simulator as simulator  # it is imported before the clock starts)
-    from prima.judge import Thresholds, judge  # noqa: F401 (judge: imported lazily too)
+    import prima.run  # (a worker imports the run machinery once, not per run: it is
+    from prima.judge import Thresholds, judge  # noqa: F401 (imported before the clock starts)
 
     steps = [0]
-    # (what every advance of the simulator goes through: _run_to, or in an earlier build
-    # advance_to, counted around it)
-    name = "_run_to" if hasattr(simulator.Simulator, "_run_to") else "advance_to"
-    real = getattr(simulator.Simulator, name)
+    real = prima.run.Run.run  # (each run's simulator counts its physics steps; the
+    # simulator itself may be compiled, and a compiled class is not changed)
 
-    def counted(self: simulator.Simulator, *args: Any, **kwargs: Any) -> None:
-        before = self.steps
-        real(self, *args, **kwargs)
-        steps[0] += self.steps - before
+    def counted(self: prima.run.Run) -> Any:
+        lines = real(self)
+        steps[0] += self.sim.steps
+        return lines
 
-    setattr(simulator.Simulator, name, counted)
+    prima.run.Run.run = counted  # type: ignore[method-assign]
     try:
         from prima.batch import Chunk, Job, bundle_scenario, run_chunk
     except ImportError:  # an earlier build (--against): its sweep's own worker function

@@ -1,0 +1,53 @@
+"""The package is described in pyproject.toml; this file only adds, when asked, the
+compiled build: with ``PRIMA_MYPYC=1`` the hot modules of the simulator, the mediator,
+the interpreter and the judge are compiled to C extensions by mypyc (part of mypy), for
+sweeps and checks of many runs. Every trace is the same as the pure Python build's.
+mypyc type-checks what it compiles, so PRIMA's dependencies and mypy come first:
+
+    python -m pip install . mypy lxml-stubs 'setuptools>=68' wheel
+    PRIMA_MYPYC=1 python -m pip install --no-build-isolation --no-deps --force-reinstall .
+
+Without ``PRIMA_MYPYC`` (the default, and what the tests run) nothing is compiled.
+docs/judging.md (Many runs) says when to use it; docs/benchmarks.md (Sweeps), what it
+gains and how it is held to the pure build's traces.
+"""
+
+from __future__ import annotations
+
+import os
+
+from setuptools import setup
+
+COMPILED = [
+    "prima/sim/_kernel.py",
+    "prima/sim/_world.py",
+    "prima/sim/_simulator.py",
+    "prima/sim/_user.py",
+    "prima/mediator/_fairness.py",
+    "prima/mediator/_holds.py",
+    "prima/mediator/_index.py",
+    "prima/mediator/_intake.py",
+    "prima/mediator/_log.py",
+    "prima/mediator/_mediator.py",
+    "prima/mediator/_memory.py",
+    "prima/mediator/_policies.py",
+    "prima/mediator/_ranking.py",
+    "prima/mediator/_rounds.py",
+    "prima/mediator/_state.py",
+    "prima/interpreter/_interpreter.py",
+    "prima/judge/_context.py",
+    "prima/judge/_judging.py",
+    "prima/judge/_reactions.py",
+]
+"""What the compiled build compiles: where a run spends its time. (Not prima.run, whose
+Run the benchmarks wrap to count physics steps, nor what mypyc cannot compile as it is:
+prima.trace makes its lines without their constructor; the judge's measures import the
+judge's package while it is being imported; the behaviors gain nothing.)"""
+
+ext_modules = []
+if os.environ.get("PRIMA_MYPYC") == "1":
+    from mypyc.build import mypycify
+
+    ext_modules = mypycify(COMPILED, opt_level="3")
+
+setup(ext_modules=ext_modules)
