@@ -7,7 +7,9 @@ mypyc type-checks what it compiles, so PRIMA's dependencies and mypy come first:
     python -m pip install . mypy lxml-stubs 'setuptools>=68' wheel
     PRIMA_MYPYC=1 python -m pip install --no-build-isolation --no-deps --force-reinstall .
 
-Without ``PRIMA_MYPYC`` (the default, and what the tests run) nothing is compiled.
+Not with ``-e``: an editable install puts the compiled modules beside the sources,
+where they hide later changes to them. Without ``PRIMA_MYPYC`` (the default, and what
+the tests run) nothing is compiled.
 docs/judging.md (Many runs) says when to use it; docs/benchmarks.md (Sweeps), what it
 gains and how it is held to the pure build's traces.
 """
