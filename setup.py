@@ -25,6 +25,8 @@ COMPILED = [
     "prima/sim/_world.py",
     "prima/sim/_simulator.py",
     "prima/sim/_user.py",
+    "prima/sim/_behaviors.py",
+    "prima/sim/_maps.py",
     "prima/mediator/_fairness.py",
     "prima/mediator/_holds.py",
     "prima/mediator/_index.py",
@@ -39,12 +41,14 @@ COMPILED = [
     "prima/interpreter/_interpreter.py",
     "prima/judge/_context.py",
     "prima/judge/_judging.py",
+    "prima/judge/_measures.py",
     "prima/judge/_reactions.py",
+    "prima/judge/_thresholds.py",
+    "prima/run.py",
+    "prima/trace.py",
 ]
-"""What the compiled build compiles: where a run spends its time. (Not prima.run, whose
-Run the benchmarks wrap to count physics steps, nor what mypyc cannot compile as it is:
-prima.trace makes its lines without their constructor; the judge's measures import the
-judge's package while it is being imported; the behaviors gain nothing.)"""
+"""What the compiled build compiles: where a run spends its time, from the simulator's
+steps to the judge's measures and the lines of the trace."""
 
 ext_modules = []
 if os.environ.get("PRIMA_MYPYC") == "1":

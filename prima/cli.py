@@ -19,7 +19,7 @@ from pathlib import Path
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import TYPE_CHECKING, TextIO
 
-from prima import __version__
+from prima import __version__, compiled
 from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
 from prima.escape import shown_path, terminal
 from prima.suggest import SuggestingParser, did_you_mean, unrecognized
@@ -94,7 +94,8 @@ def build_parser() -> SuggestingParser:
         prog="prima",
         description="PRIMA: mediate two robot applications sharing one personal robot.",
     )
-    parser.add_argument("--version", action="version", version=f"prima {__version__}")
+    build = " (compiled)" if compiled() else ""
+    parser.add_argument("--version", action="version", version=f"prima {__version__}{build}")
     _colour_argument(parser, "auto")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 

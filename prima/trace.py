@@ -73,6 +73,8 @@ class TraceLine:
         if not fields.keys() <= _DEFAULTS.keys():
             unknown = sorted(fields.keys() - _DEFAULTS.keys())
             raise TypeError(f"TraceLine has no field {unknown[0]!r}")
+        if not _STORED_AT_ONCE:
+            return cls(t, seq, kind, **fields)
         line = object.__new__(cls)
         state = dict(_DEFAULTS)
         state.update(fields)
@@ -83,8 +85,14 @@ class TraceLine:
         return line
 
     def to_dict(self) -> dict[str, object]:
-        return row_of(self.t, self.seq, self.kind, self.__dict__)
+        fields = (self.__dict__ if _STORED_AT_ONCE
+                  else {name: getattr(self, name) for name in _DEFAULTS})
+        return row_of(self.t, self.seq, self.kind, fields)
 
+
+_STORED_AT_ONCE = "__dict__" in vars(TraceLine)
+"""Whether a line keeps its fields in a dict of its own, to be stored at once (not when
+the module is compiled: a compiled class keeps its fields in fixed slots)."""
 
 _DEFAULTS: dict[str, Any] = {
     f.name: None if f.default is dataclasses.MISSING else f.default

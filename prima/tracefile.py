@@ -173,8 +173,8 @@ def rows(trace: Iterable[object]) -> Iterator[Row]:
     """A trace's lines as jsonl dicts: TraceLine objects as the line each writes, dicts
     as they are."""
     for line in trace:
-        if isinstance(line, Mapping):
-            yield line
+        if type(line) is dict or isinstance(line, Mapping):  # (a run's rows are dicts:
+            yield line                                        # no abstract class asked)
         else:
             to_dict = getattr(line, "to_dict", None)
             if to_dict is None:

@@ -218,13 +218,11 @@ def test_every_package_is_installed() -> None:
     assert found <= listed
 
 
-def test_the_compiled_build_compiles_modules_that_are_there_and_not_the_wrapped_ones() -> None:
-    """setup.py's list for the compiled build (PRIMA_MYPYC=1) names existing modules of
-    packages that are installed; not prima.run, whose Run the benchmarks wrap, nor
-    prima.trace, whose lines are made without their constructor (mypyc forbids both)."""
+def test_the_compiled_build_compiles_modules_that_are_there() -> None:
+    """setup.py's list for the compiled build (PRIMA_MYPYC=1) names existing modules."""
     tree = ast.parse((ROOT.parent / "setup.py").read_text())
     compiled = next(ast.literal_eval(node.value) for node in tree.body
                     if isinstance(node, ast.Assign)
                     and [getattr(t, "id", None) for t in node.targets] == ["COMPILED"])
     assert compiled and all((ROOT.parent / path).is_file() for path in compiled)
-    assert not {"prima/run.py", "prima/trace.py"} & set(compiled)
+    assert "prima/trace.py" in compiled  # (what prima.compiled() looks at)

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+import prima.trace
 from prima.cli import main
 from prima.errors import DocumentError, ScenarioError
 from prima.mediator import DecisionKind
@@ -243,6 +244,7 @@ class _WakingEveryTime(Run):
         return self.lines
 
 
+@pytest.mark.pure
 @pytest.mark.parametrize("scenario", ["thesis/sample-03.xml", "thesis/sample-07.xml",
                                       "examples/barge-in-question.xml"])
 def test_a_run_is_the_same_when_its_loop_wakes_at_every_simulator_time(scenario: str) -> None:
@@ -297,7 +299,12 @@ def test_shared_loaded_files_are_read_again_when_they_change(tmp_path: Path) -> 
         files.map(tmp_path / "missing.xml")
 
 
-def test_a_line_made_in_one_go_is_the_line_the_class_makes() -> None:
+@pytest.mark.parametrize("at_once", [pytest.param(True, marks=pytest.mark.pure), False])
+def test_a_line_made_in_one_go_is_the_line_the_class_makes(
+        at_once: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Alike whether the fields are stored at once (pure Python) or through the
+    constructor (the compiled build: its lines keep no dict)."""
+    monkeypatch.setattr(prima.trace, "_STORED_AT_ONCE", at_once)
     fields = {"app": "fa", "ab": 3, "command": "Speak", "text": 'say "hi"\n',
               "devices": ("speaker",), "detail": {"b": 1, "a": None},
               "robot": (1.0, 2.0, 90.0), "user": (3.0, 4.0, 0.0), "detectable": True}

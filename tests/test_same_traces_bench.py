@@ -37,6 +37,7 @@ def _other_build(tmp_path: Path, *, touch_at: str = "20") -> Path:
     return tree
 
 
+@pytest.mark.pure
 def test_the_same_build_makes_the_same_traces(tmp_path: Path,
                                               capsys: pytest.CaptureFixture[str]) -> None:
     scenario = str(ROOT / "scenarios" / "thesis" / "sample-01.xml")
@@ -45,6 +46,7 @@ def test_the_same_build_makes_the_same_traces(tmp_path: Path,
     assert "2 runs of 1 scenario(s): every trace the same in both builds" in capsys.readouterr().out
 
 
+@pytest.mark.pure
 def test_a_run_that_differs_is_named(tmp_path: Path,
                                      capsys: pytest.CaptureFixture[str]) -> None:
     scenario = str(ROOT / "scenarios" / "thesis" / "sample-01.xml")

@@ -832,9 +832,17 @@ def _recovery_line(x: Recovery) -> str:
 
 # ---------------------------------------------------------------- the table
 
+def _late() -> Finder:
+    return _Reactions(lambda r: r.late)
+
+
+def _unheard() -> Finder:
+    return _Reactions(lambda r: r.unheard)
+
+
 _FINDERS: dict[str, tuple[Callable[[], Finder], Callable[[Any], str]]] = {
-    "late": (lambda: _Reactions(lambda r: r.late), _reaction_line),
-    "unheard": (lambda: _Reactions(lambda r: r.unheard), _unheard_line),
+    "late": (_late, _reaction_line),
+    "unheard": (_unheard, _unheard_line),
     "unfaced": (_Unfaced, _unfaced_line),
     "leaving": (_Leaving, _leaving_line),
     "elsewhere": (_Elsewhere, _elsewhere_line),

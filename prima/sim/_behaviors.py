@@ -530,7 +530,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     if world.mode:
         yield from _stop(sim)
     turned: list[bool] = []
-    if world.turn_by(math.radians(angle), lambda *_a: turned.append(True)):
+    if world.turn_by(math.radians(angle), turned.append):
         yield until(lambda: bool(turned) or sim.seen)
     if sim.seen and not turned:
         yield from _stop(sim)

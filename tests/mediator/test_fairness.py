@@ -195,6 +195,7 @@ ORDERED = (70, 1484, 1755, 4086, 4703)
 orders two budget decisions at one instant."""
 
 
+@pytest.mark.pure
 def test_random_scenarios_decide_as_the_rule_settled_everywhere(
         monkeypatch: pytest.MonkeyPatch) -> None:
     budgets = 0
@@ -213,6 +214,7 @@ TIGHT = MediatorConfig(budgets={AppKind.FA: Budgets(wait_share=2.0, wait_window=
                                 AppKind.EA: Budgets(wait_share=1.0, wait_window=3.0)})
 
 
+@pytest.mark.pure
 def test_an_app_registered_again_under_its_name_within_one_operation(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The new registration takes the record over from the next settle on."""
@@ -241,6 +243,7 @@ def test_an_app_registered_again_under_its_name_within_one_operation(
     assert any(d.kind is DecisionKind.BUDGET for d in decisions)
 
 
+@pytest.mark.pure
 def test_a_deadline_asked_after_time_moved_on_is_the_last_settle_s(
         monkeypatch: pytest.MonkeyPatch) -> None:
     def play(deadlines: Deadlines) -> list[Decision]:
@@ -269,6 +272,7 @@ SLIDING = MediatorConfig(budgets={AppKind.FA: Budgets(),
                                    AppKind.EA: Budgets(wait_share=1.0, wait_window=1.5)})
 
 
+@pytest.mark.pure
 def test_deadlines_follow_a_share_sliding_out_of_its_window(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The EA keeps the FA waiting, stops, and keeps it waiting again while the FA
@@ -300,6 +304,7 @@ def test_deadlines_follow_a_share_sliding_out_of_its_window(
     assert [d.app for d in budget] == ["ea"] and budget[0].t == pytest.approx(2.05)
 
 
+@pytest.mark.pure
 def test_a_record_dropped_is_made_again_after_the_others(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The EA ``ea`` kept the FA waiting at 0 s, then nobody for a whole window: the rule

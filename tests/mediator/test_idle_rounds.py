@@ -15,6 +15,7 @@ from prima.mediator.random_driver import play
 SEEDS = range(2_000_000_000, 2_000_000_000 + 1_000)
 
 
+@pytest.mark.pure
 def test_a_round_skipped_as_idle_would_have_done_nothing(
         monkeypatch: pytest.MonkeyPatch) -> None:
     idle = Selector._idle

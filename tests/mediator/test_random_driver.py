@@ -150,6 +150,7 @@ def test_the_oracle_catches_a_ranking_criterion_left_out(monkeypatch: pytest.Mon
     assert any(what in v for v in caught() for what in WRONG_WINNER)
 
 
+@pytest.mark.pure
 def test_the_oracle_catches_a_double_booking(monkeypatch: pytest.MonkeyPatch) -> None:
     """A mediator that forgets a device is busy (and a driver that does not check)."""
     def start(self: memory_module.WorkingMemory, node: memory_module.Node) -> None:
@@ -170,6 +171,7 @@ def test_the_oracle_catches_a_double_booking(monkeypatch: pytest.MonkeyPatch) ->
                for what in ("held by running AB", "both run on", "device occupancy"))
 
 
+@pytest.mark.pure
 def test_the_oracle_catches_an_ab_started_twice(monkeypatch: pytest.MonkeyPatch) -> None:
     """A mediator that reports (and so would perform) one start twice."""
     original = log_module.DecisionLog.ab  # (what records starts)
@@ -184,6 +186,7 @@ def test_the_oracle_catches_an_ab_started_twice(monkeypatch: pytest.MonkeyPatch)
     assert any("started twice" in v for v in caught())
 
 
+@pytest.mark.pure
 def test_the_oracle_catches_a_block_ignored(monkeypatch: pytest.MonkeyPatch) -> None:
     original = holds_module.Holds.holder
 
@@ -316,6 +319,7 @@ def test_the_oracle_catches_a_reaction_that_loses_its_precedence(
     assert any(what in v for v in caught() for what in WRONG_WINNER)
 
 
+@pytest.mark.pure
 def test_the_oracle_catches_a_stream_hold_that_splits_a_stream_under_way(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """docs/rules.md 7.2 undone: a stream hold keeps every AB of the other apps but the
@@ -337,6 +341,7 @@ def test_the_oracle_catches_a_stream_hold_that_splits_a_stream_under_way(
     assert any("could start but waits" in v and "parked by" in v for v in caught())
 
 
+@pytest.mark.pure
 def test_the_oracle_catches_a_cut_ab_that_is_never_restarted(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The interrupt policy with its restart undone: the cut AB is neither restarted
@@ -376,6 +381,7 @@ def test_with_every_policy_on_the_properties_hold() -> None:
         assert play(s).violations == [], s
 
 
+@pytest.mark.pure
 def test_the_oracle_catches_a_reaction_that_keeps_no_devices(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """docs/rules.md 7.1 undone: a reaction's next AB reserves nothing while it waits for
@@ -403,6 +409,7 @@ def test_the_oracle_catches_a_reply_that_loses_to_a_reaction(
     assert any(what in v for v in caught() for what in WRONG_WINNER)
 
 
+@pytest.mark.pure
 @pytest.mark.parametrize("undone, said", [("protected", "it replies to an answer"),
                                            ("once", "cut again")])
 def test_the_oracle_catches_a_reply_cut_or_an_ab_cut_twice(

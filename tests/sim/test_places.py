@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 import random
 
+import pytest
+
 from prima.sim import CommandRunner, Place, PlaceKind, Pose, Simulator, WorldMap
 from tests.sim.helpers import call
 
@@ -71,6 +73,7 @@ class _Scanning(Simulator):
                 self._near.discard(place.name)
 
 
+@pytest.mark.pure
 def test_places_passed_are_reported_at_the_same_ticks_as_measuring_every_place() -> None:
     floor = _crowded(400, seed=5, size=20.0)
     reports = []

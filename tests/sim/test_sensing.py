@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from prima.run import Run
 from prima.sim import Pose, Simulator, UserScript, WorldMap
 from tests.sim.helpers import ROOT
@@ -99,6 +101,7 @@ def _checked_run(name: str) -> int:
     return asked
 
 
+@pytest.mark.pure
 def test_in_whole_runs_the_kept_answer_is_always_the_fresh_one() -> None:
     """Every answer human detection gives in runs that search, turn, track, guide and
     dance is the one working it out afresh from the poses gives."""
