@@ -218,6 +218,14 @@ def test_no_map_with_the_eas_places_is_a_usage_error(tmp_path: Path) -> None:
     assert code == 2 and "no map has every place ea1-museum names (panel-1, panel-2)" in err
 
 
+def test_no_map_at_all_is_said_so(tmp_path: Path) -> None:
+    """An install without the shipped maps (a wheel): the check says what is missing."""
+    with pytest.raises(ValueError, match=r"no map to make visits on \(no .*/\*\.xml\): "
+                                         "give --map or --scenario"):
+        check(ROOT / "apps" / "ea" / "cafe.pxml", fas=[QUIET], robots=[HOME], maps=tmp_path,
+              runs=1)
+
+
 # ------------------------------------------------------------ the matrix and CI
 
 def test_the_matrix_has_a_row_per_fa_and_a_column_per_robot_and_ci_files(

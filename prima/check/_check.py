@@ -275,7 +275,11 @@ def check(ea: str | Path, *, fas: Sequence[Path], robots: Sequence[Path],
         load_scenario(scenario)
     world = None
     if not scenarios:
-        world = map_for(document, _maps(maps, map_file))
+        candidates = _maps(maps, map_file)
+        if not candidates:  # (an install without the shipped maps)
+            where = f" (no {maps}/*.xml)" if maps else ""
+            raise ValueError(f"no map to make visits on{where}: give --map or --scenario")
+        world = map_for(document, candidates)
         if world is None:
             named = ", ".join(sorted({p.name for p in document.places}))
             raise ValueError(f"no map has every place {document.name} names ({named}): "
