@@ -8,7 +8,9 @@ scenario reports it in the application's file, at the name. A place computed wit
 
 from __future__ import annotations
 
+import gc
 import io
+import math
 import time
 from pathlib import Path
 
@@ -125,10 +127,18 @@ def test_the_cost_stays_linear_in_the_places_written(tmp_path: Path) -> None:
         lines = ["<chain>" + ", ".join(["TopologicalMove(lobby)"] * 100) + "</chain>"] * (n // 100)
         _pxml(tmp_path, "ea", "ea", *lines)
         path = _scenario(tmp_path, "s", "office", '<apps ea="ea.pxml"/>')
-        start = time.process_time()
-        code, out, _ = run("validate", str(path))
-        assert code == 1 and out.count("\n") == 51
-        return time.process_time() - start
+        best = math.inf
+        for _ in range(3):  # the least of three, with no collection of the whole test
+            gc.collect()    # session's objects inside (its cost is not this input's)
+            gc.disable()
+            try:
+                start = time.process_time()
+                code, out, _ = run("validate", str(path))
+                best = min(best, time.process_time() - start)
+            finally:
+                gc.enable()
+            assert code == 1 and out.count("\n") == 51
+        return best
 
     seconds(1000)  # warm
     small, large = seconds(1000), seconds(8000)
