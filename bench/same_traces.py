@@ -2,8 +2,11 @@
 a change meant only to make runs cheaper leaves every trace byte for byte as it was.
 
 Usage: python bench/same_traces.py --against TREE [--runs 40] [--jobs 2] [SCENARIO ...]
+       python bench/same_traces.py --compiled [--runs 40] [--jobs 2] [SCENARIO ...]
 
-``TREE`` is a checkout of the other build (``git worktree add /tmp/before <commit>``).
+``TREE`` is a checkout of the other build (``git worktree add /tmp/before <commit>``);
+``--compiled`` makes the other build this checkout's compiled one (``setup.py``,
+``PRIMA_MYPYC=1``), built first in a temporary copy.
 For each scenario (default: every scenario this tree ships), runs 0 to ``--runs`` - 1
 are made: run 0 as written, the others with their timings jittered by 5 s as a sweep
 jitters them (``prima.batch``, seed 7). Each build runs its own copy of the scenario
@@ -25,7 +28,7 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from _measure import ROOT, in_tree
+from _measure import ROOT, compiled_copy, in_tree
 
 JITTER = 5.0
 SEED = 7
@@ -101,18 +104,24 @@ def compare(scenario: Path, tree: Path, runs: int) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("scenarios", nargs="*", type=Path)
-    parser.add_argument("--against", type=Path, required=True, metavar="TREE",
-                        help="a checkout of the other build")
+    other = parser.add_mutually_exclusive_group(required=True)
+    other.add_argument("--against", type=Path, metavar="TREE",
+                       help="a checkout of the other build")
+    other.add_argument("--compiled", action="store_true",
+                       help="the other build is this checkout's compiled one (built first "
+                            "in a temporary copy: mypy, a C compiler and Python's headers)")
     parser.add_argument("--runs", type=int, default=40, help="runs per scenario (default 40)")
     parser.add_argument("--jobs", type=int, default=2, help="scenarios at once (default 2)")
     args = parser.parse_args(argv)
-    if not (args.against / "prima").is_dir():
+    if args.against is not None and not (args.against / "prima").is_dir():
         parser.error(f"--against {args.against}: not a checkout of prima")
     if args.runs < 1 or args.jobs < 1:
         parser.error("--runs and --jobs must be at least 1")
     scenarios = args.scenarios or shipped()
-    with ThreadPoolExecutor(args.jobs) as pool:
-        found = list(pool.map(lambda s: compare(s, args.against, args.runs), scenarios))
+    with tempfile.TemporaryDirectory(prefix="prima-compiled-") as scratch:
+        tree = compiled_copy(Path(scratch)) if args.compiled else args.against
+        with ThreadPoolExecutor(args.jobs) as pool:
+            found = list(pool.map(lambda s: compare(s, tree, args.runs), scenarios))
     differ = [line for lines in found for line in lines]
     for line in differ:
         print(line)

@@ -1,8 +1,8 @@
 """Benchmark: judged sweep runs per CPU second, against bare pymunk stepping the same
 worlds; and the peak memory of a sweep as its runs grow.
 
-Usage: python bench/sweep.py [--repeats 5] [--runs 10] [SCENARIO ...]
-       python bench/sweep.py --memory 1000,100000 [--scenario S] [--jobs 2]
+Usage: python bench/sweep.py [--repeats 5] [--runs 10] [--compiled] [SCENARIO ...]
+       python bench/sweep.py --memory 1000,100000 [--scenario S] [--jobs 2] [--compiled]
 
 Each round runs, for each scenario (default: samples 3, 7 and 10 of the thesis), a
 cold process that does what a sweep's worker does for ``--runs`` runs: each run's
@@ -24,6 +24,10 @@ the target of 2x.
 own process, and prints each one's peak resident memory (``ru_maxrss`` of the
 process waited for: the largest of the sweeping process and its worker processes)
 and their ratio, against the promise that the larger stays within 10% of the smaller.
+
+``--compiled`` measures this checkout's compiled build (``setup.py``,
+``PRIMA_MYPYC=1``) instead of its pure Python one: it is built first in a temporary
+copy of the checkout (mypy, a C compiler and Python's headers; two to three minutes).
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from _measure import ROOT, cpu, in_tree, interleaved, interpreter, report
+from _measure import ROOT, compiled_copy, cpu, in_tree, interleaved, interpreter, report
 
 SCENARIOS = {name: ROOT / "scenarios" / "thesis" / f"{name}.xml"
              for name in ("sample-03", "sample-07", "sample-10")}
@@ -126,9 +130,9 @@ class Case:
         return cpu(step)
 
 
-def speed(args: argparse.Namespace) -> int:
+def speed(args: argparse.Namespace, tree: Path) -> int:
     named = {p.stem: p for p in args.scenarios} if args.scenarios else SCENARIOS
-    cases = {name: Case(name, path, args.runs) for name, path in named.items()}
+    cases = {name: Case(name, path, args.runs, tree) for name, path in named.items()}
     # (the earlier build runs its own copy of each scenario, if it has one: today's
     # documents may use what that build lacks)
     earlier = {name: Case(name, in_tree(path, args.against.resolve()) or path, args.runs,
@@ -161,17 +165,17 @@ def speed(args: argparse.Namespace) -> int:
     return 0 if met else 1
 
 
-def peak(argv: list[str]) -> tuple[float, float]:
+def peak(argv: list[str], tree: Path) -> tuple[float, float]:
     """The peak resident memory (MiB) and CPU seconds of one process running argv."""
     process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                               env={**os.environ, "PYTHONPATH": str(ROOT)})
+                               env={**os.environ, "PYTHONPATH": str(tree)}, cwd=tree)
     _, status, usage = os.wait4(process.pid, 0)
     if os.waitstatus_to_exitcode(status) not in (0, 1):
         sys.exit(f"{' '.join(argv)} failed")
     return usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
 
 
-def memory(args: argparse.Namespace) -> int:
+def memory(args: argparse.Namespace, tree: Path) -> int:
     counts = [int(n) for n in args.memory.split(",")]
     peaks = []
     with tempfile.TemporaryDirectory() as scratch:
@@ -182,7 +186,7 @@ def memory(args: argparse.Namespace) -> int:
             if args.jobs:
                 argv += ["--jobs", str(args.jobs)]
             start = time.perf_counter()
-            mib, spent = peak(argv)
+            mib, spent = peak(argv, tree)
             peaks.append(mib)
             print(f"prima sweep --runs {n:>7,}: peak {mib:7.1f} MiB, {spent:8.1f} s of CPU "
                   f"(with its workers), {time.perf_counter() - start:7.1f} s")
@@ -207,13 +211,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--scenario", type=Path, default=ROOT / "scenarios" / "thesis" /
                         "fig5-7.xml", help="the scenario --memory sweeps (default fig5-7)")
     parser.add_argument("--jobs", type=int, help="--memory: the sweeps' --jobs")
+    parser.add_argument("--compiled", action="store_true",
+                        help="measure this checkout's compiled build (setup.py, "
+                             "PRIMA_MYPYC=1), built first in a temporary copy: needs mypy, "
+                             "a C compiler and Python's headers, two to three minutes")
     parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--first", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child is not None:
         child(args.child, args.runs, args.first)
         return 0
-    return memory(args) if args.memory else speed(args)
+    if not args.compiled:
+        return memory(args, ROOT) if args.memory else speed(args, ROOT)
+    with tempfile.TemporaryDirectory(prefix="prima-compiled-") as scratch:
+        tree = compiled_copy(Path(scratch))
+        return memory(args, tree) if args.memory else speed(args, tree)
 
 
 if __name__ == "__main__":

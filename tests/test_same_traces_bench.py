@@ -54,3 +54,22 @@ def test_a_run_that_differs_is_named(tmp_path: Path,
     assert _bench().main(["--against", str(other), "--runs", "2", scenario]) == 1
     out = capsys.readouterr().out
     assert "scenarios/thesis/sample-01.xml run 0:" in out and "2 differ" in out
+
+
+def test_the_compiled_builds_copy_has_the_checkouts_files_and_none_built(
+        tmp_path: Path) -> None:
+    """``--compiled`` builds in a copy of the checkout (bench/_measure.py): the sources
+    and the build's files are there, no module built here or cache comes along."""
+    _bench()
+    import _measure
+
+    built = ROOT / "prima" / "sim" / "_kernel.cpython-test.so"
+    built.write_bytes(b"not a module")
+    try:
+        _measure.copy_checkout(tmp_path)
+    finally:
+        built.unlink()
+    for name in ("setup.py", "pyproject.toml", "README.md", "prima/sim/_kernel.py",
+                 "scenarios/thesis/sample-01.xml", "tests/conftest.py"):
+        assert (tmp_path / name).is_file(), name
+    assert not list(tmp_path.rglob("*.so")) and not list(tmp_path.rglob("__pycache__"))
