@@ -51,6 +51,7 @@ from prima.vocab import (
     NEWS_EVENTS,
     PREDEFINED_EVENTS,
     SPEECH_EVENT,
+    USER_ACTION_EVENTS,
     AppKind,
     Budgets,
     TraceKind,
@@ -152,9 +153,9 @@ class Interpreter:
         self.clock = clock
         self.catalog = catalog
         self.robot_events = dict(robot_events or {})
-        self.user_events = frozenset(user_events)
-        """The events that are the user's own action (a touch): the reactions to them
-        go first (docs/rules.md 7.1)."""
+        self.user_events = frozenset(user_events) | USER_ACTION_EVENTS
+        """The events that are the user's own action (a touch, always; and what the
+        profile names): the reactions to them go first (docs/rules.md 7.1)."""
         self.gestures = frozenset(gestures) if gestures is not None else None
         """The robot's gestures (None: not checked here); an EA may use the common ones."""
         self.budgets = budgets or DEFAULT_BUDGETS[document.kind]
