@@ -1259,10 +1259,11 @@ _WALKS_ROUND = [(1.5, {"x": 0.3, "y": 0.0, "heading": 0.0}, {**USER, "x": 0.5, "
 def test_following_the_user_is_not_leaving() -> None:
     """The robot gets 0.5 m farther from its user, by its own motion, while it follows
     them (a TrackingHuman runs): that is no leaving; the same motion driven by a
-    TopologicalMove is."""
-    assert counts(_talking_while(_WALKS_ROUND, mover="TrackingHuman")) == {}
+    TopologicalMove is. (The user walks round behind the robot while it talks: that is
+    talking unfaced over the words, whoever drives.)"""
+    assert counts(_talking_while(_WALKS_ROUND, mover="TrackingHuman")) == {"unfaced": 1}
     report = _talking_while(_WALKS_ROUND, mover="TopologicalMove")
-    assert counts(report) == {"leaving": 1}
+    assert counts(report) == {"leaving": 1, "unfaced": 1}
     assert report.of("leaving")[0].away == 0.5
 
 
@@ -1681,8 +1682,8 @@ def test_every_measure_has_a_threshold_and_an_option() -> None:
     assert Thresholds().limits == {f"max_{k}": 0 for k in keys}
     assert [p.option for p in PARAMETERS] == [
         "--reaction-slack", "--utterance-slack", "--react-within", "--face-tolerance",
-        "--leave-distance", "--resume-distance", "--barge-in-slack", "--answer-slack",
-        "--recovery-slack", "--silence", "--stuck-after", "--search-after"]
+        "--unfaced-for", "--leave-distance", "--resume-distance", "--barge-in-slack",
+        "--answer-slack", "--recovery-slack", "--silence", "--stuck-after", "--search-after"]
 
 
 def test_thresholds_allow_what_they_say() -> None:

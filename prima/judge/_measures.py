@@ -137,19 +137,72 @@ def _about_something_else(row: Row, before: str | None) -> bool:
     return before is not None and not _AIMING.isdisjoint(before.split("+"))
 
 
-class _Unfaced:
-    """Utterances started while the user is detectable and more than the tolerance off
-    the robot's heading."""
+@dataclass
+class _Words:
+    """An utterance addressed to the user, while its words run."""
 
-    kinds: frozenset[str] | None = frozenset({"start"})
+    row: Row
+    """Its start line."""
+    words: tuple[float, float] | None
+    """When its words run, once known (they may follow something else in its AB)."""
+    off_since: Row | None = None
+    """The first posed line of the stretch in which the user is off, if they are now."""
+    most: float = 0.0
+    """The most degrees off in that stretch."""
+    turner: Blame | None = None
+    """What drove the wheels when that stretch began."""
+    pending: list[tuple[Row, Blame | None]] = field(default_factory=list)
+    """Posed lines while its words' times are not known yet: judged at its end."""
+
+
+def _off(row: Row, tolerance: float) -> float | None:
+    """How far off the user is on a posed line, if detectable and beyond ``tolerance``."""
+    robot, user = row.get("robot"), row.get("user")
+    if robot is None or user is None or user.get("detectable") is not True:
+        return None
+    off = _off_heading(robot, user)
+    return off if off is not None and off > tolerance + EPS else None
+
+
+class _Unfaced:
+    """Utterances said while the user is detectable and more than the tolerance off the
+    robot's heading: at their start, or for more than ``unfaced_for`` seconds in a row
+    while their words run (docs/rules.md 7.6 (3): the robot keeps facing the user while
+    its words run). The user's pose is known at each posed line and held until the
+    next: a stretch runs from the first line that shows the user off to the first that
+    does not (or the words' end)."""
+
+    kinds: frozenset[str] | None = None
 
     def __init__(self) -> None:
         self.found: list[Unfaced] = []
         self.last_command: dict[int, str] = {}
+        self.talking: dict[int, _Words] = {}
 
     def feed(self, row: Row, ctx: Context) -> None:
-        if row["kind"] != "start":
-            return
+        kind = row["kind"]
+        ab = row.get("ab")
+        if kind == "start" and isinstance(ab, int):
+            self._started(row, ab, ctx)
+        elif kind == "end" and isinstance(ab, int):
+            talk = self.talking.get(ab)
+            if talk is not None:
+                if talk.words is None and ab in ctx.abs:
+                    talk.words = ctx.abs[ab].words
+                    for pose, mover in talk.pending:
+                        if self._pose(ab, talk, pose, mover, ctx):
+                            break
+                if ab in self.talking:
+                    self._ended(ab, talk, float(row["t"]), ctx)
+        if self.talking and row.get("robot") is not None and row.get("user") is not None:
+            mover = _wheels(ctx)
+            for ab_id, talk in list(self.talking.items()):
+                if talk.words is None:
+                    talk.pending.append((row, mover))
+                else:
+                    self._pose(ab_id, talk, row, mover, ctx)
+
+    def _started(self, row: Row, ab: int, ctx: Context) -> None:
         tree = row.get("tree")
         before = self.last_command.get(tree) if isinstance(tree, int) else None
         if isinstance(tree, int):
@@ -157,23 +210,82 @@ class _Unfaced:
         if not row.get("text") or _about_something_else(row, before) \
                 or not ctx.elsewhere.isdisjoint(command_ids(row)):
             return
-        robot, user = row.get("robot"), row.get("user")
-        if robot is None or user is None or user.get("detectable") is not True:
+        off = _off(row, ctx.th.face_tolerance)
+        if off is not None:
+            self.found.append(self._finding(row, off, ctx))
             return
-        off = _off_heading(robot, user)
-        if off is not None and off > ctx.th.face_tolerance + EPS:
-            ab = ctx.abs.get(row.get("ab", -1))
-            self.found.append(Unfaced(int(row["seq"]), float(row["t"]), str(row.get("app")),
-                                      str(row.get("command")), str(row.get("text")),
-                                      round(off, 1), ctx.at(ab) if ab is not None else ""))
+        known = ctx.abs[ab].words if ab in ctx.abs else None
+        self.talking[ab] = _Words(row, known)
+
+    def _pose(self, ab: int, talk: _Words, row: Row, mover: Blame | None,
+              ctx: Context) -> bool:
+        """One posed line while ``talk``'s AB runs: True when it is found unfaced."""
+        words = talk.words
+        t = float(row["t"])
+        if words is None or t < words[0] - EPS or t > words[1] + EPS:
+            return False
+        off = _off(row, ctx.th.face_tolerance)
+        if off is None:
+            return self._stretch(ab, talk, t, ctx)
+        if talk.off_since is None:
+            talk.off_since, talk.most, talk.turner = row, off, mover
+        talk.most = max(talk.most, off)
+        return self._stretch(ab, talk, t, ctx, going_on=True)
+
+    def _stretch(self, ab: int, talk: _Words, t: float, ctx: Context,
+                 going_on: bool = False) -> bool:
+        """The stretch the user was off in lasts until ``t`` (and goes on, if
+        ``going_on``): found when it is longer than allowed."""
+        since = talk.off_since
+        if since is None:
+            return False
+        lasted = t - float(since["t"])
+        if lasted > ctx.th.unfaced_for + EPS:
+            self.found.append(self._finding(talk.row, talk.most, ctx, round(lasted, 3),
+                                            int(since["seq"]), talk.turner))
+            del self.talking[ab]
+            return True
+        if not going_on:
+            talk.off_since = None
+        return False
+
+    def _ended(self, ab: int, talk: _Words, t: float, ctx: Context) -> None:
+        """Its AB ended: a stretch still open lasted until its words' end."""
+        words = talk.words
+        if words is not None:
+            self._stretch(ab, talk, min(t, words[1]), ctx)
+        self.talking.pop(ab, None)
+
+    @staticmethod
+    def _finding(row: Row, off: float, ctx: Context, during: float | None = None,
+                 during_seq: int | None = None, turner: Blame | None = None) -> Unfaced:
+        ab = ctx.abs.get(row.get("ab", -1))
+        return Unfaced(int(row["seq"]), float(row["t"]), str(row.get("app")),
+                       str(row.get("command")), str(row.get("text")), round(off, 1),
+                       ctx.at(ab) if ab is not None else "", during, during_seq, turner)
 
     def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
-        return self.found
+        for ab, talk in list(self.talking.items()):
+            if talk.words is not None:
+                self._stretch(ab, talk, min(ctx.t, talk.words[1]), ctx)
+        return sorted(self.found, key=lambda u: (u.seq, u.during_seq or 0))
+
+
+def _wheels(ctx: Context) -> Blame | None:
+    """The running AB that drives the wheels now, if any."""
+    for ab in ctx.running.values():
+        if "locomotion" in ab.devices:
+            return Blame(ab.app, ab.id, ab.command, ctx.at(ab), "drove the wheels")
+    return None
 
 
 def _unfaced_line(u: Unfaced) -> str:
-    return (f"seq {u.seq} t={u.t:g} {u.app} {u.command} \"{_short(u.text)}\"{_where(u.at)}: "
-            f"{u.off:g} deg off")
+    head = f"seq {u.seq} t={u.t:g} {u.app} {u.command} \"{_short(u.text)}\"{_where(u.at)}: "
+    if u.during is None:
+        return head + f"{u.off:g} deg off"
+    turned = f", turned by {u.turned_by}" if u.turned_by is not None else ""
+    return head + (f"the user off for {u.during:g} s while its words ran (from seq "
+                   f"{u.during_seq}, up to {u.off:g} deg){turned}")
 
 
 # ---------------------------------------------------------------- leaving
@@ -224,18 +336,12 @@ class _Leaving:
                     if self._pose(talk, pose, mover, ctx):
                         break
         if row.get("robot") is not None and row.get("user") is not None and self.talking:
-            mover = self._mover(ctx)
+            mover = _wheels(ctx)
             for ab_id, talk in list(self.talking.items()):
                 if talk.words is None:
                     talk.pending.append((row, mover))
                 elif self._pose(talk, row, mover, ctx):
                     del self.talking[ab_id]
-
-    def _mover(self, ctx: Context) -> Blame | None:
-        for ab in ctx.running.values():
-            if "locomotion" in ab.devices:
-                return Blame(ab.app, ab.id, ab.command, ctx.at(ab), "drove the wheels")
-        return None
 
     def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context) -> bool:
         """One posed line during ``talk``'s AB: True when it counts as leaving."""
