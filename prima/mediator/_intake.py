@@ -7,8 +7,10 @@ The before node is decided in this order:
 2. As soon as possible: cancel the app's own not-yet-started work in trees
    that share a device with the request (a running feedback Command stops
    after its current iteration); the newest running AB there that shares a
-   device, else the newest cancelled node, is the before node; with no such
-   tree the request roots a new one (rule ``asap`` in every case).
+   device with the request's first AB (docs/rules.md 7.6 (2): never one on
+   devices it does not use), else the newest cancelled node, is the before
+   node; with no such tree the request roots a new one (rule ``asap`` in every
+   case).
 3. After latest: the app's latest Command if still in working memory
    (rule ``after-latest``); inside an open stream or block, its tree even if
    the latest Command already finished (rule ``stream``); else a new tree
@@ -196,7 +198,8 @@ class Intake:
         link = self._link_follows(app, follows, now) if follows is not None else None
         cancelled: Sequence[Command] = _NONE_CANCELLED
         if order is _ASAP:
-            asap, cancelled = self._link_asap(app, all_devices, now)
+            asap, cancelled = self._link_asap(app, all_devices,
+                                              all_devices if one or group else specs[0][1], now)
             if link is None or asap[1] is not None:  # (its before node)
                 link = asap
         elif link is None:
@@ -301,9 +304,13 @@ class Intake:
             return None
         return (_END_EVENT, node, node.tree, True, True, False)
 
-    def _link_asap(self, app: App, devices: frozenset[str],
+    def _link_asap(self, app: App, devices: frozenset[str], first: frozenset[str],
                    now: float) -> tuple[Link, Sequence[Command]]:
-        """As soon as possible: cancel the app's own trees that share a device."""
+        """As soon as possible: cancel the app's own trees that share a device with the
+        request (``devices``). Its first AB (on ``first``) waits only for a running AB of
+        theirs that holds one of its own devices, which it needs anyway; never for one
+        on devices it does not use (docs/rules.md 7.6 (2)): the rest of the request waits
+        for its devices as any AB does."""
         on = app.trees_on
         if len(devices) == 1:  # (one device: its trees, as they are)
             (device,) = devices
@@ -326,7 +333,7 @@ class Intake:
                         n.commands[0].cut = True
                     if n.cutting:
                         n.dropped = True  # (what is being cut goes: it does not restart)
-                    if n.devices & devices and (running is None or n.id > running.id):
+                    if n.devices & first and (running is None or n.id > running.id):
                         running = n
                 elif n.state in IN_MEMORY:
                     cancelled.extend(self.cancel(n, _ASAP_RULE, now))
