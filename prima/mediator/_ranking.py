@@ -93,7 +93,12 @@ def _exchange(node: Node, _pjf: Collection[int]) -> Key:
 
 
 def _wait_share(node: Node, _pjf: Collection[int]) -> Key:
-    return (1,) if node.app.demoted else (0,)
+    # (docs/rules.md 7.6 (4): a reaction to the user's own action is not rationed until its
+    # first utterance is said in full: the user paces these, one per action)
+    if node.app.demoted:
+        tree = node.tree
+        return (0,) if tree.user and tree.reaction is not None else (1,)
+    return (0,)
 
 
 def _user_first(node: Node, _pjf: Collection[int]) -> Key:
@@ -127,7 +132,8 @@ CRITERIA: tuple[Criterion, ...] = (
     # also when their app lost its precedence: one AB per answer the user gave (the
     # user paces it), and the wait share's bound allows one AB past the share.
     Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share, standing=True),
-    # (budget) an app that kept the others waiting beyond its share ranks after them.
+    # (budget) an app that kept the others waiting beyond its share ranks after them, but
+    # for its reaction to the user's own action until its first words (7.6 (4)).
     Criterion(Rule.USER_FIRST, Scope.TREE, _user_first, standing=True),
     # 2. ABs of a reaction first: a reaction to the user's own action until its first
     #    utterance is said in full (docs/rules.md 7.1), ...
@@ -180,8 +186,10 @@ def preempts(x: Node, y: Node) -> bool:
     """Whether the waiting AB ``x`` outranks the running AB ``y`` on what a running
     AB keeps (:func:`outranks`). The interrupt policy cuts ``y`` for ``x`` only then,
     and never for an app that lost its precedence (the wait share): a budget that
-    flips back and forth must not cut and restart the same ABs over and over."""
-    if x.app.demoted:
+    flips back and forth must not cut and restart the same ABs over and over. A
+    reaction to the user's own action is not rationed until its first words (7.6 (4)):
+    the user paces those, one per action."""
+    if x.app.demoted and not (x.tree.user and x.tree.reaction is not None):
         return False
     return outranks(x, y)
 

@@ -241,19 +241,22 @@ def standing_key(snap: Snapshot, streams: Streams
                  ) -> Callable[[NodeView], tuple[int, int, int, int, tuple[int, int]]]:
     """What an AB keeps whatever the waiting order: HIGH first (a reply to an answer
     ranks as HIGH, and so does a return put before it); the reply to an answer (7.4);
-    apps that lost their precedence after the others; reactions to the user's own
-    action whose first words are not yet said; the latest reaction (7.1)."""
+    apps that lost their precedence after the others (but for their reactions to the
+    user's own action, 7.6 (4)); reactions to the user's own action whose first words
+    are not yet said; the latest reaction (7.1)."""
     demoted = set(snap.demoted)
     reaction = streams.reaction
     user = streams.user
     replying = streams.replying
 
     def key(n: NodeView) -> tuple[int, int, int, int, tuple[int, int]]:
+        answering = n.tree in user and n.tree in reaction
         return (
             0 if n.priority is Priority.HIGH or replying(n) else 1,
             0 if replying(n) else 1,
-            1 if n.app in demoted else 0,
-            0 if n.tree in user and n.tree in reaction else 1,
+            # (7.6 (4): the user's own action is answered past the share, until its words)
+            1 if n.app in demoted and not answering else 0,
+            0 if answering else 1,
             (0, -reaction[n.tree]) if n.tree in reaction else (1, 0),
         )
     return key
@@ -884,11 +887,13 @@ class Oracle:
                            and n.ab not in gone for n in rivals + fresh):
                     self._uncontended.add(d.ab)
                 elif (d.ab in self.streams.replies
-                      or not self.streams.before_replies.isdisjoint(d.command_ids)) and (
+                      or not self.streams.before_replies.isdisjoint(d.command_ids)
+                      or d.tree in self.streams.user) and (
                         d.app in prev.snap.demoted or d.app in v.snap.demoted):
                     # the words that reply to an answer go first past the share too
                     # (7.4): one AB per answer the user gave, the user's pace (and what
-                    # a policy put before them: each iteration of a return)
+                    # a policy put before them: each iteration of a return); so does a
+                    # reaction to the user's own action until its first words (7.6 (4))
                     self._uncontended.add(d.ab)
                 gone.add(d.ab)
 
@@ -910,7 +915,8 @@ class Oracle:
         # what is kept for it, and what it keeps as it waits first in line for a device
         # still busy, is not a precedence taken within the share)
         excused = {r.ab for r in [*v.nexts, *v.waiting]
-                   if self.streams.replying(r) and r.app in v.snap.demoted}
+                   if (self.streams.replying(r) or r.tree in self.streams.user)
+                   and r.app in v.snap.demoted}
         self._took.update(v.snap.t, _keeping(v, self._uncontended, excused))
         self._demoted.update(v.snap.t, v.snap.demoted)
 

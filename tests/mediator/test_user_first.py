@@ -5,8 +5,17 @@ taking it out).
 
 from __future__ import annotations
 
-from prima.mediator import AppKind, DecisionKind, Event, Request, Rule, RunningOrder
+from prima.mediator import (
+    AppKind,
+    DecisionKind,
+    Event,
+    MediatorConfig,
+    Request,
+    Rule,
+    RunningOrder,
+)
 from prima.mediator.testing import Harness
+from prima.vocab import DEFAULT_BUDGETS, AppKind as Role, Budgets
 from tests.mediator.helpers import call, speak
 
 
@@ -35,3 +44,32 @@ def test_an_asap_requests_first_command_starts_on_its_free_devices_at_once() -> 
     assert cancelled == ["TopologicalMove"]  # (what it replaces is cancelled, as before)
     request = next(d for d in h.kinds(DecisionKind.REQUEST) if d.command == "StopMoving")
     assert request.rule is Rule.ASAP
+
+
+# ---------------------------------------------------------------- 7.6 (4): not rationed
+
+def test_the_users_own_words_are_answered_past_the_wait_share() -> None:
+    """7.6 (4): the EA's question (3 s) kept the FA's reaction to a message waiting
+    beyond its share of 0.5 s: the EA lost its precedence at 1.0. At 3.5, while the
+    FA says its news, the user asks the EA something: its answer goes before the FA's
+    next words all the same (the user's own action first, 7.1), as if the EA had
+    kept its precedence: the user paces these, one per action."""
+    budgets = {Role.FA: DEFAULT_BUDGETS[Role.FA],
+               Role.EA: Budgets(wait_share=0.5, wait_window=60.0)}
+    h = Harness(duration={"QA": 3.0, "*": 2.0}, config=MediatorConfig(budgets=budgets))
+    m = h.mediator
+    h.app("ea", AppKind.EA)
+    h.app("fa", AppKind.FA, on_event=lambda e: e.name == "message" and m.submit(Request(
+        "fa", (speak("I've just got a message."), speak("The host will be late.")),
+        reactive=True, reaction=True)))
+    m.submit(Request("ea", (call("QA", prompt="May I go to the next panel?", grammar="g"),)))
+    h.at(0.5, lambda: m.post(Event("message")))
+    h.at(3.5, lambda: m.submit(Request("ea", (speak("The toilets are by the door."),),
+                                       reactive=True, reaction=True, user=True)))
+    h.run(until=12.0)
+    lost = [d for d in h.kinds(DecisionKind.BUDGET) if d.app == "ea"]
+    assert lost and lost[0].t == 1.0
+    said = [(d.t, str(d.calls[0].args.get("text"))) for d in h.starts()
+            if d.command == "Speak"]
+    assert said == [(3.0, "I've just got a message."), (5.0, "The toilets are by the door."),
+                    (7.0, "The host will be late.")]
