@@ -190,6 +190,11 @@ MAX_STREAM_HOLD = 30.0
 """Upper bound on an explicit stream's hold (s), whatever a document asks: the
 other application's response speed stays bounded (rule 6c)."""
 
+MAX_ANSWER_HOLD = 30.0
+"""Upper bound (s) on how long a reaction to the user's own action keeps the streams it
+interrupted waiting on every device before it has said its first words (docs/rules.md
+7.6 (1)): a reaction whose words never come cannot hold the others for ever."""
+
 MAX_BLOCK_WATCHDOG = 60.0
 """Upper bound on a begin/end block's watchdog (s), whatever a document asks: a
 runaway block cannot starve the other application (rule 3)."""

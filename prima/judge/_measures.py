@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from prima.catalog import BODY_DEVICE, STANDARD_COMMANDS
+from prima.catalog import BODY_DEVICE, SEARCH_DEVICE, STANDARD_COMMANDS
 from prima.judge._context import EPS, Ab, Context, command_ids, xy
 from prima.judge._findings import (
     BargeIn,
@@ -40,14 +40,11 @@ from prima.judge._thresholds import LIMITS, Limit
 
 __all__ = ["MEASURES", "Finder", "Measure", "measure"]
 
-SEARCH_DEVICE = "human-detection"
-"""A feedback Command on this device looks for the user: iterating on and on while
-the user is never detectable (``search_after``), its application is stuck."""
+
 
 _AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
 _TRAVELS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
-_FOLLOWS = frozenset(c.name for c in STANDARD_COMMANDS
-                     if c.travels and SEARCH_DEVICE in c.devices and not c.breaks_cc)
+_FOLLOWS = frozenset(c.name for c in STANDARD_COMMANDS if c.follows_user)
 """Commands that move the robot after its user (Tracking Human): following the user
 is not leaving them."""
 

@@ -112,6 +112,13 @@ class Holds:
         self._reserve_parked: list[Node] = []
         """ABs parked because a reaction's next AB keeps one of their devices: they take
         their places again at every end, and when a next AB is cancelled."""
+        self._answer_parked: list[Node] = []
+        """ABs parked because a reaction to the user's own action answers first
+        (docs/rules.md 7.6 (1)): they take their places again when one stops keeping
+        the streams it interrupted waiting."""
+        self._answer_held: set[AbId] = set()
+        """Waiting ABs of streams not yet under way held back while a reaction answers
+        the user (a hold decision was emitted)."""
         self._channel_held: set[AbId] = set()
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
         self._reserved: set[AbId] = set()
@@ -230,6 +237,8 @@ class Holds:
             self._channel_held.discard(node.id)
         if self._reserved:
             self._reserved.discard(node.id)
+        if self._answer_held:
+            self._answer_held.discard(node.id)
         if not self.opened:
             return
         app = node.app
@@ -239,6 +248,8 @@ class Holds:
             blk.started = True
             blk.deadline = self._clock.after(blk.watchdog)
             self._step_aside(blk.devices)
+            self.refile_answering()  # (a block under way is concluded: 7.6 (1) holds
+            # none of its app's ABs on its devices any more)
         st = self._streams.get(app.name)
         if st is not None:
             st.devices.update(node.devices)
@@ -266,9 +277,28 @@ class Holds:
             self._unkeep(n)
             self._wm.refile(n)
 
+    def refile_answering(self) -> None:
+        """Re-file the ABs a reaction to the user's own action held (one still held, by
+        it or another, is parked again in the next round)."""
+        if not self._answer_parked:
+            return
+        parked, self._answer_parked = self._answer_parked, []
+        for n in parked:
+            self._unkeep(n)
+            self._wm.refile(n)
+
+    def answering(self, node: Node, by: App) -> None:
+        """Record that ``by``'s reaction to the user's own action holds back ``node``, of a
+        stream not yet under way (once per AB: docs/rules.md 7.6 (1))."""
+        if node.id not in self._answer_held:
+            self._answer_held.add(node.id)
+            self._log.ab(DecisionKind.HOLD, Rule.ANSWERING, node, f"{by.name} answers the user")
+            self._log.tell(node.app.name, "held", by=by.name, rule=Rule.ANSWERING.value)
+
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
         self._reserved.discard(node.id)
+        self._answer_held.discard(node.id)
         if node.reserving and self._reserve_parked:
             self.refile_reserved()  # a next AB that kept devices is gone
         self._unkeep(node)
@@ -303,6 +333,8 @@ class Holds:
             return
         if rule is Rule.RESERVED:
             self._reserve_parked.append(node)
+        elif rule is Rule.ANSWERING:
+            self._answer_parked.append(node)
         else:
             self._parked.append(node)
         if node.id not in self._kept and holder is not node.app:  # (an app's own waits
@@ -313,9 +345,11 @@ class Holds:
     def unpark_all(self) -> None:
         """A hold, block or talk ended or lost its force: re-file the parked ABs (one
         still held is parked again in the next round)."""
-        parked, self._parked = self._parked + self._talk_parked + self._reserve_parked, []
+        parked, self._parked = (self._parked + self._talk_parked + self._reserve_parked
+                                + self._answer_parked), []
         self._talk_parked = []
         self._reserve_parked = []
+        self._answer_parked = []
         for node in parked:
             self._unkeep(node)
             self._wm.refile(node)

@@ -79,6 +79,9 @@ class Intake:
         self._log = log
         self._driver = driver
         self._end_grace = config.end_grace
+        self._answer_hold = config.max_answer_hold
+        """How long a reaction to the user's own action may keep the streams it
+        interrupted waiting before its first words (docs/rules.md 7.6 (1))."""
         self._user_first = config.reactions
         """The reactions policy: a reaction to the user's own action goes first."""
         self._exchange = config.exchange
@@ -215,7 +218,7 @@ class Intake:
             tree.pose = None
         # before its nodes are filed, so that they rank as its reaction
         if (reactive or reaction) and reactive_allowed and wm.react(
-                tree, seq, user and self._user_first):
+                tree, seq, user and self._user_first, now + self._answer_hold):
             self._holds.reranked(tree)
         turns = self._turns and face_user
         # (docs/rules.md 7.4) words that follow the user's answer to the app's own Q&A
@@ -406,8 +409,7 @@ def _replies(node: Node) -> bool:
     """The first AB an answer handler requested is the reply that belongs to the
     exchange (docs/rules.md 7.4): it has words, and is no question of its own (the app's
     next question ends the exchange: a reaction may take over before it)."""
-    return (not any(c.spec.listens for c in node.commands)
-            and any(c.spec.spoken(c.call.args) for c in node.commands))
+    return node.speaks and not any(c.spec.listens for c in node.commands)
 
 
 def _turnable(node: Node, before: Node | None) -> bool:
@@ -415,7 +417,6 @@ def _turnable(node: Node, before: Node | None) -> bool:
     orient the robot itself, and the AB before it in its stream did not aim the
     robot at something on purpose (the words are about that; a policy's return, or an
     AB cancelled before it ran, aimed at nothing)."""
-    return (not any(c.spec.orients for c in node.commands)
-            and any(c.spec.spoken(c.call.args) for c in node.commands)
+    return (node.speaks and not any(c.spec.orients for c in node.commands)
             and (before is None or not any(c.spec.aims and c.internal is None
                                            and not c.cancelled for c in before.commands)))

@@ -57,6 +57,7 @@ from prima.vocab import (
     ANSWERED,
     DEFAULT_BUDGETS,
     INTERRUPTED_EVENT,
+    MAX_ANSWER_HOLD,
     MAX_BLOCK_WATCHDOG,
     MAX_EAS,
     MAX_NEWS_PER_INSTANT,
@@ -90,6 +91,11 @@ class MediatorConfig:
     max_stream_hold: float = MAX_STREAM_HOLD
     """Upper bound on an explicit stream's hold, whatever the document asks: the
     other application's response speed stays bounded (rule 6c)."""
+
+    max_answer_hold: float = MAX_ANSWER_HOLD
+    """Upper bound on how long a reaction to the user's own action keeps the streams it
+    interrupted waiting on every device before its first words have been said
+    (docs/rules.md 7.6 (1)): words that never come cannot hold the others for ever."""
 
     max_block_watchdog: float = MAX_BLOCK_WATCHDOG
     """Upper bound on a begin/end block's watchdog, whatever the document asks:
@@ -483,8 +489,7 @@ class Mediator:
         first utterance in full (docs/rules.md 7.1); the robot faces the user for the ABs
         after a turn to the user, whatever happened before it."""
         tree = node.tree
-        if tree.user and node.seq >= (tree.reaction or 0) \
-                and any(c.spec.spoken(c.call.args) for c in node.commands):
+        if tree.user and node.seq >= (tree.reaction or 0) and node.speaks:
             self._wm.heard(tree)
         if node.commands[0].internal is Rule.CONNECT_CHANNEL:
             for child in children:
@@ -669,11 +674,22 @@ class Mediator:
 
     # ============================================================== deadlines
     def next_deadline(self) -> float | None:
-        """The earliest pending hold timeout, watchdog, budget deadline or end of a pause
-        after a false interruption, if any."""
+        """The earliest pending hold timeout, watchdog, budget deadline, end of a pause
+        after a false interruption, or end of an answer's hold (7.6 (1)), if any."""
         times = (self._holds.next_deadline(), self._fairness.next_deadline(),
-                 self._rest_deadline())
+                 self._rest_deadline(), self._answer_deadline())
         return min((t for t in times if t is not None), default=None)
+
+    def _answer_deadline(self) -> float | None:
+        """When the first reaction to the user's own action whose words are still ahead
+        stops keeping the streams it interrupted waiting (its bound: docs/rules.md
+        7.6 (1)), if one is later than now."""
+        answering = self._wm.answering
+        if not answering:
+            return None
+        now = self._clock.now()
+        return min((t.answers_until for t in answering.values()
+                    if t.talks and t.answers_until > now), default=None)
 
     def _rest_deadline(self) -> float | None:
         resting = self._resting
@@ -687,6 +703,8 @@ class Mediator:
             now = self._log.now
             self._holds.expire(now)
             self._fairness.expire()
+            if any(t.answers_until <= now for t in self._wm.answering.values()):
+                self._wm.answered = True  # (a bound passed: what it held may go)
             if self._resting:
                 for node in [n for n in self._resting if n.not_before <= now]:
                     self._resting.remove(node)

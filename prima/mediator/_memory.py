@@ -74,6 +74,14 @@ class WorkingMemory:
         next AB of a reaction (or a reply to an answer, or an AB a policy put an AB of
         its own before) right after one of its tree's waiting or running ABs
         (docs/rules.md 7.1, 7.4)."""
+        self.answering: dict[TreeId, Tree] = {}
+        """Reactions to the user's own action in working memory that have not said their
+        first words in full (``Tree.user``): while their words are ahead, they keep the
+        streams they interrupted waiting on every device (docs/rules.md 7.6 (1))."""
+        self.answered = False
+        """Some reaction stopped keeping the streams it interrupted waiting (it said its
+        first words, has none ahead, or left) since the selector last looked: what it
+        held may go (``Holds`` re-files them)."""
         self.after_reactions: dict[AbId, Node] = {}
         """Restarts that may wait for the reaction's AB they were cut for (``Node.cut_for``):
         whether they wait turns on ranks, so a re-ranked tree has them looked at again."""
@@ -101,6 +109,8 @@ class WorkingMemory:
             app.trees[tid] = tree
         tree.live += 1
         app.live += 1
+        if node.speaks:
+            tree.talks += 1
         counts = tree.devices
         for d in node.sorted_devices:
             n = counts.get(d, 0)
@@ -355,10 +365,16 @@ class WorkingMemory:
                 if not on:
                     del app.trees_on[d]
         app.live -= 1
+        if node.speaks:
+            tree.talks -= 1
+            if not tree.talks and tree.user:
+                self.answered = True  # (no words ahead: it holds nothing any more)
         tree.live = live = tree.live - 1
         if not live:
             self.trees.pop(tree.id, None)
             app.trees.pop(tree.id, None)
+            if self.answering.pop(tree.id, None) is not None:
+                self.answered = True
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
@@ -412,13 +428,22 @@ class WorkingMemory:
         self.suspended.pop(tree.id, None)
         self._rerank(tree)
 
-    def react(self, tree: Tree, reaction: int, user: bool = False) -> bool:
-        """The tree takes over as (a later) reaction, to the user's own action if ``user``:
-        re-rank it. Whether its rank changed."""
+    def react(self, tree: Tree, reaction: int, user: bool = False,
+              answers_until: float = 0.0) -> bool:
+        """The tree takes over as (a later) reaction, to the user's own action if ``user``
+        (it keeps the streams it interrupted waiting until its first words, at the latest
+        until ``answers_until``): re-rank it. Whether its rank changed."""
         before = tree.reaction
         if before is None or before < reaction:
             tree.reaction = reaction
+            if tree.user and not user:
+                self.answered = True
             tree.user = user
+            if user:
+                tree.answers_until = answers_until
+                self.answering[tree.id] = tree
+            elif self.answering.pop(tree.id, None) is not None:
+                self.answered = True
             if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
                 self._rerank(tree)
                 if before is None and self.keep_next:  # its next ABs keep their devices
@@ -433,6 +458,8 @@ class WorkingMemory:
         on it ranks as any reaction (docs/rules.md 7.1)."""
         if tree.user:
             tree.user = False
+            if self.answering.pop(tree.id, None) is not None:
+                self.answered = True
             if tree.live:
                 self._rerank(tree)
 

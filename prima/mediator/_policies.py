@@ -83,7 +83,7 @@ class Policies:
             return True
         if x.turnable and self._connect(x):
             return True  # (the pose is looked at again when the turn has been made)
-        if tree.pose is not None and any(c.spec.spoken(c.call.args) for c in x.commands):
+        if tree.pose is not None and x.speaks:
             tree.pose = None  # the resumed stream's first words start here
         return False
 
@@ -102,7 +102,7 @@ class Policies:
         if any(c.spec.travels for c in x.commands):
             x.tree.pose = None  # the stream takes the robot somewhere itself
             return False
-        if not any(c.spec.spoken(c.call.args) for c in x.commands):
+        if not x.speaks:
             return False  # (a StopMoving, a gesture: the pose is looked at before its words)
         command = RESTORE_COMMAND
         if BODY_DEVICE in x.devices or x.faces or any(c.spec.aims for c in x.commands):

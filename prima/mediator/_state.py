@@ -119,7 +119,8 @@ class Tree:
     """One AB tree (one Communication Stream)."""
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
-                 "user", "started", "pose", "devices", "parked", "keys", "suspensions")
+                 "user", "started", "pose", "devices", "parked", "keys", "suspensions",
+                 "talks", "answers_until")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -150,6 +151,12 @@ class Tree:
         a perception or network event overtakes it (docs/rules.md 7.1)."""
         self.started = False
         """Some AB of it has started: it is a stream under way, not a new one."""
+        self.talks = 0
+        """How many of its nodes in working memory say words (``Node.speaks``)."""
+        self.answers_until = 0.0
+        """With ``user``: until when, at the latest, it keeps the streams it interrupted
+        waiting on every device while its first words are ahead (docs/rules.md 7.6 (1);
+        ``MediatorConfig.max_answer_hold`` after it became a reaction to the user)."""
         self.pose: Mapping[str, Value] | None = None
         """The robot's pose when it was last suspended, until the restore-state
         policy has put its return before the stream's next AB (or found none needed)."""
@@ -178,7 +185,8 @@ class Node:
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
-                 "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for")
+                 "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for",
+                 "speaks")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -262,6 +270,8 @@ class Node:
         self.not_before = 0.0
         """It may not start before this instant (an utterance a false interruption cut
         goes on after the robot's pause)."""
+        self.speaks = any(c.spec.spoken(c.call.args) for c in commands)
+        """Some Command of it says words (an utterance, a Q&A's prompt)."""
         first = commands[0]
         call = first.call
         calls: tuple[Call, ...]

@@ -70,6 +70,7 @@ from prima.mediator import (
     Priority,
     Rule,
     Snapshot,
+    TreeView,
 )
 from prima.vocab import DEFAULT_BUDGETS, Budgets
 
@@ -114,6 +115,15 @@ class Streams:
     taken_for: dict[AbId, str] = field(default_factory=dict)
     """Restarts of words the user cut for the app that took them -> that app: they wait
     for its reaction (7.5), whose next AB keeps their devices as another app's would."""
+    user_since: dict[TreeId, float] = field(default_factory=dict)
+    """Reactions to the user's own action -> when they became one (7.6 (1)'s bound)."""
+    speaks: set[CommandId] = field(default_factory=set)
+    """Commands that say words (asked for with a text the robot says)."""
+    answer_hold: float = 30.0
+    """How long a reaction to the user keeps the streams it interrupted waiting, at most,
+    while its first words are ahead (``MediatorConfig.max_answer_hold``)."""
+    following: frozenset[str] = frozenset()
+    """The Commands that follow the user (never held so: following is not leaving)."""
 
     def keeps(self, r: NodeView, n: NodeView) -> bool:
         """Whether ``r`` (a reaction's next AB) is of an app it may keep ``n`` from: another
@@ -207,9 +217,42 @@ class _View:
                 if _applies(h, n, self.snap.demoted, self.streams, self.snap.suspended)]
 
     def held(self, n: NodeView) -> bool:
-        """Held by the channel rule, another app's hold, or kept for another app's
-        reaction (7.1): it reserves nothing."""
-        return self.channel_held(n) or bool(self.holders(n)) or self.kept_for(n) is not None
+        """Held by the channel rule, another app's hold, kept for another app's reaction
+        (7.1), or waiting while a reaction answers the user (7.6 (1)): it reserves
+        nothing."""
+        return self.channel_held(n) or bool(self.holders(n)) or self.kept_for(n) is not None \
+            or self.answer_holder(n) is not None
+
+    def answer_holder(self, n: NodeView) -> TreeView | None:
+        """The reaction to the user's own action (of another tree) whose first words are
+        ahead, within its bound, that keeps ``n``'s stream waiting on every device
+        (7.6 (1)), the latest of them; never for a reply to an answer, following the
+        user, an AB of its app's block under way, or an AB of a later reaction to the
+        user than it."""
+        streams = self.streams
+        if streams.replying(n) or not streams.user:
+            return None
+        if all(c in streams.following for c in n.command.split("+")):
+            return None
+        if any(h.kind == "block" and h.app == n.app and set(h.devices) & set(n.devices)
+               for h in self.snap.holds):
+            return None
+        mine = streams.reaction.get(n.tree) if n.tree in streams.user else None
+        found: TreeView | None = None
+        for tree in self.snap.trees:
+            if tree.id == n.tree or tree.id not in streams.user \
+                    or tree.id not in streams.reaction:
+                continue
+            if self.snap.t >= streams.user_since[tree.id] + streams.answer_hold:
+                continue  # (its bound passed)
+            if not any(not streams.speaks.isdisjoint(m.command_ids) for m in tree.nodes):
+                continue  # (no words ahead)
+            order = streams.reaction[tree.id]
+            if mine is not None and mine > order:
+                continue
+            if found is None or order > streams.reaction[found.id]:
+                found = tree
+        return found
 
 
 def _applies(h: HoldView, n: NodeView, demoted: Iterable[str], streams: Streams,
@@ -327,6 +370,12 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
         elif n.parked_by == n.app:
             pass  # (a restart waiting for its own app's reaction to the user's words, 7.5)
         elif not v.channel_held(n):
+            answering = v.answer_holder(n)
+            if answering is not None:
+                # held while another app's reaction answers the user (7.6 (1))
+                if answering.app != n.app and answering.app not in v.snap.demoted:
+                    out.add(answering.app)
+                continue
             # Kept by several apps' holds (three apps or more): the wait is the
             # parking hold's doing; the others would keep nothing it did not.
             holders = v.holders(n)
@@ -439,7 +488,8 @@ class Oracle:
         self._uncontended: set[AbId] = set()
         """Running ABs that started while no other app wanted their devices."""
         self._requested: dict[CommandId, str] = {}
-        self.streams = Streams()
+        self.streams = Streams(answer_hold=config.max_answer_hold, following=frozenset(
+            c.name for c in catalog.commands.values() if c.follows_user))
         self._reactions: set[CommandId] = set()
         """First Commands of the requests made while handling a reactive event."""
         self._users: set[CommandId] = set()
@@ -558,17 +608,7 @@ class Oracle:
                                                   and d.rule is Rule.RESTART):
             self._interrupt(d)
         elif d.kind is DecisionKind.REQUEST:
-            self._requests += 1
-            for cid in d.command_ids:
-                self._order[cid] = self._requests
-            if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
-                    and d.tree is not None):
-                self.streams.reaction[d.tree] = self._requests
-                if d.command_id in self._users:
-                    self.streams.user.add(d.tree)
-                else:
-                    self.streams.user.discard(d.tree)
-            self._reply(d)
+            self._request(d)
         elif d.kind is DecisionKind.START and d.ab is not None:
             self._start(d.ab, d, suspended)
         elif d.kind is DecisionKind.END and d.ab is not None:
@@ -579,6 +619,25 @@ class Oracle:
             elif d.detail != FEEDBACK_STOPPED or d.ab not in b.ended:
                 self.fail(f"t={d.t:g}: AB{d.ab} was cancelled after it started "
                           f"({d.rule.value}: {d.detail or 'no detail'})")
+
+    def _request(self, d: Decision) -> None:
+        """A request joined working memory: its order, its words, whether its tree is now
+        a reaction (to the user's own action), whether it is a reply."""
+        self._requests += 1
+        for cid in d.command_ids:
+            self._order[cid] = self._requests
+        for cid, c in zip(d.command_ids, d.calls, strict=False):
+            if self._catalog[c.command].spoken(c.args):
+                self.streams.speaks.add(cid)
+        if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
+                and d.tree is not None):
+            self.streams.reaction[d.tree] = self._requests
+            if d.command_id in self._users:
+                self.streams.user.add(d.tree)
+                self.streams.user_since[d.tree] = d.t
+            else:
+                self.streams.user.discard(d.tree)
+        self._reply(d)
 
     def _reply(self, d: Decision) -> None:
         """A request's root AB is a reply (7.4): the first AB an answer handler requested,

@@ -14,7 +14,7 @@ from prima.mediator import (
     Rule,
     RunningOrder,
 )
-from prima.mediator.testing import Harness
+from prima.mediator.testing import Harness, feedback_iterations
 from prima.vocab import DEFAULT_BUDGETS, AppKind as Role, Budgets
 from tests.mediator.helpers import call, speak
 
@@ -73,3 +73,95 @@ def test_the_users_own_words_are_answered_past_the_wait_share() -> None:
             if d.command == "Speak"]
     assert said == [(3.0, "I've just got a message."), (5.0, "The toilets are by the door."),
                     (7.0, "The host will be late.")]
+
+
+# ---------------------------------------------------------------- 7.6 (1): own stream too
+
+def _guide(h: Harness, follow: bool = False) -> None:
+    """The EA guides (a TopologicalMove, 0.5 s a leg, or following the user) and, at
+    2.2, the user asks it something: it answers (3 s) in a stream of its own."""
+    m = h.mediator
+
+    def answer(e: Event) -> None:
+        if e.name == "speech":
+            m.submit(Request("ea", (speak("The toilets are by the door."),), reactive=True,
+                             reaction=True, user=True))
+
+    ea = h.app("ea", AppKind.EA, on_event=answer)
+    ea.listens_for = ("toilet",)
+    move = call("TrackingHuman") if follow else call("TopologicalMove", to="panel-2")
+    m.submit(Request("ea", (move,)))
+    h.at(2.2, lambda: m.hear(Event("speech", {"words": "Where is the toilet?"})))
+
+
+def test_a_guides_move_stops_while_it_answers_the_user() -> None:
+    """7.6 (1): the guide's own move is suspended at its next IU boundary (the leg under
+    way ends at 2.5) and waits, on the wheels its answer does not use, until the answer's
+    words are said (5.2); then it resumes."""
+    h = Harness(duration={"TopologicalMove": 0.5, "Speak": 3.0},
+                outcome=feedback_iterations(100))
+    _guide(h)
+    h.run(until=8.0)
+    legs = [d.t for d in h.starts() if d.command == "TopologicalMove"]
+    assert 2.0 in legs and not [t for t in legs if 2.0 < t < 5.2] and 5.2 in legs
+    suspend = next(d for d in h.kinds(DecisionKind.SUSPEND) if d.app == "ea")
+    assert (suspend.t, suspend.rule) == (2.5, Rule.ANSWERING)
+    assert any(d.t == 5.2 for d in h.kinds(DecisionKind.RESUME) if d.app == "ea")
+
+
+def test_following_the_user_goes_on_while_the_robot_answers() -> None:
+    """7.6 (1): following the user is not leaving: it goes on meanwhile."""
+    h = Harness(duration={"TrackingHuman": 0.5, "Speak": 3.0},
+                outcome=feedback_iterations(100))
+    _guide(h, follow=True)
+    h.run(until=8.0)
+    steps = [d.t for d in h.starts() if d.command == "TrackingHuman"]
+    assert [t for t in steps if 2.2 < t < 5.2] == [2.5, 3.0, 3.5, 4.0, 4.5, 5.0]
+    assert not h.kinds(DecisionKind.SUSPEND)
+
+
+def test_the_other_apps_stream_waits_on_every_device_while_the_user_is_answered() -> None:
+    """7.6 (1): the FA's gestures (arm, neck) share no device with the EA's answer to the
+    user's touch, yet its stream is suspended at its next IU boundary (2.0) until the
+    answer's words are said (4.5). The FA's block, once under way, is concluded."""
+    h = Harness(duration={"Gesture": 1.0, "Speak": 3.0})
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(Request("fa", tuple(call("Gesture", name="wave") for _ in range(4))))
+    h.at(1.5, lambda: m.submit(Request("ea", (speak("The toilets are by the door."),),
+                                       reactive=True, reaction=True, user=True)))
+    h.run(until=10.0)
+    assert [d.t for d in h.starts() if d.app == "fa"] == [0.0, 1.0, 4.5, 5.5]
+    suspend = next(d for d in h.kinds(DecisionKind.SUSPEND))
+    assert (suspend.app, suspend.t, suspend.rule) == ("fa", 2.0, Rule.ANSWERING)
+
+
+def test_a_block_under_way_is_concluded_while_the_user_is_answered() -> None:
+    """Rule 3 beside 7.6 (1): a started block is always concluded."""
+    h = Harness(duration={"Gesture": 1.0, "Speak": 3.0})
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.open_block("fa", devices=frozenset({"arm", "neck"}), watchdog=30.0)
+    m.submit(Request("fa", tuple(call("Gesture", name="wave") for _ in range(4))))
+    h.at(1.5, lambda: m.submit(Request("ea", (speak("The toilets are by the door."),),
+                                       reactive=True, reaction=True, user=True)))
+    h.run(until=10.0)
+    assert [d.t for d in h.starts() if d.app == "fa"] == [0.0, 1.0, 2.0, 3.0]
+
+
+def test_an_answer_whose_words_never_come_holds_the_others_at_most_its_bound() -> None:
+    """7.6 (1), bounded: a reaction whose words wait behind its own endless loop keeps the
+    FA's stream waiting no longer than ``max_answer_hold`` (here 5 s)."""
+    h = Harness(duration={"Gesture": 1.0, "TrackingHuman": 0.5, "Speak": 3.0},
+                outcome=feedback_iterations(10_000),
+                config=MediatorConfig(max_answer_hold=5.0))
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(Request("fa", tuple(call("Gesture", name="wave") for _ in range(4))))
+    h.at(1.5, lambda: m.submit(Request("ea", (call("TrackingHuman"), speak("Follow me.")),
+                                       reactive=True, reaction=True, user=True)))
+    h.run(until=10.0)
+    assert [d.t for d in h.starts() if d.app == "fa"] == [0.0, 1.0, 6.5, 7.5]
