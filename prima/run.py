@@ -119,9 +119,6 @@ class _Channel:
     def unfaced(self) -> bool:
         return self._sim.user_unfaced(FACE_TOLERANCE)
 
-    def still(self) -> bool:
-        return self._sim.body_still()
-
     def near(self, distance: float) -> bool:
         return self._sim.user_near(distance)
 

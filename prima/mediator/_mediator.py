@@ -387,8 +387,10 @@ class Mediator:
             wm.enter_waiting(again, False)  # (its parent has not)
         wm.leave(node)
         cutter = node.cut_by
-        if cutter is not None and cutter.alive and now > node.started_at:
+        if cutter is not None and cutter.alive and cutter is not app \
+                and now > node.started_at:
             # the time the cut throws away counts against the cutting app's wait share
+            # (an app's own stream, cut for its turn to the user, is no budget matter)
             self._fairness.charge(cutter, now - node.started_at)
         by = "user" if by_user else (cutter.name if cutter is not None else "")
         event = Event(INTERRUPTED_EVENT, {

@@ -458,10 +458,6 @@ class _Facing:
         self.asked += 1
         return self.asked % self.period != 0
 
-    def still(self) -> bool:
-        self.asked += 1
-        return self.asked % 2 == 0
-
     def near(self, distance: float) -> bool:
         self.asked += 1
         return self.asked % self.period != 1

@@ -546,10 +546,6 @@ class Simulator:
         world = self.world
         return world.has_user and self.user_detectable() and world.user_distance() <= distance
 
-    def body_still(self) -> bool:
-        """The wheels are neither driving nor turning the robot now."""
-        return not self.world.moving()
-
     def user_pose(self) -> Pose | None:
         """Where the user is, or None in a scenario without a user."""
         return self.world.user_pose() if self.world.has_user else None

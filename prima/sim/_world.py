@@ -346,12 +346,6 @@ class World:
         """The fastest the robot drives now (m/s)."""
         return self._vmax
 
-    def moving(self) -> bool:
-        """The wheels drive or turn the body (or sway it), or it has not come to rest."""
-        body = self.robot
-        return self.mode != _IDLE or self._sway is not None \
-            or body.velocity.length > 1e-3 or abs(body.angular_velocity) > 1e-3
-
     def sway(self, amplitude: float, sways: int, steps: int, owner: int) -> None:
         """Sway the body about its heading, ``amplitude`` radians either way, ``sways``
         whole times in ``steps`` steps, on top of whatever drives the wheels (alone it

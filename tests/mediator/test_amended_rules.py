@@ -63,9 +63,6 @@ class Facing:
     def near(self, distance: float) -> bool:
         return True
 
-    def still(self) -> bool:
-        return True
-
     def pose(self) -> Mapping[str, Value]:
         return {"x": 0.0, "y": 0.0, "heading": 0.0}
 

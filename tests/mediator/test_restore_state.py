@@ -24,9 +24,6 @@ class Robot:
     def unfaced(self) -> bool:
         return False
 
-    def still(self) -> bool:
-        return False
-
     def near(self, distance: float) -> bool:
         return True
 

@@ -5,6 +5,9 @@ taking it out).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
+from prima.catalog import Catalog
 from prima.mediator import (
     AppKind,
     DecisionKind,
@@ -13,6 +16,7 @@ from prima.mediator import (
     Request,
     Rule,
     RunningOrder,
+    Value,
 )
 from prima.mediator.testing import Harness, feedback_iterations
 from prima.vocab import DEFAULT_BUDGETS, AppKind as Role, Budgets
@@ -165,3 +169,75 @@ def test_an_answer_whose_words_never_come_holds_the_others_at_most_its_bound() -
                                        reactive=True, reaction=True, user=True)))
     h.run(until=10.0)
     assert [d.t for d in h.starts() if d.app == "fa"] == [0.0, 1.0, 6.5, 7.5]
+
+
+# ---------------------------------------------------------------- 7.6 (3): face first
+
+CUTS = Catalog.standard().interruptible(Catalog.standard().usually_interruptible())
+"""A robot that cuts utterances, Q&A prompts, gestures and feedback iterations."""
+
+
+class Facing:
+    """A robot that faces its user only once it has turned to them."""
+
+    def __init__(self) -> None:
+        self.faced = False
+
+    def unfaced(self) -> bool:
+        return not self.faced
+
+    def near(self, distance: float) -> bool:
+        return True
+
+    def pose(self) -> Mapping[str, Value]:
+        return {"x": 0.0, "y": 0.0, "heading": 0.0}
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
+        return False
+
+
+def _sweeping(own: bool, catalog: Catalog | None) -> Harness:
+    """An app sweeps the room for its user (a search, 2 s a sweep); at 1.0 the user
+    touches the robot, whose user is off to the side, and the FA (or, if ``own``, the
+    searching app itself) answers."""
+    facing = Facing()
+    h = Harness(catalog, duration={"ActiveSensingHuman": 2.0, "FaceHuman": 1.0, "*": 2.0},
+                outcome=feedback_iterations(100), channel=facing)
+    m = h.mediator
+    searcher = "fa" if own else "ea"
+    h.app("fa", AppKind.FA)
+    if not own:
+        h.app("ea", AppKind.EA)
+    m.submit(Request(searcher, (call("ActiveSensingHuman"),)))
+    h.at(1.0, lambda: m.submit(Request("fa", (speak("Hee-hee! That tickles."),),
+                                       order=RunningOrder.ASAP if own else
+                                       RunningOrder.AFTER_LATEST,
+                                       reactive=True, reaction=True, user=True)))
+    return h
+
+
+def _answer(h: Harness) -> list[tuple[float, str]]:
+    return [(d.t, d.command or "") for d in h.starts()
+            if d.app == "fa" and d.command in ("FaceHuman", "Speak")]
+
+
+def test_a_reactions_turn_to_the_user_cuts_a_search_sweep() -> None:
+    """7.6 (3) with 7.3 (2): on a robot that may cut a feedback iteration, the touch's
+    turn to the user cuts the EA's search sweep under way at once; the words follow the
+    turn, face to face. The FA's own sweep is cut alike (7.6 (1): its own stream too)."""
+    for own in (False, True):
+        h = _sweeping(own, CUTS)
+        h.run(until=8.0)
+        assert _answer(h) == [(1.0, "FaceHuman"), (2.0, "Speak")], own
+        cut = h.kinds(DecisionKind.INTERRUPT)
+        assert cut and cut[0].t == 1.0 and cut[0].command == "ActiveSensingHuman", own
+
+
+def test_words_wait_for_what_may_not_be_cut_on_the_wheels_to_turn_first() -> None:
+    """7.6 (3): on a robot that cuts nothing, the touch's words never start unfaced to
+    be early: they wait for the sweep under way (to 2.0), then for the turn."""
+    for own in (False, True):
+        h = _sweeping(own, None)
+        h.run(until=8.0)
+        assert _answer(h) == [(2.0, "FaceHuman"), (3.0, "Speak")], own
+        assert not h.kinds(DecisionKind.INTERRUPT)
