@@ -337,6 +337,8 @@ class Run:
                                   barge_in=self.policies["barge-in"],
                                   resume_pause=self.profile.hearing.pause),
             channel=_Channel(self.sim))
+        if self.policies["connect-channel"]:  # (the robot keeps facing its user while it
+            self.sim.watch_facing(FACE_TOLERANCE, self.mediator.regard)  # talks: 7.6 (3))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
         self.sim.on_user = self._user

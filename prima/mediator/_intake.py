@@ -293,6 +293,20 @@ class Intake:
         wm.enter_waiting(node, parent_finished)
         return node
 
+    def beside(self, x: Node, call: Call, spec: CommandSpec, rule: Rule,
+               detail: str) -> Node:
+        """Put an AB of the mediator's own (a policy's) in the running ``x``'s tree to run
+        beside it, at once if its devices allow: it waits for nothing of the tree and
+        nothing waits for it. Its Command is the app's but internal."""
+        wm = self._wm
+        cmd = Command(self.next_command, x.app, call, spec, internal=rule)
+        self.next_command += 1
+        node = wm.new_node(x.app, x.tree, (cmd,), spec.devices_for(call.args), spec.priority,
+                           False, x.seq)
+        self._log.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=[cmd])
+        wm.enter_waiting(node, True)  # (its tree's active stream goes on with it)
+        return node
+
     # ------------------------------------------------------------------ links
     def _link_follows(self, app: App, follows: CommandId, now: float) -> Link | None:
         """CS exceptions (a)/(b): a request made while handling X's end stays in X's tree."""

@@ -560,6 +560,18 @@ class Mediator:
                 return
             self.post(Event(NOMATCH_EVENT, {"words": words}, now))  # (every app sees it)
 
+    def regard(self) -> None:
+        """The user went off to the side while the robot says words (what the run's
+        Channel answers changed): an utterance addressed to them keeps facing them
+        (docs/rules.md 7.6 (3)): a turn to the user runs beside its words if the wheels
+        are free now (connect-channel); one that cannot start at once is cancelled."""
+        with self._operation():
+            turn = self._policies.keep_facing()
+            if turn is not None:
+                self._settle()
+                if turn.state is NodeState.WAITING:
+                    self._intake.cancel(turn, Rule.CONNECT_CHANNEL, self._log.now)
+
     def _talking(self) -> list[Node]:
         """The running ABs with words this robot can stop (an interruptible Command that
         says them), oldest first: the driver stops those saying them now."""

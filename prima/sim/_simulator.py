@@ -157,6 +157,12 @@ class Simulator:
         self.backchannel: Callable[[str], bool] = _never
         """Whether words only show that the user follows (the robot profile's
         backchannels): they answer no prompt."""
+        self._facing: tuple[float, Callable[[], None]] | None = None
+        """While words are said: the tolerance (degrees) beyond which the user is off to
+        the side, and whom to tell when they go off (:meth:`watch_facing`)."""
+        self._off = False
+        """The user was found off to the side while words were said, and has not been
+        faced since (told once per stretch)."""
         self._sense_every = hz // SENSE_HZ
         self._poses: tuple[int, tuple[float, float, float], tuple[float, float, float] | None,
                            bool | None] = (-1, (0.0, 0.0, 0.0), None, None)
@@ -767,7 +773,30 @@ class Simulator:
             if not k.due():
                 return
 
+    def watch_facing(self, tolerance: float, off: Callable[[], None]) -> None:
+        """While the robot says words, call ``off`` (a report) each time the user, being
+        detectable, goes more than ``tolerance`` degrees off its heading: the user walked
+        round it, or something turned it away (a run's mediator turns it back: docs/
+        rules.md 7.6 (3)). Looked at with the other senses, while anything moves."""
+        self._facing = (tolerance, off)
+
+    def _watch_facing(self, facing: tuple[float, Callable[[], None]]) -> None:
+        now = self.kernel.tick
+        if not any(words and start <= now < start + ticks
+                   for start, words, ticks, _ends in self._speech.values()):
+            self._off = False
+            return
+        tolerance, off = facing
+        if not self.user_unfaced(tolerance):
+            self._off = False
+        elif not self._off:
+            self._off = True
+            self.reports += 1
+            off()
+
     def _sense(self) -> None:
+        if self._facing is not None and self._speech:
+            self._watch_facing(self._facing)
         if self._sensing:
             self._update_monitor()
         if self._zones and self.world.mode:

@@ -72,8 +72,8 @@ def test_the_scenarios_cover_what_they_should() -> None:
         immediate += sc.immediate and 0.0 in sc.durations
         raising += any(s.raise_on for s in sc.scripts)
         endless += any(s.endless for s in sc.scripts)
-    assert kinds == {"submit", "event", "speech", "stream", "block", "swap", "asap", "group",
-                     "reactive", "follows"}
+    assert kinds == {"submit", "event", "speech", "regard", "stream", "block", "swap", "asap",
+                     "group", "reactive", "follows"}
     assert min(tiny, immediate, raising, endless) > 10
 
 
@@ -96,6 +96,15 @@ def test_the_driver_exercises_barge_in() -> None:
     for what in ("[barge-in]", "[nomatch]", "[backchannel]", "[stream-runs]", "[grammar]",
                  "(no application took the user's words)"):
         assert sum(r.count(what) for r in replays) > 3, what
+
+
+def test_the_driver_exercises_keeping_the_user_faced_and_answering_first() -> None:
+    """The user goes off to the side while the robot talks in some seeds: the mediator
+    turns the robot back beside the words (7.6 (3)); reactions to the user's own action
+    hold the streams they interrupted (7.6 (1)), which the oracle checks."""
+    replays = [replay(seed) for seed in SEEDS[:600]]
+    assert sum(r.count("keeps facing the user") for r in replays) > 5
+    assert sum(r.count("[answering]") for r in replays) > 20
 
 
 def test_the_driver_runs_three_apps_in_a_third_of_the_seeds() -> None:

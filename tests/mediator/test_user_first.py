@@ -5,6 +5,7 @@ taking it out).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 
 from prima.catalog import Catalog
@@ -241,3 +242,25 @@ def test_words_wait_for_what_may_not_be_cut_on_the_wheels_to_turn_first() -> Non
         h.run(until=8.0)
         assert _answer(h) == [(2.0, "FaceHuman"), (3.0, "Speak")], own
         assert not h.kinds(DecisionKind.INTERRUPT)
+
+
+def test_the_robot_keeps_facing_the_user_while_its_words_run() -> None:
+    """7.6 (3): the user walks round the robot (at 1.0) while it says a long utterance:
+    a turn to the user runs beside the words, in their stream, at once. With the wheels
+    busy (the FA's gesture does not use them; its drive does) nothing is put in."""
+    for drives in (False, True):
+        facing = Facing()
+        facing.faced = True
+        h = Harness(duration={"Speak": 4.0, "FaceHuman": 0.5, "*": 3.0}, channel=facing)
+        m = h.mediator
+        h.app("fa", AppKind.FA)
+        h.app("ea", AppKind.EA)
+        m.submit(Request("ea", (speak("This panel shows research points of our lab."),)))
+        m.submit(Request("fa", (call("SetSpeedAndTime", speed=0.2, time=3.0) if drives
+                                else call("Gesture", name="nod"),)))
+        h.at(1.0, functools.partial(setattr, facing, "faced", False))
+        h.at(1.0, m.regard)
+        h.run(until=8.0)
+        turns = [(d.t, d.app, d.rule) for d in h.starts() if d.command == "FaceHuman"]
+        assert turns == ([] if drives else [(1.0, "ea", Rule.CONNECT_CHANNEL)]), drives
+        assert not h.kinds(DecisionKind.CANCEL)
