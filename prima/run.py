@@ -325,6 +325,7 @@ class Run:
         self.sim.speech = speech  # None: the profile's speech rate times every utterance
         self.sim.hears_always = self.policies["barge-in"]  # else only while a Q&A listens
         self.sim.backchannel = self.profile.hearing.backchannel
+        self.sim.answers_prompt = self._answers_prompt
         self.mediator = Mediator(
             self.catalog, self.sim, self.sim, record=self._decision,
             config=MediatorConfig(budgets=self.budgets,
@@ -644,6 +645,22 @@ class Run:
         if said is not None:
             self._said[ab] = said
         self.mediator.finish(ab, outcome)
+
+    def _answers_prompt(self, command_id: int, words: str) -> bool:
+        """Whether words said over the prompt of the Q&A of ``command_id`` answer it
+        (docs/rules.md 7.5): its grammar takes them (then they are no backchannel); else
+        they do unless they are a backchannel or some application's always-on grammar
+        takes them (words no grammar takes answer it, as its no-match)."""
+        apps = list(self.apps.values())
+        for app in apps:
+            takes = app.interpreter.answers(command_id, words)
+            if takes is not None:
+                if takes:
+                    return True
+                break
+        if self.profile.hearing.backchannel(words):
+            return False
+        return not any(app.interpreter.takes(words) for app in apps)
 
     def _event(self, event: Event) -> None:
         self._line(Kind.EVENT, text=event.name, detail=dict(event.data))

@@ -212,6 +212,14 @@ class Interpreter:
             return False
         return bool(self._listening(words, {}))
 
+    def answers(self, command_id: CommandId, words: str) -> bool | None:
+        """Whether ``words`` answer the Q&A of ``command_id`` (its grammar takes them);
+        None if that is no Q&A of this application's still under way."""
+        call = self._commands.get(command_id)
+        if self.stopped or call is None or not self.catalog[call.command].listens:
+            return None
+        return self.document.grammars[call.grammar or ""].match(words) is not None
+
     def _listening(self, words: str, data: dict[str, Value]) -> tuple[Handler, ...]:
         """The speech handlers that take ``words``, in the order they are tried; ``data``
         gets the first match's ``answer`` and ``grammar``."""

@@ -156,7 +156,11 @@ class Simulator:
         over a Q&A's prompt answers it, stopping the prompt at a word boundary."""
         self.backchannel: Callable[[str], bool] = _never
         """Whether words only show that the user follows (the robot profile's
-        backchannels): they answer no prompt."""
+        backchannels)."""
+        self.answers_prompt: Callable[[int, str], bool] | None = None
+        """Whether words said over the prompt of the Q&A of a Command id answer it (a run
+        asks the Q&A's grammar, docs/rules.md 7.5: words it takes are its answer, never
+        a backchannel); None: any words but a backchannel do."""
         self._facing: tuple[float, Callable[[], None]] | None = None
         """While words are said: the tolerance (degrees) beyond which the user is off to
         the side, and whom to tell when they go off (:meth:`watch_facing`)."""
@@ -662,9 +666,9 @@ class Simulator:
 
     def hear(self, text: str) -> bool:
         """The user says ``text``: True if the robot heard it. A listening Q&A takes it;
-        else, if the robot hears at any time, an answer said over a Q&A's prompt
-        answers it (not a backchannel), and anything else is a ``speech`` event with
-        its ``words`` and whether it is a ``backchannel``."""
+        else, if the robot hears at any time, words said over a Q&A's prompt that answer
+        it (:attr:`answers_prompt`) stop the prompt and answer it, and anything else is a
+        ``speech`` event with its ``words`` and whether it is a ``backchannel``."""
         if not self.hearable():
             return False
         mic = self._mic
@@ -675,8 +679,9 @@ class Simulator:
         backchannel = self.backchannel(text)
         # (a prompt whose words were hushed before they began is being cut: not asking)
         cid = next((c for c in self._prompting if c in self._speech), None) \
-            if self._prompting and not backchannel else None
-        if cid is not None:
+            if self._prompting else None
+        if cid is not None and (not backchannel if self.answers_prompt is None
+                                else self.answers_prompt(cid, text)):
             wake = self._prompting.pop(cid)
             wake((text, *self._stop_prompt(cid)))
             return True
