@@ -441,6 +441,7 @@ class WorkingMemory:
             tree.user = user
             if user:
                 tree.answers_until = answers_until
+                tree.answers_from = self._next_tree  # (what came into being before it)
                 self.answering[tree.id] = tree
             elif self.answering.pop(tree.id, None) is not None:
                 self.answered = True

@@ -120,7 +120,7 @@ class Tree:
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
                  "user", "started", "pose", "devices", "parked", "keys", "suspensions",
-                 "talks", "answers_until")
+                 "talks", "answers_until", "answers_from")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -157,6 +157,10 @@ class Tree:
         """With ``user``: until when, at the latest, it keeps the streams it interrupted
         waiting on every device while its first words are ahead (docs/rules.md 7.6 (1);
         ``MediatorConfig.max_answer_hold`` after it became a reaction to the user)."""
+        self.answers_from = 0
+        """With ``user``: the first tree id that came into being after it became a reaction
+        to the user: only trees before it (and no later reaction) are streams it
+        interrupted (docs/rules.md 7.6 (1))."""
         self.pose: Mapping[str, Value] | None = None
         """The robot's pose when it was last suspended, until the restore-state
         policy has put its return before the stream's next AB (or found none needed)."""

@@ -117,6 +117,11 @@ class Streams:
     for its reaction (7.5), whose next AB keeps their devices as another app's would."""
     user_since: dict[TreeId, float] = field(default_factory=dict)
     """Reactions to the user's own action -> when they became one (7.6 (1)'s bound)."""
+    user_from: dict[TreeId, TreeId] = field(default_factory=dict)
+    """... -> the first tree id no decision had named by then: the trees before it are
+    the streams it interrupted (a later one is a stream of its own)."""
+    newest: TreeId = -1
+    """The largest tree id any decision named so far."""
     speaks: set[CommandId] = field(default_factory=set)
     """Commands that say words (asked for with a text the robot says)."""
     answer_hold: float = 30.0
@@ -226,9 +231,9 @@ class _View:
     def answer_holder(self, n: NodeView) -> TreeView | None:
         """The reaction to the user's own action (of another tree) whose first words are
         ahead, within its bound, that keeps ``n``'s stream waiting on every device
-        (7.6 (1)), the latest of them; never for a reply to an answer, following the
-        user, an AB of its app's block under way, or an AB of a later reaction to the
-        user than it."""
+        (7.6 (1)), the latest of them: only a stream there when it became one, and no
+        later reaction (that is a stream of its own); never for a reply to an answer,
+        following the user, or an AB of its app's block under way."""
         streams = self.streams
         if streams.replying(n) or not streams.user:
             return None
@@ -237,11 +242,11 @@ class _View:
         if any(h.kind == "block" and h.app == n.app and set(h.devices) & set(n.devices)
                for h in self.snap.holds):
             return None
-        mine = streams.reaction.get(n.tree) if n.tree in streams.user else None
+        mine = streams.reaction.get(n.tree)
         found: TreeView | None = None
         for tree in self.snap.trees:
             if tree.id == n.tree or tree.id not in streams.user \
-                    or tree.id not in streams.reaction:
+                    or tree.id not in streams.reaction or n.tree >= streams.user_from[tree.id]:
                 continue
             if self.snap.t >= streams.user_since[tree.id] + streams.answer_hold:
                 continue  # (its bound passed)
@@ -624,6 +629,8 @@ class Oracle:
         """A request joined working memory: its order, its words, whether its tree is now
         a reaction (to the user's own action), whether it is a reply."""
         self._requests += 1
+        if d.tree is not None and d.tree > self.streams.newest:
+            self.streams.newest = d.tree
         for cid in d.command_ids:
             self._order[cid] = self._requests
         for cid, c in zip(d.command_ids, d.calls, strict=False):
@@ -635,6 +642,7 @@ class Oracle:
             if d.command_id in self._users:
                 self.streams.user.add(d.tree)
                 self.streams.user_since[d.tree] = d.t
+                self.streams.user_from[d.tree] = self.streams.newest + 1
             else:
                 self.streams.user.discard(d.tree)
         self._reply(d)

@@ -142,6 +142,25 @@ def test_the_other_apps_stream_waits_on_every_device_while_the_user_is_answered(
     assert (suspend.app, suspend.t, suspend.rule) == ("fa", 2.0, Rule.ANSWERING)
 
 
+def test_a_later_reaction_is_no_stream_the_answer_interrupted() -> None:
+    """7.6 (1) beside 7.1: while the FA asks the user what they want (its touch
+    reaction's first words, a Q&A to 5.0), a message comes for the EA: its reaction is
+    a stream of its own, not one the touch interrupted. Its StopMoving takes the free
+    wheels at once; its words wait for the FA's (the user's own action first, 7.1)."""
+    h = Harness(duration={"QA": 4.0, "StopMoving": 0.2, "*": 2.0})
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA, on_event=lambda e: e.name == "message" and m.submit(Request(
+        "ea", (call("StopMoving"), speak("I've just got a message.")), reactive=True,
+        reaction=True)))
+    m.submit(Request("fa", (call("QA", prompt="What's the matter with you?", grammar="g"),),
+                     reactive=True, reaction=True, user=True))
+    h.at(2.0, lambda: m.post(Event("message")))
+    h.run(until=10.0)
+    assert _starts(h, "ea") == [(2.0, "StopMoving"), (4.0, "Speak")]
+    assert not [d for d in h.decisions if d.rule is Rule.ANSWERING]
+
+
 def test_a_block_under_way_is_concluded_while_the_user_is_answered() -> None:
     """Rule 3 beside 7.6 (1): a started block is always concluded."""
     h = Harness(duration={"Gesture": 1.0, "Speak": 3.0})
