@@ -55,9 +55,9 @@ def test_a_failure_the_fa_causes_is_the_fas_and_the_check_passes(tmp_path: Path)
                        "--jobs", "1", "--out", str(tmp_path / "worst"))
     assert code == 0, out
     assert "runaway     fail FA" in out and "quiet       ok" in out
-    assert ("leaving in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
+    assert ("leaving in 2 run(s): the FA's, runaway runaway.pxml:8:20: its SetSpeedAndTime "
             "took the robot away from the user while talker spoke") in out
-    assert ("unfaced in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
+    assert ("unfaced in 2 run(s): the FA's, runaway runaway.pxml:8:20: its SetSpeedAndTime "
             "moved the robot") in out
     assert "0 failed by the EA, 1 by others only" in out
 

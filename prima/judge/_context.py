@@ -39,6 +39,9 @@ action (docs/rules.md 7.1: a touch, heard speech)."""
 
 _ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
 
+_ANSWERS = " answers the user"
+"""How a hold or a suspension for a reaction to the user's own action ends its text."""
+
 LOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.breaks_cc)
 """Commands that break the Communication Channel (LOW priority)."""
 
@@ -90,6 +93,8 @@ class Ab:
     end_reason: str = ""
     blended_over: bool = False
     """Another AB started blended over it (the blend policy: never cut)."""
+    dropped: bool = False
+    """It was cut and its request said to drop it: it is not said again."""
 
     @property
     def low(self) -> bool:
@@ -236,6 +241,9 @@ class Context:
         """App -> when its begin/end block was open: [from, until]."""
         self.interrupts: dict[int, str] = {}
         """AB -> the application whose reaction had it cut."""
+        self.user_cuts: dict[int, bool] = {}
+        """AB -> cut because the user spoke over it: whether an application took the
+        words (False: none did, a false interruption: it goes on after a pause)."""
 
     # ---------------------------------------------------------------- the pass
     def feed(self, row: Row) -> None:
@@ -418,6 +426,7 @@ class Context:
             ab.end_seq = int(row["seq"])
             ab.end_reason = str(row.get("reason") or "")
             detail = row.get("detail") or {}
+            ab.dropped = detail.get("interrupt") == "dropped"
             ws, we = detail.get("words_start"), detail.get("words_end")
             if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
                 ab.words = (float(ws), float(we))
@@ -459,10 +468,18 @@ class Context:
                 break
         if not holder and text.endswith(" is talking"):
             holder = text[:-len(" is talking")]
+        if text.endswith(_ANSWERS):  # (docs/rules.md 7.6 (1): "[while] X answers the user")
+            holder = text[:-len(_ANSWERS)].removeprefix("while ")
         before = row.get("before")
         self.holds.append(Hold(float(row["t"]), int(row["seq"]), ab,
                                str(row.get("app") or ""), str(row.get("reason") or ""),
                                holder, before if isinstance(before, int) else None))
+
+    def _suspend(self, row: Row) -> None:
+        """A stream suspended while a reaction answers the user (7.6 (1)) is held as a
+        hold line says (its other suspensions are what its ABs lost, seen on devices)."""
+        if row.get("reason") == "answering":
+            self._hold(row)
 
     def _budget(self, row: Row) -> None:
         app = str(row.get("app") or "")
@@ -492,6 +509,8 @@ class Context:
         text = str(row.get("text") or "")
         if isinstance(ab, int) and text.startswith("for "):
             self.interrupts[ab] = text[4:].split("'s")[0]
+        elif isinstance(ab, int) and row.get("reason") == "barge-in":
+            self.user_cuts[ab] = "goes on after" not in text
 
     def _unload(self, row: Row) -> None:
         ex = self.open_exchange.pop(str(row.get("app") or ""), None)
@@ -528,6 +547,7 @@ _HANDLERS = {
     "end": Context._end,
     "cancel": Context._cancel,
     "hold": Context._hold,
+    "suspend": Context._suspend,
     "budget": Context._budget,
     "block": Context._block,
     "release": Context._release,

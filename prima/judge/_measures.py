@@ -860,10 +860,26 @@ class _Ignored:
             answered = r.first_start if r is not None else None
             if answered is None and ctx.t - t <= allowed + EPS:
                 continue  # (the trace ended before it was due)
+            if r is not None and self._withdrawn(i, r, t + allowed, ctx):
+                continue
             if answered is None or answered - t > allowed + EPS:
                 at = (r.at if r is not None else "") or self.handled.get(i, "")
                 found.append(Ignored(seq, t, text, app, answered, round(allowed, 3), at))
         return found
+
+
+    def _withdrawn(self, i: int, r: Reaction, due: float, ctx: Context) -> bool:
+        """The user's own later words to the same application cancelled its answer before
+        it was due (docs/rules.md section 8: "Stop." over an answer still to come)."""
+        cancelled = [ctx.cancelled.get(cid) for cid in r.commands]
+        if not r.commands or any(c is None for c in cancelled):
+            return False
+        gone = max(c for c in cancelled if c is not None)
+        if gone > due + EPS or (r.first_start is not None and r.first_start < gone - EPS):
+            return False
+        app, t = self.taken[i][3], self.taken[i][1]
+        return any(other == app and t + EPS < when <= gone + EPS
+                   for _s, when, _x, other in self.taken[i + 1:])
 
 
 def _ignored_line(x: Ignored) -> str:

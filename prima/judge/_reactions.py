@@ -38,6 +38,7 @@ from collections.abc import Iterable, Sequence
 
 from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, ReactionState
 from prima.judge._findings import Blame, Reaction
+from prima.vocab import MAX_ANSWER_HOLD
 
 __all__ = ["analyse"]
 
@@ -95,6 +96,8 @@ class _Analyst:
                 for cid in ex.reply:
                     replies.update(self.policy_for.get(cid, ()))
         self.replies = replies
+        self.restarts = {again: cut for cut, again in ctx.restarted.items()}
+        """An AB that starts a cut one again -> the cut one."""
         self._user_until: dict[int, float] = {}
         self._ready: dict[int, float] = {}
 
@@ -114,6 +117,18 @@ class _Analyst:
             self._user_until[key] = found
         return found
 
+    def answered(self, app: str, t: float) -> float:
+        """Until when ``app``'s reaction to the user's own action that kept something
+        waiting at ``t`` kept the streams it interrupted waiting (7.6 (1)): until its first
+        words were said whole, at most its bound after it came."""
+        found = math.inf
+        for r in self.ctx.reactions:
+            if r.app == app and r.user and r.t <= t + EPS:
+                until = min(self.user_until(r), r.t + MAX_ANSWER_HOLD)
+                if until > t - EPS:
+                    found = min(found, until)
+        return found
+
     def reaction_key(self, r: ReactionState, t: float) -> tuple[int, float]:
         if r.answer:  # (the reply to an answer goes on in its Q&A's tree, with its rank)
             return self.tree_key(r.trees[0], t) if r.trees else (1, math.inf)
@@ -127,11 +142,42 @@ class _Analyst:
         return self.reaction_key(max(taken, key=lambda r: r.order), t)
 
     def replies_to_answer(self, ab: Ab) -> bool:
-        return not self.replies.isdisjoint(ab.ids)
+        """``ab`` says (or turns or returns before) the words that reply to an answer
+        (7.4); not once the user cut them with words an application took: said again,
+        they are words like any (7.6 (5))."""
+        if self.replies.isdisjoint(ab.ids):
+            return False
+        cut = self.restarts.get(ab.id)
+        seen = {ab.id}
+        while cut is not None and cut not in seen:  # (back through its restarts)
+            if self.ctx.user_cuts.get(cut):
+                return False
+            seen.add(cut)
+            cut = self.restarts.get(cut)
+        return True
 
-    def is_reply(self, r: ReactionState) -> bool:
-        """``r`` answers a heard answer with words (7.4): the exchange's reply."""
-        return r.answer and not self.replies.isdisjoint(r.commands)
+    def is_reply(self, r: ReactionState, t: float = -math.inf) -> bool:
+        """``r`` answers a heard answer with words (7.4): the exchange's reply, which
+        goes first, until ``t`` if the user cut it with words an application took by then
+        (7.6 (5): what those words start goes first)."""
+        return r.answer and not self.replies.isdisjoint(r.commands) \
+            and not self.user_cut(r) <= t + EPS
+
+    def user_cut(self, r: ReactionState) -> float:
+        """When the user's words, which an application took, cut ``r``'s words (inf:
+        they did not)."""
+        cuts = self.ctx.user_cuts
+        return min((ab.until(self.end) for cid in r.commands for ab in self.cmd_abs.get(cid, ())
+                    if ab.end_reason == "barge-in" and cuts.get(ab.id)), default=math.inf)
+
+    def demoted(self, app: str, tree: int, t: float) -> bool:
+        """``app`` had lost its precedence at ``t``, as far as ``tree``'s ABs go: not for a
+        reaction to the user's own action before its first words (7.6 (4))."""
+        if not self.ctx.demoted_at(app, t):
+            return False
+        taken = [r for r in self.ctx.tree_reactions.get(tree, ()) if r.t <= t + EPS]
+        latest = max(taken, key=lambda r: r.order) if taken else None
+        return latest is None or not latest.user or self.user_until(latest) <= t + EPS
 
     def goes_first(self, y: Ab, r: ReactionState, low: bool, t: float) -> str:
         """Why ``y``, of another application, went first over the reaction ``r`` (whose
@@ -140,7 +186,7 @@ class _Analyst:
         ctx = self.ctx
         if self.replies_to_answer(y):
             return "a reply to its answer (7.4)"
-        if ctx.demoted_at(y.app, t):
+        if self.demoted(y.app, y.tree, t):
             return ""
         if y.low and not low:
             return ""
@@ -148,7 +194,7 @@ class _Analyst:
             return "keeps the channel (rule 4.1)"
         if ctx.block_open(y.app, t):
             return "its begin/end block (rule 3)"
-        if self.is_reply(r):
+        if self.is_reply(r, t):
             return ""  # (no other reaction goes before the words that reply to an answer)
         theirs, mine = self.tree_key(y.tree, t), self.reaction_key(r, t)
         if theirs < mine:
@@ -156,10 +202,14 @@ class _Analyst:
                     else "the latest reaction first (4.2)")
         return ""
 
-    def may_cut(self, y: Ab, r: ReactionState, low: bool, t: float) -> str:
-        """Empty if the reaction may cut ``y`` (running at ``t``); else why not."""
+    def may_cut(self, y: Ab, r: ReactionState, low: bool, t: float, turn: bool = False) -> str:
+        """Empty if the reaction may cut ``y`` (running at ``t``); else why not. ``turn``:
+        for the turn to the user put before its words, which may cut its own
+        application's other stream too, for a reaction to the user's own action
+        (docs/rules.md 7.6 (1) and (3))."""
         ctx = self.ctx
-        if y.app == r.app:
+        if y.app == r.app and not (turn and r.user and y.tree not in r.trees
+                                   and self.user_until(r) > t + EPS):
             return "its own application's"
         if not y.cuttable:
             return "uncut: not interruptible"
@@ -173,13 +223,13 @@ class _Analyst:
             return "uncut: in a begin/end block"
         if y.listens and (y.words is None or t >= y.words[1] - EPS):
             return "uncut: a Q&A listening"
-        if ctx.demoted_at(r.app, t):
+        if ctx.demoted_at(r.app, t) and not (r.user and self.user_until(r) > t + EPS):
             return "uncut: the reacting application lost its precedence"
         if low and not y.low:
             return "uncut: it keeps the channel"
         if y.low and not low:
             return ""
-        if ctx.demoted_at(y.app, t):
+        if self.demoted(y.app, y.tree, t):
             return ""
         if self.reaction_key(r, t) < self.tree_key(y.tree, t):
             return ""
@@ -214,11 +264,13 @@ class _Analyst:
         return sorted(found.values(), key=lambda ab: ab.seq)
 
     def waits(self, r: ReactionState, own: set[int], devices: frozenset[str], low: bool,
-              t0: float, seq0: int, t1: float, ready: float | None = None
+              t0: float, seq0: int, t1: float, ready: float | None = None,
+              turn: bool = False
               ) -> tuple[list[tuple[float, float, Blame]], list[tuple[float, float, Ab]]]:
         """What rightly held ``devices`` within [t0, t1], and what took them wrongly.
         ``own``: the reaction's Commands (its own ABs never count against it);
-        ``ready``: when it could first ask for a cut (after its own AB before it)."""
+        ``ready``: when it could first ask for a cut (after its own AB before it);
+        ``turn``: the devices of a turn to the user put before it (:meth:`may_cut`)."""
         ready = t0 if ready is None else max(t0, ready)
         ctx = self.ctx
         allowed: list[tuple[float, float, Blame]] = []
@@ -232,7 +284,7 @@ class _Analyst:
                 continue
             running = y.start < t0 - EPS or (abs(y.start - t0) <= EPS and y.seq < seq0)
             if running:
-                why = self.may_cut(y, r, low, ready)
+                why = self.may_cut(y, r, low, ready, turn)
                 stop = self.boundary(y, ready)
                 if not why and y.listens and y.words is not None \
                         and stop >= y.words[1] - EPS:
@@ -256,9 +308,14 @@ class _Analyst:
                 took.append((y.start, y_end, y))
         allowed += self._holds(r, own, low, t0, t1)
         if ctx.demoted_within(r.app, t0, t1):
+            # (a reaction to the user's own action is not rationed before its first words:
+            # docs/rules.md 7.6 (4))
+            since = self.user_until(r) if r.user else -math.inf
             for lo, hi in ctx.demoted.get(r.app, ()):
-                allowed.append((lo, hi, Blame(r.app, None, "", "", "it had lost its "
-                                              "precedence (its wait share)", hi)))
+                if hi > since:
+                    allowed.append((max(lo, since), hi, Blame(
+                        r.app, None, "", "", "it had lost its precedence (its wait share)",
+                        hi)))
         return allowed, took
 
     def ready(self, y: Ab) -> float:
@@ -306,6 +363,11 @@ class _Analyst:
                 out.append((h.t, min(until, t1), Blame(h.holder, None, "", "",
                                                        "its begin/end block (rule 3)",
                                                        until)))
+            elif h.reason == "answering":
+                until = min(self.answered(h.holder, h.t), t1)
+                out.append((h.t, until, Blame(h.holder, None, "", "",
+                                              "the user's own action answered first "
+                                              "(7.6 (1))", until)))
             elif h.reason == "keep-channel" and low:
                 out.append((h.t, t1, Blame(h.holder, None, "", "",
                                            "keeps the channel (rule 4.1)", t1)))
@@ -327,12 +389,13 @@ class _Analyst:
         mine.sort(key=lambda ab: ab.seq)
         first = mine[0] if mine else None
         devices = set(r.devices)
-        put: list[tuple[frozenset[str], float, int]] = []
-        """A policy's AB put before the first Command: its devices, from its request."""
+        put: list[tuple[frozenset[str], float, int, bool]] = []
+        """A policy's AB put before the first Command: its devices, from its request, and
+        whether it turns the robot to the user."""
         for cid in self.policy_for.get(r.commands[0], ()) if r.commands else ():
             for ab in self.cmd_abs.get(cid, ()):
                 asked = self.ctx.requested_at.get(ab.id, (r.t, r.seq))
-                put.append((ab.devices - devices, *asked))
+                put.append((ab.devices - devices, *asked, ab.reason == "connect-channel"))
                 devices |= ab.devices
         low = any(ab.low for ab in mine[:1]) if first is not None else False
         t1 = first.start if first is not None else self._over(r)
@@ -341,10 +404,10 @@ class _Analyst:
         if behind is not None and behind.app == r.app:  # after its own AB, still to end
             ready = self._last_of(behind).until(self.end)  # (said again if cut: 7.3 (2))
         allowed, took = self.waits(r, own, frozenset(r.devices), low, r.t, r.seq, t1, ready)
-        for extra, t_put, seq_put in put:
+        for extra, t_put, seq_put, turn in put:
             if extra:  # (the turn's wheels count from when the turn was put in line)
                 more, taken = self.waits(r, own, extra, low, t_put, seq_put, t1,
-                                         max(ready, t_put))
+                                         max(ready, t_put), turn)
                 allowed += [(max(a, t_put), b, blame) for a, b, blame in more]
                 took += [(max(a, t_put), b, y) for a, b, y in taken]
         if behind is not None and ready > r.t:
@@ -418,15 +481,18 @@ class _Analyst:
     def _unheard(self, r: ReactionState, spoken: Sequence[Ab]) -> bool:
         """Its words were never heard whole: cut and never said again, or never said
         long after the event; not if its own application cancelled them, nor if the
-        user spoke over them."""
+        user spoke over them and its request said to drop them then (docs/rules.md
+        7.6 (5): words the user cut still count if they were to be said again)."""
         words_cmds = {cid for ab in spoken for cid in ab.ids} or set(r.commands[:1])
         if words_cmds <= self.ctx.cancelled.keys():
             return False
         if any(ab.end_reason == "interrupt" for ab in spoken):
             return True
-        if any(ab.end_reason == "barge-in" for ab in spoken):
-            return False  # (the user spoke over them: theirs to cut, docs/rules.md 7.5)
-        return self.end - r.t > self.th.stuck_after + EPS
+        cut = [ab for ab in spoken if ab.end_reason == "barge-in"]
+        if cut and any(ab.dropped for ab in cut):
+            return False  # (the user spoke over them, and they were dropped)
+        since = max((ab.until(self.end) for ab in cut), default=r.t)
+        return self.end - since > self.th.stuck_after + EPS
 
     @staticmethod
     def _top(allowed: list[tuple[float, float, Blame]]) -> tuple[Blame, ...]:

@@ -292,7 +292,8 @@ class Holds:
         stream not yet under way (once per AB: docs/rules.md 7.6 (1))."""
         if node.id not in self._answer_held:
             self._answer_held.add(node.id)
-            self._log.ab(DecisionKind.HOLD, Rule.ANSWERING, node, f"{by.name} answers the user")
+            self._log.ab(DecisionKind.HOLD, Rule.ANSWERING, node,
+                         f"while {by.name} answers the user")
             self._log.tell(node.app.name, "held", by=by.name, rule=Rule.ANSWERING.value)
 
     def cancelled(self, node: Node) -> None:

@@ -1,0 +1,256 @@
+"""The judge's reading of docs/rules.md 7.6 and the amended section 8, one test per
+point: talking unfaced over the words, a reaction to the user's own action not rationed
+by the wait share, the user's cut ending an exchange's protection, a turn to the user
+that may cut its own application's sweep, streams held while the user is answered, and
+ignored speech that the user's own later words withdrew. Each trace is written by hand
+(:class:`tests.test_judge.Trace`), and each test fails when the judge's reading of its
+point is taken out (checked once by taking it out)."""
+
+from __future__ import annotations
+
+from prima.judge import Report
+from tests.test_judge import Trace, counts
+
+WHEELS = ("human-detection", "localization", "locomotion")
+
+
+# ---------------------------------------------------------------- talking unfaced
+
+def _talking(offs: list[tuple[float, float]]) -> Report:
+    """The EA speaks from 1 to 5 s, faced at its start; the user is at ``offs`` (time,
+    degrees off the robot's heading) on pose lines meanwhile."""
+    import math
+
+    tr = Trace()
+    tr.speak(1.0, "ea", 1, 1, "This panel shows research points of our laboratory.", lasts=4.0)
+    end = tr.rows.pop()
+    for t, off in offs:
+        rad = math.radians(off)
+        tr.user = {"x": math.cos(rad), "y": math.sin(rad), "heading": 180.0,
+                   "detectable": True}
+        tr.pose(t)
+    tr.rows.append(end)
+    tr.sort()
+    return tr.judge()
+
+
+def test_the_user_off_to_the_side_for_over_a_second_while_the_words_run_is_unfaced() -> None:
+    report = _talking([(2.0, 0.0), (2.5, 60.0), (3.0, 70.0), (3.5, 70.0), (4.0, 0.0)])
+    assert counts(report) == {"unfaced": 1}
+    (u,) = report.of("unfaced")
+    assert (u.t, u.during, u.off) == (1.0, 1.5, 70.0)
+
+
+def test_the_user_off_for_a_second_or_less_while_the_words_run_is_not() -> None:
+    report = _talking([(2.0, 0.0), (2.5, 60.0), (3.0, 70.0), (3.5, 0.0)])
+    assert counts(report) == {}
+
+
+def test_the_user_off_only_after_the_words_is_not() -> None:
+    report = _talking([(2.0, 0.0), (5.5, 90.0), (7.0, 90.0)])
+    assert counts(report) == {}
+
+
+# ---------------------------------------------------------------- the user's cut (7.6 (5))
+
+def _reply_cut_by_the_user(taker_goes_first: bool = True) -> Report:
+    """The EA asks; "No." at 3.0; its reply ("O.K. Take your time.", 2 s) starts at once.
+    At 3.5 the user asks the FA something over it: it stops at 3.7, the FA answers
+    (3.7-5.7), then the reply is said again (5.7-7.7)."""
+    tr = Trace()
+    tr.ask(0.0, "ea", 1, 1, "Shall we go on?", "No.", at=3.0)
+    tr.request(3.0, "ea", 2, 2, text="O.K. Take your time.", reason="end-event", before=1)
+    tr.start(3.0, "ea", 2, 2, text="O.K. Take your time.", cuttable=True, words=(3.0, 5.0))
+    tr.say(3.5, "Where is the toilet?")
+    tr.line(3.5, "event", text="speech", detail={"words": "Where is the toilet?"})
+    tr.line(3.5, "hear", app="fa", text="'Where is the toilet?': fa takes it",
+            reason="stream-runs")
+    tr.line(3.5, "interrupt", app="ea", ab=2, tree=0, command="Speak",
+            text="as the user spoke over it", reason="barge-in", devices=["speaker"],
+            detail={"command_id": 2})
+    tr.request(3.5, "fa", 4, 3, tree=1, text="Next to the door.", reactive=True)
+    tr.end(3.7, "ea", 2, 2, text="O.K. Take your time.", reason="barge-in",
+           words=(3.0, 3.7), result="interrupted=True, spoken=O.K., unspoken=Take your time.")
+    tr.request(3.7, "ea", 3, 2, text="O.K. Take your time.", reason="restart", before=2)
+    first, then = ((3.7, 5.7), (5.7, 7.7)) if taker_goes_first else ((5.7, 7.7), (3.7, 5.7))
+    tr.start(first[0], "fa", 4, 3, tree=1, text="Next to the door.", words=first,
+             reason="user-first")
+    tr.end(first[1], "fa", 4, 3, tree=1, text="Next to the door.", words=first)
+    tr.start(then[0], "ea", 3, 2, text="O.K. Take your time.", words=then, reason="restart")
+    tr.end(then[1], "ea", 3, 2, text="O.K. Take your time.", words=then)
+    tr.sort()
+    return tr.judge()
+
+
+def test_what_the_users_cut_starts_goes_first_the_reply_is_not_late_nor_split() -> None:
+    """docs/rules.md 7.6 (5): the user's cut ends the exchange's protection: the FA's
+    answer to the user's words goes first; the delay counts neither as the reply's
+    lateness nor as a split."""
+    report = _reply_cut_by_the_user()
+    assert counts(report) == {}
+    reply = next(r for r in report.reactions if r.app == "ea")
+    assert reply.first_utterance == 5.7 and not reply.late
+
+
+def test_the_users_words_still_answered_at_once_when_the_reply_goes_on_first() -> None:
+    """The other way round, the FA's answer to the user's words waits for the reply said
+    again: it is late (what the user's cut starts goes first)."""
+    report = _reply_cut_by_the_user(taker_goes_first=False)
+    assert counts(report).get("late") == 1
+    (late,) = report.of("late")
+    assert late.app == "fa"
+
+
+# ---------------------------------------------------------------- the wait share (7.6 (4))
+
+def _touched_while_demoted(words_before: bool) -> Report:
+    """The FA lost its precedence at 1.0. The user touches the robot at 2.0; the EA's
+    next words (not a reaction) take the speaker then, and the FA's "Hee-hee!" comes
+    at 5.0, after them. With ``words_before``, the FA's reaction said its first words
+    at once (2.0-2.5) and its second words are the ones that wait."""
+    tr = Trace()
+    tr.line(1.0, "budget", app="fa", reason="wait-share",
+            text="kept other applications waiting 2 s within 60 s: it loses its precedence "
+                 "until t=61 s")
+    tr.touch(2.0)
+    if words_before:
+        tr.request(2.0, "fa", 2, 2, tree=1, text="Oh!", reactive=True)
+        tr.start(2.0, "fa", 2, 2, tree=1, text="Oh!", words=(2.0, 2.5))
+        tr.end(2.5, "fa", 2, 2, tree=1, text="Oh!", words=(2.0, 2.5))
+        tr.request(2.0, "fa", 3, 3, tree=1, text="Hee-hee!", reason="after-latest", before=2)
+    else:
+        tr.request(2.0, "fa", 3, 3, tree=1, text="Hee-hee!", reactive=True)
+    tr.speak(2.5, "ea", 1, 1, "This panel shows research points.", lasts=2.5)
+    tr.start(5.0, "fa", 3, 3, tree=1, text="Hee-hee!", words=(5.0, 6.0))
+    tr.end(6.0, "fa", 3, 3, tree=1, text="Hee-hee!", words=(5.0, 6.0))
+    tr.sort()
+    return tr.judge()
+
+
+def test_a_reaction_to_the_user_is_not_excused_by_its_lost_precedence() -> None:
+    """docs/rules.md 7.6 (4): before its first words, a reaction to the user's own action
+    ranks before its application's lost precedence: waiting for another application's
+    words that came after the touch is late."""
+    report = _touched_while_demoted(words_before=False)
+    assert counts(report) == {"late": 1}
+
+
+def test_after_its_first_words_the_lost_precedence_excuses_it_again() -> None:
+    report = _touched_while_demoted(words_before=True)
+    assert counts(report) == {}
+
+
+# ---------------------------------------------------------------- ignored speech (section 8)
+
+def _withdrawn(stop_at: float) -> Report:
+    """The FA plays a tune (the speaker, uncut) from 0.5 to 4.0. The user asks the EA
+    "Where is the toilet?" at 1.0: its answer waits for the speaker. At ``stop_at`` the
+    user says "Stop." to the EA, which drops the answer still to come (asap) and says
+    "All right." once the speaker is free."""
+    tr = Trace()
+    tr.request(0.5, "fa", 1, 1, command="PlayTune")
+    tr.start(0.5, "fa", 1, 1, command="PlayTune")
+    tr.end(4.0, "fa", 1, 1, command="PlayTune")
+    for t, words, ab, cid, text in ((1.0, "Where is the toilet?", 2, 2, "Next to the door."),
+                                    (stop_at, "Stop.", 3, 3, "All right.")):
+        tr.say(t, words)
+        tr.line(t, "event", text="speech", detail={"words": words})
+        tr.line(t, "hear", app="ea", text=f"{words!r}: ea takes it", reason="stream-runs")
+        if cid == 3:
+            tr.line(t, "cancel", app="ea", ab=2, tree=1, command="Speak", reason="asap",
+                    detail={"command_id": 2})
+        tr.request(t, "ea", ab, cid, tree=cid - 1, text=text, reactive=True,
+                   reason="asap" if cid == 3 else "new-tree")
+    tr.start(4.0, "ea", 3, 3, tree=2, text="All right.", words=(4.0, 4.5))
+    tr.end(4.5, "ea", 3, 3, tree=2, text="All right.", words=(4.0, 4.5))
+    tr.pose(12.0)
+    tr.sort()
+    return tr.judge()
+
+
+def test_words_the_users_own_later_words_withdrew_are_not_ignored() -> None:
+    """Section 8: "Stop." at 2.0 cancelled the answer to "Where is the toilet?" before it
+    was due (the speaker was rightly held to 4.0): no speech was ignored."""
+    assert counts(_withdrawn(2.0)) == {}
+
+
+def test_words_withdrawn_only_after_their_answer_was_due_were_ignored() -> None:
+    """The answer to "Where is the toilet?" was due at 5.0 (1 s after the speaker was
+    free); "Stop." came at 6.0: it was ignored meanwhile."""
+    report = _withdrawn(6.0)
+    assert counts(report).get("ignored") == 1
+
+
+# ---------------------------------------------------------------- face first (7.6 (3))
+
+def _turn_over_own_sweep(cut: bool) -> Report:
+    """The FA sweeps the room for its user (a search, cuttable, 0-3 s). The user touches
+    the robot at 1.0, off to its side: the FA's answer waits for a turn to the user put
+    before it. With ``cut``, the turn cuts the sweep at once (1.02); else it waits for
+    the sweep's end."""
+    tr = Trace()
+    tr.request(0.0, "fa", 1, 1, command="ActiveSensingHuman", devices=WHEELS)
+    tr.start(0.0, "fa", 1, 1, command="ActiveSensingHuman", devices=WHEELS, cuttable=True)
+    tr.touch(1.0)
+    tr.request(1.0, "fa", 2, 2, tree=1, text="Hee-hee!", reactive=True)
+    tr.request(1.0, "fa", 3, 3, tree=1, command="FaceHuman", reason="connect-channel",
+               devices=("human-detection", "locomotion"), precedes=2)
+    swept = 1.02 if cut else 3.0
+    if cut:
+        tr.line(1.0, "interrupt", app="fa", ab=1, tree=0, command="ActiveSensingHuman",
+                text="for fa's reaction (AB3)", reason="interrupt", devices=list(WHEELS),
+                detail={"command_id": 1})
+    tr.end(swept, "fa", 1, 1, command="ActiveSensingHuman", devices=WHEELS,
+           reason="interrupt" if cut else "completed")
+    tr.start(swept, "fa", 3, 3, tree=1, command="FaceHuman", reason="connect-channel",
+             devices=("human-detection", "locomotion"))
+    tr.end(swept + 1.0, "fa", 3, 3, tree=1, command="FaceHuman",
+           devices=("human-detection", "locomotion"))
+    said = (swept + 1.0, swept + 2.0)
+    tr.start(said[0], "fa", 2, 2, tree=1, text="Hee-hee!", words=said)
+    tr.end(said[1], "fa", 2, 2, tree=1, text="Hee-hee!", words=said)
+    tr.sort()
+    return tr.judge()
+
+
+def test_a_turn_to_the_user_cuts_its_own_apps_sweep() -> None:
+    """docs/rules.md 7.6 (1) and (3): the touch's turn to the user may cut the FA's own
+    sweep: it is on time when it does, late when it waits for the sweep."""
+    assert counts(_turn_over_own_sweep(cut=True)) == {}
+    report = _turn_over_own_sweep(cut=False)
+    assert counts(report) == {"late": 1}
+    (late,) = report.of("late")
+    assert late.took is not None and late.took.command == "ActiveSensingHuman"
+
+
+# ---------------------------------------------------------------- held while answering
+
+def _held_while_the_user_is_answered(until: float) -> Report:
+    """The FA nods (0-1.2 s, uncut); a message for the EA at 0.5: its answer, a wave,
+    waits for the arm. At 1.0 the user touches the robot and the FA answers (1.0-3.0):
+    the EA's wave is held meanwhile (7.6 (1)) and starts at ``until``."""
+    arm = ("arm", "neck")
+    tr = Trace()
+    tr.request(0.0, "fa", 1, 1, command="Gesture", devices=arm)
+    tr.start(0.0, "fa", 1, 1, command="Gesture", devices=arm)
+    tr.end(1.2, "fa", 1, 1, command="Gesture", devices=arm)
+    tr.event(0.5, "message")
+    tr.request(0.5, "ea", 2, 2, tree=1, command="Gesture", reactive=True, devices=arm)
+    tr.touch(1.0)
+    tr.request(1.0, "fa", 3, 3, tree=2, text="Hee-hee! That tickles.", reactive=True)
+    tr.start(1.0, "fa", 3, 3, tree=2, text="Hee-hee! That tickles.", words=(1.0, 3.0))
+    tr.end(3.0, "fa", 3, 3, tree=2, text="Hee-hee! That tickles.", words=(1.0, 3.0))
+    tr.line(1.2, "hold", app="ea", ab=2, tree=1, command="Gesture",
+            text="while fa answers the user", reason="answering", devices=list(arm))
+    tr.start(until, "ea", 2, 2, tree=1, command="Gesture", devices=arm)
+    tr.end(until + 1.0, "ea", 2, 2, tree=1, command="Gesture", devices=arm)
+    tr.sort()
+    return tr.judge()
+
+
+def test_a_stream_held_while_the_user_is_answered_waits_rightly_until_the_words() -> None:
+    """docs/rules.md 7.6 (1): the EA's reaction to the message, there before the touch,
+    is held while the FA answers the user, until its words end (3.0): on time. Held
+    past them (to 5.0), it is late."""
+    assert counts(_held_while_the_user_is_answered(3.0)) == {}
+    assert counts(_held_while_the_user_is_answered(5.0)) == {"late": 1}
