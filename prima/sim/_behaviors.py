@@ -205,20 +205,33 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 # ---- turning --------------------------------------------------------------------------------
 
 FACE_AIM = math.radians(5.0)
-"""Face Human turns again, toward where the user is now, while it is this far off them
-(the user walked on while it turned), at most ``FACE_TRIES`` times in all."""
-FACE_TRIES = 3
+"""Face Human turns until the robot is this close to facing its user."""
+FACE_GAIN = 6.0
+"""How fast Face Human turns after a user who walks (rad/s per rad off them): a user
+who walks round the robot stays within a few degrees (a walk round at 1 m, about
+25 degrees a second, is followed within about 5)."""
+FACE_WITHIN = 4.0
+"""Seconds Face Human follows a user who keeps walking round the robot, at most."""
 
 
 def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    world = sim.world
-    seen, distance = world.sees_user(sim.kernel.tick, any_direction=True)
+    """Turn to the user: while the user stands, one turn toward them; while they walk
+    (or walked on while it turned), after them, the turning rate set every tenth of a
+    second from how far off they are, until the robot faces them (within
+    ``FACE_AIM``) or ``FACE_WITHIN`` has passed."""
+    world, k = sim.world, sim.kernel
+    seen, distance = world.sees_user(k.tick, any_direction=True)
     if not seen:
         return {"found": False}, True
-    for _ in range(FACE_TRIES):
+    if not world.human_moving:
         yield from _turn(sim, world.user_bearing())
-        if abs(world.user_bearing()) <= FACE_AIM:
-            break
+    end = k.tick + sim.ticks(FACE_WITHIN)
+    period = k.hz // 10
+    while abs(world.user_bearing()) > FACE_AIM and k.tick < end:
+        world.command(0.0, FACE_GAIN * world.user_bearing())
+        yield sleep(period)
+    if world.mode:
+        yield from _stop(sim)
     return {"found": True, "distance": round(distance, 3), **_pose(sim)}, True
 
 

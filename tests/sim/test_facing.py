@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from prima.mediator import Outcome
 from prima.sim import CommandRunner, Pose, Simulator, UserScript, WorldMap
 from tests.sim.helpers import call, walk
 
@@ -35,3 +36,35 @@ def test_a_user_who_stays_in_front_is_never_told() -> None:
 
 def test_going_off_after_the_words_is_not_told() -> None:
     assert _talking((0.0, 1.5), at=6.0) == []
+
+
+def _facing_a_walker(walks: bool) -> tuple[float, float]:
+    """The robot faces east; its user, 1 m north of it, walks west at 0.4 m/s (or
+    stands): Face Human. How far off the user is when it ends (degrees), and when."""
+    import math
+
+    actions = (walk(0.0, -3.0, 1.0),) if walks else ()
+    sim = Simulator(WorldMap("open"), robot=Pose(0, 0, 0),
+                    user=UserScript(Pose(0, 1.0, 180), actions=actions, speed=0.4))
+    runner = CommandRunner(sim)
+    ended: list[tuple[float, float]] = []
+    finished = sim.finished
+
+    def noted(ab: int, outcome: Outcome) -> None:
+        ended.append((math.degrees(abs(sim.world.user_bearing())), sim.now()))
+        finished(ab, outcome)
+
+    sim.finished = noted
+    runner.queue(call("FaceHuman"))
+    runner.run(6.0)
+    (found,) = ended
+    return found
+
+
+def test_face_human_follows_a_user_who_walks_round_the_robot() -> None:
+    """Face Human ends facing its user (within 5 degrees as it stops, a few more once it
+    has stopped after one who walks on), whether they stand or walk."""
+    off, _t = _facing_a_walker(walks=False)
+    assert off <= 5.0
+    off, t = _facing_a_walker(walks=True)
+    assert off <= 10.0 and t < 4.0
