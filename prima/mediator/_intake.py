@@ -217,9 +217,8 @@ class Intake:
             # nothing is restored of where it was suspended (restore-state)
             tree.pose = None
         # before its nodes are filed, so that they rank as its reaction
-        if (reactive or reaction) and reactive_allowed and wm.react(
-                tree, seq, user and self._user_first, now + self._answer_hold):
-            self._holds.reranked(tree)
+        if reactive or reaction:
+            self._react(app, tree, seq, reactive, reactive_allowed, user, now)
         turns = self._turns and face_user
         # (docs/rules.md 7.4) words that follow the user's answer to the app's own Q&A
         reply = self._exchange and rule is _END_EVENT and parent is not None and any(
@@ -247,6 +246,19 @@ class Intake:
             wm.enter_waiting(root, parent_finished)
         # (one call: its AB's ``command_ids`` are ``(cid,)``)
         return root.command_ids if one else tuple([c.id for c in cmds]), cancelled
+
+    def _react(self, app: App, tree: Tree, seq: int, reactive: bool, allowed: bool,
+               user: bool, now: float) -> None:
+        """A request made while handling a reactive event (``reactive``: the handling's
+        first): its tree takes over as that reaction (docs/rules.md 7.1), unless it only
+        continues its tree (``allowed`` false: it follows an end). The handling's later
+        requests are the same reaction as its first."""
+        if reactive:
+            app.reacting = seq
+        if allowed and self._wm.react(tree, seq if reactive or not app.reacting
+                                      else app.reacting, user and self._user_first,
+                                      now + self._answer_hold):
+            self._holds.reranked(tree)
 
     def _chain(self, app: App, tree: Tree, cmds: tuple[Command, ...], specs: Specs,
                parent: Node | None, reactive: bool, turns: bool, seq: int,

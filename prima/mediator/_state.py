@@ -51,7 +51,8 @@ class App:
     """One registration of an application."""
 
     __slots__ = ("name", "kind", "listener", "alive", "order", "latest", "active",
-                 "idle_since", "trees", "trees_on", "live", "demoted", "budgets", "fresh")
+                 "idle_since", "trees", "trees_on", "live", "demoted", "budgets", "fresh",
+                 "reacting")
 
     def __init__(self, name: str, kind: AppKind, listener: AppListener, order: int,
                  budgets: Budgets) -> None:
@@ -77,6 +78,10 @@ class App:
         """Its ABs in working memory (pending, waiting or running): the waiting budget."""
         self.demoted = False
         """It kept others waiting beyond its wait-share budget: it has lost its precedence."""
+        self.reacting = 0
+        """The sequence number of its latest reaction's first request (``reactive``): the
+        requests it makes later in the same handling (``reaction``) are that same reaction
+        (docs/rules.md 7.1), not later ones."""
         self.fresh = False
         """It is handling words of the user's it took (docs/rules.md 7.5): its first request
         after latest starts a stream of its own, which goes before the stream it talked

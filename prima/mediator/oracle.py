@@ -499,6 +499,11 @@ class Oracle:
         """First Commands of the requests made while handling a reactive event."""
         self._users: set[CommandId] = set()
         """... of those, the ones handling the user's own action (7.1)."""
+        self._continuing: set[CommandId] = set()
+        """... of those, the ones a handling asked for after its first request: the same
+        reaction as that one (7.1)."""
+        self._reacting: dict[str, int] = {}
+        """App -> the order of its latest reaction's first request."""
         self._answering: set[CommandId] = set()
         """First Commands of the requests made while handling a Q&A's answer (7.4)."""
         self._reply_commands: dict[CommandId, AbId] = {}
@@ -541,15 +546,19 @@ class Oracle:
 
     # ------------------------------------------------------------ the app side
     def requested(self, app: str, ids: Sequence[CommandId], reaction: bool = False,
-                  user: bool = False, answer: bool = False) -> None:
+                  user: bool = False, answer: bool = False, first: bool = True) -> None:
         """``app`` requested the Commands ``ids``; ``reaction``: while handling a
         reactive event (the caller set ``Request.reactive`` or ``reaction``), ``user``:
-        the user's own action (``Request.user``); ``answer``: ``follows`` names a Q&A the
-        user answered (its reply, if words, belongs to the exchange: 7.4)."""
+        the user's own action (``Request.user``), ``first``: the handling's first request
+        (``Request.reactive``: a later one is the same reaction, 7.1); ``answer``:
+        ``follows`` names a Q&A the user answered (its reply, if words, belongs to the
+        exchange: 7.4)."""
         for c in ids:
             self._requested[c] = app
         if reaction and ids:
             self._reactions.add(ids[0])
+            if not first:
+                self._continuing.add(ids[0])
             if user:
                 self._users.add(ids[0])
         if answer and ids:
@@ -636,9 +645,18 @@ class Oracle:
         for cid, c in zip(d.command_ids, d.calls, strict=False):
             if self._catalog[c.command].spoken(c.args):
                 self.streams.speaks.add(cid)
+        if d.command_id in self._reactions and d.command_id not in self._continuing \
+                and d.app is not None:
+            self._reacting[d.app] = self._requests
         if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
                 and d.tree is not None):
-            self.streams.reaction[d.tree] = self._requests
+            order = self._requests
+            if d.command_id in self._continuing and d.app in self._reacting:
+                order = self._reacting[d.app]  # (the same reaction as its first request)
+            if self.streams.reaction.get(d.tree, -1) >= order:
+                self._reply(d)
+                return  # (already that reaction, or a later one)
+            self.streams.reaction[d.tree] = order
             if d.command_id in self._users:
                 self.streams.user.add(d.tree)
                 self.streams.user_since[d.tree] = d.t

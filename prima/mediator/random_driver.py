@@ -533,6 +533,7 @@ class _Run:
         """Submit (errors go to the caller: inside a handler, they fail the app)."""
         self.oracle.requested(request.app, self.m.submit(request),
                               reaction=request.reactive or request.reaction,
+                              first=request.reactive,
                               user=request.user, answer=request.follows in self.answered)
 
     def guarded(self, request: Request) -> None:

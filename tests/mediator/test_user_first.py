@@ -283,3 +283,31 @@ def test_the_robot_keeps_facing_the_user_while_its_words_run() -> None:
         turns = [(d.t, d.app, d.rule) for d in h.starts() if d.command == "FaceHuman"]
         assert turns == ([] if drives else [(1.0, "ea", Rule.CONNECT_CHANNEL)]), drives
         assert not h.kinds(DecisionKind.CANCEL)
+
+
+# ---------------------------------------------------------------- 7.1: one handling
+
+def test_what_one_handling_asks_is_one_reaction_its_first_words_end_its_precedence() -> None:
+    """7.1: the user says "Stop."; the EA's handler says "All right." and, in the same
+    handling, asks its next question (a second request). That is one reaction: once
+    "All right." is said (1.0), it no longer goes before another application's later
+    reaction to a message (0.5), which then goes first, as the latest reaction."""
+    h = Harness(duration={"QA": 3.0, "*": 1.0})
+    m = h.mediator
+
+    def stop(e: Event) -> None:
+        if e.name == "speech":
+            m.submit(Request("ea", (speak("All right."),), reactive=True, reaction=True,
+                             user=True))
+            m.submit(Request("ea", (call("QA", prompt="May I go on?", grammar="g"),),
+                             reaction=True, user=True))
+
+    ea = h.app("ea", AppKind.EA, on_event=stop)
+    ea.listens_for = ("stop",)
+    h.app("fa", AppKind.FA, on_event=lambda e: e.name == "message" and m.submit(Request(
+        "fa", (speak("I've just got a message."),), reactive=True, reaction=True)))
+    m.hear(Event("speech", {"words": "Stop."}))
+    h.at(0.5, lambda: m.post(Event("message")))
+    h.run(until=10.0)
+    said = [(d.t, d.app) for d in h.starts() if d.command in ("Speak", "QA")]
+    assert said == [(0.0, "ea"), (1.0, "fa"), (2.0, "ea")]
