@@ -1049,11 +1049,13 @@ def test_an_app_that_lost_its_precedence_waits_for_anything() -> None:
 
 # ------------------------------------------------------------------ reactions never heard
 
-def _message_cut_by_a_touch(*, said_again: bool) -> Report:
+def _message_cut_by_a_touch(*, said_again: bool, dropped: bool = False,
+                            ends: float = 12.0) -> Report:
     """fa says a message (a reaction, 10 s to 12.5 s); at 10.5 s the user touches the
     robot and ea's reaction cuts it (at 10.6 s) and speaks for 1 s. With
-    ``said_again``, fa's message restarts at 11.6 s; otherwise its application dropped
-    it. The trace ends at 12 s (before fa's words were free for 1.2 s)."""
+    ``said_again``, fa's message restarts at 11.6 s; otherwise it waits to be said
+    again until the trace ends at ``ends`` (12 s: before fa's words were free for
+    1.2 s), or, ``dropped``, its request said to drop it."""
     message = "A message from your host."
     tr = Trace()
     tr.event(10.0, "message")
@@ -1063,25 +1065,36 @@ def _message_cut_by_a_touch(*, said_again: bool) -> Report:
     tr.request(10.5, "ea", 2, 2, tree=1, text="Yes?", reactive=True)
     tr.interrupt(10.5, "fa", 1, 1, by="ea", by_ab=2)
     tr.end(10.6, "fa", 1, 1, reason="interrupt", words=(10.0, 12.5), text=message)
-    if said_again:
+    if dropped:
+        tr.rows[-1]["detail"]["interrupt"] = "dropped"
+    else:
         tr.request(10.6, "fa", 3, 1, text=message, reactive=True, reason="restart", before=1)
     tr.speak(10.6, "ea", 2, 2, "Yes?", tree=1, request=False)
     if said_again:
         tr.start(11.6, "fa", 3, 1, text=message, reason="restart", words=(11.6, 14.1))
         tr.end(14.1, "fa", 3, 1, words=(11.6, 14.1), text=message)
     else:
-        tr.pose(12.0)
+        tr.pose(ends)
     return tr.judge()
 
 
-def test_a_reaction_cut_and_never_said_again_is_unheard() -> None:
-    report = _message_cut_by_a_touch(said_again=False)
+@pytest.mark.parametrize("dropped, ends, unheard", [
+    (False, 12.0, False),   # (still to be said again when the trace ends: not yet)
+    (False, 80.0, True),    # (still waiting 69 s after the cut: more than anything may)
+    (True, 12.0, False),    # (its request said to drop it: its application's choice)
+])
+def test_a_reaction_cut_and_never_said_again_is_unheard_once_overdue(
+        dropped: bool, ends: float, unheard: bool) -> None:
+    report = _message_cut_by_a_touch(said_again=False, dropped=dropped, ends=ends)
     fa, ea = report.reactions
-    assert (fa.unheard, fa.first_utterance, fa.late) == (True, None, False)
+    assert (fa.unheard, fa.first_utterance) == (unheard, None)
     assert not ea.unheard
-    assert counts(report) == {"unheard": 1}
-    assert report.seqs("unheard") == [fa.seq]
-    assert "its words were never heard whole" in format_table([report])
+    if unheard:
+        assert counts(report) == {"unheard": 1, "late": 1}
+        assert report.seqs("unheard") == [fa.seq]
+        assert "its words were never heard whole" in format_table([report])
+    else:
+        assert counts(report) == {}
 
 
 def test_a_reaction_cut_counts_its_words_once_said_again_whole() -> None:

@@ -479,18 +479,22 @@ class _Analyst:
         return self.end
 
     def _unheard(self, r: ReactionState, spoken: Sequence[Ab]) -> bool:
-        """Its words were never heard whole: cut and never said again, or never said
-        long after the event; not if its own application cancelled them, nor if the
-        user spoke over them and its request said to drop them then (docs/rules.md
-        7.6 (5): words the user cut still count if they were to be said again)."""
+        """Its words were never heard whole: cut and said again but not whole, cut and
+        not said again long after (still waiting for their turn when the trace ended
+        is not unheard yet), or never said long after the event; not if its own
+        application cancelled them, nor if they were cut and its request said to drop
+        them then (docs/rules.md 7.6 (5): words the user cut still count if they were to
+        be said again)."""
         words_cmds = {cid for ab in spoken for cid in ab.ids} or set(r.commands[:1])
         if words_cmds <= self.ctx.cancelled.keys():
             return False
-        if any(ab.end_reason == "interrupt" for ab in spoken):
-            return True
-        cut = [ab for ab in spoken if ab.end_reason == "barge-in"]
+        cut = [ab for ab in spoken if ab.end_reason in ("interrupt", "barge-in")]
         if cut and any(ab.dropped for ab in cut):
-            return False  # (the user spoke over them, and they were dropped)
+            return False  # (cut, and their request said to drop them then)
+        if any(ab.end_reason == "interrupt" and self.ctx.restarted.get(ab.id) in self.ctx.abs
+               for ab in cut):
+            return True  # (cut for another reaction, and said again but not whole)
+        # never said again yet: unheard once they waited longer than anything may
         since = max((ab.until(self.end) for ab in cut), default=r.t)
         return self.end - since > self.th.stuck_after + EPS
 
