@@ -254,3 +254,24 @@ def test_a_stream_held_while_the_user_is_answered_waits_rightly_until_the_words(
     past them (to 5.0), it is late."""
     assert counts(_held_while_the_user_is_answered(3.0)) == {}
     assert counts(_held_while_the_user_is_answered(5.0)) == {"late": 1}
+
+
+def test_what_started_while_an_app_had_lost_its_precedence_is_waited_for_as_running() -> None:
+    """Section 8, with the wait share: fa lost its precedence (9-15 s); ea's uncut
+    utterance started meanwhile (10-17 s), rightly. When fa regains its precedence, ea's
+    words are as words running at the event: fa's message waits for them rightly."""
+    tr = Trace()
+    tr.line(9.0, "budget", app="fa", reason="wait-share",
+            text="kept other applications waiting 5 s within 30 s: it loses its precedence "
+                 "until t=15 s")
+    tr.event(10.0, "message")
+    tr.request(10.0, "fa", 1, 1, text="A message.", reactive=True)
+    tr.speak(10.0, "ea", 2, 2, "The exhibition closes at six, and the cafe at five.",
+             tree=1, lasts=7.0)
+    tr.line(15.0, "budget", app="fa", text="regains its precedence", reason="wait-share")
+    tr.speak(17.0, "fa", 1, 1, "A message.", request=False)
+    tr.sort()
+    report = tr.judge()
+    assert counts(report) == {}
+    (r,) = report.reactions
+    assert r.residual == 7.0

@@ -283,9 +283,15 @@ class _Analyst:
                 allowed.append((y.start, y_end, self._blame(y, "its own")))
                 continue
             running = y.start < t0 - EPS or (abs(y.start - t0) <= EPS and y.seq < seq0)
-            if running:
-                why = self.may_cut(y, r, low, ready, turn)
-                stop = self.boundary(y, ready)
+            # (one that started while the reacting application had lost its precedence
+            # started rightly: at its regaining, it is as one running at the event)
+            regained = None if running else self._regained(r, y.start)
+            if regained is not None and y_end <= regained + EPS:
+                continue  # (over before it regained its precedence: that wait covers it)
+            if running or regained is not None:
+                when = ready if regained is None else max(ready, regained)
+                why = self.may_cut(y, r, low, when, turn)
+                stop = self.boundary(y, when)
                 if not why and y.listens and y.words is not None \
                         and stop >= y.words[1] - EPS:
                     why = "uncut: a Q&A on the last word of its prompt, then listening"
@@ -317,6 +323,16 @@ class _Analyst:
                         r.app, None, "", "", "it had lost its precedence (its wait share)",
                         hi)))
         return allowed, took
+
+    def _regained(self, r: ReactionState, t: float) -> float | None:
+        """When ``r``'s application regained its precedence, if it had lost it at ``t``
+        (None if it had not, or ``r`` was not rationed then: 7.6 (4))."""
+        if r.user and self.user_until(r) > t + EPS:
+            return None
+        for lo, hi in self.ctx.demoted.get(r.app, ()):
+            if lo - EPS <= t < hi - EPS:
+                return hi
+        return None
 
     def ready(self, y: Ab) -> float:
         """When ``y`` was ready to start, as far as the trace tells: when the AB before it
