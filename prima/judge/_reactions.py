@@ -136,10 +136,18 @@ class _Analyst:
         return (0 if user else 1, -r.order)
 
     def tree_key(self, tree: int, t: float) -> tuple[int, float]:
+        """How a tree ranks at ``t`` as the reactions that took it over say: as the latest
+        one, and first as the user's own action while a reaction to it whose first words
+        are still ahead is one of them (a later reaction to a perception that joins it
+        leaves it so, 7.1)."""
         taken = [r for r in self.ctx.tree_reactions.get(tree, ()) if r.t <= t + EPS]
         if not taken:
             return (1, math.inf)
-        return self.reaction_key(max(taken, key=lambda r: r.order), t)
+        latest = self.reaction_key(max(taken, key=lambda r: r.order), t)
+        if latest[0] and any(r.user and not r.answer and self.user_until(r) > t + EPS
+                             for r in taken):
+            return (0, latest[1])
+        return latest
 
     def replies_to_answer(self, ab: Ab) -> bool:
         """``ab`` says (or turns or returns before) the words that reply to an answer
@@ -460,6 +468,11 @@ class _Analyst:
         (a return put before the words, a restart) has its devices rightly held."""
         t0 = first.start
         t1 = heard.start if heard is not None else self.end
+        if heard is None:  # (what it had still to say, its own app cancelled: from then)
+            gone = [self.ctx.cancelled.get(cid) for cid in r.commands
+                    if cid not in self.ctx.cmd_ab]
+            if gone and all(g is not None for g in gone):
+                t1 = min(t1, max(g for g in gone if g is not None))
         if t1 <= t0 + EPS:
             return 0.0
         target = heard or (spoken[0] if spoken else None)

@@ -491,7 +491,7 @@ class Mediator:
         first utterance in full (docs/rules.md 7.1); the robot faces the user for the ABs
         after a turn to the user, whatever happened before it."""
         tree = node.tree
-        if tree.user and node.seq >= (tree.reaction or 0) and node.speaks:
+        if tree.user and node.seq >= tree.user_since and node.speaks:
             self._wm.heard(tree)
         if node.commands[0].internal is Rule.CONNECT_CHANNEL:
             for child in children:

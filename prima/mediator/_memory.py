@@ -436,15 +436,14 @@ class WorkingMemory:
         before = tree.reaction
         if before is None or before < reaction:
             tree.reaction = reaction
-            if tree.user and not user:
-                self.answered = True
-            tree.user = user
+            # (a later reaction to a perception that joins a reaction to the user's own
+            # action whose first words are ahead leaves it that: the user's words first)
             if user:
+                tree.user = True
+                tree.user_since = reaction
                 tree.answers_until = answers_until
                 tree.answers_from = self._next_tree  # (what came into being before it)
                 self.answering[tree.id] = tree
-            elif self.answering.pop(tree.id, None) is not None:
-                self.answered = True
             if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
                 self._rerank(tree)
                 if before is None and self.keep_next:  # its next ABs keep their devices

@@ -125,7 +125,7 @@ class Tree:
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
                  "user", "started", "pose", "devices", "parked", "keys", "suspensions",
-                 "talks", "answers_until", "answers_from")
+                 "talks", "answers_until", "answers_from", "user_since")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -153,7 +153,11 @@ class Tree:
         self.user = False
         """A reaction to the user's own action (a touch, heard speech) that has not yet
         said its first utterance in full: no later reaction of another application to
-        a perception or network event overtakes it (docs/rules.md 7.1)."""
+        a perception or network event overtakes it (docs/rules.md 7.1); a later reaction
+        to such an event that joins the tree leaves it so until then."""
+        self.user_since = 0
+        """With ``user``: the sequence number of that reaction: its first utterance is
+        the first one of its requests or later ones said in full."""
         self.started = False
         """Some AB of it has started: it is a stream under way, not a new one."""
         self.talks = 0

@@ -115,6 +115,9 @@ class Streams:
     taken_for: dict[AbId, str] = field(default_factory=dict)
     """Restarts of words the user cut for the app that took them -> that app: they wait
     for its reaction (7.5), whose next AB keeps their devices as another app's would."""
+    user_order: dict[TreeId, int] = field(default_factory=dict)
+    """Reactions to the user's own action -> the order of that reaction's first request
+    (its first words are the first of its requests or later ones said whole)."""
     user_since: dict[TreeId, float] = field(default_factory=dict)
     """Reactions to the user's own action -> when they became one (7.6 (1)'s bound)."""
     user_from: dict[TreeId, TreeId] = field(default_factory=dict)
@@ -659,10 +662,11 @@ class Oracle:
             self.streams.reaction[d.tree] = order
             if d.command_id in self._users:
                 self.streams.user.add(d.tree)
+                self.streams.user_order[d.tree] = order
                 self.streams.user_since[d.tree] = d.t
                 self.streams.user_from[d.tree] = self.streams.newest + 1
-            else:
-                self.streams.user.discard(d.tree)
+            # (a later reaction to a perception leaves a reaction to the user whose first
+            # words are ahead one: the user's words first, 7.1)
         self._reply(d)
 
     def _reply(self, d: Decision) -> None:
@@ -695,7 +699,7 @@ class Oracle:
             self.fail(f"t={d.t:g}: AB{ab} ended but was not running")
             return
         if (d.rule is Rule.COMPLETED and d.tree in self.streams.user
-                and self._order.get(d.command_id or 0, 0) >= self.streams.reaction[d.tree]
+                and self._order.get(d.command_id or 0, 0) >= self.streams.user_order[d.tree]
                 and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
             self.streams.user.discard(d.tree)  # the reaction's first words were said in full
             self._heard.append(d)

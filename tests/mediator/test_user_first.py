@@ -311,3 +311,23 @@ def test_what_one_handling_asks_is_one_reaction_its_first_words_end_its_preceden
     h.run(until=10.0)
     said = [(d.t, d.app) for d in h.starts() if d.command in ("Speak", "QA")]
     assert said == [(0.0, "ea"), (1.0, "fa"), (2.0, "ea")]
+
+
+def test_a_later_perception_reaction_joining_an_answer_leaves_it_the_users() -> None:
+    """7.1: the EA answers the user (a wave, then words); before its words, it sees the
+    user and reacts again, in the same stream. That later reaction to a perception does
+    not take away the user's precedence: the EA's words still go before the FA's still
+    later reaction to a message, as the user's own action first."""
+    h = Harness(duration={"Gesture": 1.0, "*": 2.0})
+    m = h.mediator
+    h.app("ea", AppKind.EA, on_event=lambda e: e.name == "human-found" and m.submit(Request(
+        "ea", (speak("Hello again."),), reactive=True, reaction=True)))
+    h.app("fa", AppKind.FA, on_event=lambda e: e.name == "message" and m.submit(Request(
+        "fa", (speak("A message."),), reactive=True, reaction=True)))
+    m.submit(Request("ea", (call("Gesture", name="wave"), speak("The tour starts here.")),
+                     reactive=True, reaction=True, user=True))
+    h.at(0.5, lambda: m.post(Event("human-found")))
+    h.at(0.6, lambda: m.post(Event("message")))
+    h.run(until=10.0)
+    said = [(d.t, str(d.calls[0].args["text"])) for d in h.starts() if d.command == "Speak"]
+    assert said[0] == (1.0, "The tour starts here.")
