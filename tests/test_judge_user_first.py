@@ -9,7 +9,7 @@ point is taken out (checked once by taking it out)."""
 from __future__ import annotations
 
 from prima.judge import Report
-from tests.test_judge import Trace, counts
+from tests.test_judge import TALK, Trace, counts
 
 WHEELS = ("human-detection", "localization", "locomotion")
 
@@ -275,3 +275,30 @@ def test_what_started_while_an_app_had_lost_its_precedence_is_waited_for_as_runn
     assert counts(report) == {}
     (r,) = report.reactions
     assert r.residual == 7.0
+
+
+def test_a_reaction_after_its_own_cut_ab_waits_for_its_restart() -> None:
+    """Rule 3, 7.3 (2): the EA's question, asked after its own search (its latest), waits
+    for it. The user's touch had the search cut for the FA's answer; the search starts
+    again after the FA's reaction, which goes on (the FA follows its user): the trace
+    ends with the restart still waiting. The question waited rightly all along."""
+    wheels = ("human-detection", "locomotion")
+    tr = Trace()
+    tr.request(0.0, "ea", 1, 1, command="ActiveSensingHuman", devices=WHEELS)
+    tr.start(0.0, "ea", 1, 1, command="ActiveSensingHuman", devices=WHEELS, cuttable=True)
+    tr.event(1.0, "human-found")
+    tr.request(1.0, "ea", 3, 3, command="QA", text="May I go on?", reactive=True,
+               reason="after-latest", before=1, devices=TALK)
+    tr.touch(1.5)
+    tr.request(1.5, "fa", 4, 4, tree=1, command="TrackingHuman", reactive=True, devices=wheels)
+    tr.line(1.5, "interrupt", app="ea", ab=1, tree=0, command="ActiveSensingHuman",
+            text="for fa's reaction (AB4)", reason="interrupt", devices=list(WHEELS),
+            detail={"command_id": 1})
+    tr.end(1.6, "ea", 1, 1, command="ActiveSensingHuman", devices=WHEELS, reason="interrupt")
+    tr.request(1.6, "ea", 2, 1, command="ActiveSensingHuman", reason="restart", before=1,
+               devices=WHEELS)
+    tr.start(1.6, "fa", 4, 4, tree=1, command="TrackingHuman", devices=wheels)
+    tr.pose(20.0)
+    tr.sort()
+    report = tr.judge()
+    assert "late" not in counts(report)

@@ -426,7 +426,9 @@ class _Analyst:
         ready = r.t
         behind = self.ctx.abs.get(r.before) if r.before is not None else None
         if behind is not None and behind.app == r.app:  # after its own AB, still to end
-            ready = self._last_of(behind).until(self.end)  # (said again if cut: 7.3 (2))
+            last = self._last_of(behind)  # (said again if cut: 7.3 (2))
+            # (a restart still to start when the trace ends: it waited all along)
+            ready = self.end if last.id in self.ctx.restarted else last.until(self.end)
         allowed, took = self.waits(r, own, frozenset(r.devices), low, r.t, r.seq, t1, ready)
         for extra, t_put, seq_put, turn in put:
             if extra:  # (the turn's wheels count from when the turn was put in line)
@@ -490,7 +492,8 @@ class _Analyst:
 
     def _last_of(self, ab: Ab) -> Ab:
         """The AB that last starts ``ab`` again (a cut AB's restart, and its restart's),
-        or ``ab`` itself."""
+        or ``ab`` itself; one whose own restart never started is still cut and waiting
+        (``ctx.restarted`` names it)."""
         seen = {ab.id}
         while (again := self.ctx.abs.get(self.ctx.restarted.get(ab.id, -1))) is not None \
                 and again.id not in seen:
