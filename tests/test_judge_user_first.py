@@ -302,3 +302,30 @@ def test_a_reaction_after_its_own_cut_ab_waits_for_its_restart() -> None:
     tr.sort()
     report = tr.judge()
     assert "late" not in counts(report)
+
+
+def test_words_said_again_are_about_what_they_were_about() -> None:
+    """A Turn aims the robot (at what the FA will photograph), then its question is
+    about that: not unfaced. The user cuts the question and it is asked again: still
+    about that, still not unfaced."""
+    tr = Trace()
+    tr.request(0.0, "fa", 1, 1, command="Turn", devices=("locomotion",))
+    tr.start(0.0, "fa", 1, 1, command="Turn", devices=("locomotion",))
+    tr.end(1.0, "fa", 1, 1, command="Turn", devices=("locomotion",))
+    tr.user = {"x": 0.0, "y": 1.0, "heading": 270.0, "detectable": True}  # (90 deg off)
+    tr.request(0.0, "fa", 2, 2, command="QA", text="May I take a picture?",
+               reason="after-latest", before=1, devices=TALK)
+    tr.start(1.0, "fa", 2, 2, command="QA", text="May I take a picture?", devices=TALK,
+             words=(1.0, 3.0))
+    tr.line(1.5, "interrupt", app="fa", ab=2, tree=0, command="QA",
+            text="as the user spoke over it", reason="barge-in", devices=list(TALK),
+            detail={"command_id": 2})
+    tr.end(1.6, "fa", 2, 2, command="QA", devices=TALK, reason="barge-in", words=(1.0, 1.6))
+    tr.request(1.6, "fa", 3, 2, command="QA", text="May I take a picture?", reason="restart",
+               before=2, devices=TALK)
+    tr.start(1.6, "fa", 3, 2, command="QA", text="May I take a picture?", devices=TALK,
+             words=(1.6, 3.6), reason="restart")
+    tr.end(6.0, "fa", 3, 2, command="QA", devices=TALK, words=(1.6, 3.6),
+           result="status=timeout")
+    tr.sort()
+    assert "unfaced" not in counts(tr.judge())

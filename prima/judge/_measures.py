@@ -175,11 +175,20 @@ class _Unfaced:
         self.found: list[Unfaced] = []
         self.last_command: dict[int, str] = {}
         self.talking: dict[int, _Words] = {}
+        self.before_of: dict[int, str | None] = {}
+        """A started AB -> the Command that started before it in its stream (what its
+        words may be about); a restart's is the AB's it starts again."""
+        self.restarts: dict[int, int] = {}
+        """A restart -> the cut AB it starts again."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
         ab = row.get("ab")
-        if kind == "start" and isinstance(ab, int):
+        if kind == "request" and row.get("reason") == "restart" and isinstance(ab, int):
+            cut = row.get("before")
+            if isinstance(cut, int):
+                self.restarts[ab] = cut
+        elif kind == "start" and isinstance(ab, int):
             self._started(row, ab, ctx)
         elif kind == "end" and isinstance(ab, int):
             talk = self.talking.get(ab)
@@ -202,6 +211,10 @@ class _Unfaced:
     def _started(self, row: Row, ab: int, ctx: Context) -> None:
         tree = row.get("tree")
         before = self.last_command.get(tree) if isinstance(tree, int) else None
+        cut = self.restarts.pop(ab, None)
+        if cut is not None:  # (said again, its words are about what they were about)
+            before = self.before_of.get(cut, before)
+        self.before_of[ab] = before
         if isinstance(tree, int):
             self.last_command[tree] = str(row.get("command"))
         if not row.get("text") or _about_something_else(row, before) \
