@@ -27,7 +27,7 @@ budget, :mod:`._fairness`) holds nothing with its streams and blocks.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from prima.catalog import Catalog, Priority
 from prima.errors import MediationError
@@ -95,8 +95,11 @@ class Holds:
     """Streams, blocks, the channel rule, parked ABs and their deadlines."""
 
     def __init__(self, apps: Mapping[str, App], wm: WorkingMemory, log: DecisionLog,
-                 catalog: Catalog, clock: Clock) -> None:
+                 catalog: Catalog, clock: Clock, resting: Sequence[Node] = ()) -> None:
         self._apps = apps
+        self._resting = resting
+        """Words a false interruption cut, waiting out the robot's pause to go on: their
+        application is still talking with the user (the channel rule)."""
         self._clock = clock
         self._wm = wm
         self._log = log
@@ -150,13 +153,21 @@ class Holds:
                 or (blk is not None and not blk.expired and blk.tree is tree))
 
     def holder(self, node: Node) -> tuple[Rule, App] | None:
-        """Another app's talk, block or armed stream hold that keeps ``node`` from starting."""
+        """Another app's talk (its words under way, or waiting out the robot's pause after
+        a false interruption), block or armed stream hold that keeps ``node`` from
+        starting."""
         if node.priority is _LOW:
             busy = self._wm.busy
             for d in self._talk:
                 talker = busy.get(d)
                 if talker is not None and talker.app is not node.app:
                     return _KEEP_CHANNEL, talker.app
+            if self._resting:  # (a pause in its words is no end of its talk: 7.5)
+                now = self._clock.now()
+                for n in self._resting:
+                    if n.state is NodeState.WAITING and n.app is not node.app \
+                            and n.not_before > now:
+                        return _KEEP_CHANNEL, n.app
         if not self.opened:
             return None
         for other in self._apps.values():

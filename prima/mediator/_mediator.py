@@ -29,7 +29,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import TracebackType
 
-from prima.catalog import CONNECT_COMMAND, SPEAKER, Catalog, ParamKind
+from prima.catalog import BODY_DEVICE, CONNECT_COMMAND, SPEAKER, Catalog, ParamKind
 from prima.errors import MediationError
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._fairness import Fairness
@@ -183,7 +183,9 @@ class Mediator:
         self._app_order = 0
         self._wm = WorkingMemory(keep_next=config.reactions)
         self._log = DecisionLog(record)
-        self._holds = Holds(self._apps, self._wm, self._log, catalog, clock)
+        self._resting: list[Node] = []
+        """Restarts that wait out the pause after a false interruption (``not_before``)."""
+        self._holds = Holds(self._apps, self._wm, self._log, catalog, clock, self._resting)
         # (whether the connect-channel policy can act: what Policies._connect requires)
         turns = (channel is not None and config.connect_channel
                  and catalog.get(CONNECT_COMMAND) is not None)
@@ -200,8 +202,6 @@ class Mediator:
         self._told: dict[str, int] = {}
         self._told_at = -1.0
         """News told per application at ``_told_at`` (:data:`MAX_NEWS_PER_INSTANT`)."""
-        self._resting: list[Node] = []
-        """Restarts that wait out the pause after a false interruption (``not_before``)."""
 
     # ================================================================ looking
     @property
@@ -433,6 +433,16 @@ class Mediator:
             self._depth -= 1
         if outer:
             self._settle()
+            if BODY_DEVICE in node.devices and SPEAKER in self._wm.busy \
+                    and node.commands[0].internal is not Rule.CONNECT_CHANNEL:
+                # (the wheels are free while words run, after something else than a turn
+                # to the user moved the robot: 7.6 (3))
+                self._depth += 1
+                try:
+                    self._keep_facing()
+                finally:
+                    self._depth -= 1
+                self._settle()
             if self._log.news:
                 self._tell_news()
 
@@ -566,11 +576,17 @@ class Mediator:
         (docs/rules.md 7.6 (3)): a turn to the user runs beside its words if the wheels
         are free now (connect-channel); one that cannot start at once is cancelled."""
         with self._operation():
-            turn = self._policies.keep_facing()
-            if turn is not None:
-                self._settle()
-                if turn.state is NodeState.WAITING:
-                    self._intake.cancel(turn, Rule.CONNECT_CHANNEL, self._log.now)
+            self._keep_facing()
+
+    def _keep_facing(self) -> None:
+        """A turn to the user beside the words under way, if the policy puts one in (the
+        wheels are free and the user off to the side); cancelled if it cannot start at
+        once."""
+        turn = self._policies.keep_facing()
+        if turn is not None:
+            self._settle()
+            if turn.state is NodeState.WAITING:
+                self._intake.cancel(turn, Rule.CONNECT_CHANNEL, self._log.now)
 
     def _talking(self) -> list[Node]:
         """The running ABs with words this robot can stop (an interruptible Command that

@@ -132,6 +132,9 @@ class Streams:
     while its first words are ahead (``MediatorConfig.max_answer_hold``)."""
     following: frozenset[str] = frozenset()
     """The Commands that follow the user (never held so: following is not leaving)."""
+    resting: dict[AbId, float] = field(default_factory=dict)
+    """Restarts of words a false interruption cut -> the instant the robot's pause ends
+    (they may not start before it; their application is still talking meanwhile)."""
 
     def keeps(self, r: NodeView, n: NodeView) -> bool:
         """Whether ``r`` (a reaction's next AB) is of an app it may keep ``n`` from: another
@@ -165,7 +168,11 @@ class _View:
     def of(cls, snap: Snapshot, talk: frozenset[str], streams: Streams) -> _View:
         nodes = {n.ab: n for tree in snap.trees for n in tree.nodes}
         busy = {d: nodes[ab] for d, ab in snap.busy}
-        talkers = frozenset(n.app for d, n in busy.items() if d in talk)
+        # (an app whose words a false interruption cut, waiting out the pause to go on,
+        # is still talking: 7.5)
+        talkers = frozenset([n.app for d, n in busy.items() if d in talk] + [
+            nodes[ab].app for ab, due in streams.resting.items()
+            if due > snap.t and ab in nodes and nodes[ab].state is NodeState.WAITING])
         waiting = sorted((nodes[ab] for ab in snap.waiting), key=rank_key(snap, streams))
         def in_line(p: NodeView) -> bool:
             """Waiting or running, or pending behind a policy's AB put before it (that
@@ -522,7 +529,7 @@ class Oracle:
         """ABs cut because the user spoke over them, with the hear decision (7.5)."""
         self._rest: dict[AbId, float] = {}
         """Cut by words no app took, ended: when the robot's pause is over."""
-        self._resting: dict[AbId, float] = {}
+        self._resting: dict[AbId, float] = self.streams.resting
         """ABs that start such a cut AB again, and the instant they may start."""
         self._cut_for: dict[AbId, AbId] = {}
         """A cut AB, then its restart -> the reaction's AB it was cut for."""

@@ -438,4 +438,4 @@ def test_a_restart_is_turned_to_the_user_like_any_utterance() -> None:
     h.run(until=40.0)
     restart = next(d for d in h.starts() if d.rule is Rule.RESTART)
     turn = [d for d in h.starts() if d.app == "fa" and d.rule is Rule.CONNECT_CHANNEL]
-    assert turn and turn[-1].t <= restart.t and turn[-1].t > 2.0
+    assert any(2.0 < d.t <= restart.t for d in turn)

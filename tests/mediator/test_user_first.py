@@ -266,7 +266,8 @@ def test_words_wait_for_what_may_not_be_cut_on_the_wheels_to_turn_first() -> Non
 def test_the_robot_keeps_facing_the_user_while_its_words_run() -> None:
     """7.6 (3): the user walks round the robot (at 1.0) while it says a long utterance:
     a turn to the user runs beside the words, in their stream, at once. With the wheels
-    busy (the FA's gesture does not use them; its drive does) nothing is put in."""
+    busy (the FA's gesture does not use them; its drive, to 3.0, does), the turn comes
+    when they are free, the words still running."""
     for drives in (False, True):
         facing = Facing()
         facing.faced = True
@@ -281,7 +282,7 @@ def test_the_robot_keeps_facing_the_user_while_its_words_run() -> None:
         h.at(1.0, m.regard)
         h.run(until=8.0)
         turns = [(d.t, d.app, d.rule) for d in h.starts() if d.command == "FaceHuman"]
-        assert turns == ([] if drives else [(1.0, "ea", Rule.CONNECT_CHANNEL)]), drives
+        assert turns == [(3.0 if drives else 1.0, "ea", Rule.CONNECT_CHANNEL)], drives
         assert not h.kinds(DecisionKind.CANCEL)
 
 
@@ -331,3 +332,22 @@ def test_a_later_perception_reaction_joining_an_answer_leaves_it_the_users() -> 
     h.run(until=10.0)
     said = [(d.t, str(d.calls[0].args["text"])) for d in h.starts() if d.command == "Speak"]
     assert said[0] == (1.0, "The tour starts here.")
+
+
+def test_a_pause_after_a_false_interruption_is_no_end_of_the_talk() -> None:
+    """7.5 with the channel rule (thesis Sec. 3.3): a cough cuts the FA's words (at 1.1),
+    which go on after the robot's pause (1.7). Meanwhile the FA is still talking with
+    the user: the EA's move, which breaks the channel, does not drive off in the pause."""
+    h = Harness(CUTS, duration={"Speak": 4.0, "TopologicalMove": 0.5}, cut_after=0.1,
+                outcome=feedback_iterations(100),
+                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(Request("fa", (speak("Let me tell you about the lab's robots."),)))
+    m.submit(Request("ea", (call("TopologicalMove", to="panel-2"),)))
+    h.at(1.0, lambda: m.hear(Event("speech", {"words": "ahem"})))
+    h.run(until=10.0)
+    moves = [round(d.t, 6) for d in h.starts() if d.command == "TopologicalMove"]
+    words = [round(d.t, 6) for d in h.starts() if d.command == "Speak"]
+    assert words == [0.0, 1.7] and moves and moves[0] == 5.7
