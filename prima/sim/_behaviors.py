@@ -215,15 +215,18 @@ FACE_WITHIN = 4.0
 
 
 def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    """Turn to the user: while the user stands, one turn toward them; while they walk
-    (or walked on while it turned), after them, the turning rate set every tenth of a
-    second from how far off they are, until the robot faces them (within
-    ``FACE_AIM``) or ``FACE_WITHIN`` has passed."""
+    """Turn to the user: while the user and the robot stand, one turn toward them; while
+    they walk (or walked on while it turned), or the robot still moves (it slows down as
+    it turns), after them, the turning rate set every tenth of a second from how far
+    off they are, until the robot faces them (within ``FACE_AIM``) or ``FACE_WITHIN``
+    has passed."""
     world, k = sim.world, sim.kernel
     seen, distance = world.sees_user(k.tick, any_direction=True)
     if not seen:
         return {"found": False}, True
-    if not world.human_moving:
+    if world.mode:
+        world.stop()  # (it brakes as it turns: no stop first)
+    elif not world.human_moving:
         yield from _turn(sim, world.user_bearing())
     end = k.tick + sim.ticks(FACE_WITHIN)
     period = k.hz // 10

@@ -68,3 +68,23 @@ def test_face_human_follows_a_user_who_walks_round_the_robot() -> None:
     assert off <= 5.0
     off, t = _facing_a_walker(walks=True)
     assert off <= 10.0 and t < 4.0
+
+
+def test_face_human_on_a_robot_still_driving_turns_as_it_brakes() -> None:
+    """A move's leg ends with the robot still driving at speed: Face Human turns to the
+    user at once, braking as it turns, rather than stopping first (a user to its left
+    is faced sooner)."""
+    import math
+
+    sim = Simulator(WorldMap("open"), robot=Pose(0, 0, 0),
+                    user=UserScript(Pose(0.5, 2.0, 270)))
+    headings: list[tuple[float, float]] = []
+    sim.sample_poses(20, lambda: headings.append((sim.now(), math.degrees(
+        sim.world.robot_angle()))))
+    runner = CommandRunner(sim)
+    sim.world.command(0.4, 0.0)  # (as a move's leg leaves it: driving on)
+    runner.run(1.0)
+    runner.queue(call("FaceHuman"))
+    runner.run(6.0)
+    turned = [h for t, h in headings if 1.0 < t <= 1.5]
+    assert turned and max(turned) > 10.0  # (turning within half a second)
