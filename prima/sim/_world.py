@@ -458,10 +458,13 @@ class World:
             ux = self._ux
             self._halt()
             self.mode = _VELOCITY
+            body = self.robot
             if lin:
                 self._v, self._w = v, 0.0
+                body.velocity = (math.cos(body.angle) * v, math.sin(body.angle) * v)
             else:
                 self._v, self._w = 0.0, v * ux
+                body.angular_velocity = v * ux  # (the body keeps its speed as it brakes)
         self._cmd_v = self._cmd_w = 0.0
         if stopped is not None:
             self._on_stopped.append(stopped)

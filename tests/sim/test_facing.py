@@ -88,3 +88,19 @@ def test_face_human_on_a_robot_still_driving_turns_as_it_brakes() -> None:
     runner.run(6.0)
     turned = [h for t, h in headings if 1.0 < t <= 1.5]
     assert turned and max(turned) > 10.0  # (turning within half a second)
+
+
+def test_a_turn_braked_to_a_new_command_keeps_turning() -> None:
+    """A turn under way that is braked (stop) and given a turning rate (Face Human's
+    follow) keeps turning: braking leaves the body its speed, as the controller thinks."""
+    import math
+
+    sim = Simulator(WorldMap("open"), robot=Pose(0, 0, 0), user=UserScript(Pose(3, 0, 180)))
+    world = sim.world
+    world.turn_by(math.radians(170.0), lambda: None)
+    sim.advance_to(0.8)  # (turning at full rate by now)
+    world.stop()
+    world.command(0.0, math.radians(90.0))
+    before = world.robot_angle()
+    sim.advance_to(1.3)
+    assert math.degrees(world.robot_angle() - before) > 30.0
