@@ -120,14 +120,25 @@ class _Analyst:
     def answered(self, app: str, t: float) -> float:
         """Until when ``app``'s reaction to the user's own action that kept something
         waiting at ``t`` kept the streams it interrupted waiting (7.6 (1)): until its first
-        words were said whole, at most its bound after it came."""
+        words were said whole (or, with none, it was over), at most its bound after it
+        came."""
         found = math.inf
         for r in self.ctx.reactions:
             if r.app == app and r.user and r.t <= t + EPS:
-                until = min(self.user_until(r), r.t + MAX_ANSWER_HOLD)
+                until = min(self.user_until(r), r.t + MAX_ANSWER_HOLD, self._gone(r))
                 if until > t - EPS:
                     found = min(found, until)
         return found
+
+    def _gone(self, r: ReactionState) -> float:
+        """When the last AB of ``r``'s trees ended (inf while one ran at the end)."""
+        last = 0.0
+        for tree in r.trees:
+            for ab in self.ctx.tree_abs.get(tree, ()):
+                if ab.end is None:
+                    return math.inf
+                last = max(last, ab.end)
+        return last if last else math.inf
 
     def reaction_key(self, r: ReactionState, t: float) -> tuple[int, float]:
         if r.answer:  # (the reply to an answer goes on in its Q&A's tree, with its rank)

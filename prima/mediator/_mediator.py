@@ -711,15 +711,15 @@ class Mediator:
         return min((t for t in times if t is not None), default=None)
 
     def _answer_deadline(self) -> float | None:
-        """When the first reaction to the user's own action whose words are still ahead
-        stops keeping the streams it interrupted waiting (its bound: docs/rules.md
+        """When the first reaction to the user's own action that has not said its first
+        words stops keeping the streams it interrupted waiting (its bound: docs/rules.md
         7.6 (1)), if one is later than now."""
         answering = self._wm.answering
         if not answering:
             return None
         now = self._clock.now()
-        return min((t.answers_until for t in answering.values()
-                    if t.talks and t.answers_until > now), default=None)
+        return min((t.answers_until for t in answering.values() if t.answers_until > now),
+                   default=None)
 
     def _rest_deadline(self) -> float | None:
         resting = self._resting

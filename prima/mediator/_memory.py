@@ -76,12 +76,12 @@ class WorkingMemory:
         (docs/rules.md 7.1, 7.4)."""
         self.answering: dict[TreeId, Tree] = {}
         """Reactions to the user's own action in working memory that have not said their
-        first words in full (``Tree.user``): while their words are ahead, they keep the
-        streams they interrupted waiting on every device (docs/rules.md 7.6 (1))."""
+        first words in full (``Tree.user``): they keep the streams they interrupted
+        waiting on every device (docs/rules.md 7.6 (1)), within their bound."""
         self.answered = False
         """Some reaction stopped keeping the streams it interrupted waiting (it said its
-        first words, has none ahead, or left) since the selector last looked: what it
-        held may go (``Holds`` re-files them)."""
+        first words, or left) since the selector last looked: what it held may go
+        (``Holds`` re-files them)."""
         self.after_reactions: dict[AbId, Node] = {}
         """Restarts that may wait for the reaction's AB they were cut for (``Node.cut_for``):
         whether they wait turns on ranks, so a re-ranked tree has them looked at again."""
@@ -107,10 +107,10 @@ class WorkingMemory:
         if not tree.live:  # it enters working memory (else it is there: see ``leave``)
             self.trees[tid] = tree
             app.trees[tid] = tree
+            if tree.user:  # (again: an end handler's request continues it, rule 6a)
+                self.answering[tid] = tree
         tree.live += 1
         app.live += 1
-        if node.speaks:
-            tree.talks += 1
         counts = tree.devices
         for d in node.sorted_devices:
             n = counts.get(d, 0)
@@ -365,10 +365,6 @@ class WorkingMemory:
                 if not on:
                     del app.trees_on[d]
         app.live -= 1
-        if node.speaks:
-            tree.talks -= 1
-            if not tree.talks and tree.user:
-                self.answered = True  # (no words ahead: it holds nothing any more)
         tree.live = live = tree.live - 1
         if not live:
             self.trees.pop(tree.id, None)

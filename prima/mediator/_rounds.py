@@ -335,9 +335,10 @@ class Selector:
 
     def _answering(self, x: Node) -> Tree | None:
         """The reaction to the user's own action that keeps ``x``'s stream waiting now
-        (docs/rules.md 7.6 (1)): the latest whose first words are ahead, within their
-        bound, that interrupted ``x``'s stream (a stream that was there when it became a
-        reaction to the user, and no later reaction). A reply to an answer (7.4),
+        (docs/rules.md 7.6 (1)): the latest that has not said its first words (or, with
+        none, is in working memory), within its bound, that interrupted ``x``'s stream
+        (a stream that was there when it became a reaction to the user, and no later
+        reaction). A reply to an answer (7.4),
         following the user, and an AB of a block under way (rule 3: a started block is
         concluded) are never held so."""
         if x.protected:
@@ -347,8 +348,8 @@ class Selector:
         mine = tree.reaction
         found: Tree | None = None
         for t in self._wm.answering.values():
-            if t is tree or not t.talks or t.answers_until <= now or tree.id >= t.answers_from:
-                continue  # (its own, done, bound passed, or a stream that came after it)
+            if t is tree or t.answers_until <= now or tree.id >= t.answers_from:
+                continue  # (its own, its bound passed, or a stream that came after it)
             reaction = t.reaction or 0
             if mine is not None and mine > reaction:
                 continue  # (a later reaction is a stream of its own, not interrupted)

@@ -125,7 +125,7 @@ class Tree:
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
                  "user", "started", "pose", "devices", "parked", "keys", "suspensions",
-                 "talks", "answers_until", "answers_from", "user_since")
+                 "answers_until", "answers_from", "user_since")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -160,11 +160,9 @@ class Tree:
         the first one of its requests or later ones said in full."""
         self.started = False
         """Some AB of it has started: it is a stream under way, not a new one."""
-        self.talks = 0
-        """How many of its nodes in working memory say words (``Node.speaks``)."""
         self.answers_until = 0.0
         """With ``user``: until when, at the latest, it keeps the streams it interrupted
-        waiting on every device while its first words are ahead (docs/rules.md 7.6 (1);
+        waiting on every device before its first words (docs/rules.md 7.6 (1);
         ``MediatorConfig.max_answer_hold`` after it became a reaction to the user)."""
         self.answers_from = 0
         """With ``user``: the first tree id that came into being after it became a reaction

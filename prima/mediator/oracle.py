@@ -125,8 +125,6 @@ class Streams:
     the streams it interrupted (a later one is a stream of its own)."""
     newest: TreeId = -1
     """The largest tree id any decision named so far."""
-    speaks: set[CommandId] = field(default_factory=set)
-    """Commands that say words (asked for with a text the robot says)."""
     answer_hold: float = 30.0
     """How long a reaction to the user keeps the streams it interrupted waiting, at most,
     while its first words are ahead (``MediatorConfig.max_answer_hold``)."""
@@ -239,8 +237,8 @@ class _View:
             or self.answer_holder(n) is not None
 
     def answer_holder(self, n: NodeView) -> TreeView | None:
-        """The reaction to the user's own action (of another tree) whose first words are
-        ahead, within its bound, that keeps ``n``'s stream waiting on every device
+        """The reaction to the user's own action (of another tree) that has not said its
+        first words, within its bound, that keeps ``n``'s stream waiting on every device
         (7.6 (1)), the latest of them: only a stream there when it became one, and no
         later reaction (that is a stream of its own); never for a reply to an answer,
         following the user, or an AB of its app's block under way."""
@@ -260,8 +258,6 @@ class _View:
                 continue
             if self.snap.t >= streams.user_since[tree.id] + streams.answer_hold:
                 continue  # (its bound passed)
-            if not any(not streams.speaks.isdisjoint(m.command_ids) for m in tree.nodes):
-                continue  # (no words ahead)
             order = streams.reaction[tree.id]
             if mine is not None and mine > order:
                 continue
@@ -652,9 +648,6 @@ class Oracle:
             self.streams.newest = d.tree
         for cid in d.command_ids:
             self._order[cid] = self._requests
-        for cid, c in zip(d.command_ids, d.calls, strict=False):
-            if self._catalog[c.command].spoken(c.args):
-                self.streams.speaks.add(cid)
         if d.command_id in self._reactions and d.command_id not in self._continuing \
                 and d.app is not None:
             self._reacting[d.app] = self._requests

@@ -351,3 +351,20 @@ def test_a_pause_after_a_false_interruption_is_no_end_of_the_talk() -> None:
     moves = [round(d.t, 6) for d in h.starts() if d.command == "TopologicalMove"]
     words = [round(d.t, 6) for d in h.starts() if d.command == "Speak"]
     assert words == [0.0, 1.7] and moves and moves[0] == 5.7
+
+
+def test_a_reaction_to_a_touch_with_no_words_holds_the_guide_while_it_lasts() -> None:
+    """7.6 (1): the user touches the robot as the EA guides them; the FA's reaction is a
+    gesture with no words (2 s). The EA's move stops at its next leg and waits until the
+    reaction is over, then goes on: the robot does not drive off while it responds."""
+    h = Harness(duration={"TopologicalMove": 0.5, "Gesture": 2.0},
+                outcome=feedback_iterations(100))
+    m = h.mediator
+    h.app("ea", AppKind.EA)
+    h.app("fa", AppKind.FA)
+    m.submit(Request("ea", (call("TopologicalMove", to="panel-2"),)))
+    h.at(2.2, lambda: m.submit(Request("fa", (call("Gesture", name="happy"),), reactive=True,
+                                       reaction=True, user=True)))
+    h.run(until=8.0)
+    legs = [d.t for d in h.starts() if d.command == "TopologicalMove"]
+    assert 2.0 in legs and not [t for t in legs if 2.0 < t < 4.2] and 4.2 in legs
