@@ -271,12 +271,17 @@ class Holds:
         or rank otherwise); those still held are parked again."""
         if self._channel_held and not node.devices.isdisjoint(self._talk):
             self._wm.dirty.update(self._channel_devices)
+        self.refile_talk()
+        if self._reserve_parked:
+            self.refile_reserved()
+
+    def refile_talk(self) -> None:
+        """Re-file what the channel rule parked: a talk ended, or the robot's pause after
+        a false interruption is over (one still held is parked again in the next round)."""
         if self._talk_parked:
             parked, self._talk_parked = self._talk_parked, []
             for n in parked:
                 self._wm.refile(n)
-        if self._reserve_parked:
-            self.refile_reserved()
 
     def refile_reserved(self) -> None:
         """Re-file the ABs parked for a reaction's next AB (one still kept is parked
@@ -313,6 +318,8 @@ class Holds:
         self._answer_held.discard(node.id)
         if node.reserving and self._reserve_parked:
             self.refile_reserved()  # a next AB that kept devices is gone
+        if node.not_before and node in self._resting:
+            self.refile_talk()  # words whose pause kept others are gone (7.5)
         self._unkeep(node)
 
     def update(self) -> None:

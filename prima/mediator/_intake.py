@@ -220,9 +220,13 @@ class Intake:
         if reactive or reaction:
             self._react(app, tree, seq, reactive, reactive_allowed, user, now)
         turns = self._turns and face_user
-        # (docs/rules.md 7.4) words that follow the user's answer to the app's own Q&A
-        reply = self._exchange and rule is _END_EVENT and parent is not None and any(
+        # (docs/rules.md 7.4) words that follow the user's answer to the app's own Q&A;
+        # whatever follows it is a reply to the user's own action (7.6 (4))
+        answered = rule is _END_EVENT and parent is not None and any(
             c.answered for c in parent.commands)
+        reply = self._exchange and answered
+        if answered and self._user_first:
+            wm.replies(tree, seq)
         if one or group:  # one AB: the usual request, or its calls grouped
             root = wm.new_node(app, tree, cmds, all_devices, prio,
                                reactive and reactive_allowed, seq)

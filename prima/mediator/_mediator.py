@@ -503,6 +503,8 @@ class Mediator:
         tree = node.tree
         if tree.user and node.seq >= tree.user_since and node.speaks:
             self._wm.heard(tree)
+        if tree.answered_since and node.seq >= tree.answered_since and node.speaks:
+            self._wm.replied(tree)
         if node.commands[0].internal is Rule.CONNECT_CHANNEL:
             for child in children:
                 child.looked = tree.suspensions
@@ -736,10 +738,13 @@ class Mediator:
             if any(t.answers_until <= now for t in self._wm.answering.values()):
                 self._wm.answered = True  # (a bound passed: what it held may go)
             if self._resting:
-                for node in [n for n in self._resting if n.not_before <= now]:
+                over = [n for n in self._resting if n.not_before <= now]
+                for node in over:
                     self._resting.remove(node)
                     if node.state is NodeState.WAITING:
                         self._wm.dirty.update(node.devices)  # (its pause is over)
+                if over:  # (its app's talk goes on or ends: what the pause held may go)
+                    self._holds.refile_talk()
 
     # ================================================================ plumbing
     def _operation(self) -> _Operation:

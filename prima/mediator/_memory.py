@@ -109,6 +109,7 @@ class WorkingMemory:
             app.trees[tid] = tree
             if tree.user:  # (again: an end handler's request continues it, rule 6a)
                 self.answering[tid] = tree
+                self._holding()
         tree.live += 1
         app.live += 1
         counts = tree.devices
@@ -424,6 +425,13 @@ class WorkingMemory:
         self.suspended.pop(tree.id, None)
         self._rerank(tree)
 
+    def _holding(self) -> None:
+        """A reaction to the user's own action now keeps the streams it interrupted
+        waiting on every device (docs/rules.md 7.6 (1)): the best waiting AB of each
+        device is looked at again (one it holds steps aside, reserving nothing)."""
+        ranked = self.ranked
+        self.dirty.update(d for d, apps in ranked.items() if apps)
+
     def react(self, tree: Tree, reaction: int, user: bool = False,
               answers_until: float = 0.0) -> bool:
         """The tree takes over as (a later) reaction, to the user's own action if ``user``
@@ -440,6 +448,7 @@ class WorkingMemory:
                 tree.answers_until = answers_until
                 tree.answers_from = self._next_tree  # (what came into being before it)
                 self.answering[tree.id] = tree
+                self._holding()
             if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
                 self._rerank(tree)
                 if before is None and self.keep_next:  # its next ABs keep their devices
@@ -448,6 +457,21 @@ class WorkingMemory:
                             self._reserve_children(node)
             return True
         return False
+
+    def replies(self, tree: Tree, seq: int) -> None:
+        """The tree replies (request ``seq``) to the user's answer to its Q&A: its first
+        words from then on are not rationed by the wait share (docs/rules.md 7.6 (4))."""
+        if not tree.answered_since:
+            tree.answered_since = seq
+            if tree.live:
+                self._rerank(tree)
+
+    def replied(self, tree: Tree) -> None:
+        """The tree said the first words of its reply to the user's answer in full."""
+        if tree.answered_since:
+            tree.answered_since = 0
+            if tree.live:
+                self._rerank(tree)
 
     def heard(self, tree: Tree) -> None:
         """A reaction to the user's own action said its first utterance in full: from now

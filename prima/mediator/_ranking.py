@@ -93,11 +93,13 @@ def _exchange(node: Node, _pjf: Collection[int]) -> Key:
 
 
 def _wait_share(node: Node, _pjf: Collection[int]) -> Key:
-    # (docs/rules.md 7.6 (4): a reaction to the user's own action is not rationed until its
-    # first utterance is said in full: the user paces these, one per action)
+    # (docs/rules.md 7.6 (4): a reaction to the user's own action, and a reply to the user's
+    # answer, is not rationed until its first utterance is said in full: the user paces
+    # these, one per action)
     if node.app.demoted:
         tree = node.tree
-        return (0,) if tree.user and tree.reaction is not None else (1,)
+        return (0,) if (tree.user and tree.reaction is not None) or tree.answered_since \
+            else (1,)
     return (0,)
 
 
@@ -189,7 +191,8 @@ def preempts(x: Node, y: Node) -> bool:
     flips back and forth must not cut and restart the same ABs over and over. A
     reaction to the user's own action is not rationed until its first words (7.6 (4)):
     the user paces those, one per action."""
-    if x.app.demoted and not (x.tree.user and x.tree.reaction is not None):
+    tree = x.tree
+    if x.app.demoted and not ((tree.user and tree.reaction is not None) or tree.answered_since):
         return False
     return outranks(x, y)
 

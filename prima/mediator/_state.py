@@ -125,7 +125,7 @@ class Tree:
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
                  "user", "started", "pose", "devices", "parked", "keys", "suspensions",
-                 "answers_until", "answers_from", "user_since")
+                 "answers_until", "answers_from", "user_since", "answered_since")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -155,6 +155,11 @@ class Tree:
         said its first utterance in full: no later reaction of another application to
         a perception or network event overtakes it (docs/rules.md 7.1); a later reaction
         to such an event that joins the tree leaves it so until then."""
+        self.answered_since = 0
+        """The sequence number of the request with which it replies to the user's answer to
+        its Q&A (words, or its next question), until its first utterance from then on is
+        said in full (0: none): the user's own action, not rationed by the wait share
+        (docs/rules.md 7.6 (4))."""
         self.user_since = 0
         """With ``user``: the sequence number of that reaction: its first utterance is
         the first one of its requests or later ones said in full."""

@@ -130,6 +130,10 @@ class Streams:
     while its first words are ahead (``MediatorConfig.max_answer_hold``)."""
     following: frozenset[str] = frozenset()
     """The Commands that follow the user (never held so: following is not leaving)."""
+    answered: dict[TreeId, int] = field(default_factory=dict)
+    """Trees replying to the user's answer to their Q&A -> the order of that request,
+    until their first words from then on are said in full: the user's own action, not
+    rationed by the wait share (7.6 (4))."""
     resting: dict[AbId, float] = field(default_factory=dict)
     """Restarts of words a false interruption cut -> the instant the robot's pause ends
     (they may not start before it; their application is still talking meanwhile)."""
@@ -301,6 +305,7 @@ def standing_key(snap: Snapshot, streams: Streams
     demoted = set(snap.demoted)
     reaction = streams.reaction
     user = streams.user
+    answered = streams.answered
     replying = streams.replying
 
     def key(n: NodeView) -> tuple[int, int, int, int, tuple[int, int]]:
@@ -308,8 +313,9 @@ def standing_key(snap: Snapshot, streams: Streams
         return (
             0 if n.priority is Priority.HIGH or replying(n) else 1,
             0 if replying(n) else 1,
-            # (7.6 (4): the user's own action is answered past the share, until its words)
-            1 if n.app in demoted and not answering else 0,
+            # (7.6 (4): the user's own action is answered past the share, until its words;
+            # so is the user's answer to a Q&A)
+            1 if n.app in demoted and not (answering or n.tree in answered) else 0,
             0 if answering else 1,
             (0, -reaction[n.tree]) if n.tree in reaction else (1, 0),
         )
@@ -667,6 +673,9 @@ class Oracle:
                 self.streams.user_from[d.tree] = self.streams.newest + 1
             # (a later reaction to a perception leaves a reaction to the user whose first
             # words are ahead one: the user's words first, 7.1)
+        if (d.command_id in self._answering and d.rule is Rule.END_EVENT
+                and d.tree is not None and self._config.reactions):
+            self.streams.answered.setdefault(d.tree, self._requests)
         self._reply(d)
 
     def _reply(self, d: Decision) -> None:
@@ -703,6 +712,11 @@ class Oracle:
                 and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
             self.streams.user.discard(d.tree)  # the reaction's first words were said in full
             self._heard.append(d)
+        answered = self.streams.answered
+        if (d.rule is Rule.COMPLETED and d.tree in answered
+                and self._order.get(d.command_id or 0, 0) >= answered[d.tree]
+                and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
+            del answered[d.tree]  # the reply's first words were said in full
         if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
             self._interrupt(d)
         b.ended.add(ab)
@@ -977,7 +991,8 @@ class Oracle:
                     self._uncontended.add(d.ab)
                 elif (d.ab in self.streams.replies
                       or not self.streams.before_replies.isdisjoint(d.command_ids)
-                      or d.tree in self.streams.user) and (
+                      or d.tree in self.streams.user
+                      or d.tree in self.streams.answered) and (
                         d.app in prev.snap.demoted or d.app in v.snap.demoted):
                     # the words that reply to an answer go first past the share too
                     # (7.4): one AB per answer the user gave, the user's pace (and what
@@ -1004,7 +1019,8 @@ class Oracle:
         # what is kept for it, and what it keeps as it waits first in line for a device
         # still busy, is not a precedence taken within the share)
         excused = {r.ab for r in [*v.nexts, *v.waiting]
-                   if (self.streams.replying(r) or r.tree in self.streams.user)
+                   if (self.streams.replying(r) or r.tree in self.streams.user
+                       or r.tree in self.streams.answered)
                    and r.app in v.snap.demoted}
         self._took.update(v.snap.t, _keeping(v, self._uncontended, excused))
         self._demoted.update(v.snap.t, v.snap.demoted)

@@ -8,12 +8,15 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping
 
+import pytest
+
 from prima.catalog import Catalog
 from prima.mediator import (
     AppKind,
     DecisionKind,
     Event,
     MediatorConfig,
+    Outcome,
     Request,
     Rule,
     RunningOrder,
@@ -80,6 +83,40 @@ def test_the_users_own_words_are_answered_past_the_wait_share() -> None:
                     (7.0, "The host will be late.")]
 
 
+@pytest.mark.parametrize("reply", ["words", "question"])
+def test_the_users_answer_is_replied_to_past_the_wait_share(reply: str) -> None:
+    """7.6 (4) with 7.4: the EA's question (3 s) kept the FA's news waiting beyond its
+    share of 0.5 s: the EA lost its precedence at 1.0. The user answers at 3.0; the
+    EA's reply (words, or its next question) goes before the FA's waiting news all the
+    same (the user's answer asks for the robot's output), and the FA's news follows
+    it: past the reply's first words, the EA is demoted again."""
+    budgets = {Role.FA: DEFAULT_BUDGETS[Role.FA],
+               Role.EA: Budgets(wait_share=0.5, wait_window=60.0)}
+    h = Harness(duration={"QA": 3.0, "*": 2.0}, config=MediatorConfig(budgets=budgets),
+                outcome=lambda ab: Outcome({"status": "answered", "utterance": "no"}))
+    m = h.mediator
+    asked: list[int] = []
+
+    def replied(cid: int, _o: Outcome) -> None:
+        if cid in asked:
+            first = call("QA", prompt="Shall I tell you more?", grammar="g") \
+                if reply == "question" else speak("All right.")
+            m.submit(Request("ea", (first, speak("Here is the next panel.")), follows=cid))
+
+    h.app("ea", AppKind.EA, on_ended=replied)
+    h.app("fa", AppKind.FA)
+    asked.extend(m.submit(Request("ea", (call("QA", prompt="May I go to the next panel?",
+                                                 grammar="g"),))))
+    h.at(0.5, lambda: m.submit(Request("fa", (speak("The host will be late."),))))
+    h.run(until=20.0)
+    lost = [d for d in h.kinds(DecisionKind.BUDGET) if d.app == "ea"]
+    assert lost and lost[0].t == 1.0
+    said = [(d.t, d.app, d.command) for d in h.starts() if d.command in ("Speak", "QA")]
+    first = "QA" if reply == "question" else "Speak"
+    assert said[:3] == [(0.0, "ea", "QA"), (3.0, "ea", first),
+                        (6.0 if reply == "question" else 5.0, "fa", "Speak")]
+
+
 # ---------------------------------------------------------------- 7.6 (1): own stream too
 
 def _guide(h: Harness, follow: bool = False) -> None:
@@ -140,6 +177,28 @@ def test_the_other_apps_stream_waits_on_every_device_while_the_user_is_answered(
     assert [d.t for d in h.starts() if d.app == "fa"] == [0.0, 1.0, 4.5, 5.5]
     suspend = next(d for d in h.kinds(DecisionKind.SUSPEND))
     assert (suspend.app, suspend.t, suspend.rule) == ("fa", 2.0, Rule.ANSWERING)
+
+
+def test_what_waits_for_a_busy_device_steps_aside_when_the_user_is_answered() -> None:
+    """7.6 (1) with 7.6 (2): the FA's words wait for the speaker (the EA talks till 3.0)
+    and, ranking first there, keep the wheels for themselves. The user touches the
+    robot at 1.0: the EA's reaction, as soon as possible, is a move. The FA's stream,
+    which the reaction interrupted, is held: its waiting words keep nothing from it,
+    and the move starts at once (it waited for the EA's words to end)."""
+    h = Harness(duration={"Speak": 3.0, "TopologicalMove": 0.5, "*": 1.0},
+                outcome=feedback_iterations(2))
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA, on_event=lambda e: e.name == "touched" and m.submit(Request(
+        "ea", (call("TopologicalMove", to="panel-2"),), order=RunningOrder.ASAP,
+        reactive=True, reaction=True, user=True)))
+    m.submit(Request("ea", (speak("This panel shows research points of our laboratory."),)))
+    h.at(0.5, lambda: m.submit(Request("fa", (call("FaceHumanAndSpeak", text="Hello."),))))
+    h.at(1.0, lambda: m.post(Event("touched")))
+    h.run(until=10.0)
+    assert _starts(h, "ea") == [(0.0, "Speak"), (1.0, "TopologicalMove"),
+                                (1.5, "TopologicalMove")]
+    assert _starts(h, "fa") == [(3.0, "FaceHumanAndSpeak")]
 
 
 def test_a_later_reaction_is_no_stream_the_answer_interrupted() -> None:
@@ -351,6 +410,46 @@ def test_a_pause_after_a_false_interruption_is_no_end_of_the_talk() -> None:
     moves = [round(d.t, 6) for d in h.starts() if d.command == "TopologicalMove"]
     words = [round(d.t, 6) for d in h.starts() if d.command == "Speak"]
     assert words == [0.0, 1.7] and moves and moves[0] == 5.7
+
+
+def test_what_the_pause_held_goes_when_the_pause_is_over() -> None:
+    """7.5 with the channel rule: a cough cuts the FA's words (1.1); they are to go on
+    after the robot's pause (1.7), but wait there for the EA's reaction, which comes
+    first. The EA's move, held while the FA was talking (and pausing), starts when the
+    pause is over: the FA is no longer talking (it waited for ever)."""
+    h = Harness(CUTS, duration={"Speak": 4.0, "TopologicalMove": 0.5}, cut_after=0.1,
+                outcome=feedback_iterations(2),
+                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(Request("fa", (speak("Let me tell you about the lab's robots."),)))
+    m.submit(Request("ea", (call("TopologicalMove", to="panel-2"), speak("Here is panel 2."))))
+    m.submit(Request("ea", (speak("Hello."),), reactive=True, reaction=True))
+    h.at(1.0, lambda: m.hear(Event("speech", {"words": "ahem"})))
+    h.run(until=20.0)
+    starts = [(round(d.t, 6), d.app, d.command) for d in h.starts()]
+    assert starts[1] == (1.7, "ea", "TopologicalMove")
+    assert starts[-1] == (10.7, "fa", "Speak")
+
+
+def test_what_the_pause_held_goes_when_the_words_it_paused_are_gone() -> None:
+    """7.5 with the channel rule: a cough cuts the FA's words (1.1); in the robot's
+    pause, the FA is unloaded (1.3): its words will not go on, and the EA's move, held
+    while the FA was talking, starts then (it waited for ever)."""
+    h = Harness(CUTS, duration={"Speak": 4.0, "TopologicalMove": 0.5}, cut_after=0.1,
+                outcome=feedback_iterations(2),
+                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(Request("fa", (speak("Let me tell you about the lab's robots."),)))
+    m.submit(Request("ea", (call("TopologicalMove", to="panel-2"),)))
+    h.at(1.0, lambda: m.hear(Event("speech", {"words": "ahem"})))
+    h.at(1.3, lambda: m.unregister("fa"))
+    h.run(until=20.0)
+    starts = [(round(d.t, 6), d.app, d.command) for d in h.starts()]
+    assert starts[:2] == [(0.0, "fa", "Speak"), (1.3, "ea", "TopologicalMove")]
 
 
 def test_a_reaction_to_a_touch_with_no_words_holds_the_guide_while_it_lasts() -> None:
