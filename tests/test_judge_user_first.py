@@ -140,6 +140,41 @@ def test_after_its_first_words_the_lost_precedence_excuses_it_again() -> None:
     assert counts(report) == {}
 
 
+def test_the_reply_to_the_users_answer_is_not_rationed_by_the_lost_precedence() -> None:
+    """docs/rules.md 7.6 (4) with 7.4: the FA's reaction to a message (0.2) waits while
+    the EA talks and while the EA's later reaction (it found the user, 0.5) asks its
+    question. The EA lost its precedence at 2.0. The user answers at 3.0; the EA's
+    reply, its next question, goes on in its reaction's tree before the FA's words:
+    the user's answer is not rationed until its first words, so that is the latest
+    reaction going first, not a precedence the EA no longer had."""
+    tr = Trace()
+    tr.speak(0.0, "ea", 1, 1, "Welcome to the laboratory.", lasts=1.0)
+    tr.event(0.2, "message")
+    tr.request(0.2, "fa", 2, 2, tree=1, text="A message for you.", reactive=True)
+    tr.event(0.5, "human-found")
+    tr.ask(1.0, "ea", 3, 3, "May I repeat the explanation?", "No.", at=3.0, tree=2,
+           reactive=True)
+    tr.line(2.0, "budget", app="ea", reason="wait-share",
+            text="kept other applications waiting 2 s within 60 s: it loses its precedence "
+                 "until t=62 s")
+    tr.request(3.0, "ea", 4, 4, tree=2, command="QA", text="May I go to the next panel?",
+               reason="end-event", devices=TALK, before=3)
+    tr.start(3.0, "ea", 4, 4, tree=2, command="QA", text="May I go to the next panel?",
+             devices=TALK, words=(3.0, 5.0))
+    tr.end(5.5, "ea", 4, 4, tree=2, command="QA", devices=TALK, words=(3.0, 5.0),
+           result="status=timeout")
+    tr.start(5.5, "fa", 2, 2, tree=1, text="A message for you.", words=(5.5, 7.0))
+    tr.end(7.0, "fa", 2, 2, tree=1, text="A message for you.", words=(5.5, 7.0))
+    tr.sort()
+    # (the EA's reaction to the user found is requested at 0.5, with its Q&A)
+    for row in tr.rows:
+        if row["kind"] == "request" and row.get("ab") == 3:
+            row["t"] = 0.5
+    tr.sort()
+    report = tr.judge()
+    assert not [r for r in report.reactions if r.app == "fa" and r.late]
+
+
 # ---------------------------------------------------------------- ignored speech (section 8)
 
 def _withdrawn(stop_at: float) -> Report:

@@ -99,6 +99,7 @@ class _Analyst:
         self.restarts = {again: cut for cut, again in ctx.restarted.items()}
         """An AB that starts a cut one again -> the cut one."""
         self._user_until: dict[int, float] = {}
+        self._by_tree: dict[int, list[ReactionState]] | None = None
         self._ready: dict[int, float] = {}
 
     # ------------------------------------------------------------ precedence
@@ -191,12 +192,27 @@ class _Analyst:
 
     def demoted(self, app: str, tree: int, t: float) -> bool:
         """``app`` had lost its precedence at ``t``, as far as ``tree``'s ABs go: not for a
-        reaction to the user's own action before its first words (7.6 (4))."""
+        reaction to the user's own action before its first words (7.6 (4)), nor for the
+        reply to the user's answer to its Q&A (its words, or its next question) before
+        its first words."""
         if not self.ctx.demoted_at(app, t):
             return False
         taken = [r for r in self.ctx.tree_reactions.get(tree, ()) if r.t <= t + EPS]
         latest = max(taken, key=lambda r: r.order) if taken else None
-        return latest is None or not latest.user or self.user_until(latest) <= t + EPS
+        if latest is not None and latest.user and self.user_until(latest) > t + EPS:
+            return False
+        return not any(r.t <= t + EPS and self.user_until(r) > t + EPS
+                       for r in self._answers().get(tree, ()))
+
+    def _answers(self) -> dict[int, list[ReactionState]]:
+        """Tree -> the reactions to heard answers that go on in it (its replies)."""
+        if self._by_tree is None:
+            self._by_tree = {}
+            for r in self.ctx.reactions:
+                if r.answer and r.user:
+                    for tree in r.trees:
+                        self._by_tree.setdefault(tree, []).append(r)
+        return self._by_tree
 
     def goes_first(self, y: Ab, r: ReactionState, low: bool, t: float) -> str:
         """Why ``y``, of another application, went first over the reaction ``r`` (whose

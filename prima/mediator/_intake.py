@@ -220,13 +220,7 @@ class Intake:
         if reactive or reaction:
             self._react(app, tree, seq, reactive, reactive_allowed, user, now)
         turns = self._turns and face_user
-        # (docs/rules.md 7.4) words that follow the user's answer to the app's own Q&A;
-        # whatever follows it is a reply to the user's own action (7.6 (4))
-        answered = rule is _END_EVENT and parent is not None and any(
-            c.answered for c in parent.commands)
-        reply = self._exchange and answered
-        if answered and self._user_first:
-            wm.replies(tree, seq)
+        reply = rule is _END_EVENT and parent is not None and self._replies(parent, tree, seq)
         if one or group:  # one AB: the usual request, or its calls grouped
             root = wm.new_node(app, tree, cmds, all_devices, prio,
                                reactive and reactive_allowed, seq)
@@ -250,6 +244,17 @@ class Intake:
             wm.enter_waiting(root, parent_finished)
         # (one call: its AB's ``command_ids`` are ``(cid,)``)
         return root.command_ids if one else tuple([c.id for c in cmds]), cancelled
+
+    def _replies(self, parent: Node, tree: Tree, seq: int) -> bool:
+        """A request that follows the end of ``parent``: whether its words reply to the
+        user's answer to the app's own Q&A (docs/rules.md 7.4: they belong to the
+        exchange). Whatever follows such an answer replies to the user's own action, not
+        rationed by the wait share until its first words (7.6 (4))."""
+        if not any(c.answered for c in parent.commands):
+            return False
+        if self._user_first:
+            self._wm.replies(tree, seq)
+        return self._exchange
 
     def _react(self, app: App, tree: Tree, seq: int, reactive: bool, allowed: bool,
                user: bool, now: float) -> None:

@@ -465,6 +465,8 @@ class WorkingMemory:
             tree.answered_since = seq
             if tree.live:
                 self._rerank(tree)
+            if self.answering:  # (an earlier reaction to the user no longer holds it: 7.6 (1))
+                self.answered = True
 
     def replied(self, tree: Tree) -> None:
         """The tree said the first words of its reply to the user's answer in full."""

@@ -173,6 +173,15 @@ def outranks(x: Node, y: Node) -> bool:
     return _standing(x) < _standing(y)
 
 
+def goes_before(r: Node, x: Node) -> bool:
+    """Whether ``r``'s stream goes before ``x``'s on what an AB keeps whatever the waiting
+    order, priority aside (an exchange's reply, precedence, the user first, the latest
+    reaction): the same for every AB of a tree but a reply's own, so no two trees go
+    before each other, and no chain of ABs waiting for those that go before them
+    closes on itself."""
+    return _standing(r)[1:] < _standing(x)[1:]
+
+
 def keeps_for(r: Node, x: Node) -> bool:
     """Whether the pending next AB ``r`` of a reaction (or a reply) keeps a device it
     will use from the waiting ``x`` of another application (docs/rules.md 7.1): ``r``'s

@@ -27,7 +27,7 @@ from prima.mediator._interface import AbId, AtomicBehavior, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._policies import Policies
-from prima.mediator._ranking import Rank, keeps_for, outranks
+from prima.mediator._ranking import Rank, goes_before, keeps_for
 from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
@@ -346,13 +346,16 @@ class Selector:
         tree = x.tree
         now = self._log.now
         mine = tree.reaction
+        if tree.answered_since and (mine is None or tree.answered_since > mine):
+            mine = tree.answered_since  # (its reply to the user's answer: as a reaction)
         found: Tree | None = None
         for t in self._wm.answering.values():
             if t is tree or t.answers_until <= now or tree.id >= t.answers_from:
                 continue  # (its own, its bound passed, or a stream that came after it)
             reaction = t.reaction or 0
             if mine is not None and mine > reaction:
-                continue  # (a later reaction is a stream of its own, not interrupted)
+                continue  # (a later reaction is a stream of its own, not interrupted; so
+                # is the reply to the user's later answer)
             if found is None or reaction > (found.reaction or 0):
                 found = t
         if found is None or all(c.spec.follows_user for c in x.commands):
@@ -497,9 +500,11 @@ class Selector:
     def _after_its_reaction(self, x: Node, cut_for: Node) -> bool:
         """Whether the restart ``x`` waits, in its place, for the reaction's AB it was cut
         for (7.3 (2)): while that AB steps aside for another reaction's next AB (7.1) and
-        outranks it; not for a next AB after ``x`` in its own tree (that one waits for
-        ``x``: they would wait for each other)."""
-        if cut_for.state is not _WAITING or not outranks(cut_for, x):
+        its stream goes before ``x``'s, priority aside (``x``'s stream may have become a
+        later reaction since, to the user's own action: then it goes first); not for a
+        next AB after ``x`` in its own tree (that one waits for ``x``: they would wait
+        for each other)."""
+        if cut_for.state is not _WAITING or not goes_before(cut_for, x):
             return False
         # (as it is now, ranks may have moved since; one in x's own tree waits for x)
         return self._reserved(cut_for, besides=x.tree) is not None

@@ -255,6 +255,9 @@ class _View:
                for h in self.snap.holds):
             return None
         mine = streams.reaction.get(n.tree)
+        replying = streams.answered.get(n.tree)
+        if replying is not None and (mine is None or replying > mine):
+            mine = replying  # (the reply to the user's later answer is no stream it holds)
         found: TreeView | None = None
         for tree in self.snap.trees:
             if tree.id == n.tree or tree.id not in streams.user \
@@ -353,11 +356,12 @@ def _left_waiting(v: _View, cut_for: Mapping[AbId, AbId]) -> list[AbId]:
 def _after_its_reaction(v: _View, n: NodeView, cut_for: Mapping[AbId, AbId]) -> bool:
     """A restart waits (in its place) for the reaction's AB it was cut for while that AB
     steps aside for another reaction's next AB (not one after the restart in its own
-    tree) and outranks it (7.3 (2), 7.1)."""
+    tree) and its stream goes before the restart's, priority aside (7.3 (2), 7.1)."""
     r = v.nodes.get(cut_for.get(n.ab, -1))
     if r is None or r.state is not NodeState.WAITING:
         return False
-    return v.kept_for(r, besides=n.tree) is not None and v.standing(r) < v.standing(n)
+    return v.kept_for(r, besides=n.tree) is not None \
+        and v.standing(r)[1:] < v.standing(n)[1:]
 
 
 def keeping(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,

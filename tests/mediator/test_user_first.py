@@ -117,6 +117,35 @@ def test_the_users_answer_is_replied_to_past_the_wait_share(reply: str) -> None:
                         (6.0 if reply == "question" else 5.0, "fa", "Speak")]
 
 
+def test_the_reply_to_a_later_answer_is_no_stream_an_earlier_reaction_holds() -> None:
+    """7.6 (1) with 7.4: the user touches the robot (0.5) while the EA asks them a
+    question; the FA's reaction is a gesture with no words (till 6.5), which holds
+    the streams it interrupted while it lasts. The user answers the EA at 3.0: the
+    EA's reply, its next question, answers the user's later action and goes as soon
+    as the speaker is free, not after the gesture."""
+    h = Harness(duration={"QA": 3.0, "Gesture": 6.0, "*": 2.0},
+                outcome=lambda ab: Outcome({"status": "answered", "utterance": "no"}))
+    m = h.mediator
+    asked: list[int] = []
+
+    def replied(cid: int, _o: Outcome) -> None:
+        if cid in asked:
+            m.submit(Request("ea", (call("QA", prompt="May I go to the next panel?",
+                                         grammar="g"),), follows=cid))
+            asked.clear()
+
+    h.app("ea", AppKind.EA, on_ended=replied)
+    h.app("fa", AppKind.FA, on_event=lambda e: e.name == "touched" and m.submit(Request(
+        "fa", (call("Gesture", name="happy"),), order=RunningOrder.ASAP, reactive=True,
+        reaction=True, user=True)))
+    asked.extend(m.submit(Request("ea", (call("QA", prompt="May I repeat that?",
+                                                 grammar="g"),))))
+    h.at(0.5, lambda: m.post(Event("touched")))
+    h.run(until=20.0)
+    assert _starts(h, "ea") == [(0.0, "QA"), (3.0, "QA")]
+    assert _starts(h, "fa") == [(0.5, "Gesture")]
+
+
 # ---------------------------------------------------------------- 7.6 (1): own stream too
 
 def _guide(h: Harness, follow: bool = False) -> None:
