@@ -214,12 +214,27 @@ FACE_WITHIN = 4.0
 """Seconds Face Human follows a user who keeps walking round the robot, at most."""
 
 
+FACE_STILL = math.radians(10.0)
+"""Face Human is done turning only below this turning rate (rad/s): the robot brakes
+from there within a degree and a half."""
+
+
+def _face_rate(sim: Simulator, off: float, period: float) -> float:
+    """The turning rate toward a user ``off`` radians away, set for the next ``period``
+    seconds: ``FACE_GAIN`` times how far off they are, but never faster than the robot can
+    brake from within what is left once that period is over (it would turn past them)."""
+    alpha = math.radians(sim.spec.turn_accel)
+    turning = abs(sim.world.robot.angular_velocity)
+    left = max(0.0, abs(off) - turning * period)
+    return math.copysign(min(FACE_GAIN * abs(off), math.sqrt(2.0 * alpha * left)), off)
+
+
 def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     """Turn to the user: while the user and the robot stand, one turn toward them; while
     they walk (or walked on while it turned), or the robot still moves (it slows down as
     it turns), after them, the turning rate set every tenth of a second from how far
-    off they are, until the robot faces them (within ``FACE_AIM``) or ``FACE_WITHIN``
-    has passed."""
+    off they are (never faster than it can brake from before it faces them), until the
+    robot faces them (within ``FACE_AIM``, nearly still) or ``FACE_WITHIN`` has passed."""
     world, k = sim.world, sim.kernel
     seen, distance = world.sees_user(k.tick, any_direction=True)
     if not seen:
@@ -230,8 +245,11 @@ def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
         yield from _turn(sim, world.user_bearing())
     end = k.tick + sim.ticks(FACE_WITHIN)
     period = k.hz // 10
-    while abs(world.user_bearing()) > FACE_AIM and k.tick < end:
-        world.command(0.0, FACE_GAIN * world.user_bearing())
+    while k.tick < end:
+        off = world.user_bearing()
+        if abs(off) <= FACE_AIM and abs(world.robot.angular_velocity) <= FACE_STILL:
+            break
+        world.command(0.0, _face_rate(sim, off, period / k.hz))
         yield sleep(period)
     if world.mode:
         yield from _stop(sim)

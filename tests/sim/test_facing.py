@@ -104,3 +104,25 @@ def test_a_turn_braked_to_a_new_command_keeps_turning() -> None:
     before = world.robot_angle()
     sim.advance_to(1.3)
     assert math.degrees(world.robot_angle() - before) > 30.0
+
+
+def test_face_human_far_off_does_not_turn_past_its_user() -> None:
+    """The robot drives on (a move's leg left running) with its user far behind it
+    (about 145 degrees off): Face Human turns at full rate, and brakes in time to face
+    them: it never turns past them by more than a few degrees (it went 30 degrees past,
+    braking from full rate only once it faced them)."""
+    import math
+
+    sim = Simulator(WorldMap("open"), robot=Pose(0, 0, 0),
+                    user=UserScript(Pose(-1.2, 0.8, 0)))
+    offs: list[float] = []
+    sim.sample_poses(20, lambda: offs.append(math.degrees(sim.world.user_bearing())))
+    runner = CommandRunner(sim)
+    sim.world.command(0.4, 0.0)
+    runner.run(1.0)
+    start = len(offs)
+    runner.queue(call("FaceHuman"))
+    runner.run(6.0)
+    turned = offs[start:]
+    assert turned[0] > 120.0 and abs(turned[-1]) <= 5.0
+    assert min(turned) >= -5.0  # (the user is to its left all the way: never passed)
