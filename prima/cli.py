@@ -1231,8 +1231,7 @@ def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         return _usage("lsp", problem, err)
     from prima.lsp import serve
 
-    serve(Path(args.robot).resolve() if args.robot else None)
-    return EXIT_OK
+    return serve(Path(args.robot).resolve() if args.robot else None, err=err)
 
 
 def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:

@@ -23,7 +23,10 @@ from prima.lsp._workspace import Buffer, Place, Setting, Workspace
 from prima.lsp._xml import Attr, Tag, Where, locate
 from prima.vocab import PREDEFINED_EVENTS
 
-__all__ = ["Features", "Hover", "Item", "Target", "event_fields"]
+__all__ = ["MAX_KEPT", "Features", "Hover", "Item", "Target", "event_fields"]
+
+MAX_KEPT = 256
+"""Most buffers whose index and setting are kept between requests."""
 
 PXML = "urn:prima:pxml:1"
 SCENARIO = "urn:prima:scenario:1"
@@ -100,6 +103,7 @@ class _Doc:
     def __init__(self, workspace: Workspace, buffer: Buffer) -> None:
         self.workspace = workspace
         self.buffer = buffer
+        self.generation = workspace.generation
         self.source = buffer.text
         self.namespace = buffer.namespace
         self._setting: Setting | None = None
@@ -254,14 +258,33 @@ def _place_doc(place: Place) -> str:
 
 
 class Features:
-    """Completion, hover and definition over a workspace's buffers."""
+    """Completion, hover and definition over a workspace's buffers.
+
+    What a buffer declares (its states, variables, labels...) and what is in force
+    for it are worked out once per version of the buffer and generation of the
+    workspace, and kept for the requests that follow.
+    """
 
     def __init__(self, workspace: Workspace) -> None:
         self.workspace = workspace
+        self._docs: dict[Path, _Doc] = {}
 
     def _doc(self, path: Path) -> _Doc | None:
         buffer = self.workspace.buffer(path)
-        return None if buffer is None else _Doc(self.workspace, buffer)
+        if buffer is None:
+            return None
+        kept = self._docs.get(path)
+        if kept is not None and kept.buffer is buffer \
+                and kept.generation == self.workspace.generation:
+            return kept
+        if len(self._docs) >= MAX_KEPT:
+            self._docs.clear()
+        made = self._docs[path] = _Doc(self.workspace, buffer)
+        return made
+
+    def drop(self, path: Path) -> None:
+        """Forget what was worked out for ``path`` (closed)."""
+        self._docs.pop(path, None)
 
     # ---------------------------------------------------------------- completion
 

@@ -16,7 +16,7 @@ import html
 import re
 from dataclasses import dataclass, field
 
-__all__ = ["Attr", "Spot", "Tag", "Where", "XmlText", "locate", "scan"]
+__all__ = ["Attr", "Spot", "Tag", "Where", "XmlText", "first_tag", "locate", "scan"]
 
 _MARKUP = re.compile(r"<!--.*?(?:-->|\Z)|<\?.*?(?:\?>|\Z)|<!\[CDATA\[.*?(?:\]\]>|\Z)"
                      r"|<!.*?(?:>|\Z)|</(?P<end>[^\s<>]*)[^<>]*>?|<(?P<start>[^\s<>/!?]*)", re.S)
@@ -210,6 +210,18 @@ def scan(source: str) -> XmlText:
     for tag in stack:
         tag.content_end = len(source)
     return XmlText(source, tags, ends, others)
+
+
+def first_tag(source: str) -> Tag | None:
+    """The first start tag of ``source`` (the root :func:`scan` finds), read alone."""
+    pos = 0
+    while True:
+        m = _MARKUP.search(source, pos)
+        if m is None:
+            return None
+        if m.group("start") is not None:
+            return _start_tag(source, m.start(), m.group("start"))
+        pos = m.end()
 
 
 def _innermost(text: XmlText, offset: int) -> Tag | None:
