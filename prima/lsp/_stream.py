@@ -7,11 +7,13 @@ held) and refused with an error, answered under the request's own id when its
 first bytes name one. What cannot be a message (a header line longer than
 :data:`MAX_HEADER_LINE`, one that is not ``Name: value``, headers without a
 length) is skipped up to the next ``Content-Length`` header, and said on stderr.
-Reading past a message also stops at such a header: valid JSON never holds a
-line break followed by ``Content-Length:`` outside a string, and a string holds
-no raw line break, so a client that declared more bytes than it sent is
-understood again from its next message. The only thing that cannot be read
-again is a stream that ends inside a message: the server says so and exits.
+Reading past a message also stops at such a header line: in valid JSON
+``Content-Length: N`` can only be inside a string, and a string holds no raw
+line break, so a client that declared more bytes than it sent is
+understood again from its next message (a message's body is followed by the
+next one's ``Content-Length`` header, on no line of its own). The only thing
+that cannot be read again is a stream that ends inside a message: the server
+says so and exits.
 
 :func:`serve` runs a pygls server on it, on one thread: every message is
 handled as it is read, and the diagnostics wait (:mod:`prima.lsp._schedule`)
@@ -42,8 +44,11 @@ reads (1 MiB) however a client escapes it in JSON."""
 MAX_HEADER_LINE = 4096
 """Most bytes of one header line."""
 
-_KEY = b"content-length:"
-_RESYNC = re.compile(rb"\ncontent-length:", re.I)
+_RESYNC = re.compile(rb"content-length:[ \t]*\d{1,18}[ \t]*\r?\n", re.I)
+"""A header line: in a JSON body, ``Content-Length`` is in a string or an error, and a
+string holds no raw line break, so this never matches inside a valid message."""
+_TAIL = 64
+"""Bytes kept back while reading past: the start of a header line cut between reads."""
 _HEAD = 4096
 """How many first bytes of a refused message are kept, to find its id."""
 
@@ -55,8 +60,8 @@ class Framer:
     """Cuts a byte stream into message bodies.
 
     ``message(body)`` is called with each body of at most :data:`MAX_MESSAGE`
-    bytes; ``refused(length, head)`` for a longer one, with its first bytes,
-    once it has been read past; ``skipped(reason)`` when bytes that are no
+    bytes; ``refused(length, head)`` for a longer one, with its first bytes (up
+    to 4 KiB, once they are in); ``skipped(reason)`` when bytes that are no
     message begin to be skipped.
     """
 
@@ -75,7 +80,7 @@ class Framer:
         """Bytes still to read past (``refuse``); None while skipping to a header."""
         self._declared = 0
         self._head = bytearray()
-        self._line_start = True
+        self._told = False
 
     def feed(self, data: bytes) -> None:
         """Take the next bytes of the stream; handle every message they complete."""
@@ -108,8 +113,7 @@ class Framer:
         end = buf.find(b"\n")
         if end < 0:
             if len(buf) > MAX_HEADER_LINE:
-                self._start_skip(f"a header line longer than {MAX_HEADER_LINE:,} bytes",
-                                 line_start=False)
+                self._start_skip(f"a header line longer than {MAX_HEADER_LINE:,} bytes")
                 return True
             return False
         line = bytes(buf[:end]).rstrip(b"\r")
@@ -122,7 +126,7 @@ class Framer:
             elif self._length > self.limit:
                 self._state, self._left, self._declared = "refuse", self._length, self._length
                 self._head.clear()
-                self._line_start = True
+                self._told = False
             else:
                 self._state = "body"
             return True
@@ -149,65 +153,51 @@ class Framer:
         self._message(body)
         return True
 
-    def _start_skip(self, reason: str, *, line_start: bool = True) -> None:
+    def _start_skip(self, reason: str) -> None:
         self._skipped(reason)
-        self._state, self._left, self._line_start = "skip", None, line_start
+        self._state, self._left = "skip", None
         self._length, self._headers = None, False
 
     def _skip(self) -> bool:
         buf = self._buf
-        window = len(buf) if self._left is None else min(len(buf), self._left)
         if self._left == 0:
             self._done_skipping()
             return True
+        window = len(buf) if self._left is None else min(len(buf), self._left)
         if window == 0:
             return False
-        at = self._header_at(window)
-        if at is not None:
-            self._consume(at)
+        found = _RESYNC.search(buf, 0, window)
+        if found is not None:
+            self._consume(found.start())
             self._done_skipping()
             return True
-        keep = 0 if window == self._left else self._partial(window)
+        keep = 0 if window == self._left else min(window, _TAIL)
         if window - keep <= 0:
             return False
         self._consume(window - keep)
         return True
 
-    def _header_at(self, window: int) -> int | None:
-        """Where a ``Content-Length`` header begins a line in the first ``window`` bytes."""
-        buf = self._buf
-        if self._line_start and window >= len(_KEY) and buf[:len(_KEY)].lower() == _KEY:
-            return 0
-        found = _RESYNC.search(buf, 0, window)
-        return None if found is None else found.start() + 1
-
-    def _partial(self, window: int) -> int:
-        """How many bytes at the window's end may begin a ``Content-Length`` header."""
-        buf = self._buf
-        if self._line_start and window < len(_KEY) and _KEY.startswith(bytes(buf[:window]).lower()):
-            return window
-        newline = buf.rfind(b"\n", max(0, window - len(_KEY)), window)
-        if newline >= 0 and _KEY.startswith(bytes(buf[newline + 1:window]).lower()):
-            return window - newline
-        return 0
-
     def _consume(self, n: int) -> None:
-        buf = self._buf
         if n <= 0:
             return
-        if self._state == "refuse" and len(self._head) < _HEAD:
-            self._head += buf[:min(n, _HEAD - len(self._head))]
-        self._line_start = buf[n - 1] == 0x0A
-        del buf[:n]
+        if self._state == "refuse" and not self._told:
+            self._head += self._buf[:min(n, _HEAD - len(self._head))]
+            if len(self._head) >= _HEAD:
+                self._tell()
+        del self._buf[:n]
         if self._left is not None:
             self._left -= n
 
+    def _tell(self) -> None:
+        """Refuse the message being read past, once (as soon as its first bytes are in)."""
+        if not self._told:
+            self._told = True
+            self._refused(self._declared, bytes(self._head))
+
     def _done_skipping(self) -> None:
-        refused = self._state == "refuse"
-        declared, head = self._declared, bytes(self._head)
+        if self._state == "refuse":
+            self._tell()
         self._reset()
-        if refused:
-            self._refused(declared, head)
 
     def _reset(self) -> None:
         self._state, self._length, self._headers, self._left = "headers", None, False, None
@@ -281,7 +271,11 @@ class _Connection:
         try:
             message = json.loads(body, object_hook=protocol.structure_message)
         except JsonRpcException as exc:
-            ident = _plain_id(body)
+            plain = _plain(body)
+            if plain is not None and "method" in plain and "params" not in plain:
+                self.message(json.dumps({**plain, "params": None}).encode())  # (allowed)
+                return
+            ident = _request_id_of(plain)
             self.say(f"a message the protocol does not allow: {exc.message}")
             if ident is not None:
                 self.answer_error(ident, exc.code, exc.message)
@@ -311,12 +305,17 @@ class _Connection:
         self.say(f"{reason}: skipped up to the next Content-Length header")
 
 
-def _plain_id(body: bytes) -> int | str | None:
+def _plain(body: bytes) -> dict[str, Any] | None:
+    """A message's JSON object, read without pygls's types (None: not one)."""
     try:
         data = json.loads(body)
     except (ValueError, RecursionError):
         return None
-    ident = data.get("id") if isinstance(data, dict) and "method" in data else None
+    return data if isinstance(data, dict) else None
+
+
+def _request_id_of(data: dict[str, Any] | None) -> int | str | None:
+    ident = data.get("id") if data is not None and "method" in data else None
     return ident if isinstance(ident, (int, str)) and not isinstance(ident, bool) else None
 
 
@@ -393,7 +392,8 @@ class _Input:
 
 class _OneLine(logging.Formatter):
     def format(self, record: logging.LogRecord) -> str:
-        return f"prima lsp: {record.getMessage()}"
+        lines = record.getMessage().splitlines()  # (pygls puts tracebacks in some messages)
+        return f"prima lsp: {lines[0] if lines else ''}"
 
 
 def _quiet_pygls(err: TextIO) -> logging.Handler:
