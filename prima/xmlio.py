@@ -508,6 +508,9 @@ def _check_depth(doc: XmlDocument, fail: Callable[[etree._Element, str], Located
 
 def local_name(el: etree._Element) -> str:
     """The element's tag without its namespace."""
+    tag = el.tag
+    if isinstance(tag, str):  # "{namespace}name" or "name": what QName reads, without it
+        return tag.rpartition("}")[2]
     return etree.QName(el).localname
 
 

@@ -201,7 +201,9 @@ class Builder:
         el, where, base = spot
         for name, index in compiled.names:
             self.refs.variables.append((name, (el, where, base + index)))
-        for name, index in sorted(compiled.event_fields, key=lambda f: f[1]):
+        fields = sorted(compiled.event_fields, key=lambda f: f[1]) if compiled.event_fields \
+            else ()
+        for name, index in fields:
             if name not in EVENT_FIELDS:
                 self.warning((el, where, base + index),
                              f"event field '{name}' is not one PRIMA's events carry: it is "

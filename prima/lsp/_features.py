@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 
@@ -84,17 +85,51 @@ class Target:
     end: int
 
 
-@dataclass
 class _Index:
-    """What a PXML buffer declares, read forgivingly."""
+    """What a PXML buffer declares, read forgivingly (its Command ids on first need: they
+    take reading every chain)."""
 
-    states: dict[str, Attr]
-    variables: dict[str, Tag]
-    grammars: dict[str, Attr]
-    events: dict[str, Attr]
-    timers: dict[str, Attr]
-    labels: dict[str, tuple[int, int, str]]
-    """label -> where it is written (start, end) and its Command."""
+    def __init__(self, doc: _Doc) -> None:
+        self._doc = doc
+        self.states: dict[str, Attr] = {}
+        self.variables: dict[str, Tag] = {}
+        self.grammars: dict[str, Attr] = {}
+        self.events: dict[str, Attr] = {}
+        self.timers: dict[str, Attr] = {}
+        root = doc.buffer.xml.root
+        for tag in doc.buffer.xml.tags:
+            if tag.name == "state":
+                _first(self.states, tag.attr("id"))
+            elif tag.name == "var" and tag.parent is root:
+                name = tag.get("name")
+                if name and name not in self.variables:
+                    self.variables[name] = tag
+            elif tag.name == "grammar":
+                _first(self.grammars, tag.attr("id"))
+            elif tag.name == "event" and tag.parent is root:
+                _first(self.events, tag.attr("name"))
+            elif tag.name == "timer":
+                _first(self.timers, tag.attr("name"))
+
+    @cached_property
+    def labels(self) -> dict[str, tuple[int, int, str]]:
+        """label -> where it is written (start, end) and its Command."""
+        doc = self._doc
+        found: dict[str, tuple[int, int, str]] = {}
+        elements = {element_name(c.name): c.name for c in doc.setting.profile.catalog()}
+        for tag in doc.buffer.xml.tags:
+            if tag.name == "chain":
+                start, text = tag.text(doc.source)
+                commands = {label: name for name, _at, label in calls(text) if label}
+                for label, at in labels(text):
+                    found.setdefault(label, (start + at, start + at + len(label),
+                                             commands.get(label, "")))
+            if tag.parent is not None and tag.parent.name == "request":
+                ident = tag.attr("id")
+                command = tag.get("name") if tag.name == "command" else elements.get(tag.name, "")
+                if ident is not None and ident.value_start >= 0:
+                    found.setdefault(ident.value, (ident.value_start, ident.value_end, command))
+        return found
 
 
 class _Doc:
@@ -129,40 +164,7 @@ class _Doc:
         return self._index
 
     def _build_index(self) -> _Index:
-        xml = self.buffer.xml
-        root = xml.root
-        states: dict[str, Attr] = {}
-        variables: dict[str, Tag] = {}
-        grammars: dict[str, Attr] = {}
-        events: dict[str, Attr] = {}
-        timers: dict[str, Attr] = {}
-        found: dict[str, tuple[int, int, str]] = {}
-        elements = {element_name(c.name): c.name for c in self.setting.profile.catalog()}
-        for tag in xml.tags:
-            if tag.name == "state":
-                _first(states, tag.attr("id"))
-            elif tag.name == "var" and tag.parent is root:
-                name = tag.get("name")
-                if name and name not in variables:
-                    variables[name] = tag
-            elif tag.name == "grammar":
-                _first(grammars, tag.attr("id"))
-            elif tag.name == "event" and tag.parent is root:
-                _first(events, tag.attr("name"))
-            elif tag.name == "timer":
-                _first(timers, tag.attr("name"))
-            elif tag.name == "chain":
-                start, text = tag.text(self.source)
-                commands = {label: name for name, _at, label in calls(text) if label}
-                for label, at in labels(text):
-                    found.setdefault(label, (start + at, start + at + len(label),
-                                             commands.get(label, "")))
-            if tag.parent is not None and tag.parent.name == "request":
-                ident = tag.attr("id")
-                command = tag.get("name") if tag.name == "command" else elements.get(tag.name, "")
-                if ident is not None and ident.value_start >= 0:
-                    found.setdefault(ident.value, (ident.value_start, ident.value_end, command))
-        return _Index(states, variables, grammars, events, timers, found)
+        return _Index(self)
 
     def element(self, tag: Tag) -> ElementInfo | None:
         return element_info(self.namespace, tag.path())

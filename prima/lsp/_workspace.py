@@ -23,6 +23,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
 
+from prima.collecting import no_collections
 from prima.dsl import RobotProfile, default_profile, load_profile
 from prima.errors import DocumentError, LocatedError, Problem
 from prima.lsp._xml import Tag, XmlText, first_tag, scan
@@ -393,7 +394,7 @@ class Workspace:
             if scenario is not None:
                 items.insert(0, (scenario, True))
         profile = self.profile(self.robot) if self.robot is not None else default_profile()
-        with self.unsaved():
+        with self.unsaved(), no_collections():
             report = _validation(profile, self.robot is not None).run(items)
         names: dict[str, bool] = {}
         problems = []

@@ -14,7 +14,7 @@ from __future__ import annotations
 import enum
 import html
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 __all__ = ["Attr", "Spot", "Tag", "Where", "XmlText", "first_tag", "locate", "scan"]
 
@@ -23,6 +23,9 @@ _MARKUP = re.compile(r"<!--.*?(?:-->|\Z)|<\?.*?(?:\?>|\Z)|<!\[CDATA\[.*?(?:\]\]>
 _ATTR = re.compile(r"""\s*(?P<name>[^\s=<>/"']+)"""
                    r"""(?:\s*=\s*(?:"(?P<dq>[^"<]*)"?|'(?P<sq>[^'<]*)'?))?""")
 _TAG_END = re.compile(r"\s*(/?>)?")
+_WHOLE_TAG = re.compile(r"""<[^\s<>/!?]*(?P<attrs>(?:\s+[^\s=<>/"']+\s*=\s*"""
+                        r"""(?:"[^"<]*"|'[^'<]*'))*)\s*(?P<close>/?>)""")
+"""A start tag written whole: every attribute with a quoted value, then ``>`` or ``/>``."""
 
 
 @dataclass
@@ -47,23 +50,39 @@ class Attr:
         return self.name_start + len(self.name)
 
 
-@dataclass
 class Tag:
-    """A start tag (and the element it opens)."""
+    """A start tag (and the element it opens). Its attributes are read from the text on
+    first need (a document's tags are many; most requests look at a few)."""
 
-    name: str
-    """Its local name (a prefix dropped)."""
-    start: int
-    """Offset of its ``<``."""
-    end: int
-    """Offset just after its ``>`` (or where it stops, when not closed)."""
-    closed: bool
-    empty: bool
-    attrs: list[Attr] = field(default_factory=list)
-    parent: Tag | None = None
-    content_end: int = -1
-    """Where its content ends (its end tag's ``<``; the text's end if never closed)."""
-    children: list[Tag] = field(default_factory=list)
+    __slots__ = ("_attrs", "_span", "children", "closed", "content_end", "empty", "end", "name",
+                 "parent", "raw_name", "start")
+
+    def __init__(self, name: str, start: int, end: int, closed: bool, empty: bool,
+                 attrs: list[Attr] | tuple[str, int, int], raw_name: str = "") -> None:
+        self.name = name
+        """Its local name (a prefix dropped)."""
+        self.start = start
+        """Offset of its ``<``."""
+        self.end = end
+        """Offset just after its ``>`` (or where it stops, when not closed)."""
+        self.closed = closed
+        self.empty = empty
+        self._attrs: list[Attr] | None = attrs if isinstance(attrs, list) else None
+        self._span = attrs if isinstance(attrs, tuple) else None
+        """(source, start, end) of attributes not read yet."""
+        self.parent: Tag | None = None
+        self.content_end = -1
+        """Where its content ends (its end tag's ``<``; the text's end if never closed)."""
+        self.children: list[Tag] = []
+        self.raw_name = raw_name
+
+    @property
+    def attrs(self) -> list[Attr]:
+        if self._attrs is None:
+            source, start, end = self._span or ("", 0, 0)
+            self._attrs = _attributes(source, start, end)[0]
+            self._span = None
+        return self._attrs
 
     @property
     def name_start(self) -> int:
@@ -72,8 +91,6 @@ class Tag:
     @property
     def name_end(self) -> int:
         return self.start + 1 + len(self.raw_name)
-
-    raw_name: str = ""
 
     def attr(self, name: str) -> Attr | None:
         return next((a for a in self.attrs if a.name == name), None)
@@ -148,11 +165,11 @@ def _local(name: str) -> str:
     return name.rpartition(":")[2]
 
 
-def _start_tag(source: str, at: int, raw_name: str) -> Tag:
-    pos = at + 1 + len(raw_name)
+def _attributes(source: str, pos: int, stop: int | None = None) -> tuple[list[Attr], int]:
+    """The attributes written from ``pos`` (up to ``stop``), and where they end."""
     attrs: list[Attr] = []
     while True:
-        m = _ATTR.match(source, pos)
+        m = _ATTR.match(source, pos) if stop is None else _ATTR.match(source, pos, stop)
         if not m or m.end() == pos:
             break
         if m.group("dq") is not None or m.group("sq") is not None:
@@ -162,6 +179,15 @@ def _start_tag(source: str, at: int, raw_name: str) -> Tag:
         else:
             attrs.append(Attr(m.group("name"), m.start("name"), -1, -1, ""))
         pos = m.end()
+    return attrs, pos
+
+
+def _start_tag(source: str, at: int, raw_name: str) -> Tag:
+    whole = _WHOLE_TAG.match(source, at)
+    if whole is not None:  # well formed: its attributes are read when asked for
+        return Tag(_local(raw_name), at, whole.end(), True, whole.group("close") == "/>",
+                   (source, whole.start("attrs"), whole.end("attrs")), raw_name)
+    attrs, pos = _attributes(source, at + 1 + len(raw_name))
     end = _TAG_END.match(source, pos)
     closer = end.group(1) if end else None
     stop = end.end() if end else pos
@@ -169,9 +195,7 @@ def _start_tag(source: str, at: int, raw_name: str) -> Tag:
         nxt = source.find("<", pos)
         stop = len(source) if nxt < 0 else nxt
         stop = max(stop, pos)
-    tag = Tag(_local(raw_name), at, stop, closer is not None, closer == "/>", attrs)
-    tag.raw_name = raw_name
-    return tag
+    return Tag(_local(raw_name), at, stop, closer is not None, closer == "/>", attrs, raw_name)
 
 
 def scan(source: str) -> XmlText:

@@ -11,6 +11,7 @@ import contextlib
 import fcntl
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -36,9 +37,12 @@ class Session:
         self.diagnostics: dict[str, list[types.Diagnostic]] = {}
         self._published: dict[str, asyncio.Event] = {}
         self.versions: dict[str, int] = {}
+        self.log: list[tuple[str, int | None, float]] = []
+        """Every publication: the document, its version, when it arrived (perf_counter)."""
 
         @self.client.feature(types.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
         def published(params: types.PublishDiagnosticsParams) -> None:
+            self.log.append((params.uri, params.version, time.perf_counter()))
             self.diagnostics[params.uri] = list(params.diagnostics)
             self._event(params.uri).set()
 
@@ -82,6 +86,27 @@ class Session:
             types.VersionedTextDocumentIdentifier(self.versions[key], key),
             [types.TextDocumentContentChangeWholeDocument(text)]))
         return await self.wait(key)
+
+    def edit(self, path: Path, start: tuple[int, int], end: tuple[int, int], text: str) -> int:
+        """Send one keystroke, as an editor does: the range replaced and its new text; the
+        document's new version (its diagnostics are not awaited)."""
+        key = uri(path)
+        self._event(key).clear()
+        self.versions[key] += 1
+        self.client.text_document_did_change(types.DidChangeTextDocumentParams(
+            types.VersionedTextDocumentIdentifier(self.versions[key], key),
+            [types.TextDocumentContentChangePartial(
+                types.Range(types.Position(*start), types.Position(*end)), text)]))
+        return self.versions[key]
+
+    async def version(self, path: Path, version: int) -> list[types.Diagnostic]:
+        """The diagnostics of ``version`` of the document, once published."""
+        key = uri(path)
+        while True:
+            self._event(key).clear()
+            if any(u == key and v == version for u, v, _t in self.log):
+                return self.diagnostics[key]
+            await self.wait(key)
 
     async def wait(self, key: str) -> list[types.Diagnostic]:
         await asyncio.wait_for(self._event(key).wait(), TIMEOUT)
