@@ -13,7 +13,7 @@ import contextlib
 import gc
 from collections.abc import Iterator
 
-__all__ = ["YOUNG_THRESHOLD", "fewer_collections", "no_collections"]
+__all__ = ["YOUNG_THRESHOLD", "fewer_collections", "no_collections", "settle"]
 
 YOUNG_THRESHOLD = 20_000
 """Objects allocated between two collections of the youngest generation meanwhile."""
@@ -44,3 +44,11 @@ def no_collections() -> Iterator[None]:
     finally:
         if was:
             gc.enable()
+
+
+def settle() -> None:
+    """Collect once, then keep every object alive now out of all later passes: a
+    long-lived process calls it when what it loads once (schemas, the parser, the
+    Command catalog) is loaded, so the collector's passes scan only what came after."""
+    gc.collect()
+    gc.freeze()

@@ -191,7 +191,8 @@ class SourceMap:
         self._text = text
         self._line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
         self._elements = list(root.iter(tag=etree.Element))  # keeps proxies alive
-        places = _scan_start_tags(text)
+        places, self.depth = _scan_start_tags(text)
+        """How deep the elements nest (the root alone: 1)."""
         self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places, strict=False))
         counts = [len(el.attrib) for el in self._elements]
         self.nodes = len(places) + sum(counts)
@@ -257,15 +258,23 @@ _MARKUP = re.compile(
 _ATTRIBUTE = re.compile(r"""([^\s=/>]+)\s*=\s*(?:"([^"]*)"|'([^']*)')""")
 
 
-def _scan_start_tags(text: str) -> list[_Place]:
-    """Start tags of a well-formed document, in document order."""
+def _scan_start_tags(text: str) -> tuple[list[_Place], int]:
+    """Start tags of a well-formed document, in document order, and how deep its
+    elements nest."""
     places: list[_Place] = []
+    depth = deepest = 0
     for m in _MARKUP.finditer(text):
         if m.group("name") is None:
+            if m.group().startswith("</"):
+                depth -= 1
             continue
+        empty = m.group("empty")
+        deepest = max(deepest, depth + 1)
+        if not empty:
+            depth += 1
         places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"),
-                             -1 if m.group("empty") else m.end()))
-    return places
+                             -1 if empty else m.end()))
+    return places, deepest
 
 
 @dataclass
@@ -498,6 +507,8 @@ def _syntax_message(exc: etree.XMLSyntaxError) -> str:
 
 
 def _check_depth(doc: XmlDocument, fail: Callable[[etree._Element, str], LocatedError]) -> None:
+    if doc.where.depth <= MAX_DEPTH:  # (counted as the text was read: no walk)
+        return
     stack = [(doc.root, 1)]
     while stack:
         el, depth = stack.pop()

@@ -542,15 +542,15 @@ class Builder:
                 self.warning((el, None, 0), f"never runs: the <goto> at line "
                                             f"{self.loc_of(goto).line} leaves the state first")
                 warned = True
-            action = self._action(el)
+            tag = local_name(el)
+            action = self._action(el, tag)
             if action is not None:
                 out.append(action)
-            if goto is None and local_name(el) == "goto":
+            if goto is None and tag == "goto":
                 goto = el
         return tuple(out)
 
-    def _action(self, el: etree._Element) -> Action | None:
-        tag = local_name(el)
+    def _action(self, el: etree._Element, tag: str) -> Action | None:
         read = _ACTIONS.get(tag)
         if read is None:
             self.error((el, None, 0), f"<{tag}> is not an action")

@@ -22,6 +22,7 @@ from pygls.uris import from_fs_path, to_fs_path
 from pygls.workspace import PositionCodec
 
 from prima import __version__
+from prima.collecting import settle
 from prima.errors import Problem, Severity
 from prima.lsp._features import Features, Item, Target
 from prima.lsp._schedule import DEBOUNCE, Diagnostics
@@ -69,6 +70,7 @@ class PrimaServer(LanguageServer):
         """Each open document's resolved path."""
         self.depends: dict[str, frozenset[Path]] = {}
         """What each open document's last check depended on."""
+        self._settled = False
 
     def files(self) -> Workspace:
         """PRIMA's view of the workspace, made on first need (after initialize)."""
@@ -107,6 +109,9 @@ class PrimaServer(LanguageServer):
         if doc is None or buffer is None:
             return
         checked = self.files().check(_path(uri))
+        if not self._settled:  # what the first check loaded stays: never scanned again
+            self._settled = True
+            settle()
         self.depends[uri] = checked.depends
         codec = doc.position_codec
         self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(

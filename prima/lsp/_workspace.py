@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from prima.collecting import no_collections
 from prima.dsl import RobotProfile, default_profile, load_profile
 from prima.errors import DocumentError, LocatedError, Problem
-from prima.lsp._xml import Tag, XmlText, first_tag, scan
+from prima.lsp._xml import Tag, XmlText, first_tag, rescan, scan
 from prima.xmlio import read_source, unsaved
 
 if TYPE_CHECKING:
@@ -54,13 +54,24 @@ class Buffer:
     """A file's text as read: from the editor, or from disk. What is read of it is read
     once, on first need: its tags (for completion, hover and definition), its lines."""
 
-    def __init__(self, path: Path, text: str) -> None:
+    def __init__(self, path: Path, text: str, before: XmlText | None = None) -> None:
         self.path = path
         self.text = text
+        self._before = before
+        """An earlier version's scan, to take over (:func:`~prima.lsp._xml.rescan`)."""
 
     @cached_property
     def xml(self) -> XmlText:
-        return scan(self.text)
+        before, self._before = self._before, None
+        return scan(self.text) if before is None else rescan(before, self.text)
+
+    def hand_over(self) -> XmlText | None:
+        """This version's scan (or the one it was to take over), given up to the next
+        version; asked again, this buffer scans its text anew."""
+        made: XmlText | None = self.__dict__.pop("xml", None)
+        if made is None:
+            made, self._before = self._before, None
+        return made
 
     @cached_property
     def _root(self) -> Tag | None:
@@ -184,7 +195,7 @@ class Workspace:
         held = self.buffers.get(key)
         if held is not None and (held.text is text or held.text == text):
             return held
-        buffer = Buffer(path, text)
+        buffer = Buffer(path, text, None if held is None else held.hand_over())
         self.buffers[key] = buffer
         if held is None or buffer.namespace != PXML_NS or held.namespace != PXML_NS:
             self.generation += 1  # (a PXML document's text changes nothing in force)

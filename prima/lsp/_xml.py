@@ -16,7 +16,7 @@ import html
 import re
 from dataclasses import dataclass
 
-__all__ = ["Attr", "Spot", "Tag", "Where", "XmlText", "first_tag", "locate", "scan"]
+__all__ = ["Attr", "Spot", "Tag", "Where", "XmlText", "first_tag", "locate", "rescan", "scan"]
 
 _MARKUP = re.compile(r"<!--.*?(?:-->|\Z)|<\?.*?(?:\?>|\Z)|<!\[CDATA\[.*?(?:\]\]>|\Z)"
                      r"|<!.*?(?:>|\Z)|</(?P<end>[^\s<>]*)[^<>]*>?|<(?P<start>[^\s<>/!?]*)", re.S)
@@ -234,6 +234,119 @@ def scan(source: str) -> XmlText:
     for tag in stack:
         tag.content_end = len(source)
     return XmlText(source, tags, ends, others)
+
+
+def rescan(old: XmlText, source: str) -> XmlText:
+    """:func:`scan` of ``source``, a later version of ``old.source``; ``old`` is taken
+    over (its tags move to the new text) when what changed is one run of text or one
+    attribute's value that no markup character enters or leaves, which is what a
+    keystroke mostly is: then only offsets move, and no tag is read again. Otherwise
+    the text is scanned whole. Either way ``old`` must not be used again."""
+    before = old.source
+    start = _common_prefix(before, source)
+    tail = _common_suffix(before, source, start)
+    old_end, new_end = len(before) - tail, len(source) - tail
+    removed, typed = before[start:old_end], source[start:new_end]
+    if "<" in removed or "<" in typed:
+        return scan(source)
+    holder = _holder(old, start, old_end)
+    if holder is None:
+        return scan(source)
+    tag, attr = holder
+    if attr is not None:
+        quote = before[attr.value_start - 1]
+        if quote in removed or quote in typed or before[attr.value_end:attr.value_end + 1] != quote:
+            return scan(source)
+    _shift(old, source, old_end, len(source) - len(before), tag)
+    return old
+
+
+def _common_prefix(a: str, b: str) -> int:
+    """How many first characters ``a`` and ``b`` share (compared in halves, in C)."""
+    low, high = 0, min(len(a), len(b))
+    while low < high:
+        mid = (low + high + 1) // 2
+        if a[low:mid] == b[low:mid]:
+            low = mid
+        else:
+            high = mid - 1
+    return low
+
+
+def _common_suffix(a: str, b: str, prefix: int) -> int:
+    """How many last characters ``a`` and ``b`` share, not counting into ``prefix``."""
+    low, high = 0, min(len(a), len(b)) - prefix
+    while low < high:
+        mid = (low + high + 1) // 2
+        if a[len(a) - mid:len(a) - low] == b[len(b) - mid:len(b) - low]:
+            low = mid
+        else:
+            high = mid - 1
+    return low
+
+
+def _holder(old: XmlText, start: int, end: int) -> tuple[Tag | None, Attr | None] | None:
+    """What the changed characters ``[start, end)`` of ``old.source`` lie in: a run of
+    text between two pieces of markup (None, None), one attribute's value (its tag and
+    it), or (None) anything else."""
+    text = old.source
+    for begin, stop in old.others:
+        if begin < end and start < stop or (stop == start and not text.endswith(">", 0, stop)):
+            return None
+    for begin, stop, _name in old.ends:
+        if begin < end and start < stop or (stop == start and not text.endswith(">", 0, stop)):
+            return None
+    at = _last_starting_before(old.tags, start)
+    if at is None or at.end < start or (at.end == start and text.endswith(">", 0, at.end)):
+        return None, None  # between markup (a tag ending in '>' examined nothing after it)
+    if not at.closed or at.end <= end:
+        return None
+    for attr in at.attrs:
+        if attr.value_start >= 0 and attr.value_start <= start and end <= attr.value_end:
+            return at, attr
+    return None
+
+
+def _last_starting_before(tags: list[Tag], offset: int) -> Tag | None:
+    """The last tag whose ``<`` is before ``offset``."""
+    low, high = 0, len(tags)
+    while low < high:
+        mid = (low + high) // 2
+        if tags[mid].start < offset:
+            low = mid + 1
+        else:
+            high = mid
+    return tags[low - 1] if low else None
+
+
+def _shift(old: XmlText, source: str, at: int, by: int, holder: Tag | None) -> None:
+    """Move everything from offset ``at`` of ``old`` on by ``by`` characters, into the
+    new ``source`` (``holder``: the tag whose attribute value changed)."""
+    for tag in old.tags:
+        if tag is holder:
+            tag.end += by
+            if tag.content_end >= at:
+                tag.content_end += by
+            tag._attrs, tag._span = None, (source, tag.name_end, tag.end)
+            continue
+        moved = tag.start >= at
+        if moved:
+            tag.start += by
+            tag.end += by
+        if tag.content_end >= at:
+            tag.content_end += by
+        if tag._span is not None:
+            _text, begin, stop = tag._span
+            tag._span = (source, begin + by, stop + by) if moved else (source, begin, stop)
+        elif tag._attrs is not None and moved:
+            for attr in tag._attrs:
+                attr.name_start += by
+                if attr.value_start >= 0:
+                    attr.value_start += by
+                    attr.value_end += by
+    old.ends = [(b + by, e + by, n) if b >= at else (b, e, n) for b, e, n in old.ends]
+    old.others = [(b + by, e + by) if b >= at else (b, e) for b, e in old.others]
+    old.source = source
 
 
 def first_tag(source: str) -> Tag | None:
