@@ -9,7 +9,9 @@ are literals or expressions, places and gestures are bare names or
 from __future__ import annotations
 
 import re
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING
 
@@ -18,6 +20,8 @@ from lxml import etree
 from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
 from prima.dsl._elements import children
 from prima.dsl._expr import (
+    MEMO_ENTRIES,
+    MEMO_TEXT,
     ChainArg,
     ChainStep,
     Compiled,
@@ -31,6 +35,7 @@ from prima.dsl._expr import (
     string_literal,
 )
 from prima.dsl._model import CommandCall
+from prima.dsl._profile import RobotProfile
 from prima.vocab import MAX_NUMBER, AppKind
 from prima.xmlio import local_name
 
@@ -134,6 +139,75 @@ def _note_place(b: Builder, spec: CommandSpec, param: Param, raw: str, spot: Spo
 def _extra_attr(b: Builder, spec: CommandSpec, el: etree._Element) -> Compiled | None:
     param = b.profile.extras.get(spec.name, {}).get(el.get("name", ""))
     return compile_attribute(b, param.kind if param else ParamKind.TEXT, el, "value")
+
+
+def bind_chain(b: Builder, el: etree._Element, text: str,
+               steps: Sequence[ChainStep]) -> list[CommandCall | None]:
+    """The Commands of a chain (:func:`bind_step` each). A short chain bound without a
+    problem is kept (see :data:`~prima.dsl._expr.MEMO_TEXT`): the same text bound again,
+    in the same setting (the robot profile, the kind of application, the variables
+    declared, inside a handler or not), gives the same Commands, each located where
+    this chain is written, and the same labels, places and names to check."""
+    key = (text, b.kind, b.max_text, b.in_handler, b.variable_key)
+    kept = _BOUND.get(key) if len(text) <= MEMO_TEXT else None
+    if kept is not None and kept.profile is b.profile:
+        _BOUND.move_to_end(key)
+        return kept.replay(b, el)
+    marks = (len(b.problems), len(b.refs.variables), len(b.refs.grammars), len(b.places))
+    calls = [bind_step(b, el, text, step) for step in steps]
+    if len(text) <= MEMO_TEXT and len(b.problems) == marks[0] and all(calls):
+        _BOUND[key] = _Bound.record(b, steps, calls, marks)
+        while len(_BOUND) > MEMO_ENTRIES:
+            _BOUND.popitem(last=False)
+    return calls
+
+
+@dataclass(frozen=True)
+class _Bound:
+    """A chain's Commands as bound once, with what binding them asked the builder to
+    check later, located in the chain's text (where, index) so that they can be
+    replayed for another element that holds the same text."""
+
+    profile: RobotProfile
+    calls: tuple[tuple[CommandCall, int, int], ...]
+    """Each Command, where its step and its label are written."""
+    variables: tuple[tuple[str, str | None, int], ...]
+    grammars: tuple[tuple[str, str | None, int], ...]
+    places: tuple[tuple[str, str | None, int, str, str], ...]
+
+    @classmethod
+    def record(cls, b: Builder, steps: Sequence[ChainStep], calls: Sequence[CommandCall | None],
+               marks: tuple[int, int, int, int]) -> _Bound:
+        _problems, variables, grammars, places = marks
+        return cls(
+            b.profile,
+            tuple((call, step.index, step.label_index)
+                  for call, step in zip(calls, steps, strict=True) if call is not None),
+            tuple((name, where, index) for name, (_el, where, index)
+                  in b.refs.variables[variables:]),
+            tuple((name, where, index) for name, (_el, where, index)
+                  in b.refs.grammars[grammars:]),
+            tuple((name, where, index, command, param) for name, (_el, where, index), command,
+                  param in b.places[places:]))
+
+    def replay(self, b: Builder, el: etree._Element) -> list[CommandCall | None]:
+        out: list[CommandCall | None] = []
+        for call, index, label_index in self.calls:
+            again = CommandCall(call.command, dict(call.args), dict(call.extra), call.label,
+                                b.loc((el, "#text", index)), call.grammar, call.into)
+            if again.label is not None:
+                b.add_label(again.label, again, (el, "#text", label_index))
+            out.append(again)
+        b.refs.variables.extend((name, (el, where, index)) for name, where, index in self.variables)
+        b.refs.grammars.extend((name, (el, where, index)) for name, where, index in self.grammars)
+        b.places.extend((name, (el, where, index), command, param)
+                        for name, where, index, command, param in self.places)
+        return out
+
+
+_BOUND: OrderedDict[tuple[object, ...], _Bound] = OrderedDict()
+"""The chains bound without a problem, by their text and setting (the least recently
+used go first, past :data:`~prima.dsl._expr.MEMO_ENTRIES`)."""
 
 
 def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> CommandCall | None:

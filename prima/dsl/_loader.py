@@ -19,7 +19,7 @@ from lxml import etree
 
 from prima.suggest import did_you_mean, similar
 from prima.catalog import ParamKind
-from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
+from prima.dsl._commands import bind_chain, bind_element, compile_attribute, element_name
 from prima.dsl._elements import elements, flag
 from prima.dsl._expr import (
     MAX_CHAIN_COMMANDS,
@@ -124,6 +124,7 @@ class Builder:
         self.refs = _Refs()
         self.variable_names = dict.fromkeys(v.get("name", "") for v in self._top("var"))
         """Every declared variable, in document order."""
+        self.variable_key = frozenset(self.variable_names)
         self.labels: dict[str, CommandCall] = {}
         self.timers: dict[str, tuple[bool, Spot]] = {}
         self.states: dict[str, State] = {}
@@ -136,7 +137,7 @@ class Builder:
         self._carets: set[int] = set()
         self._hints = 0
         self._known: dict[str, str] = {}
-        self._places: list[tuple[str, Spot, str, str]] = []
+        self.places: list[tuple[str, Spot, str, str]] = []
         """Places written by name as Command arguments: name, where, Command, argument."""
 
     # ------------------------------------------------------------ reporting
@@ -249,7 +250,7 @@ class Builder:
 
     def literal_place(self, name: str, spot: Spot, command: str, param: str) -> None:
         """A place written by name as a Command's argument (the map checks it, if known)."""
-        self._places.append((name, spot, command, param))
+        self.places.append((name, spot, command, param))
 
     def need_grammar(self, name: str, spot: Spot) -> None:
         """The document must declare this grammar (checked once all is read)."""
@@ -302,7 +303,7 @@ class Builder:
             streams=self.streams, blocks=self.blocks, commands=dict(self.labels),
             timers=frozenset(self.timers),
             places=tuple(sorted((PlaceRef(name, self.loc(spot), command, param)
-                                 for name, spot, command, param in self._places),
+                                 for name, spot, command, param in self.places),
                                 key=lambda p: (p.loc.line, p.loc.col))),
         )
 
@@ -582,7 +583,7 @@ class Builder:
             except ExpressionError as fault:
                 self.fault((el, "#text", 0), fault)
                 return None
-            calls = [bind_step(self, el, text, step) for step in steps]
+            calls = bind_chain(self, el, text, steps)
         else:
             children = elements(el)
             if len(children) > MAX_CHAIN_COMMANDS:

@@ -69,3 +69,59 @@ def test_every_use_of_a_text_is_located_where_it_is_written() -> None:
         found = [(p.line, p.col, p.message.split(";")[0].split(" (")[0]) for p in problems
                  if p.severity.value == "error"]
         assert found == expected
+
+
+CHAINS = """<pxml xmlns="urn:prima:pxml:1" kind="fa" name="t">
+  <grammar id="yn"><choice value="yes">yes</choice></grammar>
+  <var name="said" expr="''"/>
+  <state id="s" initial="true">
+    <entry><chain>a: TopologicalMove(hall), q: QA("Go?", yn, said)</chain></entry>
+    <on event="touched"><chain>Speak("{event.name}")</chain></on>
+    <on event="held"><goto state="t"/></on>
+  </state>
+  <state id="t">
+    <entry><chain>a: TopologicalMove(hall), q: QA("Go?", yn, said)</chain></entry>
+    <on event="touched"><chain>Speak("{event.name}")</chain></on>
+  </state>
+  <state id="u"><entry><chain>Speak("{event.name}")</chain></entry></state>
+</pxml>"""
+
+
+def _messages(text: str) -> list[tuple[int, int, str]]:
+    return [(p.line, p.col, p.message.split(" (")[0])
+            for p in check_document(text.encode(), "t.pxml")[1]]
+
+
+def test_a_chain_bound_again_is_checked_again_where_it_is() -> None:
+    """A chain bound without a problem is kept, and its copies replayed: their Commands
+    located where each is written, their labels checked for duplicates, their names
+    checked; the setting it was bound in (a handler or not, the variables declared)
+    is part of what it is."""
+    from prima.dsl._commands import _BOUND
+
+    _BOUND.clear()
+    first = _messages(CHAINS)
+    assert len(_BOUND) == 2  # the entries' chain and the handlers' (line 10: a replay)
+    assert _messages(CHAINS) == first
+    column = CHAINS.splitlines()[9].index("a:") + 1
+    assert (10, column, "duplicate Command id 'a'") in first
+    assert (10, CHAINS.splitlines()[9].index("q:") + 1, "duplicate Command id 'q'") in first
+    event = CHAINS.splitlines()[12].index("event.name") + 1
+    assert [m for m in first if "'event'" in m[2]] == [
+        (13, event, "'event' is only available inside an event handler")]
+    declared = CHAINS.replace('<var name="said"', '<var name="hall" expr="\'x\'"/><var name="said"')
+    warned = [m for m in _messages(declared) if "taken as a place name" in m[2]]
+    assert [line for line, _col, _m in warned] == [5, 10]
+
+
+def test_a_document_built_again_is_the_same_document() -> None:
+    from pathlib import Path
+
+    from prima.dsl._commands import _BOUND
+
+    for path in sorted((Path(__file__).resolve().parents[2] / "apps").rglob("*.pxml")):
+        _BOUND.clear()
+        data = path.read_bytes()
+        fresh = check_document(data, str(path))
+        replayed = check_document(data, str(path))
+        assert replayed == fresh, path.name
