@@ -200,6 +200,16 @@ class SourceMap:
         self.most_attributes = max(counts, default=0)
         """The most attributes one element carries."""
 
+    @property
+    def source(self) -> str:
+        """The text the map was built from (a byte-order mark left out)."""
+        return self._text
+
+    def offset(self, el: etree._Element) -> int | None:
+        """Where the element's start tag begins (its ``<``), if it is known."""
+        place = self._places.get(el)
+        return None if place is None else place.start
+
     def position(self, offset: int) -> tuple[int, int]:
         """Line and column (both 1-based) of a character offset."""
         line = bisect_right(self._line_starts, offset) - 1

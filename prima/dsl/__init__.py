@@ -52,6 +52,8 @@ from prima.dsl._loader import (
     NAMESPACE,
     check_document,
     check_parsed,
+    forget_kept,
+    kept,
     load_document,
     structure_problems,
 )
@@ -159,6 +161,8 @@ __all__ = [
     "default_profile",
     "element_name",
     "fast_parse",
+    "forget_kept",
+    "kept",
     "load_document",
     "literal_places",
     "unknown_places",

@@ -210,6 +210,11 @@ _BOUND: OrderedDict[tuple[object, ...], _Bound] = OrderedDict()
 used go first, past :data:`~prima.dsl._expr.MEMO_ENTRIES`)."""
 
 
+def chains_kept() -> OrderedDict[tuple[object, ...], _Bound]:
+    """The chains kept (:func:`bind_chain`)."""
+    return _BOUND
+
+
 def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> CommandCall | None:
     """A Command written in the chain notation: ``label: Name(args)[extras]``."""
     where: Spot = (el, "#text", step.index)

@@ -8,7 +8,9 @@ waiting to be read, so every request and change already sent is handled first:
 a burst of changes ends in one check, of the latest version (a version
 superseded before its check starts is never checked), and a request is never
 queued behind the checks of a burst. Documents are checked one at a time, the
-earliest due first, each check followed by a turn of the input.
+earliest due first, each check followed by a turn of the input; a check that a
+change read meanwhile has made stale is not published (the document is due
+again).
 """
 
 from __future__ import annotations
@@ -21,13 +23,17 @@ __all__ = ["DEBOUNCE", "Diagnostics"]
 
 DEBOUNCE = 0.040
 """Seconds a changed document waits, unchanged, before it is checked (keystrokes
-30 ms apart are one check)."""
+30 ms apart are one check; one that comes late may start a check, whose
+diagnostics are then dropped if the next keystroke is read while it runs)."""
 
 
 class Diagnostics:
-    """The documents due for a check, and the loop that checks them (``check(uri)``)."""
+    """The documents due for a check, and the loop that checks them: ``check(uri)`` checks
+    one and gives what publishes its diagnostics, which is done unless a change read
+    while it was checked made it due again (its diagnostics would be stale)."""
 
-    def __init__(self, check: Callable[[str], None], *, debounce: float = DEBOUNCE,
+    def __init__(self, check: Callable[[str], Callable[[], None] | None], *,
+                 debounce: float = DEBOUNCE,
                  failed: Callable[[str, Exception], None] | None = None) -> None:
         self._check = check
         self._failed = failed
@@ -73,7 +79,11 @@ class Diagnostics:
                 continue
             del self._due[uri]
             try:
-                self._check(uri)
+                publish = self._check(uri)
+                while pending():  # what came meanwhile first: it may make this one stale
+                    await asyncio.sleep(0)
+                if publish is not None and uri not in self._due:
+                    publish()
             except BrokenPipeError:
                 return
             except Exception as exc:  # noqa: BLE001 - said, and the other documents go on

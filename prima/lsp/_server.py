@@ -13,6 +13,7 @@ from __future__ import annotations
 import re
 import sys
 from bisect import bisect_right
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -102,21 +103,25 @@ class PrimaServer(LanguageServer):
                                                 in self.depends.items() if u in self.keys])
         self.diagnostics.due([u for u, key in self.keys.items() if key in affected], delay)
 
-    def check(self, uri: str) -> None:
-        """Check the open document ``uri`` as it is now, and publish its problems."""
+    def check(self, uri: str) -> Callable[[], None] | None:
+        """Check the open document ``uri`` as it is now; what publishes its problems."""
         doc = self.workspace.text_documents.get(uri)
         buffer = self.buffer(uri)
         if doc is None or buffer is None:
-            return
+            return None
         checked = self.files().check(_path(uri))
         if not self._settled:  # what the first check loaded stays: never scanned again
             self._settled = True
             settle()
         self.depends[uri] = checked.depends
-        codec = doc.position_codec
-        self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
-            uri=uri, version=doc.version,
-            diagnostics=[diagnostic(buffer, p, codec) for p in checked.problems]))
+        codec, version = doc.position_codec, doc.version
+        found = [diagnostic(buffer, p, codec) for p in checked.problems]
+
+        def publish() -> None:
+            if uri in self.keys:  # (not closed meanwhile)
+                self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
+                    uri=uri, version=version, diagnostics=found))
+        return publish
 
     def closed(self, uri: str) -> None:
         """``uri`` is closed: its diagnostics cleared, the documents that read it checked

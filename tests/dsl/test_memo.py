@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from prima.dsl import Scope, check_document, compile_expression, compile_template, parse_chain
+from prima.dsl import (
+    Scope,
+    check_document,
+    compile_expression,
+    compile_template,
+    forget_kept,
+    kept,
+    parse_chain,
+)
 
 SCOPE = Scope({"count": 2, "name": "Ann"})
 
@@ -97,11 +105,9 @@ def test_a_chain_bound_again_is_checked_again_where_it_is() -> None:
     located where each is written, their labels checked for duplicates, their names
     checked; the setting it was bound in (a handler or not, the variables declared)
     is part of what it is."""
-    from prima.dsl._commands import _BOUND
-
-    _BOUND.clear()
+    forget_kept()
     first = _messages(CHAINS)
-    assert len(_BOUND) == 2  # the entries' chain and the handlers' (line 10: a replay)
+    assert kept()["chains"] == 2  # the entries' chain and the handlers' (line 10: a replay)
     assert _messages(CHAINS) == first
     column = CHAINS.splitlines()[9].index("a:") + 1
     assert (10, column, "duplicate Command id 'a'") in first
@@ -117,11 +123,58 @@ def test_a_chain_bound_again_is_checked_again_where_it_is() -> None:
 def test_a_document_built_again_is_the_same_document() -> None:
     from pathlib import Path
 
-    from prima.dsl._commands import _BOUND
-
     for path in sorted((Path(__file__).resolve().parents[2] / "apps").rglob("*.pxml")):
-        _BOUND.clear()
+        forget_kept()
         data = path.read_bytes()
         fresh = check_document(data, str(path))
         replayed = check_document(data, str(path))
         assert replayed == fresh, path.name
+
+
+def test_a_state_kept_is_the_state_built_afresh_after_any_edit() -> None:
+    """States built without a problem are kept and replayed where the same text is written
+    at the same place: after edits anywhere (in a state, between states, adding lines,
+    breaking the document), the problems and the document are what a fresh build gives."""
+    import random
+    from pathlib import Path
+
+    rng = random.Random(11)
+    typed = ["a", " ", "x", '"', "<", ">", "\n", "{", "}", "(", ",", "", "", "&amp;",
+             "goto", "Speak", "event.", '<timer name="t" after="1" reactive="true"/>',
+             '<chain>a: Speak("x")</chain>']
+    apps = sorted((Path(__file__).resolve().parents[2] / "apps").rglob("*.pxml"))
+    replayed = 0
+    for path in apps:
+        source = path.read_text(encoding="utf-8")
+        forget_kept()
+        check_document(source.encode(), path.name)
+        for _ in range(25):  # each an edit of the file as shipped, its states kept
+            at = rng.randrange(len(source) + 1)
+            cut = min(len(source), at + rng.choice([0, 1, 3]))
+            text = source[:at] + rng.choice(typed) + source[cut:]
+            replayed += kept()["states"]
+            warm = check_document(text.encode(), path.name)
+            forget_kept()
+            fresh = check_document(text.encode(), path.name)
+            assert warm == fresh, (path.name, text[at - 40:at + 40])
+            check_document(source.encode(), path.name)
+    assert replayed > 1000
+
+
+def test_states_kept_check_command_ids_and_timers_across_states_again() -> None:
+    doc = """<pxml xmlns="urn:prima:pxml:1" kind="fa" name="t">
+  <state id="s" initial="true">
+    <entry><chain>a: Speak("x")</chain><timer name="t" after="1"/></entry>
+    <on event="touched"><goto state="u"/></on>
+  </state>
+  <state id="u"><entry><chain>b: Speak("y")</chain><timer name="t" after="2"/></entry></state>
+</pxml>"""
+    forget_kept()
+    assert _messages(doc) == []
+    assert kept()["states"] == 2
+    # state u is replayed; state s, changed, now holds the same id and a reactive timer
+    clash = doc.replace('a: Speak("x")', 'b: Speak("x")').replace(
+        '<timer name="t" after="1"/>', '<timer name="t" after="1" reactive="true"/>')
+    found = {m for _line, _col, m in _messages(clash)}
+    assert "duplicate Command id 'b'" in found
+    assert "timer 't' is started elsewhere with a different reactive flag" in found
