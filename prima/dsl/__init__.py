@@ -48,12 +48,11 @@ from prima.dsl._grammar import parser
 from prima.dsl._grammar import prebuilt as prebuilt_parser
 from prima.dsl._syntax import Token as ParseToken
 from prima.dsl._syntax import Tree as ParseTree
+from prima.dsl._kept import Kept, keeping
 from prima.dsl._loader import (
     NAMESPACE,
     check_document,
     check_parsed,
-    forget_kept,
-    kept,
     load_document,
     structure_problems,
 )
@@ -125,6 +124,7 @@ __all__ = [
     "CommandCall",
     "Compiled",
     "Document",
+    "Kept",
     "EventDecl",
     "Goto",
     "Grammar",
@@ -161,8 +161,7 @@ __all__ = [
     "default_profile",
     "element_name",
     "fast_parse",
-    "forget_kept",
-    "kept",
+    "keeping",
     "load_document",
     "literal_places",
     "unknown_places",

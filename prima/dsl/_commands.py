@@ -9,7 +9,6 @@ are literals or expressions, places and gestures are bare names or
 from __future__ import annotations
 
 import re
-from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import partial
@@ -20,7 +19,6 @@ from lxml import etree
 from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
 from prima.dsl._elements import children
 from prima.dsl._expr import (
-    MEMO_ENTRIES,
     MEMO_TEXT,
     ChainArg,
     ChainStep,
@@ -143,27 +141,28 @@ def _extra_attr(b: Builder, spec: CommandSpec, el: etree._Element) -> Compiled |
 
 def bind_chain(b: Builder, el: etree._Element, text: str,
                steps: Sequence[ChainStep]) -> list[CommandCall | None]:
-    """The Commands of a chain (:func:`bind_step` each). A short chain bound without a
-    problem is kept (see :data:`~prima.dsl._expr.MEMO_TEXT`): the same text bound again,
-    in the same setting (the robot profile, the kind of application, the variables
-    declared, inside a handler or not), gives the same Commands, each located where
-    this chain is written, and the same labels, places and names to check."""
+    """The Commands of a chain (:func:`bind_step` each). Where the builder keeps
+    (:func:`~prima.dsl._kept.keeping`), a short chain bound without a problem is kept: the
+    same text bound again, in the same setting (the robot profile, the kind of
+    application, the variables declared, inside a handler or not), gives the same
+    Commands, each located where this chain is written, and the same labels, places
+    and names to check."""
+    kept = b.kept
+    if kept is None or len(text) > MEMO_TEXT:
+        return [bind_step(b, el, text, step) for step in steps]
     key = (text, b.kind, b.max_text, b.in_handler, b.variable_key)
-    kept = _BOUND.get(key) if len(text) <= MEMO_TEXT else None
-    if kept is not None and kept.profile is b.profile:
-        _BOUND.move_to_end(key)
-        return kept.replay(b, el)
+    found = kept.chains.get(key)
+    if found is not None and found.profile is b.profile:
+        return found.replay(b, el)
     marks = (len(b.problems), len(b.refs.variables), len(b.refs.grammars), len(b.places))
     calls = [bind_step(b, el, text, step) for step in steps]
-    if len(text) <= MEMO_TEXT and len(b.problems) == marks[0] and all(calls):
-        _BOUND[key] = _Bound.record(b, steps, calls, marks)
-        while len(_BOUND) > MEMO_ENTRIES:
-            _BOUND.popitem(last=False)
+    if len(b.problems) == marks[0] and all(calls):
+        kept.chains.put(key, KeptChain.record(b, steps, calls, marks))
     return calls
 
 
 @dataclass(frozen=True)
-class _Bound:
+class KeptChain:
     """A chain's Commands as bound once, with what binding them asked the builder to
     check later, located in the chain's text (where, index) so that they can be
     replayed for another element that holds the same text."""
@@ -177,7 +176,7 @@ class _Bound:
 
     @classmethod
     def record(cls, b: Builder, steps: Sequence[ChainStep], calls: Sequence[CommandCall | None],
-               marks: tuple[int, int, int, int]) -> _Bound:
+               marks: tuple[int, int, int, int]) -> KeptChain:
         _problems, variables, grammars, places = marks
         return cls(
             b.profile,
@@ -203,16 +202,6 @@ class _Bound:
         b.places.extend((name, (el, where, index), command, param)
                         for name, where, index, command, param in self.places)
         return out
-
-
-_BOUND: OrderedDict[tuple[object, ...], _Bound] = OrderedDict()
-"""The chains bound without a problem, by their text and setting (the least recently
-used go first, past :data:`~prima.dsl._expr.MEMO_ENTRIES`)."""
-
-
-def chains_kept() -> OrderedDict[tuple[object, ...], _Bound]:
-    """The chains kept (:func:`bind_chain`)."""
-    return _BOUND
 
 
 def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> CommandCall | None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from collections import OrderedDict, deque
+from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,14 +20,9 @@ from lxml import etree
 
 from prima.suggest import did_you_mean, similar
 from prima.catalog import ParamKind
-from prima.dsl._commands import (
-    bind_chain,
-    bind_element,
-    chains_kept,
-    compile_attribute,
-    element_name,
-)
+from prima.dsl._commands import bind_chain, bind_element, compile_attribute, element_name
 from prima.dsl._elements import elements, flag
+from prima.dsl._kept import kept_now
 from prima.dsl._expr import (
     MAX_CHAIN_COMMANDS,
     Compiled,
@@ -132,6 +127,8 @@ class Builder:
         self.variable_names = dict.fromkeys(v.get("name", "") for v in self._top("var"))
         """Every declared variable, in document order."""
         self.variable_key = frozenset(self.variable_names)
+        self.kept = kept_now()
+        """Where chains and states are kept and replayed from, if anywhere."""
         self.labels: dict[str, CommandCall] = {}
         self.timers: dict[str, tuple[bool, Spot]] = {}
         self.states: dict[str, State] = {}
@@ -144,7 +141,7 @@ class Builder:
         self.label_log: list[tuple[str, CommandCall, Spot]] = []
         self.timer_log: list[tuple[str, bool, Spot, Spot]] = []
         """Every <goto>, Command id and timer start, in the order read (states kept and
-        replayed, :class:`_KeptState`, replay them)."""
+        replayed, :class:`KeptState`, replay them)."""
         self.in_handler = False
         self._carets: set[int] = set()
         self._hints = 0
@@ -303,7 +300,7 @@ class Builder:
                 description = " ".join((el.text or "").split())
             elif tag.startswith("on"):
                 handlers.append(self._handler(el))
-            elif tag == "state" and starts[i] is not None:
+            elif tag == "state" and starts[i] is not None and self.kept is not None:
                 after = starts[i + 1] if i + 1 < len(starts) else None
                 self._add_kept_state(el, head, self.doc.where.source[starts[i]:after])
             elif tag in ("state", "stream", "block"):
@@ -444,19 +441,23 @@ class Builder:
 
     def _add_kept_state(self, el: etree._Element, head: str, written: str) -> None:
         """A state written at the top level, built, or replayed from the same text
-        written at the same place in the same setting (see :class:`_KeptState`)."""
+        written at the same place in the same setting (see :class:`KeptState`)."""
+        kept = self.kept
+        if kept is None or len(written) > MAX_KEPT_STATE:
+            self._add_state(el, None, None)
+            return
         line, col = self.position((el, None, 0))
         key = (written, line, col, head, self.kind, self.max_text, self.variable_key)
-        kept = _STATES.get(key) if len(written) <= MAX_KEPT_STATE else None
-        if kept is not None and kept.profile is self.profile:
-            self._register_state(el, kept.replay(self, el))
+        found = kept.states.get(key)
+        if found is not None and found.profile is self.profile:
+            self._register_state(el, found.replay(self, el))
             return
         marks = _Marks.of(self)
         state = self._state(el, None, None)
-        if len(written) <= MAX_KEPT_STATE and len(self.problems) == marks.problems:
-            found = _KeptState.record(self, el, state, marks)
-            if found is not None:
-                _STATES.keep(key, found, len(written))
+        if len(self.problems) == marks.problems:
+            made = KeptState.record(self, el, state, marks)
+            if made is not None:
+                kept.states.put(key, made, len(written))
         self._register_state(el, state)
 
     def _add_state(self, el: etree._Element, stream: etree._Element | None,
@@ -845,11 +846,7 @@ class Builder:
 
 MAX_KEPT_STATE = 4096
 """Longest state (characters, from its ``<state`` to the next element at the top
-level) whose building is kept for the same text written at the same place."""
-
-MAX_KEPT_TEXT = 2 << 20
-"""Most characters of states kept in all (the least recently used go first): a bound
-on the memory untrusted documents can make the process keep."""
+level) whose building is kept (:func:`~prima.dsl._kept.keeping`)."""
 
 
 class _Marks(NamedTuple):
@@ -876,7 +873,7 @@ Where = tuple[int, str | None, int]
 
 
 @dataclass(frozen=True)
-class _KeptState:
+class KeptState:
     """A top-level state built without a problem, and what building it asked the builder
     to check later, its spots as indexes in the state's own tree. The same text written
     at the same line and column, in the same setting, is the same state: its model (every
@@ -893,7 +890,7 @@ class _KeptState:
 
     @classmethod
     def record(cls, b: Builder, el: etree._Element, state: State,
-               marks: _Marks) -> _KeptState | None:
+               marks: _Marks) -> KeptState | None:
         index = {node: i for i, node in enumerate(el.iter())}
 
         def where(spot: Spot) -> Where:
@@ -938,53 +935,6 @@ class _KeptState:
             b._goto_elements[goto] = nodes[at_node]
             b.goto_log.append((goto, nodes[at_node]))
         return self.state
-
-
-class _KeptStates:
-    """The states kept, by text and setting, the least recently used going first past
-    :data:`MAX_KEPT_TEXT` characters in all."""
-
-    def __init__(self) -> None:
-        self._kept: OrderedDict[tuple[object, ...], tuple[_KeptState, int]] = OrderedDict()
-        self._size = 0
-
-    def get(self, key: tuple[object, ...]) -> _KeptState | None:
-        found = self._kept.get(key)
-        if found is None:
-            return None
-        self._kept.move_to_end(key)
-        return found[0]
-
-    def keep(self, key: tuple[object, ...], kept: _KeptState, size: int) -> None:
-        if key in self._kept:
-            return
-        self._kept[key] = (kept, size)
-        self._size += size
-        while self._size > MAX_KEPT_TEXT:
-            _old, (_gone, gone_size) = self._kept.popitem(last=False)
-            self._size -= gone_size
-
-    def clear(self) -> None:
-        self._kept.clear()
-        self._size = 0
-
-    def __len__(self) -> int:
-        return len(self._kept)
-
-
-_STATES = _KeptStates()
-
-
-def kept() -> dict[str, int]:
-    """How many chains and states this process keeps, to replay where the same text is
-    met again (``prima lsp`` checking a document at every pause in the typing)."""
-    return {"chains": len(chains_kept()), "states": len(_STATES)}
-
-
-def forget_kept() -> None:
-    """Drop every chain and state kept: the next documents are built afresh."""
-    chains_kept().clear()
-    _STATES.clear()
 
 
 _ACTIONS: Mapping[str, Callable[[Builder, etree._Element], Action | None]] = {

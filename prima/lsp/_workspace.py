@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
 
 from prima.collecting import no_collections
-from prima.dsl import RobotProfile, default_profile, load_profile
+from prima.dsl import Kept, RobotProfile, default_profile, keeping, load_profile
 from prima.errors import DocumentError, LocatedError, Problem
 from prima.lsp._xml import Tag, XmlText, first_tag, rescan, scan
 from prima.xmlio import read_source, unsaved
@@ -186,6 +186,9 @@ class Workspace:
         self._walked: list[Path] | None = None
         self._profiles: dict[Path, tuple[object, RobotProfile | None]] = {}
         self._settings: dict[Path, tuple[int, Setting]] = {}
+        self.kept = Kept()
+        """What the checks keep from one version of a document to the next (chains and
+        states unchanged are replayed, not built again: :func:`prima.dsl.keeping`)."""
 
     # ---- buffers and files
 
@@ -405,7 +408,7 @@ class Workspace:
             if scenario is not None:
                 items.insert(0, (scenario, True))
         profile = self.profile(self.robot) if self.robot is not None else default_profile()
-        with self.unsaved(), no_collections():
+        with self.unsaved(), no_collections(), keeping(self.kept):
             report = _validation(profile, self.robot is not None).run(items)
         names: dict[str, bool] = {}
         problems = []

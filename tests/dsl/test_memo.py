@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from prima.dsl import (
+    Kept,
     Scope,
     check_document,
     compile_expression,
     compile_template,
-    forget_kept,
-    kept,
+    keeping,
     parse_chain,
 )
 
@@ -95,9 +95,10 @@ CHAINS = """<pxml xmlns="urn:prima:pxml:1" kind="fa" name="t">
 </pxml>"""
 
 
-def _messages(text: str) -> list[tuple[int, int, str]]:
-    return [(p.line, p.col, p.message.split(" (")[0])
-            for p in check_document(text.encode(), "t.pxml")[1]]
+def _messages(text: str, kept: Kept | None = None) -> list[tuple[int, int, str]]:
+    with keeping(kept or Kept()):
+        found = check_document(text.encode(), "t.pxml")[1]
+    return [(p.line, p.col, p.message.split(" (")[0]) for p in found]
 
 
 def test_a_chain_bound_again_is_checked_again_where_it_is() -> None:
@@ -105,10 +106,11 @@ def test_a_chain_bound_again_is_checked_again_where_it_is() -> None:
     located where each is written, their labels checked for duplicates, their names
     checked; the setting it was bound in (a handler or not, the variables declared)
     is part of what it is."""
-    forget_kept()
-    first = _messages(CHAINS)
-    assert kept()["chains"] == 2  # the entries' chain and the handlers' (line 10: a replay)
-    assert _messages(CHAINS) == first
+    kept = Kept()
+    first = _messages(CHAINS, kept)
+    assert len(kept.chains) == 2  # the entries' chain and the handlers' (line 10: a replay)
+    assert _messages(CHAINS, kept) == first
+    assert _messages(CHAINS) == first == _messages_afresh(CHAINS)
     column = CHAINS.splitlines()[9].index("a:") + 1
     assert (10, column, "duplicate Command id 'a'") in first
     assert (10, CHAINS.splitlines()[9].index("q:") + 1, "duplicate Command id 'q'") in first
@@ -116,19 +118,25 @@ def test_a_chain_bound_again_is_checked_again_where_it_is() -> None:
     assert [m for m in first if "'event'" in m[2]] == [
         (13, event, "'event' is only available inside an event handler")]
     declared = CHAINS.replace('<var name="said"', '<var name="hall" expr="\'x\'"/><var name="said"')
-    warned = [m for m in _messages(declared) if "taken as a place name" in m[2]]
+    warned = [m for m in _messages(declared, kept) if "taken as a place name" in m[2]]
     assert [line for line, _col, _m in warned] == [5, 10]
+
+
+def _messages_afresh(text: str) -> list[tuple[int, int, str]]:
+    return [(p.line, p.col, p.message.split(" (")[0])
+            for p in check_document(text.encode(), "t.pxml")[1]]
 
 
 def test_a_document_built_again_is_the_same_document() -> None:
     from pathlib import Path
 
     for path in sorted((Path(__file__).resolve().parents[2] / "apps").rglob("*.pxml")):
-        forget_kept()
         data = path.read_bytes()
         fresh = check_document(data, str(path))
-        replayed = check_document(data, str(path))
-        assert replayed == fresh, path.name
+        with keeping(Kept()) as kept:
+            assert check_document(data, str(path)) == fresh, path.name
+            assert check_document(data, str(path)) == fresh, path.name  # replayed
+        assert len(kept.states) + len(kept.chains) > 0, path.name
 
 
 def test_a_state_kept_is_the_state_built_afresh_after_any_edit() -> None:
@@ -146,18 +154,16 @@ def test_a_state_kept_is_the_state_built_afresh_after_any_edit() -> None:
     replayed = 0
     for path in apps:
         source = path.read_text(encoding="utf-8")
-        forget_kept()
-        check_document(source.encode(), path.name)
         for _ in range(25):  # each an edit of the file as shipped, its states kept
-            at = rng.randrange(len(source) + 1)
-            cut = min(len(source), at + rng.choice([0, 1, 3]))
-            text = source[:at] + rng.choice(typed) + source[cut:]
-            replayed += kept()["states"]
-            warm = check_document(text.encode(), path.name)
-            forget_kept()
+            with keeping(Kept()) as kept:
+                check_document(source.encode(), path.name)
+                replayed += len(kept.states)
+                at = rng.randrange(len(source) + 1)
+                cut = min(len(source), at + rng.choice([0, 1, 3]))
+                text = source[:at] + rng.choice(typed) + source[cut:]
+                warm = check_document(text.encode(), path.name)
             fresh = check_document(text.encode(), path.name)
             assert warm == fresh, (path.name, text[at - 40:at + 40])
-            check_document(source.encode(), path.name)
     assert replayed > 1000
 
 
@@ -169,12 +175,13 @@ def test_states_kept_check_command_ids_and_timers_across_states_again() -> None:
   </state>
   <state id="u"><entry><chain>b: Speak("y")</chain><timer name="t" after="2"/></entry></state>
 </pxml>"""
-    forget_kept()
-    assert _messages(doc) == []
-    assert kept()["states"] == 2
+    kept = Kept()
+    assert _messages(doc, kept) == []
+    assert len(kept.states) == 2
     # state u is replayed; state s, changed, now holds the same id and a reactive timer
     clash = doc.replace('a: Speak("x")', 'b: Speak("x")').replace(
         '<timer name="t" after="1"/>', '<timer name="t" after="1" reactive="true"/>')
-    found = {m for _line, _col, m in _messages(clash)}
+    found = {m for _line, _col, m in _messages(clash, kept)}
+    assert found == {m for _line, _col, m in _messages_afresh(clash)}
     assert "duplicate Command id 'b'" in found
     assert "timer 't' is started elsewhere with a different reactive flag" in found
