@@ -40,6 +40,7 @@ def serve(robot: Path | None = None, *, stdin: IO[bytes] | None = None,
     from prima.lsp._server import build_server
     from prima.lsp._stream import serve as serve_streams
 
-    server = build_server(robot)
+    said = err or sys.stderr
+    server = build_server(robot, err=said)
     return serve_streams(server, stdin or sys.stdin.buffer, stdout or sys.stdout.buffer,
-                         err or sys.stderr, server.diagnostics.run)
+                         said, server.diagnostics.run)

@@ -15,7 +15,7 @@ import sys
 from bisect import bisect_right
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from lsprotocol import types
 from pygls.lsp.server import LanguageServer
@@ -60,10 +60,13 @@ _LINE_END = re.compile(r"[\r\n]")
 class PrimaServer(LanguageServer):
     """A language server with PRIMA's workspace, and its diagnostics' schedule."""
 
-    def __init__(self, robot: Path | None, *, debounce: float = DEBOUNCE) -> None:
+    def __init__(self, robot: Path | None, *, debounce: float = DEBOUNCE,
+                 err: TextIO | None = None) -> None:
         super().__init__("prima", __version__,
                          text_document_sync_kind=types.TextDocumentSyncKind.Incremental)
         self.robot = robot
+        self.err = err or sys.stderr
+        """Where what goes wrong is said, one line each."""
         self.prima: Workspace | None = None
         self._features: Features | None = None
         self.diagnostics = Diagnostics(self.check, debounce=debounce, failed=self._failed)
@@ -144,7 +147,7 @@ class PrimaServer(LanguageServer):
 
     def _failed(self, uri: str, exc: Exception) -> None:
         print(f"prima lsp: checking {uri} failed: {type(exc).__name__}: {exc}",
-              file=sys.stderr, flush=True)
+              file=self.err, flush=True)
 
 
 def _path(uri: str) -> Path:
@@ -216,10 +219,11 @@ def _location(ls: PrimaServer, target: Target, codec: PositionCodec) -> types.Lo
     return types.Location(uri, _range(buffer, target.start, target.end, codec))
 
 
-def build_server(robot: Path | None = None, *, debounce: float = DEBOUNCE) -> PrimaServer:
+def build_server(robot: Path | None = None, *, debounce: float = DEBOUNCE,
+                 err: TextIO | None = None) -> PrimaServer:
     """The server: diagnostics as ``prima validate`` words them, completion, hover and
     go-to-definition for PXML documents, robot profiles, scenarios and maps."""
-    server = PrimaServer(robot, debounce=debounce)
+    server = PrimaServer(robot, debounce=debounce, err=err)
 
     @server.feature(types.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: PrimaServer, params: types.DidOpenTextDocumentParams) -> None:

@@ -345,6 +345,8 @@ class _Input:
     def __init__(self, stdin: IO[bytes]) -> None:
         self.stdin = stdin
         self.fd: int | None = None
+        self.failed = ""
+        """What went wrong reading the input, if anything did."""
 
     async def start(self, feed: Callable[[bytes], None], done: asyncio.Future[None]) -> None:
         loop = asyncio.get_running_loop()
@@ -357,6 +359,9 @@ class _Input:
             try:
                 feed(data)
             except BrokenPipeError:  # the client is gone: nothing more to answer
+                finish()
+            except Exception as exc:  # noqa: BLE001 - a fault of ours: said, and the end
+                self.failed = f"{type(exc).__name__}: {exc}"
                 finish()
         try:
             await loop.connect_read_pipe(lambda: _Pipe(fed, done), self.stdin)
@@ -396,14 +401,18 @@ class _OneLine(logging.Formatter):
         return f"prima lsp: {lines[0] if lines else ''}"
 
 
-def _quiet_pygls(err: TextIO) -> logging.Handler:
-    """pygls's warnings as one line each on stderr, never with a traceback."""
+_LOGS = ("pygls", "asyncio")
+
+
+def _quiet_logs(err: TextIO) -> logging.Handler:
+    """pygls's and asyncio's warnings as one line each on stderr, never a traceback."""
     handler = logging.StreamHandler(err)
     handler.setFormatter(_OneLine())
     handler.setLevel(logging.WARNING)
-    log = logging.getLogger("pygls")
-    log.addHandler(handler)
-    log.propagate = False
+    for name in _LOGS:
+        log = logging.getLogger(name)
+        log.addHandler(handler)
+        log.propagate = False
     return handler
 
 
@@ -416,7 +425,7 @@ def serve(server: LanguageServer, stdin: IO[bytes], stdout: BinaryIO, err: TextI
     server.protocol.set_writer(writer)
     connection = _Connection(server, writer, err)
     source = _Input(stdin)
-    handler = _quiet_pygls(err)
+    handler = _quiet_logs(err)
 
     async def run() -> None:
         done: asyncio.Future[None] = asyncio.get_running_loop().create_future()
@@ -427,7 +436,8 @@ def serve(server: LanguageServer, stdin: IO[bytes], stdout: BinaryIO, err: TextI
         finally:
             task.cancel()
         await asyncio.gather(task, return_exceptions=True)
-        cut = connection.framer.ended()
+        cut = connection.framer.ended() or (
+            f"the input could not be read ({source.failed})" if source.failed else None)
         if cut:
             connection.say(f"{cut}: stopping")
         raise SystemExit(1 if cut else 0)
@@ -442,5 +452,6 @@ def serve(server: LanguageServer, stdin: IO[bytes], stdout: BinaryIO, err: TextI
     except KeyboardInterrupt:
         return 130
     finally:
-        logging.getLogger("pygls").removeHandler(handler)
+        for name in _LOGS:
+            logging.getLogger(name).removeHandler(handler)
     return 0
