@@ -38,7 +38,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -194,11 +194,21 @@ class SourceMap:
         places, self.depth = _scan_start_tags(text)
         """How deep the elements nest (the root alone: 1)."""
         self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places, strict=False))
-        counts = [len(el.attrib) for el in self._elements]
-        self.nodes = len(places) + sum(counts)
-        """Elements plus attributes: what schema diagnostics cost."""
-        self.most_attributes = max(counts, default=0)
+
+    @cached_property
+    def _attribute_counts(self) -> list[int]:
+        return [len(el.attrib) for el in self._elements]
+
+    @property
+    def nodes(self) -> int:
+        """Elements plus attributes: what schema diagnostics cost (counted when asked:
+        only a document the schema refuses is asked)."""
+        return len(self._places) + sum(self._attribute_counts)
+
+    @property
+    def most_attributes(self) -> int:
         """The most attributes one element carries."""
+        return max(self._attribute_counts, default=0)
 
     @property
     def source(self) -> str:
@@ -261,7 +271,7 @@ class SourceMap:
 
 
 _MARKUP = re.compile(
-    r"""<(?:!--.*?-->|!\[CDATA\[.*?\]\]>|\?.*?\?>|![^>]*>|/[^>]*>"""
+    r"""<(?:!--.*?-->|!\[CDATA\[.*?\]\]>|\?.*?\?>|![^>]*>|(?P<end>/)[^>]*>"""
     r"""|(?P<name>[^\s/>!?][^\s/>]*)(?P<attrs>(?:\s+[^\s=/>]+\s*=\s*(?:"[^"]*"|'[^']*'))*)\s*(?P<empty>/?)>)""",
     re.S,
 )
@@ -274,16 +284,18 @@ def _scan_start_tags(text: str) -> tuple[list[_Place], int]:
     places: list[_Place] = []
     depth = deepest = 0
     for m in _MARKUP.finditer(text):
-        if m.group("name") is None:
-            if m.group().startswith("</"):
-                depth -= 1
-            continue
-        empty = m.group("empty")
-        deepest = max(deepest, depth + 1)
-        if not empty:
+        kind = m.lastgroup  # "empty" (a start tag's last group), "end", or None (the rest)
+        if kind == "end":
+            depth -= 1
+        elif kind is not None:
             depth += 1
-        places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"),
-                             -1 if empty else m.end()))
+            if depth > deepest:
+                deepest = depth
+            if m.group("empty"):
+                depth -= 1
+                places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"), -1))
+            else:
+                places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"), m.end()))
     return places, deepest
 
 
