@@ -25,6 +25,7 @@ from prima.escape import shown_path, terminal
 from prima.suggest import SuggestingParser, did_you_mean, unrecognized
 from prima.term import BOLD, CYAN, GREEN, RED, WHEN, YELLOW, Paint, columns, is_terminal, \
     wants_colour
+from prima.shipped import locate, shipped
 from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
@@ -389,6 +390,7 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except SystemExit as exc:
         return int(exc.code or 0)
     _colour = args.color
+    _locate_inputs(args)
     command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
     with terminate_as_interrupt() as signals:
         status = _main(command, args, out, err)
@@ -397,6 +399,26 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
 
 _colour = "auto"
 """``--color`` as this command line gives it (``main`` sets it first)."""
+
+_INPUTS = {"scenario": None, "input": None, "paths": None, "map": None, "eas": "ea",
+           "fa": "fa", "ea": "ea", "robot": "robot"}
+"""The options and arguments that name files to read, each with what a bare name there
+names (:data:`prima.shipped.NAMED`: ``--fa fa2-follow``), or None."""
+
+
+def _locate_inputs(args: argparse.Namespace) -> None:
+    """Each file to read as :func:`prima.shipped.locate` finds it: one the current folder
+    lacks may be shipped with PRIMA (``scenarios/thesis/sample-03.xml`` from an install,
+    as from a checkout). Not for ``prima test --update``, which writes beside them: PRIMA's
+    own golden traces are not rewritten from outside a checkout."""
+    if getattr(args, "update", False):
+        return
+    for name, kind in _INPUTS.items():
+        value = getattr(args, name, None)
+        if isinstance(value, str):
+            setattr(args, name, locate(value, kind))
+        elif isinstance(value, list):
+            setattr(args, name, [locate(v, kind) if isinstance(v, str) else v for v in value])
 
 
 def _colour_asked(given: Sequence[str]) -> str:
@@ -1245,14 +1267,10 @@ def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
-def _shipped(*parts: str) -> Path:
-    """A folder shipped beside the package (a checkout's apps/fa, robots, scenarios/maps),
-    relative to the current folder when it is inside it (messages name it so)."""
-    folder = Path(__file__).resolve().parent.parent.joinpath(*parts)
-    try:
-        return folder.relative_to(Path.cwd())
-    except ValueError:
-        return folder
+def _shipped_files(folder: str, pattern: str) -> list[Path]:
+    """The files of a shipped folder (``apps/fa``, ``robots``: prima.shipped), by name."""
+    found = shipped(folder)
+    return sorted(found.glob(pattern)) if found is not None else []
 
 
 def _check_usage(args: argparse.Namespace) -> str | None:
@@ -1260,9 +1278,9 @@ def _check_usage(args: argparse.Namespace) -> str | None:
     for path in [*args.eas, *args.fa, *args.robot, *args.scenario, args.map]:
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
-    if not args.fa and not sorted(_shipped("apps", "fa").glob("*.pxml")):
+    if not args.fa and not _shipped_files("apps/fa", "*.pxml"):
         return "no shipped FAs (apps/fa/*.pxml) here: name them with --fa"
-    if not args.robot and not sorted(_shipped("robots").glob("*.xml")):
+    if not args.robot and not _shipped_files("robots", "*.xml"):
         return "no shipped robot profiles (robots/*.xml) here: name them with --robot"
     if not 1 <= args.runs <= MAX_RUNS:
         return f"--runs must be a whole number from 1 to {MAX_RUNS}"
@@ -1300,8 +1318,8 @@ def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.output import written
     from prima.sweep import progress_bar
 
-    fas = [Path(p) for p in args.fa] or sorted(_shipped("apps", "fa").glob("*.pxml"))
-    robots = [Path(p) for p in args.robot] or sorted(_shipped("robots").glob("*.xml"))
+    fas = [Path(p) for p in args.fa] or _shipped_files("apps/fa", "*.pxml")
+    robots = [Path(p) for p in args.robot] or _shipped_files("robots", "*.xml")
 
     def show(text: str) -> None:
         err.write(text)
@@ -1313,7 +1331,7 @@ def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         pool = _pool(args, args.runs * len(fas) * len(robots))
         try:
             result = check(ea, fas=fas, robots=robots, scenarios=[Path(s) for s in args.scenario],
-                           maps=_shipped("scenarios", "maps"),
+                           maps=shipped("scenarios/maps"),
                            map_file=Path(args.map) if args.map else None, runs=args.runs,
                            jitter=args.jitter, seed=args.seed, until=args.until,
                            thresholds=thresholds, pool=pool,
