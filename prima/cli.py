@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import importlib
 import json
 import math
@@ -390,7 +391,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except SystemExit as exc:
         return int(exc.code or 0)
     _colour = args.color
-    _locate_inputs(args)
+    problem = _locate_inputs(args)
+    if problem:
+        return _usage(args.command, problem, err)
     command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
     with terminate_as_interrupt() as signals:
         status = _main(command, args, out, err)
@@ -400,25 +403,46 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
 _colour = "auto"
 """``--color`` as this command line gives it (``main`` sets it first)."""
 
-_INPUTS = {"scenario": None, "input": None, "paths": None, "map": None, "eas": "ea",
+_INPUTS = {"scenario": None, "input": None, "paths": None, "map": "map", "eas": "ea",
            "fa": "fa", "ea": "ea", "robot": "robot"}
 """The options and arguments that name files to read, each with what a bare name there
 names (:data:`prima.shipped.NAMED`: ``--fa fa2-follow``), or None."""
 
 
-def _locate_inputs(args: argparse.Namespace) -> None:
+def _locate_inputs(args: argparse.Namespace) -> str | None:
     """Each file to read as :func:`prima.shipped.locate` finds it: one the current folder
     lacks may be shipped with PRIMA (``scenarios/thesis/sample-03.xml`` from an install,
     as from a checkout). Not for ``prima test --update``, which writes beside them: PRIMA's
-    own golden traces are not rewritten from outside a checkout."""
+    own golden traces are not rewritten from outside a checkout. What is wrong with a name
+    no file can have (too long to look up), as a usage error, or None."""
+    for name in _INPUTS:
+        value = getattr(args, name, None)
+        for text in value if isinstance(value, list) else [value]:
+            problem = _unnameable(text) if isinstance(text, str) else None
+            if problem:
+                return problem
     if getattr(args, "update", False):
-        return
+        return None
     for name, kind in _INPUTS.items():
         value = getattr(args, name, None)
         if isinstance(value, str):
             setattr(args, name, locate(value, kind))
         elif isinstance(value, list):
             setattr(args, name, [locate(v, kind) if isinstance(v, str) else v for v in value])
+    return None
+
+
+def _unnameable(text: str) -> str | None:
+    """Why the system cannot look ``text`` up at all (a name longer than a file's or a
+    path's may be), or None."""
+    try:
+        os.stat(text)
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            return f"{terminal(text[:40])}...: {os.strerror(exc.errno).lower()}"
+    except ValueError:  # (a NUL in it: the commands say there is no such file)
+        pass
+    return None
 
 
 def _colour_asked(given: Sequence[str]) -> str:

@@ -9,9 +9,10 @@ one another as in the checkout (``prima/apps``, ``prima/scenarios``, ...), so a 
 them in the checkout, a wheel in the install: the answers below are the same either way.
 
 A command line names them as a checkout does (``scenarios/thesis/sample-03.xml``,
-``apps/fa/fa2-follow.pxml``), or an application or a robot by its name (``--fa
-fa2-follow``, ``--robot guide-robot``): :func:`locate` says which file that is when
-the current folder has no such file (docs/cli.md, What ships with PRIMA).
+``apps/fa/fa2-follow.pxml``), or an application, a robot or a map by its name
+(``--fa fa2-follow``, ``--robot guide-robot``, ``--map museum``): :func:`locate` says
+which file that is when the current folder has no such file (docs/cli.md, What ships
+with PRIMA).
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ FOLDERS = {"apps": "prima.apps", "robots": "prima.robots", "scenarios": "prima.s
            "schemas": "prima.schemas"}
 """Each shipped folder, as a checkout's top names it, and the package that holds it."""
 
-NAMED = {"fa": ("apps/fa", ".pxml"), "ea": ("apps/ea", ".pxml"), "robot": ("robots", ".xml")}
+NAMED = {"fa": ("apps/fa", ".pxml"), "ea": ("apps/ea", ".pxml"), "robot": ("robots", ".xml"),
+         "map": ("scenarios/maps", ".xml")}
 """What a bare name names, by kind: ``--fa fa2-follow`` is ``apps/fa/fa2-follow.pxml``."""
 
 
@@ -44,7 +46,7 @@ def shipped(*parts: str) -> Path | None:
     if not isinstance(top, Path):  # (not a folder on disk: a zip archive, say)
         return None
     path = top.joinpath(*names[1:])
-    if not path.exists():
+    if not _exists(path):
         return None
     try:
         return path.relative_to(Path.cwd())
@@ -59,10 +61,19 @@ def locate(text: str, kind: str | None = None) -> str:
     the shipped one of that name (``fa2-follow``); else ``text`` unchanged, for the
     command to say there is no such file."""
     given = Path(text)
-    if given.exists() or given.is_absolute():
+    if _exists(given) or given.is_absolute():
         return text
     found = shipped(text)
     if found is None and kind in NAMED and len(given.parts) == 1 and not given.suffix:
         folder, suffix = NAMED[kind]
         found = shipped(folder, text + suffix)
     return str(found) if found is not None else text
+
+
+def _exists(path: Path) -> bool:
+    """Whether ``path`` names something; a name the system cannot even look up (too long,
+    a NUL in it) names nothing, and the command says there is no such file."""
+    try:
+        return path.exists()
+    except (OSError, ValueError):
+        return False

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import importlib.util
 import os
-import tomllib
 from pathlib import Path
 from types import ModuleType
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+tomllib = pytest.importorskip("tomllib")  # (Python 3.11 on; 3.10 reads no TOML of its own)
 
 
 def _backend() -> ModuleType:

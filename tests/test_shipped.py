@@ -10,10 +10,15 @@ from pathlib import Path
 
 import pytest
 
+from importlib import resources
+
 from prima.cli import main
-from prima.shipped import locate, shipped
+from prima.shipped import FOLDERS, locate, shipped
 
 ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = {folder: Path(str(resources.files(package))) for folder, package in FOLDERS.items()}
+"""Where the install keeps each shipped folder: in an editable install, the checkout's
+own (a tree run from elsewhere, the compiled build's copy, borrows the install's)."""
 
 
 @pytest.fixture
@@ -23,11 +28,15 @@ def elsewhere(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 
 def test_the_shipped_folders_are_the_checkouts(elsewhere: Path) -> None:
-    """From an editable install, what ships is the checkout's own files."""
-    assert shipped("apps", "fa") == ROOT / "apps" / "fa"
-    assert shipped("scenarios/maps/office.xml") == ROOT / "scenarios" / "maps" / "office.xml"
-    assert shipped("robots") == ROOT / "robots"
-    assert shipped("schemas/pxml.xsd") == ROOT / "schemas" / "pxml.xsd"
+    """What ships is the checkout's files, file for file (tests/test_wheel.py: and a
+    wheel's), found where the install keeps them."""
+    for folder in FOLDERS:
+        found = shipped(folder)
+        assert found == SHIPPED[folder]
+        assert {p.name: p.read_bytes() for p in found.iterdir() if p.is_file()} == \
+            {p.name: p.read_bytes() for p in (ROOT / folder).iterdir() if p.is_file()}
+    assert shipped("apps", "fa") == SHIPPED["apps"] / "fa"
+    assert shipped("scenarios/maps/office.xml") == SHIPPED["scenarios"] / "maps" / "office.xml"
     # nothing else, and nothing outside them
     for path in ("prima", "docs/running.md", "apps/../README.md", "apps/fa/nope.pxml", ""):
         assert shipped(path) is None, path
@@ -35,16 +44,17 @@ def test_the_shipped_folders_are_the_checkouts(elsewhere: Path) -> None:
 
 def test_inside_the_checkout_it_is_named_as_the_checkout_names_it(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.chdir(ROOT)
+    monkeypatch.chdir(SHIPPED["apps"].parent)
     assert shipped("apps/fa") == Path("apps/fa")
 
 
 def test_locate(elsewhere: Path) -> None:
     assert locate("scenarios/thesis/sample-01.xml") == \
-        str(ROOT / "scenarios" / "thesis" / "sample-01.xml")
-    assert locate("fa1-emotions", "fa") == str(ROOT / "apps" / "fa" / "fa1-emotions.pxml")
-    assert locate("cafe", "ea") == str(ROOT / "apps" / "ea" / "cafe.pxml")
-    assert locate("guide-robot", "robot") == str(ROOT / "robots" / "guide-robot.xml")
+        str(SHIPPED["scenarios"] / "thesis" / "sample-01.xml")
+    assert locate("fa1-emotions", "fa") == str(SHIPPED["apps"] / "fa" / "fa1-emotions.pxml")
+    assert locate("cafe", "ea") == str(SHIPPED["apps"] / "ea" / "cafe.pxml")
+    assert locate("guide-robot", "robot") == str(SHIPPED["robots"] / "guide-robot.xml")
+    assert locate("museum", "map") == str(SHIPPED["scenarios"] / "maps" / "museum.xml")
     # a bare name is an application or a robot only where one is asked for
     assert locate("fa1-emotions") == "fa1-emotions"
     assert locate("cafe", "fa") == "cafe"
@@ -75,7 +85,7 @@ def test_a_shipped_ea_is_checked_from_anywhere(
     assert main(["check", "cafe", "--runs", "1", "--jobs", "1", "--worst", "0"]) == 0
     out = capsys.readouterr().out
     assert "cafe beside 8 FA(s) on 2 robot(s)" in out
-    assert f"{ROOT / 'apps' / 'fa' / 'fa2-follow.pxml'}:45:94: error: unknown gesture" in out
+    assert f"{SHIPPED['apps'] / 'fa' / 'fa2-follow.pxml'}:45:94: error: unknown gesture" in out
 
 
 def test_a_name_that_is_no_shipped_fa_is_no_such_file(
@@ -86,7 +96,7 @@ def test_a_name_that_is_no_shipped_fa_is_no_such_file(
 
 def test_shipped_golden_traces_are_not_rewritten_from_outside(
         elsewhere: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    golden = ROOT / "scenarios" / "thesis" / "sample-01.golden.txt"
+    golden = SHIPPED["scenarios"] / "thesis" / "sample-01.golden.txt"
     before = golden.stat().st_mtime_ns
     assert main(["test", "--update", "scenarios/thesis/sample-01.xml"]) == 2
     assert "no such file or folder" in capsys.readouterr().err
