@@ -58,11 +58,14 @@ def _seed(text: str) -> int:
 def _switch_arguments(parser: argparse.ArgumentParser, policies: bool = True) -> None:
     """What changes a scenario's own choices, the same on every command that runs one:
     its FA, its EA, its robot (and, with ``policies``, policy switches)."""
-    parser.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
-    parser.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
+    parser.add_argument("--fa", metavar="DOC",
+                        help="the FA document, or a shipped FA's name (fa2-follow; default: "
+                             "the scenario's)")
+    parser.add_argument("--ea", metavar="DOC",
+                        help="the EA document, or a shipped EA's name (default: the scenario's)")
     parser.add_argument("--robot", metavar="PROFILE",
-                        help="robot hardware profile (default: the scenario's, else the home "
-                             "robot)")
+                        help="robot hardware profile, or a shipped one's name (guide-robot; "
+                             "default: the scenario's, else the home robot)")
     if policies:
         _policy_argument(parser)
 
@@ -269,9 +272,11 @@ def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
     )
     check.add_argument("eas", nargs="+", metavar="EA", help="the EA documents to check")
     check.add_argument("--fa", action="append", default=[], metavar="DOC",
-                       help="an FA to check beside (repeatable; default: every apps/fa/*.pxml)")
+                       help="an FA to check beside, or a shipped FA's name (repeatable; "
+                            "default: every shipped FA, apps/fa/*.pxml)")
     check.add_argument("--robot", action="append", default=[], metavar="PROFILE",
-                       help="a robot profile to check on (repeatable; default: every robots/*.xml)")
+                       help="a robot profile to check on, or a shipped one's name (repeatable; "
+                            "default: every shipped robot, robots/*.xml)")
     check.add_argument("--scenario", action="append", default=[], metavar="FILE",
                        help="the EA's own scenario (repeatable; default: generated visits)")
     check.add_argument("--map", metavar="MAP",
