@@ -37,7 +37,7 @@ def test_a_full_disk_is_a_message(tmp_path: Path) -> None:
         argv[-1] = "/dev/full"
         status, _, err = _cli(*argv)
         assert (status, err.splitlines()) == (
-            1, [f"prima {argv[0]}: error: cannot write /dev/full: No space left on device"]
+            1, [f"prima {argv[0]}: error: cannot write /dev/full: no space left on device"]
         ) or (argv[0] == "plot" and status == 2), (argv, err)
 
 
