@@ -1266,7 +1266,9 @@ def _plot_usage(args: argparse.Namespace) -> str | None:
     if source.suffix not in (".jsonl", ".xml"):
         return f"{args.input}: give a trace (*.jsonl) or a scenario (*.xml)"
     if target.suffix.lower() not in _PLOT_SUFFIXES:
-        return f"--out {args.out}: name a {', '.join(_PLOT_SUFFIXES)} file"
+        from prima.output import shown
+
+        return f"--out {shown(args.out)}: name a {', '.join(_PLOT_SUFFIXES)} file"
     inputs = _run_inputs(args, source if source.suffix == ".xml" else None)
     if source.suffix == ".jsonl":
         inputs.append(("the trace drawn", source))
