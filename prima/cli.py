@@ -476,9 +476,21 @@ def _report(problems: Iterable[Problem], to: TextIO) -> None:
                   terminal(problem.message), file=to)
         else:
             print(f"{where} {severity}: {terminal(problem.message)}", file=to)
-        caret = problem.caret()
+        caret = _caret(problem)
         if caret:
             print(caret, file=to)
+
+
+def _caret(problem: Problem) -> str:
+    """``problem``'s source line and a caret under its column (:meth:`Problem.caret`),
+    the line escaped as every row is (tabs kept, so the caret still lines up)."""
+    if not problem.source:
+        return ""
+    line = problem.source.rstrip("\r\n")
+    shown = "\t".join(terminal(part) for part in line.split("\t"))
+    pad = "".join(c if c == "\t" else " " * len(terminal(c))
+                  for c in line[: max(problem.col - 1, 0)])
+    return f"    {shown}\n    {pad}^"
 
 
 def _usage(command: str, message: str, err: TextIO) -> int:

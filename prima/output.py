@@ -197,13 +197,22 @@ def _mode() -> int:
     return 0o666 & ~mask
 
 
-def _regular_or_missing(target: Path) -> bool:
-    """Whether ``target`` is written through a file beside it (a regular file, or none
-    yet), not directly (a device, a named pipe)."""
+_SYSTEM = ("/dev/", "/proc/")
+"""Where a path names a stream, not a file to replace (``/dev/stdout``, ``/dev/fd/1``,
+``/proc/self/fd/1``), even when the stream is a regular file (a shell's ``>``)."""
+
+
+def _written_directly(target: Path) -> bool:
+    """Whether ``target`` is written directly (a device, a named pipe, a stream of this
+    process), not through a file beside it renamed over it."""
     try:
-        return not target.exists() or target.is_file() or target.is_dir()
+        if target.exists() and not target.is_file():
+            return not target.is_dir()
     except OSError as exc:
         raise _failed(target, exc) from exc
+    real = os.path.realpath(target)
+    return any(os.fspath(target).startswith(system) or real.startswith(system)
+               for system in _SYSTEM)
 
 
 class Staged:
@@ -220,6 +229,7 @@ class Staged:
     def __init__(self, path: str | os.PathLike[str], *, binary: bool = False,
                  seekable: bool = False, prefix: int = 0) -> None:
         self.target = Path(path)
+        """The file as named (messages name it so)."""
         self._made: list[Path] = []
         self._temp: str | None = None
         self._copy_to: Path | None = None
@@ -227,7 +237,7 @@ class Staged:
         mode = "w+b" if binary and seekable else "wb" if binary else "w"
         encoding = None if binary else "utf-8"
         newline = None if binary else "\n"
-        if not _regular_or_missing(self.target):
+        if _written_directly(self.target):
             try:
                 if seekable:
                     self._copy_to = self.target
@@ -241,10 +251,12 @@ class Staged:
         problem = check_target(self.target)
         if problem:
             raise OutputError(f"cannot write {problem}")
-        self._made = make_folder(self.target.parent, self.target)
+        self._real = Path(os.path.realpath(self.target))
+        """The file replaced: a symbolic link's target (the link itself stays)."""
+        self._made = make_folder(self._real.parent, self.target)
         try:
             fd, self._temp = tempfile.mkstemp(prefix=".prima-", suffix=".part",
-                                              dir=self.target.parent)
+                                              dir=self._real.parent)
         except OSError as exc:
             _unmake(self._made)
             raise _failed(self.target, exc) from exc
@@ -282,7 +294,7 @@ class Staged:
                 self.file.close()
             if self._temp is not None:
                 os.chmod(self._temp, _mode())
-                os.replace(self._temp, self.target)
+                os.replace(self._temp, self._real)
         except OSError as exc:
             self._close()
             self._remove()

@@ -426,6 +426,11 @@ SURFACES = [
     Case("validate-control-name", "an escape sequence in a file's name, plain validate",
          made(_controlled), Exits(1, "bad\\x1b[2J.pxml:1:", absent=C1_OR_C0),
          command=("validate", "{path}")),
+    Case("validate-caret-c1", "a C1 control character in the line under validate's caret",
+         write("t.pxml", '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t">\n'
+                         '<var name="x" expr="1 + \x9b2J @"/>\n'
+                         '<state id="s" initial="true"/>\n</pxml>\n'),
+         Exits(1, "expr=\"1 + \\x9b2J @\"", absent=C1_OR_C0), command=("validate", "{path}")),
     Case("test-control-name", "an escape sequence in a scenario's name, prima test's diff",
          made(_golden_differs), Exits(1, "s\\x1b[2J.golden.txt", absent=C1_OR_C0),
          command=("test", "{path}")),
