@@ -4,6 +4,7 @@ long as the run says them, and ``prima show --audio``'s page playing them in Chr
 from __future__ import annotations
 
 import io
+import time
 import wave
 from collections.abc import Iterator
 from pathlib import Path
@@ -50,6 +51,38 @@ def test_the_utterances_are_when_the_words_are_said() -> None:
     assert cut.whole == "This panel shows research points of our laboratory."
     assert cut.end == ends[cut.ab]["t"]
     assert cut.duration == pytest.approx(MODEL(cut.whole) * 3 / 8, abs=0.03)
+
+
+def test_an_utterance_the_user_spoke_over_is_its_spoken_words_at_their_pace() -> None:
+    """Barge-in cuts too (reason ``barge-in``): the sound is the words spoken, at the pace
+    the speech model says them, ending at the cut (it was the whole utterance squeezed
+    into the time before the cut)."""
+    rows = _rows(ROOT / "scenarios" / "examples" / "barge-in-question.xml")
+    [end] = [r for r in rows if r["kind"] == "end" and r.get("reason") == "barge-in"]
+    spoken, whole = end["detail"]["spoken"], end["text"]
+    [cut] = [u for u in utterances(rows, MODEL) if u.ab == end["ab"]]
+    assert cut.cut and cut.text == spoken and cut.whole == whole and cut.end == end["t"]
+    k, n = len(spoken.split()), len(whole.split())
+    assert cut.duration == pytest.approx(MODEL(whole) * k / n, abs=0.03)
+    assert cut.start == pytest.approx(end["detail"]["words_start"], abs=0.03)
+    assert len(clip(cut).samples) == round(cut.duration * OUTPUT_RATE)
+
+
+def test_what_is_synthesised_is_bounded() -> None:
+    """A forged utterance of 99,999 s, or of 100,000 words, makes a clip of at most
+    MAX_SECONDS saying at most MAX_WORDS words, marked shortened."""
+    from prima.audio import MAX_SECONDS, MAX_WORDS, Utterance
+
+    long = Utterance(1, "a", "Speak", 0.0, 99_999.0, "hi there", "hi there")
+    made = clip(long)
+    assert made.shortened and made.duration == pytest.approx(MAX_SECONDS)
+    many = " ".join(["word"] * 100_000)
+    wordy = Utterance(1, "a", "Speak", 0.0, 40_000.0, many, many)
+    started = time.process_time()
+    made = clip(wordy)
+    assert made.shortened and made.duration == pytest.approx(MAX_SECONDS)
+    assert len(made.words) <= MAX_WORDS
+    assert time.process_time() - started < 5
 
 
 def test_a_clip_lasts_exactly_its_utterance_and_is_the_same_every_time() -> None:

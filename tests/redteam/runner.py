@@ -21,6 +21,7 @@ import math
 import multiprocessing
 import os
 import resource
+import signal
 import time
 import traceback
 from collections.abc import Callable
@@ -93,6 +94,9 @@ class Case:
     its folder), with an :class:`Exits` verdict."""
     stdin: str = ""
     """What ``prima debug`` reads as typed."""
+    file_limit: int | None = None
+    """The most bytes the child may write into one file (``RLIMIT_FSIZE``): a write past
+    it fails as on a full disk (``EFBIG``), half-way through an output."""
 
 
 @dataclass(frozen=True)
@@ -117,6 +121,10 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
         resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
         cpu = cpu_bound(case)
         resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))  # SIGXCPU, then SIGKILL
+        if case.file_limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # (the write fails instead)
+            hard = resource.getrlimit(resource.RLIMIT_FSIZE)[1]  # (``then`` may lift it)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (case.file_limit, hard))
         argv = [a.replace("{dir}", str(path.parent)) for a in case.argv]
         out, err = io.StringIO(), io.StringIO()
         start = time.process_time()
