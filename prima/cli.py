@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import importlib
 import json
 import math
@@ -27,6 +28,7 @@ from prima.escape import shown_path, terminal
 from prima.suggest import SuggestingParser, did_you_mean, unrecognized
 from prima.term import BOLD, CYAN, GREEN, RED, WHEN, YELLOW, Paint, columns, is_terminal, \
     wants_colour
+from prima.shipped import locate, shipped
 from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
@@ -59,11 +61,14 @@ def _seed(text: str) -> int:
 def _switch_arguments(parser: argparse.ArgumentParser, policies: bool = True) -> None:
     """What changes a scenario's own choices, the same on every command that runs one:
     its FA, its EA, its robot (and, with ``policies``, policy switches)."""
-    parser.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
-    parser.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
+    parser.add_argument("--fa", metavar="DOC",
+                        help="the FA document, or a shipped FA's name (fa2-follow; default: "
+                             "the scenario's)")
+    parser.add_argument("--ea", metavar="DOC",
+                        help="the EA document, or a shipped EA's name (default: the scenario's)")
     parser.add_argument("--robot", metavar="PROFILE",
-                        help="robot hardware profile (default: the scenario's, else the home "
-                             "robot)")
+                        help="robot hardware profile, or a shipped one's name (guide-robot; "
+                             "default: the scenario's, else the home robot)")
     if policies:
         _policy_argument(parser)
 
@@ -270,9 +275,11 @@ def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
     )
     check.add_argument("eas", nargs="+", metavar="EA", help="the EA documents to check")
     check.add_argument("--fa", action="append", default=[], metavar="DOC",
-                       help="an FA to check beside (repeatable; default: every apps/fa/*.pxml)")
+                       help="an FA to check beside, or a shipped FA's name (repeatable; "
+                            "default: every shipped FA, apps/fa/*.pxml)")
     check.add_argument("--robot", action="append", default=[], metavar="PROFILE",
-                       help="a robot profile to check on (repeatable; default: every robots/*.xml)")
+                       help="a robot profile to check on, or a shipped one's name (repeatable; "
+                            "default: every shipped robot, robots/*.xml)")
     check.add_argument("--scenario", action="append", default=[], metavar="FILE",
                        help="the EA's own scenario (repeatable; default: generated visits)")
     check.add_argument("--map", metavar="MAP",
@@ -392,6 +399,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except SystemExit as exc:
         return int(exc.code or 0)
     _colour = args.color
+    problem = _locate_inputs(args)
+    if problem:
+        return _usage(args.command, problem, err)
     command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
     with terminate_as_interrupt() as signals:
         status = _main(command, args, out, err)
@@ -400,6 +410,47 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
 
 _colour = "auto"
 """``--color`` as this command line gives it (``main`` sets it first)."""
+
+_INPUTS = {"scenario": None, "input": None, "paths": None, "map": "map", "eas": "ea",
+           "fa": "fa", "ea": "ea", "robot": "robot"}
+"""The options and arguments that name files to read, each with what a bare name there
+names (:data:`prima.shipped.NAMED`: ``--fa fa2-follow``), or None."""
+
+
+def _locate_inputs(args: argparse.Namespace) -> str | None:
+    """Each file to read as :func:`prima.shipped.locate` finds it: one the current folder
+    lacks may be shipped with PRIMA (``scenarios/thesis/sample-03.xml`` from an install,
+    as from a checkout). Not for ``prima test --update``, which writes beside them: PRIMA's
+    own golden traces are not rewritten from outside a checkout. What is wrong with a name
+    no file can have (too long to look up), as a usage error, or None."""
+    for name in _INPUTS:
+        value = getattr(args, name, None)
+        for text in value if isinstance(value, list) else [value]:
+            problem = _unnameable(text) if isinstance(text, str) else None
+            if problem:
+                return problem
+    if getattr(args, "update", False):
+        return None
+    for name, kind in _INPUTS.items():
+        value = getattr(args, name, None)
+        if isinstance(value, str):
+            setattr(args, name, locate(value, kind))
+        elif isinstance(value, list):
+            setattr(args, name, [locate(v, kind) if isinstance(v, str) else v for v in value])
+    return None
+
+
+def _unnameable(text: str) -> str | None:
+    """Why the system cannot look ``text`` up at all (a name longer than a file's or a
+    path's may be), or None."""
+    try:
+        os.stat(text)
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            return f"{terminal(text[:40])}...: {os.strerror(exc.errno).lower()}"
+    except ValueError:  # (a NUL in it: the commands say there is no such file)
+        pass
+    return None
 
 
 def _colour_asked(given: Sequence[str]) -> str:
@@ -1367,14 +1418,10 @@ def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
-def _shipped(*parts: str) -> Path:
-    """A folder shipped beside the package (a checkout's apps/fa, robots, scenarios/maps),
-    relative to the current folder when it is inside it (messages name it so)."""
-    folder = Path(__file__).resolve().parent.parent.joinpath(*parts)
-    try:
-        return folder.relative_to(Path.cwd())
-    except ValueError:
-        return folder
+def _shipped_files(folder: str, pattern: str) -> list[Path]:
+    """The files of a shipped folder (``apps/fa``, ``robots``: prima.shipped), by name."""
+    found = shipped(folder)
+    return sorted(found.glob(pattern)) if found is not None else []
 
 
 def _check_usage(args: argparse.Namespace) -> str | None:
@@ -1382,9 +1429,9 @@ def _check_usage(args: argparse.Namespace) -> str | None:
     for path in [*args.eas, *args.fa, *args.robot, *args.scenario, args.map]:
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
-    if not args.fa and not sorted(_shipped("apps", "fa").glob("*.pxml")):
+    if not args.fa and not _shipped_files("apps/fa", "*.pxml"):
         return "no shipped FAs (apps/fa/*.pxml) here: name them with --fa"
-    if not args.robot and not sorted(_shipped("robots").glob("*.xml")):
+    if not args.robot and not _shipped_files("robots", "*.xml"):
         return "no shipped robot profiles (robots/*.xml) here: name them with --robot"
     if not 1 <= args.runs <= MAX_RUNS:
         return f"--runs must be a whole number from 1 to {MAX_RUNS}"
@@ -1459,8 +1506,8 @@ def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.output import written
     from prima.sweep import progress_bar
 
-    fas = [Path(p) for p in args.fa] or sorted(_shipped("apps", "fa").glob("*.pxml"))
-    robots = [Path(p) for p in args.robot] or sorted(_shipped("robots").glob("*.xml"))
+    fas = [Path(p) for p in args.fa] or _shipped_files("apps/fa", "*.pxml")
+    robots = [Path(p) for p in args.robot] or _shipped_files("robots", "*.xml")
 
     results = []
     status = EXIT_OK
@@ -1470,7 +1517,7 @@ def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             with _BarLine(err) as bar:
                 result = check(ea, fas=fas, robots=robots,
                                scenarios=[Path(s) for s in args.scenario],
-                               maps=_shipped("scenarios", "maps"),
+                               maps=shipped("scenarios/maps"),
                                map_file=Path(args.map) if args.map else None,
                                runs=args.runs, jitter=args.jitter, seed=args.seed,
                                until=args.until, thresholds=thresholds, pool=pool,

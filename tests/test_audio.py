@@ -16,7 +16,7 @@ from prima.audio import OUTPUT_RATE, available, clip, utterances, wav
 from prima.cli import main
 from prima.dsl import default_profile
 from prima.run import Run, spec_from_profile
-from tests.browser import headless_chromium
+from tests.browser import STEPPED_CLOCK, headless_chromium, until
 
 if available() is not None:
     pytest.skip(f"{available()} (.ci/run installs it)", allow_module_level=True)
@@ -109,13 +109,11 @@ def browser() -> Iterator[Any]:
 def _sounds(browser: Any, page: Path) -> list[dict[str, Any]]:
     """Open the page from file://; its sounds, once every one has loaded its metadata."""
     browser.get(page.as_uri())
-    sounds: list[dict[str, Any]] = []
-    for _ in range(200):
-        if browser.execute_script("return !!window.primaShow"):
-            sounds = browser.execute_script("return window.primaShow.sounds()")
-            if sounds and all(s["ready"] >= 1 or s["error"] for s in sounds):
-                break
-        time.sleep(0.05)
+    until(browser, "return !!window.primaShow && window.primaShow.sounds().length && "
+                   "window.primaShow.sounds().every(function (s) { "
+                   "return s.ready >= 1 || s.error; })")
+    browser.execute_script(STEPPED_CLOCK)
+    sounds: list[dict[str, Any]] = browser.execute_script("return window.primaShow.sounds()")
     return sounds
 
 
@@ -133,12 +131,16 @@ def test_the_page_plays_each_utterance_offline_as_long_as_it_is_said(
         assert (sound["start"], sound["end"]) == pytest.approx((u.start, u.end))
         assert sound["duration"] == pytest.approx(u.duration, abs=1e-3)
         assert sound["expected"] == pytest.approx(u.duration, abs=1e-4)
-    # played with the playhead: inside an utterance, its sound plays from there
+    # played with the playhead: inside an utterance, its sound plays from there (one frame
+    # of the page's clock, stepped by the test: the playhead then stays where it is while
+    # the sound plays on, as long as the machine takes to get it past 0.4 s)
     u = said[len(said) // 2]
-    browser.execute_script(f"window.primaShow.seek({u.start + 0.3}); window.primaShow.play();")
-    time.sleep(0.4)
-    playing = browser.execute_script("return window.primaShow.sounds()")
     index = said.index(u)
+    browser.execute_script(f"window.primaShow.seek({u.start + 0.3}); window.primaShow.play();"
+                           "window.stepClock(0);")
+    until(browser, "const s = window.primaShow.sounds()[arguments[0]]; "
+                   "return !s.paused && s.at > 0.4;", index)
+    playing = browser.execute_script("return window.primaShow.sounds()")
     assert not playing[index]["paused"] and playing[index]["at"] > 0.4
     assert all(s["paused"] for i, s in enumerate(playing) if i != index)
     state = browser.execute_script("window.primaShow.pause(); return window.primaShow.sounds()")

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from prima.cli import main
+from tests.signalled import signalled_run
 from tests.test_escape import speaking
 
 NOT_UTF8 = os.fsdecode(b"run-\xff")
@@ -93,22 +94,12 @@ def test_a_sweep_checks_where_it_writes_before_it_runs(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("form", ["text", "jsonl", "chrome-trace"])
 def test_sigterm_keeps_the_trace_written_so_far(tmp_path: Path, form: str) -> None:
-    import signal
-    import subprocess
-    import sys
-    import time
-
     trace = tmp_path / "run.out"
     scenario = Path(__file__).parents[1] / "scenarios" / "thesis" / "sample-03.xml"
-    child = subprocess.Popen([sys.executable, "-m", "prima", "run", str(scenario), "--until",
-                              "100000", "--format", form, "--out", str(trace)],
-                             stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and not list(tmp_path.glob(".prima-*")):
-        time.sleep(0.05)
-    time.sleep(1.5)  # the run is under way (sample-03 ends at 60 s; this goes on and on)
-    child.send_signal(signal.SIGTERM)
-    _, err = child.communicate(timeout=60)
+    # SIGTERM once the trace passes 61 s (sample-03 ends at 60 s; this goes on and on)
+    child = signalled_run("SIGTERM", 61, "run", str(scenario), "--until", "100000",
+                          "--format", form, "--out", str(trace))
+    err = child.stderr
     assert child.returncode == 143, err
     assert "prima run: interrupted at t=" in err and "Traceback" not in err
     text = trace.read_text(encoding="utf-8")

@@ -445,6 +445,16 @@ SURFACES = [
     Case("jsonl-error-relative", "a runtime error's line in the jsonl trace",
          made(_failing), Exits(0, '"text": "ea.pxml:1:', absent='"text": "/'),
          command=("run", "{path}", "--format", "jsonl")),
+    # 17: names no file can have, and names of shipped files that are not shipped
+    Case("cli-name-too-long", "a scenario named with 300 letters (a traceback from os.stat)",
+         _speaker("hello"), Exits(2, "...: file name too long"),
+         command=("run", "{dir}/" + "a" * 300 + ".xml")),
+    Case("check-fa-name-too-long", "prima check --fa with a path 5,000 letters long",
+         _speaker("hello"), Exits(2, "...: file name too long"),
+         command=("check", "{dir}/ea.pxml", "--fa", "apps/fa/" + "a" * 5000)),
+    Case("run-fa-not-shipped", "--fa with a name no shipped FA has",
+         _speaker("hello"), Exits(2, "no such file: fa9-nope"),
+         command=("run", "{path}", "--fa", "fa9-nope")),
     # 9: the shipped files
     Case("validate-apps", "prima validate apps/ (FA7 is the guide robot's)",
          made(_shipped_apps), Accepted(), seconds=10),
