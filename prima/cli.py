@@ -736,12 +736,12 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
 def make_validation(profile: RobotProfile, *, robot: bool = False) -> Validation:
     """A validation as ``prima validate`` makes one: documents and robot profiles, and
-    scenarios and maps with every file they name (``robot``: the documents a scenario
-    runs are checked against ``profile``, as ``--robot`` asks, not the scenario's
-    robot). ``prima lsp`` checks an editor's buffer with it."""
+    scenarios and maps with every file they name (``robot``: every document is checked
+    against ``profile``, as ``--robot`` asks, not the scenario's robot nor the one its
+    ``robot`` attribute names). ``prima lsp`` checks an editor's buffer with it."""
     from prima.dsl import Validation
 
-    made: Validation = Validation(profile,
+    made: Validation = Validation(profile, follow_declared=not robot,
                                   more_checkers=lambda: _scenario_checkers(made, robot))
     return made
 
@@ -1404,8 +1404,7 @@ def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         return _usage("lsp", problem, err)
     from prima.lsp import serve
 
-    serve(Path(args.robot).resolve() if args.robot else None)
-    return EXIT_OK
+    return serve(Path(args.robot).resolve() if args.robot else None, err=err)
 
 
 def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:

@@ -22,6 +22,7 @@ import multiprocessing
 import os
 import resource
 import signal
+import sys
 import time
 import traceback
 from collections.abc import Callable
@@ -92,8 +93,9 @@ class Case:
     command: tuple[str, ...] = ()
     """Another command than ``prima validate``, whole (``{path}``: the input, ``{dir}``:
     its folder), with an :class:`Exits` verdict."""
-    stdin: str = ""
-    """What ``prima debug`` reads as typed."""
+    stdin: str | bytes = ""
+    """What ``prima debug`` reads as typed (text), or the bytes ``prima lsp`` reads from
+    its client (bytes; what it answers is dropped)."""
     file_limit: int | None = None
     """The most bytes the child may write into one file (``RLIMIT_FSIZE``): a write past
     it fails as on a full disk (``EFBIG``), half-way through an output."""
@@ -131,7 +133,12 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
         if case.command:
             import prima.cli
 
-            prima.cli._stdin = lambda: io.StringIO(case.stdin)  # type: ignore[attr-defined]
+            if isinstance(case.stdin, bytes):  # a language client's bytes
+                sys.stdin = io.TextIOWrapper(io.BytesIO(case.stdin))
+                sys.stdout = io.TextIOWrapper(io.BytesIO())
+            else:
+                typed = case.stdin
+                prima.cli._stdin = lambda: io.StringIO(typed)  # type: ignore[attr-defined]
             command = [a.replace("{path}", str(path)).replace("{dir}", str(path.parent))
                        for a in case.command]
             code = main(command, out=out, err=err)

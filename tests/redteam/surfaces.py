@@ -85,6 +85,15 @@ def _shipped_scenarios(_folder: Path) -> Path:
     return ROOT / "scenarios"
 
 
+def _lsp_frame(message: dict[str, object]) -> bytes:
+    body = json.dumps(message).encode()
+    return b"Content-Length: %d\r\n\r\n" % len(body) + body
+
+
+_LSP_INIT = _lsp_frame({"jsonrpc": "2.0", "id": 1, "method": "initialize",
+                        "params": {"processId": None, "rootUri": None, "capabilities": {}}})
+
+
 # ------------------------------------------------------------ outputs: what they must not do
 
 EARLIER = b"an earlier file the user made\n"
@@ -455,6 +464,19 @@ SURFACES = [
     Case("run-fa-not-shipped", "--fa with a name no shipped FA has",
          _speaker("hello"), Exits(2, "no such file: fa9-nope"),
          command=("run", "{path}", "--fa", "fa9-nope")),
+    # 18: the language server's client
+    Case("lsp-huge-length", "a Content-Length of 10^17 and a body cut short (the server ended "
+         "with a traceback)", made(_shipped_apps),
+         Exits(1, "the client's stream ended inside a refused message: stopping",
+               absent="Traceback"),
+         command=("lsp",), stdin=_LSP_INIT + b"Content-Length: 99999999999999999\r\n\r\n{",
+         seconds=8),
+    Case("lsp-garbage-headers", "headers that are no headers, then a clean shutdown",
+         made(_shipped_apps),
+         Exits(0, "skipped up to the next Content-Length header", absent="Traceback"),
+         command=("lsp",), stdin=_LSP_INIT + b"Content-Type: x\r\n\r\n{}\r\nnoise\r\n"
+         + _lsp_frame({"jsonrpc": "2.0", "id": 2, "method": "shutdown"})
+         + _lsp_frame({"jsonrpc": "2.0", "method": "exit"}), seconds=8),
     # 9: the shipped files
     Case("validate-apps", "prima validate apps/ (FA7 is the guide robot's)",
          made(_shipped_apps), Accepted(), seconds=10),
