@@ -76,6 +76,19 @@ def _not_utf8(folder: Path) -> Path:
     return made_path.rename(folder / os.fsdecode(b"run-\xff.xml"))
 
 
+def _placed_on_the_robot(folder: Path) -> Path:
+    """The robot tracks a user who stands exactly on it and follows it."""
+    (folder / "map.xml").write_text(MAP)
+    (folder / "ea.pxml").write_text(
+        '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t"><state id="s" initial="true">'
+        "<entry><chain>TrackingHuman(1.0)</chain></entry></state></pxml>\n")
+    path = folder / "s.xml"
+    path.write_text('<scenario xmlns="urn:prima:scenario:1" name="s" until="8">'
+                    '<map href="map.xml"/><apps ea="ea.pxml"/><robot place="a"/>'
+                    '<user x="0" y="0"><follow at="0" distance="1"/></user></scenario>\n')
+    return path
+
+
 def _shipped_apps(_folder: Path) -> Path:
     return ROOT / "apps"
 
@@ -153,6 +166,9 @@ SURFACES = [
          _speaker("hello"), Exits(0, "2 of 2 runs"),
          command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--jobs", "1024",
                   "--worst", "0"), seconds=10),
+    Case("user-on-the-robot", "a user placed on the robot who follows it (distance 0)",
+         _placed_on_the_robot, Exits(0, "follows the robot", absent="Error"),
+         command=("run", "{path}"), seconds=6),
     # 8: mistakes that passed in silence
     Case("debug-unknown-state", "a breakpoint on a state no application has",
          _speaker("hello"), Exits(0, "no state 'nope' in this run, no breakpoint set"),
