@@ -22,6 +22,7 @@ from prima.batch._dispatch import (
     plan,
 )
 from prima.batch._pools import executor_problem, pool_for
+from prima.batch._records import Nullable, shape_problem
 from prima.batch._results import ResultsFile
 from prima.batch._variants import (
     MIN_ANSWER_DELAY,
@@ -42,6 +43,7 @@ __all__ = [
     "Chunk",
     "Inline",
     "Job",
+    "Nullable",
     "Observer",
     "Pool",
     "Processes",
@@ -58,6 +60,7 @@ __all__ = [
     "rng",
     "run_chunk",
     "run_one",
+    "shape_problem",
     "shift_timings",
     "write_variant",
 ]

@@ -351,7 +351,7 @@ def collect(jobs: Sequence[Job], take: Callable[[Record], None], *,
     total = sum(j.runs for j in jobs)
     skip = 0
     if out is not None and resume:
-        for record in out.previous([j.runs for j in jobs]):
+        for record in out.previous(jobs):
             take(record)
             skip += 1
     if out is not None:

@@ -48,6 +48,11 @@ class Analysis(Protocol):
     def key(self) -> str:
         """The record's key for what it finds."""
 
+    @property
+    def shape(self) -> Any:
+        """What a record says under :attr:`key`, as a shape (``prima.batch.shape_problem``):
+        a resumed results file's records are checked against it."""
+
     def observer(self) -> Observer:
         """A fresh observer for one run."""
 

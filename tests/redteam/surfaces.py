@@ -89,6 +89,29 @@ def _placed_on_the_robot(folder: Path) -> Path:
     return path
 
 
+def _forged_results(old: str, new: str) -> Make:
+    """A sweep's results file (``r.jsonl``, of two runs of a scenario) whose first record
+    has ``old`` replaced by ``new``."""
+    def make(folder: Path) -> Path:
+        from prima.cli import main
+
+        path = _speaker("hello")(folder)
+        results = folder / "r.jsonl"
+        assert main(["sweep", str(path), "--runs", "2", "--jitter", "1", "--jobs", "1",
+                     "--worst", "0", "--results", str(results)],
+                    out=open(os.devnull, "w"), err=open(os.devnull, "w")) == 0  # noqa: SIM115
+        head, first, *_ = results.read_text().splitlines()
+        assert old in first, first
+        results.write_text(f"{head}\n{first.replace(old, new, 1)}\n")
+        return path
+    return make
+
+
+RESUME = ("sweep", "{path}", "--runs", "2", "--jitter", "1", "--jobs", "1", "--worst", "0",
+          "--resume", "{dir}/r.jsonl")
+"""Resume the sweep whose results ``_forged_results`` forged."""
+
+
 def _shipped_apps(_folder: Path) -> Path:
     return ROOT / "apps"
 
@@ -169,6 +192,21 @@ SURFACES = [
     Case("user-on-the-robot", "a user placed on the robot who follows it (distance 0)",
          _placed_on_the_robot, Exits(0, "follows the robot", absent="Error"),
          command=("run", "{path}"), seconds=6),
+    Case("resume-count-huge", "--resume with a count of 10^400",
+         _forged_results('"late": 0', '"late": 1' + "0" * 400),
+         Exits(1, "r.jsonl:2:"), command=RESUME, seconds=6),
+    Case("resume-counts-array", "--resume with counts that are not an object",
+         _forged_results('"counts": {', '"counts": [], "x": {'),
+         Exits(1, "field 'counts' must be an object"), command=RESUME, seconds=6),
+    Case("resume-deep", "--resume with a record of 100,000 nested arrays",
+         _forged_results('{"job": 0', "[" * 100_000 + "]" * 100_000 + '{"job": 0'),
+         Exits(1, "nested more than 16 levels deep"), command=RESUME, seconds=6),
+    Case("resume-lateness-soon", "--resume with a lateness of \"soon\"",
+         _forged_results('"worst_lateness": 0.0', '"worst_lateness": "soon"'),
+         Exits(1, "field 'worst_lateness' must be a number"), command=RESUME, seconds=6),
+    Case("resume-lateness-missing", "--resume with a record without its worst_lateness",
+         _forged_results('"worst_lateness": 0.0, ', ""),
+         Exits(1, "field 'worst_lateness' is missing"), command=RESUME, seconds=6),
     # 8: mistakes that passed in silence
     Case("debug-unknown-state", "a breakpoint on a state no application has",
          _speaker("hello"), Exits(0, "no state 'nope' in this run, no breakpoint set"),
