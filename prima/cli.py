@@ -303,7 +303,9 @@ def _batch_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--executor", metavar="WHERE",
                         help="where the runs go: processes (default: this machine's, --jobs) "
                              "or dask://HOST:PORT, a Dask cluster's scheduler (the dask "
-                             "extra; docs/running.md, Many runs)")
+                             "extra; how long a cluster may keep the runs waiting: "
+                             "PRIMA_DASK_CONNECT_TIMEOUT, PRIMA_DASK_WORKER_TIMEOUT, "
+                             "PRIMA_DASK_PROGRESS_TIMEOUT; docs/judging.md, Many runs)")
     parser.add_argument("--results", metavar="FILE",
                         help="write every run's record to FILE (jsonl) as it comes")
     parser.add_argument("--resume", metavar="FILE",
@@ -1043,15 +1045,11 @@ def _batch_usage(args: argparse.Namespace) -> str | None:
 
 
 def _pool(args: argparse.Namespace, runs: int) -> Pool:
-    """The pool the options ask for; a Dask scheduler that cannot be reached is a
-    PrimaError (a message)."""
+    """The pool the options ask for; a Dask cluster that cannot take the runs is a
+    ClusterError (a message)."""
     from prima.batch import pool_for
-    from prima.errors import RunError
 
-    try:
-        return pool_for(args.executor, args.jobs, runs)
-    except OSError as exc:
-        raise RunError(str(exc)) from exc
+    return pool_for(args.executor, args.jobs, runs)
 
 
 def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:

@@ -83,9 +83,12 @@ class Case:
     """More work on an accepted input, inside the same limits."""
     command: tuple[str, ...] = ()
     """Another command than ``prima validate``, whole (``{path}``: the input, ``{dir}``:
-    its folder), with an :class:`Exits` verdict."""
+    its folder, ``{port}``: what the file ``port`` there says), with an :class:`Exits`
+    verdict."""
     stdin: str = ""
     """What ``prima debug`` reads as typed."""
+    env: tuple[tuple[str, str], ...] = ()
+    """Environment variables the command runs with (in the child only)."""
 
 
 @dataclass(frozen=True)
@@ -115,7 +118,10 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
             import prima.cli
 
             prima.cli._stdin = lambda: io.StringIO(case.stdin)  # type: ignore[attr-defined]
+            os.environ.update(dict(case.env))
+            port = path.parent / "port"  # (a port the case's input listens on)
             command = [a.replace("{path}", str(path)).replace("{dir}", str(path.parent))
+                       .replace("{port}", port.read_text() if port.exists() else "")
                        for a in case.command]
             code = main(command, out=out, err=err)
         else:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 from pathlib import Path
 
 from tests.redteam.cases import MAP, ROOT, Make, made, write
@@ -112,6 +113,21 @@ RESUME = ("sweep", "{path}", "--runs", "2", "--jitter", "1", "--jobs", "1", "--w
 """Resume the sweep whose results ``_forged_results`` forged."""
 
 
+_LISTENING: list[socket.socket] = []
+"""Ports the cases listen on, kept open while the tests run (the children inherit them)."""
+
+
+def _silent_port(folder: Path) -> Path:
+    """A scenario, and a port (written in ``port``) that accepts connections and never
+    answers: what a sweep takes for a Dask scheduler."""
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)
+    _LISTENING.append(listener)
+    (folder / "port").write_text(str(listener.getsockname()[1]))
+    return _speaker("hello")(folder)
+
+
 def _shipped_apps(_folder: Path) -> Path:
     return ROOT / "apps"
 
@@ -207,6 +223,15 @@ SURFACES = [
     Case("resume-lateness-missing", "--resume with a record without its worst_lateness",
          _forged_results('"worst_lateness": 0.0, ', ""),
          Exits(1, "field 'worst_lateness' is missing"), command=RESUME, seconds=6),
+    Case("dask-silent-port", "--executor dask:// to a port that accepts and never answers",
+         _silent_port, Exits(1, "did not answer within 0.5 s (PRIMA_DASK_CONNECT_TIMEOUT)"),
+         command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--worst", "0",
+                  "--executor", "dask://127.0.0.1:{port}"),
+         env=(("PRIMA_DASK_CONNECT_TIMEOUT", "0.5"),), seconds=8),
+    Case("dask-long-host", "--executor dask:// to a host name of 300 characters",
+         _speaker("hello"), Exits(2, "the host name is 300 characters long"),
+         command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--worst", "0",
+                  "--executor", "dask://" + "a" * 300 + ":8786")),
     # 8: mistakes that passed in silence
     Case("debug-unknown-state", "a breakpoint on a state no application has",
          _speaker("hello"), Exits(0, "no state 'nope' in this run, no breakpoint set"),
