@@ -27,6 +27,7 @@ from prima.batch._results import ResultsFile
 from prima.batch._work import Chunk, Job, run_chunk
 from prima.errors import ClusterError
 from prima.escape import shown_path
+from prima.signals import deferred
 
 __all__ = ["CHUNK", "RECYCLE", "Inline", "Pool", "Processes", "chunk_size", "collect", "dispatch",
            "plan"]
@@ -107,8 +108,12 @@ class Inline:
 
 
 def _quiet() -> None:
-    """Workers leave Ctrl-C to the parent, which stops the pool."""
+    """Workers leave Ctrl-C to the parent, which stops the pool, and SIGTERM ends them
+    at once, without a word (as the parent's :meth:`Processes.stop` does; they are
+    forked with the parent's handlers, which note these signals meanwhile:
+    :func:`prima.signals.deferred`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 RECYCLE = 10
@@ -141,7 +146,8 @@ class _Recycling(concurrent.futures.Executor):
             self._pool = concurrent.futures.ProcessPoolExecutor(
                 self.workers, mp_context=multiprocessing.get_context(), initializer=_quiet)
             self._taken = 0
-        future = self._pool.submit(fn, *args, **kwargs)
+        with deferred():  # (a new pool forks its workers here)
+            future = self._pool.submit(fn, *args, **kwargs)
         self._taken += 1
         self._futures.append(future)
         return future
@@ -361,7 +367,8 @@ def dispatch(jobs: Sequence[Job], pool: Pool, *, size: int, skip: int = 0,
             if records and progress is not None:
                 progress(finished)
     except BaseException:  # Ctrl-C, or a fault of the batch's own: stop the workers now
-        pool.stop()
+        with deferred():  # (a second Ctrl-C meanwhile is noted, and the stop finishes)
+            pool.stop()
         raise
     pool.close()
 

@@ -28,6 +28,7 @@ from prima.batch._records import (
 from prima.batch._work import Job
 from prima.errors import OutputError, Problem, ResultsError, Severity
 from prima.escape import json_line, shown_path
+from prima.signals import deferred
 from prima.output import make_folder
 
 __all__ = ["ResultsFile"]
@@ -141,8 +142,10 @@ class ResultsFile:
         """One run's record, at the end of the file (flushed: a stop keeps it)."""
         if self._out is None:
             raise RuntimeError("the results file is not open")
-        self._out.write(json_line(dict(record)) + "\n")
-        self._out.flush()
+        line = json_line(dict(record)) + "\n"
+        with deferred():  # (Ctrl-C keeps a record whole: after it, not in it)
+            self._out.write(line)
+            self._out.flush()
 
     def close(self) -> None:
         if self._out is not None:
