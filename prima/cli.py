@@ -274,7 +274,8 @@ def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
                        help="the EA's own scenario (repeatable; default: generated visits)")
     check.add_argument("--map", metavar="MAP",
                        help="the map of the generated visits (default: the first shipped map "
-                            "with every place the EA names)")
+                            "with every place the EA can go to; needed when some cannot be "
+                            "known before it runs)")
     check.add_argument("--runs", type=int, default=20, metavar="N",
                        help="runs per scenario and cell (default 20)")
     check.add_argument("--jitter", type=float, default=5.0, metavar="SECONDS",

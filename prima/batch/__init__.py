@@ -34,10 +34,11 @@ from prima.batch._variants import (
     shift_timings,
     write_variant,
 )
-from prima.batch._work import Analysis, Chunk, Job, Observer, record_of, run_chunk, run_one
+from prima.batch._work import CPU, Analysis, Chunk, Job, Observer, record_of, run_chunk, run_one
 
 __all__ = [
     "CHUNK",
+    "CPU",
     "MIN_ANSWER_DELAY",
     "TIMEOUTS",
     "Analysis",

@@ -24,7 +24,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol
 
 from prima.batch._results import ResultsFile
-from prima.batch._work import Chunk, Job, run_chunk
+from prima.batch._work import CPU, Chunk, Job, run_chunk
 from prima.errors import ClusterError
 from prima.escape import shown_path
 from prima.signals import deferred
@@ -379,7 +379,8 @@ def collect(jobs: Sequence[Job], take: Callable[[Record], None], *,
             progress: Callable[[int, int], None] | None = None) -> bool:
     """Every run's record of ``jobs`` to ``take``, in the order of the runs, and to the
     results file ``out`` as it comes; with ``resume``, the records ``out`` holds already
-    are taken first and their runs not run again. ``pool(runs_left)`` gives the pool;
+    are taken first and their runs not run again (a record run now says its run's CPU
+    time, :data:`~._work.CPU`, which is not written). ``pool(runs_left)`` gives the pool;
     ``progress(done, total)`` is called as runs finish. True if Ctrl-C stopped it
     (what was taken is the batch's first runs)."""
     total = sum(j.runs for j in jobs)
@@ -399,7 +400,7 @@ def collect(jobs: Sequence[Job], take: Callable[[Record], None], *,
                                else (lambda finished: progress(finished, total))):
             take(record)
             if out is not None:
-                out.write(record)
+                out.write({k: v for k, v in record.items() if k != CPU})
             done += 1
     except KeyboardInterrupt:
         return True

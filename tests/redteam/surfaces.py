@@ -232,6 +232,16 @@ SURFACES = [
          _speaker("hello"), Exits(2, "the host name is 300 characters long"),
          command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--worst", "0",
                   "--executor", "dask://" + "a" * 300 + ":8786")),
+    Case("check-place-unknown", "prima check of an EA that goes where a message says",
+         write("ea.pxml", '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t">\n'
+                          '<var name="goal" expr="\'\'"/>\n<on event="message">\n'
+                          '<assign name="goal" expr="event.text"/>\n'
+                          "<chain>TopologicalMove({goal})</chain></on>\n"
+                          '<state id="s" initial="true"/></pxml>\n'),
+         Exits(2, "ea.pxml:5:8: TopologicalMove goes to a place nobody can know"),
+         command=("check", "{path}", "--fa", str(ROOT / "apps" / "fa" / "fa6-scheduler.pxml"),
+                  "--robot", str(ROOT / "robots" / "home-robot.xml"), "--runs", "1"),
+         seconds=6),
     # 8: mistakes that passed in silence
     Case("debug-unknown-state", "a breakpoint on a state no application has",
          _speaker("hello"), Exits(0, "no state 'nope' in this run, no breakpoint set"),
