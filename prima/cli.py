@@ -284,7 +284,8 @@ def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
                        help="the EA's own scenario (repeatable; default: generated visits)")
     check.add_argument("--map", metavar="MAP",
                        help="the map of the generated visits (default: the first shipped map "
-                            "with every place the EA names)")
+                            "with every place the EA can go to; needed when some cannot be "
+                            "known before it runs)")
     check.add_argument("--runs", type=int, default=20, metavar="N",
                        help="runs per scenario and cell (default 20)")
     check.add_argument("--jitter", type=float, default=5.0, metavar="SECONDS",
@@ -313,7 +314,9 @@ def _batch_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--executor", metavar="WHERE",
                         help="where the runs go: processes (default: this machine's, --jobs) "
                              "or dask://HOST:PORT, a Dask cluster's scheduler (the dask "
-                             "extra; docs/running.md, Many runs)")
+                             "extra; how long a cluster may keep the runs waiting: "
+                             "PRIMA_DASK_CONNECT_TIMEOUT, PRIMA_DASK_WORKER_TIMEOUT, "
+                             "PRIMA_DASK_PROGRESS_TIMEOUT; docs/judging.md, Many runs)")
     parser.add_argument("--results", metavar="FILE",
                         help="write every run's record to FILE (jsonl) as it comes")
     parser.add_argument("--resume", metavar="FILE",
@@ -1206,15 +1209,11 @@ class _BarLine:
 
 
 def _pool(args: argparse.Namespace, runs: int) -> Pool:
-    """The pool the options ask for; a Dask scheduler that cannot be reached is a
-    PrimaError (a message)."""
+    """The pool the options ask for; a Dask cluster that cannot take the runs is a
+    ClusterError (a message)."""
     from prima.batch import pool_for
-    from prima.errors import RunError
 
-    try:
-        return pool_for(args.executor, args.jobs, runs)
-    except OSError as exc:
-        raise RunError(str(exc)) from exc
+    return pool_for(args.executor, args.jobs, runs)
 
 
 def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
