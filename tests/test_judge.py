@@ -1148,6 +1148,29 @@ def test_a_reaction_its_own_app_cancelled_is_neither_late_nor_unheard() -> None:
     assert counts(report) == {}
 
 
+def test_words_a_later_request_of_its_own_app_cancelled_after_its_first_ab_are_not_unheard(
+        ) -> None:
+    """The EA's reaction to a message stops the robot (its StopMoving runs), then would
+    say the message; a place reached in the meantime makes the EA ask for other words as
+    soon as possible, which cancels the message's words: its own choice, not unheard
+    (it would be, were they left waiting)."""
+    def unheard(cancelled: bool) -> bool:
+        tr = Trace()
+        tr.event(1.0, "message")
+        tr.request(1.0, "ea", 1, [1, 2], command="StopMoving", reactive=True,
+                   text="I've just got a message.", devices=("locomotion",))
+        tr.start(1.0, "ea", 1, 1, command="StopMoving", devices=("locomotion",))
+        tr.end(1.1, "ea", 1, 1, command="StopMoving", devices=("locomotion",))
+        if cancelled:
+            tr.line(1.2, "cancel", app="ea", ab=2, tree=0, command="Speak",
+                    reason="asap", devices=["speaker"], detail={"command_id": 2})
+        tr.line(70.0, "pose")
+        (r,) = tr.judge().reactions
+        return r.unheard
+
+    assert (unheard(True), unheard(False)) == (False, True)
+
+
 # ------------------------------------------------------------------ talking unfaced
 
 def test_words_after_an_aiming_command_are_about_what_it_aims_at() -> None:

@@ -16,14 +16,20 @@ WHEELS = ("human-detection", "localization", "locomotion")
 
 # ---------------------------------------------------------------- talking unfaced
 
-def _talking(offs: list[tuple[float, float]]) -> Report:
+def _talking(offs: list[tuple[float, float]], turn: tuple[float, float] | None = None
+             ) -> Report:
     """The EA speaks from 1 to 5 s, faced at its start; the user is at ``offs`` (time,
-    degrees off the robot's heading) on pose lines meanwhile."""
+    degrees off the robot's heading) on pose lines meanwhile; with ``turn``, a turn to
+    the user (connect-channel) runs beside the words then."""
     import math
 
     tr = Trace()
     tr.speak(1.0, "ea", 1, 1, "This panel shows research points of our laboratory.", lasts=4.0)
     end = tr.rows.pop()
+    if turn is not None:
+        tr.start(turn[0], "ea", 2, 2, command="FaceHuman", devices=WHEELS,
+                 reason="connect-channel")
+        tr.end(turn[1], "ea", 2, 2, command="FaceHuman", devices=WHEELS)
     for t, off in offs:
         rad = math.radians(off)
         tr.user = {"x": math.cos(rad), "y": math.sin(rad), "heading": 180.0,
@@ -39,6 +45,17 @@ def test_the_user_off_to_the_side_for_over_a_second_while_the_words_run_is_unfac
     assert counts(report) == {"unfaced": 1}
     (u,) = report.of("unfaced")
     assert (u.t, u.during, u.off) == (1.0, 1.5, 70.0)
+
+
+def test_the_user_off_while_the_robot_turns_to_them_is_not() -> None:
+    """The user walks round the robot; it turns to them beside its words (keeping
+    facing them, 7.6 (3)) as fast as it can: the time the turn takes is no stretch
+    unfaced (one starts anew if they are still off when it is over)."""
+    offs = [(2.0, 0.0), (2.5, 60.0), (3.0, 70.0), (3.5, 70.0), (4.0, 0.0)]
+    assert counts(_talking(offs, turn=(2.5, 3.6))) == {}
+    assert counts(_talking(offs + [(4.2, 80.0), (4.9, 80.0)], turn=(2.5, 3.6))) == {}
+    late = [(2.0, 0.0), (2.5, 60.0), (3.0, 70.0), (3.5, 70.0), (4.0, 70.0), (4.7, 70.0)]
+    assert counts(_talking(late, turn=(2.5, 3.0))) == {"unfaced": 1}
 
 
 def test_the_user_off_for_a_second_or_less_while_the_words_run_is_not() -> None:

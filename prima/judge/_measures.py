@@ -167,7 +167,9 @@ class _Unfaced:
     while their words run (docs/rules.md 7.6 (3): the robot keeps facing the user while
     its words run). The user's pose is known at each posed line and held until the
     next: a stretch runs from the first line that shows the user off to the first that
-    does not (or the words' end)."""
+    does not (or the words' end). While a turn to the user runs (reason
+    ``connect-channel``: the robot turns to them as fast as it can), no stretch runs:
+    one starts anew if they are still off when it is over."""
 
     kinds: frozenset[str] | None = None
 
@@ -237,6 +239,9 @@ class _Unfaced:
         off = _off(row, ctx.th.face_tolerance)
         if off is None:
             return self._stretch(ab, talk, t, ctx)
+        if any(y.reason == "connect-channel" for y in ctx.running.values()):
+            talk.off_since = None  # (the robot turns to them: as fast as it can)
+            return False
         if talk.off_since is None:
             talk.off_since, talk.most, talk.turner = row, off, mover
         talk.most = max(talk.most, off)

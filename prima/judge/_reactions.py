@@ -544,9 +544,14 @@ class _Analyst:
         application cancelled them, nor if they were cut and its request said to drop
         them then (docs/rules.md 7.6 (5): words the user cut still count if they were to
         be said again)."""
-        words_cmds = {cid for ab in spoken for cid in ab.ids} or set(r.commands[:1])
-        if words_cmds <= self.ctx.cancelled.keys():
-            return False
+        cancelled = self.ctx.cancelled
+        if spoken:
+            if {cid for ab in spoken for cid in ab.ids} <= cancelled.keys():
+                return False
+        else:  # (none said: what never started is what would have said them)
+            never = [cid for cid in r.commands if cid not in self.ctx.cmd_ab]
+            if never and all(cid in cancelled for cid in never):
+                return False
         cut = [ab for ab in spoken if ab.end_reason in ("interrupt", "barge-in")]
         if cut and any(ab.dropped for ab in cut):
             return False  # (cut, and their request said to drop them then)

@@ -406,6 +406,7 @@ class Simulator:
         if self.speech is not None:
             ends = tuple(min(ticks, self.ticks(at)) for at in self.speech.said(text)[1])
         self._speech[command_id] = (self.kernel.tick, tuple(text.split()), ticks, ends)
+        self._off = False  # (new words: whether the user goes off is watched afresh)
 
     def speech_duration(self, text: str) -> float:
         """How long saying ``text`` takes: by :attr:`speech` if given, else by the speech

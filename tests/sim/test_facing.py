@@ -38,6 +38,25 @@ def test_going_off_after_the_words_is_not_told() -> None:
     assert _talking((0.0, 1.5), at=6.0) == []
 
 
+def test_new_words_with_the_user_still_off_are_told_again() -> None:
+    """The user walks round the robot during its first words (told) and stands off to
+    its side while nothing moves; then walks on slowly during its next words: told
+    again (the watch starts afresh with each utterance: it missed the second, which
+    began with them off)."""
+    sim = Simulator(WorldMap("open"), robot=Pose(0, 0, 0),
+                    user=UserScript(Pose(1.5, 0, 180), speed=0.8,
+                                    actions=(walk(1.0, 0.0, 1.5), walk(8.5, -0.6, 1.5, 0.3))))
+    told: list[float] = []
+    sim.watch_facing(30.0, lambda: told.append(sim.now()))
+    runner = CommandRunner(sim)
+    runner.queue(call("Speak", text="This panel shows research points of our laboratory, "
+                                    "and the figure above shows a wearable computer."))
+    runner.run(8.0)
+    runner.queue(call("Speak", text="The next panel is about the robot you are talking to."))
+    runner.run(14.0)
+    assert len(told) == 2 and told[1] > 8.0, told
+
+
 def _facing_a_walker(walks: bool) -> tuple[float, float]:
     """The robot faces east; its user, 1 m north of it, walks west at 0.4 m/s (or
     stands): Face Human. How far off the user is when it ends (degrees), and when."""
