@@ -1640,6 +1640,28 @@ def test_a_command_still_waiting_at_the_end_is_stuck() -> None:
     assert counts(search_loop(until=50.0, other_app=True).judge()) == {}
 
 
+def test_waiting_while_the_robot_follows_its_user_is_not_stuck() -> None:
+    """The FA follows the user (Tracking Human, as they asked) from 0 s to the end; the
+    EA's guide move waits for the wheels meanwhile: the user leads, nobody is stuck. The
+    same wait behind a search is."""
+    def waits_behind(command: str) -> dict[str, int]:
+        tr = Trace()
+        wheels = ("human-detection", "locomotion")
+        tr.request(0.0, "fa", 1, 1, command=command, devices=wheels)
+        tr.request(5.0, "ea", 100, 2, tree=1, command="TopologicalMove",
+                   devices=("localization", "locomotion"))
+        t, ab = 0.0, 1
+        while t < 80.0:
+            tr.start(t, "fa", ab, 1, command=command, devices=wheels, iteration=ab - 1)
+            tr.end(t + 0.5, "fa", ab, 1, command=command, devices=wheels, iteration=ab - 1)
+            t, ab = t + 0.5, ab + 1
+        tr.sort()
+        return counts(tr.judge())
+
+    assert waits_behind("TrackingHuman") == {}
+    assert waits_behind("ActiveSensingHuman") == {"stuck": 1}
+
+
 def test_a_command_stuck_at_the_end_names_what_ran_then() -> None:
     tr = search_loop(until=80.0, other_app=True)
     del tr.rows[-1]  # the search's last look still runs when the trace ends

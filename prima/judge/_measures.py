@@ -630,6 +630,10 @@ class _Stuck:
         self.checks: list[tuple[float, int, int]] = []
         self.stuck: dict[str, Stuck] = {}
         self.t = 0.0
+        self.following: dict[int, list[float | str]] = {}
+        """ABs that follow the user (Tracking Human) -> [start, end (inf while it runs),
+        app]: while the robot follows its user, another application's Commands that wait
+        for the wheels are not stuck (the user leads: docs/rules.md 7.6 (1))."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         t = float(row["t"])
@@ -637,6 +641,13 @@ class _Stuck:
             self._check(ctx, before=t)
             self.t = t
         kind = row["kind"]
+        ab = row.get("ab")
+        if kind in ("start", "end") and isinstance(ab, int) and any(
+                c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
+            if kind == "start":
+                self.following[ab] = [t, math.inf, str(row.get("app") or "")]
+            elif ab in self.following:
+                self.following[ab][1] = t
         if kind == "request" and row.get("reason") != "restart":
             # (a Command cut to start again has started once, as a feedback Command's
             # next iteration has: it is not counted as waiting again)
@@ -740,13 +751,26 @@ class _Stuck:
                     Blame(ab.app, ab.id, ab.command, ctx.at(ab), "never ended"))
         for app, waiting in self.waiting.items():
             late = [c for c in waiting.values()
-                    if not c.done and end - c.t > ctx.th.stuck_after + EPS]
+                    if not c.done and end - c.t - self._followed(app, c.t, end)
+                    > ctx.th.stuck_after + EPS]
             if late and app not in self.stuck:
                 first = min(late, key=lambda c: c.seq)
                 self.stuck[app] = Stuck(app, round(first.t + ctx.th.stuck_after, 3),
                                         first.seq, first.id, first.t, "end",
                                         ctx.cmd_at.get(first.id, ""), self._in_way(ctx, first))
         return sorted(self.stuck.values(), key=lambda s: (s.t, s.seq))
+
+    def _followed(self, app: str, lo: float, hi: float) -> float:
+        """How long within [lo, hi] another application's AB followed the user."""
+        spans = sorted((max(lo, float(a)), min(hi, float(b))) for a, b, who
+                       in self.following.values() if who != app)
+        total, reach = 0.0, lo
+        for a, b in spans:
+            a = max(a, reach)
+            if b > a:
+                total += b - a
+                reach = b
+        return total
 
     @staticmethod
     def _in_way(ctx: Context, command: _Command) -> Blame | None:
