@@ -300,6 +300,8 @@ class Selector:
                 log.tell(x.app.name, "suspended", by=by.app.name, rule=_ANSWERING.value)
                 if wm.suspend(tree):
                     self._policies.suspending(tree)
+            elif tree.live:  # (suspended by another AB's start in the round: held, said so)
+                self._holds.answering(x, by.app)
 
     def _kept_back(self, x: Node, ready: bool) -> bool:
         """Whether ``x``, held by no hold, waits all the same: kept for another
@@ -326,9 +328,9 @@ class Selector:
         answering = self._answering(x)
         if answering is None:
             return False
-        if x.tree.started:
-            self._answered.append((x, answering))
-        else:
+        if x.tree.started and x.tree.suspended is None:
+            self._answered.append((x, answering))  # (suspended once the round is over)
+        else:  # (a new stream, or one suspended already, by another AB: held, said so)
             self._holds.answering(x, answering.app)
         self._holds.park(x, _ANSWERING, answering.app)
         return True

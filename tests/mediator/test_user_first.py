@@ -230,6 +230,32 @@ def test_what_waits_for_a_busy_device_steps_aside_when_the_user_is_answered() ->
     assert _starts(h, "fa") == [(3.0, "FaceHumanAndSpeak")]
 
 
+def test_a_stream_suspended_by_the_answers_turn_is_said_to_be_held_for_the_answer() -> None:
+    """7.6 (1): the EA's reaction to a message (its StopMoving, as soon as its move's
+    leg is over) is suspended by the FA's turn to the user who touched the robot, and
+    then waits for the FA's words as a stream the FA's reaction interrupted: a `hold`
+    decision says so (rule answering), so that what reads the trace (the judge) knows
+    why it waits past the turn."""
+    h = Harness(duration={"TopologicalMove": 0.5, "FaceHuman": 2.0, "Speak": 1.2,
+                          "StopMoving": 0.1}, outcome=feedback_iterations(100))
+    m = h.mediator
+    h.app("fa", AppKind.FA, on_event=lambda e: e.name == "touched" and m.submit(Request(
+        "fa", (call("FaceHuman"), speak("Hee-hee! That tickles.")), order=RunningOrder.ASAP,
+        reactive=True, reaction=True, user=True)))
+    h.app("ea", AppKind.EA, on_event=lambda e: e.name == "message" and m.submit(Request(
+        "ea", (call("StopMoving"), speak("A message from your host.")),
+        order=RunningOrder.ASAP, reactive=True, reaction=True)))
+    m.submit(Request("ea", (call("TopologicalMove", to="room"),)))
+    h.at(1.2, lambda: m.post(Event("message")))
+    h.at(1.3, lambda: m.post(Event("touched")))
+    h.run(until=8.0)
+    said = [(d.t, d.kind, d.rule, d.command) for d in h.decisions
+            if d.app == "ea" and d.kind in (DecisionKind.SUSPEND, DecisionKind.HOLD)]
+    assert said == [(1.5, DecisionKind.SUSPEND, Rule.USER_FIRST, "StopMoving"),
+                    (1.5, DecisionKind.HOLD, Rule.ANSWERING, "StopMoving")]
+    assert _starts(h, "ea")[-2:] == [(4.7, "StopMoving"), (4.8, "Speak")]
+
+
 def test_a_later_reaction_is_no_stream_the_answer_interrupted() -> None:
     """7.6 (1) beside 7.1: while the FA asks the user what they want (its touch
     reaction's first words, a Q&A to 5.0), a message comes for the EA: its reaction is
