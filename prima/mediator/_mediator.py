@@ -184,6 +184,8 @@ class Mediator:
         self._wm = WorkingMemory(keep_next=config.reactions)
         self._log = DecisionLog(record)
         self._resting: list[Node] = []
+        self._beside: dict[AbId, Node] = {}
+        """Words -> the turn to the user running beside them (7.6 (3)): it ends with them."""
         """Restarts that wait out the pause after a false interruption (``not_before``)."""
         self._holds = Holds(self._apps, self._wm, self._log, catalog, clock, self._resting)
         # (whether the connect-channel policy can act: what Policies._connect requires)
@@ -428,6 +430,10 @@ class Mediator:
         self._depth += 1
         self._log.now = self._clock.now()
         try:
+            if self._beside:
+                turn = self._beside.pop(ab_id, None)
+                if turn is not None and turn.state is _RUNNING:
+                    self._driver.cut(turn.id)  # (a turn beside words ends with them: 7.6 (3))
             self._end(node, outcome)
         finally:
             self._depth -= 1
@@ -584,11 +590,14 @@ class Mediator:
         """A turn to the user beside the words under way, if the policy puts one in (the
         wheels are free and the user off to the side); cancelled if it cannot start at
         once."""
-        turn = self._policies.keep_facing()
-        if turn is not None:
+        put = self._policies.keep_facing()
+        if put is not None:
+            words, turn = put
             self._settle()
             if turn.state is NodeState.WAITING:
                 self._intake.cancel(turn, Rule.CONNECT_CHANNEL, self._log.now)
+            elif turn.state is _RUNNING:
+                self._beside[words.id] = turn
 
     def _talking(self) -> list[Node]:
         """The running ABs with words this robot can stop (an interruptible Command that

@@ -137,11 +137,12 @@ class Policies:
                                    f"turns to the user before AB{x.id}")
         return True
 
-    def keep_facing(self) -> Node | None:
+    def keep_facing(self) -> tuple[Node, Node] | None:
         """The connect-channel policy while words run (docs/rules.md 7.6 (3): the robot
         keeps facing the user while its words run): the user went off to the side while
         an utterance addressed to them is under way; if the wheels are free, a turn to
-        the user runs beside its words, in its stream. The turn, if put, is returned."""
+        the user runs beside its words, in its stream. The words' AB and the turn, if
+        put, are returned."""
         spec = self._catalog.get(CONNECT_COMMAND)
         if self._channel is None or spec is None or not self._config.connect_channel:
             return None
@@ -152,8 +153,8 @@ class Policies:
         if not talking or not self._channel.unfaced():
             return None
         x = talking[0][1]
-        return self._intake.beside(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
-                                   f"keeps facing the user while AB{x.id} speaks")
+        return x, self._intake.beside(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
+                                      f"keeps facing the user while AB{x.id} speaks")
 
     def acts_on_busy(self, x: Node) -> bool:
         """Whether a policy may act for ``x`` on busy devices: share them (blend) or

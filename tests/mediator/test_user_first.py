@@ -400,6 +400,33 @@ def test_the_robot_keeps_facing_the_user_while_its_words_run() -> None:
         assert not h.kinds(DecisionKind.CANCEL)
 
 
+def test_a_turn_beside_words_ends_with_them() -> None:
+    """7.6 (3): the user walks on round the robot while it asks its question; the turn
+    to them beside the prompt (a Face Human that follows them) ends with the Q&A, so
+    that the reply to their answer (its words on the wheels too) starts at once, not
+    when the turn gives up following them (a silence after the answer)."""
+    facing = Facing()
+    facing.faced = True
+    h = Harness(duration={"QA": 2.0, "FaceHuman": 4.0, "*": 1.0}, channel=facing,
+                outcome=lambda ab: Outcome({"status": "answered", "utterance": "yes"}))
+    m = h.mediator
+    asked: list[int] = []
+
+    def replied(cid: int, _o: Outcome) -> None:
+        if cid in asked:
+            m.submit(Request("ea", (call("FaceHumanAndSpeak", text="Here we go."),),
+                             follows=cid))
+
+    h.app("ea", AppKind.EA, on_ended=replied)
+    asked.extend(m.submit(Request("ea", (call("QA", prompt="May I repeat that?",
+                                                 grammar="g"),))))
+    h.at(0.5, functools.partial(setattr, facing, "faced", False))
+    h.at(0.5, m.regard)
+    h.run(until=10.0)
+    assert [(d.t, d.command) for d in h.starts()] == [
+        (0.0, "QA"), (0.5, "FaceHuman"), (2.0, "FaceHumanAndSpeak")]
+
+
 # ---------------------------------------------------------------- 7.1: one handling
 
 def test_what_one_handling_asks_is_one_reaction_its_first_words_end_its_precedence() -> None:
