@@ -28,8 +28,10 @@ from prima.batch._variants import (
     Bundle,
     bundle_scenario,
     number,
+    repath,
     rng,
     shift_timings,
+    switched_root,
     write_variant,
 )
 from prima.batch._work import Analysis, Chunk, Job, Observer, record_of, run_chunk, run_one
@@ -55,9 +57,11 @@ __all__ = [
     "plan",
     "pool_for",
     "record_of",
+    "repath",
     "rng",
     "run_chunk",
     "run_one",
     "shift_timings",
+    "switched_root",
     "write_variant",
 ]

@@ -11,8 +11,17 @@ from prima.check._check import Cell, Check, Failure, Verdict, check
 from prima.check._coverage import KINDS, Coverage, Item
 from prima.check._observe import CheckAnalysis, attribute
 from prima.check._report import format_check, format_coverage, junit, markdown
-from prima.check._visits import VISITS, Visit, map_for, visit_scenario
+from prima.check._visits import (
+    VISITS,
+    Visit,
+    listens,
+    map_for,
+    questions,
+    sends,
+    starts,
+    visit_scenario,
+)
 
 __all__ = ["KINDS", "VISITS", "Cell", "Check", "CheckAnalysis", "Coverage", "Failure", "Item",
            "Verdict", "Visit", "attribute", "check", "format_check", "format_coverage", "junit",
-           "map_for", "markdown", "visit_scenario"]
+           "listens", "map_for", "markdown", "questions", "sends", "starts", "visit_scenario"]

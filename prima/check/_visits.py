@@ -26,7 +26,8 @@ from xml.sax.saxutils import quoteattr
 from prima.dsl import Document, Grammar, Handler, HandlerKind, If, Request, Send
 from prima.sim import WorldMap
 
-__all__ = ["VISITS", "Visit", "map_for", "visit_scenario"]
+__all__ = ["VISITS", "Visit", "listens", "map_for", "questions", "sends", "starts",
+           "visit_scenario"]
 
 VISITS = ("willing", "declining", "hesitant", "silent")
 """The visitors a generated visit has, by name."""
@@ -288,15 +289,24 @@ def _user_actions(visit: Visit, far: str, said: list[str]) -> list[str]:
     return [f'    <{kind} at="{at * t:g}"{rest}/>' for at, kind, rest in actions]
 
 
+def starts(world: WorldMap) -> tuple[str, float, tuple[float, float, float]]:
+    """Where a visit on ``world`` begins: the robot's place and heading (the entrance,
+    else the first place, facing as it faces), and the visitor's position and heading
+    (1 m from the robot, ahead of it where that is clear, facing it)."""
+    place, x, y, heading = _start(world)
+    ux, uy = _beside(world, x, y, heading)
+    return place, heading, (ux, uy, round(math.degrees(math.atan2(y - uy, x - ux)), 1))
+
+
 def visit_scenario(visit: Visit, ea: Document, fa: Document, world: tuple[Path, WorldMap],
                    paths: tuple[Path, Path]) -> str:
     """The visit's scenario file (its file names absolute: ``paths`` are the EA's and the
     FA's documents, ``world`` the map's path and the map)."""
     map_path, plan = world
     ea_path, fa_path = paths
-    place, x, y, heading = _start(plan)
-    ux, uy = _beside(plan, x, y, heading)
-    facing = math.degrees(math.atan2(y - uy, x - ux))
+    place, heading, (ux, uy, facing) = starts(plan)
+    start = plan.place(place)
+    x, y = (start.x, start.y) if start is not None else (0.0, 0.0)
     far = max(plan.places, key=lambda p: math.hypot(p.x - x, p.y - y))
     t = visit.until / 180.0  # (the times below are for a visit of 180 s)
     lines = [
@@ -308,7 +318,7 @@ def visit_scenario(visit: Visit, ea: Document, fa: Document, world: tuple[Path, 
         f"  <map href={quoteattr(str(map_path.resolve()))}/>",
         f"  <apps fa={quoteattr(str(fa_path.resolve()))} ea={quoteattr(str(ea_path.resolve()))}/>",
         f'  <robot place="{place}" heading="{heading:g}"/>',
-        f'  <user x="{ux:g}" y="{uy:g}" heading="{round(facing, 1):g}" speed="0.4">',
+        f'  <user x="{ux:g}" y="{uy:g}" heading="{facing:g}" speed="0.4">',
         *_answer_rules(questions(ea) + questions(fa), visit.visitor),
         *_user_actions(visit, far.name, [r for doc in (ea, fa)
                                          for r in remarks(doc, visit.visitor)]),
