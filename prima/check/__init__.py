@@ -14,6 +14,7 @@ from prima.check._report import format_check, format_coverage, junit, markdown
 from prima.check._visits import (
     VISITS,
     Visit,
+    beside,
     listens,
     map_for,
     questions,
@@ -23,5 +24,6 @@ from prima.check._visits import (
 )
 
 __all__ = ["KINDS", "VISITS", "Cell", "Check", "CheckAnalysis", "Coverage", "Failure", "Item",
-           "Verdict", "Visit", "attribute", "check", "format_check", "format_coverage", "junit",
-           "listens", "map_for", "markdown", "questions", "sends", "starts", "visit_scenario"]
+           "Verdict", "Visit", "attribute", "beside", "check", "format_check", "format_coverage",
+           "junit", "listens", "map_for", "markdown", "questions", "sends", "starts",
+           "visit_scenario"]

@@ -26,7 +26,7 @@ from xml.sax.saxutils import quoteattr
 from prima.dsl import Document, Grammar, Handler, HandlerKind, If, Request, Send
 from prima.sim import WorldMap
 
-__all__ = ["VISITS", "Visit", "listens", "map_for", "questions", "sends", "starts",
+__all__ = ["VISITS", "Visit", "beside", "listens", "map_for", "questions", "sends", "starts",
            "visit_scenario"]
 
 VISITS = ("willing", "declining", "hesitant", "silent")
@@ -235,8 +235,9 @@ def _start(world: WorldMap) -> tuple[str, float, float, float]:
     return place.name, place.x, place.y, place.facing or 0.0
 
 
-def _beside(world: WorldMap, x: float, y: float, heading: float) -> tuple[float, float]:
-    """Where the visitor stands: 1 m from the robot, ahead of it if that is clear."""
+def beside(world: WorldMap, x: float, y: float, heading: float) -> tuple[float, float]:
+    """Where a visitor stands beside a robot at (x, y) heading ``heading``: 1 m from it,
+    ahead of it if that is clear (else the first clear way round it)."""
     for turn in (0, 45, -45, 90, -90, 135, -135, 180):
         a = math.radians(heading + turn)
         ux, uy = round(x + math.cos(a), 2), round(y + math.sin(a), 2)
@@ -294,7 +295,7 @@ def starts(world: WorldMap) -> tuple[str, float, tuple[float, float, float]]:
     else the first place, facing as it faces), and the visitor's position and heading
     (1 m from the robot, ahead of it where that is clear, facing it)."""
     place, x, y, heading = _start(world)
-    ux, uy = _beside(world, x, y, heading)
+    ux, uy = beside(world, x, y, heading)
     return place, heading, (ux, uy, round(math.degrees(math.atan2(y - uy, x - ux)), 1))
 
 
