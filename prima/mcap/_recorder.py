@@ -28,6 +28,7 @@ from foxglove.channels import (
 from foxglove.mcap import MCAPWriteOptions
 
 from prima.judge import Report, judge
+from prima.mcap._layout import ATTACHMENT, HOME_DEVICES, layout
 from prima.mediator import DecisionKind
 from prima.sim import WorldMap
 from prima.trace import TraceLine, describe
@@ -115,10 +116,12 @@ class Recorder:
     adds what needs the whole run (the judge's findings, the paths) and finishes the
     file. Use it as a context manager."""
 
-    def __init__(self, path: str | Path, world: WorldMap | None = None, *,
-                 robot_radius: float = 0.2) -> None:
-        self.context = foxglove.Context()
-        self.writer = foxglove.open_mcap(
+    def __init__(self, path: str | Path | None, world: WorldMap | None = None, *,
+                 robot_radius: float = 0.2, context: foxglove.Context | None = None) -> None:
+        self.context = context or foxglove.Context()
+        """Where the messages go: the file's writer, and whatever else listens to it (the
+        WebSocket server of ``prima live --foxglove``)."""
+        self.writer = None if path is None else foxglove.open_mcap(
             str(path), allow_overwrite=True, context=self.context,
             writer_options=MCAPWriteOptions(profile="", compression_threads=0))
         ctx = self.context
@@ -153,7 +156,9 @@ class Recorder:
 
     def _scene(self, world: WorldMap | None, radius: float) -> None:
         entities = [] if world is None else self._map_entities(world)
-        self.map.log(fm.SceneUpdate(entities=entities), log_time=0)
+        self.scene = (fm.SceneUpdate(entities=entities), fm.SceneUpdate())
+        """The map's scene and the bodies' (logged once at 0; again for a live view)."""
+        self.map.log(self.scene[0], log_time=0)
         robot = fm.SceneEntity(
             timestamp=_stamp(0), frame_id="robot", id="robot", frame_locked=True,
             cylinders=[fm.CylinderPrimitive(pose=_pose(0, 0, z=0.15),
@@ -172,7 +177,14 @@ class Recorder:
             arrows=[fm.ArrowPrimitive(pose=_pose(0, 0, z=1.75), shaft_length=0.2,
                                       shaft_diameter=0.05, head_length=0.1,
                                       head_diameter=0.1, color=_colour("#e67e22"))])
-        self.bodies.log(fm.SceneUpdate(entities=[robot, user]), log_time=0)
+        self.scene = (self.scene[0], fm.SceneUpdate(entities=[robot, user]))
+        self.bodies.log(self.scene[1], log_time=0)
+
+    def scene_again(self) -> None:
+        """Log the map's and the bodies' scenes again, at the latest time (a live view that
+        subscribes after the start has them so)."""
+        self.map.log(self.scene[0], log_time=_nanos(self.end))
+        self.bodies.log(self.scene[1], log_time=_nanos(self.end))
 
     def _map_entities(self, world: WorldMap) -> list[fm.SceneEntity]:
         stamp = _stamp(0)
@@ -307,12 +319,30 @@ class Recorder:
         """The judge's report of the lines written so far."""
         return judge(self.lines, name="run")
 
+    def finding(self, t: float, measure: str, message: str) -> None:
+        """Log one of the judge's findings at its time (``/judge``)."""
+        self.findings.log(fm.Log(timestamp=_stamp(t), level=fm.LogLevel.Warning,
+                                 message=message, name=measure), log_time=_nanos(t))
+
+    def paths_so_far(self, kept: int = 2000) -> None:
+        """Log the robot's and the user's paths walked so far (their latest ``kept``
+        poses), at the latest time: what a live view draws as it goes."""
+        for who, walked in self.walked.items():
+            if walked:
+                self.paths[who].log(fm.PosesInFrame(
+                    timestamp=_stamp(self.end), frame_id="map",
+                    poses=[_pose(x, y, h) for _t, (x, y, h) in walked[-kept:]]),
+                    log_time=_nanos(self.end))
+
+    def layout(self) -> str:
+        """The Foxglove layout of this run (its devices and applications), as JSON."""
+        return layout(list(self.devices) or HOME_DEVICES, list(self.apps)).to_json()
+
     def close(self) -> None:
-        """Add the judge's findings and the paths, and finish the file."""
+        """Add the judge's findings, the paths and the layout, and finish the file."""
         report = self.judged()
         for t, measure, message in _findings(report):
-            self.findings.log(fm.Log(timestamp=_stamp(t), level=fm.LogLevel.Warning,
-                                     message=message, name=measure), log_time=_nanos(t))
+            self.finding(t, measure, message)
         counts = ", ".join(f"{n} {key}" for key, n in report.counts().items())
         self.findings.log(fm.Log(timestamp=_stamp(self.end),
                                  level=fm.LogLevel.Info if report.ok else fm.LogLevel.Warning,
@@ -323,7 +353,11 @@ class Recorder:
                 self.paths[who].log(fm.PosesInFrame(
                     timestamp=_stamp(0), frame_id="map",
                     poses=[_pose(x, y, h) for _t, (x, y, h) in walked]), log_time=0)
-        self.writer.close()
+        if self.writer is not None:
+            self.writer.attach(log_time=0, create_time=0, name=ATTACHMENT,
+                               media_type="application/json",
+                               data=self.layout().encode("utf-8"))
+            self.writer.close()
 
     def __enter__(self) -> Recorder:
         return self
