@@ -461,3 +461,133 @@ def test_ctrl_c_and_sigterm_end_it_cleanly_in_one_line(signum: int) -> None:
     assert len(lines) == 1 and re.fullmatch(
         r"prima live: stopped at 0\.\d\d s of simulated time \(stopped\); 0 input\(s\); "
         "not saved", lines[0]), err
+
+
+# ------------------------------------------------------------------ the judge, live
+
+@pytest.mark.parametrize(("name", "policies"), [
+    ("thesis/sample-06.xml", {"all": False}), ("thesis/sample-10.xml", {}),
+    ("policies/interrupt-on.xml", {}), ("examples/museum-cafe.xml", {"all": False}),
+], ids=["sample-06-all-off", "sample-10", "interrupt-on", "museum-cafe-all-off"])
+def test_a_finding_is_shown_once_it_is_final_and_never_taken_back(
+        name: str, policies: dict[str, bool]) -> None:
+    """Judged every half second of its trace, as a live session judges it: each finding
+    shown before the end is in the whole run's report, word for word; the ones that
+    wait for the end (a reaction not started yet, words not heard yet) are shown then,
+    and by the end every finding has been shown. (These runs have late reactions that
+    had not started yet, unheard words and stuck applications on the way.)"""
+    from prima.judge import MEASURES, judge
+    from prima.live import LiveJudge
+    from prima.run import Run
+
+    rows: list[dict[str, Any]] = []
+    Run(ROOT / "scenarios" / name, policies=policies, rows=rows.append).run()
+    whole = judge(rows)
+    report = {(m.key, f.seq): m.line(f) for m in MEASURES for f in whole.of(m.key)}
+    live = LiveJudge()
+    shown: list[dict[str, Any]] = []
+    waited = 0
+    end, k, t = rows[-1]["t"], 0, 0.5
+    while t < end:
+        while k < len(rows) and rows[k]["t"] <= t:
+            k += 1
+        new, waiting = live.update(rows[:k], over=False)
+        shown += new
+        waited = max(waited, waiting)
+        t += 0.5
+    before_the_end = {(f["key"], f["seq"]): f["line"] for f in shown}
+    assert before_the_end.items() <= report.items()
+    new, waiting = live.update(rows, over=True)
+    assert waiting == 0
+    assert {(f["key"], f["seq"]): f["line"] for f in shown + new} == report
+    assert waited > 0  # (some waited: in sample-10, one the run then took back)
+
+
+# ------------------------------------------------------------------ Foxglove, live
+
+def _decoder(channel: dict[str, Any]) -> Callable[[bytes], Any]:
+    """How a Foxglove client decodes a channel's messages: PRIMA's JSON, Foxglove's own
+    schemas as protobuf (their file descriptors, advertised in base64)."""
+    if channel["encoding"] == "json":
+        return json.loads
+    import base64
+
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+    files = descriptor_pb2.FileDescriptorSet.FromString(base64.b64decode(channel["schema"]))
+    pool = descriptor_pool.DescriptorPool()
+    for file in files.file:
+        pool.Add(file)
+    kind = message_factory.GetMessageClass(pool.FindMessageTypeByName(channel["schemaName"]))
+    return kind.FromString  # type: ignore[no-any-return]
+
+
+def test_foxglove_gets_the_recordings_channels_and_decodes_them_as_a_run_plays(
+        tmp_path: Path) -> None:
+    """A WebSocket client speaking Foxglove's protocol is advertised the recording's
+    channels (the same topics and schemas as ``prima run --format mcap``), subscribes,
+    and decodes every message it gets while the run plays; the server's time is the
+    run's."""
+    pytest.importorskip("foxglove", reason="Foxglove's server is the mcap extra")
+    pytest.importorskip("google.protobuf")
+    from prima.live._foxglove import FoxgloveLive
+
+    session = _session(tmp_path, VISIT)
+    fox = FoxgloveLive(session.world, host="127.0.0.1", port=0)
+    session.tee = fox.line
+    session.start()
+    wanted = {"/map", "/bodies", "/tf", "/robot/pose", "/user/pose", "/words", "/mediator",
+              "/events", "/user", "/devices/speaker", "/apps/ea1-museum/state",
+              "/robot/path"}
+
+    async def client() -> tuple[dict[str, dict[str, Any]], dict[str, list[Any]], int]:
+        channels: dict[int, dict[str, Any]] = {}
+        decoded: dict[str, list[Any]] = {}
+        clock = 0
+        async with aiohttp.ClientSession() as http, http.ws_connect(
+                f"ws://127.0.0.1:{fox.port}", protocols=["foxglove.sdk.v1"]) as ws:
+            stepping = asyncio.create_task(asyncio.to_thread(
+                lambda: [_step(session, 1.0) for _ in range(40)]))
+            while not wanted <= decoded.keys():
+                message = await asyncio.wait_for(ws.receive(), WAIT)
+                if message.type == aiohttp.WSMsgType.TEXT:
+                    data = json.loads(message.data)
+                    if data.get("op") == "advertise":
+                        new = [c for c in data["channels"] if c["id"] not in channels]
+                        channels.update({c["id"]: c for c in new})
+                        await ws.send_str(json.dumps({"op": "subscribe", "subscriptions": [
+                            {"id": c["id"], "channelId": c["id"]} for c in new]}))
+                elif message.type == aiohttp.WSMsgType.BINARY:
+                    raw = message.data
+                    if raw[0] == 1:  # message data: subscription, log time, payload
+                        channel = channels[int.from_bytes(raw[1:5], "little")]
+                        decoded.setdefault(channel["topic"], []).append(
+                            _decoder(channel)(raw[13:]))
+                    elif raw[0] == 2:  # the server's time
+                        clock = max(clock, int.from_bytes(raw[1:9], "little"))
+                else:
+                    raise ConnectionError(f"Foxglove's server closed ({message.type})")
+            await stepping
+        return {c["topic"]: c for c in channels.values()}, decoded, clock
+
+    try:
+        channels, decoded, clock = asyncio.run(client())
+    finally:
+        session.stop()
+        fox.stop()
+    from prima.mcap import TOPICS
+
+    patterns = [re.escape(t).replace("DEVICE", "[^/]+").replace("APP", "[^/]+") for t in TOPICS]
+    assert all(any(re.fullmatch(p, topic) for p in patterns) for topic in channels)
+    assert {t for t in TOPICS if "DEVICE" not in t and "APP" not in t} <= channels.keys()
+    schemas = {topic: c["schemaName"] for topic, c in channels.items()}
+    assert schemas["/map"] == "foxglove.SceneUpdate" and schemas["/tf"] == \
+        "foxglove.FrameTransforms" and schemas["/mediator"] == "prima.Decision"
+    assert channels["/words"]["encoding"] == "protobuf"
+    assert channels["/mediator"]["encoding"] == "json"
+    words = [w.message for w in decoded["/words"]]
+    assert "I'm going to start the tour of the museum." in words
+    decisions = decoded["/mediator"]
+    assert {"kind", "reason", "what", "seq"} <= decisions[0].keys()
+    assert len(decoded["/map"][0].entities) > 3  # (walls, edges, places)
+    assert 0 < clock <= round(session.rows[-1]["t"] * 1e9)
