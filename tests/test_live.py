@@ -591,3 +591,163 @@ def test_foxglove_gets_the_recordings_channels_and_decodes_them_as_a_run_plays(
     assert {"kind", "reason", "what", "seq"} <= decisions[0].keys()
     assert len(decoded["/map"][0].entities) > 3  # (walls, edges, places)
     assert 0 < clock <= round(session.rows[-1]["t"] * 1e9)
+
+
+# ------------------------------------------------------------------ the page, in a browser
+
+@pytest.fixture
+def browser() -> Any:
+    from tests.browser import headless_chromium
+
+    yield from headless_chromium()
+
+
+def _page_wait(driver: Any, script: str, what: str) -> Any:
+    """Wait (generously) until ``script`` returns something true in the page."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    return WebDriverWait(driver, WAIT, poll_frequency=0.05).until(
+        lambda d: d.execute_script(script), message=f"the page never showed {what}")
+
+
+def _steps(driver: Any, by: str, times: int) -> None:
+    """Click Step ``times`` times, ``by`` seconds each, each time until the run caught up."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select
+
+    Select(driver.find_element(By.ID, "step-by")).select_by_value(by)
+    for _ in range(times):
+        clock = driver.execute_script("return window.primaLive.status().clock")
+        driver.find_element(By.ID, "step").click()
+        _page_wait(driver, f"const s = window.primaLive.status(); return s.idle && "
+                           f"(s.clock >= {clock} + {by} - 1e-6 || s.state !== 'running')",
+                   f"the run {by} s further")
+
+
+def _rows(driver: Any) -> list[dict[str, Any]]:
+    rows: list[dict[str, Any]] = driver.execute_script("return window.primaLive.rows()")
+    return rows
+
+
+def test_the_author_asks_over_an_explanation_touches_and_saves_and_prima_run_replays_it(
+        browser: Any, tmp_path: Path) -> None:
+    """The acceptance: in real headless Chromium, the page shows the run; typed over the
+    guide's explanation, a question stops the robot at the word (within 0.3 s and the
+    word under way, simulated) and the guide answers; a touch is felt; Save writes the
+    session where the command line said, and ``prima run`` of it makes the lines the
+    page showed. Hostile words are shown as words."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    process, url = _started(str(VISIT), "--script", "--paused", "--save-dir", str(tmp_path))
+    try:
+        browser.get(url)
+        _page_wait(browser, "return window.primaLive.ready() && window.primaLive.status()",
+                   "the session")
+        _steps(browser, "5", 7)
+        _steps(browser, "1", 2)  # 37 s: "Take attention to this upper figure. Our ..."
+        speaking = [r for r in _rows(browser) if r["kind"] == "start" and r.get("text")]
+        assert speaking[-1]["text"].startswith("Take attention to this upper figure.")
+        box = browser.find_element(By.ID, "say")
+        box.send_keys("Excuse me, where is the toilet?" + Keys.ENTER)
+        _page_wait(browser, "return window.primaLive.rows().some(r => r.kind === 'hear')",
+                   "the words heard")
+        _steps(browser, "1", 4)
+        rows = _rows(browser)
+        said = next(r for r in rows if r["kind"] == "user" and r.get("action") == "say")
+        cut = next(r for r in rows if r["kind"] == "end" and r.get("reason") == "barge-in")
+        detail = cut["detail"]
+        words = len(str(detail["spoken"]).split()) + len(str(detail["unspoken"]).split())
+        word = (detail["words_end"] - detail["words_start"]) / words
+        planned = next(r for r in rows if r["kind"] == "start" and r.get("ab") == cut["ab"])
+        assert planned["t"] < said["t"] < cut["t"] <= said["t"] + 0.3 + word + 1e-9
+        answer = next(r for r in rows if r["kind"] == "start" and r.get("text") ==
+                      "The toilets are next to the museum door.")
+        assert answer["t"] - said["t"] < 2.0
+        # the words as the page shows them, a stranger's markup shown as text
+        box.send_keys('<img src=x onerror="window.hacked=1">' + Keys.ENTER)
+        browser.find_element(By.ID, "touch").click()
+        _steps(browser, "1", 3)
+        for _ in range(20):  # (the user walks up to the robot first)
+            if any(r["kind"] == "event" and r.get("text") == "touched" for r in _rows(browser)):
+                break
+            _steps(browser, "1", 1)
+        assert any(r["kind"] == "event" and r.get("text") == "touched" for r in _rows(browser))
+        words_shown = browser.find_element(By.ID, "words").text
+        assert '<img src=x onerror="window.hacked=1">' in words_shown
+        assert not browser.execute_script("return document.querySelector('#words img') || "
+                                          "window.hacked")
+        browser.find_element(By.ID, "save").click()
+        _page_wait(browser, "return document.getElementById('notice').textContent"
+                            ".startsWith('saved as')", "the save")
+        saved = tmp_path / "museum-visit-live-1.xml"
+        assert saved.is_file()
+        text = saved.read_text(encoding="utf-8")
+        until = _until(text)
+        _steps(browser, "1", 2)  # (the page has every line before the save's end)
+        page_rows = _rows(browser)
+        assert page_rows[-1]["t"] >= until
+        errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert errors == []
+    finally:
+        process.send_signal(signal.SIGTERM)
+        process.communicate(timeout=WAIT)
+    assert _same_trace(page_rows, text, tmp_path / "replayed.xml") > 100
+    assert main(["validate", str(saved)], err=io.StringIO()) == 0
+
+
+def test_the_user_walks_where_dragged_the_robot_is_touched_where_clicked_one_tab_at_a_time(
+        browser: Any, tmp_path: Path) -> None:
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+
+    process, url = _started(str(VISIT), "--paused")
+    try:
+        browser.get(url)
+        _page_wait(browser, "return window.primaLive.ready() && window.primaLive.pose()",
+                   "the session")
+        _steps(browser, "1", 2)
+        drag = browser.find_element(By.CSS_SELECTOR, "#map .nsewdrag")
+
+        def at(x: float, y: float) -> tuple[int, int]:  # a map point, from the layer's centre
+            dx, dy = browser.execute_script(
+                "const d = document.getElementById('map'), l = d._fullLayout, r = "
+                "d.querySelector('.nsewdrag').getBoundingClientRect(); return "
+                "[l.xaxis.c2p(arguments[0]) - r.width / 2, l.yaxis.c2p(arguments[1]) - "
+                "r.height / 2];", x, y)
+            return round(dx), round(dy)
+
+        _t, robot, user = browser.execute_script("return window.primaLive.pose()")
+        ActionChains(browser).move_to_element_with_offset(drag, *at(user[0], user[1])) \
+            .click_and_hold().move_to_element_with_offset(drag, *at(9.5, 4.0)).release() \
+            .perform()
+        _page_wait(browser, "return window.primaLive.rows().some(r => r.kind === 'user' && "
+                            "r.action === 'walk')", "the walk")
+        walk = next(r for r in _rows(browser) if r["kind"] == "user" and r["action"] == "walk")
+        x, y = (float(v) for v in walk["detail"]["target"].strip("()").split(","))
+        assert abs(x - 9.5) < 0.2 and abs(y - 4.0) < 0.2
+        ActionChains(browser).move_to_element_with_offset(drag, *at(robot[0], robot[1])) \
+            .click().perform()
+        _page_wait(browser, "return window.primaLive.status().added === 2", "the touch")
+        _steps(browser, "5", 4)
+        touch = [r for r in _rows(browser) if r["kind"] == "user" and r["action"] == "touch"]
+        assert touch, "the user walked up to the robot and touched it"
+        # a second tab is told the session is in use; when the first goes, it takes over
+        first = browser.current_window_handle
+        browser.switch_to.new_window("tab")
+        browser.get(url)
+        _page_wait(browser, "return !document.getElementById('banner').hidden && "
+                            "document.getElementById('banner').textContent.includes('in use')",
+                   "the session in use")
+        second = browser.current_window_handle
+        browser.switch_to.window(first)
+        browser.close()
+        browser.switch_to.window(second)
+        browser.refresh()
+        _page_wait(browser, "return window.primaLive.ready() && "
+                            "window.primaLive.rows().length > 50", "the session taken over")
+        assert browser.find_element(By.ID, "banner").get_attribute("hidden") is not None
+    finally:
+        process.send_signal(signal.SIGTERM)
+        _out, err = process.communicate(timeout=WAIT)
+    assert "2 input(s)" in err

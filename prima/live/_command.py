@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import ipaddress
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,6 +100,10 @@ def serve(options: Options, base: Base, save: object, out: TextIO, err: TextIO) 
     if not _loopback(options.host):
         print(f"prima live: warning: serving on {options.host}: anyone who can reach it can "
               "act in the session and save it", file=err, flush=True)
+    # The run's thread does a little every tenth of a simulated second; the judge and the
+    # timeline, in another thread, a lot at once: threads take turns every millisecond
+    # (not Python's 5), so the run never waits long behind them.
+    sys.setswitchinterval(0.001)
     with tempfile.TemporaryDirectory(prefix="prima-live-") as scratch:
         fox: FoxgloveLive | None = None
         session = Session(base, Path(scratch), until=options.until, speed=options.speed)

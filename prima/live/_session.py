@@ -121,6 +121,9 @@ class Session:
         self.idle = False
         """The run's thread waits for the live clock (:meth:`caught_up` says whether it
         has gone as far as the clock lets it)."""
+        self.behind = 0.0
+        """The most the run has been behind the live clock while it played (simulated s): a
+        run that keeps real time stays within a few milliseconds."""
         self._waits_for = 0.0
         """When idle, the time the run waits to reach."""
         self._lock = threading.Lock()
@@ -174,11 +177,15 @@ class Session:
         sim = self.run.sim
         robot, user, _seen = sim.poses()
         self.pose = (sim.now(), robot, user)
+        first = True
         while True:
             self._wake.clear()  # (before looking: a change made after it wakes the wait)
             with self._lock:
                 if self._stopping:
                     raise Stopped
+                if first and not self.clock.paused:
+                    self.behind = max(self.behind, self.clock.now() - self.pose[0])
+                    first = False
                 added = self._give()
                 calls, self._calls = self._calls, []
                 wait = 0.0 if added else self.clock.wait(tick / self.hz)
@@ -288,7 +295,8 @@ class Session:
             clock, paused, speed = self.clock.now(), self.clock.paused, self.clock.speed
         return {"t": round(self.pose[0], 3), "clock": round(min(clock, self.until), 3),
                 "paused": paused, "speed": speed, "state": self.state, "error": self.error,
-                "until": self.until, "added": len(self.added), "idle": self.caught_up()}
+                "until": self.until, "added": len(self.added), "idle": self.caught_up(),
+                "behind": round(self.behind, 4)}
 
     def saved(self, folder: Path | None) -> str:
         """The session so far as a scenario (paths relative to ``folder``; absolute without

@@ -10,7 +10,8 @@
   const ROBOT_SAYS_FOR = 1.0, USER_SAYS_FOR = 3.0;  // as prima show's bubbles
   let ws = null, D = null, rows = [], poses = [[], []], status = null, statusAt = 0;
   let open = {}, bubbles = [], asking = null, shownBubbles = "", following = true;
-  let frames = 0, heard = [], lastPose = null, pathAt = -1, dragging = false;
+  let frames = 0, heard = [], said = [], lastPose = null, pathAt = -1, dragging = false;
+  let shownMarkers = "";
 
   function notice(text, bad) {
     const p = $("notice");
@@ -247,7 +248,13 @@
     frames++;
     const t = now();
     const robot = PrimaDraw.poseAt(poses[0], t), user = PrimaDraw.poseAt(poses[1], t);
-    if (!dragging) PrimaDraw.markers(mapDiv, robot, user, D.map.robot, D.map.user);
+    const markers = JSON.stringify([robot, user].map(function (p) {
+      return p ? [p[1].toFixed(3), p[2].toFixed(3), p[3].toFixed(1)] : null;
+    }));
+    if (!dragging && markers !== shownMarkers) {  // (redrawn only when they moved)
+      shownMarkers = markers;
+      PrimaDraw.markers(mapDiv, robot, user, D.map.robot, D.map.user);
+    }
     const out = [], seen = {robot: 0, user: 0};
     Object.keys(open).forEach(function (ab) {
       if (robot) out.push(PrimaDraw.bubble("robot", robot, open[ab].text, seen.robot++));
@@ -284,6 +291,7 @@
 
   function say(text) {
     if (!text.trim()) return;
+    said.push(performance.now());
     send({act: "say", text: text});
     $("say").value = "";
   }
@@ -321,6 +329,7 @@
         send({act: "touch"});
       }
       dragging = false;
+      shownMarkers = "";  // (the user's marker goes back to where the user is)
       from = null;
     });
   }
@@ -378,6 +387,8 @@
     rows: function () { return rows; },
     frames: function () { return frames; },
     heard: function () { return heard; },
+    said: function () { return said; },
+    pose: function () { return lastPose; },
     time: now,
     status: function () { return status; },
     ready: function () { return D !== null; },
