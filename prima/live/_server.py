@@ -143,6 +143,7 @@ class Server:
         self._pending = threading.Event()
         self._stopped: asyncio.Event | None = None
         self._allowed: set[str] = set()
+        self._any_host = False
 
     # ------------------------------------------------------------ lifecycle
 
@@ -173,6 +174,7 @@ class Server:
         self._allowed = {f"{shown}:{port}"}
         if self.host in ("127.0.0.1", "localhost", "::1"):
             self._allowed |= {f"localhost:{port}", f"127.0.0.1:{port}", f"[::1]:{port}"}
+        self._any_host = self.host in ("0.0.0.0", "::", "")  # (every address: any name)
         self.session.start()
         return runner
 
@@ -218,8 +220,9 @@ class Server:
                          handler: Callable[[web.Request], Awaitable[web.StreamResponse]]
                          ) -> web.StreamResponse:
         """Requests for this host and port only: a page of another site that names this
-        server by another name (DNS rebinding) is refused."""
-        if request.host not in self._allowed:
+        server by another name (DNS rebinding) is refused. (Served on every address,
+        ``--host 0.0.0.0``, the server answers to any name it is reached by.)"""
+        if request.host not in self._allowed and not self._any_host:
             return web.Response(status=403, text="prima live answers only on its own address")
         return await handler(request)
 
@@ -238,7 +241,7 @@ class Server:
 
     async def _socket(self, request: web.Request) -> web.WebSocketResponse:
         origin = request.headers.get("Origin")
-        if origin is not None and origin.split("://", 1)[-1] not in self._allowed:
+        if origin is not None and origin.split("://", 1)[-1] != request.host:
             raise web.HTTPForbidden(text="a page of another site may not use this session")
         ws = web.WebSocketResponse(max_msg_size=MAX_MESSAGE, heartbeat=20.0)
         await ws.prepare(request)

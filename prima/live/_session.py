@@ -124,6 +124,9 @@ class Session:
         self.behind = 0.0
         """The most the run has been behind the live clock while it played (simulated s): a
         run that keeps real time stays within a few milliseconds."""
+        self.points = self.late = 0
+        """Where the run could wait for the clock while it played, and where it was more
+        than 0.05 s behind it."""
         self._waits_for = 0.0
         """When idle, the time the run waits to reach."""
         self._lock = threading.Lock()
@@ -184,7 +187,10 @@ class Session:
                 if self._stopping:
                     raise Stopped
                 if first and not self.clock.paused:
-                    self.behind = max(self.behind, self.clock.now() - self.pose[0])
+                    late = self.clock.now() - self.pose[0]
+                    self.behind = max(self.behind, late)
+                    self.points += 1
+                    self.late += late > 0.05
                     first = False
                 added = self._give()
                 calls, self._calls = self._calls, []
@@ -296,7 +302,7 @@ class Session:
         return {"t": round(self.pose[0], 3), "clock": round(min(clock, self.until), 3),
                 "paused": paused, "speed": speed, "state": self.state, "error": self.error,
                 "until": self.until, "added": len(self.added), "idle": self.caught_up(),
-                "behind": round(self.behind, 4)}
+                "behind": round(self.behind, 4), "points": self.points, "late": self.late}
 
     def saved(self, folder: Path | None) -> str:
         """The session so far as a scenario (paths relative to ``folder``; absolute without

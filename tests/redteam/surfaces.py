@@ -174,6 +174,13 @@ SURFACES = [
                lambda folder: (folder / "map.xml").write_text(MAP)),
          Exits(0, "warning: this <message> at 30 s is timed at or after the run ends"),
          command=("validate", "{path}")),
+    # 10: prima live (its page's inputs: tests/test_live.py)
+    Case("live-save-over-scenario", "prima live told to save its session over its scenario",
+         _speaker("hello"), Exits(2, "is one of the session's inputs"),
+         command=("live", "{path}", "--save", "{path}", "--port", "0"), seconds=6),
+    Case("live-save-over-map", "prima live told to save its session over its map",
+         _speaker("hello"), Exits(2, "is one of the session's inputs"),
+         command=("live", "{path}", "--save", "{dir}/map.xml", "--port", "0"), seconds=6),
     # 9: the shipped files
     Case("validate-apps", "prima validate apps/ (FA7 is the guide robot's)",
          made(_shipped_apps), Accepted(), seconds=10),
