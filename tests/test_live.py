@@ -144,6 +144,10 @@ def test_what_the_author_does_is_saved_as_a_scenario_that_replays_the_session(
     err = io.StringIO()
     assert main(["validate", str(tmp_path / "second.xml")], err=err) == 0, err.getvalue()
     assert "0 warning(s)" in err.getvalue()
+    pinned = str(tmp_path / "second.xml")  # and pinned as a golden trace
+    assert main(["test", "--update", pinned], out=io.StringIO()) == 0
+    out = io.StringIO()
+    assert main(["test", pinned], out=out) == 0 and "same" in out.getvalue()
     said = [r for r in session.rows if r["kind"] == "user" and r.get("action") == "say"]
     assert said, "the session's words are in its trace"
 
@@ -432,6 +436,22 @@ def test_applications_alone_run_on_a_map_with_their_places(tmp_path: Path) -> No
     assert main(["live", str(lost), "--port", "0"], out=io.StringIO(), err=err) == 1
     assert "no map has every place the applications name (moon-base, panel-1)" in \
         err.getvalue()
+
+
+def test_a_port_in_use_is_said_in_one_line() -> None:
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = str(taken.getsockname()[1])
+        for argv in (["--port", port], ["--port", "0", "--foxglove", port]):
+            err = io.StringIO()
+            assert main(["live", str(FA1), *argv], out=io.StringIO(), err=err) == 1
+            said = err.getvalue().strip().splitlines()
+            assert len(said) == 1 and "in use" in said[0], said
+            assert said[0].startswith("prima live: error: cannot serve")
+            assert "Traceback" not in err.getvalue()
 
 
 def _started(*argv: str) -> tuple[subprocess.Popen[str], str]:

@@ -15,6 +15,7 @@ from typing import Any
 import foxglove
 from foxglove.websocket import Capability, ChannelView, Client, ServerListener
 
+from prima.errors import PrimaError
 from prima.mcap import Recorder
 from prima.sim import WorldMap
 from prima.trace import TraceLine
@@ -46,9 +47,13 @@ class FoxgloveLive:
         self.again = False
         """A client subscribed to what it should have at once (set by the server's thread,
         done by the run's)."""
-        self.server = foxglove.start_server(
-            name=name, host=host, port=port, context=self.context,
-            capabilities=[Capability.Time], server_listener=_Listener(self))
+        try:
+            self.server = foxglove.start_server(
+                name=name, host=host, port=port, context=self.context,
+                capabilities=[Capability.Time], server_listener=_Listener(self))
+        except (RuntimeError, ValueError) as exc:  # (the port is taken, say)
+            raise PrimaError(f"cannot serve Foxglove on {host}:{port}: "
+                             f"{str(exc).removeprefix('FoxgloveError: ')}") from exc
         self.port = self.server.port
         self._sent_at = -1.0
 

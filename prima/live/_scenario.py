@@ -24,6 +24,7 @@ from lxml import etree
 from prima.batch import number, repath, switched_root
 from prima.dsl import Document
 from prima.errors import PrimaError
+from prima.escape import markup
 from prima.run import Switches
 from prima.sim import (
     SCENARIO_NS,
@@ -35,7 +36,7 @@ from prima.sim import (
 )
 from prima.xmlio import local_name
 
-__all__ = ["ACTIONS", "Added", "Base", "for_apps", "from_scenario"]
+__all__ = ["ACTIONS", "Added", "Base", "for_apps", "from_scenario", "user_spot"]
 
 ACTIONS = ("say", "touch", "walk", "follow", "stop", "message")
 """What the author may do from the page: the user's own actions, and a network
@@ -82,13 +83,6 @@ class Added:
         elif self.kind == "walk":
             attributes.update(x=number(self.x or 0.0), y=number(self.y or 0.0))
         return etree.Element(f"{{{SCENARIO_NS}}}{self.kind}", attributes)
-
-    def to_dict(self) -> dict[str, object]:
-        out: dict[str, object] = {"tick": self.tick, "kind": self.kind}
-        for key in ("text", "x", "y", "sender"):
-            if getattr(self, key) is not None:
-                out[key] = getattr(self, key)
-        return out
 
 
 def _children(el: etree._Element) -> list[etree._Element]:
@@ -145,7 +139,7 @@ class Base:
         for el in _merged(scheduled, [a for a in added if a.kind == "message"], hz, until_tick):
             after.addnext(el)
             after = el
-        if folder is not None:
+        if folder is not None:  # (the base's paths are absolute: read from anywhere)
             repath(root, Path("/"), folder)
         return _document(root, self.note.replace("SAVED", f"saved at {number(until_tick / hz)} s"))
 
@@ -236,7 +230,7 @@ def for_apps(documents: Sequence[tuple[Path, Document]], world: tuple[Path, Worl
     names = [d.name for _p, d in documents]
     text = (f'<scenario xmlns="{SCENARIO_NS}" name={quoteattr("live-" + "-".join(names))} '
             f'until="3600" seed="{seed or 0}">'
-            f"<description>{_escape('prima live: ' + ', '.join(names) + ' on ' + plan.name)}"
+            f"<description>{markup('prima live: ' + ', '.join(names) + ' on ' + plan.name)}"
             f"</description><map href={quoteattr(str(map_path.resolve()))}/>"
             f"<apps{apps}>{more}</apps>"
             f'<robot place={quoteattr(place)} heading="{number(heading)}"{profile}/>'
@@ -248,10 +242,6 @@ def for_apps(documents: Sequence[tuple[Path, Document]], world: tuple[Path, Worl
     note = _comment(f"prima live: a session of {', '.join(names)} on {plan.name} (the "
                     "user's actions as they were played), SAVED; prima run replays it")
     return Base(root, root.get("name", "live"), 50, files, note)
-
-
-def _escape(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
 def user_spot(world: WorldMap, x: float, y: float, heading: float
