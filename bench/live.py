@@ -19,6 +19,7 @@ end (the docs' ``docs/live-*.png`` are made so).
 from __future__ import annotations
 
 import argparse
+import shutil
 import statistics
 import subprocess
 import sys
@@ -35,11 +36,12 @@ def _browser() -> object:
     from selenium.webdriver.chrome.service import Service
 
     options = Options()
-    options.binary_location = "/usr/bin/chromium"
+    options.binary_location = shutil.which("chromium") or "chromium"
     for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
                      "--disable-dev-shm-usage", "--window-size=1400,1000"):
         options.add_argument(argument)
-    return webdriver.Chrome(options=options, service=Service("/usr/bin/chromedriver"))
+    return webdriver.Chrome(options=options,
+                            service=Service(shutil.which("chromedriver") or "chromedriver"))
 
 
 def _wait(driver: object, script: str, timeout: float = 60.0) -> object:

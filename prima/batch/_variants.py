@@ -121,9 +121,16 @@ def _switch(root: etree._Element, switches: Switches) -> None:
     if robot is not None and switches.robot is not None:
         robot.set("profile", str(Path(switches.robot).resolve()))
     if robot is not None and switches.policies:
-        after = robot
+        # Over the scenario's own switches, as the command line's are: a switch it names
+        # again replaces the scenario's (a scenario switches each policy once), and `all`
+        # replaces every one of them (it switches every policy first).
+        named = {name for name, _on in switches.policies}
         for c in children:
-            if local_name(c) == "policy":
+            if local_name(c) == "policy" and ("all" in named or c.get("name") in named):
+                root.remove(c)
+        after = robot
+        for c in root:
+            if isinstance(c.tag, str) and local_name(c) == "policy":
                 after = c
         for name, on in switches.policies:
             policy = etree.Element(f"{{{ns}}}policy" if ns else "policy",
