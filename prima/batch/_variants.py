@@ -124,9 +124,9 @@ def _switch(root: etree._Element, switches: Switches) -> None:
         # Over the scenario's own switches, as the command line's are: a switch it names
         # again replaces the scenario's (a scenario switches each policy once), and `all`
         # replaces every one of them (it switches every policy first).
-        named = {name for name, _on in switches.policies}
+        switched = {name for name, _on in switches.policies}
         for c in children:
-            if local_name(c) == "policy" and ("all" in named or c.get("name") in named):
+            if local_name(c) == "policy" and ("all" in switched or c.get("name") in switched):
                 root.remove(c)
         after = robot
         for c in root:
