@@ -771,3 +771,20 @@ def test_the_user_walks_where_dragged_the_robot_is_touched_where_clicked_one_tab
         process.send_signal(signal.SIGTERM)
         _out, err = process.communicate(timeout=WAIT)
     assert "2 input(s)" in err
+
+
+def test_only_the_live_command_imports_the_live_page() -> None:
+    """A server apart from the core: only ``prima live``'s handler imports it, lazily, and
+    it is imported by nothing else (aiohttp with it)."""
+    import ast
+
+    importers = []
+    for path in sorted((ROOT / "prima").rglob("*.py")):
+        inside = path.relative_to(ROOT / "prima").parts[0]
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if inside != "live" and any(n == "prima.live" or n.startswith(
+                    ("prima.live.", "aiohttp")) for n in names):
+                importers.append((inside, node.col_offset > 0))
+    assert set(importers) == {("cli.py", True)}
