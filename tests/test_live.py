@@ -574,26 +574,28 @@ def test_foxglove_gets_the_recordings_channels_and_decodes_them_as_a_run_plays(
                     _step(session, 1.0)
 
             stepping = asyncio.create_task(asyncio.to_thread(play))
-            while not wanted <= decoded.keys():
-                message = await asyncio.wait_for(ws.receive(), WAIT)
-                if message.type == aiohttp.WSMsgType.TEXT:
-                    data = json.loads(message.data)
-                    if data.get("op") == "advertise":
-                        new = [c for c in data["channels"] if c["id"] not in channels]
-                        channels.update({c["id"]: c for c in new})
-                        await ws.send_str(json.dumps({"op": "subscribe", "subscriptions": [
-                            {"id": c["id"], "channelId": c["id"]} for c in new]}))
-                elif message.type == aiohttp.WSMsgType.BINARY:
-                    raw = message.data
-                    if raw[0] == 1:  # message data: subscription, log time, payload
-                        channel = channels[int.from_bytes(raw[1:5], "little")]
-                        decoded.setdefault(channel["topic"], []).append(
-                            _decoder(channel)(raw[13:]))
-                    elif raw[0] == 2:  # the server's time
-                        clock = max(clock, int.from_bytes(raw[1:9], "little"))
-                else:
-                    raise ConnectionError(f"Foxglove's server closed ({message.type})")
-            done.set()
+            try:
+                while not wanted <= decoded.keys():
+                    message = await asyncio.wait_for(ws.receive(), WAIT)
+                    if message.type == aiohttp.WSMsgType.TEXT:
+                        data = json.loads(message.data)
+                        if data.get("op") == "advertise":
+                            new = [c for c in data["channels"] if c["id"] not in channels]
+                            channels.update({c["id"]: c for c in new})
+                            await ws.send_str(json.dumps({"op": "subscribe", "subscriptions": [
+                                {"id": c["id"], "channelId": c["id"]} for c in new]}))
+                    elif message.type == aiohttp.WSMsgType.BINARY:
+                        raw = message.data
+                        if raw[0] == 1:  # message data: subscription, log time, payload
+                            channel = channels[int.from_bytes(raw[1:5], "little")]
+                            decoded.setdefault(channel["topic"], []).append(
+                                _decoder(channel)(raw[13:]))
+                        elif raw[0] == 2:  # the server's time
+                            clock = max(clock, int.from_bytes(raw[1:9], "little"))
+                    else:
+                        raise ConnectionError(f"Foxglove's server closed ({message.type})")
+            finally:
+                done.set()
             await stepping
         return {c["topic"]: c for c in channels.values()}, decoded, clock
 
