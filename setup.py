@@ -2,12 +2,14 @@
 compiled build: with ``PRIMA_MYPYC=1`` the hot modules of the simulator, the mediator,
 the interpreter and the judge are compiled to C extensions by mypyc (part of mypy), for
 sweeps and checks of many runs. Every trace is the same as the pure Python build's.
-mypyc type-checks what it compiles, so PRIMA's dependencies and mypy come first:
+mypyc type-checks what it compiles, so it needs mypy, lxml's stubs and PRIMA's own
+dependencies where it builds: build_backend.py asks pip for them, so one command does it
+(with a C compiler and Python's headers on the machine):
 
-    python -m pip install . mypy lxml-stubs 'setuptools>=68' wheel
-    PRIMA_MYPYC=1 python -m pip install --no-build-isolation --no-deps --force-reinstall .
+    PRIMA_MYPYC=1 python -m pip install .
 
-Not with ``-e``: an editable install puts the compiled modules beside the sources,
+In an environment that has them (mypy: the lint extra), ``PRIMA_MYPYC=1 python setup.py
+build_ext --inplace`` builds it in place (bench/_measure.py's compiled_copy). Not with ``-e``: an editable install puts the compiled modules beside the sources,
 where they hide later changes to them. Without ``PRIMA_MYPYC`` (the default, and what
 the tests run) nothing is compiled.
 docs/judging.md (Many runs) says when to use it; docs/benchmarks.md (Sweeps), what it

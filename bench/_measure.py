@@ -127,10 +127,12 @@ def copy_checkout(folder: Path) -> None:
 def compiled_copy(folder: Path) -> Path:
     """This checkout's compiled build (``setup.py``, ``PRIMA_MYPYC=1``), made in ``folder``:
     the checkout copied there (:func:`copy_checkout`), its modules compiled in place, and
-    checked to load compiled. Needs mypy, a C compiler and Python's headers; two to
-    three minutes. Returns ``folder``, a tree to run (``PYTHONPATH``) like a checkout."""
+    checked to load compiled. Needs mypy (the lint extra), a C compiler and Python's
+    headers; about three minutes of CPU time (docs/judging.md, A compiled build). Returns
+    ``folder``, a tree to run (``PYTHONPATH``) like a checkout. (In place, not ``pip
+    install``: the tests and benchmarks run in that tree, beside the compiled modules.)"""
     copy_checkout(folder)
-    print(f"building the compiled build in {folder} (two to three minutes) ...",
+    print(f"building the compiled build in {folder} (about three minutes of CPU time) ...",
           file=sys.stderr, flush=True)
     env = {**os.environ, "PRIMA_MYPYC": "1"}
     done = subprocess.run([sys.executable, "setup.py", "-q", "build_ext", "--inplace"],

@@ -27,7 +27,7 @@ and their ratio, against the promise that the larger stays within 10% of the sma
 
 ``--compiled`` measures this checkout's compiled build (``setup.py``,
 ``PRIMA_MYPYC=1``) instead of its pure Python one: it is built first in a temporary
-copy of the checkout (mypy, a C compiler and Python's headers; two to three minutes).
+copy of the checkout (mypy, a C compiler and Python's headers; about three minutes of CPU time).
 """
 
 from __future__ import annotations
@@ -214,7 +214,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--compiled", action="store_true",
                         help="measure this checkout's compiled build (setup.py, "
                              "PRIMA_MYPYC=1), built first in a temporary copy: needs mypy, "
-                             "a C compiler and Python's headers, two to three minutes")
+                             "a C compiler and Python's headers, about three minutes of CPU time")
     parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--first", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)

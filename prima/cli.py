@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import importlib
 import json
 import math
 import os
+import re
+import shlex
 import signal
 import sys
 import threading
@@ -25,11 +28,13 @@ from prima.escape import shown_path, terminal
 from prima.suggest import SuggestingParser, did_you_mean, unrecognized
 from prima.term import BOLD, CYAN, GREEN, RED, WHEN, YELLOW, Paint, columns, is_terminal, \
     wants_colour
+from prima.shipped import locate, shipped
 from prima.signals import EXIT_TERMINATED, Terminated, note_terminated, terminate_as_interrupt
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
     from prima.batch import Pool
+    from prima.output import Inputs
     from prima.dsl import Checker, Header, RobotProfile, Validation
     from prima.run import Switches
     from prima.sim import WorldMap
@@ -56,11 +61,14 @@ def _seed(text: str) -> int:
 def _switch_arguments(parser: argparse.ArgumentParser, policies: bool = True) -> None:
     """What changes a scenario's own choices, the same on every command that runs one:
     its FA, its EA, its robot (and, with ``policies``, policy switches)."""
-    parser.add_argument("--fa", metavar="DOC", help="the FA document (default: the scenario's)")
-    parser.add_argument("--ea", metavar="DOC", help="the EA document (default: the scenario's)")
+    parser.add_argument("--fa", metavar="DOC",
+                        help="the FA document, or a shipped FA's name (fa2-follow; default: "
+                             "the scenario's)")
+    parser.add_argument("--ea", metavar="DOC",
+                        help="the EA document, or a shipped EA's name (default: the scenario's)")
     parser.add_argument("--robot", metavar="PROFILE",
-                        help="robot hardware profile (default: the scenario's, else the home "
-                             "robot)")
+                        help="robot hardware profile, or a shipped one's name (guide-robot; "
+                             "default: the scenario's, else the home robot)")
     if policies:
         _policy_argument(parser)
 
@@ -268,9 +276,11 @@ def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
     )
     check.add_argument("eas", nargs="+", metavar="EA", help="the EA documents to check")
     check.add_argument("--fa", action="append", default=[], metavar="DOC",
-                       help="an FA to check beside (repeatable; default: every apps/fa/*.pxml)")
+                       help="an FA to check beside, or a shipped FA's name (repeatable; "
+                            "default: every shipped FA, apps/fa/*.pxml)")
     check.add_argument("--robot", action="append", default=[], metavar="PROFILE",
-                       help="a robot profile to check on (repeatable; default: every robots/*.xml)")
+                       help="a robot profile to check on, or a shipped one's name (repeatable; "
+                            "default: every shipped robot, robots/*.xml)")
     check.add_argument("--scenario", action="append", default=[], metavar="FILE",
                        help="the EA's own scenario (repeatable; default: generated visits)")
     check.add_argument("--map", metavar="MAP",
@@ -389,7 +399,7 @@ def _live(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     options = Options(
         inputs=inputs, switches=switches, seed=args.seed, until=args.until, speed=args.speed,
         script=args.script, host=args.host, port=args.port, foxglove=args.foxglove,
-        maps=_shipped("scenarios", "maps") if apps else None,
+        maps=shipped("scenarios", "maps") if apps else None,
         map_file=Path(args.map) if args.map else None,
         robot=Path(args.robot) if apps and args.robot else None, autoplay=not args.paused)
     base = base_of(options)
@@ -495,6 +505,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     except SystemExit as exc:
         return int(exc.code or 0)
     _colour = args.color
+    problem = _locate_inputs(args)
+    if problem:
+        return _usage(args.command, problem, err)
     command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command]
     with terminate_as_interrupt() as signals:
         status = _main(command, args, out, err)
@@ -503,6 +516,47 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
 
 _colour = "auto"
 """``--color`` as this command line gives it (``main`` sets it first)."""
+
+_INPUTS = {"scenario": None, "input": None, "paths": None, "inputs": None, "map": "map",
+           "eas": "ea", "fa": "fa", "ea": "ea", "robot": "robot"}
+"""The options and arguments that name files to read, each with what a bare name there
+names (:data:`prima.shipped.NAMED`: ``--fa fa2-follow``), or None."""
+
+
+def _locate_inputs(args: argparse.Namespace) -> str | None:
+    """Each file to read as :func:`prima.shipped.locate` finds it: one the current folder
+    lacks may be shipped with PRIMA (``scenarios/thesis/sample-03.xml`` from an install,
+    as from a checkout). Not for ``prima test --update``, which writes beside them: PRIMA's
+    own golden traces are not rewritten from outside a checkout. What is wrong with a name
+    no file can have (too long to look up), as a usage error, or None."""
+    for name in _INPUTS:
+        value = getattr(args, name, None)
+        for text in value if isinstance(value, list) else [value]:
+            problem = _unnameable(text) if isinstance(text, str) else None
+            if problem:
+                return problem
+    if getattr(args, "update", False):
+        return None
+    for name, kind in _INPUTS.items():
+        value = getattr(args, name, None)
+        if isinstance(value, str):
+            setattr(args, name, locate(value, kind))
+        elif isinstance(value, list):
+            setattr(args, name, [locate(v, kind) if isinstance(v, str) else v for v in value])
+    return None
+
+
+def _unnameable(text: str) -> str | None:
+    """Why the system cannot look ``text`` up at all (a name longer than a file's or a
+    path's may be), or None."""
+    try:
+        os.stat(text)
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            return f"{terminal(text[:40])}...: {os.strerror(exc.errno).lower()}"
+    except ValueError:  # (a NUL in it: the commands say there is no such file)
+        pass
+    return None
 
 
 def _colour_asked(given: Sequence[str]) -> str:
@@ -541,6 +595,14 @@ def _main(command: Callable[[argparse.Namespace, TextIO, TextIO], int],
     except BrokenPipeError:  # e.g. `prima validate apps/ | head`: the reader had enough
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
         return EXIT_PIPE
+    except OSError as exc:  # the file system refused (a name too long...): a message too
+        from prima.output import shown
+
+        reason = exc.strerror or str(exc)
+        named = f"{shown(os.fsdecode(exc.filename))}: " if exc.filename is not None else ""
+        print(f"{_error(args.command, err)} {named}{reason[:1].lower() + reason[1:]}",
+              file=err)
+        return EXIT_ERRORS
     except KeyboardInterrupt:  # Ctrl-C or SIGTERM: what was written so far stays written
         print(f"prima {args.command}: interrupted", file=err)
         return EXIT_INTERRUPTED
@@ -558,21 +620,34 @@ def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.Argume
 
 
 def _report(problems: Iterable[Problem], to: TextIO) -> None:
-    """One line per problem; under a fault inside an expression, its line and a caret.
-    On a terminal, ``file:line:col:`` in bold, ``error`` in red, ``warning`` in yellow."""
+    """One line per problem, its file's name and message escaped (they may hold control
+    characters); under a fault inside an expression, its line and a caret. On a
+    terminal, ``file:line:col:`` in bold, ``error`` in red, ``warning`` in yellow."""
     paint = _paint(to)
     for problem in problems:
+        where = f"{terminal(problem.file)}:{problem.line}:{problem.col}:"
+        severity = problem.severity.value
         if paint.on:
-            where = f"{problem.file}:{problem.line}:{problem.col}:"
-            severity = problem.severity.value
             print(paint(where, BOLD), paint(severity, RED if problem.severity is Severity.ERROR
                                              else YELLOW, BOLD) + ":",
                   terminal(problem.message), file=to)
         else:
-            print(problem, file=to)
-        caret = problem.caret()
+            print(f"{where} {severity}: {terminal(problem.message)}", file=to)
+        caret = _caret(problem)
         if caret:
             print(caret, file=to)
+
+
+def _caret(problem: Problem) -> str:
+    """``problem``'s source line and a caret under its column (:meth:`Problem.caret`),
+    the line escaped as every row is (tabs kept, so the caret still lines up)."""
+    if not problem.source:
+        return ""
+    line = problem.source.rstrip("\r\n")
+    shown = "\t".join(terminal(part) for part in line.split("\t"))
+    pad = "".join(c if c == "\t" else " " * len(terminal(c))
+                  for c in line[: max(problem.col - 1, 0)])
+    return f"    {shown}\n    {pad}^"
 
 
 def _usage(command: str, message: str, err: TextIO) -> int:
@@ -796,7 +871,7 @@ def _run_usage(args: argparse.Namespace) -> str | None:
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
     if args.out:
-        return _target(args.out)
+        return _target(args.out, _run_inputs(args, args.scenario))
     return None
 
 
@@ -820,12 +895,59 @@ def _scenario_only(args: argparse.Namespace, source: Path) -> str | None:
     return None
 
 
-def _target(path: str) -> str | None:
-    """What stops ``--out PATH`` from being written, as a usage error."""
+def _target(path: str, inputs: Inputs = (), option: str = "--out") -> str | None:
+    """What stops ``--out PATH`` from being written (it names one of ``inputs``, say), as
+    a usage error."""
     from prima.output import check_target
 
-    problem = check_target(path)
-    return f"--out {problem}" if problem else None
+    problem = check_target(path, inputs)
+    return f"{option} {problem}" if problem else None
+
+
+_REFERENCE_ROLES = {"fa": "the FA", "ea": "an EA", "zone": "a zone's EA", "map": "the map",
+                    "profile": "the robot profile"}
+"""What a file a scenario names is, by its role (``scenario_references``)."""
+
+
+def _scenario_inputs(scenario: str | Path, what: str = "the scenario") -> list[tuple[str, Path]]:
+    """A scenario and every file it names (its documents, map and robot profile), each
+    with what it is: what an output must not overwrite."""
+    from prima.sim import scenario_references
+
+    path = Path(scenario)
+    found: list[tuple[str, Path]] = [(what, path)]
+    for ref in scenario_references(path):
+        role = _REFERENCE_ROLES.get(ref.role, "a file")
+        found.append((f"{role} of {shown_path(path.name)}", ref.path))
+    return found
+
+
+def _run_inputs(args: argparse.Namespace, scenario: str | Path | None) -> list[tuple[str, Path]]:
+    """The input files of a command that runs ``scenario`` (if any) with the command
+    line's ``--fa``, ``--ea`` and ``--robot``."""
+    found = _scenario_inputs(scenario) if scenario is not None else []
+    for option, what in (("fa", "the --fa document"), ("ea", "the --ea document"),
+                         ("robot", "the --robot profile")):
+        given = getattr(args, option, None)
+        if isinstance(given, str):
+            found.append((what, Path(given)))
+    return found
+
+
+def _worst_runs_named(folder: str, inputs: Inputs, stem: str, seed: int) -> str | None:
+    """An input that a worst run written in ``folder`` could be named as
+    (``STEM-runN-seedS.xml``, ``stem`` a regular expression), as a usage error: it is
+    refused before any run."""
+    from prima.output import same_file
+
+    pattern = re.compile(stem + rf"-run\d+-seed{seed}\.xml")
+    for what, path in inputs:
+        given = Path(path)
+        if pattern.fullmatch(given.name) and same_file(given.parent, folder):
+            return (f"--out {shown_path(folder)}: a worst run written there may be named "
+                    f"{shown_path(given.name)}, which is {what}, an input of this command: "
+                    "name another folder (nothing was written)")
+    return None
 
 
 def _mcap_usage(args: argparse.Namespace) -> str | None:
@@ -856,7 +978,7 @@ POLICY_NAMES = ("all", *POLICIES)
 
 
 def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.output import make_folder, written
+    from prima.output import written
     from prima.run import Run
     from prima.trace import TextTrace, TraceLine, jsonl_row
 
@@ -872,7 +994,7 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               pose_rate=args.pose_rate, policies=args.policy)
     with contextlib.ExitStack() as files:
         # (an MCAP recording is written by its recorder, a binary file of its own)
-        to = files.enter_context(written(args.out)) \
+        to = files.enter_context(written(args.out, partial=True)) \
             if args.out and args.format != "mcap" else out
         if args.format == "text":
             text = TextTrace(run.app_names(), paint=_paint(to))
@@ -894,7 +1016,6 @@ def _run(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         elif args.format == "mcap":
             from prima.mcap import Recorder
 
-            make_folder(Path(args.out).parent, args.out)  # (the rule of every output: prima.output)
             recorder = files.enter_context(Recorder(args.out, run.scenario.map))
             ctrl_c = files.enter_context(_between_lines())
 
@@ -978,7 +1099,7 @@ def _between_lines() -> Iterator[_Deferred]:
 
 
 def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.golden import Status, check, scenarios_with_goldens
+    from prima.golden import Status, check, golden_path, scenarios_with_goldens
 
     switches = _switches(args)
     if isinstance(switches, str):
@@ -989,6 +1110,12 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         return _usage("test", f"no such file or folder: {exc}", err)
     if not scenarios:
         return _usage("test", f"no scenario with a golden trace in {' '.join(args.paths)}", err)
+    if args.update:
+        for scenario in scenarios:
+            problem = _target(str(golden_path(scenario)), _run_inputs(args, scenario),
+                              "--update")
+            if problem:
+                return _usage("test", problem, err)
     failed = 0
     paint = _paint(out)
     styles = {Status.SAME: (GREEN,), Status.DIFFERENT: (RED, BOLD), Status.MISSING: (YELLOW,),
@@ -1001,14 +1128,19 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             failed += 1
             continue
         except Exception as exc:  # noqa: BLE001 - report it, and test the other scenarios
-            print(f"{paint('error', RED, BOLD)}     {scenario}: {type(exc).__name__}: {exc}",
-                  file=out)
+            print(f"{paint('error', RED, BOLD)}     {shown_path(scenario)}: "
+                  f"{type(exc).__name__}: {terminal(str(exc))}", file=out)
             failed += 1
             continue
         status = result.status.value
-        print(f"{paint(status, *styles[result.status])}{' ' * (9 - len(status))} {scenario}",
-              file=out)
-        if result.status in (Status.DIFFERENT, Status.MISSING):
+        print(f"{paint(status, *styles[result.status])}{' ' * (9 - len(status))} "
+              f"{shown_path(scenario)}", file=out)
+        if result.status is Status.MISSING:
+            failed += 1
+            print(f"          no golden trace {shown_path(golden_path(scenario).name)}: create "
+                  f"it with prima test --update {terminal(shlex.quote(str(scenario)))}",
+                  file=out)
+        elif result.status is Status.DIFFERENT:
             failed += 1
             out.write(_diff(result.diff, paint))
     summary = f"{failed} failed"
@@ -1018,14 +1150,15 @@ def _test(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
 
 def _diff(diff: str, paint: Paint) -> str:
-    """A golden trace's diff, its lines coloured as git colours them, for a terminal."""
-    if not paint.on:
-        return diff
+    """A golden trace's diff, its lines escaped (a file's name may hold anything) and, for
+    a terminal, coloured as git colours them."""
+    if not diff:
+        return ""
     styles = {"---": (BOLD,), "+++": (BOLD,), "@@": (CYAN,), "-": (RED,), "+": (GREEN,)}
     out = []
-    for line in diff.splitlines():
+    for line in diff.split("\n")[:-1] if diff.endswith("\n") else diff.split("\n"):
         mark = next((m for m in styles if line.startswith(m)), None)
-        out.append(paint(line, *styles[mark]) if mark else terminal(line))
+        out.append(paint(terminal(line), *styles[mark]) if mark else terminal(line))
     return "".join(f"{line}\n" for line in out)
 
 
@@ -1109,7 +1242,8 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
         return f"--runs must be a whole number from 1 to {MAX_RUNS}"
     if not (math.isfinite(args.jitter) and 0 <= args.jitter <= MAX_RUN_TIME):
         return f"--jitter must be a number of seconds from 0 to {MAX_RUN_TIME:g}"
-    problem = _batch_usage(args)
+    inputs = _run_inputs(args, args.scenario)
+    problem = _batch_usage(args, inputs)
     if problem:
         return problem
     if args.worst < 0:
@@ -1117,16 +1251,21 @@ def _sweep_usage(args: argparse.Namespace) -> str | None:
     from prima.output import check_folder, named_after
 
     args.out = args.out or str(named_after(args.scenario, "sweep-{stem}"))
-    problem = check_folder(args.out) if args.worst else None
-    return f"--out {problem}" if problem else None
+    if not args.worst:
+        return None
+    problem = check_folder(args.out, inputs)
+    if problem:
+        return f"--out {problem}"
+    return _worst_runs_named(args.out, inputs, re.escape(Path(args.scenario).stem), args.seed)
 
 
 MAX_RUNS = 1_000_000
 """The most runs one sweep or check cell may ask for."""
 
 
-def _batch_usage(args: argparse.Namespace) -> str | None:
-    """What is wrong with ``--jobs``, ``--executor``, ``--results`` and ``--resume``."""
+def _batch_usage(args: argparse.Namespace, inputs: Inputs = ()) -> str | None:
+    """What is wrong with ``--jobs``, ``--executor``, ``--results`` and ``--resume``
+    (a results file must not be one of ``inputs``)."""
     from prima.batch import executor_problem
 
     if args.jobs is not None and not 1 <= args.jobs <= 1024:
@@ -1140,12 +1279,36 @@ def _batch_usage(args: argparse.Namespace) -> str | None:
         return f"--resume: no such file: {args.resume}"
     target = args.results or args.resume
     if target:
-        from prima.output import check_target
-
-        problem = check_target(target)
-        if problem:
-            return f"--{'results' if args.results else 'resume'} {problem}"
+        return _target(target, inputs, "--results" if args.results else "--resume")
     return None
+
+
+class _BarLine:
+    """Standard error while a progress bar is drawn on it: whether the bar's line is
+    still open. Leaving the block (``with``), however it is left, ends that line, so
+    nothing printed next, on standard output or error, shares it with the bar."""
+
+    def __init__(self, err: TextIO) -> None:
+        self.err = err
+        self.open = False
+
+    def write(self, text: str) -> None:
+        if text:
+            self.err.write(text)
+            self.err.flush()
+            self.open = not text.endswith("\n")
+
+    def end(self) -> None:
+        if self.open:
+            self.open = False
+            self.err.write("\n")
+            self.err.flush()
+
+    def __enter__(self) -> _BarLine:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.end()
 
 
 def _pool(args: argparse.Namespace, runs: int) -> Pool:
@@ -1174,22 +1337,18 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     if isinstance(switches, str):
         return _usage("sweep", switches, err)
 
-    def show(text: str) -> None:
-        err.write(text)
-        err.flush()
-
     pool = _pool(args, args.runs)
-    result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
-                   jobs=args.jobs, thresholds=thresholds,
-                   progress=progress_bar(show, live=is_terminal(err)), switches=switches,
-                   pool=pool,
-                   results=args.results or args.resume, resume=bool(args.resume),
-                   keep=args.worst)
+    bar = _BarLine(err)
+    with bar:
+        result = sweep(args.scenario, runs=args.runs, jitter=args.jitter, seed=args.seed,
+                       jobs=args.jobs, thresholds=thresholds,
+                       progress=progress_bar(bar.write, live=is_terminal(err)),
+                       switches=switches, pool=pool,
+                       results=args.results or args.resume, resume=bool(args.resume),
+                       keep=args.worst)
     paint = _paint(out)
     out.write(format_sweep(result, paint))
     if result.interrupted:
-        if result.done and is_terminal(err):
-            err.write("\n")  # after the progress bar
         print(f"prima sweep: interrupted after {result.done} of {result.asked} runs",
               file=err)
         return EXIT_INTERRUPTED
@@ -1198,16 +1357,16 @@ def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
               "worker process died each time, the run alone too (out of memory?); the other "
               f"{result.done} run(s) are judged", file=err)
     for index, error in result.errors:
-        print(f"prima sweep: run {index} failed: {error}", file=err)
+        print(f"prima sweep: run {index} failed: {terminal(str(error))}", file=err)
     if args.worst:
         folder = Path(args.out)
         worst = result.worst(args.worst)
         paths = result.write_worst(args.worst, folder)
-        print(f"worst {len(paths)} run(s), written to {folder}/:", file=out)
+        print(f"worst {len(paths)} run(s), written to {shown_path(folder)}/:", file=out)
         for run, path in zip(worst, paths, strict=True):
             exceeded = paint(", ".join(run.exceeded()), RED) or "no threshold exceeded"
-            print(f"  {path}  {exceeded}; worst lateness {run.worst_lateness():.2f} s",
-                  file=out)
+            print(f"  {shown_path(path)}  {exceeded}; worst lateness "
+                  f"{run.worst_lateness():.2f} s", file=out)
     return EXIT_ERRORS if result.breached or result.lost or result.failed else EXIT_OK
 
 
@@ -1226,7 +1385,11 @@ def _show_usage(args: argparse.Namespace) -> str | None:
     from prima.output import named_after
 
     args.out = args.out or str(named_after(source, "{stem}.html"))
-    return _target(args.out)
+    scenario = source if source.suffix == ".xml" else args.scenario
+    inputs = _run_inputs(args, scenario)
+    if source.suffix == ".jsonl":
+        inputs.append(("the trace shown", source))
+    return _target(args.out, inputs)
 
 
 def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -1252,7 +1415,9 @@ def _show(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     scenario = source if source.suffix == ".xml" else args.scenario
     with written(args.out) as page:  # a jsonl trace streamed: never held whole
         abs_, end = write_page(source, page, scenario=scenario, title=source.stem,
-                               switches=switches, audio=args.audio, timing=timing)
+                               switches=switches, audio=args.audio, timing=timing,
+                               warn=lambda said: print(f"prima show: warning: {said}",
+                                                       file=err))
     print(f"prima show: wrote {shown_path(args.out)} ({abs_} atomic behavior(s), "
           f"{end:g} s{'' if scenario else '; no map'})", file=err)
     return EXIT_OK
@@ -1270,9 +1435,17 @@ def _plot_usage(args: argparse.Namespace) -> str | None:
     if source.suffix not in (".jsonl", ".xml"):
         return f"{args.input}: give a trace (*.jsonl) or a scenario (*.xml)"
     if target.suffix.lower() not in _PLOT_SUFFIXES:
-        return f"--out {args.out}: name a {', '.join(_PLOT_SUFFIXES)} file"
-    if _target(args.out):
-        return _target(args.out)
+        from prima.output import shown
+
+        return f"--out {shown(args.out)}: name a {', '.join(_PLOT_SUFFIXES)} file"
+    inputs = _run_inputs(args, source if source.suffix == ".xml" else None)
+    if source.suffix == ".jsonl":
+        inputs.append(("the trace drawn", source))
+    if args.map is not None:
+        inputs.append(("the --map", Path(args.map)))
+    problem = _target(args.out, inputs)
+    if problem:
+        return problem
     until = args.until
     if until is not None and not (math.isfinite(until) and 0 < until <= MAX_RUN_TIME):
         return f"--until must be a number of seconds above 0 and at most {MAX_RUN_TIME:g}"
@@ -1351,14 +1524,10 @@ def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     return EXIT_OK
 
 
-def _shipped(*parts: str) -> Path:
-    """A folder shipped beside the package (a checkout's apps/fa, robots, scenarios/maps),
-    relative to the current folder when it is inside it (messages name it so)."""
-    folder = Path(__file__).resolve().parent.parent.joinpath(*parts)
-    try:
-        return folder.relative_to(Path.cwd())
-    except ValueError:
-        return folder
+def _shipped_files(folder: str, pattern: str) -> list[Path]:
+    """The files of a shipped folder (``apps/fa``, ``robots``: prima.shipped), by name."""
+    found = shipped(folder)
+    return sorted(found.glob(pattern)) if found is not None else []
 
 
 def _check_usage(args: argparse.Namespace) -> str | None:
@@ -1366,9 +1535,9 @@ def _check_usage(args: argparse.Namespace) -> str | None:
     for path in [*args.eas, *args.fa, *args.robot, *args.scenario, args.map]:
         if path is not None and not Path(path).is_file():
             return f"no such file: {path}"
-    if not args.fa and not sorted(_shipped("apps", "fa").glob("*.pxml")):
+    if not args.fa and not _shipped_files("apps/fa", "*.pxml"):
         return "no shipped FAs (apps/fa/*.pxml) here: name them with --fa"
-    if not args.robot and not sorted(_shipped("robots").glob("*.xml")):
+    if not args.robot and not _shipped_files("robots", "*.xml"):
         return "no shipped robot profiles (robots/*.xml) here: name them with --robot"
     if not 1 <= args.runs <= MAX_RUNS:
         return f"--runs must be a whole number from 1 to {MAX_RUNS}"
@@ -1380,15 +1549,52 @@ def _check_usage(args: argparse.Namespace) -> str | None:
         return "--min-coverage must be a percentage from 0 to 100"
     if args.worst < 0:
         return "--worst must be a whole number from 0 up"
-    for option in ("junit", "summary"):
-        if getattr(args, option):
-            problem = _target(getattr(args, option))
-            if problem:
-                return problem.replace("--out", f"--{option}", 1)
-    from prima.output import check_folder
+    return _check_outputs(args)
 
-    problem = check_folder(args.out or "check-NAME") if args.worst else None
-    return f"--out {problem}" if problem else _batch_usage(args)
+
+def _check_outputs(args: argparse.Namespace) -> str | None:
+    """What stops ``prima check``'s outputs from being written: each refused where it
+    names an input, or another of its outputs."""
+    from prima.output import check_folder, input_named
+
+    inputs = _check_inputs(args)
+    written: list[tuple[str, Path]] = []
+    for option in ("junit", "summary", "results", "resume"):
+        given = getattr(args, option)
+        if not given:
+            continue
+        problem = _target(given, inputs, f"--{option}") if option in ("junit", "summary") \
+            else None
+        twice = input_named(given, written)
+        if twice:
+            problem = (f"--{option} {shown_path(given)} is also {twice[0]}: give each output "
+                       "a file of its own (nothing was written)")
+        if problem:
+            return problem
+        written.append((f"the --{option} file", Path(given)))
+
+    if args.worst:
+        folder = args.out or "check-NAME"
+        problem = check_folder(folder, inputs)
+        if problem:
+            return f"--out {problem}"
+        problem = _worst_runs_named(folder, inputs, ".*", args.seed)
+        if problem:
+            return problem
+    return _batch_usage(args, inputs)
+
+
+def _check_inputs(args: argparse.Namespace) -> list[tuple[str, Path]]:
+    """``prima check``'s input files: the EAs, FAs, robot profiles, scenarios (and what
+    they name) and map."""
+    found = [("an EA checked", Path(p)) for p in args.eas]
+    found += [("an FA checked beside", Path(p)) for p in args.fa]
+    found += [("a robot profile checked on", Path(p)) for p in args.robot]
+    for scenario in args.scenario:
+        found += _scenario_inputs(scenario, "a scenario checked")
+    if args.map:
+        found.append(("the --map", Path(args.map)))
+    return found
 
 
 def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -1406,27 +1612,26 @@ def _check(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.output import written
     from prima.sweep import progress_bar
 
-    fas = [Path(p) for p in args.fa] or sorted(_shipped("apps", "fa").glob("*.pxml"))
-    robots = [Path(p) for p in args.robot] or sorted(_shipped("robots").glob("*.xml"))
-
-    def show(text: str) -> None:
-        err.write(text)
-        err.flush()
+    fas = [Path(p) for p in args.fa] or _shipped_files("apps/fa", "*.pxml")
+    robots = [Path(p) for p in args.robot] or _shipped_files("robots", "*.xml")
 
     results = []
     status = EXIT_OK
     for ea in args.eas:
         pool = _pool(args, args.runs * len(fas) * len(robots))
         try:
-            result = check(ea, fas=fas, robots=robots, scenarios=[Path(s) for s in args.scenario],
-                           maps=_shipped("scenarios", "maps"),
-                           map_file=Path(args.map) if args.map else None, runs=args.runs,
-                           jitter=args.jitter, seed=args.seed, until=args.until,
-                           thresholds=thresholds, pool=pool,
-                           results=args.results or args.resume, resume=bool(args.resume),
-                           out=Path(args.out) if args.out else Path(f"check-{Path(ea).stem}"),
-                           worst=args.worst,
-                           progress=progress_bar(show, live=is_terminal(err)))
+            with _BarLine(err) as bar:
+                result = check(ea, fas=fas, robots=robots,
+                               scenarios=[Path(s) for s in args.scenario],
+                               maps=shipped("scenarios/maps"),
+                               map_file=Path(args.map) if args.map else None,
+                               runs=args.runs, jitter=args.jitter, seed=args.seed,
+                               until=args.until, thresholds=thresholds, pool=pool,
+                               results=args.results or args.resume, resume=bool(args.resume),
+                               out=Path(args.out) if args.out
+                               else Path(f"check-{Path(ea).stem}"),
+                               worst=args.worst,
+                               progress=progress_bar(bar.write, live=is_terminal(err)))
         except ValueError as exc:
             if isinstance(exc, LocatedError):
                 raise

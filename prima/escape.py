@@ -8,7 +8,8 @@ or mathematics:
 
 - :func:`terminal`: a line of text for a terminal or a text file (the text trace,
   ``prima debug``, messages): C0 and C1 control characters, DEL, the Unicode line
-  and paragraph separators and undecodable bytes of a file name as escapes;
+  and paragraph separators, the bidirectional controls (U+202E, U+200F, ...: they
+  would reorder the rest of a row) and undecodable bytes of a file name as escapes;
 - :func:`json_line`: one JSON value on one line (the jsonl trace, the Chrome
   trace): nothing any reader takes for a line break (U+0085, U+2028, U+2029 are
   escaped, as JSON allows), nothing a UTF-8 file cannot hold;
@@ -31,7 +32,11 @@ from typing import Any
 
 __all__ = ["PLAIN_TEXT", "json_line", "markup", "script_json", "shown_path", "terminal"]
 
-_TERMINAL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\ud800-\udfff]")
+_TERMINAL = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028-\u202e\u2066-\u2069"
+                       "\ud800-\udfff]")
+"""What :func:`terminal` escapes: C0, DEL and C1 controls, the line and paragraph
+separators, the bidirectional controls (U+061C, U+200E, U+200F, U+202A to U+202E,
+U+2066 to U+2069: they reorder what a terminal shows after them) and undecodable bytes."""
 _NAMED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
@@ -47,8 +52,9 @@ def _escape_one(match: re.Match[str]) -> str:
 
 def terminal(text: str) -> str:
     """``text`` on one line, safe for a terminal: control characters (C0, DEL, C1), the
-    line and paragraph separators and undecodable bytes as ``\\n``, ``\\x1b``,
-    ``\\u2028``, ``\\xff``... A document cannot forge a line or send an escape sequence."""
+    line and paragraph separators, the bidirectional controls and undecodable bytes as
+    ``\\n``, ``\\x1b``, ``\\u2028``, ``\\u202e``, ``\\xff``... A document cannot forge a
+    line, reorder one or send an escape sequence."""
     return _TERMINAL.sub(_escape_one, text)
 
 

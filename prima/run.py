@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -268,6 +270,11 @@ class Run:
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
         self.scenario: Scenario = loaded
+        self._folder = os.path.abspath(Path(loaded.source).parent)
+        self._named: dict[str, str] = {}
+        """A file's path as an error names it -> as the trace names it: relative to the
+        scenario's folder (a golden trace reads the same on every machine)."""
+        self._name(loaded.source)
         self.until = loaded.until if until is None else until
         profile_path = robot or (loaded.resolve(loaded.profile) if loaded.profile else None)
         self.profile = (self._files.profile(profile_path) if profile_path
@@ -396,10 +403,30 @@ class Run:
         is as wide as the longest)."""
         return [document.name for document in self.documents()]
 
+    def _name(self, path: str | Path) -> None:
+        """Note a file the run reads: an error line names it relative to the scenario's
+        folder (:meth:`_portable`)."""
+        key = str(path)
+        if key and key not in self._named:
+            self._named[key] = os.path.relpath(os.path.abspath(key), self._folder)
+
+    def _portable(self, text: str) -> str:
+        """An error's text with every file the run read named relative to the scenario's
+        folder, as ``prima validate`` of the scenario's folder names it: no absolute path
+        in a trace line."""
+        named = sorted((p for p, r in self._named.items() if p != r and p in text),
+                       key=len, reverse=True)
+        if not named:
+            return text
+        pattern = re.compile("|".join(re.escape(f"{p}:") for p in named))  # (one pass)
+        return pattern.sub(lambda m: f"{self._named[m.group()[:-1]]}:", text)
+
     def _checked(self, path: Path, role: AppKind) -> Document:
         """A document loaded for ``role``, its places written by name on the scenario's map
         (as ``prima validate`` of the scenario checks them): else the problems."""
+        self._name(path)
         document = _check_slot(self._files.document(path, self.profile), role)
+        self._name(document.path)
         world = self.scenario.map
         problems = unknown_places(str(path), document.places, [p.name for p in world.places],
                                   world.name, world.source)
@@ -485,6 +512,8 @@ class Run:
     # ------------------------------------------------------------ recording
 
     def _line(self, kind: RecordKind, **fields: Any) -> None:
+        if kind is Kind.ERROR:
+            fields["text"] = self._portable(str(fields.get("text") or ""))
         if kind in _POSED:
             fields["robot"], user, detectable = self.sim.poses()
             if user is not None:

@@ -10,7 +10,10 @@ trace never fails on a value of the wrong type. Bad lines are reported located
 read (at most :data:`MAX_PROBLEMS` of them: reading stops there). Lines are
 split at ``\\n`` only (a ``\\r`` before it is allowed), never at the other
 characters ``str.splitlines`` takes for line ends: a writer escapes those
-(:func:`prima.escape.json_line`) and a reader does not split a line there.
+(:func:`prima.escape.json_line`) and a reader does not split a line there. Numbers
+are bounded where they are read: a whole number of more than :data:`MAX_DIGITS`
+digits (or, for ``t`` and ``seq``, beyond 2^63) is a located error, never a crash
+of the reader that would turn it into a float or a text.
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from typing import Any
 
 from prima.errors import Problem, Severity, TraceError
 
-__all__ = ["MAX_PROBLEMS", "MAX_LINE", "Row", "check_row", "load_trace", "read_trace", "rows"]
+__all__ = ["MAX_DIGITS", "MAX_LINE", "MAX_NUMBER", "MAX_PROBLEMS", "Row", "check_row",
+           "load_trace", "read_trace", "rows"]
 
 Row = Mapping[str, Any]
 """One line of a trace, as its jsonl dict."""
@@ -33,6 +37,15 @@ MAX_PROBLEMS = 20
 
 MAX_LINE = 1 << 20
 """The longest trace line read, in characters (1 MiB; a run's longest is a few kB)."""
+
+MAX_DIGITS = 19
+"""The most digits a whole number in a trace has (2^63 has 19): a longer one is refused
+where it is read, located, before any reader turns it into a float or a text."""
+
+MAX_NUMBER = 64
+"""The most characters of a number with a fraction or an exponent in a trace."""
+
+_LARGEST = 2**63
 
 _EPS = 1e-6
 """Times are rounded to the millisecond: a time this much earlier is not earlier."""
@@ -153,15 +166,51 @@ def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
         raise TraceError(problems)
 
 
+class _Unbounded(ValueError):
+    """A number in a line beyond what a trace holds (:data:`MAX_DIGITS`)."""
+
+    def __init__(self, text: str, message: str) -> None:
+        super().__init__(message)
+        self.text = text
+
+
+def _whole(text: str) -> int:
+    """A JSON whole number, read only if it is of at most :data:`MAX_DIGITS` digits."""
+    digits = len(text.lstrip("-"))
+    if digits > MAX_DIGITS:
+        raise _Unbounded(text, f"a whole number of {digits:,} digits: a trace's have at most "
+                               f"{MAX_DIGITS}")
+    return int(text)
+
+
+def _decimal(text: str) -> float:
+    """A JSON number with a fraction or an exponent, read only if it is of at most
+    :data:`MAX_NUMBER` characters (a float's value is bounded; its text is not)."""
+    if len(text) > MAX_NUMBER:
+        raise _Unbounded(text, f"a number written with {len(text):,} characters: a trace's "
+                               f"have at most {MAX_NUMBER}")
+    return float(text)
+
+
 def _decode(line: str) -> tuple[Any, str | None, int]:
     """A line's JSON value, what is wrong with it, and where."""
     try:
-        row = json.loads(line)
+        row = json.loads(line, parse_int=_whole, parse_float=_decimal)
     except json.JSONDecodeError as exc:
         return None, f"not a JSON object: {exc.msg}", exc.colno
     except RecursionError:
         return None, "not a JSON object: nested too deep", 1
+    except _Unbounded as exc:
+        return None, str(exc), line.find(exc.text) + 1
+    except ValueError as exc:  # (whatever else json's number reading refuses)
+        return None, f"not a JSON object: {exc}", 1
+    if isinstance(row, dict) and any(_too_large(row.get(key)) for key in ("t", "seq")):
+        return row, "fields 't' and 'seq' must be at most 2^63", 1
     return row, check_row(row), 1
+
+
+def _too_large(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and abs(value) > _LARGEST
 
 
 def load_trace(path: str | Path) -> list[dict[str, Any]]:

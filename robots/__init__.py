@@ -1,1 +1,2 @@
-"""Robot hardware profiles shipped with PRIMA, as package data (``prima.robots``)."""
+"""Robot hardware profiles shipped with PRIMA, as package data (``prima.robots``;
+prima.shipped finds them)."""

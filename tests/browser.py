@@ -33,3 +33,29 @@ def headless_chromium(*extra: str) -> Iterator[Any]:
         yield driver
     finally:
         driver.quit()
+
+
+WAIT = 300.0
+"""Seconds :func:`until` waits at most: a bound against a page that never gets there,
+not a speed it must keep (a loaded machine only makes the wait longer)."""
+
+
+def until(driver: Any, script: str, *args: Any) -> Any:
+    """What ``script`` (JavaScript, run in the page) returns once it is truthy: the page
+    loaded, a sound's data read, a redraw done. Waits for the page, not for a time."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    return WebDriverWait(driver, WAIT, poll_frequency=0.05).until(
+        lambda d: d.execute_script(script, *args))
+
+
+STEPPED_CLOCK = """
+const frames = [];
+window.primaShow.useClock(function (callback) { frames.push(callback); });
+window.stepClock = function (stamp) {
+  frames.splice(0).forEach(function (callback) { callback(stamp); });
+};
+"""
+"""Hands the page's clock (prima/show/player.js: its animation frames) to the test:
+``stepClock(ms)`` runs the frames due with that time stamp, so playing for 600 ms is two
+steps, ``stepClock(0)`` and ``stepClock(600)``, however long the machine takes."""

@@ -32,7 +32,7 @@ import prima
 ROOT = Path(prima.__file__).parent
 SUBPACKAGES = sorted(p.name for p in ROOT.iterdir() if (p / "__init__.py").exists())
 NEUTRAL = ("prima.vocab", "prima.catalog", "prima.errors", "prima.escape", "prima.suggest",
-           "prima.signals", "prima.term")
+           "prima.signals", "prima.term", "prima.shipped")
 LIGHT = ("prima.judge", "prima.judge._thresholds")
 """What `prima --help` may import beyond the CLI and the neutral modules: the table of
 thresholds its commands' options are made from."""
@@ -58,6 +58,7 @@ ONLY: dict[str, set[str]] = {
     "prima.suggest": set(),
     "prima.signals": set(),
     "prima.term": {"prima.escape"},
+    "prima.shipped": set(),
 }
 """Shared modules -> the only PRIMA units they may import."""
 

@@ -16,7 +16,7 @@ from prima.audio import OUTPUT_RATE, available, clip, utterances, wav
 from prima.cli import main
 from prima.dsl import default_profile
 from prima.run import Run, spec_from_profile
-from tests.browser import headless_chromium
+from tests.browser import STEPPED_CLOCK, headless_chromium, until
 
 if available() is not None:
     pytest.skip(f"{available()} (.ci/run installs it)", allow_module_level=True)
@@ -53,6 +53,38 @@ def test_the_utterances_are_when_the_words_are_said() -> None:
     assert cut.duration == pytest.approx(MODEL(cut.whole) * 3 / 8, abs=0.03)
 
 
+def test_an_utterance_the_user_spoke_over_is_its_spoken_words_at_their_pace() -> None:
+    """Barge-in cuts too (reason ``barge-in``): the sound is the words spoken, at the pace
+    the speech model says them, ending at the cut (it was the whole utterance squeezed
+    into the time before the cut)."""
+    rows = _rows(ROOT / "scenarios" / "examples" / "barge-in-question.xml")
+    [end] = [r for r in rows if r["kind"] == "end" and r.get("reason") == "barge-in"]
+    spoken, whole = end["detail"]["spoken"], end["text"]
+    [cut] = [u for u in utterances(rows, MODEL) if u.ab == end["ab"]]
+    assert cut.cut and cut.text == spoken and cut.whole == whole and cut.end == end["t"]
+    k, n = len(spoken.split()), len(whole.split())
+    assert cut.duration == pytest.approx(MODEL(whole) * k / n, abs=0.03)
+    assert cut.start == pytest.approx(end["detail"]["words_start"], abs=0.03)
+    assert len(clip(cut).samples) == round(cut.duration * OUTPUT_RATE)
+
+
+def test_what_is_synthesised_is_bounded() -> None:
+    """A forged utterance of 99,999 s, or of 100,000 words, makes a clip of at most
+    MAX_SECONDS saying at most MAX_WORDS words, marked shortened."""
+    from prima.audio import MAX_SECONDS, MAX_WORDS, Utterance
+
+    long = Utterance(1, "a", "Speak", 0.0, 99_999.0, "hi there", "hi there")
+    made = clip(long)
+    assert made.shortened and made.duration == pytest.approx(MAX_SECONDS)
+    many = " ".join(["word"] * 100_000)
+    wordy = Utterance(1, "a", "Speak", 0.0, 40_000.0, many, many)
+    started = time.process_time()
+    made = clip(wordy)
+    assert made.shortened and made.duration == pytest.approx(MAX_SECONDS)
+    assert len(made.words) <= MAX_WORDS
+    assert time.process_time() - started < 5
+
+
 def test_a_clip_lasts_exactly_its_utterance_and_is_the_same_every_time() -> None:
     said = utterances(_rows(INTERRUPT), MODEL)
     for u in said[:4] + [u for u in said if u.cut]:
@@ -77,13 +109,11 @@ def browser() -> Iterator[Any]:
 def _sounds(browser: Any, page: Path) -> list[dict[str, Any]]:
     """Open the page from file://; its sounds, once every one has loaded its metadata."""
     browser.get(page.as_uri())
-    sounds: list[dict[str, Any]] = []
-    for _ in range(200):
-        if browser.execute_script("return !!window.primaShow"):
-            sounds = browser.execute_script("return window.primaShow.sounds()")
-            if sounds and all(s["ready"] >= 1 or s["error"] for s in sounds):
-                break
-        time.sleep(0.05)
+    until(browser, "return !!window.primaShow && window.primaShow.sounds().length && "
+                   "window.primaShow.sounds().every(function (s) { "
+                   "return s.ready >= 1 || s.error; })")
+    browser.execute_script(STEPPED_CLOCK)
+    sounds: list[dict[str, Any]] = browser.execute_script("return window.primaShow.sounds()")
     return sounds
 
 
@@ -101,12 +131,16 @@ def test_the_page_plays_each_utterance_offline_as_long_as_it_is_said(
         assert (sound["start"], sound["end"]) == pytest.approx((u.start, u.end))
         assert sound["duration"] == pytest.approx(u.duration, abs=1e-3)
         assert sound["expected"] == pytest.approx(u.duration, abs=1e-4)
-    # played with the playhead: inside an utterance, its sound plays from there
+    # played with the playhead: inside an utterance, its sound plays from there (one frame
+    # of the page's clock, stepped by the test: the playhead then stays where it is while
+    # the sound plays on, as long as the machine takes to get it past 0.4 s)
     u = said[len(said) // 2]
-    browser.execute_script(f"window.primaShow.seek({u.start + 0.3}); window.primaShow.play();")
-    time.sleep(0.4)
-    playing = browser.execute_script("return window.primaShow.sounds()")
     index = said.index(u)
+    browser.execute_script(f"window.primaShow.seek({u.start + 0.3}); window.primaShow.play();"
+                           "window.stepClock(0);")
+    until(browser, "const s = window.primaShow.sounds()[arguments[0]]; "
+                   "return !s.paused && s.at > 0.4;", index)
+    playing = browser.execute_script("return window.primaShow.sounds()")
     assert not playing[index]["paused"] and playing[index]["at"] > 0.4
     assert all(s["paused"] for i, s in enumerate(playing) if i != index)
     state = browser.execute_script("window.primaShow.pause(); return window.primaShow.sounds()")

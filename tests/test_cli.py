@@ -5,16 +5,15 @@ from __future__ import annotations
 import io
 import json
 import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from prima import xmlio as _schema
 from prima.cli import main
+from tests.signalled import signalled_run
 
 ROOT = Path(__file__).parents[1]
 FIG_5_7 = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
@@ -184,27 +183,18 @@ def test_run_checks_its_output_path_before_running(tmp_path: Path) -> None:
     assert code == 2 and "is a folder" in err
 
 
+HANG = 600.0
+"""Seconds a test waits at most for a child process: a bound against a hang (a blocked
+named pipe, a run that never stops), not a speed it must keep on a loaded machine."""
+
+
 def interrupted_run(out: Path, form: str) -> str:
-    """``prima run --format FORM --out OUT`` stopped with Ctrl-C once it has written
-    some of its trace; its standard error (it exits with 130)."""
-    # Ctrl-C's default action in the child even when this process ignores SIGINT (as a
-    # background job of a non-interactive shell does, and its children inherit)
-    proc = subprocess.Popen([sys.executable, "-m", "prima", "run", str(OFFICE), "--until",
-                             "900000", "--format", form, "--out", str(out)],
-                            stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    try:
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and (not out.exists() or out.stat().st_size < 4096):
-            time.sleep(0.05)
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:  # never left running, whatever failed
-            proc.kill()
-            proc.communicate()
-    assert proc.returncode == 130, err
-    return err
+    """``prima run --format FORM --out OUT`` stopped with Ctrl-C once its trace has passed
+    30 s of the run (tests/signalled.py); its standard error (it exits with 130)."""
+    done = signalled_run("SIGINT", 30, "run", str(OFFICE), "--until", "900000", "--format",
+                         form, "--out", str(out))
+    assert done.returncode == 130, done.stderr
+    return done.stderr
 
 
 def test_ctrl_c_ends_a_run_with_130_and_keeps_the_trace_so_far(tmp_path: Path) -> None:
@@ -258,7 +248,7 @@ def test_a_named_pipe_is_a_located_error_not_a_hang(tmp_path: Path) -> None:
     fifo = tmp_path / "app.pxml"
     os.mkfifo(fifo)
     result = subprocess.run([sys.executable, "-m", "prima", "validate", str(fifo)],
-                            capture_output=True, text=True, check=False, timeout=20)
+                            capture_output=True, text=True, check=False, timeout=HANG)
     assert result.returncode == 1
     assert result.stdout == f"{fifo}:1:1: error: a named pipe: PRIMA reads only regular files\n"
 
@@ -379,4 +369,4 @@ def test_a_reader_that_stops_early_ends_the_command_quietly_with_141() -> None:
     assert proc.stdout.readline().startswith(b'{"t": 0')
     proc.stdout.close()
     said = proc.stderr.read()
-    assert proc.wait(timeout=60) == 141 and b"Traceback" not in said, said
+    assert proc.wait(timeout=HANG) == 141 and b"Traceback" not in said, said

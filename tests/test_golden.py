@@ -147,3 +147,14 @@ def test_a_golden_pinning_a_runtime_error_names_no_absolute_path(tmp_path: Path)
     check(path, update=True)
     golden = golden_path(path).read_text()
     assert "ERROR: ea.pxml:" in golden and str(tmp_path) not in golden, golden
+
+
+def test_a_golden_made_in_a_folder_with_spaces_names_no_absolute_path(tmp_path: Path) -> None:
+    """Error lines name the document relative to the scenario's folder from the start (a
+    path with a space slipped past the rewriting of absolute paths)."""
+    folder = tmp_path / "my apps"
+    folder.mkdir()
+    path = _talker(folder, "Hello.", fault=True)
+    check(path, update=True)
+    golden = golden_path(path).read_text()
+    assert "ERROR: ea.pxml:" in golden and str(tmp_path) not in golden, golden

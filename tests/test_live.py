@@ -341,9 +341,13 @@ def test_a_closed_page_loses_no_saved_session(tmp_path: Path) -> None:
 
 def test_saves_go_where_the_command_line_said_and_never_over_an_input(tmp_path: Path) -> None:
     base = base_of(Options(inputs=(VISIT,), script=True))
-    assert "one of the session's inputs" in (check_save(SaveTo(file=VISIT), base.inputs) or "")
-    map_file = ROOT / "scenarios" / "maps" / "museum.xml"
-    assert "inputs" in (check_save(SaveTo(file=map_file), base.inputs) or "")
+    assert "is the scenario (" in (check_save(SaveTo(file=VISIT), base.inputs) or "")
+    map_file = ROOT / "scenarios" / "maps" / ".." / "maps" / "museum.xml"
+    assert "is the map (" in (check_save(SaveTo(file=map_file), base.inputs) or "")
+    link = tmp_path / "visit.xml"  # (another name for the same file)
+    link.hardlink_to(VISIT)
+    assert "is the scenario (" in (check_save(SaveTo(file=link), base.inputs) or "")
+    assert "is a file: an EA (" in (check_save(SaveTo(folder=EA1), base.inputs) or "")
     assert "is a folder" in (check_save(SaveTo(file=tmp_path), base.inputs) or "")
     assert check_save(SaveTo(folder=tmp_path / "new"), base.inputs) is None
     folder = SaveTo(folder=tmp_path, stem="visit")
@@ -416,7 +420,7 @@ async def _refused_soon(page: _Page) -> bool:
     (["live", str(VISIT), "--until", "-1"], "--until"),
     (["live", str(VISIT), "--port", "70000"], "--port"),
     (["live", str(VISIT), "--save", "a.xml", "--save-dir", "d"], "not both"),
-    (["live", str(VISIT), "--save", str(VISIT)], "one of the session's inputs"),
+    (["live", str(VISIT), "--save", str(VISIT)], "which this command reads"),
     (["live", str(VISIT), "--policy", "nope=on"], "no policy"),
 ], ids=["missing", "script-with-apps", "map-with-scenario", "both", "speed", "until", "port",
         "save-twice", "save-over-input", "policy"])

@@ -156,3 +156,43 @@ def test_the_shipped_layout_is_the_one_the_code_makes() -> None:
     from prima.mcap import layout, shipped
 
     assert json.loads(shipped()) == json.loads(layout().to_json())
+
+
+def test_a_full_disk_is_one_line(tmp_path: Path) -> None:
+    """foxglove-sdk printed an error of its own for every message after a failed write,
+    then raised; the recording is written through a file of PRIMA's: one line."""
+    import subprocess
+    import sys
+
+    scenario = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
+    done = subprocess.run([sys.executable, "-m", "prima", "run", str(scenario), "--format",
+                           "mcap", "--out", "/dev/full"], capture_output=True, text=True,
+                          timeout=120)
+    assert (done.returncode, done.stderr) == (
+        1, "prima run: error: cannot write /dev/full: no space left on device\n")
+
+
+def test_a_killed_recording_leaves_the_earlier_one_whole(tmp_path: Path) -> None:
+    """SIGKILL mid-write: the recording was written in place (14 MB the reader rejects
+    in place of a good one); it is written beside it and renamed when finished."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    target = tmp_path / "run.mcap"
+    assert main(["run", str(ROOT / "scenarios" / "thesis" / "fig5-7.xml"), "--format",
+                 "mcap", "-o", str(target)], err=io.StringIO()) == 0
+    earlier = target.read_bytes()
+    child = subprocess.Popen([sys.executable, "-m", "prima", "run", str(SAMPLE_03), "--until",
+                              "100000", "--format", "mcap", "--out", str(target)],
+                             stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120  # (until the recording is being written: not a pace)
+    while time.monotonic() < deadline and not any(
+            p.stat().st_size for p in tmp_path.glob(".prima-*.part")) and child.poll() is None:
+        time.sleep(0.05)
+    os.kill(child.pid, signal.SIGKILL)
+    child.wait(timeout=60)
+    assert target.read_bytes() == earlier
+    assert len(read(target)) > 0  # still a recording the reader reads whole

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from prima.cli import main
+from tests.signalled import signalled_run
 from tests.test_escape import speaking
 
 NOT_UTF8 = os.fsdecode(b"run-\xff")
@@ -37,7 +38,7 @@ def test_a_full_disk_is_a_message(tmp_path: Path) -> None:
         argv[-1] = "/dev/full"
         status, _, err = _cli(*argv)
         assert (status, err.splitlines()) == (
-            1, [f"prima {argv[0]}: error: cannot write /dev/full: No space left on device"]
+            1, [f"prima {argv[0]}: error: cannot write /dev/full: no space left on device"]
         ) or (argv[0] == "plot" and status == 2), (argv, err)
 
 
@@ -93,22 +94,12 @@ def test_a_sweep_checks_where_it_writes_before_it_runs(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("form", ["text", "jsonl", "chrome-trace"])
 def test_sigterm_keeps_the_trace_written_so_far(tmp_path: Path, form: str) -> None:
-    import signal
-    import subprocess
-    import sys
-    import time
-
     trace = tmp_path / "run.out"
     scenario = Path(__file__).parents[1] / "scenarios" / "thesis" / "sample-03.xml"
-    child = subprocess.Popen([sys.executable, "-m", "prima", "run", str(scenario), "--until",
-                              "100000", "--format", form, "--out", str(trace)],
-                             stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and not list(tmp_path.glob(".prima-*")):
-        time.sleep(0.05)
-    time.sleep(1.5)  # the run is under way (sample-03 ends at 60 s; this goes on and on)
-    child.send_signal(signal.SIGTERM)
-    _, err = child.communicate(timeout=60)
+    # SIGTERM once the trace passes 61 s (sample-03 ends at 60 s; this goes on and on)
+    child = signalled_run("SIGTERM", 61, "run", str(scenario), "--until", "100000",
+                          "--format", form, "--out", str(trace))
+    err = child.stderr
     assert child.returncode == 143, err
     assert "prima run: interrupted at t=" in err and "Traceback" not in err
     text = trace.read_text(encoding="utf-8")
@@ -182,3 +173,33 @@ def test_what_the_command_line_does_not_name_goes_to_the_current_folder(
     assert _cli("show", str(scenario))[0] == 0
     assert _cli("sweep", str(scenario), "--runs", "1", "--jitter", "0", "--jobs", "1")[0] == 0
     assert (tmp_path / "s.html").is_file() and (tmp_path / "sweep-s").is_dir()
+
+
+@pytest.mark.parametrize("form", ["jsonl", "mcap"])
+def test_a_stream_of_the_process_is_written_into_not_replaced(tmp_path: Path, form: str) -> None:
+    """``--out /dev/fd/1`` (as ``/dev/stdout``) with standard output a file: written into
+    (an MCAP recording through a file copied into it), never renamed over: the name is the
+    process's stream, not a file of the folder to replace."""
+    import subprocess
+    import sys
+
+    if form == "mcap":
+        pytest.importorskip("foxglove")
+    scenario = speaking(tmp_path, "hello", until=2)
+    with (tmp_path / f"out.{form}").open("wb") as out:
+        done = subprocess.run([sys.executable, "-m", "prima", "run", str(scenario), "--format",
+                               form, "--out", "/dev/fd/1"], stdout=out, stderr=subprocess.PIPE,
+                              timeout=120)
+    assert done.returncode == 0, done.stderr
+    written = (tmp_path / f"out.{form}").read_bytes()
+    assert written.startswith(b"\x89MCAP" if form == "mcap" else b'{"t": 0.0')
+
+
+def test_a_symbolic_link_is_kept_and_its_file_written(tmp_path: Path) -> None:
+    scenario = speaking(tmp_path, "hello", until=2)
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "runs" / "today.txt").write_text("the old trace\n")
+    (tmp_path / "latest.txt").symlink_to(Path("runs") / "today.txt")
+    assert _cli("run", str(scenario), "--out", str(tmp_path / "latest.txt"))[0] == 0
+    assert (tmp_path / "latest.txt").is_symlink()
+    assert (tmp_path / "runs" / "today.txt").read_text().startswith("  No.")

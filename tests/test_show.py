@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import io
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -15,7 +14,7 @@ from prima.cli import main
 pytest.importorskip("plotly", reason="prima show needs the show extra (plotly)")
 
 from prima.show import read_rows, render  # noqa: E402 - after the skip
-from tests.browser import headless_chromium
+from tests.browser import STEPPED_CLOCK, headless_chromium, until
 
 ROOT = Path(__file__).parents[1]
 SCENARIOS = sorted(p for folder in ("thesis", "policies", "examples")
@@ -164,10 +163,8 @@ def _open(browser: Any, scenario: Path, folder: Path) -> list[dict[str, Any]]:
     page = folder / f"{scenario.stem}.html"
     page.write_text(render(rows, scenario=scenario, title=scenario.stem), encoding="utf-8")
     browser.get(page.as_uri())
-    for _ in range(100):
-        if browser.execute_script("return !!window.primaShow"):
-            break
-        time.sleep(0.05)
+    until(browser, "return !!window.primaShow")
+    browser.execute_script(STEPPED_CLOCK)
     return rows
 
 
@@ -240,26 +237,32 @@ def test_the_page_in_a_browser(browser: Any, scenario: Path, tmp_path: Path) -> 
         assert sum(1 for b in drawn if b[4] == trace) == next(b[6] for b in drawn
                                                               if b[4] == trace)
 
-    # playing moves the robot (from just before it first moves)
+    # playing moves the robot (from just before it first moves): 0.6 s of the page's
+    # clock at 16x is 9.6 s of the run, stepped by the test (browser.STEPPED_CLOCK)
     moves = _first_move(rows)
     if moves is not None:
-        browser.execute_script(f"window.primaShow.seek({max(0.0, moves - 1.0)})")
+        start = max(0.0, moves - 1.0)
+        browser.execute_script(f"window.primaShow.seek({start})")
         before = browser.execute_script(_ROBOT_MARKER)
         browser.execute_script("document.getElementById('speed').value = '16';")
         browser.find_element(By.ID, "play").click()
-        time.sleep(0.6)
+        browser.execute_script("window.stepClock(1000); window.stepClock(1600);")
         browser.find_element(By.ID, "play").click()  # pause
-        assert browser.execute_script("return window.primaShow.time()") > moves
+        played = browser.execute_script("return window.primaShow.time()")
+        assert played == pytest.approx(min(start + 9.6, browser.execute_script(
+            "return PRIMA_SHOW.end")))
+        assert played > moves
         assert browser.execute_script(_ROBOT_MARKER) != before
 
     # the user's words read as said in their bubble (quotes, not &quot;)
     said = next((r for r in rows if r["kind"] == "user" and r.get("action") == "say"), None)
     if said is not None:
         browser.execute_script(f"window.primaShow.seek({said['t'] + 0.1})")
-        time.sleep(0.2)
-        shown = browser.execute_script(
-            "return Array.from(document.querySelectorAll('#map .annotation-text'))"
-            ".map(function (e) { return e.textContent; });")
+        shown = until(browser, "const want = arguments[0], shown = Array.from("
+                      "document.querySelectorAll('#map .annotation-text'))"
+                      ".map(function (e) { return e.textContent; });"
+                      "return shown.some(function (t) { return t.includes(want); }) "
+                      "? shown : null;", f'"{said["text"][:40]}')
         assert any(f'"{said["text"][:40]}' in text for text in shown), shown
         assert not any("&quot;" in text or "&amp;" in text for text in shown), shown
 

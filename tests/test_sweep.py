@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 from lxml import etree
 
+import prima.batch
 import prima.batch._work
 import prima.sweep
 from prima.cli import main
@@ -163,6 +164,56 @@ def test_ctrl_c_prints_what_was_done_and_exits_130(tmp_path: Path,
     assert code == 130
     assert "2 of 5 runs" in out and "interrupted after 2 of 5 runs" in err
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_the_progress_bar_line_is_ended_before_anything_else_is_printed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Standard output and error on one terminal: an interrupted sweep's summary starts a
+    line of its own, not the end of the bar's; so does an error's message."""
+    real = prima.sweep.progress_bar
+
+    def bar(out: Any, live: bool = True) -> Any:
+        draw = real(out, live=live)
+
+        def stop_at_two(done: int, total: int) -> None:
+            draw(done, total)
+            if done == 2:
+                raise KeyboardInterrupt
+        return stop_at_two
+
+    monkeypatch.setattr(prima.sweep, "progress_bar", bar)
+    monkeypatch.chdir(tmp_path)
+    screen = _Terminal()
+    code = main(["sweep", str(SHORT), "--runs", "5", "--jitter", "1", "--jobs", "1",
+                 "--color", "never"], out=screen, err=screen)
+    assert code == 130
+    lines = screen.getvalue().split("\n")
+    [summary] = [x for x in lines if "2 of 5 runs, jitter" in x]
+    assert summary.startswith(str(SHORT)), lines[:3]
+    assert "prima sweep: interrupted after 2 of 5 runs" in lines
+
+    written = [0]
+
+    def full(_self: Any, _record: Any) -> None:
+        written[0] += 1
+        if written[0] == 3:
+            from prima.errors import OutputError
+            raise OutputError("cannot write r.jsonl: no space left on device")
+
+    monkeypatch.setattr(prima.sweep, "progress_bar", real)
+    monkeypatch.setattr(prima.batch.ResultsFile, "write", full)
+    screen = _Terminal()
+    code = main(["sweep", str(SHORT), "--runs", "4", "--jitter", "1", "--jobs", "1",
+                 "--color", "never", "--results", str(tmp_path / "r.jsonl")], out=screen,
+                err=screen)
+    assert code == 1
+    shown = screen.getvalue()
+    assert "runs\nprima sweep: error: cannot write r.jsonl" in shown, shown
 
 
 def test_a_breach_exits_1_and_the_worst_runs_go_to_the_default_folder(

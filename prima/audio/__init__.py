@@ -17,6 +17,11 @@ extra adds no Python package; :func:`available` says whether it is there.
 
 from prima.audio._espeak import RATE_MAX, RATE_MIN, Speech, SpeechError, available
 from prima.audio._speech import (
+    MAX_CHARACTERS,
+    MAX_CLIPS,
+    MAX_SECONDS,
+    MAX_SOUND,
+    MAX_WORDS,
     OUTPUT_RATE,
     Clip,
     SynthesisedTiming,
@@ -27,6 +32,7 @@ from prima.audio._speech import (
     wav,
 )
 
-__all__ = ["OUTPUT_RATE", "RATE_MAX", "RATE_MIN", "Clip", "Speech", "SpeechError",
+__all__ = ["MAX_CHARACTERS", "MAX_CLIPS", "MAX_SECONDS", "MAX_SOUND", "MAX_WORDS",
+           "OUTPUT_RATE", "RATE_MAX", "RATE_MIN", "Clip", "Speech", "SpeechError",
            "SynthesisedTiming", "Utterance", "available", "clip", "synthesise", "utterances",
            "wav"]

@@ -17,8 +17,9 @@ from array import array
 from dataclasses import dataclass
 
 from prima.errors import PrimaError
+from prima.escape import terminal
 
-__all__ = ["LIBRARY", "RATE_MAX", "RATE_MIN", "Speech", "SpeechError", "available"]
+__all__ = ["LIBRARY", "RATE_MAX", "RATE_MIN", "Speech", "SpeechError", "available", "quoted"]
 
 LIBRARY = "libespeak-ng.so.1"
 """The shared library loaded (Debian's ``libespeak-ng1``)."""
@@ -118,8 +119,15 @@ class _Engine:
         status = self.lib.espeak_Synth(data, len(data), 0, 0, 0, _CHARS_UTF8, None, None)
         self.lib.espeak_Synchronize()
         if status != 0:
-            raise SpeechError(f"espeak-ng failed to say {text!r} (status {status})")
+            raise SpeechError(f"espeak-ng failed to say {quoted(text)} (status {status})")
         return Speech(self.samples, self.rate, tuple(self.words))
+
+
+def quoted(text: str, limit: int = 60) -> str:
+    """An utterance as an error message quotes it: on one line, escaped, its first
+    ``limit`` characters (a forged utterance may be megabytes long)."""
+    shown = terminal(text if len(text) <= limit else text[:limit] + "...")
+    return f"'{shown}' ({len(text):,} characters)" if len(text) > limit else f"'{shown}'"
 
 
 _LOCK = threading.Lock()

@@ -9,12 +9,22 @@ atomic behavior's ``duration`` result, and a cut one's ``spoken`` words
 (the interrupt policy cuts at the end of a word). :func:`clip` synthesises an
 utterance's words with espeak-ng at the rate that fills its span, and makes the
 samples exactly as long as the span: the page plays them in time with its
-playhead. A cut utterance is what was said before the cut, over the time it
-took, so its sound stops at the cut word.
+playhead. A cut utterance (by the interrupt policy, or by the user speaking over
+it: its end line has ``spoken`` and ``unspoken``) is the words spoken before the
+cut at their natural pace, over the time they took, so its sound stops at the
+cut word.
+
+What is synthesised is bounded, whoever wrote the trace: an utterance's sound is
+at most :data:`MAX_SECONDS` long and says at most :data:`MAX_WORDS` words (of at
+most :data:`MAX_CHARACTERS` characters); a longer utterance's sound is its
+beginning, at its own pace, and its clip says it was shortened. A page holds at
+most :data:`MAX_SOUND` seconds of sound in :data:`MAX_CLIPS` utterances
+(:mod:`prima.show` says which have none).
 """
 
 from __future__ import annotations
 
+import math
 import os
 import pickle
 import re
@@ -25,15 +35,43 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from prima.audio._espeak import RATE_MAX, RATE_MIN, Speech, SpeechError, _engine, _LOCK
+from prima.audio._espeak import (
+    RATE_MAX,
+    RATE_MIN,
+    Speech,
+    SpeechError,
+    _engine,
+    _LOCK,
+    quoted,
+)
 from prima.catalog import Catalog
 
-__all__ = ["OUTPUT_RATE", "Clip", "Ends", "SynthesisedTiming", "Utterance", "clip", "synthesise",
+__all__ = ["MAX_CHARACTERS", "MAX_CLIPS", "MAX_SECONDS", "MAX_SOUND", "MAX_WORDS",
+           "OUTPUT_RATE", "Clip", "Ends", "SynthesisedTiming", "Utterance", "clip", "synthesise",
            "utterances", "wav"]
 
 OUTPUT_RATE = 11_025
 """Samples per second of the page's sound (espeak-ng's 22,050 halved: its voice is
 well below 5 kHz, and the page half as heavy)."""
+
+MAX_SECONDS = 120.0
+"""The longest sound made for one utterance (s): a longer one sounds its first two
+minutes (a forged trace's 99,999 s utterance would need gigabytes of samples)."""
+
+MAX_WORDS = 300
+"""The most words synthesised for one utterance (two minutes at the home robot's 2.5
+words a second): a longer one sounds its first words."""
+
+MAX_CHARACTERS = 3_000
+"""The most characters synthesised for one utterance (a 'word' of a million letters
+is cut too)."""
+
+MAX_SOUND = 1_800.0
+"""The most sound one page holds (s, half an hour: 40 MB of samples); later utterances
+have none."""
+
+MAX_CLIPS = 1_000
+"""The most utterances one page holds the sound of."""
 
 _SILENCE = 64
 """A sample this quiet (of 32,767) counts as silence at an utterance's ends."""
@@ -64,11 +102,15 @@ class Utterance:
 @dataclass(frozen=True)
 class Clip:
     """An utterance's sound: 16-bit mono samples at :data:`OUTPUT_RATE`, exactly as long
-    as the utterance; ``words``: where each word starts (s from the clip's start)."""
+    as the utterance (at most :data:`MAX_SECONDS`); ``words``: where each word starts
+    (s from the clip's start)."""
 
     utterance: Utterance
     samples: array[int]
     words: tuple[float, ...]
+    shortened: bool = False
+    """The utterance is longer than a clip may be (:data:`MAX_SECONDS`,
+    :data:`MAX_WORDS`, :data:`MAX_CHARACTERS`): this is its beginning."""
 
     @property
     def duration(self) -> float:
@@ -94,6 +136,10 @@ def _speaks_last(command: str) -> bool:
     return last is not None and not last.listens and "speaker" in last.devices
 
 
+_CUT = ("interrupt", "barge-in")
+"""The reasons of an end line whose utterance was cut: for another application's
+reaction, or because the user spoke over it."""
+
 Ends = Callable[[str], Sequence[float]]
 """When each word of a text ends, from its start (s): a synthesiser's word boundaries."""
 
@@ -104,8 +150,9 @@ def _said(start: Row, end: Row, model: Callable[[str], float],
     t0, t1 = float(start["t"]), float(end["t"])
     ab, app, command = int(start["ab"]), str(start.get("app") or ""), str(start.get("command"))
     full = model(whole)
-    if end.get("reason") == "interrupt":
-        spoken = str((end.get("detail") or {}).get("spoken") or "")
+    detail = end.get("detail") or {}
+    if end.get("reason") in _CUT or "spoken" in detail or "unspoken" in detail:
+        spoken = str(detail.get("spoken") or "")
         k, n = len(spoken.split()), len(whole.split())
         if not k or not n:
             return None  # cut before its first word
@@ -175,7 +222,7 @@ def synthesise(text: str, wpm: int) -> Speech:
             payload = got.read()
         os.waitpid(pid, 0)
     if not payload:
-        raise SpeechError(f"espeak-ng failed to say {text!r}")
+        raise SpeechError(f"espeak-ng failed to say {quoted(text)}")
     raw, rate, words = pickle.loads(payload)  # noqa: S301 - our own child's bytes
     samples = array("h")
     samples.frombytes(raw)
@@ -206,16 +253,17 @@ def clip(utterance: Utterance, timing: SynthesisedTiming | None = None) -> Clip:
     guess), then the silence at its end trimmed or padded; what is still too long is cut
     with a 20 ms fade. With ``timing`` (the run was timed by the synthesiser), the whole
     utterance as ``timing`` said it, up to the end of its span (a cut one: its cut word)."""
-    duration = utterance.duration
+    duration = min(utterance.duration, MAX_SECONDS)
     target = max(1, round(duration * OUTPUT_RATE))
+    text, shortened = _bounded(utterance.text, utterance.duration)
     if timing is not None:
         speech = timing.speech(utterance.whole)
     else:
-        wpm = _rate(60 * max(1, len(utterance.text.split())) / duration)
-        speech = synthesise(utterance.text, wpm)
+        wpm = _rate(60 * max(1, len(text.split())) / duration)
+        speech = synthesise(text, wpm)
         better = _rate(wpm * _voiced(speech.samples) / speech.rate / duration)
         if better != wpm:
-            speech = synthesise(utterance.text, better)
+            speech = synthesise(text, better)
     samples = _halve(speech.samples[:_voiced(speech.samples)])
     if len(samples) >= target:
         samples = samples[:target]
@@ -225,7 +273,19 @@ def clip(utterance: Utterance, timing: SynthesisedTiming | None = None) -> Clip:
     else:
         samples.extend([0] * (target - len(samples)))
     words = tuple(round(at / speech.rate, 3) for _, _, at in speech.words)
-    return Clip(utterance, samples, words)
+    return Clip(utterance, samples, words, shortened or utterance.duration > MAX_SECONDS)
+
+
+def _bounded(text: str, duration: float) -> tuple[str, bool]:
+    """The words of an utterance a clip says (at most :data:`MAX_WORDS`, the share of
+    them that fits in :data:`MAX_SECONDS`, at most :data:`MAX_CHARACTERS` characters),
+    and whether that is fewer than it has."""
+    words = text.split()
+    keep = min(len(words), MAX_WORDS)
+    if duration > MAX_SECONDS:
+        keep = min(keep, max(1, math.ceil(len(words) * MAX_SECONDS / duration)))
+    said = " ".join(words[:keep])[:MAX_CHARACTERS]
+    return said, said != " ".join(words)
 
 
 class SynthesisedTiming:

@@ -7,6 +7,12 @@ half-way (Ctrl-C, a machine lost) leaves its first runs' records: resumed
 (:meth:`ResultsFile.previous`), it checks the header is its own, reads them back,
 drops a last line cut short, and goes on from the next run, so the file ends as
 the one an uninterrupted batch writes.
+
+The file is written beside its place and put there when the batch ends, however it
+ends (:class:`prima.output.Staged`): a batch killed outright leaves the file that
+was there as it was. A record that cannot be written (a full disk) stops the batch
+with an :class:`~prima.errors.OutputError` that says how many runs' records the
+file keeps, to go on from with ``--resume``.
 """
 
 from __future__ import annotations
@@ -14,11 +20,11 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 from prima.errors import OutputError, Problem, ResultsError, Severity
-from prima.escape import json_line, shown_path
-from prima.output import make_folder
+from prima.escape import json_line
+from prima.output import Staged, shown
 
 __all__ = ["ResultsFile"]
 
@@ -60,7 +66,11 @@ class ResultsFile:
         self.header: dict[str, Any] = json.loads(json_line(dict(header)))
         self.kept = 0
         """Bytes of the file that hold the header and whole records (resumed)."""
-        self._out: IO[str] | None = None
+        self._kept_records = 0
+        self.records = 0
+        """The runs whose records the file holds."""
+        self._out: Staged | None = None
+        self._failed = False
 
     def previous(self, counts: Sequence[int]) -> Iterator[dict[str, Any]]:
         """The records of the runs done, in order, checked (a missing file: none).
@@ -73,7 +83,7 @@ class ResultsFile:
         except OSError as exc:
             raise _problem(self.path, 1, f"cannot read: {exc.strerror or exc}") from exc
         with source:
-            self.kept = 0
+            self.kept = self._kept_records = 0
             order = _runs(counts)
             for number, raw in enumerate(source, start=1):
                 if not raw.endswith(b"\n"):
@@ -92,36 +102,47 @@ class ResultsFile:
                     if (row.get("job"), row.get("run")) != next(order, None):
                         raise _problem(self.path, number, "not the next run's record")
                     yield row
+                    self._kept_records += 1
                 self.kept += len(raw)
 
     def open(self, *, resume: bool) -> None:
         """Start writing: a new file with its header, or (``resume``) after the records
         :meth:`previous` read."""
-        try:
-            if resume and self.kept:
-                with self.path.open("r+b") as old:
-                    old.truncate(self.kept)
-                self._out = self.path.open("a", encoding="utf-8", newline="\n")
-            else:
-                make_folder(self.path.parent, self.path)  # (every command's rule: made)
-                self._out = self.path.open("w", encoding="utf-8", newline="\n")
-                self._out.write(json_line(self.header) + "\n")
-                self._out.flush()
-        except OSError as exc:
-            raise OutputError(f"cannot write {shown_path(self.path)}: "
-                              f"{exc.strerror or exc}") from exc
+        going_on = resume and self.kept > 0
+        self._out = Staged(self.path, prefix=self.kept if going_on else 0)
+        self.records = self._kept_records if going_on else 0
+        if not going_on:
+            self._write(json_line(self.header) + "\n", header=True)
 
     def write(self, record: Mapping[str, Any]) -> None:
         """One run's record, at the end of the file (flushed: a stop keeps it)."""
+        self._write(json_line(dict(record)) + "\n")
+        self.records += 1
+
+    def _write(self, line: str, header: bool = False) -> None:
         if self._out is None:
             raise RuntimeError("the results file is not open")
-        self._out.write(json_line(dict(record)) + "\n")
-        self._out.flush()
+        try:
+            self._out.file.write(line)
+            self._out.file.flush()
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+            said = f"cannot write {shown(self.path)}: {reason[:1].lower() + reason[1:]}"
+            if header:
+                self._out.discard()
+                self._out = None
+                raise OutputError(said) from exc
+            self._failed = True
+            raise OutputError(f"{said}; the batch stopped, the records of its first "
+                              f"{self.records} run(s) are kept in it: go on with --resume "
+                              "once there is room") from exc
 
     def close(self) -> None:
+        """Put the file in its place: with every record written so far (a batch stopped
+        half-way goes on from them with ``--resume``)."""
         if self._out is not None:
-            self._out.close()
-            self._out = None
+            out, self._out = self._out, None
+            out.commit(failed=self._failed)
 
 
 def _runs(counts: Sequence[int]) -> Iterator[tuple[int, int]]:

@@ -101,13 +101,14 @@ class Base:
     """The scenario a session plays: its XML (every path in it absolute), its name, its
     physics rate, and the files it names."""
 
-    def __init__(self, root: etree._Element, name: str, rate: int, inputs: Iterable[Path],
-                 note: str) -> None:
+    def __init__(self, root: etree._Element, name: str, rate: int,
+                 inputs: Iterable[tuple[str, Path]], note: str) -> None:
         self.root = root
         self.name = name
         self.rate = rate
-        self.inputs = frozenset(p.resolve() for p in inputs)
-        """The files the session reads (a save never goes over one)."""
+        self.inputs = tuple(inputs)
+        """The files the session reads, each with what it is (``("the map", path)``): a
+        save never goes over one (:func:`prima.output.check_target`)."""
         self.note = note
         """What the saved scenario is, said in a comment at its head."""
 
@@ -190,23 +191,29 @@ def from_scenario(path: Path, switches: Switches, *, seed: int | None, script: b
                              heading=number(heading))
         last = [c for c in _children(root) if local_name(c) in ("robot", "policy")][-1]
         last.addnext(user)
-    inputs = [path, *_named(root)]
+    inputs = [("the scenario", path), *_named(root)]
     kept = "its user's script kept, " if script else ""
     note = _comment(f"prima live: a session of {path.name} ({kept}the user's actions as "
                     "they were played), SAVED; prima run replays it")
     return Base(root, f"{loaded.name}", loaded.rate, inputs, note)
 
 
-def _named(root: etree._Element) -> list[Path]:
-    """The files a (base) scenario names: its paths are absolute."""
+_WHAT = {("map", "href"): "the map", ("apps", "fa"): "the FA", ("apps", "ea"): "an EA",
+         ("ea", "href"): "an EA", ("robot", "profile"): "the robot profile",
+         ("zone", "ea"): "a zone's EA"}
+"""What each file a scenario names is, by element and attribute."""
+
+
+def _named(root: etree._Element) -> list[tuple[str, Path]]:
+    """The files a (base) scenario names, each with what it is: its paths are absolute."""
     out = []
     for el in root.iter():
         if not isinstance(el.tag, str):
             continue
-        for attribute in ("href", "fa", "ea", "profile"):
+        for (tag, attribute), what in _WHAT.items():
             value = el.get(attribute)
-            if value and local_name(el) in ("map", "apps", "ea", "robot", "zone"):
-                out.append(Path(value))
+            if value and local_name(el) == tag:
+                out.append((what, Path(value)))
     return out
 
 
@@ -238,7 +245,10 @@ def for_apps(documents: Sequence[tuple[Path, Document]], world: tuple[Path, Worl
             + "".join(f"<reply to={quoteattr(to)} after=\"2\" text=\"OK: {{text}}\"/>"
                       for to in replies) + "</scenario>")
     root = etree.fromstring(text.encode("utf-8"))
-    files = [map_path, *(p for p, _d in documents), *([robot] if robot else [])]
+    files = [("the map", map_path),
+             *((f"the {d.kind.name}" if d.kind.value == "fa" else "an EA", p)
+               for p, d in documents),
+             *([("the robot profile", robot)] if robot else [])]
     note = _comment(f"prima live: a session of {', '.join(names)} on {plan.name} (the "
                     "user's actions as they were played), SAVED; prima run replays it")
     return Base(root, root.get("name", "live"), 50, files, note)

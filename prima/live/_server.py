@@ -34,11 +34,11 @@ from aiohttp import WSMsgType, web
 
 from prima.dsl import Document
 from prima.errors import OutputError
-from prima.escape import json_line, shown_path
+from prima.escape import json_line
 from prima.live._judging import LiveJudge
 from prima.live._page import page, plotly_script
 from prima.live._session import LiveError, Session
-from prima.output import written
+from prima.output import Inputs, input_named, shown, written
 
 __all__ = ["MAX_MESSAGE", "Hints", "SaveTo", "Server", "check_save"]
 
@@ -372,8 +372,10 @@ class Server:
         if target is None:
             stem = re.sub(r"[^A-Za-z0-9._-]+", "-", self.session.base.name).strip(".-") or "live"
             return {"download": {"name": f"{stem[:80]}-live.xml", "text": text}}
-        if target.resolve() in self.session.base.inputs:  # (checked at the start too)
-            raise LiveError(f"{shown_path(target)} is one of the session's inputs: not saved")
+        found = input_named(target, self.session.base.inputs)  # (checked at the start too)
+        if found is not None:
+            raise LiveError(f"{shown(target)} is {found[0]} ({shown(found[1])}), which the "
+                            "session reads: not saved")
         await asyncio.to_thread(_write, target, text)
         self.saves += 1
         return {"saved": target.name, "saves": self.saves}
@@ -415,17 +417,15 @@ def _write(target: Path, text: str) -> None:
         out.write(text)
 
 
-def check_save(save: SaveTo, inputs: frozenset[Path]) -> str | None:
-    """What is wrong with where the command line lets saves go, or None."""
+def check_save(save: SaveTo, inputs: Inputs) -> str | None:
+    """What is wrong with where the command line lets saves go (an input of the session's
+    among them), or None."""
     from prima.output import check_folder, check_target
 
     if save.file is not None:
-        if save.file.resolve() in inputs:
-            return f"--save {shown_path(save.file)} is one of the session's inputs"
-        problem = check_target(save.file)
+        problem = check_target(save.file, inputs)
         return f"--save {problem}" if problem else None
     if save.folder is not None:
-        problem = check_folder(save.folder)
+        problem = check_folder(save.folder, inputs)
         return f"--save-dir {problem}" if problem else None
     return None
-

@@ -9,12 +9,14 @@ the judge's findings and the paths walked. See :data:`TOPICS`.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import IO, Any
 
 import foxglove
 from foxglove import messages as fm
@@ -25,11 +27,13 @@ from foxglove.channels import (
     PosesInFrameChannel,
     SceneUpdateChannel,
 )
-from foxglove.mcap import MCAPWriteOptions
+from foxglove.mcap import MCAPWriteOptions, MCAPWriter
 
+from prima.errors import OutputError
 from prima.judge import Report, judge
 from prima.mcap._layout import ATTACHMENT, HOME_DEVICES, layout
 from prima.mediator import DecisionKind
+from prima.output import Staged, shown
 from prima.sim import WorldMap
 from prima.trace import TraceLine, describe
 
@@ -111,19 +115,71 @@ def _xyz(value: object) -> tuple[float, float, float] | None:
     return float(value["x"]), float(value["y"]), float(value.get("heading", 0.0))
 
 
+class _Guarded:
+    """The recording's file as foxglove's writer sees it: a write that fails (a full
+    disk) is remembered, and what follows dropped, instead of raised into the writer
+    (which would print an error of its own for every message after it). Its position is
+    kept here, so the writer's seeks agree with its writes either way."""
+
+    def __init__(self, file: IO[bytes]) -> None:
+        self.file = file
+        self.error: OSError | None = None
+        self.position = 0
+        self.size = 0
+
+    def _do(self, work: Any, *args: Any) -> None:
+        if self.error is None:
+            try:
+                work(*args)
+            except OSError as exc:
+                self.error = exc
+
+    def write(self, data: bytes | bytearray) -> int:
+        self._do(self.file.write, data)
+        self.position += len(data)
+        self.size = max(self.size, self.position)
+        return len(data)
+
+    def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
+        base = {os.SEEK_SET: 0, os.SEEK_CUR: self.position, os.SEEK_END: self.size}[whence]
+        self.position = base + offset
+        self._do(self.file.seek, self.position)
+        return self.position
+
+    def flush(self) -> None:
+        self._do(self.file.flush)
+
+
 class Recorder:
     """Writes a run's trace lines as an MCAP file, as the run makes them; ``close()``
     adds what needs the whole run (the judge's findings, the paths) and finishes the
-    file. Use it as a context manager."""
+    file. Use it as a context manager.
+
+    The recording is written beside ``path`` and put in its place once finished
+    (:class:`prima.output.Staged`): a run that fails, a full disk or a killed process
+    leaves the file that was there as it was. A run stopped by Ctrl-C (between two
+    lines) is finished and kept. A write that fails is an
+    :class:`~prima.errors.OutputError` at the next line."""
 
     def __init__(self, path: str | Path | None, world: WorldMap | None = None, *,
                  robot_radius: float = 0.2, context: foxglove.Context | None = None) -> None:
+        self.path = Path(path) if path is not None else None
         self.context = context or foxglove.Context()
         """Where the messages go: the file's writer, and whatever else listens to it (the
-        WebSocket server of ``prima live --foxglove``)."""
-        self.writer = None if path is None else foxglove.open_mcap(
-            str(path), allow_overwrite=True, context=self.context,
-            writer_options=MCAPWriteOptions(profile="", compression_threads=0))
+        WebSocket server of ``prima live --foxglove``, which gives ``path`` None: no
+        file)."""
+        self._staged = (Staged(path, binary=True, seekable=True) if path is not None
+                        else None)
+        self._file = _Guarded(self._staged.file) if self._staged is not None else None
+        self.writer: MCAPWriter | None = None
+        if self._file is not None:
+            try:
+                self.writer = foxglove.open_mcap(
+                    self._file, context=self.context,
+                    writer_options=MCAPWriteOptions(profile="", compression_threads=0))
+            except BaseException:
+                self._discard()
+                raise
         ctx = self.context
         self.map = SceneUpdateChannel("/map", context=ctx)
         self.bodies = SceneUpdateChannel("/bodies", context=ctx)
@@ -229,6 +285,7 @@ class Recorder:
 
     def write(self, line: TraceLine) -> None:
         """Record one trace line (in trace order)."""
+        self._check()
         self.lines.append(line)
         row: dict[str, Any] = line.to_dict()
         t = line.t
@@ -339,7 +396,8 @@ class Recorder:
         return layout(list(self.devices) or HOME_DEVICES, list(self.apps)).to_json()
 
     def close(self) -> None:
-        """Add the judge's findings, the paths and the layout, and finish the file."""
+        """Add the judge's findings, the paths and the layout, and finish the file (put it
+        in its place)."""
         report = self.judged()
         for t, measure, message in _findings(report):
             self.finding(t, measure, message)
@@ -353,18 +411,51 @@ class Recorder:
                 self.paths[who].log(fm.PosesInFrame(
                     timestamp=_stamp(0), frame_id="map",
                     poses=[_pose(x, y, h) for _t, (x, y, h) in walked]), log_time=0)
-        if self.writer is not None:
-            self.writer.attach(log_time=0, create_time=0, name=ATTACHMENT,
-                               media_type="application/json",
-                               data=self.layout().encode("utf-8"))
-            self.writer.close()
+        self._finish()
+        if self._staged is not None:
+            self._staged.commit()
+
+    def _discard(self) -> None:
+        if self._staged is not None:
+            self._staged.discard()
+
+    def _check(self) -> None:
+        """An OutputError if a write has failed."""
+        if self._file is not None and self._file.error is not None:
+            self._finish()
+            self._discard()
+            error = self._file.error
+            reason = error.strerror or str(error)
+            raise OutputError(f"cannot write {shown(self.path or '')}: "
+                              f"{reason[:1].lower() + reason[1:]}") from error
+
+    def _finish(self) -> None:
+        """Finish the writer's file (the run's layout attached, its summary, its index),
+        once."""
+        if self.writer is None:
+            return
+        writer, self.writer = self.writer, None
+        try:
+            writer.attach(log_time=0, create_time=0, name=ATTACHMENT,
+                          media_type="application/json", data=self.layout().encode("utf-8"))
+            writer.close()
+        except RuntimeError as exc:  # foxglove's own error: never the user's traceback
+            self._discard()
+            raise OutputError(f"cannot write {shown(self.path or '')}: the MCAP writer failed "
+                              f"({exc})") from exc
+        self._check()
 
     def __enter__(self) -> Recorder:
         return self
 
     def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
-        self.close()
+        if kind is None or issubclass(kind, KeyboardInterrupt):
+            self.close()  # (Ctrl-C comes between two lines: the recording is whole)
+            return
+        with contextlib.suppress(Exception):  # the run failed: its error is the one told
+            self._finish()
+        self._discard()
 
 
 _DECISIONS = frozenset(kind.value for kind in DecisionKind)

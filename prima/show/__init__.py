@@ -20,7 +20,7 @@ from __future__ import annotations
 import importlib
 import io
 import tempfile
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -79,14 +79,15 @@ def render(rows: Iterable[Mapping[str, Any]], scenario: str | Path | None = None
 
 def write_page(path: str | Path, out: TextIO, scenario: str | Path | None = None,
                title: str = "run", switches: Switches | None = None, *,
-               audio: bool = False, timing: SynthesisedTiming | None = None
-               ) -> tuple[int, float]:
+               audio: bool = False, timing: SynthesisedTiming | None = None,
+               warn: Callable[[str], object] | None = None) -> tuple[int, float]:
     """Write the page of a run to ``out``: a jsonl trace streamed (never held whole:
     its table's rows are spooled to a temporary file; with ``audio``, held whole, the
     sound of every utterance being made before the page), or a scenario run in-process
     (``switches``: its FA, EA, robot or policies changed; ``timing``: its utterances
-    timed by the synthesiser). Returns the atomic behaviors started and the run's end
-    (s)."""
+    timed by the synthesiser; ``warn``: told what of the sound was shortened or left out,
+    :func:`prima.show._sound.clips`). Returns the atomic behaviors started and the run's
+    end (s)."""
     path = Path(path)
     rows: Iterable[Mapping[str, Any]]
     if path.suffix == ".jsonl":
@@ -96,12 +97,14 @@ def write_page(path: str | Path, out: TextIO, scenario: str | Path | None = None
     else:
         rows = _run_rows(path, switches, timing)
     with tempfile.TemporaryFile("w+", encoding="utf-8") as spool:
-        return _write(rows, out, scenario, title, spool, audio=audio, timing=timing)
+        return _write(rows, out, scenario, title, spool, audio=audio, timing=timing,
+                      warn=warn)
 
 
 def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path | None,
            title: str, spool: TextIO | None = None, *, audio: bool = False,
-           timing: SynthesisedTiming | None = None) -> tuple[int, float]:
+           timing: SynthesisedTiming | None = None,
+           warn: Callable[[str], object] | None = None) -> tuple[int, float]:
     try:
         from prima.show._page import write_page as page
     except ImportError as exc:  # the plotting library is an optional extra
@@ -116,7 +119,7 @@ def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path 
         from prima.show._sound import clips, elements
 
         rows = list(rows)  # (every utterance's sound is made before the page)
-        sounds = elements(clips(rows, scenario, timing))
+        sounds = elements(clips(rows, scenario, timing, warn))
     model = build(rows, spool)
     page(model, world, title, out, spool, sounds)
     return model.starts, model.timeline.end

@@ -126,19 +126,24 @@
     render();
   }
 
+  /* The clock that plays the run: the browser's animation frames, each called with its
+     time stamp in milliseconds. primaShow.useClock(schedule) hands the frames to another
+     (a test's, which steps them at the stamps it chooses). */
+  let nextFrame = function (callback) { window.requestAnimationFrame(callback); };
+
   function frame(stamp) {
     if (!playing) return;
     if (last !== null) now += (stamp - last) / 1000 * Number(speed.value);
     last = stamp;
     if (now >= D.end) { now = D.end; pause(); }
     render();
-    if (playing) requestAnimationFrame(frame);
+    if (playing) nextFrame(frame);
   }
 
   function play() {
     if (now >= D.end) now = 0;
     playing = true; last = null; playButton.textContent = "Pause";
-    requestAnimationFrame(frame);
+    nextFrame(frame);
   }
 
   function pause() { playing = false; playButton.textContent = "Play"; voice(); }
@@ -213,6 +218,7 @@
     abs: Object.keys(D.abs).filter(function (k) { return D.abs[k].start != null; }),
     seek: seek, play: play, pause: pause, chooseAb: chooseAb,
     time: function () { return now; },
+    useClock: function (schedule) { nextFrame = schedule; },
     sounds: function () {
       return sounds.map(function (s) {
         return {start: s.start, end: s.end, duration: s.el.duration, ready: s.el.readyState,

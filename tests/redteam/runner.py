@@ -4,20 +4,24 @@ A case writes its input (a document, scenario, map, profile, a named pipe...)
 into a folder, then the child runs ``prima validate`` on it exactly as the
 command line does, optionally followed by more work on an accepted input
 (matching an answer, say). The child's verdict carries the CPU time it took (so a
-loaded machine does not fail a case: a quadratic cost still would); the parent
-kills a child that gives none within four times its limit of wall-clock time, so
-a hang (a blocked FIFO, a backtracking regex in C) fails the case
-instead of the test run; the child's address space is capped with
-``RLIMIT_AS``, so an entity bomb or a quadratic blow-up fails with a
-MemoryError instead of taking the machine down.
+loaded machine does not fail a case: a quadratic cost still would). A hang fails
+the case instead of the test run, and neither is told by the wall clock, which a
+loaded machine stretches: a child that spins (a backtracking regex in C) is ended by
+its CPU time, four times its limit and a second (``RLIMIT_CPU``); one that waits
+without spinning (a blocked FIFO) is killed by the parent after :data:`HANG` seconds
+of waiting, a bound no case comes near. The child's address space is capped with
+``RLIMIT_AS``, so an entity bomb or a quadratic blow-up fails with a MemoryError
+instead of taking the machine down.
 """
 
 from __future__ import annotations
 
 import io
+import math
 import multiprocessing
 import os
 import resource
+import signal
 import time
 import traceback
 from collections.abc import Callable
@@ -26,6 +30,10 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 
 from prima.cli import main
+
+HANG = 600.0
+"""Seconds the parent waits for a child's verdict at most: the bound on a child that
+waits without using its CPU time (a busy one ends by ``RLIMIT_CPU`` first)."""
 
 Make = Callable[[Path], Path]
 """Writes a case's input into a folder and returns the path to validate."""
@@ -86,6 +94,9 @@ class Case:
     its folder), with an :class:`Exits` verdict."""
     stdin: str = ""
     """What ``prima debug`` reads as typed."""
+    file_limit: int | None = None
+    """The most bytes the child may write into one file (``RLIMIT_FSIZE``): a write past
+    it fails as on a full disk (``EFBIG``), half-way through an output."""
 
 
 @dataclass(frozen=True)
@@ -108,6 +119,12 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
     try:
         cap = _vm_bytes() + case.megabytes * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+        cpu = cpu_bound(case)
+        resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))  # SIGXCPU, then SIGKILL
+        if case.file_limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # (the write fails instead)
+            hard = resource.getrlimit(resource.RLIMIT_FSIZE)[1]  # (``then`` may lift it)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (case.file_limit, hard))
         argv = [a.replace("{dir}", str(path.parent)) for a in case.argv]
         out, err = io.StringIO(), io.StringIO()
         start = time.process_time()
@@ -130,20 +147,30 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
         os._exit(0)
 
 
-def run_case(case: Case, folder: Path) -> tuple[Path, Outcome]:
+def cpu_bound(case: Case) -> int:
+    """The CPU seconds after which a case's child is ended (a hang that spins)."""
+    return math.ceil(case.seconds * 4 + 1)
+
+
+def run_case(case: Case, folder: Path, hang: float = HANG) -> tuple[Path, Outcome]:
     """Make the case's input in ``folder`` and validate it in a child: the input and what
-    became of it. A child that overruns is killed, and that is an AssertionError."""
+    became of it. A child that spins past :func:`cpu_bound` ends, one that waits ``hang``
+    seconds is killed, and either is an AssertionError."""
     path = case.make(folder)
     receive, send = multiprocessing.Pipe(duplex=False)
     child = multiprocessing.get_context("fork").Process(target=_child, args=(case, path, send))
     child.start()
     send.close()
-    grace = case.seconds * 4 + 1  # the child reports its own CPU time; this stops a hang
-    if not receive.poll(grace):
+    if not receive.poll(hang):
         child.kill()
         child.join()
-        raise AssertionError(f"{case.id}: no verdict within {grace:g} s (a hang)")
-    outcome: Outcome = receive.recv()
+        raise AssertionError(f"{case.id}: no verdict after waiting {hang:g} s (a hang)")
+    try:
+        outcome: Outcome = receive.recv()
+    except EOFError:  # (ended without a verdict: over its CPU time)
+        child.join()
+        raise AssertionError(f"{case.id}: no verdict within {cpu_bound(case)} s of CPU time "
+                             f"(a hang; the child ended with {child.exitcode})") from None
     child.join()
     return path, outcome
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 from tests.redteam.cases import MAP, ROOT, Make, made, write
@@ -82,6 +83,136 @@ def _shipped_apps(_folder: Path) -> Path:
 
 def _shipped_scenarios(_folder: Path) -> Path:
     return ROOT / "scenarios"
+
+
+# ------------------------------------------------------------ outputs: what they must not do
+
+EARLIER = b"an earlier file the user made\n"
+"""What is at an output's place before the command writes it."""
+
+LONG = "x" * 300
+"""A file name longer than any file system takes (255 bytes)."""
+
+
+def _earlier(name: str, make: Make | None = None) -> Make:
+    """``make``'s input (a scenario that speaks, by default) and ``EARLIER`` at ``name``."""
+    def made_too(folder: Path) -> Path:
+        path = (make or _speaker("hello"))(folder)
+        (folder / name).write_bytes(EARLIER)
+        return path
+    return made_too
+
+
+def _kept(name: str) -> Callable[[Path], None]:
+    """The earlier file at ``name`` is byte for byte as it was, no part of the new one
+    left beside it."""
+    def check(path: Path) -> None:
+        assert (path.parent / name).read_bytes() == EARLIER
+        assert not list(path.parent.glob(".prima-*")), list(path.parent.iterdir())
+    return check
+
+
+def _inputs_intact(path: Path) -> None:
+    """The scenario and the EA it runs are still themselves."""
+    assert (path.parent / "s.xml").read_text().startswith("<scenario")
+    assert (path.parent / "ea.pxml").read_text().startswith("<pxml")
+
+
+def _mapped(name: str) -> Make:
+    """A speaking scenario whose map file is named ``name``."""
+    def make(folder: Path) -> Path:
+        path = _speaker("hello")(folder)
+        (folder / "map.xml").rename(folder / name)
+        path.write_text(path.read_text().replace('href="map.xml"', f'href="{name}"'))
+        return path
+    return make
+
+
+def _linked(kind: str) -> Make:
+    """A speaking scenario and another name for it (a hard or a symbolic link)."""
+    def make(folder: Path) -> Path:
+        path = _speaker("hello")(folder)
+        (os.link if kind == "hard" else os.symlink)(path, folder / "other.txt")
+        return path
+    return make
+
+
+def _results_resumable(path: Path) -> None:
+    """A results file a full disk stopped: its header and whole records, and no more than
+    a last line cut short; with room again, ``--resume`` goes on from them."""
+    import resource
+
+    from prima.cli import main
+
+    results = path.parent / "r.jsonl"
+    lines = results.read_bytes().split(b"\n")
+    assert json.loads(lines[0])["prima"] == "sweep results"
+    kept = [json.loads(x)["run"] for x in lines[1:-1]]
+    assert kept and kept == list(range(len(kept)))
+    hard = resource.getrlimit(resource.RLIMIT_FSIZE)[1]
+    resource.setrlimit(resource.RLIMIT_FSIZE, (hard, hard))  # room again
+    quiet = open(os.devnull, "w")  # noqa: SIM115
+    assert main(["sweep", str(path), "--runs", "6", "--jitter", "1", "--jobs", "1",
+                 "--worst", "0", "--resume", str(results)], out=quiet, err=quiet) == 0
+    again = results.read_text().splitlines()
+    assert [json.loads(x)["run"] for x in again[1:]] == list(range(6))
+
+
+def _said_and_cut(folder: Path) -> Path:
+    """A forged trace: one utterance of 99,999 s (its ``duration`` result)."""
+    start = START | {"command": "FaceHumanAndSpeak", "text": "hi there"}
+    end = END | {"command": "FaceHumanAndSpeak", "t": 99_999,
+                 "detail": {"result": "duration=99999"}}
+    return _trace(start, end)(folder)
+
+
+def _user_says(words: str) -> Make:
+    """A scenario whose user says ``words`` at 1 s."""
+    def make(folder: Path) -> Path:
+        path = _speaker("hello")(folder)
+        said = "".join(c if c.isalnum() or c == " " else f"&#x{ord(c):x};" for c in words)
+        path.write_text(path.read_text().replace(
+            '<robot place="a"/>', '<robot place="a"/><user place="a">'
+            f'<say at="1" text="{said}"/></user>'))
+        return path
+    return make
+
+
+def _failing(folder: Path) -> Path:
+    """A scenario whose EA divides by zero once it has spoken."""
+    path = _speaker("hello")(folder)
+    (folder / "ea.pxml").write_text(
+        '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t"><var name="x" expr="0"/>'
+        '<state id="s" initial="true"><entry><request><speak text="hi"/></request>'
+        '<assign name="x" expr="1 / 0"/></entry></state></pxml>\n')
+    return path
+
+
+def _controlled(folder: Path) -> Path:
+    """A document with an error, its file's name holding an escape sequence."""
+    path = folder / "bad\x1b[2J.pxml"
+    path.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t"/>\n')
+    return path
+
+
+def _worst_named_as_ea(folder: Path) -> Path:
+    """A speaking scenario, and its EA also as s-run0-seed0.xml (a worst run's name)."""
+    path = _speaker("hello")(folder)
+    (folder / "s-run0-seed0.xml").write_bytes((folder / "ea.pxml").read_bytes())
+    return path
+
+
+def _golden_differs(folder: Path) -> Path:
+    """A scenario named with an escape sequence, its golden trace out of date."""
+    path = _speaker("hello")(folder).rename(folder / "s\x1b[2J.xml")
+    (folder / "s\x1b[2J.golden.txt").write_text("an old trace\n")
+    return path
+
+
+_TAKES = {"run": ("{path}",), "show": ("{path}",), "plot": ("{path}",),
+          "sweep": ("{path}", "--runs", "1", "--jitter", "0"),
+          "check": ("{dir}/ea.pxml", "--scenario", "{path}", "--runs", "1")}
+"""What each command is given besides an output (a command a user would type)."""
 
 
 SURFACES = [
@@ -174,13 +305,169 @@ SURFACES = [
                lambda folder: (folder / "map.xml").write_text(MAP)),
          Exits(0, "warning: this <message> at 30 s is timed at or after the run ends"),
          command=("validate", "{path}")),
-    # 10: prima live (its page's inputs: tests/test_live.py)
+    # 10: an output that names an input is refused before anything runs
+    Case("out-is-scenario", "prima run s.xml --out s.xml", _speaker("hello"),
+         Exits(2, "s.xml is the scenario (", absent="Traceback"),
+         command=("run", "{path}", "--out", "{path}"), then=_inputs_intact),
+    Case("out-is-ea", "--out naming the EA the scenario runs", _speaker("hello"),
+         Exits(2, "ea.pxml is an EA of s.xml ("),
+         command=("run", "{path}", "--format", "jsonl", "--out", "{dir}/ea.pxml"),
+         then=_inputs_intact),
+    Case("out-is-map-another-way", "--out naming the map by another path", _speaker("hello"),
+         Exits(2, "is the map of s.xml"),
+         command=("run", "{path}", "--out", "{dir}/./sub/../map.xml")),
+    Case("out-is-hard-link", "--out a hard link to the scenario", _linked("hard"),
+         Exits(2, "other.txt is the scenario ("),
+         command=("run", "{path}", "--out", "{dir}/other.txt"), then=_inputs_intact),
+    Case("out-is-symlink", "--out a symbolic link to the scenario", _linked("symbolic"),
+         Exits(2, "other.txt is the scenario ("),
+         command=("run", "{path}", "--out", "{dir}/other.txt"), then=_inputs_intact),
+    Case("show-out-is-scenario", "prima show s.xml -o s.xml", _speaker("hello"),
+         Exits(2, "s.xml is the scenario ("), command=("show", "{path}", "-o", "{path}"),
+         then=_inputs_intact),
+    Case("show-out-is-trace", "prima show run.jsonl -o run.jsonl", _forged(),
+         Exits(2, "run.jsonl is the trace shown ("), command=("show", "{path}", "-o", "{path}")),
+    Case("plot-out-is-map", "a picture over the scenario's map (a map named m.svg)",
+         _mapped("m.svg"), Exits(2, "m.svg is the map of s.xml ("),
+         command=("plot", "{path}", "-o", "{dir}/m.svg")),
+    Case("sweep-out-is-scenario", "prima sweep s.xml --out s.xml", _speaker("hello"),
+         Exits(2, "s.xml is a file: the scenario ("),
+         command=("sweep", "{path}", "--runs", "1", "--jitter", "0", "--out", "{path}"),
+         then=_inputs_intact),
+    Case("sweep-results-is-ea", "prima sweep --results over the EA", _speaker("hello"),
+         Exits(2, "ea.pxml is an EA of s.xml ("),
+         command=("sweep", "{path}", "--runs", "1", "--jitter", "0", "--results",
+                  "{dir}/ea.pxml"), then=_inputs_intact),
+    Case("sweep-worst-run-is-ea", "an EA named as a worst run would be, in --out",
+         made(_worst_named_as_ea),
+         Exits(2, "a worst run written there may be named s-run0-seed0.xml"),
+         command=("sweep", "{path}", "--runs", "1", "--jitter", "0", "--ea",
+                  "{dir}/s-run0-seed0.xml", "--out", "{dir}")),
+    Case("check-junit-is-ea", "prima check ea.pxml --junit ea.pxml", _speaker("hello"),
+         Exits(2, "ea.pxml is an EA checked ("),
+         command=("check", "{dir}/ea.pxml", "--scenario", "{path}", "--junit",
+                  "{dir}/ea.pxml"), then=_inputs_intact),
+    Case("check-summary-is-scenario", "prima check --summary over its scenario",
+         _speaker("hello"), Exits(2, "s.xml is a scenario checked ("),
+         command=("check", "{dir}/ea.pxml", "--scenario", "{path}", "--summary", "{path}"),
+         then=_inputs_intact),
+    Case("check-results-is-ea", "prima check --results over the EA", _speaker("hello"),
+         Exits(2, "ea.pxml is an EA checked ("),
+         command=("check", "{dir}/ea.pxml", "--scenario", "{path}", "--results",
+                  "{dir}/ea.pxml"), then=_inputs_intact),
+    Case("check-two-outputs-one-file", "--junit and --summary naming one file",
+         _speaker("hello"), Exits(2, "is also the --junit file"),
+         command=("check", "{dir}/ea.pxml", "--scenario", "{path}", "--junit", "{dir}/o",
+                  "--summary", "{dir}/o")),
+    Case("test-update-golden-is-map", "prima test --update over the scenario's map",
+         _mapped("s.golden.txt"), Exits(2, "s.golden.txt is the map of s.xml ("),
+         command=("test", "{path}", "--update")),
+    # 11: a write that fails half-way leaves the earlier file whole (a file size limit)
+    Case("mcap-fails-midway", "an MCAP recording that cannot be written whole",
+         _earlier("r.mcap"), Exits(1, "cannot write"), file_limit=4096,
+         command=("run", "{path}", "--format", "mcap", "--out", "{dir}/r.mcap"),
+         then=_kept("r.mcap"), seconds=6),
+    Case("jsonl-fails-midway", "a jsonl trace that cannot be written whole",
+         _earlier("r.jsonl"), Exits(1, "cannot write"), file_limit=2048,
+         command=("run", "{path}", "--format", "jsonl", "--out", "{dir}/r.jsonl"),
+         then=_kept("r.jsonl")),
+    Case("page-fails-midway", "a page that cannot be written whole", _earlier("p.html"),
+         Exits(1, "cannot write"), file_limit=65536,
+         command=("show", "{path}", "-o", "{dir}/p.html"), then=_kept("p.html"), seconds=8),
+    Case("picture-fails-midway", "a picture that cannot be written whole", _earlier("p.png"),
+         Exits(1, "cannot write"), file_limit=4096,
+         command=("plot", "{path}", "-o", "{dir}/p.png"), then=_kept("p.png"), seconds=8),
+    Case("golden-fails-midway", "a golden trace that cannot be written whole",
+         _earlier("s.golden.txt"), Exits(1, "cannot write"), file_limit=64,
+         command=("test", "{path}", "--update"), then=_kept("s.golden.txt")),
+    Case("results-fails-midway", "a results file the disk fills under (the runs done kept)",
+         _speaker("hello"), Exits(1, "; the batch stopped, the records of its first"),
+         file_limit=1500,
+         command=("sweep", "{path}", "--runs", "6", "--jitter", "1", "--jobs", "1",
+                  "--worst", "0", "--results", "{dir}/r.jsonl"),
+         then=_results_resumable, seconds=8),
+    # 12: file-system errors on outputs are one line
+    *(Case(f"name-too-long-{command}-{option.strip('-')}",
+           f"a 300-character file name for prima {command} {option}", _speaker("hello"),
+           Exits(1, f"prima {command}: error: cannot write "),
+           command=(command, *_TAKES[command], option, "{dir}/" + LONG + suffix))
+      for command, option, suffix in (
+          ("run", "--out", ""), ("show", "-o", ".html"), ("plot", "-o", ".svg"),
+          ("sweep", "--out", ""), ("sweep", "--results", ""), ("check", "--junit", ""),
+          ("check", "--summary", ""), ("check", "--results", ""))),
+    Case("mcap-full-disk", "prima run --format mcap --out /dev/full", _speaker("hello"),
+         Exits(1, "prima run: error: cannot write /dev/full: no space left on device"),
+         command=("run", "{path}", "--format", "mcap", "--out", "/dev/full"), seconds=4),
+    Case("results-full-disk", "prima sweep --results /dev/full", _speaker("hello"),
+         Exits(1, "prima sweep: error: cannot write /dev/full: no space left on device"),
+         command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--jobs", "1",
+                  "--worst", "0", "--results", "/dev/full")),
+    # 13: numbers in traces are bounded where they are read
+    *(Case(f"trace-huge-{field}-{command}", f"a {field} of 5,000 digits, {command}",
+           _trace(json.dumps(START | {field: 0}).replace(f'"{field}": 0', f'"{field}": 1'
+                                                          + "0" * 5000), END),
+           Exits(1, "run.jsonl:1:"),
+           command=(command, "{path}", *(("-o", "{dir}/p.svg") if command == "plot" else
+                                         ("-o", "{dir}/p.html") if command == "show" else ())))
+      for field in ("seq", "t") for command in ("show", "plot", "judge")),
+    # 14: what --audio synthesises is bounded, in time and words
+    Case("audio-long-utterance", "an utterance of 99,999 s (was a MemoryError)",
+         made(_said_and_cut), Exits(0, "its sound is its beginning, 120.0 s"),
+         command=("show", "{path}", "--audio", "-o", "{dir}/p.html"), seconds=10),
+    Case("audio-many-words", "an utterance of 100,000 words (was 2.7 GB and 80 s)",
+         _trace(START | {"text": " ".join(["word"] * 100_000)}, END | {"t": 40_000}),
+         Exits(0, "says 100,000 word(s)"),
+         command=("show", "{path}", "--audio", "-o", "{dir}/p.html"), seconds=10),
+    # 15: escaping, in every row and every message
+    Case("text-trace-bidi-user", "U+202E and U+200F in what the user says",
+         _user_says("abc\u202edef\u200fghi"), Exits(0, "abc\\u202edef\\u200fghi",
+                                                      absent="[\u202e\u200f]"),
+         command=("run", "{path}")),
+    Case("validate-control-name", "an escape sequence in a file's name, plain validate",
+         made(_controlled), Exits(1, "bad\\x1b[2J.pxml:1:", absent=C1_OR_C0),
+         command=("validate", "{path}")),
+    Case("validate-caret-c1", "a C1 control character in the line under validate's caret",
+         write("t.pxml", '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t">\n'
+                         '<var name="x" expr="1 + \x9b2J @"/>\n'
+                         '<state id="s" initial="true"/>\n</pxml>\n'),
+         Exits(1, "expr=\"1 + \\x9b2J @\"", absent=C1_OR_C0), command=("validate", "{path}")),
+    Case("test-control-name", "an escape sequence in a scenario's name, prima test's diff",
+         made(_golden_differs), Exits(1, "s\\x1b[2J.golden.txt", absent=C1_OR_C0),
+         command=("test", "{path}")),
+    Case("test-missing-golden", "prima test of a scenario without its golden trace",
+         _speaker("hello"), Exits(1, "no golden trace s.golden.txt: create it with prima "
+                                     "test --update "),
+         command=("test", "{path}")),
+    # 16: traces are portable: no absolute path in any line
+    Case("trace-error-relative", "a runtime error's line in the text trace",
+         made(_failing), Exits(0, "ERROR: ea.pxml:1:", absent="ERROR: /"),
+         command=("run", "{path}")),
+    Case("jsonl-error-relative", "a runtime error's line in the jsonl trace",
+         made(_failing), Exits(0, '"text": "ea.pxml:1:', absent='"text": "/'),
+         command=("run", "{path}", "--format", "jsonl")),
+    # 17: names no file can have, and names of shipped files that are not shipped
+    Case("cli-name-too-long", "a scenario named with 300 letters (a traceback from os.stat)",
+         _speaker("hello"), Exits(2, "...: file name too long"),
+         command=("run", "{dir}/" + "a" * 300 + ".xml")),
+    Case("check-fa-name-too-long", "prima check --fa with a path 5,000 letters long",
+         _speaker("hello"), Exits(2, "...: file name too long"),
+         command=("check", "{dir}/ea.pxml", "--fa", "apps/fa/" + "a" * 5000)),
+    Case("run-fa-not-shipped", "--fa with a name no shipped FA has",
+         _speaker("hello"), Exits(2, "no such file: fa9-nope"),
+         command=("run", "{path}", "--fa", "fa9-nope")),
+    # 11: prima live (its page's inputs: tests/test_live.py)
     Case("live-save-over-scenario", "prima live told to save its session over its scenario",
-         _speaker("hello"), Exits(2, "is one of the session's inputs"),
-         command=("live", "{path}", "--save", "{path}", "--port", "0"), seconds=6),
+         _speaker("hello"), Exits(2, "s.xml is the scenario ("),
+         command=("live", "{path}", "--save", "{path}", "--port", "0"), seconds=6,
+         then=_inputs_intact),
     Case("live-save-over-map", "prima live told to save its session over its map",
-         _speaker("hello"), Exits(2, "is one of the session's inputs"),
-         command=("live", "{path}", "--save", "{dir}/map.xml", "--port", "0"), seconds=6),
+         _speaker("hello"), Exits(2, "map.xml is the map ("),
+         command=("live", "{path}", "--save", "{dir}/./sub/../map.xml", "--port", "0"),
+         seconds=6),
+    Case("live-save-dir-is-ea", "prima live told to save into its EA, as a folder",
+         _speaker("hello"), Exits(2, "ea.pxml is a file: an EA ("),
+         command=("live", "{path}", "--save-dir", "{dir}/ea.pxml", "--port", "0"), seconds=6,
+         then=_inputs_intact),
     # 9: the shipped files
     Case("validate-apps", "prima validate apps/ (FA7 is the guide robot's)",
          made(_shipped_apps), Accepted(), seconds=10),

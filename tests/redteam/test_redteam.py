@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import re
 import time
@@ -69,19 +70,30 @@ def _allocate(_path: Path) -> None:
 
 
 def _hang(_path: Path) -> None:
-    time.sleep(30)
+    time.sleep(3600)
+
+
+def _spin(_path: Path) -> None:
+    while True:
+        pass
 
 
 def test_the_runner_enforces_its_limits(tmp_path: Path) -> None:
-    # the harness itself: a case that allocates 4 GiB fails, one that hangs is killed
+    # the harness itself: a case that allocates 4 GiB fails, one that hangs is ended
     greedy = Case("greedy", "memory", write("t.pxml", pxml(STATE)), Accepted(), then=_allocate)
-    (tmp_path / "a").mkdir()
-    (tmp_path / "b").mkdir()
+    for name in "abc":
+        (tmp_path / name).mkdir()
     _path, outcome = run_case(greedy, tmp_path / "a")
     assert "MemoryError" in outcome.crash
-    stuck = Case("stuck", "time", write("t.pxml", pxml(STATE)), Accepted(), then=_hang,
-                 seconds=0.2)
-    start = time.perf_counter()
-    with pytest.raises(AssertionError, match="no verdict within 1.8 s"):
-        run_case(stuck, tmp_path / "b")
-    assert time.perf_counter() - start < 5
+    # one that spins, by its CPU time (four times its limit and a second), however long a
+    # loaded machine takes to give it that much
+    spinning = Case("spinning", "time", write("t.pxml", pxml(STATE)), Accepted(), then=_spin,
+                    seconds=0.2)
+    with pytest.raises(AssertionError, match="no verdict within 2 s of CPU time"):
+        run_case(spinning, tmp_path / "b")
+    # one that waits without spinning, when the parent stops waiting for it (here after a
+    # second; the corpus's bound is runner.HANG), killed and gone
+    stuck = Case("stuck", "time", write("t.pxml", pxml(STATE)), Accepted(), then=_hang)
+    with pytest.raises(AssertionError, match="no verdict after waiting 1 s"):
+        run_case(stuck, tmp_path / "c", hang=1.0)
+    assert multiprocessing.active_children() == []
