@@ -1,7 +1,57 @@
-"""``python -m prima``: the same as the ``prima`` command."""
+"""``python -m prima`` and the ``prima`` command: :func:`prima.cli.main`, with Ctrl-C and SIGTERM
+one line and an exit status at any moment of the process, not only while a command runs.
 
+It imports nothing heavy before it takes the signals: one that comes while the
+command's modules load (before :func:`prima.cli.main` handles it itself) ends the
+process with ``prima: interrupted`` and 130 (143 for SIGTERM); one that comes once
+the command is done, while Python shuts down (its worker pools joined, its files
+closed), ends it at once with the command's own status, instead of a traceback from
+whatever Python was doing then. Tests call :func:`prima.cli.main` itself.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
 import sys
 
-from prima.cli import main
+from prima.signals import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated
 
-sys.exit(main())
+__all__ = ["main"]
+
+
+def _terminated(_signum: int, _frame: object) -> None:
+    raise Terminated
+
+
+def main() -> int:
+    """Run the command the process' arguments name; its exit status."""
+    signal.signal(signal.SIGTERM, _terminated)  # (as Ctrl-C: the command's own sets it too)
+    try:
+        from prima.cli import main as command
+
+        status = command()
+    except KeyboardInterrupt as exc:
+        print("prima: interrupted", file=sys.stderr)
+        status = EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+    _done(status)
+    return status
+
+
+def _done(status: int) -> None:
+    """From now on a signal ends the process at once, with ``status``: the command said
+    what it had to (flushed here)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):  # (a closed pipe or stream)
+            stream.flush()
+
+    def leave(_signum: int, _frame: object) -> None:
+        os._exit(status)
+
+    signal.signal(signal.SIGINT, leave)
+    signal.signal(signal.SIGTERM, leave)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -285,7 +285,8 @@ def _add_check(commands: argparse._SubParsersAction[SuggestingParser]) -> None:
                        help="the EA's own scenario (repeatable; default: generated visits)")
     check.add_argument("--map", metavar="MAP",
                        help="the map of the generated visits (default: the first shipped map "
-                            "with every place the EA names)")
+                            "with every place the EA can go to; needed when some cannot be "
+                            "known before it runs)")
     check.add_argument("--runs", type=int, default=20, metavar="N",
                        help="runs per scenario and cell (default 20)")
     check.add_argument("--jitter", type=float, default=5.0, metavar="SECONDS",
@@ -419,7 +420,9 @@ def _batch_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--executor", metavar="WHERE",
                         help="where the runs go: processes (default: this machine's, --jobs) "
                              "or dask://HOST:PORT, a Dask cluster's scheduler (the dask "
-                             "extra; docs/running.md, Many runs)")
+                             "extra; how long a cluster may keep the runs waiting: "
+                             "PRIMA_DASK_CONNECT_TIMEOUT, PRIMA_DASK_WORKER_TIMEOUT, "
+                             "PRIMA_DASK_PROGRESS_TIMEOUT; docs/judging.md, Many runs)")
     parser.add_argument("--results", metavar="FILE",
                         help="write every run's record to FILE (jsonl) as it comes")
     parser.add_argument("--resume", metavar="FILE",
@@ -842,12 +845,12 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
 def make_validation(profile: RobotProfile, *, robot: bool = False) -> Validation:
     """A validation as ``prima validate`` makes one: documents and robot profiles, and
-    scenarios and maps with every file they name (``robot``: the documents a scenario
-    runs are checked against ``profile``, as ``--robot`` asks, not the scenario's
-    robot). ``prima lsp`` checks an editor's buffer with it."""
+    scenarios and maps with every file they name (``robot``: every document is checked
+    against ``profile``, as ``--robot`` asks, not the scenario's robot nor the one its
+    ``robot`` attribute names). ``prima lsp`` checks an editor's buffer with it."""
     from prima.dsl import Validation
 
-    made: Validation = Validation(profile,
+    made: Validation = Validation(profile, follow_declared=not robot,
                                   more_checkers=lambda: _scenario_checkers(made, robot))
     return made
 
@@ -1312,15 +1315,11 @@ class _BarLine:
 
 
 def _pool(args: argparse.Namespace, runs: int) -> Pool:
-    """The pool the options ask for; a Dask scheduler that cannot be reached is a
-    PrimaError (a message)."""
+    """The pool the options ask for; a Dask cluster that cannot take the runs is a
+    ClusterError (a message)."""
     from prima.batch import pool_for
-    from prima.errors import RunError
 
-    try:
-        return pool_for(args.executor, args.jobs, runs)
-    except OSError as exc:
-        raise RunError(str(exc)) from exc
+    return pool_for(args.executor, args.jobs, runs)
 
 
 def _sweep(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
@@ -1510,8 +1509,7 @@ def _lsp(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         return _usage("lsp", problem, err)
     from prima.lsp import serve
 
-    serve(Path(args.robot).resolve() if args.robot else None)
-    return EXIT_OK
+    return serve(Path(args.robot).resolve() if args.robot else None, err=err)
 
 
 def _completion(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:

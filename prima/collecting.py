@@ -13,7 +13,7 @@ import contextlib
 import gc
 from collections.abc import Iterator
 
-__all__ = ["YOUNG_THRESHOLD", "fewer_collections"]
+__all__ = ["YOUNG_THRESHOLD", "fewer_collections", "no_collections", "settle"]
 
 YOUNG_THRESHOLD = 20_000
 """Objects allocated between two collections of the youngest generation meanwhile."""
@@ -29,3 +29,26 @@ def fewer_collections() -> Iterator[None]:
         yield
     finally:
         gc.set_threshold(*before)
+
+
+@contextlib.contextmanager
+def no_collections() -> Iterator[None]:
+    """No pass of the cycle collector meanwhile: for one bounded piece of work in a
+    long-lived process (``prima lsp`` checking one document: a tenth to a fifth of
+    its CPU time went to passes over the server's own objects). Reference counting
+    still frees what the work drops; its cycles wait for the next pass after."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
+def settle() -> None:
+    """Collect once, then keep every object alive now out of all later passes: a
+    long-lived process calls it when what it loads once (schemas, the parser, the
+    Command catalog) is loaded, so the collector's passes scan only what came after."""
+    gc.collect()
+    gc.freeze()

@@ -15,6 +15,7 @@ Every exception PRIMA raises on purpose derives from :class:`PrimaError`::
     ├── MediationError (ValueError) the mediator refused an operation
     ├── SimulationError (ValueError) the simulator was asked something impossible
     ├── RunError (RuntimeError)     a run cannot go on
+    │   └── ClusterError            the cluster a batch's runs go to cannot take them
     └── OutputError (OSError)       a file a command writes cannot be written
 
 Every error a user can cause in an input file carries one or more
@@ -33,6 +34,7 @@ from dataclasses import dataclass, field
 
 __all__ = [
     "AppFailure",
+    "ClusterError",
     "CommandError",
     "DocumentError",
     "ExecutionError",
@@ -182,6 +184,12 @@ class SimulationError(PrimaError, ValueError):
 
 class RunError(PrimaError, RuntimeError):
     """A run cannot go on (the run loop stopped making progress)."""
+
+
+class ClusterError(RunError):
+    """The cluster a batch's runs go to cannot take them: its scheduler does not answer
+    or went away, no worker joined it, or no run finished for too long. The runs done
+    are kept (a results file resumes the batch)."""
 
 
 class OutputError(PrimaError, OSError):

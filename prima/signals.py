@@ -15,8 +15,10 @@ import signal
 import threading
 from collections.abc import Iterator
 
-__all__ = ["EXIT_TERMINATED", "Terminated", "note_terminated", "terminate_as_interrupt"]
+__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "Terminated", "deferred", "note_terminated",
+           "terminate_as_interrupt"]
 
+EXIT_INTERRUPTED = 128 + signal.SIGINT
 EXIT_TERMINATED = 128 + signal.SIGTERM
 
 
@@ -56,3 +58,58 @@ def terminate_as_interrupt() -> Iterator[_Received]:
         yield received
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+class _Noted:
+    """The signals that came while they were deferred."""
+
+    def __init__(self) -> None:
+        self.signals: list[int] = []
+
+    def handle(self, signum: int, _frame: object) -> None:
+        self.signals.append(signum)
+
+
+_depth = [0]
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[None]:
+    """Meanwhile, SIGINT and SIGTERM are noted, not raised; when it ends, the first one
+    noted is raised as it would have been (KeyboardInterrupt, or :class:`Terminated`).
+
+    For what a signal must not cut in two: forking a worker process (Python's fork
+    hooks swallow an exception raised in them, and the child would inherit a handler
+    that raises), stopping the workers, writing a record. In the main thread only
+    (elsewhere no handler can be set, and nothing changes); nested, the outermost
+    decides."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    if _depth[0]:  # (inside another: that one's handlers note, and it raises)
+        _depth[0] += 1
+        try:
+            yield
+        finally:
+            _depth[0] -= 1
+        return
+    noted = _Noted()
+    previous = {s: signal.signal(s, noted.handle) for s in (signal.SIGINT, signal.SIGTERM)}
+    _depth[0] = 1
+    try:
+        yield
+    finally:
+        _depth[0] = 0
+        for each, handler in previous.items():
+            signal.signal(each, handler)
+        if noted.signals:  # (raised in place of what the block raised, if it did)
+            first = signal.Signals(noted.signals[0])
+            _raise_as(first, previous[first])
+
+
+def _raise_as(signum: int, handler: object) -> None:
+    """Do what ``handler`` (the one a signal found deferred) does with ``signum``."""
+    if callable(handler):
+        handler(signum, None)
+    elif handler == signal.SIG_DFL:
+        signal.raise_signal(signum)  # (what no handler of Python's catches: the default)

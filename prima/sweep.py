@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from prima.batch import (
+    CPU,
     MIN_ANSWER_DELAY,
     Job,
     Pool,
@@ -165,6 +166,7 @@ class Sweep:
         if run.breaches:
             self.breached += 1
         if self.keep and (len(self.kept) < self.keep or run.rank() < self.kept[-1].rank()):
+            run = SweepRun(index, {k: v for k, v in record.items() if k != CPU})  # (measures)
             self.kept = sorted([*self.kept, run], key=SweepRun.rank)[: self.keep]
 
     def worst(self, k: int) -> list[SweepRun]:

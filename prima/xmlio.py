@@ -38,7 +38,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -191,13 +191,34 @@ class SourceMap:
         self._text = text
         self._line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
         self._elements = list(root.iter(tag=etree.Element))  # keeps proxies alive
-        places = _scan_start_tags(text)
+        places, self.depth = _scan_start_tags(text)
+        """How deep the elements nest (the root alone: 1)."""
         self._places: dict[etree._Element, _Place] = dict(zip(self._elements, places, strict=False))
-        counts = [len(el.attrib) for el in self._elements]
-        self.nodes = len(places) + sum(counts)
-        """Elements plus attributes: what schema diagnostics cost."""
-        self.most_attributes = max(counts, default=0)
+
+    @cached_property
+    def _attribute_counts(self) -> list[int]:
+        return [len(el.attrib) for el in self._elements]
+
+    @property
+    def nodes(self) -> int:
+        """Elements plus attributes: what schema diagnostics cost (counted when asked:
+        only a document the schema refuses is asked)."""
+        return len(self._places) + sum(self._attribute_counts)
+
+    @property
+    def most_attributes(self) -> int:
         """The most attributes one element carries."""
+        return max(self._attribute_counts, default=0)
+
+    @property
+    def source(self) -> str:
+        """The text the map was built from (a byte-order mark left out)."""
+        return self._text
+
+    def offset(self, el: etree._Element) -> int | None:
+        """Where the element's start tag begins (its ``<``), if it is known."""
+        place = self._places.get(el)
+        return None if place is None else place.start
 
     def position(self, offset: int) -> tuple[int, int]:
         """Line and column (both 1-based) of a character offset."""
@@ -250,22 +271,32 @@ class SourceMap:
 
 
 _MARKUP = re.compile(
-    r"""<(?:!--.*?-->|!\[CDATA\[.*?\]\]>|\?.*?\?>|![^>]*>|/[^>]*>"""
+    r"""<(?:!--.*?-->|!\[CDATA\[.*?\]\]>|\?.*?\?>|![^>]*>|(?P<end>/)[^>]*>"""
     r"""|(?P<name>[^\s/>!?][^\s/>]*)(?P<attrs>(?:\s+[^\s=/>]+\s*=\s*(?:"[^"]*"|'[^']*'))*)\s*(?P<empty>/?)>)""",
     re.S,
 )
 _ATTRIBUTE = re.compile(r"""([^\s=/>]+)\s*=\s*(?:"([^"]*)"|'([^']*)')""")
 
 
-def _scan_start_tags(text: str) -> list[_Place]:
-    """Start tags of a well-formed document, in document order."""
+def _scan_start_tags(text: str) -> tuple[list[_Place], int]:
+    """Start tags of a well-formed document, in document order, and how deep its
+    elements nest."""
     places: list[_Place] = []
+    depth = deepest = 0
     for m in _MARKUP.finditer(text):
-        if m.group("name") is None:
-            continue
-        places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"),
-                             -1 if m.group("empty") else m.end()))
-    return places
+        kind = m.lastgroup  # "empty" (a start tag's last group), "end", or None (the rest)
+        if kind == "end":
+            depth -= 1
+        elif kind is not None:
+            depth += 1
+            if depth > deepest:
+                deepest = depth
+            if m.group("empty"):
+                depth -= 1
+                places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"), -1))
+            else:
+                places.append(_Place(m.start(), m.start("attrs"), m.end("attrs"), m.end()))
+    return places, deepest
 
 
 @dataclass
@@ -498,6 +529,8 @@ def _syntax_message(exc: etree.XMLSyntaxError) -> str:
 
 
 def _check_depth(doc: XmlDocument, fail: Callable[[etree._Element, str], LocatedError]) -> None:
+    if doc.where.depth <= MAX_DEPTH:  # (counted as the text was read: no walk)
+        return
     stack = [(doc.root, 1)]
     while stack:
         el, depth = stack.pop()
@@ -508,6 +541,9 @@ def _check_depth(doc: XmlDocument, fail: Callable[[etree._Element, str], Located
 
 def local_name(el: etree._Element) -> str:
     """The element's tag without its namespace."""
+    tag = el.tag
+    if isinstance(tag, str):  # "{namespace}name" or "name": what QName reads, without it
+        return tag.rpartition("}")[2]
     return etree.QName(el).localname
 
 

@@ -218,6 +218,59 @@ def test_a_line_that_is_not_the_next_record_is_located(tmp_path: Path) -> None:
     assert code == 1 and f"{target}:2:1: error: not the next run's record" in err
 
 
+FORGED = [  # (what is done to the first record's line, the error, the field it points at)
+    (lambda r: r.replace('"late": 0', '"late": 1' + "0" * 400),
+     "field 'counts.late' is 10000000000000000...: too large a number", '"late"'),
+    (lambda r: r.replace('"counts": {', '"counts": [{').replace('}, "worst_lateness"',
+                                                                 '}], "worst_lateness"'),
+     "field 'counts' must be an object, not [{", '"counts"'),
+    (lambda r: "[" * 100_000 + "]" * 100_000,
+     "not a JSON object: nested more than 16 levels deep", 17),
+    (lambda r: r.replace('"worst_lateness": 0.0', '"worst_lateness": "soon"'),
+     "field 'worst_lateness' must be a number, not \"soon\"", '"worst_lateness"'),
+    (lambda r: r.replace('"worst_lateness": 0.0, ', ""), "field 'worst_lateness' is missing",
+     1),
+    (lambda r: r.replace('"run": 0', '"run": false'),
+     "field 'run' must be a whole number from 0", '"run"'),
+    (lambda r: r.replace('"end": 60.0', '"end": NaN'), "field 'end' is NaN, not a number",
+     '"end"'),
+    (lambda r: r.replace('"end": 60.0', '"end": 1e400'), "field 'end' is 1e400: too large",
+     '"end"'),
+    (lambda r: r.replace('"breaches": []', '"breaches": [1]'),
+     "field 'breaches[0]' must be a text, not 1", '"breaches"'),
+    (lambda r: r.replace('"late": 0', '"late": 0, "later": 1'),
+     "field 'counts.later' is not a field of this record", '"later"'),
+    (lambda r: '{"job": 0, "run": 0, "lost": 1}', "field 'lost' must be true, not 1",
+     '"lost"'),
+    (lambda r: '{"job": 0, "run": 0, "error": {"a": 1}}', "field 'error' must be a text",
+     '"error"'),
+    (lambda r: r + " !", "not a JSON object: Extra data", "!"),
+]
+
+
+@pytest.mark.parametrize("forge, said, at", FORGED, ids=[
+    "count-10e400", "counts-array", "deep", "lateness-soon", "lateness-missing", "run-false",
+    "end-nan", "end-1e400", "breach-number", "unknown-count", "lost-1", "error-object",
+    "extra-data"])
+def test_a_forged_record_is_located_at_its_field(
+        tmp_path: Path, forge: Callable[[str], str], said: str, at: str | int) -> None:
+    """A resumed results file is read by one validating reader: a record's numbers are
+    bounded, its types checked, its nesting bounded; what is wrong is one located line
+    that names the field, never an exception of the code that reads the records."""
+    target = tmp_path / "r.jsonl"
+    sweep_ = ("sweep", str(SHORT), "--runs", "3", "--jitter", "1", "--jobs", "1",
+              "--worst", "0")
+    assert cli(*sweep_, "--results", str(target))[0] == 0
+    head, first, *_ = target.read_text().splitlines()
+    forged = forge(first)
+    target.write_text(f"{head}\n{forged}\n")
+    code, _, err = cli(*sweep_, "--resume", str(target))
+    col = forged.index(at) + 1 if isinstance(at, str) else at
+    assert code == 1 and "Traceback" not in err
+    assert f"{target}:2:{col}: error: {said}" in err, err
+    assert len(err.strip().splitlines()) == 1, err
+
+
 @pytest.mark.parametrize("extra, fragment", [
     (["--executor", "spark://x:1"], "--executor spark://x:1: give processes"),
     (["--executor", "dask://host:99999"], "the port must be from 1 to 65535"),

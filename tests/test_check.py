@@ -6,13 +6,25 @@ from __future__ import annotations
 
 import io
 import json
+import time
 from pathlib import Path
 
 import pytest
 from lxml import etree
 
 from prima.batch import Inline, Processes
-from prima.check import VISITS, Visit, Verdict, attribute, check, map_for, visit_scenario
+from prima.check import (
+    VISITS,
+    Verdict,
+    Visit,
+    attribute,
+    check,
+    destinations,
+    format_check,
+    junit,
+    map_for,
+    visit_scenario,
+)
 from prima.cli import main
 from prima.dsl import default_profile, load_document
 from prima.judge import (
@@ -211,11 +223,92 @@ def test_a_visitor_speaks_of_their_own_accord_to_what_the_apps_hear_at_any_time(
     assert times == sorted(times)
 
 
-def test_no_map_with_the_eas_places_is_a_usage_error(tmp_path: Path) -> None:
-    code, _, err = cli("check", str(ROOT / "apps" / "ea" / "ea1-museum.pxml"), "--fa",
-                       str(QUIET), "--robot", str(HOME), "--map",
-                       str(MAPS / "office.xml"), "--runs", "1")
-    assert code == 2 and "no map has every place ea1-museum names (panel-1, panel-2)" in err
+def test_a_map_given_that_lacks_the_eas_places_says_which_and_where(tmp_path: Path) -> None:
+    museum = ROOT / "apps" / "ea" / "ea1-museum.pxml"
+    code, _, err = cli("check", str(museum), "--fa", str(QUIET), "--robot", str(HOME),
+                       "--map", str(MAPS / "office.xml"), "--runs", "1")
+    assert code == 2, err
+    assert (f"prima check: error: --map {MAPS / 'office.xml'} lacks panel-1 ({museum}:67:72: "
+            f"TopologicalMove), panel-2 ({museum}:127:130: TopologicalMove)") in err
+
+
+def test_no_shipped_map_with_the_eas_places_is_a_usage_error(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match=r"no map in .* has every place ea1-museum can go to "
+                                         r"\(panel-1 \(.*ea1-museum.pxml:67:72: Topologic"):
+        check(ROOT / "apps" / "ea" / "ea1-museum.pxml", fas=[QUIET], robots=[HOME],
+              maps=_only(tmp_path, "office.xml", "library.xml"), runs=1)
+
+
+def _only(folder: Path, *names: str) -> Path:
+    """A folder of some of the shipped maps."""
+    for name in names:
+        (folder / name).write_bytes((MAPS / name).read_bytes())
+    return folder
+
+
+USHER = DATA / "usher.pxml"
+"""An EA whose places come only through variables: a Q&A's answer, an answer heard at any
+time, a constant and another variable; all on the office map, none on the library's."""
+
+
+def test_the_places_an_ea_goes_to_through_its_variables_are_known() -> None:
+    document = load_document(USHER, default_profile())
+    found = [(d.command, d.loc.line, sorted(d.places or ())) for d in destinations(document)]
+    assert found == [("TopologicalMove", 21, ["corner", "kidode-room", "poster"]),
+                     ("TopologicalMove", 29, ["corner", "kidode-room", "poster"]),
+                     ("TopologicalMove", 38, ["hall"])]
+
+
+def test_an_ea_whose_places_come_through_a_variable_is_checked_on_a_map_with_them() -> None:
+    """Not on the library map, the first shipped one, which has none of them: there the
+    EA would never have guided anyone, and every cell would have said ok."""
+    result = check(USHER, fas=[QUIET], robots=[HOME], maps=MAPS, runs=1, pool=Inline(),
+                   visitors=("willing",))
+    assert result.map == MAPS / "office.xml"
+    (cell,) = result.cells
+    assert cell.maps == [MAPS / "office.xml"] and cell.done == 1
+    assert "on the map office (" in format_check(result)
+    hit = {i.label for i in result.coverage.items if i.kind == "commands"
+           and result.coverage.covered(i)}
+    assert "TopologicalMove" in hit  # (it went somewhere: the map has the place)
+
+
+def _ea(folder: Path, handlers: str, grammars: str = "") -> Path:
+    path = folder / "guess.pxml"
+    path.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="guess">\n'
+                    f'  <var name="goal" expr="\'\'"/>\n{grammars}{handlers}'
+                    '  <state id="s" initial="true"/>\n</pxml>\n')
+    return path
+
+
+@pytest.mark.parametrize("handlers, grammars, why", [
+    ('  <on event="message">\n    <assign name="goal" expr="event.text"/>\n'
+     "    <chain>TopologicalMove({goal})</chain>\n  </on>\n", "",
+     "'goal' is set to event.text at line 4"),
+    ('  <on event="speech" match="g">\n    <assign name="goal" expr="event.answer"/>\n'
+     "    <chain>TopologicalMove({goal})</chain>\n  </on>\n",
+     '  <grammar id="g"><pattern>go to *</pattern></grammar>\n',
+     "grammar 'g' has patterns"),
+    ('  <on event="human-found">\n    <chain>TopologicalMove({goal + \'-room\'})</chain>\n'
+     "  </on>\n", "", "its to is the expression goal + '-room'"),
+    ('  <on event="speech">\n    <assign name="goal" expr="event.answer"/>\n'
+     "    <chain>TopologicalMove({goal})</chain>\n  </on>\n", "", "takes any words"),
+])
+def test_a_place_nobody_can_know_asks_for_a_map_at_its_command(
+        tmp_path: Path, handlers: str, grammars: str, why: str) -> None:
+    ea = _ea(tmp_path, handlers, grammars)
+    line = next(i for i, text in enumerate(ea.read_text().splitlines(), start=1)
+                if "TopologicalMove" in text)
+    code, _, err = cli("check", str(ea), "--fa", str(QUIET), "--robot", str(HOME),
+                       "--runs", "1", "--jobs", "1")
+    assert code == 2, err
+    assert f"prima check: error: {ea}:{line}:" in err and why in err, err
+    assert "TopologicalMove goes to a place nobody can know before it runs" in err
+    assert "give --map MAP" in err
+    code, out, err = cli("check", str(ea), "--fa", str(QUIET), "--robot", str(HOME),
+                         "--runs", "1", "--jobs", "1", "--map", str(MAPS / "office.xml"),
+                         "--worst", "0")
+    assert code == 0 and "on the map office" in out, err
 
 
 def test_no_map_at_all_is_said_so(tmp_path: Path) -> None:
@@ -242,15 +335,43 @@ def test_the_matrix_has_a_row_per_fa_and_a_column_per_robot_and_ci_files(
     assert lines[head].split() == ["FA", "\\", "robot", "home-robot", "guide-robot"]
     assert lines[head + 2].split()[:2] == ["fa7-spotlight", "n/a"]  # FA7 needs the guide
     assert "unknown Command 'Spotlight'" in out
+    # every cell's map and robot: in the output, the JUnit and the summary
+    assert "generated visits (willing, declining, hesitant, silent) on the map library" in out
+    for fa in ("quiet", "fa7-spotlight"):
+        for robot in ("home-robot", "guide-robot"):
+            assert f"\n{fa} on {robot}, map library: " in out, out
     suite = etree.parse(str(tmp_path / "j.xml")).getroot()[0]
     cases = {c.get("name"): c for c in suite.iter("testcase")}
-    assert set(cases) == {"quiet on home-robot", "quiet on guide-robot",
-                          "fa7-spotlight on home-robot", "fa7-spotlight on guide-robot"}
+    assert set(cases) == {"quiet on home-robot, map library", "quiet on guide-robot, map library",
+                          "fa7-spotlight on home-robot, map library",
+                          "fa7-spotlight on guide-robot, map library"}
     assert suite.get("tests") == "4"
-    assert cases["fa7-spotlight on home-robot"].find("skipped") is not None
-    assert cases["quiet on home-robot"].find("failure") is not None
+    assert cases["fa7-spotlight on home-robot, map library"].find("skipped") is not None
+    assert cases["quiet on home-robot, map library"].find("failure") is not None
+    named = {p.get("name"): Path(p.get("value", "")).resolve() for p in
+             cases["quiet on guide-robot, map library"].iter("property")}
+    assert named == {"fa": QUIET, "robot": GUIDE, "map": MAPS / "library.xml"}
     summary = (tmp_path / "s.md").read_text()
     assert "| FA | home-robot | guide-robot |" in summary and "| quiet | FAIL EA" in summary
+    assert "on the map library (" in summary
+    assert "| fa7-spotlight | home-robot | library | n/a | 0 |" in summary
+    assert "| quiet | guide-robot | library | " in summary
+
+
+def test_junit_says_each_cells_own_cpu_time() -> None:
+    """The time of a test case is the CPU time its cell's runs took, summed: the cells'
+    own (a cell that could not run took none), together no more than the check's."""
+    start = time.process_time()
+    result = check(MUTE, fas=[QUIET, RUNAWAY, ROOT / "apps" / "fa" / "fa7-spotlight.pxml"],
+                   robots=[HOME], maps=MAPS, runs=2, pool=Inline())
+    spent = time.process_time() - start
+    suite = etree.fromstring(junit([result]).encode())[0]
+    times = [float(c.get("time", "")) for c in suite.iter("testcase")]
+    assert times == [round(c.cpu, 3) for c in result.cells]
+    ran, na = [c for c in result.cells if c.done], [c for c in result.cells if not c.done]
+    assert len(ran) == 2 and all(c.cpu > 0 for c in ran) and [c.cpu for c in na] == [0.0]
+    assert 0 < sum(c.cpu for c in result.cells) <= spent
+    assert float(suite.get("time", "")) == pytest.approx(sum(times), abs=0.002)
 
 
 def test_a_written_worst_run_replays_the_failure(tmp_path: Path) -> None:
@@ -336,3 +457,20 @@ def test_the_example_ea_written_from_the_docs_passes_every_cell(tmp_path: Path) 
     assert result.failed_by_ea == []
     assert {c.verdict for c in result.cells} <= {Verdict.OK, Verdict.OTHER, Verdict.NA}
     assert sum(c.verdict == Verdict.OK for c in result.cells) >= 8
+
+
+def test_a_forged_record_of_a_check_is_located_at_its_field(tmp_path: Path) -> None:
+    """A check's records are read back checked too, what the check adds to them
+    included (whose each failure is, what of the EA ran)."""
+    target = tmp_path / "r.jsonl"
+    argv = ["check", str(MUTE), "--fa", str(QUIET), "--robot", str(HOME), "--runs", "2",
+            "--jobs", "1", "--worst", "0"]
+    assert cli(*argv, "--results", str(target))[0] == 1  # (MUTE fails: the EA's doing)
+    head, first, *rest = target.read_text().splitlines()
+    record = json.loads(first)
+    record["check"]["coverage"]["commands"][0] = ["12:7", "first"]
+    target.write_text("\n".join([head, json.dumps(record), *rest]) + "\n")
+    code, _, err = cli(*argv, "--resume", str(target))
+    assert code == 1 and "Traceback" not in err, err
+    assert (f"{target}:2:") in err and ("field 'check.coverage.commands[0][1]' must be a whole "
+                                        'number from 0') in err, err

@@ -5,7 +5,8 @@ seed, jitter, thresholds, and what else a run's record says, an :class:`Analysis
 :func:`dispatch` sends the runs in :class:`Chunk` of runs to a :class:`Pool`, one
 :class:`concurrent.futures.Executor` seam: :class:`Inline` (this process),
 :class:`Processes` (this machine's cores, the default) or a Dask cluster
-(:func:`pool_for` with ``dask://HOST:PORT``; the ``dask`` extra). Every run's record
+(:func:`pool_for` with ``dask://HOST:PORT``; the ``dask`` extra; waited for no longer
+than :class:`ClusterTimeouts` say, from the environment: :data:`TIMEOUTS`). Every run's record
 comes back in the order of the runs, the same whatever ran it; a lost chunk is
 sent again. :class:`ResultsFile` writes them as they come and reads them back to
 resume a batch.
@@ -21,7 +22,8 @@ from prima.batch._dispatch import (
     dispatch,
     plan,
 )
-from prima.batch._pools import executor_problem, pool_for
+from prima.batch._pools import TIMEOUTS, ClusterTimeouts, executor_problem, pool_for
+from prima.batch._records import Nullable, shape_problem
 from prima.batch._results import ResultsFile
 from prima.batch._variants import (
     MIN_ANSWER_DELAY,
@@ -34,16 +36,20 @@ from prima.batch._variants import (
     switched_root,
     write_variant,
 )
-from prima.batch._work import Analysis, Chunk, Job, Observer, record_of, run_chunk, run_one
+from prima.batch._work import CPU, Analysis, Chunk, Job, Observer, record_of, run_chunk, run_one
 
 __all__ = [
     "CHUNK",
+    "CPU",
     "MIN_ANSWER_DELAY",
+    "TIMEOUTS",
     "Analysis",
     "Bundle",
     "Chunk",
+    "ClusterTimeouts",
     "Inline",
     "Job",
+    "Nullable",
     "Observer",
     "Pool",
     "Processes",
@@ -61,6 +67,7 @@ __all__ = [
     "rng",
     "run_chunk",
     "run_one",
+    "shape_problem",
     "shift_timings",
     "switched_root",
     "write_variant",

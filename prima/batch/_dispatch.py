@@ -19,11 +19,15 @@ import concurrent.futures.process
 import math
 import multiprocessing
 import signal
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol
 
 from prima.batch._results import ResultsFile
-from prima.batch._work import Chunk, Job, run_chunk
+from prima.batch._work import CPU, Chunk, Job, run_chunk
+from prima.errors import ClusterError
+from prima.escape import shown_path
+from prima.signals import deferred
 
 __all__ = ["CHUNK", "RECYCLE", "Inline", "Pool", "Processes", "chunk_size", "collect", "dispatch",
            "plan"]
@@ -51,6 +55,15 @@ class Pool(Protocol):
     def broken(self, exc: BaseException) -> bool:
         """Whether ``exc``, a task's failure, left the executor unable to take more."""
 
+    @property
+    def poll(self) -> float | None:
+        """Seconds between two calls of :meth:`watch` while no task finishes (None: it
+        is never called; the pool's own tasks always end)."""
+
+    def watch(self, idle: float) -> None:
+        """No task finished for ``idle`` seconds: raise ClusterError if the pool cannot
+        finish them (a cluster gone, without workers, or stalled)."""
+
     def stop(self) -> None:
         """Stop now (Ctrl-C): cancel what has not started, end what runs."""
 
@@ -76,12 +89,16 @@ class Inline:
 
     workers = 1
     chunk = 1
+    poll = None
 
     def executor(self) -> concurrent.futures.Executor:
         return _Now()
 
     def broken(self, exc: BaseException) -> bool:
         return False
+
+    def watch(self, idle: float) -> None:
+        pass
 
     def stop(self) -> None:
         pass
@@ -91,8 +108,12 @@ class Inline:
 
 
 def _quiet() -> None:
-    """Workers leave Ctrl-C to the parent, which stops the pool."""
+    """Workers leave Ctrl-C to the parent, which stops the pool, and SIGTERM ends them
+    at once, without a word (as the parent's :meth:`Processes.stop` does; they are
+    forked with the parent's handlers, which note these signals meanwhile:
+    :func:`prima.signals.deferred`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 RECYCLE = 10
@@ -125,7 +146,8 @@ class _Recycling(concurrent.futures.Executor):
             self._pool = concurrent.futures.ProcessPoolExecutor(
                 self.workers, mp_context=multiprocessing.get_context(), initializer=_quiet)
             self._taken = 0
-        future = self._pool.submit(fn, *args, **kwargs)
+        with deferred():  # (a new pool forks its workers here)
+            future = self._pool.submit(fn, *args, **kwargs)
         self._taken += 1
         self._futures.append(future)
         return future
@@ -158,6 +180,7 @@ class Processes:
     did not finish fails with it): a fresh pool takes the work on."""
 
     chunk = CHUNK
+    poll = None
 
     def __init__(self, jobs: int, recycle: int = RECYCLE) -> None:
         self.workers = jobs
@@ -177,6 +200,9 @@ class Processes:
         if isinstance(exc, concurrent.futures.process.BrokenProcessPool):
             self._broken = True
         return self._broken
+
+    def watch(self, idle: float) -> None:
+        pass
 
     def stop(self) -> None:
         pool, self._pool = self._pool, None
@@ -258,6 +284,8 @@ class _Flight:
         self.ahead = self.window * size * 4
         self.flying: dict[concurrent.futures.Future[list[Record]], tuple[int, Chunk]] = {}
         self.executor = pool.executor()
+        self.since = time.monotonic()
+        """When a task last finished (or the first was sent)."""
 
     def push(self, chunk: Chunk, attempt: int) -> None:
         heapq.heappush(self.queue, (self.order.position(chunk), attempt, next(self.pushed),
@@ -294,8 +322,13 @@ class _Flight:
     def collect(self) -> list[Record]:
         """Wait for a chunk to finish: the records of every chunk finished (a lost one's
         runs sent again)."""
-        done, _ = concurrent.futures.wait(self.flying,
-                                          return_when=concurrent.futures.FIRST_COMPLETED)
+        while True:  # (a pool that may never finish its tasks is watched meanwhile)
+            done, _ = concurrent.futures.wait(self.flying, timeout=self.pool.poll,
+                                              return_when=concurrent.futures.FIRST_COMPLETED)
+            if done:
+                break
+            self.pool.watch(time.monotonic() - self.since)
+        self.since = time.monotonic()
         broke = False
         records: list[Record] = []
         for future in done:
@@ -334,7 +367,8 @@ def dispatch(jobs: Sequence[Job], pool: Pool, *, size: int, skip: int = 0,
             if records and progress is not None:
                 progress(finished)
     except BaseException:  # Ctrl-C, or a fault of the batch's own: stop the workers now
-        pool.stop()
+        with deferred():  # (a second Ctrl-C meanwhile is noted, and the stop finishes)
+            pool.stop()
         raise
     pool.close()
 
@@ -345,28 +379,37 @@ def collect(jobs: Sequence[Job], take: Callable[[Record], None], *,
             progress: Callable[[int, int], None] | None = None) -> bool:
     """Every run's record of ``jobs`` to ``take``, in the order of the runs, and to the
     results file ``out`` as it comes; with ``resume``, the records ``out`` holds already
-    are taken first and their runs not run again. ``pool(runs_left)`` gives the pool;
+    are taken first and their runs not run again (a record run now says its run's CPU
+    time, :data:`~._work.CPU`, which is not written). ``pool(runs_left)`` gives the pool;
     ``progress(done, total)`` is called as runs finish. True if Ctrl-C stopped it
     (what was taken is the batch's first runs)."""
     total = sum(j.runs for j in jobs)
     skip = 0
     if out is not None and resume:
-        for record in out.previous([j.runs for j in jobs]):
+        for record in out.previous(jobs):
             take(record)
             skip += 1
+    done = skip
     if out is not None:
         out.open(resume=resume)
-    chosen = pool(total - skip)
-    size = chunk_size(total - skip, chosen.workers, chosen.chunk)
     try:
+        chosen = pool(total - skip)
+        size = chunk_size(total - skip, chosen.workers, chosen.chunk)
         for record in dispatch(jobs, chosen, size=size, skip=skip,
                                progress=None if progress is None
-                               else (lambda done: progress(done, total))):
+                               else (lambda finished: progress(finished, total))):
             take(record)
             if out is not None:
-                out.write(record)
+                out.write({k: v for k, v in record.items() if k != CPU})
+            done += 1
     except KeyboardInterrupt:
         return True
+    except ClusterError as exc:
+        if out is None:
+            raise
+        kept = shown_path(out.path)
+        raise ClusterError(f"{exc}; the {done} run(s) done are in {kept}: --resume {kept} "
+                           "goes on with the others") from exc
     finally:
         if out is not None:
             out.close()

@@ -22,15 +22,26 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from prima.batch._records import (
+    MAX_LINE,
+    Unreadable,
+    decode,
+    field_column,
+    record_shape,
+    shape_problem,
+    shown,
+)
+from prima.batch._work import Job
 from prima.errors import OutputError, Problem, ResultsError, Severity
 from prima.escape import json_line
-from prima.output import Staged, shown
+from prima.output import Staged, shown as shown_file
+from prima.signals import deferred
 
 __all__ = ["ResultsFile"]
 
 
-def _problem(path: Path, line: int, message: str) -> ResultsError:
-    return ResultsError([Problem(str(path), line, 1, Severity.ERROR, message)])
+def _problem(path: Path, line: int, message: str, col: int = 1) -> ResultsError:
+    return ResultsError([Problem(str(path), line, col, Severity.ERROR, message)])
 
 
 def _differs(found: Any, wanted: Any, where: str = "") -> str:
@@ -47,15 +58,10 @@ def _differs(found: Any, wanted: Any, where: str = "") -> str:
                 return _differs(a, b, f"{where}[{i}]")
     if isinstance(found, list) and isinstance(wanted, list):
         return f"it has {len(found)} {where or 'entries'}, not {len(wanted)}"
-    said = f"its {where or 'header'} is {_short(found)}, not {_short(wanted)}"
+    said = f"its {where or 'header'} is {shown(found)}, not {shown(wanted)}"
     if where.endswith(".digest"):
         said += " (the scenario, or a document it runs, changed)"
     return said
-
-
-def _short(value: Any) -> str:
-    text = json.dumps(value)
-    return text if len(text) <= 80 else text[:77] + "..."
 
 
 class ResultsFile:
@@ -72,10 +78,11 @@ class ResultsFile:
         self._out: Staged | None = None
         self._failed = False
 
-    def previous(self, counts: Sequence[int]) -> Iterator[dict[str, Any]]:
-        """The records of the runs done, in order, checked (a missing file: none).
-        Raises ResultsError for a file of another batch, or a line that is not the
-        next run's record."""
+    def previous(self, jobs: Sequence[Job]) -> Iterator[dict[str, Any]]:
+        """The records of the runs of ``jobs`` done, in order, checked (a missing file:
+        none). Raises ResultsError, located at the line and the field, for a file of
+        another batch, a line that is no JSON within bounds (:mod:`._records`), a record
+        that is not the next run's or a field of the wrong type or size."""
         try:
             source = self.path.open("rb")
         except FileNotFoundError:
@@ -84,14 +91,15 @@ class ResultsFile:
             raise _problem(self.path, 1, f"cannot read: {exc.strerror or exc}") from exc
         with source:
             self.kept = self._kept_records = 0
-            order = _runs(counts)
-            for number, raw in enumerate(source, start=1):
-                if not raw.endswith(b"\n"):
+            order = _runs([j.runs for j in jobs])
+            for number, raw in enumerate(iter(lambda: source.readline(MAX_LINE + 1), b""),
+                                         start=1):
+                if not raw.endswith(b"\n") and len(raw) <= MAX_LINE:
                     return  # cut short as it was written: run again
                 try:
-                    row = json.loads(raw.decode("utf-8"))
-                except (UnicodeDecodeError, ValueError):
-                    raise _problem(self.path, number, "not a JSON object") from None
+                    row = decode(raw.removesuffix(b"\n"))
+                except Unreadable as exc:
+                    raise _problem(self.path, number, str(exc), exc.col) from None
                 if not isinstance(row, dict):
                     raise _problem(self.path, number, "not a JSON object")
                 if number == 1:
@@ -99,11 +107,30 @@ class ResultsFile:
                         raise _problem(self.path, 1, "these are the results of another "
                                        f"batch: {_differs(row, self.header)}")
                 else:
-                    if (row.get("job"), row.get("run")) != next(order, None):
-                        raise _problem(self.path, number, "not the next run's record")
-                    yield row
+                    yield self._record(raw, number, row, next(order, None), jobs)
                     self._kept_records += 1
                 self.kept += len(raw)
+
+    def _record(self, raw: bytes, number: int, row: dict[str, Any],
+                expected: tuple[int, int] | None, jobs: Sequence[Job]) -> dict[str, Any]:
+        """A line's record, checked: the next run's, every field as a worker writes it."""
+        line = raw.decode("utf-8")
+        for key in ("job", "run"):
+            wrong = shape_problem(row.get(key), int, key) if key in row else (key, "is missing")
+            if wrong is not None:
+                raise _problem(self.path, number, f"field '{wrong[0]}' {wrong[1]}",
+                               field_column(line, key))
+        if expected is None:
+            raise _problem(self.path, number, "a record after the last run of the batch")
+        if (row["job"], row["run"]) != expected:
+            raise _problem(self.path, number, f"not the next run's record (job {expected[0]}, "
+                                              f"run {expected[1]})")
+        wrong = shape_problem(row, record_shape(row, jobs[row["job"]].analysis))
+        if wrong is not None:
+            field, message = wrong
+            raise _problem(self.path, number, f"field '{field}' {message}",
+                           field_column(line, field))
+        return row
 
     def open(self, *, resume: bool) -> None:
         """Start writing: a new file with its header, or (``resume``) after the records
@@ -123,11 +150,12 @@ class ResultsFile:
         if self._out is None:
             raise RuntimeError("the results file is not open")
         try:
-            self._out.file.write(line)
-            self._out.file.flush()
+            with deferred():  # (Ctrl-C keeps a record whole: after it, not in it)
+                self._out.file.write(line)
+                self._out.file.flush()
         except OSError as exc:
             reason = exc.strerror or str(exc)
-            said = f"cannot write {shown(self.path)}: {reason[:1].lower() + reason[1:]}"
+            said = f"cannot write {shown_file(self.path)}: {reason[:1].lower() + reason[1:]}"
             if header:
                 self._out.discard()
                 self._out = None

@@ -13,6 +13,7 @@ from __future__ import annotations
 import copy
 import math
 import tempfile
+import time
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,7 +29,7 @@ from prima.judge import Report, Thresholds
 if TYPE_CHECKING:
     from prima.run import Loaded  # (imported where runs are made, as Run is)
 
-__all__ = ["Analysis", "Chunk", "Job", "Observer", "record_of", "run_chunk", "run_one"]
+__all__ = ["CPU", "Analysis", "Chunk", "Job", "Observer", "record_of", "run_chunk", "run_one"]
 
 
 class Observer(Protocol):
@@ -47,6 +48,11 @@ class Analysis(Protocol):
     @property
     def key(self) -> str:
         """The record's key for what it finds."""
+
+    @property
+    def shape(self) -> Any:
+        """What a record says under :attr:`key`, as a shape (``prima.batch.shape_problem``):
+        a resumed results file's records are checked against it."""
 
     def observer(self) -> Observer:
         """A fresh observer for one run."""
@@ -136,9 +142,17 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
     return record
 
 
+CPU = "cpu"
+"""The key of a record that says how long its run took: the CPU seconds of the thread
+that ran it (a worker process', or one of a Dask worker's threads). It differs from
+machine to machine and run to run, so it is never written to a results file (which is
+the same whatever runs it): :func:`prima.batch.collect` gives it to whoever takes the
+record, then drops it."""
+
+
 def run_chunk(chunk: Chunk) -> list[dict[str, Any]]:
     """Run a chunk's runs in order (in a worker, or in this process): their records,
-    each with its job's number."""
+    each with its job's number and its :data:`CPU` time."""
     spec = chunk.spec
     with tempfile.TemporaryDirectory(prefix="prima-runs-") as scratch, fewer_collections():
         folder = Path(scratch)
@@ -149,6 +163,8 @@ def run_chunk(chunk: Chunk) -> list[dict[str, Any]]:
         files = Loaded()
         out = []
         for index in range(chunk.first, chunk.first + chunk.count):
+            start = time.thread_time()
             record = run_one(spec, index, root, folder, files)
-            out.append({"job": chunk.job, **record})
+            out.append({"job": chunk.job, **record,
+                        CPU: round(time.thread_time() - start, 6)})
         return out

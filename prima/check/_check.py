@@ -21,12 +21,13 @@ from typing import Any
 from prima.batch import Job, Pool, ResultsFile, bundle_scenario, collect, pool_for
 from prima.check._coverage import Coverage
 from prima.check._observe import CheckAnalysis
-from prima.check._visits import VISITS, Visit, map_for, visit_scenario
+from prima.check._places import Destination, destinations, known_places, map_for
+from prima.check._visits import VISITS, Visit, visit_scenario
 from prima.dsl import Document, load_document, load_profile, structure_problems
 from prima.errors import DocumentError, LocatedError
 from prima.judge import Thresholds
 from prima.output import make_folder
-from prima.sim import WorldMap, load_map, load_scenario
+from prima.sim import WorldMap, load_map, load_scenario, scenario_references
 from prima.sweep import SweepRun, results_header, write_variant
 from prima.xmlio import parse_xml, read_source
 
@@ -97,10 +98,20 @@ class Cell:
     lost: int = 0
     written: list[Path] = field(default_factory=list)
     """The worst runs, written as scenario files."""
+    maps: list[Path] = field(default_factory=list)
+    """The maps its scenarios run on (one for generated visits), in their order."""
+    cpu: float = 0.0
+    """The CPU time (s) its runs took in their workers, summed (the runs this check ran:
+    those read back from a resumed results file count nothing)."""
 
     @property
     def name(self) -> str:
         return f"{self.fa.stem} / {self.robot.stem}"
+
+    @property
+    def map_names(self) -> str:
+        """Its maps by name (``office``; several: ``office, museum``; none known: ``?``)."""
+        return ", ".join(dict.fromkeys(m.stem for m in self.maps)) or "?"
 
     @property
     def verdict(self) -> str:
@@ -124,6 +135,9 @@ class Cell:
         return ""
 
     def add(self, scenario: int, record: Mapping[str, Any]) -> None:
+        cpu = record.get("cpu")
+        if isinstance(cpu, (int, float)):
+            self.cpu += cpu
         if record.get("lost"):
             self.lost += 1
             return
@@ -175,6 +189,8 @@ class Check:
     interrupted: bool = False
     visits: bool = True
     """The scenarios were generated visits (not the EA's own)."""
+    map: Path | None = None
+    """The map of the generated visits (None: the EA's own scenarios, each its own)."""
 
     def cell(self, fa: Path, robot: Path) -> Cell:
         return next(c for c in self.cells if c.fa == fa and c.robot == robot)
@@ -208,13 +224,54 @@ def _problem(exc: LocatedError) -> str:
     return str(exc.problems[0]) if exc.problems else str(exc)
 
 
-def _maps(folder: Path | None, given: Path | None) -> list[tuple[Path, WorldMap]]:
-    if given is not None:
-        return [(given, load_map(given))]
+def _maps(folder: Path | None) -> list[tuple[Path, WorldMap]]:
     return [(p, load_map(p)) for p in sorted(folder.glob("*.xml"))] if folder else []
 
 
 _World = tuple[Path, WorldMap]
+
+
+def _world(document: Document, folder: Path | None, given: Path | None) -> _World:
+    """The map of the generated visits: ``given`` (``--map``), which must have every place
+    the EA can go to that can be known; else the first map of ``folder`` that has them
+    all, when every place the EA can go to can be known (:mod:`._places`). Raises
+    ValueError saying which places are missing, or which Command goes where nobody can
+    know, located in the EA."""
+    found = destinations(document)
+    places = known_places(found)
+    if given is not None:
+        world = load_map(given)
+        missing = sorted(places - {p.name for p in world.places})
+        if missing:
+            raise ValueError(f"--map {given} lacks {_places_at(missing, found, document)}")
+        return given, world
+    unknown = [d for d in found if d.places is None]
+    if unknown:
+        first = unknown[0]
+        more = f" (and {len(unknown) - 1} more Command(s))" if len(unknown) > 1 else ""
+        raise ValueError(f"{first.where(document)}: {first.command} goes to a place nobody "
+                         f"can know before it runs ({first.why}){more}: give --map MAP, a "
+                         "map with the places it can go to (or --scenario)")
+    candidates = _maps(folder)
+    if not candidates:  # (an install without the shipped maps)
+        where = f" (no {folder}/*.xml)" if folder else ""
+        raise ValueError(f"no map to make visits on{where}: give --map or --scenario")
+    chosen = map_for(document, candidates)
+    if chosen is None:
+        raise ValueError(f"no map in {folder} has every place {document.name} can go to "
+                         f"({_places_at(sorted(places), found, document)}): give --map or "
+                         "--scenario")
+    return chosen
+
+
+def _places_at(names: Sequence[str], found: Sequence[Destination], document: Document) -> str:
+    """Places, each with the first Command that goes there (``panel-1 (ea.pxml:67:72:
+    TopologicalMove)``)."""
+    said = []
+    for name in names:
+        first = next(d for d in found if d.places is not None and name in d.places)
+        said.append(f"{name} ({first.where(document)}: {first.command})")
+    return ", ".join(said)
 
 
 def _cell_scenarios(cell: Cell, ea: Path, scenarios: Sequence[Path], world: _World | None,
@@ -224,6 +281,8 @@ def _cell_scenarios(cell: Cell, ea: Path, scenarios: Sequence[Path], world: _Wor
     from prima.run import Run, Switches
 
     runs, seed, jitter, thresholds = spec
+    cell.maps = [world[0]] if world is not None and not scenarios else [
+        ref.path for path in scenarios for ref in scenario_references(path) if ref.role == "map"]
     try:
         ea_doc = _profiled(ea, cell.robot, profiles)
         fa_doc = _profiled(cell.fa, cell.robot, profiles)
@@ -262,10 +321,12 @@ def check(ea: str | Path, *, fas: Sequence[Path], robots: Sequence[Path],
           visitors: Sequence[str] = VISITS) -> Check:
     """Check the EA ``ea`` beside every FA of ``fas`` on every robot of ``robots``, on its
     own ``scenarios`` or, without, on generated visits (on ``map_file``, else the first
-    map in the folder ``maps`` that has every place the EA names): each swept ``runs``
+    map in the folder ``maps`` that has every place the EA can go to): each swept ``runs``
     times with timings jittered by up to ``jitter`` s. The ``worst`` worst runs of each
     failing cell are written into ``out``. Raises LocatedError for an EA that cannot be
-    loaded or an FA that is no PXML document, ValueError when no map has its places.
+    loaded or an FA that is no PXML document, ValueError when no map has its places (or
+    ``map_file`` lacks some, or nobody can know some before the EA runs and no
+    ``map_file`` is given).
     ``visitors``: the generated visits' visitors (default: all of :data:`VISITS`)."""
     ea_path = Path(ea)
     document = load_document(ea_path, load_profile(robots[0]))
@@ -273,22 +334,13 @@ def check(ea: str | Path, *, fas: Sequence[Path], robots: Sequence[Path],
         _a_document(fa)
     for scenario in scenarios:  # a scenario of the EA's own with errors stops the check
         load_scenario(scenario)
-    world = None
-    if not scenarios:
-        candidates = _maps(maps, map_file)
-        if not candidates:  # (an install without the shipped maps)
-            where = f" (no {maps}/*.xml)" if maps else ""
-            raise ValueError(f"no map to make visits on{where}: give --map or --scenario")
-        world = map_for(document, candidates)
-        if world is None:
-            named = ", ".join(sorted({p.name for p in document.places}))
-            raise ValueError(f"no map has every place {document.name} names ({named}): "
-                             "give --map or --scenario")
+    world = None if scenarios else _world(document, maps, map_file)
     visits = [Visit(v, until) for v in visitors]
     coverage = Coverage(document)
     cells = [Cell(fa, robot) for fa in fas for robot in robots]
     result = Check(ea_path, document, list(fas), list(robots), cells, coverage, runs,
-                   float(jitter), seed, visits=not scenarios)
+                   float(jitter), seed, visits=not scenarios,
+                   map=world[0] if world is not None else None)
     profiles: dict[Path, Any] = {}
     with tempfile.TemporaryDirectory(prefix="prima-check-") as scratch:
         for cell in cells:

@@ -230,6 +230,15 @@ class _Observer:
         }
 
 
+_FAILURE = {"measure": str, "app": str, "role": str, "rule": str, "waited": str, "at": str,
+            "finding": str}
+SHAPE = {"failures": [_FAILURE],
+         "coverage": {"states": [str], "handlers": [str], "commands": [(str, int)],
+                      "answers": [(str, int, str, str)]}}
+"""What a check's record says under ``check`` (:meth:`_Observer.finish`), as a shape
+(:func:`prima.batch.shape_problem`): a resumed check's records are checked against it."""
+
+
 @dataclass(frozen=True)
 class CheckAnalysis:
     """``prima check``'s analysis of a run (:class:`prima.batch.Analysis`): the EA under
@@ -237,6 +246,10 @@ class CheckAnalysis:
 
     ea: str
     key: str = "check"
+
+    @property
+    def shape(self) -> Any:
+        return SHAPE
 
     def observer(self) -> _Observer:
         return _Observer(self.ea)

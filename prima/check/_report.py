@@ -10,7 +10,7 @@ from prima.check._coverage import KINDS, spans
 from prima.check._visits import VISITS
 from prima.escape import terminal
 
-__all__ = ["format_check", "format_coverage", "junit", "markdown"]
+__all__ = ["cell_line", "format_check", "format_coverage", "junit", "markdown"]
 
 _ROLE = {"ea": "the EA's", "fa": "the FA's", "other": "another EA's",
          "mediator": "no application's"}
@@ -55,15 +55,33 @@ def _failures(cell: Cell) -> list[str]:
     return rows
 
 
+def _where(result: Check) -> str:
+    """What the cells ran on: the generated visits' map, or the EA's own scenarios."""
+    if result.visits and result.map is not None:
+        return (f"generated visits ({', '.join(VISITS)}) on the map {result.map.stem} "
+                f"({terminal(str(result.map))})")
+    return "its own scenarios, each on its own map"
+
+
+def _seconds(cell: Cell) -> str:
+    return f"{cell.cpu:.1f} s" if cell.cpu >= 0.05 or not cell.cpu else f"{cell.cpu:.3f} s"
+
+
+def cell_line(cell: Cell) -> str:
+    """One cell: its FA, robot and map, its verdict, its runs and their CPU time."""
+    runs = "" if cell.verdict == Verdict.NA else f"; {cell.done} run(s) judged, {_seconds(cell)}"
+    return (f"{cell.fa.stem} on {cell.robot.stem}, map {terminal(cell.map_names)}: "
+            f"{_cell_text(cell)}{runs}")
+
+
 def format_check(result: Check) -> str:
-    """The matrix, each failing cell's failures and worst runs, the coverage."""
-    what = f"generated visits ({', '.join(VISITS)})" if result.visits \
-        else "its own scenarios"
+    """The matrix, a line per cell (its FA, robot and map), each failing cell's failures
+    and worst runs, the coverage."""
     head = (f"{terminal(str(result.ea))}: {result.document.name} beside {len(result.fas)} FA(s) "
-            f"on {len(result.robots)} robot(s), {what}, {result.runs} runs each, jitter "
-            f"±{result.jitter:g} s, seed {result.seed}"
+            f"on {len(result.robots)} robot(s), {_where(result)}, {result.runs} runs each, "
+            f"jitter ±{result.jitter:g} s, seed {result.seed}"
             + (" (interrupted)" if result.interrupted else ""))
-    rows = [head, "", *matrix(result), ""]
+    rows = [head, "", *matrix(result), "", *(cell_line(c) for c in result.cells), ""]
     for cell in result.cells:
         if cell.verdict == Verdict.NA:
             rows.append(f"{cell.name}: n/a: {terminal(cell.problem)}")
@@ -112,11 +130,19 @@ def junit(results: list[Check]) -> str:
                       "</testsuites>"]) + "\n"
 
 
+def _properties(cell: Cell) -> str:
+    """A test case's FA, robot and map(s), as JUnit properties (the files' paths)."""
+    named = [("fa", cell.fa), ("robot", cell.robot), *(("map", m) for m in
+                                                      dict.fromkeys(cell.maps))]
+    return "<properties>" + "".join(f"<property name={quoteattr(k)} value={quoteattr(str(v))}/>"
+                                    for k, v in named) + "</properties>"
+
+
 def _suite(result: Check) -> list[str]:
     cases = []
     failures = errors = skipped = 0
     for cell in result.cells:
-        name = quoteattr(f"{cell.fa.stem} on {cell.robot.stem}")
+        name = quoteattr(f"{cell.fa.stem} on {cell.robot.stem}, map {cell.map_names}")
         body = ""
         text = "\n".join(_failures(cell))
         if cell.verdict == Verdict.EA:
@@ -133,10 +159,10 @@ def _suite(result: Check) -> list[str]:
         elif cell.verdict == Verdict.OTHER:
             body = f"<system-out>{escape(_cell_text(cell) + chr(10) + text)}</system-out>"
         cases.append(f'    <testcase classname={quoteattr("prima.check." + result.document.name)} '
-                     f'name={name} time="0">{body}</testcase>')
+                     f'name={name} time="{cell.cpu:.3f}">{_properties(cell)}{body}</testcase>')
     suite = (f'  <testsuite name={quoteattr("prima check " + result.document.name)} '
              f'tests="{len(result.cells)}" failures="{failures}" errors="{errors}" '
-             f'skipped="{skipped}">')
+             f'skipped="{skipped}" time="{sum(c.cpu for c in result.cells):.3f}">')
     return [suite, *cases, "  </testsuite>"]
 
 
@@ -147,13 +173,18 @@ def _md(text: str) -> str:
 def markdown(result: Check) -> str:
     """A short Markdown summary: the matrix as a table, the failures, the coverage."""
     rows = [f"### prima check: {result.document.name}", "",
-            f"{result.runs} runs per scenario, jitter ±{result.jitter:g} s, seed {result.seed}; "
-            f"coverage {result.coverage.percent:.0f}%", "",
+            f"{_md(_where(result))}; {result.runs} runs per scenario, jitter "
+            f"±{result.jitter:g} s, seed {result.seed}; coverage "
+            f"{result.coverage.percent:.0f}%", "",
             "| FA | " + " | ".join(r.stem for r in result.robots) + " |",
             "|---|" + "---|" * len(result.robots)]
     for fa in result.fas:
         cells = [_md(_cell_text(result.cell(fa, r))) for r in result.robots]
         rows.append(f"| {fa.stem} | " + " | ".join(cells) + " |")
+    rows += ["", "| FA | robot | map | verdict | runs | CPU |", "|---|---|---|---|---|---|"]
+    for cell in result.cells:
+        rows.append(f"| {cell.fa.stem} | {cell.robot.stem} | {_md(cell.map_names)} | "
+                    f"{_md(_cell_text(cell))} | {cell.done} | {_seconds(cell)} |")
     for cell in result.cells:
         if cell.verdict in (Verdict.EA, Verdict.OTHER):
             rows += ["", f"**{cell.name}**: {cell.breached} of {cell.done} runs failed", ""]

@@ -1,8 +1,8 @@
 """Generated visits: a scenario for an EA beside an FA that neither author wrote.
 
 A visit stages what a stranger's EA meets anywhere: the building's map (one that has
-every place the EA names), the robot at its entrance, and a visitor who stands by
-it, follows it, answers both applications' questions from their own grammars,
+every place the EA can go to: :mod:`._places`), the robot at its entrance, and a visitor
+who stands by it, follows it, answers both applications' questions from their own grammars,
 touches the robot, walks away to the far end of the building and comes back; a
 message from each sender the EA listens for, a server's reply to what either
 application sends, a sound either one listens for, and words said of the visitor's
@@ -26,7 +26,7 @@ from xml.sax.saxutils import quoteattr
 from prima.dsl import Document, Grammar, Handler, HandlerKind, If, Request, Send
 from prima.sim import WorldMap
 
-__all__ = ["VISITS", "Visit", "beside", "listens", "map_for", "questions", "sends", "starts",
+__all__ = ["VISITS", "Visit", "beside", "listens", "questions", "sends", "starts",
            "visit_scenario"]
 
 VISITS = ("willing", "declining", "hesitant", "silent")
@@ -190,16 +190,6 @@ def questions(document: Document) -> list[tuple[str, list[str]]]:
 
 
 # ---------------------------------------------------------------------------- the map
-
-def map_for(document: Document,
-            maps: Sequence[tuple[Path, WorldMap]]) -> tuple[Path, WorldMap] | None:
-    """The first map that has every place the document names (None: none has)."""
-    named = {p.name for p in document.places}
-    for path, world in maps:
-        if named <= {p.name for p in world.places}:
-            return path, world
-    return None
-
 
 def _clear(world: WorldMap, x: float, y: float, fx: float, fy: float) -> bool:
     """Nothing of the map within 0.5 m of the way from (fx, fy) to (x, y), nor of (x, y)."""

@@ -48,6 +48,7 @@ from prima.dsl._grammar import parser
 from prima.dsl._grammar import prebuilt as prebuilt_parser
 from prima.dsl._syntax import Token as ParseToken
 from prima.dsl._syntax import Tree as ParseTree
+from prima.dsl._kept import Kept, keeping
 from prima.dsl._loader import (
     NAMESPACE,
     check_document,
@@ -123,6 +124,7 @@ __all__ = [
     "CommandCall",
     "Compiled",
     "Document",
+    "Kept",
     "EventDecl",
     "Goto",
     "Grammar",
@@ -159,6 +161,7 @@ __all__ = [
     "default_profile",
     "element_name",
     "fast_parse",
+    "keeping",
     "load_document",
     "literal_places",
     "unknown_places",

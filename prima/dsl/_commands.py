@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING
 
@@ -18,6 +19,7 @@ from lxml import etree
 from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
 from prima.dsl._elements import children
 from prima.dsl._expr import (
+    MEMO_TEXT,
     ChainArg,
     ChainStep,
     Compiled,
@@ -31,6 +33,7 @@ from prima.dsl._expr import (
     string_literal,
 )
 from prima.dsl._model import CommandCall
+from prima.dsl._profile import RobotProfile
 from prima.vocab import MAX_NUMBER, AppKind
 from prima.xmlio import local_name
 
@@ -134,6 +137,71 @@ def _note_place(b: Builder, spec: CommandSpec, param: Param, raw: str, spot: Spo
 def _extra_attr(b: Builder, spec: CommandSpec, el: etree._Element) -> Compiled | None:
     param = b.profile.extras.get(spec.name, {}).get(el.get("name", ""))
     return compile_attribute(b, param.kind if param else ParamKind.TEXT, el, "value")
+
+
+def bind_chain(b: Builder, el: etree._Element, text: str,
+               steps: Sequence[ChainStep]) -> list[CommandCall | None]:
+    """The Commands of a chain (:func:`bind_step` each). Where the builder keeps
+    (:func:`~prima.dsl._kept.keeping`), a short chain bound without a problem is kept: the
+    same text bound again, in the same setting (the robot profile, the kind of
+    application, the variables declared, inside a handler or not), gives the same
+    Commands, each located where this chain is written, and the same labels, places
+    and names to check."""
+    kept = b.kept
+    if kept is None or len(text) > MEMO_TEXT:
+        return [bind_step(b, el, text, step) for step in steps]
+    key = (text, b.kind, b.max_text, b.in_handler, b.variable_key)
+    found = kept.chains.get(key)
+    if found is not None and found.profile is b.profile:
+        return found.replay(b, el)
+    marks = (len(b.problems), len(b.refs.variables), len(b.refs.grammars), len(b.places))
+    calls = [bind_step(b, el, text, step) for step in steps]
+    if len(b.problems) == marks[0] and all(calls):
+        kept.chains.put(key, KeptChain.record(b, steps, calls, marks))
+    return calls
+
+
+@dataclass(frozen=True)
+class KeptChain:
+    """A chain's Commands as bound once, with what binding them asked the builder to
+    check later, located in the chain's text (where, index) so that they can be
+    replayed for another element that holds the same text."""
+
+    profile: RobotProfile
+    calls: tuple[tuple[CommandCall, int, int], ...]
+    """Each Command, where its step and its label are written."""
+    variables: tuple[tuple[str, str | None, int], ...]
+    grammars: tuple[tuple[str, str | None, int], ...]
+    places: tuple[tuple[str, str | None, int, str, str], ...]
+
+    @classmethod
+    def record(cls, b: Builder, steps: Sequence[ChainStep], calls: Sequence[CommandCall | None],
+               marks: tuple[int, int, int, int]) -> KeptChain:
+        _problems, variables, grammars, places = marks
+        return cls(
+            b.profile,
+            tuple((call, step.index, step.label_index)
+                  for call, step in zip(calls, steps, strict=True) if call is not None),
+            tuple((name, where, index) for name, (_el, where, index)
+                  in b.refs.variables[variables:]),
+            tuple((name, where, index) for name, (_el, where, index)
+                  in b.refs.grammars[grammars:]),
+            tuple((name, where, index, command, param) for name, (_el, where, index), command,
+                  param in b.places[places:]))
+
+    def replay(self, b: Builder, el: etree._Element) -> list[CommandCall | None]:
+        out: list[CommandCall | None] = []
+        for call, index, label_index in self.calls:
+            again = CommandCall(call.command, dict(call.args), dict(call.extra), call.label,
+                                b.loc((el, "#text", index)), call.grammar, call.into)
+            if again.label is not None:
+                b.add_label(again.label, again, (el, "#text", label_index))
+            out.append(again)
+        b.refs.variables.extend((name, (el, where, index)) for name, where, index in self.variables)
+        b.refs.grammars.extend((name, (el, where, index)) for name, where, index in self.grammars)
+        b.places.extend((name, (el, where, index), command, param)
+                        for name, where, index, command, param in self.places)
+        return out
 
 
 def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> CommandCall | None:

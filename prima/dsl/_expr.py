@@ -810,8 +810,31 @@ def string_literal(arg: ChainArg) -> str | None:
 
 
 def compile_chain_arg(arg: ChainArg, source: str, *, max_text: int = MAX_TEXT) -> Compiled:
-    """Compile a chain argument as an expression (the chain was measured when parsed)."""
-    return _Compiler(source, max_text).compile(arg.tree)
+    """Compile a chain argument as an expression (the chain was measured when parsed). The
+    arguments of a short chain are compiled once per process (see :data:`MEMO_TEXT`)."""
+    if len(source) <= MEMO_TEXT:
+        return _chain_args(source, arg.index, max_text, _Along(arg))
+    return _compile_chain_arg(source, max_text, _Along(arg))
+
+
+def _compile_chain_arg(source: str, max_text: int, arg: _Along) -> Compiled:
+    return _Compiler(source, max_text).compile(arg.value.tree)
+
+
+class _Along:
+    """A chain argument riding along a memo's key without being part of it: the chain's
+    text and where the argument begins in it say which argument it is."""
+
+    __slots__ = ("value",)
+
+    def __init__(self, value: ChainArg) -> None:
+        self.value = value
+
+    def __hash__(self) -> int:
+        return 0
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, _Along)
 
 
 # ---------------------------------------------------------------- compiler
@@ -1159,16 +1182,24 @@ def _skip(source: str, at: int, chars: str, step: int) -> int:
 # ---------------------------------------------------------------- memo
 
 MEMO_TEXT = 256
-"""Longest expression, template or chain whose compiled form (or parse) is kept and
-reused for the same text in this process: documents repeat many short texts
-(``0``, ``count + 1``, ``Speak("Please say yes or no.")``). What is kept holds
-positions relative to the text only, so each use is located where it is written.
-Faults are not kept: a faulty text is compiled again and fails again."""
+"""Longest expression, template or chain whose compiled form (or parse, and its
+arguments' compiled forms) is kept and reused for the same text in this process:
+documents repeat many short texts (``0``, ``count + 1``, ``Speak("Please say yes
+or no.")``), and ``prima lsp`` checks a document again at every pause in the
+typing, most of its texts unchanged. What is kept holds positions relative to the
+text only, so each use is located where it is written. Faults are not kept: a
+faulty text is compiled again and fails again."""
 
-MEMO_ENTRIES = 1024
-"""How many texts of each kind are kept (the least recently used go first), which
-bounds the memory untrusted documents can make the process keep."""
+MEMO_ENTRIES = 4096
+"""How many texts of each kind are kept (the least recently used go first): every
+text of a document of 5,000 lines, and a bound on the memory untrusted documents
+can make the process keep (at most :data:`MEMO_TEXT` characters each)."""
 
 _expressions = lru_cache(maxsize=MEMO_ENTRIES)(_compile_expression)
 _templates = lru_cache(maxsize=MEMO_ENTRIES)(_compile_template)
 _chains = lru_cache(maxsize=MEMO_ENTRIES)(_parse_chain)
+
+
+@lru_cache(maxsize=MEMO_ENTRIES)
+def _chain_args(source: str, index: int, max_text: int, arg: _Along) -> Compiled:
+    return _compile_chain_arg(source, max_text, arg)

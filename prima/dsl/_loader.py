@@ -14,13 +14,15 @@ from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, NamedTuple
 
 from lxml import etree
 
 from prima.suggest import did_you_mean, similar
 from prima.catalog import ParamKind
-from prima.dsl._commands import bind_element, bind_step, compile_attribute, element_name
+from prima.dsl._commands import bind_chain, bind_element, compile_attribute, element_name
 from prima.dsl._elements import elements, flag
+from prima.dsl._kept import kept_now
 from prima.dsl._expr import (
     MAX_CHAIN_COMMANDS,
     Compiled,
@@ -124,6 +126,9 @@ class Builder:
         self.refs = _Refs()
         self.variable_names = dict.fromkeys(v.get("name", "") for v in self._top("var"))
         """Every declared variable, in document order."""
+        self.variable_key = frozenset(self.variable_names)
+        self.kept = kept_now()
+        """Where chains and states are kept and replayed from, if anywhere."""
         self.labels: dict[str, CommandCall] = {}
         self.timers: dict[str, tuple[bool, Spot]] = {}
         self.states: dict[str, State] = {}
@@ -132,11 +137,16 @@ class Builder:
         self._state_elements: dict[str, etree._Element] = {}
         self._goto_elements: dict[Goto, etree._Element] = {}
         """Each <goto> read, by the action it became."""
+        self.goto_log: list[tuple[Goto, etree._Element]] = []
+        self.label_log: list[tuple[str, CommandCall, Spot]] = []
+        self.timer_log: list[tuple[str, bool, Spot, Spot]] = []
+        """Every <goto>, Command id and timer start, in the order read (states kept and
+        replayed, :class:`KeptState`, replay them)."""
         self.in_handler = False
         self._carets: set[int] = set()
         self._hints = 0
         self._known: dict[str, str] = {}
-        self._places: list[tuple[str, Spot, str, str]] = []
+        self.places: list[tuple[str, Spot, str, str]] = []
         """Places written by name as Command arguments: name, where, Command, argument."""
 
     # ------------------------------------------------------------ reporting
@@ -201,7 +211,9 @@ class Builder:
         el, where, base = spot
         for name, index in compiled.names:
             self.refs.variables.append((name, (el, where, base + index)))
-        for name, index in sorted(compiled.event_fields, key=lambda f: f[1]):
+        fields = sorted(compiled.event_fields, key=lambda f: f[1]) if compiled.event_fields \
+            else ()
+        for name, index in fields:
             if name not in EVENT_FIELDS:
                 self.warning((el, where, base + index),
                              f"event field '{name}' is not one PRIMA's events carry: it is "
@@ -247,7 +259,7 @@ class Builder:
 
     def literal_place(self, name: str, spot: Spot, command: str, param: str) -> None:
         """A place written by name as a Command's argument (the map checks it, if known)."""
-        self._places.append((name, spot, command, param))
+        self.places.append((name, spot, command, param))
 
     def need_grammar(self, name: str, spot: Spot) -> None:
         """The document must declare this grammar (checked once all is read)."""
@@ -259,6 +271,7 @@ class Builder:
 
     def add_label(self, label: str, call: CommandCall, spot: Spot) -> None:
         """Record a Command's id, which handlers refer to; ids are unique in a document."""
+        self.label_log.append((label, call, spot))
         if label in self.labels:
             first = self.labels[label].loc
             self.error(spot, f"duplicate Command id '{label}' (first used at line {first.line})")
@@ -278,12 +291,18 @@ class Builder:
         events = self._events()
         handlers: list[Handler] = []
         description = ""
-        for el in elements(root):
+        tops = elements(root)
+        starts = [self.doc.where.offset(el) for el in tops]
+        head = self.doc.where.source[:starts[0] or 0] if starts else ""
+        for i, el in enumerate(tops):
             tag = local_name(el)
             if tag == "description":
                 description = " ".join((el.text or "").split())
             elif tag.startswith("on"):
                 handlers.append(self._handler(el))
+            elif tag == "state" and starts[i] is not None and self.kept is not None:
+                after = starts[i + 1] if i + 1 < len(starts) else None
+                self._add_kept_state(el, head, self.doc.where.source[starts[i]:after])
             elif tag in ("state", "stream", "block"):
                 self._state_group(el, None, None)
         self._check_references(events)
@@ -300,7 +319,7 @@ class Builder:
             streams=self.streams, blocks=self.blocks, commands=dict(self.labels),
             timers=frozenset(self.timers),
             places=tuple(sorted((PlaceRef(name, self.loc(spot), command, param)
-                                 for name, spot, command, param in self._places),
+                                 for name, spot, command, param in self.places),
                                 key=lambda p: (p.loc.line, p.loc.col))),
         )
 
@@ -420,9 +439,32 @@ class Builder:
                  block: etree._Element | None) -> list[str]:
         return [sid for child in elements(el) for sid in self._state_group(child, stream, block)]
 
+    def _add_kept_state(self, el: etree._Element, head: str, written: str) -> None:
+        """A state written at the top level, built, or replayed from the same text
+        written at the same place in the same setting (see :class:`KeptState`)."""
+        kept = self.kept
+        if kept is None or len(written) > MAX_KEPT_STATE:
+            self._add_state(el, None, None)
+            return
+        line, col = self.position((el, None, 0))
+        key = (written, line, col, head, self.kind, self.max_text, self.variable_key)
+        found = kept.states.get(key)
+        if found is not None and found.profile is self.profile:
+            self._register_state(el, found.replay(self, el))
+            return
+        marks = _Marks.of(self)
+        state = self._state(el, None, None)
+        if len(self.problems) == marks.problems:
+            made = KeptState.record(self, el, state, marks)
+            if made is not None:
+                kept.states.put(key, made, len(written))
+        self._register_state(el, state)
+
     def _add_state(self, el: etree._Element, stream: etree._Element | None,
                    block: etree._Element | None) -> str:
-        state = self._state(el, stream, block)
+        return self._register_state(el, self._state(el, stream, block))
+
+    def _register_state(self, el: etree._Element, state: State) -> str:
         self._state_elements.setdefault(state.id, el)
         if state.id in self.states:
             self.error((el, "id", 0), f"duplicate state id '{state.id}' "
@@ -540,15 +582,15 @@ class Builder:
                 self.warning((el, None, 0), f"never runs: the <goto> at line "
                                             f"{self.loc_of(goto).line} leaves the state first")
                 warned = True
-            action = self._action(el)
+            tag = local_name(el)
+            action = self._action(el, tag)
             if action is not None:
                 out.append(action)
-            if goto is None and local_name(el) == "goto":
+            if goto is None and tag == "goto":
                 goto = el
         return tuple(out)
 
-    def _action(self, el: etree._Element) -> Action | None:
-        tag = local_name(el)
+    def _action(self, el: etree._Element, tag: str) -> Action | None:
         read = _ACTIONS.get(tag)
         if read is None:
             self.error((el, None, 0), f"<{tag}> is not an action")
@@ -580,7 +622,7 @@ class Builder:
             except ExpressionError as fault:
                 self.fault((el, "#text", 0), fault)
                 return None
-            calls = [bind_step(self, el, text, step) for step in steps]
+            calls = bind_chain(self, el, text, steps)
         else:
             children = elements(el)
             if len(children) > MAX_CHAIN_COMMANDS:
@@ -622,6 +664,7 @@ class Builder:
         self.refs.gotos.append((el.get("state", ""), (el, "state", 0)))
         goto = Goto(el.get("state", ""), self.loc_of(el))
         self._goto_elements[goto] = el
+        self.goto_log.append((goto, el))
         return goto
 
     def _send(self, el: etree._Element) -> Send | None:
@@ -637,12 +680,17 @@ class Builder:
         reactive = flag(el, "reactive")
         if reactive and self.kind is AppKind.EA:
             self.error((el, "reactive", 0), "only an FA may mark its own events reactive")
-        if name in self.timers and self.timers[name][0] != reactive:
-            self.error((el, "reactive", 0), f"timer '{name}' is started elsewhere with a "
-                                            "different reactive flag")
-        self.timers.setdefault(name, (reactive, (el, "name", 0)))
+        self.note_timer(name, reactive, (el, "reactive", 0), (el, "name", 0))
         after = compile_attribute(self, ParamKind.NUMBER, el, "after")
         return StartTimer(name, after, reactive, self.loc_of(el)) if after else None
+
+    def note_timer(self, name: str, reactive: bool, flag_at: Spot, name_at: Spot) -> None:
+        """A timer started: every start of one timer gives it the same reactive flag."""
+        self.timer_log.append((name, reactive, flag_at, name_at))
+        if name in self.timers and self.timers[name][0] != reactive:
+            self.error(flag_at, f"timer '{name}' is started elsewhere with a "
+                                "different reactive flag")
+        self.timers.setdefault(name, (reactive, name_at))
 
     def _cancel_timer(self, el: etree._Element) -> CancelTimer:
         self.refs.cancels.append((el.get("name", ""), (el, "name", 0)))
@@ -794,6 +842,99 @@ class Builder:
                 self.warning((self._state_elements[state.id], None, 0),
                              f"state '{state.id}' is unreachable from the initial state "
                              f"'{initial}'")
+
+
+MAX_KEPT_STATE = 4096
+"""Longest state (characters, from its ``<state`` to the next element at the top
+level) whose building is kept (:func:`~prima.dsl._kept.keeping`)."""
+
+
+class _Marks(NamedTuple):
+    """How much the builder had collected before a state was read."""
+
+    problems: int
+    refs: tuple[int, ...]
+    places: int
+    labels: int
+    timers: int
+    gotos: int
+
+    @classmethod
+    def of(cls, b: Builder) -> _Marks:
+        return cls(len(b.problems), tuple(len(getattr(b.refs, f)) for f in _REFS),
+                   len(b.places), len(b.label_log), len(b.timer_log), len(b.goto_log))
+
+
+_REFS = ("gotos", "variables", "grammars", "handlers", "raises", "cancels")
+"""The lists of :class:`_Refs`, each of entries that end in a spot but ``handlers``'."""
+
+Where = tuple[int, str | None, int]
+"""A spot inside a kept state: (the element's index in the state's tree, where, index)."""
+
+
+@dataclass(frozen=True)
+class KeptState:
+    """A top-level state built without a problem, and what building it asked the builder
+    to check later, its spots as indexes in the state's own tree. The same text written
+    at the same line and column, in the same setting, is the same state: its model (every
+    location the same) is used again, and what it asked is asked again for the new tree,
+    where the checks that look across states (Command ids, timers' flags) run again."""
+
+    profile: RobotProfile
+    state: State
+    refs: tuple[tuple[tuple[Any, ...], ...], ...]
+    places: tuple[tuple[str, Where, str, str], ...]
+    labels: tuple[tuple[str, CommandCall, Where], ...]
+    timers: tuple[tuple[str, bool, Where, Where], ...]
+    gotos: tuple[tuple[Goto, int], ...]
+
+    @classmethod
+    def record(cls, b: Builder, el: etree._Element, state: State,
+               marks: _Marks) -> KeptState | None:
+        index = {node: i for i, node in enumerate(el.iter())}
+
+        def where(spot: Spot) -> Where:
+            node, what, at = spot
+            return index[node], what, at
+
+        try:
+            refs = []
+            for name, mark in zip(_REFS, marks.refs, strict=True):
+                entries = getattr(b.refs, name)[mark:]
+                refs.append(tuple((k, key, where(spot), r) for k, key, spot, r in entries)
+                            if name == "handlers" else
+                            tuple((value, where(spot)) for value, spot in entries))
+            return cls(
+                b.profile, state, tuple(refs),
+                tuple((n, where(spot), c, p) for n, spot, c, p in b.places[marks.places:]),
+                tuple((label, call, where(spot))
+                      for label, call, spot in b.label_log[marks.labels:]),
+                tuple((n, r, where(f), where(a)) for n, r, f, a in b.timer_log[marks.timers:]),
+                tuple((goto, index[node]) for goto, node in b.goto_log[marks.gotos:]))
+        except KeyError:  # a spot outside the state's own tree: not kept
+            return None
+
+    def replay(self, b: Builder, el: etree._Element) -> State:
+        nodes = list(el.iter())
+
+        def spot(at: Where) -> Spot:
+            return nodes[at[0]], at[1], at[2]
+
+        for name, entries in zip(_REFS, self.refs, strict=True):
+            into = getattr(b.refs, name)
+            if name == "handlers":
+                into.extend((k, key, spot(at), r) for k, key, at, r in entries)
+            else:
+                into.extend((value, spot(at)) for value, at in entries)
+        b.places.extend((n, spot(at), c, p) for n, at, c, p in self.places)
+        for label, call, at in self.labels:
+            b.add_label(label, call, spot(at))
+        for name, reactive, flag_at, name_at in self.timers:
+            b.note_timer(name, reactive, spot(flag_at), spot(name_at))
+        for goto, at_node in self.gotos:
+            b._goto_elements[goto] = nodes[at_node]
+            b.goto_log.append((goto, nodes[at_node]))
+        return self.state
 
 
 _ACTIONS: Mapping[str, Callable[[Builder, etree._Element], Action | None]] = {

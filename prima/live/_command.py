@@ -55,7 +55,7 @@ def base_of(options: Options) -> Base:
 
 
 def _apps_base(options: Options) -> Base:
-    from prima.check import map_for, sends, starts
+    from prima.check import destinations, map_for, sends, starts
     from prima.dsl import default_profile, load_document, load_profile
     from prima.sim import load_map
 
@@ -72,7 +72,8 @@ def _apps_base(options: Options) -> Base:
         maps = [(p, load_map(p)) for p in sorted(folder.glob("*.xml"))] if folder else []
     world = next((m for m in maps if all(map_for(d, [m]) for _p, d in documents)), None)
     if world is None:
-        named = sorted({p.name for _path, d in documents for p in d.places})
+        named = sorted({place for _path, d in documents for where in destinations(d)
+                        for place in where.places or ()})
         where = (f"in {shown_path(options.map_file)}" if options.map_file
                  else f"among the maps in {shown_path(options.maps)}" if options.maps
                  else "(no maps are installed: give one with --map)")

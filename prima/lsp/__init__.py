@@ -25,13 +25,22 @@ Neovim: ``docs/editors.md``.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
+from typing import IO, BinaryIO, TextIO
 
 __all__ = ["serve"]
 
 
-def serve(robot: Path | None = None) -> None:
-    """Serve the protocol on stdin and stdout until the editor says exit."""
+def serve(robot: Path | None = None, *, stdin: IO[bytes] | None = None,
+          stdout: BinaryIO | None = None, err: TextIO | None = None) -> int:
+    """Serve the protocol on stdin and stdout until the editor says exit (or the input
+    ends); the exit status. What goes wrong with the client's messages is said on
+    ``err``, one line each (``docs/editors.md``, *Bounds*)."""
     from prima.lsp._server import build_server
+    from prima.lsp._stream import serve as serve_streams
 
-    build_server(robot).start_io()
+    said = err or sys.stderr
+    server = build_server(robot, err=said)
+    return serve_streams(server, stdin or sys.stdin.buffer, stdout or sys.stdout.buffer,
+                         said, server.diagnostics.run)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 
@@ -23,7 +24,10 @@ from prima.lsp._workspace import Buffer, Place, Setting, Workspace
 from prima.lsp._xml import Attr, Tag, Where, locate
 from prima.vocab import PREDEFINED_EVENTS
 
-__all__ = ["Features", "Hover", "Item", "Target", "event_fields"]
+__all__ = ["MAX_KEPT", "Features", "Hover", "Item", "Target", "event_fields"]
+
+MAX_KEPT = 256
+"""Most buffers whose index and setting are kept between requests."""
 
 PXML = "urn:prima:pxml:1"
 SCENARIO = "urn:prima:scenario:1"
@@ -81,17 +85,51 @@ class Target:
     end: int
 
 
-@dataclass
 class _Index:
-    """What a PXML buffer declares, read forgivingly."""
+    """What a PXML buffer declares, read forgivingly (its Command ids on first need: they
+    take reading every chain)."""
 
-    states: dict[str, Attr]
-    variables: dict[str, Tag]
-    grammars: dict[str, Attr]
-    events: dict[str, Attr]
-    timers: dict[str, Attr]
-    labels: dict[str, tuple[int, int, str]]
-    """label -> where it is written (start, end) and its Command."""
+    def __init__(self, doc: _Doc) -> None:
+        self._doc = doc
+        self.states: dict[str, Attr] = {}
+        self.variables: dict[str, Tag] = {}
+        self.grammars: dict[str, Attr] = {}
+        self.events: dict[str, Attr] = {}
+        self.timers: dict[str, Attr] = {}
+        root = doc.buffer.xml.root
+        for tag in doc.buffer.xml.tags:
+            if tag.name == "state":
+                _first(self.states, tag.attr("id"))
+            elif tag.name == "var" and tag.parent is root:
+                name = tag.get("name")
+                if name and name not in self.variables:
+                    self.variables[name] = tag
+            elif tag.name == "grammar":
+                _first(self.grammars, tag.attr("id"))
+            elif tag.name == "event" and tag.parent is root:
+                _first(self.events, tag.attr("name"))
+            elif tag.name == "timer":
+                _first(self.timers, tag.attr("name"))
+
+    @cached_property
+    def labels(self) -> dict[str, tuple[int, int, str]]:
+        """label -> where it is written (start, end) and its Command."""
+        doc = self._doc
+        found: dict[str, tuple[int, int, str]] = {}
+        elements = {element_name(c.name): c.name for c in doc.setting.profile.catalog()}
+        for tag in doc.buffer.xml.tags:
+            if tag.name == "chain":
+                start, text = tag.text(doc.source)
+                commands = {label: name for name, _at, label in calls(text) if label}
+                for label, at in labels(text):
+                    found.setdefault(label, (start + at, start + at + len(label),
+                                             commands.get(label, "")))
+            if tag.parent is not None and tag.parent.name == "request":
+                ident = tag.attr("id")
+                command = tag.get("name") if tag.name == "command" else elements.get(tag.name, "")
+                if ident is not None and ident.value_start >= 0:
+                    found.setdefault(ident.value, (ident.value_start, ident.value_end, command))
+        return found
 
 
 class _Doc:
@@ -100,6 +138,7 @@ class _Doc:
     def __init__(self, workspace: Workspace, buffer: Buffer) -> None:
         self.workspace = workspace
         self.buffer = buffer
+        self.generation = workspace.generation
         self.source = buffer.text
         self.namespace = buffer.namespace
         self._setting: Setting | None = None
@@ -125,40 +164,7 @@ class _Doc:
         return self._index
 
     def _build_index(self) -> _Index:
-        xml = self.buffer.xml
-        root = xml.root
-        states: dict[str, Attr] = {}
-        variables: dict[str, Tag] = {}
-        grammars: dict[str, Attr] = {}
-        events: dict[str, Attr] = {}
-        timers: dict[str, Attr] = {}
-        found: dict[str, tuple[int, int, str]] = {}
-        elements = {element_name(c.name): c.name for c in self.setting.profile.catalog()}
-        for tag in xml.tags:
-            if tag.name == "state":
-                _first(states, tag.attr("id"))
-            elif tag.name == "var" and tag.parent is root:
-                name = tag.get("name")
-                if name and name not in variables:
-                    variables[name] = tag
-            elif tag.name == "grammar":
-                _first(grammars, tag.attr("id"))
-            elif tag.name == "event" and tag.parent is root:
-                _first(events, tag.attr("name"))
-            elif tag.name == "timer":
-                _first(timers, tag.attr("name"))
-            elif tag.name == "chain":
-                start, text = tag.text(self.source)
-                commands = {label: name for name, _at, label in calls(text) if label}
-                for label, at in labels(text):
-                    found.setdefault(label, (start + at, start + at + len(label),
-                                             commands.get(label, "")))
-            if tag.parent is not None and tag.parent.name == "request":
-                ident = tag.attr("id")
-                command = tag.get("name") if tag.name == "command" else elements.get(tag.name, "")
-                if ident is not None and ident.value_start >= 0:
-                    found.setdefault(ident.value, (ident.value_start, ident.value_end, command))
-        return _Index(states, variables, grammars, events, timers, found)
+        return _Index(self)
 
     def element(self, tag: Tag) -> ElementInfo | None:
         return element_info(self.namespace, tag.path())
@@ -254,14 +260,33 @@ def _place_doc(place: Place) -> str:
 
 
 class Features:
-    """Completion, hover and definition over a workspace's buffers."""
+    """Completion, hover and definition over a workspace's buffers.
+
+    What a buffer declares (its states, variables, labels...) and what is in force
+    for it are worked out once per version of the buffer and generation of the
+    workspace, and kept for the requests that follow.
+    """
 
     def __init__(self, workspace: Workspace) -> None:
         self.workspace = workspace
+        self._docs: dict[Path, _Doc] = {}
 
     def _doc(self, path: Path) -> _Doc | None:
         buffer = self.workspace.buffer(path)
-        return None if buffer is None else _Doc(self.workspace, buffer)
+        if buffer is None:
+            return None
+        kept = self._docs.get(path)
+        if kept is not None and kept.buffer is buffer \
+                and kept.generation == self.workspace.generation:
+            return kept
+        if len(self._docs) >= MAX_KEPT:
+            self._docs.clear()
+        made = self._docs[path] = _Doc(self.workspace, buffer)
+        return made
+
+    def drop(self, path: Path) -> None:
+        """Forget what was worked out for ``path`` (closed)."""
+        self._docs.pop(path, None)
 
     # ---------------------------------------------------------------- completion
 

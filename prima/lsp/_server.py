@@ -1,29 +1,35 @@
 """The protocol: pygls serves :class:`~prima.lsp._features.Features` and the
-workspace's diagnostics over stdio.
+workspace's diagnostics (:mod:`prima.lsp._schedule`) over stdio (:mod:`prima.lsp._stream`).
 
-Offsets inside PRIMA are Python string indices; the protocol counts UTF-16 code
-units by default. pygls's document position codec converts both ways, so a
-line with an emoji or a CJK character still lands on the right character.
+Offsets inside PRIMA are Python string indices; the protocol counts lines (at
+``\\n``, ``\\r\\n`` or ``\\r``) and UTF-16 code units by default. A buffer's line
+starts are found once per version; pygls's position codec converts the
+characters of the one line concerned, so a line with an emoji or a CJK character
+still lands on the right character, and no request walks the whole buffer.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
+import sys
+from bisect import bisect_right
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from lsprotocol import types
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
-from pygls.workspace import TextDocument
+from pygls.workspace import PositionCodec
 
 from prima import __version__
+from prima.collecting import settle
 from prima.errors import Problem, Severity
 from prima.lsp._features import Features, Item, Target
-from prima.lsp._workspace import Workspace
+from prima.lsp._schedule import DEBOUNCE, Diagnostics
+from prima.lsp._workspace import Buffer, Workspace, resolved
 
-__all__ = ["TRIGGERS", "build_server"]
+__all__ = ["TRIGGERS", "PrimaServer", "build_server"]
 
 TRIGGERS = ["<", '"', "'", "(", ",", ".", "=", " ", ":", "[", "{"]
 """Characters after which an editor asks for completions on its own."""
@@ -48,16 +54,27 @@ _SEVERITY = {Severity.ERROR: types.DiagnosticSeverity.Error,
              Severity.WARNING: types.DiagnosticSeverity.Warning}
 _SNIPPET = re.compile(r"\$\{\d+:([^}]*)\}|\$\d+")
 _TOKEN = re.compile(r"[\w\-.:]+")
+_LINE_END = re.compile(r"[\r\n]")
 
 
 class PrimaServer(LanguageServer):
-    """A language server with PRIMA's workspace."""
+    """A language server with PRIMA's workspace, and its diagnostics' schedule."""
 
-    def __init__(self, robot: Path | None) -> None:
+    def __init__(self, robot: Path | None, *, debounce: float = DEBOUNCE,
+                 err: TextIO | None = None) -> None:
         super().__init__("prima", __version__,
                          text_document_sync_kind=types.TextDocumentSyncKind.Incremental)
         self.robot = robot
+        self.err = err or sys.stderr
+        """Where what goes wrong is said, one line each."""
         self.prima: Workspace | None = None
+        self._features: Features | None = None
+        self.diagnostics = Diagnostics(self.check, debounce=debounce, failed=self._failed)
+        self.keys: dict[str, Path] = {}
+        """Each open document's resolved path."""
+        self.depends: dict[str, frozenset[Path]] = {}
+        """What each open document's last check depended on."""
+        self._settled = False
 
     def files(self) -> Workspace:
         """PRIMA's view of the workspace, made on first need (after initialize)."""
@@ -69,45 +86,117 @@ class PrimaServer(LanguageServer):
         return self.prima
 
     def features(self) -> Features:
-        return Features(self.files())
+        if self._features is None:
+            self._features = Features(self.files())
+        return self._features
+
+    def buffer(self, uri: str) -> Buffer | None:
+        """An open document's buffer, in step with the editor's text (None: not open)."""
+        doc = self.workspace.text_documents.get(uri)
+        if doc is None:
+            return None
+        return self.files().open(_path(uri), doc.source)
+
+    # ---- diagnostics
+
+    def changed(self, uri: str, delay: float | None = None) -> None:
+        """``uri`` changed: check it and the open documents whose problems it may change."""
+        files = self.files()
+        affected = files.affected(_path(uri), [(self.keys[u], on) for u, on
+                                                in self.depends.items() if u in self.keys])
+        self.diagnostics.due([u for u, key in self.keys.items() if key in affected], delay)
+
+    def check(self, uri: str) -> Callable[[], None] | None:
+        """Check the open document ``uri`` as it is now; what publishes its problems."""
+        doc = self.workspace.text_documents.get(uri)
+        buffer = self.buffer(uri)
+        if doc is None or buffer is None:
+            return None
+        checked = self.files().check(_path(uri))
+        if not self._settled:  # what the first check loaded stays: never scanned again
+            self._settled = True
+            settle()
+        self.depends[uri] = checked.depends
+        codec, version = doc.position_codec, doc.version
+        found = [diagnostic(buffer, p, codec) for p in checked.problems]
+
+        def publish() -> None:
+            if uri in self.keys:  # (not closed meanwhile)
+                self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
+                    uri=uri, version=version, diagnostics=found))
+        return publish
+
+    def closed(self, uri: str) -> None:
+        """``uri`` is closed: its diagnostics cleared, the documents that read it checked
+        again (they now read the file on disk)."""
+        path = _path(uri)
+        self.files().close(path)
+        self.features().drop(path)
+        self.diagnostics.drop(uri)
+        self.depends.pop(uri, None)
+        if self.keys.pop(uri, None) is not None:
+            self.changed(uri)
+        self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
+            uri=uri, diagnostics=[]))
+
+    def snippets(self) -> bool:
+        """Whether the client takes completions as snippets."""
+        caps: Any = self.client_capabilities.text_document
+        return bool(caps and caps.completion and caps.completion.completion_item
+                    and caps.completion.completion_item.snippet_support)
+
+    def _failed(self, uri: str, exc: Exception) -> None:
+        print(f"prima lsp: checking {uri} failed: {type(exc).__name__}: {exc}",
+              file=self.err, flush=True)
 
 
 def _path(uri: str) -> Path:
     return Path(to_fs_path(uri) or uri)
 
 
-def _position(doc: TextDocument, offset: int) -> types.Position:
-    return doc.client_position_at_offset(offset)
+def position(buffer: Buffer, offset: int, codec: PositionCodec) -> types.Position:
+    """An offset of the buffer as the protocol counts it (lines; the client's units)."""
+    starts = buffer.line_starts
+    offset = min(max(offset, 0), len(buffer.text))
+    line = bisect_right(starts, offset) - 1
+    return types.Position(line, codec.client_num_units(buffer.text[starts[line]:offset]))
 
 
-def _range(doc: TextDocument, start: int, end: int) -> types.Range:
-    return types.Range(_position(doc, start), _position(doc, end))
+def offset(buffer: Buffer, at: types.Position, codec: PositionCodec) -> int:
+    """A position the client gives as an offset of the buffer."""
+    starts, text = buffer.line_starts, buffer.text
+    if at.line >= len(starts):
+        return len(text)
+    start = starts[at.line]
+    end = starts[at.line + 1] if at.line + 1 < len(starts) else len(text)
+    line = text[start:end].rstrip("\r\n")
+    found = codec.position_from_client_units([line], types.Position(0, at.character))
+    return start + min(found.character, len(line))
 
 
-def diagnostic(doc: TextDocument, problem: Problem) -> types.Diagnostic:
+def _range(buffer: Buffer, start: int, end: int, codec: PositionCodec) -> types.Range:
+    return types.Range(position(buffer, start, codec), position(buffer, end, codec))
+
+
+def diagnostic(buffer: Buffer, problem: Problem, codec: PositionCodec) -> types.Diagnostic:
     """A problem as the protocol says it: from its line and column (code points) to the
     end of the word there."""
-    lines = doc.lines
-    line = min(max(problem.line - 1, 0), max(len(lines) - 1, 0))
-    text = lines[line].rstrip("\r\n") if lines else ""
-    col = min(max(problem.col - 1, 0), len(text))
-    word = _TOKEN.match(text, col + (1 if text[col:col + 1] == "<" else 0))
-    end = max(word.end() if word else col + 1, col + 1)
-    start_at = types.Position(line, col)
-    end_at = types.Position(line, min(end, len(text)) if text else col)
-    codec = doc.position_codec
-    return types.Diagnostic(
-        range=types.Range(codec.position_to_client_units(lines, start_at),
-                          codec.position_to_client_units(lines, end_at)),
-        message=problem.message, severity=_SEVERITY[problem.severity], source="prima")
+    text = buffer.text
+    at = buffer.offset_of(problem.line, problem.col)
+    newline = _LINE_END.search(text, at)
+    line_end = newline.start() if newline else len(text)
+    word = _TOKEN.match(text, at + (1 if text[at:at + 1] == "<" else 0), line_end)
+    end = min(max(word.end() if word else at + 1, at + 1), line_end) if line_end > at else at
+    return types.Diagnostic(range=_range(buffer, at, end, codec), message=problem.message,
+                            severity=_SEVERITY[problem.severity], source="prima")
 
 
 def _plain(snippet: str) -> str:
     return _SNIPPET.sub(lambda m: m.group(1) or "", snippet)
 
 
-def _completion(doc: TextDocument, item: Item, offset: int, snippets: bool,
-                rank: int) -> types.CompletionItem:
+def _completion(buffer: Buffer, item: Item, at: int, snippets: bool, rank: int,
+                codec: PositionCodec) -> types.CompletionItem:
     text = item.insert if item.insert is not None else item.label
     snippet = item.snippet and snippets
     if item.snippet and not snippets:
@@ -116,99 +205,90 @@ def _completion(doc: TextDocument, item: Item, offset: int, snippets: bool,
         label=item.label, kind=_KINDS.get(item.kind), detail=item.detail or None,
         documentation=types.MarkupContent(types.MarkupKind.Markdown, item.doc)
         if item.doc else None,
-        text_edit=types.TextEdit(_range(doc, item.start, offset), text),
+        text_edit=types.TextEdit(_range(buffer, item.start, at, codec), text),
         insert_text_format=types.InsertTextFormat.Snippet if snippet
         else types.InsertTextFormat.PlainText,
         sort_text=f"{rank:04d}")
 
 
-def _location(ls: PrimaServer, target: Target) -> types.Location:
+def _location(ls: PrimaServer, target: Target, codec: PositionCodec) -> types.Location:
     uri = from_fs_path(str(target.path)) or str(target.path)
-    doc = ls.workspace.get_text_document(uri)
-    if not doc.source and target.path.is_file():
-        doc = TextDocument(uri, target.path.read_text(encoding="utf-8"))
-    return types.Location(uri, _range(doc, target.start, target.end))
+    buffer = ls.files().buffer(target.path)  # read within PRIMA's bound, if not open
+    if buffer is None:
+        return types.Location(uri, types.Range(types.Position(0, 0), types.Position(0, 0)))
+    return types.Location(uri, _range(buffer, target.start, target.end, codec))
 
 
-def build_server(robot: Path | None = None) -> PrimaServer:
+def build_server(robot: Path | None = None, *, debounce: float = DEBOUNCE,
+                 err: TextIO | None = None) -> PrimaServer:
     """The server: diagnostics as ``prima validate`` words them, completion, hover and
     go-to-definition for PXML documents, robot profiles, scenarios and maps."""
-    server = PrimaServer(robot)
-
-    def publish(ls: PrimaServer, uris: Iterable[str]) -> None:
-        files = ls.files()
-        for uri in uris:
-            doc = ls.workspace.get_text_document(uri)
-            files.open(_path(uri), doc.source)
-            problems = files.problems(_path(uri))
-            ls.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
-                uri=uri, version=doc.version,
-                diagnostics=[diagnostic(doc, p) for p in problems]))
-
-    def changed(ls: PrimaServer, uri: str) -> None:
-        files = ls.files()
-        doc = ls.workspace.get_text_document(uri)
-        buffer = files.open(_path(uri), doc.source)
-        others = [u for u in ls.workspace.text_documents if u != uri]
-        # a scenario, a map or a profile changes what is in force for the open documents
-        publish(ls, [uri, *(others if buffer.namespace != "urn:prima:pxml:1" else [])])
+    server = PrimaServer(robot, debounce=debounce, err=err)
 
     @server.feature(types.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: PrimaServer, params: types.DidOpenTextDocumentParams) -> None:
-        changed(ls, params.text_document.uri)
+        uri = params.text_document.uri
+        ls.keys[uri] = resolved(_path(uri))
+        ls.buffer(uri)
+        ls.changed(uri, delay=0.0)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: PrimaServer, params: types.DidChangeTextDocumentParams) -> None:
-        changed(ls, params.text_document.uri)
+        uri = params.text_document.uri
+        if uri in ls.keys:
+            ls.buffer(uri)
+            ls.changed(uri)
 
     @server.feature(types.TEXT_DOCUMENT_DID_SAVE)
     def did_save(ls: PrimaServer, params: types.DidSaveTextDocumentParams) -> None:
-        ls.files().forget()
-        changed(ls, params.text_document.uri)
+        ls.files().forget()  # (a file saved for the first time may be a new scenario)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls: PrimaServer, params: types.DidCloseTextDocumentParams) -> None:
-        ls.files().close(_path(params.text_document.uri))
-        ls.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
-            uri=params.text_document.uri, diagnostics=[]))
+        ls.closed(params.text_document.uri)
 
     @server.feature(types.WORKSPACE_DID_CHANGE_WATCHED_FILES)
     def watched(ls: PrimaServer, params: types.DidChangeWatchedFilesParams) -> None:
         ls.files().forget()
-        publish(ls, list(ls.workspace.text_documents))
+        for change in params.changes:
+            ls.changed(change.uri)
 
     @server.feature(types.TEXT_DOCUMENT_COMPLETION,
                     types.CompletionOptions(trigger_characters=TRIGGERS))
     def completion(ls: PrimaServer, params: types.CompletionParams) -> types.CompletionList:
         uri = params.text_document.uri
-        doc = ls.workspace.get_text_document(uri)
-        ls.files().open(_path(uri), doc.source)
-        offset = doc.offset_at_position(params.position)
-        caps: Any = ls.client_capabilities.text_document
-        snippets = bool(caps and caps.completion and caps.completion.completion_item
-                        and caps.completion.completion_item.snippet_support)
-        items = ls.features().complete(_path(uri), offset)
+        buffer = ls.buffer(uri)
+        if buffer is None:
+            return types.CompletionList(is_incomplete=False, items=[])
+        codec = ls.workspace.position_codec
+        at = offset(buffer, params.position, codec)
+        items = ls.features().complete(_path(uri), at)
+        snippets = ls.snippets()
         return types.CompletionList(is_incomplete=False, items=[
-            _completion(doc, item, offset, snippets, rank) for rank, item in enumerate(items)])
+            _completion(buffer, item, at, snippets, rank, codec)
+            for rank, item in enumerate(items)])
 
     @server.feature(types.TEXT_DOCUMENT_HOVER)
     def hover(ls: PrimaServer, params: types.HoverParams) -> types.Hover | None:
         uri = params.text_document.uri
-        doc = ls.workspace.get_text_document(uri)
-        ls.files().open(_path(uri), doc.source)
-        found = ls.features().hover(_path(uri), doc.offset_at_position(params.position))
+        buffer = ls.buffer(uri)
+        if buffer is None:
+            return None
+        codec = ls.workspace.position_codec
+        found = ls.features().hover(_path(uri), offset(buffer, params.position, codec))
         if found is None:
             return None
         return types.Hover(types.MarkupContent(types.MarkupKind.Markdown, found.text),
-                           _range(doc, found.start, found.end))
+                           _range(buffer, found.start, found.end, codec))
 
     @server.feature(types.TEXT_DOCUMENT_DEFINITION)
     def definition(ls: PrimaServer, params: types.DefinitionParams) -> list[types.Location]:
         uri = params.text_document.uri
-        doc = ls.workspace.get_text_document(uri)
-        ls.files().open(_path(uri), doc.source)
-        targets = ls.features().definition(_path(uri), doc.offset_at_position(params.position))
-        return [_location(ls, t) for t in targets]
+        buffer = ls.buffer(uri)
+        if buffer is None:
+            return []
+        codec = ls.workspace.position_codec
+        targets = ls.features().definition(_path(uri), offset(buffer, params.position, codec))
+        return [_location(ls, t, codec) for t in targets]
 
     return server
-

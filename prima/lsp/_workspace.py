@@ -14,22 +14,35 @@ places against no map. Unsaved buffers are read in place of their files
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+import re
+from collections import OrderedDict
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
+from typing import TYPE_CHECKING, NamedTuple
 
-from prima.dsl import RobotProfile, default_profile, load_profile
+from prima.collecting import no_collections
+from prima.dsl import Kept, RobotProfile, default_profile, keeping, load_profile
 from prima.errors import DocumentError, LocatedError, Problem
-from prima.lsp._xml import Tag, XmlText, scan
+from prima.lsp._xml import Tag, XmlText, first_tag, rescan, scan
 from prima.xmlio import read_source, unsaved
 
-__all__ = ["MAX_SCENARIOS", "Buffer", "Place", "Setting", "Workspace"]
+if TYPE_CHECKING:
+    from prima.dsl import Validation
+
+__all__ = ["MAX_READ", "MAX_SCENARIOS", "Buffer", "Checked", "Place", "Setting", "Workspace",
+           "resolved"]
 
 MAX_SCENARIOS = 2_000
 """Most ``*.xml`` files looked into for scenarios in a workspace."""
 
+MAX_READ = 256
+"""Most files not open in the editor whose text is kept (the least recently read go)."""
+
 SCENARIO_NS = "urn:prima:scenario:1"
+PXML_NS = "urn:prima:pxml:1"
 _SKIPPED = frozenset({".git", ".hg", ".svn", ".venv", "venv", "node_modules", "__pycache__",
                       "build", "dist", ".tox", ".mypy_cache", ".pytest_cache"})
 _ROLES = (("apps", "fa", "fa"), ("apps", "ea", "ea"), ("ea", "href", "ea"),
@@ -37,27 +50,73 @@ _ROLES = (("apps", "fa", "fa"), ("apps", "ea", "ea"), ("ea", "href", "ea"),
 """(element, attribute, role) of every application a scenario runs."""
 
 
-@dataclass
 class Buffer:
-    """A file's text as read: from the editor, or from disk."""
+    """A file's text as read: from the editor, or from disk. What is read of it is read
+    once, on first need: its tags (for completion, hover and definition), its lines."""
 
-    path: Path
-    text: str
-    xml: XmlText = field(init=False)
+    def __init__(self, path: Path, text: str, before: XmlText | None = None) -> None:
+        self.path = path
+        self.text = text
+        self._before = before
+        """An earlier version's scan, to take over (:func:`~prima.lsp._xml.rescan`)."""
 
-    def __post_init__(self) -> None:
-        self.xml = scan(self.text)
+    @cached_property
+    def xml(self) -> XmlText:
+        before, self._before = self._before, None
+        return scan(self.text) if before is None else rescan(before, self.text)
+
+    def hand_over(self) -> XmlText | None:
+        """This version's scan (or the one it was to take over), given up to the next
+        version; asked again, this buffer scans its text anew."""
+        made: XmlText | None = self.__dict__.pop("xml", None)
+        if made is None:
+            made, self._before = self._before, None
+        return made
+
+    @cached_property
+    def _root(self) -> Tag | None:
+        return first_tag(self.text)
 
     @property
     def namespace(self) -> str | None:
-        root = self.xml.root
+        root = self._root
         return None if root is None else root.get("xmlns") or None
 
     @property
     def kind(self) -> str:
         """A PXML document's ``kind`` (``fa``, ``ea``; empty if not written)."""
-        root = self.xml.root
+        root = self._root
         return "" if root is None else root.get("kind")
+
+    @property
+    def declared_robot(self) -> str | None:
+        """Its root's ``robot`` attribute, as written (a document's declared robot)."""
+        root = self._root
+        found = None if root is None else root.attr("robot")
+        return None if found is None else found.value
+
+    @cached_property
+    def line_starts(self) -> list[int]:
+        """Where each line begins, as the protocol counts lines (``\\n``, ``\\r\\n``,
+        ``\\r``)."""
+        return [0, *(m.end() for m in _BREAK.finditer(self.text))]
+
+    @cached_property
+    def _newline_starts(self) -> list[int]:
+        return [0, *(m.end() for m in re.finditer("\n", self.text))]
+
+    def offset_of(self, line: int, col: int) -> int:
+        """The offset of a problem's 1-based line and column (``prima validate`` counts
+        lines at ``\\n`` and columns in characters, after a byte-order mark)."""
+        starts = self._newline_starts
+        index = min(max(line - 1, 0), len(starts) - 1)
+        at = starts[index]
+        end = starts[index + 1] - 1 if index + 1 < len(starts) else len(self.text)
+        bom = 1 if index == 0 and self.text.startswith("\ufeff") else 0
+        return min(at + max(col - 1, 0) + bom, end)
+
+
+_BREAK = re.compile(r"\r\n|\r|\n")
 
 
 @dataclass(frozen=True)
@@ -85,15 +144,36 @@ class Setting:
     places: list[Place]
 
 
-def _key(path: Path) -> Path:
+def resolved(path: Path) -> Path:
+    """A path as the workspace keys it: resolved (absolute, if it cannot be)."""
     try:
         return path.resolve()
     except (OSError, RuntimeError):
         return path.absolute()
 
 
+class Checked(NamedTuple):
+    """A file's check: its problems, and the files they depend on (resolved paths)."""
+
+    problems: list[Problem]
+    depends: frozenset[Path]
+
+
+def _validation(profile: RobotProfile, robot: bool) -> Validation:
+    """A validation exactly as ``prima validate`` makes one (its scenario checks included).
+    The one place the language server names where that is made."""
+    from prima.cli import make_validation
+
+    return make_validation(profile, robot=robot)
+
+
 class Workspace:
-    """The buffers, the workspace's folders, and the robot given to the server."""
+    """The buffers, the workspace's folders, and the robot given to the server.
+
+    :attr:`generation` counts the changes that may change what is in force for a file
+    (a buffer that is not a PXML document changed, a buffer closed, files changed on
+    disk): what is worked out from them is kept until it moves on.
+    """
 
     def __init__(self, roots: list[Path], robot: Path | None = None) -> None:
         self.roots = roots
@@ -101,29 +181,41 @@ class Workspace:
         """``prima lsp --robot``: the profile documents are checked against, as
         ``prima validate --robot`` does (over a scenario's)."""
         self.buffers: dict[Path, Buffer] = {}
-        self._read: dict[Path, tuple[tuple[int, int], Buffer]] = {}
-        self._scenarios: list[Path] | None = None
+        self.generation = 0
+        self._read: OrderedDict[Path, tuple[tuple[int, int], Buffer]] = OrderedDict()
+        self._walked: list[Path] | None = None
         self._profiles: dict[Path, tuple[object, RobotProfile | None]] = {}
+        self._settings: dict[Path, tuple[int, Setting]] = {}
+        self.kept = Kept()
+        """What the checks keep from one version of a document to the next (chains and
+        states unchanged are replayed, not built again: :func:`prima.dsl.keeping`)."""
 
     # ---- buffers and files
 
     def open(self, path: Path, text: str) -> Buffer:
-        buffer = Buffer(path, text)
-        self.buffers[_key(path)] = buffer
-        if buffer.namespace == SCENARIO_NS:
-            self.forget()
+        """The editor's text of ``path`` (the buffer held, if the text is the same)."""
+        key = resolved(path)
+        held = self.buffers.get(key)
+        if held is not None and (held.text is text or held.text == text):
+            return held
+        buffer = Buffer(path, text, None if held is None else held.hand_over())
+        self.buffers[key] = buffer
+        if held is None or buffer.namespace != PXML_NS or held.namespace != PXML_NS:
+            self.generation += 1  # (a PXML document's text changes nothing in force)
         return buffer
 
     def close(self, path: Path) -> None:
-        self.buffers.pop(_key(path), None)
+        if self.buffers.pop(resolved(path), None) is not None:
+            self.generation += 1
 
     def forget(self) -> None:
-        """Files changed on disk (or a scenario in a buffer): look for scenarios again."""
-        self._scenarios = None
+        """Files changed on disk: look for scenarios again, read what is in force again."""
+        self._walked = None
+        self.generation += 1
 
     def buffer(self, path: Path) -> Buffer | None:
         """The file's text: the editor's, else the disk's (None if it cannot be read)."""
-        key = _key(path)
+        key = resolved(path)
         held = self.buffers.get(key)
         if held is not None:
             return held
@@ -134,6 +226,7 @@ class Workspace:
         stamp = (info.st_mtime_ns, info.st_size)
         cached = self._read.get(key)
         if cached is not None and cached[0] == stamp:
+            self._read.move_to_end(key)
             return cached[1]
         try:
             text = read_source(key, DocumentError).decode("utf-8-sig", "replace")
@@ -141,6 +234,8 @@ class Workspace:
             return None
         buffer = Buffer(path, text)
         self._read[key] = (stamp, buffer)
+        while len(self._read) > MAX_READ:
+            self._read.popitem(last=False)
         return buffer
 
     @contextmanager
@@ -153,14 +248,14 @@ class Workspace:
 
     def scenarios(self) -> list[Path]:
         """The workspace's scenario files, in path order (as ``prima validate`` of its
-        folders would meet them)."""
-        if self._scenarios is None:
+        folders would meet them), the editor's buffers included."""
+        if self._walked is None:
             found: set[Path] = set()
             for root in self.roots:
                 found.update(self._walk(root))
-            found.update(p for p, b in self.buffers.items() if b.namespace == SCENARIO_NS)
-            self._scenarios = sorted(found)
-        return [p for p in self._scenarios if self._is_scenario(p)]
+            self._walked = sorted(found)
+        held = {p for p, b in self.buffers.items() if b.namespace == SCENARIO_NS}
+        return sorted(p for p in {*self._walked, *held} if self._is_scenario(p))
 
     def _walk(self, root: Path) -> Iterator[Path]:
         seen = 0
@@ -172,7 +267,7 @@ class Workspace:
                 seen += 1
                 if seen > MAX_SCENARIOS:
                     return
-                path = _key(Path(folder) / name)
+                path = resolved(Path(folder) / name)
                 if self._is_scenario(path):
                     yield path
 
@@ -190,12 +285,13 @@ class Workspace:
             for element, attribute, role in (*_ROLES, ("map", "href", "map"),
                                              ("robot", "profile", "profile")):
                 if tag.name == element and tag.attr(attribute) is not None:
-                    out.append((role, _key(scenario.parent / tag.get(attribute)), tag, attribute))
+                    named = resolved(scenario.parent / tag.get(attribute))
+                    out.append((role, named, tag, attribute))
         return out
 
     def scenario_for(self, path: Path) -> Path | None:
         """The first scenario that runs the document ``path``, if any."""
-        key = _key(path)
+        key = resolved(path)
         for scenario in self.scenarios():
             if any(role in ("fa", "ea", "zone") and target == key
                    for role, target, _tag, _attr in self.references(scenario)):
@@ -221,11 +317,22 @@ class Workspace:
         return cached[1] or default_profile()
 
     def setting(self, path: Path) -> Setting:
-        """What is in force for the file ``path``."""
+        """What is in force for the file ``path`` (worked out once a generation)."""
+        key = resolved(path)
+        kept = self._settings.get(key)
+        if kept is not None and kept[0] == self.generation:
+            return kept[1]
+        found = self._setting(path)
+        if len(self._settings) > MAX_READ:
+            self._settings.clear()
+        self._settings[key] = (self.generation, found)
+        return found
+
+    def _setting(self, path: Path) -> Setting:
         buffer = self.buffer(path)
         namespace = None if buffer is None else buffer.namespace
-        scenario = _key(path) if namespace == SCENARIO_NS else (
-            self.scenario_for(path) if namespace == "urn:prima:pxml:1" else None)
+        scenario = resolved(path) if namespace == SCENARIO_NS else (
+            self.scenario_for(path) if namespace == PXML_NS else None)
         profile_path = self.robot
         map_path: Path | None = None
         if scenario is not None:
@@ -235,7 +342,7 @@ class Workspace:
                 elif role == "map" and map_path is None:
                     map_path = target
         if namespace == "urn:prima:map:1":
-            map_path = _key(path)
+            map_path = resolved(path)
         places = self.places(map_path) if map_path is not None else []
         return Setting(scenario, self.profile(profile_path), profile_path, map_path, places)
 
@@ -255,19 +362,64 @@ class Workspace:
 
     # ---- diagnostics
 
-    def problems(self, path: Path) -> list[Problem]:
-        """The file's problems, as ``prima validate`` reports them: the file alone, or a
-        document with the scenario that runs it (its robot, its map's places)."""
-        from prima.cli import make_validation
+    def depends(self, path: Path) -> frozenset[Path]:
+        """The files the problems of ``path`` depend on: itself; a scenario's, every file
+        it names; a document's, the scenario that runs it with its map and robot
+        profile, and the profile the document names (not the scenario's other
+        applications: what they say is the scenario's to report)."""
+        key = resolved(path)
+        out = {key} | ({resolved(self.robot)} if self.robot is not None else set())
+        buffer = self.buffer(path)
+        namespace = None if buffer is None else buffer.namespace
+        if namespace == SCENARIO_NS:
+            out.update(target for _role, target, _tag, _attr in self.references(key))
+        elif namespace == PXML_NS and buffer is not None:
+            scenario = self.scenario_for(key)
+            if scenario is not None:
+                out.add(scenario)
+                out.update(target for role, target, _tag, _attr in self.references(scenario)
+                           if role in ("map", "profile"))
+            declared = buffer.declared_robot
+            if declared:
+                out.add(resolved(key.parent / declared))
+        return frozenset(out)
 
-        key = _key(path)
+    def affected(self, path: Path, depends: Iterable[tuple[Path, frozenset[Path]]]) -> set[Path]:
+        """The files whose problems a change of ``path`` may change: itself, those whose
+        last check depended on it (``depends``: each file checked and what it depended
+        on), and, for a scenario, the documents it names now (it may now be the scenario
+        that runs them)."""
+        key = resolved(path)
+        out = {key, *(checked for checked, on in depends if key in on)}
+        buffer = self.buffer(key)
+        if buffer is not None and buffer.namespace == SCENARIO_NS:
+            out.update(target for _role, target, _tag, _attr in self.references(key))
+        return out
+
+    def check(self, path: Path) -> Checked:
+        """The file's problems, as ``prima validate`` reports them: the file alone, or a
+        document with the scenario that runs it (its robot, its map's places); and what
+        they depend on."""
+        key = resolved(path)
         buffer = self.buffer(path)
         items: list[tuple[Path, bool]] = [(path, True)]
-        if buffer is not None and buffer.namespace == "urn:prima:pxml:1":
+        if buffer is not None and buffer.namespace == PXML_NS:
             scenario = self.scenario_for(path)
             if scenario is not None:
                 items.insert(0, (scenario, True))
         profile = self.profile(self.robot) if self.robot is not None else default_profile()
-        with self.unsaved():
-            report = make_validation(profile, robot=self.robot is not None).run(items)
-        return [p for p in report.problems if _key(Path(p.file)) == key]
+        with self.unsaved(), no_collections(), keeping(self.kept):
+            report = _validation(profile, self.robot is not None).run(items)
+        names: dict[str, bool] = {}
+        problems = []
+        for problem in report.problems:
+            mine = names.get(problem.file)
+            if mine is None:
+                mine = names[problem.file] = resolved(Path(problem.file)) == key
+            if mine:
+                problems.append(problem)
+        return Checked(problems, self.depends(path))
+
+    def problems(self, path: Path) -> list[Problem]:
+        """The file's problems, as ``prima validate`` reports them."""
+        return self.check(path).problems

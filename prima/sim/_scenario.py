@@ -329,6 +329,12 @@ class _Loader:
     def bad(self, el: etree._Element, message: str, attribute: str | None = None) -> None:
         self.problems.append(self.doc.problem(el, message, attribute=attribute))
 
+    def blank(self, el: etree._Element, attribute: str, message: str) -> None:
+        """An error at ``attribute`` when it is given but blank (empty, spaces, tabs)."""
+        value = el.get(attribute)
+        if value is not None and not value.strip():
+            self.bad(el, message, attribute)
+
     def place(self, el: etree._Element, attribute: str) -> Place | None:
         name = el.get(attribute)
         if name is None or self.map is None:
@@ -465,6 +471,10 @@ class _Loader:
                                 "list the user's actions in time order", "at")
             last = max(last, at)
             kind = _ACTIONS[tag]
+            if kind is UserActionKind.SAY:
+                self.blank(child, "text", "<say> says nothing: blank words are no speech (the "
+                                          "robot never hears them); give words, or leave the "
+                                          "<say> out")
             place = None
             if kind in (UserActionKind.WALK, UserActionKind.LEAVE):
                 has_xy = child.get("x") is not None or child.get("y") is not None
@@ -497,6 +507,8 @@ class _Loader:
                 self.problems.append(self.doc.problem(el, message, attribute="matches",
                                                       index=index))
                 pattern = None
+        self.blank(el, "say", "say is blank: blank words are no answer (the robot never "
+                              "hears them); leave say out to stay silent")
         nth = self.num.whole(el, "nth", MAX_NTH, 1) if el.get("nth") is not None else None
         return AnswerRule(say=el.get("say"), contains=contains, pattern=pattern,
                           after=self.num.get(el, "after", 1.0), nth=nth)

@@ -693,8 +693,9 @@ class Simulator:
         """The user says ``text``: True if the robot heard it. A listening Q&A takes it;
         else, if the robot hears at any time, an answer said over a Q&A's prompt
         answers it (not a backchannel), and anything else is a ``speech`` event with
-        its ``words`` and whether it is a ``backchannel``."""
-        if not self.hearable():
+        its ``words`` and whether it is a ``backchannel``. Blank words (empty, spaces,
+        tabs) are no speech: never heard, they neither answer nor cut the robot."""
+        if not self.hearable() or not text.strip():
             return False
         mic = self._mic
         if mic is not None:

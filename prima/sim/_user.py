@@ -203,7 +203,7 @@ class ScriptedUser:
             self._record(UserActionKind.SAY, text=text, heard=sim.hear(text))
             return
         # (said outside a Q&A: the line first, then what the robot makes of it)
-        self._record(UserActionKind.SAY, text=text, heard=sim.hearable())
+        self._record(UserActionKind.SAY, text=text, heard=sim.hearable() and bool(text.strip()))
         sim.hear(text)
 
     # ---- actions ----------------------------------------------------------------
@@ -289,7 +289,10 @@ class ScriptedUser:
             yield sleep(period)
 
     def _in_the_way(self, rx: float, ry: float, hx: float, hy: float, d: float) -> bool:
-        """The robot heads toward the user (within 45 degrees)."""
+        """The robot heads toward the user (within 45 degrees); a user standing on the
+        robot itself (``d`` 0, placed there) is in its way whichever way it heads."""
+        if d < 1e-9:
+            return True
         angle = self._sim.world.robot_angle()
         ahead = ((hx - rx) * math.cos(angle) + (hy - ry) * math.sin(angle)) / d
         return ahead > math.cos(math.radians(45))

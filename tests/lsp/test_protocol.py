@@ -291,3 +291,76 @@ def test_a_scenario_completes_its_maps_places_and_leads_to_its_files() -> None:
         assert fa.uri == uri(ROOT / "apps" / "fa" / "fa2-follow.pxml")
 
     run(ROOT, test)
+
+
+BREAKS = {
+    "apps/ea/ea3-navigate.pxml": FAULTS,
+    "scenarios/examples/office-kidode.xml": (('place="entrance"', 'place="entrence"'),
+                                             ('at="40" to="poster"', 'at="40" to="postr"')),
+    "scenarios/maps/library.xml": (('<wall x1="8" y1="1"', '<wall x1="8" y1="1e999"'),),
+    "apps/fa/fa1-emotions.pxml": (("<state ", "<state  bogus=\"1\" "),),
+    "robots/guide-robot.xml": (("<gesture ", "<gesture speed=\"fast\" "),),
+}
+"""Damage done to copies of shipped files (each text replaced once, where it is)."""
+
+
+def _shipped_tree(folder: Path, broken: bool) -> list[Path]:
+    """Copies of apps/, scenarios/ and robots/ (with the damage of BREAKS, if ``broken``):
+    their documents, profiles, scenarios and maps."""
+    for part in ("apps", "scenarios", "robots"):
+        shutil.copytree(ROOT / part, folder / part,
+                        ignore=shutil.ignore_patterns("*.golden.txt", "__pycache__", "*.py"))
+    for name, faults in BREAKS.items() if broken else ():
+        path = folder / name
+        text = path.read_text(encoding="utf-8")
+        for right, wrong in faults:
+            assert right in text, (name, right)
+            text = text.replace(right, wrong, 1)
+        path.write_text(text, encoding="utf-8")
+    return sorted(p for p in folder.rglob("*") if p.suffix in (".pxml", ".xml"))
+
+
+@pytest.mark.parametrize("broken", [False, True], ids=["shipped", "broken"])
+def test_every_file_gets_exactly_what_prima_validate_reports(tmp_path: Path,
+                                                             broken: bool) -> None:
+    """Every shipped document, profile, scenario and map (and copies with faults typed
+    into five of them), open in the editor: the diagnostics are prima validate's lines
+    for that file, as ``prima validate apps scenarios robots`` checks it (a document with
+    the first scenario that runs it): the same problems, wording and positions."""
+    files = _shipped_tree(tmp_path, broken)
+    out = io.StringIO()
+    main(["validate", *(str(tmp_path / p) for p in ("apps", "scenarios", "robots"))],
+         out=out, err=io.StringIO())
+    expected: dict[str, list[str]] = {}
+    for line in out.getvalue().splitlines():
+        if not line.startswith(" "):
+            expected.setdefault(line.split(":", 1)[0], []).append(line)
+    if broken:
+        assert {str(tmp_path / name) for name in BREAKS} <= set(expected), expected
+        assert sum(map(len, expected.values())) >= 8
+
+    async def test(s: Session) -> None:
+        for path in files:
+            assert lines(await s.open(path), str(path)) == expected.get(str(path), []), path
+
+    run(tmp_path, test)
+
+
+def test_robot_option_overrides_the_robot_a_document_names(tmp_path: Path) -> None:
+    """``prima lsp --robot`` checks as ``prima validate --robot`` does: against that
+    profile, not the one the document's robot attribute names."""
+    (tmp_path / "apps" / "fa").mkdir(parents=True)
+    shutil.copytree(ROOT / "robots", tmp_path / "robots",
+                    ignore=shutil.ignore_patterns("*.py", "__pycache__"))
+    fa = tmp_path / "apps" / "fa" / "fa7-spotlight.pxml"
+    shutil.copy(ROOT / "apps" / "fa" / "fa7-spotlight.pxml", fa)
+    home = tmp_path / "robots" / "home-robot.xml"
+    out = io.StringIO()
+    main(["validate", "--robot", str(home), str(fa)], out=out, err=io.StringIO())
+    expected = [line for line in out.getvalue().splitlines() if line.startswith(str(fa))]
+    assert any("unknown Command 'Spotlight'" in line for line in expected)
+
+    async def test(s: Session) -> None:
+        assert lines(await s.open(fa), str(fa)) == expected
+
+    run(tmp_path, test, "--robot", str(home))

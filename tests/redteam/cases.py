@@ -447,6 +447,15 @@ SCENARIOS = [
     Case("ea-in-fa-slot", "an EA named as the FA",
          scenario(apps='<apps fa="ea.pxml"/>', extra=app("ea.pxml")),
          Rejected("'ea.pxml' is an EA (kind=\"ea\"); it cannot run as the FA", "ea.pxml")),
+    Case("say-empty", "a user who says nothing (an empty <say>), heard as a barge-in",
+         user('<say at="1" text=""/>'),
+         Rejected("blank words are no speech", 'text=""', offset=6)),
+    Case("say-blank", "a user who says a space and a tab",
+         user('<say at="1" text=" &#9;"/>'),
+         Rejected("blank words are no speech", 'text="', offset=6)),
+    Case("answer-blank", "an answer rule that says a tab",
+         user('<answer contains="x" say="&#9;"/>'),
+         Rejected("blank words are no answer", 'say="', offset=5)),
 ]
 
 MAPS = [

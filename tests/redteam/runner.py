@@ -22,6 +22,7 @@ import multiprocessing
 import os
 import resource
 import signal
+import sys
 import time
 import traceback
 from collections.abc import Callable
@@ -91,12 +92,16 @@ class Case:
     """More work on an accepted input, inside the same limits."""
     command: tuple[str, ...] = ()
     """Another command than ``prima validate``, whole (``{path}``: the input, ``{dir}``:
-    its folder), with an :class:`Exits` verdict."""
-    stdin: str = ""
-    """What ``prima debug`` reads as typed."""
+    its folder, ``{port}``: what the file ``port`` there says), with an :class:`Exits`
+    verdict."""
+    stdin: str | bytes = ""
+    """What ``prima debug`` reads as typed (text), or the bytes ``prima lsp`` reads from
+    its client (bytes; what it answers is dropped)."""
     file_limit: int | None = None
     """The most bytes the child may write into one file (``RLIMIT_FSIZE``): a write past
     it fails as on a full disk (``EFBIG``), half-way through an output."""
+    env: tuple[tuple[str, str], ...] = ()
+    """Environment variables the command runs with (in the child only)."""
 
 
 @dataclass(frozen=True)
@@ -131,8 +136,16 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
         if case.command:
             import prima.cli
 
-            prima.cli._stdin = lambda: io.StringIO(case.stdin)  # type: ignore[attr-defined]
+            if isinstance(case.stdin, bytes):  # a language client's bytes
+                sys.stdin = io.TextIOWrapper(io.BytesIO(case.stdin))
+                sys.stdout = io.TextIOWrapper(io.BytesIO())
+            else:
+                typed = case.stdin
+                prima.cli._stdin = lambda: io.StringIO(typed)  # type: ignore[attr-defined]
+            os.environ.update(dict(case.env))
+            port = path.parent / "port"  # (a port the case's input listens on)
             command = [a.replace("{path}", str(path)).replace("{dir}", str(path.parent))
+                       .replace("{port}", port.read_text() if port.exists() else "")
                        for a in case.command]
             code = main(command, out=out, err=err)
         else:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 from collections.abc import Callable
 from pathlib import Path
 
@@ -77,12 +78,72 @@ def _not_utf8(folder: Path) -> Path:
     return made_path.rename(folder / os.fsdecode(b"run-\xff.xml"))
 
 
+def _placed_on_the_robot(folder: Path) -> Path:
+    """The robot tracks a user who stands exactly on it and follows it."""
+    (folder / "map.xml").write_text(MAP)
+    (folder / "ea.pxml").write_text(
+        '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t"><state id="s" initial="true">'
+        "<entry><chain>TrackingHuman(1.0)</chain></entry></state></pxml>\n")
+    path = folder / "s.xml"
+    path.write_text('<scenario xmlns="urn:prima:scenario:1" name="s" until="8">'
+                    '<map href="map.xml"/><apps ea="ea.pxml"/><robot place="a"/>'
+                    '<user x="0" y="0"><follow at="0" distance="1"/></user></scenario>\n')
+    return path
+
+
+def _forged_results(old: str, new: str) -> Make:
+    """A sweep's results file (``r.jsonl``, of two runs of a scenario) whose first record
+    has ``old`` replaced by ``new``."""
+    def make(folder: Path) -> Path:
+        from prima.cli import main
+
+        path = _speaker("hello")(folder)
+        results = folder / "r.jsonl"
+        assert main(["sweep", str(path), "--runs", "2", "--jitter", "1", "--jobs", "1",
+                     "--worst", "0", "--results", str(results)],
+                    out=open(os.devnull, "w"), err=open(os.devnull, "w")) == 0  # noqa: SIM115
+        head, first, *_ = results.read_text().splitlines()
+        assert old in first, first
+        results.write_text(f"{head}\n{first.replace(old, new, 1)}\n")
+        return path
+    return make
+
+
+RESUME = ("sweep", "{path}", "--runs", "2", "--jitter", "1", "--jobs", "1", "--worst", "0",
+          "--resume", "{dir}/r.jsonl")
+"""Resume the sweep whose results ``_forged_results`` forged."""
+
+
+_LISTENING: list[socket.socket] = []
+"""Ports the cases listen on, kept open while the tests run (the children inherit them)."""
+
+
+def _silent_port(folder: Path) -> Path:
+    """A scenario, and a port (written in ``port``) that accepts connections and never
+    answers: what a sweep takes for a Dask scheduler."""
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)
+    _LISTENING.append(listener)
+    (folder / "port").write_text(str(listener.getsockname()[1]))
+    return _speaker("hello")(folder)
+
+
 def _shipped_apps(_folder: Path) -> Path:
     return ROOT / "apps"
 
 
 def _shipped_scenarios(_folder: Path) -> Path:
     return ROOT / "scenarios"
+
+
+def _lsp_frame(message: dict[str, object]) -> bytes:
+    body = json.dumps(message).encode()
+    return b"Content-Length: %d\r\n\r\n" % len(body) + body
+
+
+_LSP_INIT = _lsp_frame({"jsonrpc": "2.0", "id": 1, "method": "initialize",
+                        "params": {"processId": None, "rootUri": None, "capabilities": {}}})
 
 
 # ------------------------------------------------------------ outputs: what they must not do
@@ -284,6 +345,43 @@ SURFACES = [
          _speaker("hello"), Exits(0, "2 of 2 runs"),
          command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--jobs", "1024",
                   "--worst", "0"), seconds=10),
+    Case("user-on-the-robot", "a user placed on the robot who follows it (distance 0)",
+         _placed_on_the_robot, Exits(0, "follows the robot", absent="Error"),
+         command=("run", "{path}"), seconds=6),
+    Case("resume-count-huge", "--resume with a count of 10^400",
+         _forged_results('"late": 0', '"late": 1' + "0" * 400),
+         Exits(1, "r.jsonl:2:"), command=RESUME, seconds=6),
+    Case("resume-counts-array", "--resume with counts that are not an object",
+         _forged_results('"counts": {', '"counts": [], "x": {'),
+         Exits(1, "field 'counts' must be an object"), command=RESUME, seconds=6),
+    Case("resume-deep", "--resume with a record of 100,000 nested arrays",
+         _forged_results('{"job": 0', "[" * 100_000 + "]" * 100_000 + '{"job": 0'),
+         Exits(1, "nested more than 16 levels deep"), command=RESUME, seconds=6),
+    Case("resume-lateness-soon", "--resume with a lateness of \"soon\"",
+         _forged_results('"worst_lateness": 0.0', '"worst_lateness": "soon"'),
+         Exits(1, "field 'worst_lateness' must be a number"), command=RESUME, seconds=6),
+    Case("resume-lateness-missing", "--resume with a record without its worst_lateness",
+         _forged_results('"worst_lateness": 0.0, ', ""),
+         Exits(1, "field 'worst_lateness' is missing"), command=RESUME, seconds=6),
+    Case("dask-silent-port", "--executor dask:// to a port that accepts and never answers",
+         _silent_port, Exits(1, "did not answer within 0.5 s (PRIMA_DASK_CONNECT_TIMEOUT)"),
+         command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--worst", "0",
+                  "--executor", "dask://127.0.0.1:{port}"),
+         env=(("PRIMA_DASK_CONNECT_TIMEOUT", "0.5"),), seconds=8),
+    Case("dask-long-host", "--executor dask:// to a host name of 300 characters",
+         _speaker("hello"), Exits(2, "the host name is 300 characters long"),
+         command=("sweep", "{path}", "--runs", "2", "--jitter", "1", "--worst", "0",
+                  "--executor", "dask://" + "a" * 300 + ":8786")),
+    Case("check-place-unknown", "prima check of an EA that goes where a message says",
+         write("ea.pxml", '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t">\n'
+                          '<var name="goal" expr="\'\'"/>\n<on event="message">\n'
+                          '<assign name="goal" expr="event.text"/>\n'
+                          "<chain>TopologicalMove({goal})</chain></on>\n"
+                          '<state id="s" initial="true"/></pxml>\n'),
+         Exits(2, "ea.pxml:5:8: TopologicalMove goes to a place nobody can know"),
+         command=("check", "{path}", "--fa", str(ROOT / "apps" / "fa" / "fa6-scheduler.pxml"),
+                  "--robot", str(ROOT / "robots" / "home-robot.xml"), "--runs", "1"),
+         seconds=6),
     # 8: mistakes that passed in silence
     Case("debug-unknown-state", "a breakpoint on a state no application has",
          _speaker("hello"), Exits(0, "no state 'nope' in this run, no breakpoint set"),
@@ -455,7 +553,20 @@ SURFACES = [
     Case("run-fa-not-shipped", "--fa with a name no shipped FA has",
          _speaker("hello"), Exits(2, "no such file: fa9-nope"),
          command=("run", "{path}", "--fa", "fa9-nope")),
-    # 11: prima live (its page's inputs: tests/test_live.py)
+    # 18: the language server's client
+    Case("lsp-huge-length", "a Content-Length of 10^17 and a body cut short (the server ended "
+         "with a traceback)", made(_shipped_apps),
+         Exits(1, "the client's stream ended inside a refused message: stopping",
+               absent="Traceback"),
+         command=("lsp",), stdin=_LSP_INIT + b"Content-Length: 99999999999999999\r\n\r\n{",
+         seconds=8),
+    Case("lsp-garbage-headers", "headers that are no headers, then a clean shutdown",
+         made(_shipped_apps),
+         Exits(0, "skipped up to the next Content-Length header", absent="Traceback"),
+         command=("lsp",), stdin=_LSP_INIT + b"Content-Type: x\r\n\r\n{}\r\nnoise\r\n"
+         + _lsp_frame({"jsonrpc": "2.0", "id": 2, "method": "shutdown"})
+         + _lsp_frame({"jsonrpc": "2.0", "method": "exit"}), seconds=8),
+    # 19: prima live (its page's inputs: tests/test_live.py)
     Case("live-save-over-scenario", "prima live told to save its session over its scenario",
          _speaker("hello"), Exits(2, "s.xml is the scenario ("),
          command=("live", "{path}", "--save", "{path}", "--port", "0"), seconds=6,

@@ -8,7 +8,7 @@ import pytest
 
 from prima.catalog import Catalog, CommandSpec
 from prima.errors import SimulationError
-from prima.mediator import AtomicBehavior
+from prima.mediator import AtomicBehavior, Call
 from prima.sim import (
     CommandRunner,
     EntryKind,
@@ -349,3 +349,18 @@ def test_the_world_reads_and_writes_the_bodies_as_pymunk_does() -> None:
         assert pose.heading == math.degrees(world.robot.angle) % 360.0
         seen.add(world.robot_xy())
     assert len(seen) > 20  # (it drove all along)
+
+
+@pytest.mark.parametrize("command", [call("TrackingHuman", distance=1.0), call("FaceHuman"),
+                                     call("FaceHumanAndSpeak", text="Hello."),
+                                     call("ActiveSensingHuman")], ids=lambda c: c.command)
+def test_a_user_placed_on_the_robot_who_follows_it_runs(command: Call) -> None:
+    """A user who stands exactly on the robot (placed there) and follows it: nothing
+    divides by the distance between them, and the user steps out of the robot's way."""
+    r = runner("museum", CENTER, Pose(CENTER.x, CENTER.y, 0),
+               TimedAction(0, UserActionKind.FOLLOW, distance=1.0),
+               TimedAction(8, UserActionKind.TOUCH))
+    r.queue(command)
+    r.run(20)
+    assert r.sim.world.user_distance() > 0.1
+    assert r.events("touched")

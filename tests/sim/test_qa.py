@@ -70,3 +70,21 @@ def test_a_user_out_of_earshot_does_not_answer() -> None:
     r.queue(call("QA", prompt="Are you ready?", grammar="g", timeout=3))
     r.run(30)
     assert r.ends("QA")[0].data["status"] == "noinput"
+
+
+@pytest.mark.parametrize("blank", ["", " ", "\t", " \t\n "])
+def test_blank_words_are_never_heard(blank: str) -> None:
+    """Blank words are no speech: a Q&A that listens does not take them as its answer
+    (it times out), and a robot that hears at any time gets no ``speech`` event from
+    them (nothing to cut its words by barge-in)."""
+    r = runner("museum", ROBOT, USER, TimedAction(0.5, UserActionKind.SAY, text=blank),
+               answers=(AnswerRule(blank, contains="ready", after=0.5),))
+    r.sim.hears_always = True
+    r.queue(call("Speak", text="Welcome to the museum, we hope you enjoy your visit."),
+            call("QA", prompt="Are you ready?", grammar="g", timeout=3))
+    r.run(30)
+    assert r.ends("QA")[0].data["status"] == "noinput"
+    assert not r.events("speech")
+    said = [e for e in r.trace if e.kind is EntryKind.USER]
+    assert [(e.data["text"], e.data["heard"]) for e in said] == [(blank, False)] * 2
+    assert "cut" not in str(r.ends("Speak")[0].data)

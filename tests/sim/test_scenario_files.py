@@ -256,6 +256,22 @@ def test_numbers_the_simulator_cannot_use_are_located(
     assert fragment in found[0][2]
 
 
+@pytest.mark.parametrize("words", ["", " ", "&#9;", " &#9; "])
+def test_blank_words_in_a_scenario_are_located_errors(tmp_path: Path, words: str) -> None:
+    """Blank words are no speech: a ``<say>`` or an answer rule's ``say`` that says
+    nothing is refused where it is written (an answer that stays silent leaves say out)."""
+    body = (MAP_REF + '  <robot place="entrance"/>\n  <user x="1" y="0">\n'
+            f'    <answer contains="ready" say="{words}"/>\n'
+            f'    <say at="1" text="{words}"/>\n  </user>\n')
+    path = scenario_file(tmp_path, body)
+    text = path.read_text().splitlines()
+    found = problems(path)
+    assert [(line, col) for line, col, _ in found] == [
+        (6, text[5].index('say="') + 6), (7, text[6].index('text="') + 7)]
+    assert "blank words are no answer" in found[0][2]
+    assert "blank words are no speech" in found[1][2]
+
+
 def test_map_numbers_are_located(tmp_path: Path) -> None:
     path = tmp_path / "m.xml"
     path.write_text(HEAD + '<map xmlns="urn:prima:map:1" name="m">\n'

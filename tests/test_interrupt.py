@@ -1,0 +1,119 @@
+"""Ctrl-C and SIGTERM at any moment of a sweep end it with one line and the signal's exit
+status, never a traceback, the finished runs kept whole in the results file.
+
+A real ``prima sweep`` runs in a process group of its own, on two worker processes, and
+the signal goes to the whole group, as a terminal's Ctrl-C does (the workers get it
+too). Each point is reached by waiting for what the sweep has written, not for a time:
+at start-up (at once), as the pool is made (the results file has its header), while the
+runs go (it has records) and while they are written (many records).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from prima.signals import Terminated, deferred, terminate_as_interrupt
+
+ROOT = Path(__file__).parents[1]
+SCENARIO = ROOT / "scenarios" / "thesis" / "sample-08.xml"
+RUNS = "60"
+BOUND = 120.0
+"""Seconds any wait may take at most (a sweep of these runs takes a few)."""
+
+STATUS = {signal.SIGINT: (130, -signal.SIGINT), signal.SIGTERM: (143, -signal.SIGTERM)}
+"""The statuses a signal may end the sweep with: 128 + its number, or killed by it (a
+shell says 128 + its number of both). CPython ends a process whose KeyboardInterrupt
+went through an ``exec`` of text (a dataclass being made, as a module loads) by
+SIGINT itself at exit, whoever caught the exception; and a signal before Python has
+set its handlers kills the process at once, with nothing said."""
+
+
+def _sweep(results: Path, *more: str) -> list[str]:
+    return [sys.executable, "-m", "prima", "sweep", str(SCENARIO), "--runs", RUNS, "--jitter",
+            "3", "--seed", "4", "--jobs", "2", "--worst", "0", *more, str(results)]
+
+
+def _records(results: Path) -> int:
+    """The lines the results file has (-1: none yet)."""
+    try:
+        return results.read_bytes().count(b"\n")
+    except FileNotFoundError:
+        return -1
+
+
+def _interrupted(results: Path, sig: signal.Signals, lines: int | None) -> tuple[int, str]:
+    """A sweep given ``sig`` (its process group) once its results file has ``lines``
+    lines (None: at once): its exit status and what it said on standard error."""
+    process = subprocess.Popen(_sweep(results, "--results"), stdout=subprocess.DEVNULL,
+                               stderr=subprocess.PIPE, start_new_session=True, cwd=ROOT)
+    try:
+        deadline = time.monotonic() + BOUND
+        while lines is not None and _records(results) < lines and process.poll() is None \
+                and time.monotonic() < deadline:
+            time.sleep(0.002)
+        if process.poll() is None:
+            os.killpg(process.pid, sig)
+        _, err = process.communicate(timeout=BOUND)
+    finally:
+        if process.poll() is None:  # never left running, whatever failed
+            os.killpg(process.pid, signal.SIGKILL)
+            process.communicate()
+    return process.returncode, err.decode("utf-8", "replace")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+@pytest.mark.parametrize("lines", [None, 1, 2, 30], ids=["start-up", "pool", "running",
+                                                          "writing"])
+def test_a_signal_at_any_moment_of_a_sweep_ends_it_in_one_line(
+        tmp_path: Path, sig: signal.Signals, lines: int | None) -> None:
+    results = tmp_path / "r.jsonl"
+    status, err = _interrupted(results, sig, lines)
+    said = [line for line in err.replace("\r", "\n").splitlines()
+            if line.strip() and not line.startswith("[")]  # (the progress bar's lines)
+    assert "Traceback" not in err and "Exception" not in err, err
+    if status == 0:  # (the sweep was done before the signal came)
+        return
+    assert status in STATUS[sig], err
+    assert len(said) <= 1 and all("interrupted" in line for line in said), err
+    if lines is not None:
+        assert said, err  # (Python's handlers were set: the sweep said why it ended)
+        rows = [json.loads(line) for line in results.read_text().splitlines()]
+        assert rows[0]["prima"] == "sweep results"
+        assert [(r["job"], r["run"]) for r in rows[1:]] == [(0, i) for i in range(len(rows) - 1)]
+
+
+def test_a_sweep_stopped_mid_run_resumes_to_the_file_an_uninterrupted_one_writes(
+        tmp_path: Path) -> None:
+    results = tmp_path / "stopped.jsonl"
+    status, err = _interrupted(results, signal.SIGINT, 20)
+    assert status in STATUS[signal.SIGINT] and "interrupted after" in err, err
+    assert 20 <= _records(results) < int(RUNS) + 1
+    whole = tmp_path / "whole.jsonl"
+    for argv in (_sweep(results, "--resume"), _sweep(whole, "--results")):
+        done = subprocess.run(argv, capture_output=True, cwd=ROOT, timeout=BOUND, check=False)
+        assert done.returncode == 0, done.stderr.decode()
+    assert results.read_bytes() == whole.read_bytes()
+
+
+@pytest.mark.parametrize("sig, raised", [(signal.SIGINT, KeyboardInterrupt),
+                                         (signal.SIGTERM, Terminated)])
+def test_a_deferred_signal_is_raised_when_the_block_ends(
+        sig: signal.Signals, raised: type[BaseException]) -> None:
+    """What a signal must not cut in two (a fork, a record written) finishes, then the
+    signal is raised as it would have been; nested blocks wait for the outermost."""
+    finished = []
+    with pytest.raises(raised), terminate_as_interrupt(), deferred():
+        with deferred():
+            signal.raise_signal(sig)
+            finished.append("inner")
+        finished.append("outer")
+    assert finished == ["inner", "outer"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
