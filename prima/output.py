@@ -16,7 +16,9 @@ Every output file is written through :class:`Staged` (:func:`written`,
 :func:`written_bytes`): into a temporary file beside the target, renamed over it
 once written, so a run that fails half-way, a full disk or a process killed
 (even with SIGKILL) leaves the earlier file byte for byte as it was, and the file
-appears whole. Ctrl-C and SIGTERM (:class:`KeyboardInterrupt`) keep what was
+appears whole; a log read back after a stop (a sweep's results file) is written in
+place instead, line by line (:class:`Log`), so that a process killed outright keeps
+the lines it wrote. Ctrl-C and SIGTERM (:class:`KeyboardInterrupt`) keep what was
 written so far only where the caller asks (``partial``: an interrupted run's trace
 is still its trace up to then; a page or a picture cut short is discarded). A target
 that is not a regular file (``/dev/stdout``, a named pipe) is written directly, or,
@@ -39,7 +41,7 @@ from typing import IO, Any, BinaryIO, TextIO, cast
 from prima.errors import OutputError
 from prima.escape import shown_path, terminal
 
-__all__ = ["Inputs", "SHOWN_NAME", "Staged", "check_folder", "check_target", "input_named",
+__all__ = ["Inputs", "Log", "SHOWN_NAME", "Staged", "check_folder", "check_target", "input_named",
            "make_folder", "named_after", "same_file", "shown", "written", "written_bytes"]
 
 Inputs = Iterable[tuple[str, "str | os.PathLike[str]"]]
@@ -222,12 +224,10 @@ class Staged:
 
     ``binary``: a binary file, else text (UTF-8, ``\n`` line ends). ``seekable``: the
     writer seeks (an MCAP recording): a target that is not a regular file is written
-    through a temporary file copied into it on commit. ``prefix``: the file begins as
-    the first ``prefix`` bytes of the file at ``path`` now (a resumed results file
-    goes on after its records)."""
+    through a temporary file copied into it on commit."""
 
     def __init__(self, path: str | os.PathLike[str], *, binary: bool = False,
-                 seekable: bool = False, prefix: int = 0) -> None:
+                 seekable: bool = False) -> None:
         self.target = Path(path)
         """The file as named (messages name it so)."""
         self._made: list[Path] = []
@@ -261,12 +261,7 @@ class Staged:
             _unmake(self._made)
             raise _failed(self.target, exc) from exc
         try:
-            if prefix:
-                with open(self.target, "rb") as old:
-                    _copy(old, fd, prefix)
             self.file = os.fdopen(fd, mode, encoding=encoding, newline=newline)
-            if prefix:
-                self.file.seek(0, os.SEEK_END)
         except OSError as exc:
             os.close(fd)
             self._remove()
@@ -275,8 +270,8 @@ class Staged:
     def commit(self, *, failed: bool = False) -> None:
         """Put the file written in place of the target (its folder's entry replaced at
         once: a reader sees the old file or the new one, never a part). ``failed``: a
-        write to it failed; what reached it is put in place all the same (a results
-        file's whole records), what did not is dropped."""
+        write to it failed; what reached it is put in place all the same, what did not
+        is dropped."""
         if self.done:
             return
         self.done = True
@@ -319,17 +314,38 @@ class Staged:
         _unmake(self._made)
 
 
-def _copy(source: BinaryIO, fd: int, count: int) -> None:
-    """The first ``count`` bytes of ``source`` written to the file ``fd``."""
-    left = count
-    while left > 0:
-        chunk = source.read(min(left, 1 << 20))
-        if not chunk:
-            break
-        view = memoryview(chunk)
-        while view:
-            view = view[os.write(fd, view):]
-        left -= len(chunk)
+class Log:
+    """An output file written in place, line by line, each line flushed as it is
+    written: a log read back after a stop (a sweep's results file, ``--resume``), where
+    what a process killed outright (SIGKILL, a machine lost) wrote must be kept. A
+    reader drops a last line cut short. ``keep``: go on after the first ``keep`` bytes
+    of the file there (the rest is cut off); else it is written anew."""
+
+    def __init__(self, path: str | os.PathLike[str], *, keep: int = 0) -> None:
+        self.target = Path(path)
+        problem = check_target(self.target)
+        if problem:
+            raise OutputError(f"cannot write {problem}")
+        made = [] if _written_directly(self.target) else make_folder(self.target.parent,
+                                                                     self.target)
+        try:
+            self.file: TextIO = open(self.target, "r+" if keep else "w",  # noqa: SIM115
+                                     encoding="utf-8", newline="\n")
+            if keep:
+                self.file.seek(keep)
+                self.file.truncate()
+        except OSError as exc:
+            _unmake(made)
+            raise _failed(self.target, exc) from exc
+
+    def write(self, line: str) -> None:
+        """One line (ending with ``\n``), flushed (:class:`OSError` as the system says)."""
+        self.file.write(line)
+        self.file.flush()
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):  # (what could not be written is not kept)
+            self.file.close()
 
 
 def written(path: str | os.PathLike[str], *, partial: bool = False

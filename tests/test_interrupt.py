@@ -103,6 +103,33 @@ def test_a_sweep_stopped_mid_run_resumes_to_the_file_an_uninterrupted_one_writes
     assert results.read_bytes() == whole.read_bytes()
 
 
+def test_a_sweep_killed_outright_keeps_its_records_to_go_on_from(tmp_path: Path) -> None:
+    """SIGKILL (the out-of-memory killer, a machine gone): nothing of the sweep runs
+    after it, and the records it wrote are in the results file all the same, read back
+    by --resume to the file an uninterrupted sweep writes."""
+    results = tmp_path / "killed.jsonl"
+    process = subprocess.Popen(_sweep(results, "--results"), stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL, start_new_session=True, cwd=ROOT)
+    try:
+        deadline = time.monotonic() + BOUND
+        while _records(results) < 10 and process.poll() is None \
+                and time.monotonic() < deadline:
+            time.sleep(0.002)
+        assert process.poll() is None, "the sweep was over before it could be killed"
+        os.killpg(process.pid, signal.SIGKILL)
+        process.communicate(timeout=BOUND)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.communicate()
+    assert 10 <= _records(results) < int(RUNS) + 1
+    whole = tmp_path / "whole.jsonl"
+    for argv in (_sweep(results, "--resume"), _sweep(whole, "--results")):
+        done = subprocess.run(argv, capture_output=True, cwd=ROOT, timeout=BOUND, check=False)
+        assert done.returncode == 0, done.stderr.decode()
+    assert results.read_bytes() == whole.read_bytes()
+
+
 @pytest.mark.parametrize("sig, raised", [(signal.SIGINT, KeyboardInterrupt),
                                          (signal.SIGTERM, Terminated)])
 def test_a_deferred_signal_is_raised_when_the_block_ends(

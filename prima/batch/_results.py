@@ -8,11 +8,11 @@ half-way (Ctrl-C, a machine lost) leaves its first runs' records: resumed
 drops a last line cut short, and goes on from the next run, so the file ends as
 the one an uninterrupted batch writes.
 
-The file is written beside its place and put there when the batch ends, however it
-ends (:class:`prima.output.Staged`): a batch killed outright leaves the file that
-was there as it was. A record that cannot be written (a full disk) stops the batch
-with an :class:`~prima.errors.OutputError` that says how many runs' records the
-file keeps, to go on from with ``--resume``.
+The file is written in place, each record flushed as it is written
+(:class:`prima.output.Log`): a batch killed outright (SIGKILL, a machine lost) keeps
+the records of the runs it finished, to go on from with ``--resume``. A record that
+cannot be written (a full disk) stops the batch with an
+:class:`~prima.errors.OutputError` that says how many runs' records the file keeps.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from prima.batch._records import (
 from prima.batch._work import Job
 from prima.errors import OutputError, Problem, ResultsError, Severity
 from prima.escape import json_line
-from prima.output import Staged, shown as shown_file
+from prima.output import Log, shown as shown_file
 from prima.signals import deferred
 
 __all__ = ["ResultsFile"]
@@ -75,8 +75,7 @@ class ResultsFile:
         self._kept_records = 0
         self.records = 0
         """The runs whose records the file holds."""
-        self._out: Staged | None = None
-        self._failed = False
+        self._out: Log | None = None
 
     def previous(self, jobs: Sequence[Job]) -> Iterator[dict[str, Any]]:
         """The records of the runs of ``jobs`` done, in order, checked (a missing file:
@@ -136,7 +135,7 @@ class ResultsFile:
         """Start writing: a new file with its header, or (``resume``) after the records
         :meth:`previous` read."""
         going_on = resume and self.kept > 0
-        self._out = Staged(self.path, prefix=self.kept if going_on else 0)
+        self._out = Log(self.path, keep=self.kept if going_on else 0)
         self.records = self._kept_records if going_on else 0
         if not going_on:
             self._write(json_line(self.header) + "\n", header=True)
@@ -151,26 +150,22 @@ class ResultsFile:
             raise RuntimeError("the results file is not open")
         try:
             with deferred():  # (Ctrl-C keeps a record whole: after it, not in it)
-                self._out.file.write(line)
-                self._out.file.flush()
+                self._out.write(line)
         except OSError as exc:
             reason = exc.strerror or str(exc)
             said = f"cannot write {shown_file(self.path)}: {reason[:1].lower() + reason[1:]}"
             if header:
-                self._out.discard()
-                self._out = None
                 raise OutputError(said) from exc
-            self._failed = True
             raise OutputError(f"{said}; the batch stopped, the records of its first "
                               f"{self.records} run(s) are kept in it: go on with --resume "
                               "once there is room") from exc
 
     def close(self) -> None:
-        """Put the file in its place: with every record written so far (a batch stopped
+        """Close the file: it holds every record written so far (a batch stopped
         half-way goes on from them with ``--resume``)."""
         if self._out is not None:
             out, self._out = self._out, None
-            out.commit(failed=self._failed)
+            out.close()
 
 
 def _runs(counts: Sequence[int]) -> Iterator[tuple[int, int]]:
