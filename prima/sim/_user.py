@@ -126,9 +126,9 @@ class ScriptedUser:
         """A touch's walk up to the robot is under way (replaced, it is reported missed)."""
         self._matched = [0] * len(script.answers)
         self._asked: tuple[str, AnswerRule | None] | None = None
+        """The prompt the robot is asking, and the rule that answers it (None: none)."""
         self._room: Iterator[int] = iter(())
         """The insertion numbers kept for actions added as the run goes (:meth:`add`)."""
-        """The prompt the robot is asking, and the rule that answers it (None: none)."""
 
     def begin(self) -> None:
         """Put every timed action on the agenda, and keep room after them for
