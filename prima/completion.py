@@ -73,6 +73,7 @@ _BY_COMMAND: dict[tuple[str, str], Completer] = {
     ("judge", "paths"): _RUN,
     ("show", "out"): Files(".html"),
     ("plot", "out"): Files(".svg", ".png", ".pdf", ".gif"),
+    ("live", "inputs"): Files(".xml", ".pxml"),
 }
 """Where one command's argument takes files of its own."""
 

@@ -46,11 +46,12 @@ def complete(line: str, cwd: Path = ROOT) -> list[str]:
 
 def test_commands() -> None:
     assert complete("prima ") == ["validate", "run", "debug", "test", "judge", "sweep",
-                                  "check", "show", "plot", "lsp", "completion"]
+                                  "check", "show", "plot", "live", "lsp", "completion"]
     assert complete("prima ju") == ["judge"]
 
 
-@pytest.mark.parametrize("command", ["run", "debug", "test", "judge", "sweep", "show", "plot"])
+@pytest.mark.parametrize("command", ["run", "debug", "test", "judge", "sweep", "show", "plot",
+                                     "live"])
 def test_policy_names(command: str) -> None:
     assert complete(f"prima {command} --policy ") == EVERY_POLICY
     assert complete(f"prima {command} --policy inter") == ["interrupt=on", "interrupt=off"]
@@ -75,6 +76,8 @@ def test_files_of_the_kind_each_argument_takes(tmp_path: Path) -> None:
     assert complete("prima plot s.xml -o ", tmp_path) == ["p.svg", "sub/"]
     assert complete("prima sweep s.xml --out ", tmp_path) == ["sub/"]
     assert complete("prima run s.xml --robot su", tmp_path) == ["sub/"]
+    assert complete("prima live ", tmp_path) == ["a.pxml", "s.xml", "sub/"]
+    assert complete("prima live s.xml --save-dir ", tmp_path) == ["sub/"]
 
 
 def test_every_argument_that_takes_a_file_or_a_policy_has_a_completer() -> None:

@@ -42,7 +42,8 @@ def test_every_command_is_documented_in_both_forms() -> None:
                                           ("sweep", "judging.md"), ("debug", "running.md"),
                                           ("check", "checking.md"),
                                           ("plot", "running.md"), ("show", "show.md"),
-                                          ("lsp", "editors.md"), ("completion", "cli.md")])
+                                          ("lsp", "editors.md"), ("completion", "cli.md"),
+                                          ("live", "live.md")])
 def test_every_cli_option_is_documented(command: str, doc: str) -> None:
     text = (ROOT / "docs" / doc).read_text()
     assert f"prima {command}" in text

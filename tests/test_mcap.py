@@ -116,6 +116,48 @@ def test_an_mcap_recording_needs_a_file(tmp_path: Path) -> None:
     assert "--format mcap writes a binary file: give --out FILE" in err.getvalue()
 
 
+def _panels(content: dict[str, Any]) -> list[dict[str, Any]]:
+    """Every panel of a layout's content, in order."""
+    if content.get("type") == "split":
+        return [p for item in content["items"] for p in _panels(item["content"])]
+    return [content]
+
+
+def test_a_recording_carries_its_foxglove_layout(tmp_path: Path) -> None:
+    """A 3D panel on the map, the bodies and the paths; the device timeline as state
+    transitions, and the applications' states; the words, the decisions, the findings:
+    every topic the layout names is one of the recording's, which has the layout as an
+    attachment (foxglove.layouts)."""
+    from prima.mcap import ATTACHMENT
+
+    messages = record(SAMPLE_03, tmp_path / "run.mcap")
+    topics = {topic for topic, *_ in messages}
+    with (tmp_path / "run.mcap").open("rb") as f:
+        attachments = list(reader.make_reader(f).iter_attachments())
+    assert [a.name for a in attachments] == [ATTACHMENT]
+    assert attachments[0].media_type == "application/json"
+    layout = json.loads(attachments[0].data)
+    panels = _panels(layout["content"])
+    kinds = [p["panelType"] for p in panels]
+    assert kinds == ["ThreeDee", "StateTransitions", "StateTransitions", "Log", "RawMessages",
+                     "Log"]
+    assert set(panels[0]["config"]["topics"]) == {"/map", "/bodies", "/robot/path",
+                                                  "/user/path"} <= topics
+    series = [s["value"] for p in panels[1:3] for s in p["config"]["paths"]]
+    assert "/devices/speaker.state" in series and "/apps/ea3-navigate/state.state" in series
+    assert {s.rsplit(".", 1)[0] for s in series} <= topics
+    assert [panels[k]["config"].get("topicToRender", panels[k]["config"].get("topicPath"))
+            for k in (3, 4, 5)] == ["/words", "/mediator", "/judge"]
+
+
+def test_the_shipped_layout_is_the_one_the_code_makes() -> None:
+    """``prima/mcap/foxglove-layout.json`` (the home robot's devices, to import into
+    Foxglove by hand) is what :func:`prima.mcap.layout` makes now."""
+    from prima.mcap import layout, shipped
+
+    assert json.loads(shipped()) == json.loads(layout().to_json())
+
+
 def test_a_full_disk_is_one_line(tmp_path: Path) -> None:
     """foxglove-sdk printed an error of its own for every message after a failed write,
     then raised; the recording is written through a file of PRIMA's: one line."""

@@ -59,6 +59,25 @@ def test_a_variant_keeps_the_order_and_the_bounds(tmp_path: Path) -> None:
     assert load_scenario(path).map.name == "office"  # paths relative to the new file
 
 
+@pytest.mark.parametrize(("given", "settings"), [
+    ((("interrupt", False),), {"interrupt": False}),
+    ((("all", False), ("interrupt", True)), {"all": False, "interrupt": True}),
+], ids=["one-over-the-scenarios", "all-over-the-scenarios"])
+def test_a_variant_holds_the_command_lines_policies_over_the_scenarios(
+        tmp_path: Path, given: tuple[tuple[str, bool], ...], settings: dict[str, bool]) -> None:
+    """A scenario that switches a policy itself (``interrupt``), run with ``--policy``
+    switches: the variant switches each policy once (the command line's winning) and
+    runs as the scenario does with those switches."""
+    from prima.run import Run, Switches
+
+    scenario = ROOT / "scenarios" / "policies" / "interrupt-on.xml"
+    path = write_variant(scenario, tmp_path / "v.xml", seed=0, index=0, jitter=0.0,
+                         switches=Switches(policies=given))
+    assert dict(load_scenario(path).policies) == settings
+    assert [line.to_dict() for line in Run(path).run()] == \
+        [line.to_dict() for line in Run(scenario, policies=dict(given)).run()]
+
+
 def test_no_jitter_no_change(tmp_path: Path) -> None:
     path = write_variant(BUSY, tmp_path / "v.xml", seed=1, index=0, jitter=0.0)
     assert timings(path) == timings(BUSY)

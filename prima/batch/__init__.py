@@ -30,8 +30,10 @@ from prima.batch._variants import (
     Bundle,
     bundle_scenario,
     number,
+    repath,
     rng,
     shift_timings,
+    switched_root,
     write_variant,
 )
 from prima.batch._work import CPU, Analysis, Chunk, Job, Observer, record_of, run_chunk, run_one
@@ -61,10 +63,12 @@ __all__ = [
     "plan",
     "pool_for",
     "record_of",
+    "repath",
     "rng",
     "run_chunk",
     "run_one",
     "shape_problem",
     "shift_timings",
+    "switched_root",
     "write_variant",
 ]

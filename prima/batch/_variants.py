@@ -28,8 +28,8 @@ from prima.xmlio import local_name, parse_xml, read_source
 if TYPE_CHECKING:
     from prima.run import Switches
 
-__all__ = ["MIN_ANSWER_DELAY", "Bundle", "bundle_scenario", "number", "rng", "shift_timings",
-           "write_variant"]
+__all__ = ["MIN_ANSWER_DELAY", "Bundle", "bundle_scenario", "number", "repath", "rng",
+           "shift_timings", "switched_root", "write_variant"]
 
 MIN_ANSWER_DELAY = 0.1
 """The shortest delay (s) an answer rule keeps after jitter."""
@@ -92,8 +92,9 @@ def _named(root: etree._Element) -> list[tuple[etree._Element, str]]:
     return found
 
 
-def _repath(root: etree._Element, source: Path, relative_to: Path | None) -> None:
-    """File paths made absolute, or relative to ``relative_to``."""
+def repath(root: etree._Element, source: Path, relative_to: Path | None) -> None:
+    """The file paths of the scenario ``root`` (read from ``source``) made absolute, or
+    relative to the folder ``relative_to``, in place."""
     for el, attribute in _named(root):
         target = (source.parent / str(el.get(attribute))).resolve()
         if relative_to is not None:
@@ -120,9 +121,16 @@ def _switch(root: etree._Element, switches: Switches) -> None:
     if robot is not None and switches.robot is not None:
         robot.set("profile", str(Path(switches.robot).resolve()))
     if robot is not None and switches.policies:
-        after = robot
+        # Over the scenario's own switches, as the command line's are: a switch it names
+        # again replaces the scenario's (a scenario switches each policy once), and `all`
+        # replaces every one of them (it switches every policy first).
+        switched = {name for name, _on in switches.policies}
         for c in children:
-            if local_name(c) == "policy":
+            if local_name(c) == "policy" and ("all" in switched or c.get("name") in switched):
+                root.remove(c)
+        after = robot
+        for c in root:
+            if isinstance(c.tag, str) and local_name(c) == "policy":
                 after = c
         for name, on in switches.policies:
             policy = etree.Element(f"{{{ns}}}policy" if ns else "policy",
@@ -131,8 +139,9 @@ def _switch(root: etree._Element, switches: Switches) -> None:
             after = policy
 
 
-def _switched(scenario: Path, switches: Switches | None) -> etree._Element:
-    """A copy of the scenario's root with the command line's switches written in."""
+def switched_root(scenario: Path, switches: Switches | None) -> etree._Element:
+    """A copy of the scenario's root with the command line's switches written in (raises
+    ScenarioError for a file that cannot be read as XML)."""
     doc = parse_xml(read_source(scenario, ScenarioError), str(scenario), ScenarioError)
     root = copy.deepcopy(doc.root.getroottree()).getroot()
     if switches:
@@ -150,9 +159,9 @@ def write_variant(scenario: str | Path, path: str | Path, *, seed: int, index: i
     so ``prima run`` replays it exactly.
     """
     source, path = Path(scenario), Path(path)
-    root = _switched(source, switches)
+    root = switched_root(source, switches)
     shift_timings(root, rng(seed, index), jitter)
-    _repath(root, source, None if absolute else path.parent)
+    repath(root, source, None if absolute else path.parent)
     before = [etree.tostring(c, encoding="unicode") for c in root.itersiblings(preceding=True)]
     named = shown_path(source.name).replace("--", "- -")  # (no '--' inside a comment)
     note = (f"<!-- prima sweep: run {index} of {named} (seed {seed}, jitter "
@@ -202,7 +211,7 @@ def bundle_scenario(scenario: str | Path, switches: Switches | None = None) -> B
     """The bundle of ``scenario`` (with the command line's switches written in). Raises
     ScenarioError for a scenario that cannot be read, or a file it names that cannot."""
     source = Path(scenario)
-    root = _switched(source, switches)
+    root = switched_root(source, switches)
     names: dict[Path, str] = {}
     files: list[tuple[str, bytes]] = []
     for el, attribute in _named(root):

@@ -12,8 +12,18 @@ from prima.check._coverage import KINDS, Coverage, Item
 from prima.check._observe import CheckAnalysis, attribute
 from prima.check._report import format_check, format_coverage, junit, markdown
 from prima.check._places import Destination, destinations, map_for
-from prima.check._visits import VISITS, Visit, visit_scenario
+from prima.check._visits import (
+    VISITS,
+    Visit,
+    beside,
+    listens,
+    questions,
+    sends,
+    starts,
+    visit_scenario,
+)
 
 __all__ = ["KINDS", "VISITS", "Cell", "Check", "CheckAnalysis", "Coverage", "Destination",
-           "Failure", "Item", "Verdict", "Visit", "attribute", "check", "destinations",
-           "format_check", "format_coverage", "junit", "map_for", "markdown", "visit_scenario"]
+           "Failure", "Item", "Verdict", "Visit", "attribute", "beside", "check",
+           "destinations", "format_check", "format_coverage", "junit", "listens", "map_for",
+           "markdown", "questions", "sends", "starts", "visit_scenario"]

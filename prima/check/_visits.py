@@ -26,7 +26,8 @@ from xml.sax.saxutils import quoteattr
 from prima.dsl import Document, Grammar, Handler, HandlerKind, If, Request, Send
 from prima.sim import WorldMap
 
-__all__ = ["VISITS", "Visit", "visit_scenario"]
+__all__ = ["VISITS", "Visit", "beside", "listens", "questions", "sends", "starts",
+           "visit_scenario"]
 
 VISITS = ("willing", "declining", "hesitant", "silent")
 """The visitors a generated visit has, by name."""
@@ -227,8 +228,9 @@ def _start(world: WorldMap) -> tuple[str, float, float, float]:
     return place.name, place.x, place.y, place.facing or 0.0
 
 
-def _beside(world: WorldMap, x: float, y: float, heading: float) -> tuple[float, float]:
-    """Where the visitor stands: 1 m from the robot, ahead of it if that is clear."""
+def beside(world: WorldMap, x: float, y: float, heading: float) -> tuple[float, float]:
+    """Where a visitor stands beside a robot at (x, y) heading ``heading``: 1 m from it,
+    ahead of it if that is clear (else the first clear way round it)."""
     for turn in (0, 45, -45, 90, -90, 135, -135, 180):
         a = math.radians(heading + turn)
         ux, uy = round(x + math.cos(a), 2), round(y + math.sin(a), 2)
@@ -281,15 +283,24 @@ def _user_actions(visit: Visit, far: str, said: list[str]) -> list[str]:
     return [f'    <{kind} at="{at * t:g}"{rest}/>' for at, kind, rest in actions]
 
 
+def starts(world: WorldMap) -> tuple[str, float, tuple[float, float, float]]:
+    """Where a visit on ``world`` begins: the robot's place and heading (the entrance,
+    else the first place, facing as it faces), and the visitor's position and heading
+    (1 m from the robot, ahead of it where that is clear, facing it)."""
+    place, x, y, heading = _start(world)
+    ux, uy = beside(world, x, y, heading)
+    return place, heading, (ux, uy, round(math.degrees(math.atan2(y - uy, x - ux)), 1))
+
+
 def visit_scenario(visit: Visit, ea: Document, fa: Document, world: tuple[Path, WorldMap],
                    paths: tuple[Path, Path]) -> str:
     """The visit's scenario file (its file names absolute: ``paths`` are the EA's and the
     FA's documents, ``world`` the map's path and the map)."""
     map_path, plan = world
     ea_path, fa_path = paths
-    place, x, y, heading = _start(plan)
-    ux, uy = _beside(plan, x, y, heading)
-    facing = math.degrees(math.atan2(y - uy, x - ux))
+    place, heading, (ux, uy, facing) = starts(plan)
+    start = plan.place(place)
+    x, y = (start.x, start.y) if start is not None else (0.0, 0.0)
     far = max(plan.places, key=lambda p: math.hypot(p.x - x, p.y - y))
     t = visit.until / 180.0  # (the times below are for a visit of 180 s)
     lines = [
@@ -301,7 +312,7 @@ def visit_scenario(visit: Visit, ea: Document, fa: Document, world: tuple[Path, 
         f"  <map href={quoteattr(str(map_path.resolve()))}/>",
         f"  <apps fa={quoteattr(str(fa_path.resolve()))} ea={quoteattr(str(ea_path.resolve()))}/>",
         f'  <robot place="{place}" heading="{heading:g}"/>',
-        f'  <user x="{ux:g}" y="{uy:g}" heading="{round(facing, 1):g}" speed="0.4">',
+        f'  <user x="{ux:g}" y="{uy:g}" heading="{facing:g}" speed="0.4">',
         *_answer_rules(questions(ea) + questions(fa), visit.visitor),
         *_user_actions(visit, far.name, [r for doc in (ea, fa)
                                          for r in remarks(doc, visit.visitor)]),

@@ -31,6 +31,7 @@ from foxglove.mcap import MCAPWriteOptions, MCAPWriter
 
 from prima.errors import OutputError
 from prima.judge import Report, judge
+from prima.mcap._layout import ATTACHMENT, HOME_DEVICES, layout
 from prima.mediator import DecisionKind
 from prima.output import Staged, shown
 from prima.sim import WorldMap
@@ -160,20 +161,25 @@ class Recorder:
     lines) is finished and kept. A write that fails is an
     :class:`~prima.errors.OutputError` at the next line."""
 
-    def __init__(self, path: str | Path, world: WorldMap | None = None, *,
-                 robot_radius: float = 0.2) -> None:
-        self.path = Path(path)
-        self._staged = Staged(path, binary=True, seekable=True)
-        self._file = _Guarded(self._staged.file)
-        self.context = foxglove.Context()
+    def __init__(self, path: str | Path | None, world: WorldMap | None = None, *,
+                 robot_radius: float = 0.2, context: foxglove.Context | None = None) -> None:
+        self.path = Path(path) if path is not None else None
+        self.context = context or foxglove.Context()
+        """Where the messages go: the file's writer, and whatever else listens to it (the
+        WebSocket server of ``prima live --foxglove``, which gives ``path`` None: no
+        file)."""
+        self._staged = (Staged(path, binary=True, seekable=True) if path is not None
+                        else None)
+        self._file = _Guarded(self._staged.file) if self._staged is not None else None
         self.writer: MCAPWriter | None = None
-        try:
-            self.writer = foxglove.open_mcap(
-                self._file, context=self.context,
-                writer_options=MCAPWriteOptions(profile="", compression_threads=0))
-        except BaseException:
-            self._staged.discard()
-            raise
+        if self._file is not None:
+            try:
+                self.writer = foxglove.open_mcap(
+                    self._file, context=self.context,
+                    writer_options=MCAPWriteOptions(profile="", compression_threads=0))
+            except BaseException:
+                self._discard()
+                raise
         ctx = self.context
         self.map = SceneUpdateChannel("/map", context=ctx)
         self.bodies = SceneUpdateChannel("/bodies", context=ctx)
@@ -206,7 +212,9 @@ class Recorder:
 
     def _scene(self, world: WorldMap | None, radius: float) -> None:
         entities = [] if world is None else self._map_entities(world)
-        self.map.log(fm.SceneUpdate(entities=entities), log_time=0)
+        self.scene = (fm.SceneUpdate(entities=entities), fm.SceneUpdate())
+        """The map's scene and the bodies' (logged once at 0; again for a live view)."""
+        self.map.log(self.scene[0], log_time=0)
         robot = fm.SceneEntity(
             timestamp=_stamp(0), frame_id="robot", id="robot", frame_locked=True,
             cylinders=[fm.CylinderPrimitive(pose=_pose(0, 0, z=0.15),
@@ -225,7 +233,14 @@ class Recorder:
             arrows=[fm.ArrowPrimitive(pose=_pose(0, 0, z=1.75), shaft_length=0.2,
                                       shaft_diameter=0.05, head_length=0.1,
                                       head_diameter=0.1, color=_colour("#e67e22"))])
-        self.bodies.log(fm.SceneUpdate(entities=[robot, user]), log_time=0)
+        self.scene = (self.scene[0], fm.SceneUpdate(entities=[robot, user]))
+        self.bodies.log(self.scene[1], log_time=0)
+
+    def scene_again(self) -> None:
+        """Log the map's and the bodies' scenes again, at the latest time (a live view that
+        subscribes after the start has them so)."""
+        self.map.log(self.scene[0], log_time=_nanos(self.end))
+        self.bodies.log(self.scene[1], log_time=_nanos(self.end))
 
     def _map_entities(self, world: WorldMap) -> list[fm.SceneEntity]:
         stamp = _stamp(0)
@@ -361,12 +376,31 @@ class Recorder:
         """The judge's report of the lines written so far."""
         return judge(self.lines, name="run")
 
+    def finding(self, t: float, measure: str, message: str) -> None:
+        """Log one of the judge's findings at its time (``/judge``)."""
+        self.findings.log(fm.Log(timestamp=_stamp(t), level=fm.LogLevel.Warning,
+                                 message=message, name=measure), log_time=_nanos(t))
+
+    def paths_so_far(self, kept: int = 2000) -> None:
+        """Log the robot's and the user's paths walked so far (their latest ``kept``
+        poses), at the latest time: what a live view draws as it goes."""
+        for who, walked in self.walked.items():
+            if walked:
+                self.paths[who].log(fm.PosesInFrame(
+                    timestamp=_stamp(self.end), frame_id="map",
+                    poses=[_pose(x, y, h) for _t, (x, y, h) in walked[-kept:]]),
+                    log_time=_nanos(self.end))
+
+    def layout(self) -> str:
+        """The Foxglove layout of this run (its devices and applications), as JSON."""
+        return layout(list(self.devices) or HOME_DEVICES, list(self.apps)).to_json()
+
     def close(self) -> None:
-        """Add the judge's findings and the paths, and finish the file."""
+        """Add the judge's findings, the paths and the layout, and finish the file (put it
+        in its place)."""
         report = self.judged()
         for t, measure, message in _findings(report):
-            self.findings.log(fm.Log(timestamp=_stamp(t), level=fm.LogLevel.Warning,
-                                     message=message, name=measure), log_time=_nanos(t))
+            self.finding(t, measure, message)
         counts = ", ".join(f"{n} {key}" for key, n in report.counts().items())
         self.findings.log(fm.Log(timestamp=_stamp(self.end),
                                  level=fm.LogLevel.Info if report.ok else fm.LogLevel.Warning,
@@ -378,28 +412,36 @@ class Recorder:
                     timestamp=_stamp(0), frame_id="map",
                     poses=[_pose(x, y, h) for _t, (x, y, h) in walked]), log_time=0)
         self._finish()
-        self._staged.commit()
+        if self._staged is not None:
+            self._staged.commit()
+
+    def _discard(self) -> None:
+        if self._staged is not None:
+            self._staged.discard()
 
     def _check(self) -> None:
         """An OutputError if a write has failed."""
-        if self._file.error is not None:
+        if self._file is not None and self._file.error is not None:
             self._finish()
-            self._staged.discard()
+            self._discard()
             error = self._file.error
             reason = error.strerror or str(error)
-            raise OutputError(f"cannot write {shown(self.path)}: "
+            raise OutputError(f"cannot write {shown(self.path or '')}: "
                               f"{reason[:1].lower() + reason[1:]}") from error
 
     def _finish(self) -> None:
-        """Finish the writer's file (its summary, its index), once."""
+        """Finish the writer's file (the run's layout attached, its summary, its index),
+        once."""
         if self.writer is None:
             return
         writer, self.writer = self.writer, None
         try:
+            writer.attach(log_time=0, create_time=0, name=ATTACHMENT,
+                          media_type="application/json", data=self.layout().encode("utf-8"))
             writer.close()
         except RuntimeError as exc:  # foxglove's own error: never the user's traceback
-            self._staged.discard()
-            raise OutputError(f"cannot write {shown(self.path)}: the MCAP writer failed "
+            self._discard()
+            raise OutputError(f"cannot write {shown(self.path or '')}: the MCAP writer failed "
                               f"({exc})") from exc
         self._check()
 
@@ -413,7 +455,7 @@ class Recorder:
             return
         with contextlib.suppress(Exception):  # the run failed: its error is the one told
             self._finish()
-        self._staged.discard()
+        self._discard()
 
 
 _DECISIONS = frozenset(kind.value for kind in DecisionKind)

@@ -17,6 +17,7 @@ the ``show`` extra (``pip install 'prima[show]'``).
 
 from __future__ import annotations
 
+import importlib
 import io
 import tempfile
 from collections.abc import Callable, Iterable, Mapping
@@ -28,9 +29,12 @@ from prima.errors import PrimaError
 if TYPE_CHECKING:
     from prima.audio import SynthesisedTiming
     from prima.run import Switches
-    from prima.sim import SpeechTiming
+    from prima.sim import SpeechTiming, WorldMap
 
-__all__ = ["read_rows", "render", "speech_timing", "write_page"]
+__all__ = ["drawing", "map_figure", "read_rows", "render", "speech_timing", "style",
+           "timeline_figure", "write_page"]
+
+_Pose = tuple[float, float, float]
 
 
 def read_rows(path: str | Path, switches: Switches | None = None,
@@ -119,3 +123,50 @@ def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path 
     model = build(rows, spool)
     page(model, world, title, out, spool, sounds)
     return model.starts, model.timeline.end
+
+
+# ------------------------------------------------------------ what prima live draws too
+
+def _drawn() -> Any:
+    """The page's module (Plotly's figures), or what is missing to make them."""
+    try:
+        return importlib.import_module("prima.show._page")
+    except ImportError as exc:  # the plotting library is an optional extra
+        raise PrimaError(f"prima show needs Plotly ({exc.name} is missing): "
+                         "pip install 'prima[show]'") from exc
+
+
+def map_figure(world: WorldMap | None, robot: _Pose | None,
+               user: _Pose | None) -> dict[str, Any]:
+    """The map as the page draws it, the robot and the user at these poses (x, y,
+    heading): Plotly's JSON (``data``, ``layout``, ``config``), and which traces are the
+    robot's and the user's markers (``robot``, ``user``), to move them."""
+    from prima.show._model import Model
+    from prima.timeline import Timeline
+
+    page = _drawn()
+    model = Model(Timeline(), [], robot=[(0.0, *robot)] if robot else [],
+                  user=[(0.0, *user)] if user else [])
+    fig, index = page.map_figure(model, world)
+    return {**page.figure_json(fig), **index}
+
+
+def timeline_figure(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
+    """The device timeline of a run's trace lines (in trace order), as the page draws it:
+    Plotly's JSON (``data``, ``layout``, ``config``)."""
+    from prima.show._model import build
+
+    page = _drawn()
+    fig, _traces = page.timeline_figure(build(rows))
+    return dict(page.figure_json(fig))
+
+
+def drawing() -> str:
+    """The script both pages draw with (``PrimaDraw``: a line's words, the table's rows,
+    poses between samples, bubbles, markers)."""
+    return str(_drawn().drawing())
+
+
+def style() -> str:
+    """The style both pages share."""
+    return str(_drawn().style())

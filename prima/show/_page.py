@@ -33,6 +33,23 @@ _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": [
                                                                                "lasso2d"]}
 
 
+def drawing() -> str:
+    """The script both pages draw with (``draw.js``: ``PrimaDraw``)."""
+    return resources.files("prima.show").joinpath("draw.js").read_text(encoding="utf-8")
+
+
+def style() -> str:
+    """The style both pages share (``show.css``)."""
+    return resources.files("prima.show").joinpath("show.css").read_text(encoding="utf-8")
+
+
+def figure_json(fig: go.Figure) -> dict[str, Any]:
+    """A figure as Plotly.newPlot and Plotly.react take it: its traces and its layout
+    (with its template), the one way both pages write a figure."""
+    return {"data": [trace.to_plotly_json() for trace in fig.data],
+            "layout": go.Figure(layout=fig.layout).to_dict()["layout"], "config": _CONFIG}
+
+
 def _esc(text: str) -> str:
     """Text shown as itself (Plotly reads some HTML in its labels, a forged trace's
     device names too)."""
@@ -236,8 +253,8 @@ def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
                            config=_CONFIG)
     del map_fig
     files = resources.files("prima.show")
-    player = files.joinpath("player.js").read_text(encoding="utf-8")
-    style = files.joinpath("show.css").read_text(encoding="utf-8")
+    player = drawing() + files.joinpath("player.js").read_text(encoding="utf-8")
+    css = style()
     speeds = "".join(f'<option value="{s}"{" selected" if s == "1" else ""}>{s}x</option>'
                      for s in ("0.5", "1", "2", "4", "8", "16", "32"))
     name = markup(title)
@@ -247,7 +264,7 @@ def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
 <meta charset="utf-8">
 <title>prima show: {name}</title>
 <style>
-{style}</style>
+{css}</style>
 </head>
 <body>
 <header>

@@ -19,40 +19,11 @@
     function (el) { return {el: el, start: Number(el.dataset.start), end: Number(el.dataset.end)}; });
   let now = 0, playing = false, last = null, shownRow = -1, shownBubbles = "";
 
-  function esc(text) {
-    return String(text).replace(/[&<>"]/g, function (c) {
-      return {"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}[c];
-    });
-  }
-
-  // Plotly reads a few tags and entities in its texts (&lt; and the like, not &quot;)
-  function plotlyText(text) {
-    return String(text).replace(/[&<>]/g, function (c) {
-      return {"&": "&amp;", "<": "&lt;", ">": "&gt;"}[c];
-    });
-  }
-
-  function what(row) {
-    if (row.kind === "user") {
-      return row.action === "say" ? '"' + (row.text || "") + '"' : row.action +
-        (row.detail && row.detail.target ? " " + row.detail.target : "");
-    }
-    const parts = [];
-    if (row.command) parts.push(row.command);
-    if (row.text) parts.push(row.command ? '"' + row.text + '"' : row.text);
-    if (row.detail && row.detail.args) parts.push(row.detail.args);
-    if (!parts.length && row.detail) parts.push(JSON.stringify(row.detail));
-    return parts.join(" ");
-  }
+  const esc = PrimaDraw.esc, what = PrimaDraw.what, poseAt = PrimaDraw.poseAt;
 
   /* The trace table. */
   const trs = D.rows.map(function (row, i) {
-    const tr = document.createElement("tr");
-    tr.dataset.i = i;
-    // numbered by the line's seq, as the jsonl, prima judge and prima debug number it
-    tr.innerHTML = "<td>" + (row.seq == null ? i : row.seq) + "</td><td>" + row.t.toFixed(2) + "</td><td>" + esc(row.kind) +
-      "</td><td>" + esc(row.app || "") + "</td><td>" + (row.ab == null ? "" : row.ab) +
-      "</td><td>" + esc(what(row)) + "</td><td>" + esc(row.reason || "") + "</td>";
+    const tr = PrimaDraw.tableRow(row, i);
     tr.className = "future";
     tbody.appendChild(tr);
     return tr;
@@ -61,22 +32,6 @@
     const tr = e.target.closest("tr");
     if (tr) choose(Number(tr.dataset.i));
   });
-
-  /* Poses, interpolated between samples. */
-  function poseAt(poses, t) {
-    if (!poses.length) return null;
-    let lo = 0, hi = poses.length - 1;
-    if (t <= poses[0][0]) return poses[0];
-    if (t >= poses[hi][0]) return poses[hi];
-    while (hi - lo > 1) {
-      const mid = (lo + hi) >> 1;
-      if (poses[mid][0] <= t) lo = mid; else hi = mid;
-    }
-    const a = poses[lo], b = poses[hi];
-    const f = b[0] > a[0] ? (t - a[0]) / (b[0] - a[0]) : 1;
-    let turn = ((b[3] - a[3]) % 360 + 540) % 360 - 180;
-    return [t, a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2]), a[3] + f * turn];
-  }
 
   function lastRowAt(t) {  // the last line at or before t, or -1
     let lo = 0, hi = times.length;
@@ -93,13 +48,7 @@
     D.bubbles.forEach(function (b) {
       if (b[1] > t || t > b[2]) return;
       const pose = b[0] === "robot" ? robot : user;
-      if (!pose) return;
-      const n = seen[b[0]]++;
-      out.push({x: pose[1], y: pose[2], text: plotlyText(String(b[3]).slice(0, 80)), showarrow: true,
-                arrowhead: 0, ax: b[0] === "robot" ? -40 : 40, ay: -30 - 22 * n,
-                bgcolor: b[0] === "robot" ? "#ecf0f1" : "#fdebd0",
-                bordercolor: b[0] === "robot" ? "#2c3e50" : "#e67e22",
-                borderpad: 3, font: {size: 11}});
+      if (pose) out.push(PrimaDraw.bubble(b[0], pose, b[3], seen[b[0]]++));
     });
     return out;
   }
@@ -108,13 +57,7 @@
     scrub.value = now;
     clock.textContent = now.toFixed(2) + " s";
     const robot = poseAt(D.robot, now), user = poseAt(D.user, now);
-    const xs = [], ys = [], angles = [], idx = [];
-    [[robot, D.robotTrace], [user, D.userTrace]].forEach(function (p) {
-      if (!p[0]) return;
-      xs.push([p[0][1]]); ys.push([p[0][2]]); angles.push((90 - p[0][3] + 360) % 360);
-      idx.push(p[1]);
-    });
-    if (idx.length) Plotly.restyle(mapDiv, {x: xs, y: ys, "marker.angle": angles}, idx);
+    PrimaDraw.markers(mapDiv, robot, user, D.robotTrace, D.userTrace);
     const bubbles = bubblesAt(now, robot, user);
     const key = JSON.stringify(bubbles);
     if (key !== shownBubbles) {

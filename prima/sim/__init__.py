@@ -36,9 +36,10 @@ from prima.sim._scenario import (
 )
 from prima.sim._simulator import Simulator
 from prima.sim._spec import DEFAULT_GESTURES, RobotSpec, SpeechTiming
-from prima.sim._user import AnswerRule, ScriptedUser, TimedAction, UserScript
+from prima.sim._user import ADDED_ACTIONS, AnswerRule, ScriptedUser, TimedAction, UserScript
 
 __all__ = [
+    "ADDED_ACTIONS",
     "BEHAVIORS",
     "DEFAULT_GESTURES",
     "MAP_NS",

@@ -102,6 +102,20 @@ class Kernel:
         self._seq += 1
         heapq.heappush(self._heap, (max(tick, self.tick), self._seq, fn, None))
 
+    def reserve(self, n: int) -> range:
+        """Keep ``n`` insertion numbers for work added later (:meth:`at_reserved`): within
+        its tick, such work goes where work scheduled now goes, before what is scheduled
+        after this call. What a live user does (``prima live``) is played so in the place
+        a scripted user's actions have: the same run as a script of it makes."""
+        first = self._seq + 1
+        self._seq += n
+        return range(first, first + n)
+
+    def at_reserved(self, tick: int, number: int, fn: Callable[[], None]) -> None:
+        """Do ``fn`` at ``tick`` (never earlier than now) in the order of ``number``, one of
+        the insertion numbers :meth:`reserve` kept (each used once)."""
+        heapq.heappush(self._heap, (max(tick, self.tick), number, fn, None))
+
     def _wake(self, tick: int, proc: Process, token: int, value: Any) -> None:
         """Resume ``proc`` with ``value`` at ``tick`` (not earlier than now), unless it
         was resumed since ``token``: what :meth:`at` does with a function that fires it,

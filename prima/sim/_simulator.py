@@ -42,7 +42,7 @@ from prima.sim._records import (
     ZoneEntry,
 )
 from prima.sim._spec import RobotSpec, SpeechTiming
-from prima.sim._user import ScriptedUser, UserScript
+from prima.sim._user import ADDED_ACTIONS, ScriptedUser, UserScript
 from prima.sim._world import World
 from prima.vocab import MAX_TEXT, Value
 
@@ -181,6 +181,14 @@ class Simulator:
         may go from there before they can change (negative: look them up)."""
         for ev in events:
             self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
+        self._room = iter(self.kernel.reserve(ADDED_ACTIONS))
+        """The insertion numbers kept for inputs added as the run goes (:meth:`add_event`)."""
+        self.pace: Callable[[int], None] | None = None
+        """Called with the tick the run may go on to, where it could wait for a wall clock
+        (``prima live``): at each sensing tick while something moves, and before each jump
+        over a still stretch. It may block, and add inputs (:meth:`add_event`,
+        ``user.add``) after now; the simulator then looks at its agenda again. Pacing so
+        changes nothing of the run."""
         self.user = ScriptedUser(user, self) if user is not None else None
         if self.user is not None:
             self.user.begin()
@@ -202,6 +210,21 @@ class Simulator:
                                        {"sender": to, "text": answer})
                 self.kernel.at(self.kernel.tick + ticks, functools.partial(self._post, reply))
                 return
+
+    def add_event(self, event: ScheduledEvent) -> None:
+        """Post ``event`` at its time, after now, as if the scenario had listed it last
+        among the inputs of that tick (a network message sent live, ``prima live``): a
+        scenario with the same inputs at the same times makes the same run. Raises
+        SimulationError for a time not after now, or past the bound."""
+        k = self.kernel
+        tick = round(event.at * k.hz)
+        if tick <= k.tick:
+            raise SimulationError(f"an input added at {event.at:g} s comes too late: the "
+                                  f"run is at {self.now():g} s")
+        number = next(self._room, None)
+        if number is None:
+            raise SimulationError(f"at most {ADDED_ACTIONS} inputs may be added to a run")
+        k.at_reserved(tick, number, functools.partial(self._post, event))
 
     @classmethod
     def from_scenario(cls, scenario: Scenario, *, spec: RobotSpec | None = None,
@@ -482,6 +505,7 @@ class Simulator:
         every = self._sense_every
         sample = self.sample_every
         heap = k._heap
+        pace = self.pace
         before = self.reports if stop_on_report else -1
         while True:
             self._settle()
@@ -496,6 +520,8 @@ class Simulator:
                         done()
                     if k.tick % every == 0:
                         self._sense()
+                        if pace is not None:
+                            pace(k.tick)
                     if sample and k.tick % sample == 0:
                         self.on_sample()
                     if (k.tick >= target or (heap and heap[0][0] <= k.tick)
@@ -506,6 +532,11 @@ class Simulator:
             else:
                 nxt = k.next_tick()
                 jump = target if nxt is None or nxt > target else max(nxt, k.tick)
+                if pace is not None and jump > k.tick:
+                    pace(jump)
+                    nxt = k.next_tick()  # (an input added while it waited comes first)
+                    if nxt is not None and k.tick < nxt < jump:
+                        jump = nxt
                 if sample:  # nothing moves: the samples on the way see the same poses
                     for tick in range((k.tick // sample + 1) * sample, jump + 1, sample):
                         k.tick = tick

@@ -14,8 +14,11 @@ from __future__ import annotations
 import functools
 import math
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
+
+from prima.errors import SimulationError
 
 from prima.sim._kernel import ProcGen, Process, sleep
 from prima.sim._records import Pose, UserAction, UserActionKind
@@ -23,7 +26,7 @@ from prima.sim._records import Pose, UserAction, UserActionKind
 if TYPE_CHECKING:
     from prima.sim._simulator import Simulator
 
-__all__ = ["AnswerRule", "ScriptedUser", "TimedAction", "UserScript"]
+__all__ = ["ADDED_ACTIONS", "AnswerRule", "ScriptedUser", "TimedAction", "UserScript"]
 
 
 @dataclass(frozen=True)
@@ -101,6 +104,10 @@ class UserScript:
                 "answers": [r.to_dict() for r in self.answers]}
 
 
+ADDED_ACTIONS = 10_000
+"""How many actions may be added to a run as it goes (:meth:`ScriptedUser.add`): a live
+session's bound (``prima live``)."""
+
 _FOLLOW_PERIOD = 0.1
 _STEP_ASIDE = 0.6
 """A following user steps out of the robot's way when it comes this close (a fraction
@@ -120,12 +127,36 @@ class ScriptedUser:
         self._matched = [0] * len(script.answers)
         self._asked: tuple[str, AnswerRule | None] | None = None
         """The prompt the robot is asking, and the rule that answers it (None: none)."""
+        self._room: Iterator[int] = iter(())
+        """The insertion numbers kept for actions added as the run goes (:meth:`add`)."""
 
     def begin(self) -> None:
-        """Put every timed action on the agenda."""
+        """Put every timed action on the agenda, and keep room after them for
+        :data:`ADDED_ACTIONS` more (:meth:`add`)."""
         k = self._sim.kernel
         for action in self.script.actions:
             k.at(round(action.at * k.hz), functools.partial(self._do, action))
+        self._room = iter(k.reserve(ADDED_ACTIONS))
+
+    def add(self, action: TimedAction) -> None:
+        """Do ``action`` at its time, after now, as if the script had listed it last among
+        the actions of that tick: what a user does live (``prima live``), played so that a
+        script of the same actions at the same times makes the same run. Its tick is a
+        report, so the run loop gets control there as it would from the script's own
+        reckoning. Raises SimulationError for a time not after now, or past the bound."""
+        k = self._sim.kernel
+        tick = round(action.at * k.hz)
+        if tick <= k.tick:
+            raise SimulationError(f"an action added at {action.at:g} s comes too late: the "
+                                  f"run is at {self._sim.now():g} s")
+        number = next(self._room, None)
+        if number is None:
+            raise SimulationError(f"at most {ADDED_ACTIONS} actions may be added to a run")
+        k.at_reserved(tick, number, functools.partial(self._added, action))
+
+    def _added(self, action: TimedAction) -> None:
+        self._sim.reports += 1
+        self._do(action)
 
     # ---- hearing and speaking ---------------------------------------------------
 

@@ -566,6 +566,19 @@ SURFACES = [
          command=("lsp",), stdin=_LSP_INIT + b"Content-Type: x\r\n\r\n{}\r\nnoise\r\n"
          + _lsp_frame({"jsonrpc": "2.0", "id": 2, "method": "shutdown"})
          + _lsp_frame({"jsonrpc": "2.0", "method": "exit"}), seconds=8),
+    # 19: prima live (its page's inputs: tests/test_live.py)
+    Case("live-save-over-scenario", "prima live told to save its session over its scenario",
+         _speaker("hello"), Exits(2, "s.xml is the scenario ("),
+         command=("live", "{path}", "--save", "{path}", "--port", "0"), seconds=6,
+         then=_inputs_intact),
+    Case("live-save-over-map", "prima live told to save its session over its map",
+         _speaker("hello"), Exits(2, "map.xml is the map ("),
+         command=("live", "{path}", "--save", "{dir}/./sub/../map.xml", "--port", "0"),
+         seconds=6),
+    Case("live-save-dir-is-ea", "prima live told to save into its EA, as a folder",
+         _speaker("hello"), Exits(2, "ea.pxml is a file: an EA ("),
+         command=("live", "{path}", "--save-dir", "{dir}/ea.pxml", "--port", "0"), seconds=6,
+         then=_inputs_intact),
     # 9: the shipped files
     Case("validate-apps", "prima validate apps/ (FA7 is the guide robot's)",
          made(_shipped_apps), Accepted(), seconds=10),

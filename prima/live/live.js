@@ -1,0 +1,398 @@
+/* prima live: the run as it happens, drawn as prima show draws a run (PrimaDraw), and
+   what the author does as the user, sent to the server. Words are set as text. */
+(function () {
+  "use strict";
+  const $ = function (id) { return document.getElementById(id); };
+  const mapDiv = $("map"), timeline = $("timeline"), tbody = document.querySelector("#trace tbody");
+  const tableBox = $("table-box"), head = $("playhead"), timelineBox = $("timeline-box");
+  const KEEP_ROWS = 1500;      // trace lines kept in the table (the page stays quick)
+  const KEEP_WORDS = 200;      // lines of words kept
+  const ROBOT_SAYS_FOR = 1.0, USER_SAYS_FOR = 3.0;  // as prima show's bubbles
+  let ws = null, D = null, rows = [], poses = [[], []], status = null, statusAt = 0;
+  let open = {}, bubbles = [], asking = null, shownBubbles = "", following = true;
+  let frames = 0, heard = [], said = [], lastPose = null, pathAt = -1, dragging = false;
+  let shownMarkers = "";
+
+  function notice(text, bad) {
+    const p = $("notice");
+    p.textContent = text;
+    p.className = bad ? "bad" : "";
+  }
+
+  function banner(text) {
+    const b = $("banner");
+    b.textContent = text;
+    b.hidden = !text;
+  }
+
+  function send(message) {
+    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(message));
+    else notice("not connected", true);
+  }
+
+  /* ---------------------------------------------------------------- what comes */
+
+  function connect() {
+    ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws");
+    ws.onmessage = function (e) { receive(JSON.parse(e.data)); };
+    ws.onclose = function () {
+      if (!$("banner").dataset.busy) banner("The connection to prima live is closed: " +
+        "the server stopped, or this tab lost it. Reload to take the session again.");
+    };
+  }
+
+  function receive(m) {
+    if (m.hello) hello(m.hello);
+    if (m.rows) addRows(m.rows);
+    if (m.pose) pose(m.pose);
+    if (m.status) setStatus(m.status);
+    if (m.timeline) drawTimeline(m.timeline);
+    if (m.findings) addFindings(m.findings, m.waiting);
+    if (m.busy) { $("banner").dataset.busy = "1"; banner(m.busy); }
+    if (m.refused) notice(m.refused, true);
+    if (m.saved) notice("saved as " + m.saved + " (save " + m.saves + ")");
+    if (m.download) download(m.download);
+  }
+
+  function hello(h) {
+    D = h;
+    const map = h.map;
+    map.layout.dragmode = false;
+    Plotly.newPlot(mapDiv, map.data, map.layout, map.config);
+    Plotly.newPlot(timeline, [], {height: 220, margin: {l: 140, r: 10, t: 30, b: 40},
+                                 xaxis: {title: "simulated time (s)"}}, {displaylogo: false});
+    timeline.on("plotly_relayout", function (e) {
+      if (e && (e["xaxis.range[0]"] !== undefined || e["xaxis.autorange"])) following = false;
+      placeHead();
+    });
+    const senders = $("senders");
+    h.senders.forEach(function (s) {
+      const o = document.createElement("option");
+      o.value = s;
+      senders.appendChild(o);
+    });
+    if (h.senders.length) $("sender").value = h.senders[0];
+    $("layout").hidden = !h.layout;
+    if (h.foxglove) notice("Foxglove: connect to " + h.foxglove);
+    addFindings(h.findings, h.waiting);
+    setStatus(h.status);
+    mapEvents();
+    requestAnimationFrame(frame);
+  }
+
+  function addRows(list) {
+    const atBottom = tableBox.scrollTop + tableBox.clientHeight >= tableBox.scrollHeight - 30;
+    list.forEach(function (row) {
+      const i = rows.length;
+      rows.push(row);
+      if (row.kind === "pose") return;
+      tbody.appendChild(PrimaDraw.tableRow(row, i));
+      if (tbody.rows.length > KEEP_ROWS) tbody.deleteRow(0);
+      mark(row);
+    });
+    if (atBottom) tableBox.scrollTop = tableBox.scrollHeight;
+  }
+
+  function words(who, text, cls) {
+    const li = document.createElement("li");
+    const b = document.createElement("b");
+    b.textContent = who;
+    li.appendChild(b);
+    li.appendChild(document.createTextNode(" " + text));
+    li.className = cls;
+    const ol = $("words");
+    ol.appendChild(li);
+    if (ol.children.length > KEEP_WORDS) ol.removeChild(ol.firstChild);
+    ol.scrollTop = ol.scrollHeight;
+  }
+
+  function mark(row) {  // what a line changes on the map and in the words
+    const t = row.t;
+    if (row.kind === "start" && row.text && row.ab != null) {
+      open[row.ab] = {t: t, text: row.text};
+      words((row.app || "robot") + ":", row.text, "robot");
+      if (row.command && row.command.split("+").indexOf("QA") >= 0) {
+        asking = row.ab;
+        showAsking(row.text);
+      }
+    } else if (row.kind === "end" && row.ab != null) {
+      const o = open[row.ab];
+      if (o) {
+        bubbles.push(["robot", o.t, Math.max(t, o.t + ROBOT_SAYS_FOR), o.text]);
+        delete open[row.ab];
+      }
+      if (asking === row.ab) { asking = null; showAsking(null); }
+    } else if (row.kind === "user") {
+      const said = row.action === "say";
+      const label = said ? row.text : "[" + PrimaDraw.what(row) + "]";
+      bubbles.push(["user", t, t + USER_SAYS_FOR, label]);
+      if (said) words("you:", row.text, "user");
+    } else if (row.kind === "hear") {
+      heard.push({t: t, seq: row.seq, at: performance.now()});
+    }
+    if (bubbles.length > 50) bubbles = bubbles.slice(-50);
+  }
+
+  function showAsking(prompt) {
+    $("asking").hidden = !prompt;
+    const box = $("answers");
+    box.textContent = "";
+    if (!prompt) return;
+    $("prompt").textContent = prompt;
+    D.questions.forEach(function (q) {
+      if (prompt.toLowerCase().indexOf(q[0].toLowerCase()) < 0) return;
+      q[1].forEach(function (answer) {
+        const b = document.createElement("button");
+        b.type = "button";
+        b.textContent = answer;
+        b.addEventListener("click", function () { say(answer); });
+        box.appendChild(b);
+      });
+    });
+    $("say").focus();
+  }
+
+  function pose(p) {
+    const t = p[0];
+    [p[1], p[2]].forEach(function (xyh, k) {
+      if (!xyh) return;
+      const list = poses[k];
+      if (list.length && list[list.length - 1][0] >= t) list.pop();
+      list.push([t, xyh[0], xyh[1], xyh[2]]);
+      if (list.length > 200) list.splice(0, list.length - 200);
+    });
+    lastPose = p;
+    if (t - pathAt >= 0.5 && D) {  // the paths walked, every half second
+      pathAt = t;
+      const update = {x: [], y: []}, idx = [];
+      [[p[1], D.map.robot - 2], [p[2], D.map.robot - 1]].forEach(function (w) {
+        if (!w[0]) return;
+        update.x.push([w[0][0]]); update.y.push([w[0][1]]); idx.push(w[1]);
+      });
+      if (idx.length) Plotly.extendTraces(mapDiv, update, idx);
+    }
+  }
+
+  function setStatus(s) {
+    status = s;
+    statusAt = performance.now();
+    $("play").textContent = s.paused ? "Play" : "Pause";
+    $("step").disabled = !s.paused || s.state !== "running";
+    const speed = $("speed");
+    if (speed.value !== String(s.speed)) {
+      if (![].some.call(speed.options, function (o) { return o.value === String(s.speed); })) {
+        const o = document.createElement("option");
+        o.value = String(s.speed);
+        o.textContent = s.speed + "x";
+        speed.appendChild(o);
+      }
+      speed.value = String(s.speed);
+    }
+    const words = {running: s.paused ? "paused" : "", ended: "the run has ended (" +
+      s.until.toFixed(2) + " s): save it, or stop the server", stopped: "stopped",
+      failed: "the run failed: " + s.error};
+    $("state").textContent = words[s.state] || "";
+    $("state").className = s.state === "failed" ? "bad" : "";
+  }
+
+  function addFindings(list, waiting) {
+    const ol = $("findings");
+    list.forEach(function (f) {
+      const li = document.createElement("li");
+      const b = document.createElement("b");
+      b.textContent = f.title + " ";
+      li.appendChild(b);
+      li.appendChild(document.createTextNode(f.line));
+      li.dataset.seq = f.seq;
+      li.title = "trace line " + f.seq;
+      ol.appendChild(li);
+    });
+    $("waiting").textContent = waiting ? "(" + waiting + " more decided when the run ends)" : "";
+  }
+
+  function drawTimeline(fig) {
+    const layout = fig.layout;
+    const t = now();
+    if (following) layout.xaxis.range = [Math.max(0, t - 90), Math.max(t, 30) + 3];
+    layout.uirevision = following ? undefined : "kept";
+    Plotly.react(timeline, fig.data, layout, fig.config);
+    placeHead();
+  }
+
+  function download(d) {
+    const url = URL.createObjectURL(new Blob([d.text], {type: "application/xml"}));
+    const a = document.createElement("a");
+    a.href = url;
+    a.download = d.name;
+    document.body.appendChild(a);
+    a.click();
+    a.remove();
+    setTimeout(function () { URL.revokeObjectURL(url); }, 10000);
+    notice("downloaded as " + d.name);
+    window.primaLive.downloaded = d;
+  }
+
+  /* ---------------------------------------------------------------- drawing */
+
+  function now() {  // the simulated time shown: the clock, a step behind the poses' latest
+    if (!status) return 0;
+    let t = status.clock;
+    if (!status.paused && status.state === "running") {
+      t += (performance.now() - statusAt) / 1000 * status.speed;
+    }
+    const latest = lastPose ? lastPose[0] : 0;
+    return Math.max(0, Math.min(t, latest + 0.1, status.until) - 0.1);
+  }
+
+  function frame() {
+    frames++;
+    const t = now();
+    const robot = PrimaDraw.poseAt(poses[0], t), user = PrimaDraw.poseAt(poses[1], t);
+    const markers = JSON.stringify([robot, user].map(function (p) {
+      return p ? [p[1].toFixed(3), p[2].toFixed(3), p[3].toFixed(1)] : null;
+    }));
+    if (!dragging && markers !== shownMarkers) {  // (redrawn only when they moved)
+      shownMarkers = markers;
+      PrimaDraw.markers(mapDiv, robot, user, D.map.robot, D.map.user);
+    }
+    const out = [], seen = {robot: 0, user: 0};
+    Object.keys(open).forEach(function (ab) {
+      if (robot) out.push(PrimaDraw.bubble("robot", robot, open[ab].text, seen.robot++));
+    });
+    bubbles.forEach(function (b) {
+      if (b[1] > t + 0.2 || t > b[2]) return;
+      const at = b[0] === "robot" ? robot : user;
+      if (at && seen[b[0]] < 3) out.push(PrimaDraw.bubble(b[0], at, b[3], seen[b[0]]++));
+    });
+    const key = JSON.stringify(out);
+    if (key !== shownBubbles) {
+      shownBubbles = key;
+      Plotly.relayout(mapDiv, {annotations: out});
+    }
+    $("clock").textContent = t.toFixed(2) + " s";
+    placeHead(t);
+    requestAnimationFrame(frame);
+  }
+
+  function placeHead(t) {  // a line over the timeline (moving it redraws nothing)
+    const area = timeline.querySelector(".nsewdrag");
+    const range = timeline.layout && timeline.layout.xaxis && timeline.layout.xaxis.range;
+    if (!area || !range) { head.style.display = "none"; return; }
+    const at = t === undefined ? now() : t;
+    const r = area.getBoundingClientRect(), box = timelineBox.getBoundingClientRect();
+    const x = r.left - box.left + (at - range[0]) / (range[1] - range[0]) * r.width;
+    head.style.display = x >= r.left - box.left && x <= r.right - box.left ? "block" : "none";
+    head.style.left = x + "px";
+    head.style.top = (r.top - box.top) + "px";
+    head.style.height = r.height + "px";
+  }
+
+  /* ---------------------------------------------------------------- what the author does */
+
+  function say(text) {
+    if (!text.trim()) return;
+    said.push(performance.now());
+    send({act: "say", text: text});
+    $("say").value = "";
+  }
+
+  function toMap(e) {  // a mouse event's point, in metres on the map
+    const l = mapDiv._fullLayout;
+    if (!l || !l.xaxis || !l.yaxis) return null;
+    const r = mapDiv.querySelector(".nsewdrag").getBoundingClientRect();
+    return [l.xaxis.p2c(e.clientX - r.left), l.yaxis.p2c(e.clientY - r.top)];
+  }
+
+  function near(point, pose, metres) {
+    return point && pose && Math.hypot(point[0] - pose[1], point[1] - pose[2]) <= metres;
+  }
+
+  function mapEvents() {
+    let from = null;
+    mapDiv.addEventListener("mousedown", function (e) {
+      from = toMap(e);
+      const t = now();
+      dragging = near(from, PrimaDraw.poseAt(poses[1], t), 0.6);
+      if (dragging) e.preventDefault();
+    });
+    mapDiv.addEventListener("mousemove", function (e) {
+      if (!dragging) return;
+      const to = toMap(e);
+      if (to) Plotly.restyle(mapDiv, {x: [[to[0]]], y: [[to[1]]]}, [D.map.user]);
+    });
+    window.addEventListener("mouseup", function (e) {
+      if (from === null) return;
+      const to = toMap(e), t = now();
+      if (dragging && to) {
+        send({act: "walk", x: Math.round(to[0] * 100) / 100, y: Math.round(to[1] * 100) / 100});
+      } else if (near(to, PrimaDraw.poseAt(poses[0], t), 0.6)) {
+        send({act: "touch"});
+      }
+      dragging = false;
+      shownMarkers = "";  // (the user's marker goes back to where the user is)
+      from = null;
+    });
+  }
+
+  $("say-form").addEventListener("submit", function (e) {
+    e.preventDefault();
+    say($("say").value);
+  });
+  $("message-form").addEventListener("submit", function (e) {
+    e.preventDefault();
+    send({act: "message", sender: $("sender").value, text: $("message").value});
+    $("message").value = "";
+  });
+  ["touch", "follow", "stop"].forEach(function (act) {
+    $(act).addEventListener("click", function () { send({act: act}); });
+  });
+  $("play").addEventListener("click", function () {
+    send({control: status && status.paused ? "play" : "pause"});
+  });
+  $("step").addEventListener("click", function () {
+    send({control: "step", seconds: Number($("step-by").value)});
+  });
+  $("speed").addEventListener("change", function () {
+    send({control: "speed", speed: Number($("speed").value)});
+  });
+  $("save").addEventListener("click", function () { send({save: true}); });
+  document.addEventListener("keydown", function (e) {
+    if (/^(INPUT|SELECT|BUTTON|TEXTAREA)$/.test(e.target.tagName)) return;
+    if (e.key === " ") { e.preventDefault(); $("play").click(); }
+  });
+
+  // Speech, where the browser recognises it; typed words always work.
+  const Recognition = window.SpeechRecognition || window.webkitSpeechRecognition;
+  if (Recognition) {
+    const mic = $("mic");
+    mic.hidden = false;
+    let listening = null;
+    mic.addEventListener("click", function () {
+      if (listening) { listening.stop(); return; }
+      listening = new Recognition();
+      listening.lang = "en-US";
+      listening.onresult = function (e) {
+        const r = e.results[e.results.length - 1];
+        if (r.isFinal) say(r[0].transcript);
+      };
+      listening.onend = function () { listening = null; mic.classList.remove("on"); };
+      listening.onerror = function (e) { notice("speech: " + e.error, true); };
+      mic.classList.add("on");
+      listening.start();
+    });
+  }
+
+  // For tests and benchmarks: what the page has, read through the browser.
+  window.primaLive = {
+    rows: function () { return rows; },
+    frames: function () { return frames; },
+    heard: function () { return heard; },
+    said: function () { return said; },
+    pose: function () { return lastPose; },
+    time: now,
+    status: function () { return status; },
+    ready: function () { return D !== null; },
+    downloaded: null,
+  };
+  connect();
+})();
