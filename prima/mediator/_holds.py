@@ -43,6 +43,7 @@ __all__ = ["Block", "Holds", "Stream"]
 # from its class costs far more than a module global in Python 3.11.
 _LOW = Priority.LOW
 _KEEP_CHANNEL = Rule.KEEP_CHANNEL
+_RESTORE_STATE = Rule.RESTORE_STATE
 _BLOCK = Rule.BLOCK
 _STREAM_HOLD = Rule.STREAM_HOLD
 
@@ -155,17 +156,20 @@ class Holds:
     def holder(self, node: Node) -> tuple[Rule, App] | None:
         """Another app's talk (its words under way, or waiting out the robot's pause after
         a false interruption), block or armed stream hold that keeps ``node`` from
-        starting."""
+        starting. A return of the restore-state policy's waits for any talk, its own
+        application's too: the mediator's own move never turns the robot away from words
+        addressed to the user (docs/rules.md 7.6 (3))."""
         if node.priority is _LOW:
             busy = self._wm.busy
+            anyone = node.commands[0].internal is _RESTORE_STATE
             for d in self._talk:
                 talker = busy.get(d)
-                if talker is not None and talker.app is not node.app:
+                if talker is not None and (talker.app is not node.app or anyone):
                     return _KEEP_CHANNEL, talker.app
             if self._resting:  # (a pause in its words is no end of its talk: 7.5)
                 now = self._clock.now()
                 for n in self._resting:
-                    if n.state is NodeState.WAITING and n.app is not node.app \
+                    if n.state is NodeState.WAITING and (n.app is not node.app or anyone) \
                             and n.not_before > now:
                         return _KEEP_CHANNEL, n.app
         if not self.opened:

@@ -134,6 +134,8 @@ class Streams:
     """Trees replying to the user's answer to their Q&A -> the order of that request,
     until their first words from then on are said in full: the user's own action, not
     rationed by the wait share (7.6 (4))."""
+    returns: set[CommandId] = field(default_factory=set)
+    """The restore-state policy's returns (they wait for any talk: 7.6 (3))."""
     resting: dict[AbId, float] = field(default_factory=dict)
     """Restarts of words a false interruption cut -> the instant the robot's pause ends
     (they may not start before it; their application is still talking meanwhile)."""
@@ -225,8 +227,11 @@ class _View:
                 and not self.behind_hold(r, n.app)]
 
     def channel_held(self, n: NodeView) -> bool:
-        """A Command that breaks the channel waits while another app talks."""
-        return n.priority is Priority.LOW and bool(self.talkers - {n.app})
+        """A Command that breaks the channel waits while another app talks; the
+        restore-state policy's return, while any app talks (its own too: 7.6 (3))."""
+        return n.priority is Priority.LOW and bool(
+            self.talkers if not self.streams.returns.isdisjoint(n.command_ids)
+            else self.talkers - {n.app})
 
     def holders(self, n: NodeView) -> list[str]:
         """Other, non-demoted apps whose block or armed stream hold keeps ``n``."""
@@ -687,6 +692,8 @@ class Oracle:
         with words and no question of its own; or a policy's AB put before one."""
         if d.ab is None:
             return
+        if d.rule is Rule.RESTORE_STATE:
+            self.streams.returns.update(d.command_ids)
         if d.precedes is not None:
             self.streams.deferred.add(d.precedes)
             first = self._reply_commands.get(d.precedes)
