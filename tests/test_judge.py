@@ -934,6 +934,30 @@ def test_without_the_mediators_hold_a_free_speaker_is_free() -> None:
     assert (fa.free, fa.late) == (0.5, True)
 
 
+def test_devices_kept_for_a_next_ab_its_app_cancelled_are_kept_until_then() -> None:
+    """7.1: ea's reaction keeps the speaker for its words (AB3, after its StopMoving);
+    ea cancels those words at 11.0 (a newer request of its own): fa's words were
+    rightly kept until then, not after (then they were free)."""
+    tr = Trace()
+    tr.event(10.0, "message")
+    tr.request(10.0, "fa", 1, 1, text="A message.", reactive=True)
+    tr.event(10.0, "human-found")
+    tr.request(10.0, "ea", 2, [2, 3], tree=1, command="StopMoving", text="There you are.",
+               reactive=True, devices=("locomotion",))
+    tr.start(10.0, "ea", 2, 2, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.line(10.0, "hold", app="fa", ab=1, tree=0, command="Speak", reason="reserved",
+            text="devices kept for ea's reaction (AB3 next)", devices=["speaker"],
+            before=3, detail={"command_id": 1})
+    tr.line(11.0, "cancel", app="ea", ab=3, tree=1, command="Speak", reason="asap",
+            devices=["speaker"], detail={"command_id": 3})
+    tr.end(11.5, "ea", 2, 2, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.speak(12.0, "fa", 1, 1, "A message.", request=False)
+    fa, _ea = tr.judge().reactions
+    assert (fa.residual, fa.free, fa.late) == (1.0, 1.0, True)
+    assert (("ea", 3, "kept for a reaction's next AB (7.1)", 11.0)
+            in [(w.app, w.ab, w.rule, w.until) for w in fa.waits])
+
+
 def test_a_reaction_that_goes_first_keeps_the_speaker_while_its_turn_runs() -> None:
     """7.1: ea's reaction (the latest) stops the robot (0.1 s), then the connect-channel
     policy turns the robot to the user (1 s) before ea's words: the speaker is theirs

@@ -214,6 +214,8 @@ class Context:
         """A policy's Command (a turn, a return) -> the Command it was put before."""
         self.cancelled: dict[int, float] = {}
         """Command -> when it was cancelled."""
+        self.cancelled_ab: dict[int, tuple[float, int | None]] = {}
+        """AB (one never started, too) -> when it was cancelled, and its tree."""
         self.requested_at: dict[int, tuple[float, int]] = {}
         self.elsewhere: set[int] = set()
         """Commands whose request said their words are about something else."""
@@ -451,6 +453,10 @@ class Context:
         ids = command_ids(row)
         for cid in ids:
             self.cancelled.setdefault(cid, float(row["t"]))
+        ab, tree = row.get("ab"), row.get("tree")
+        if isinstance(ab, int):
+            self.cancelled_ab.setdefault(ab, (float(row["t"]),
+                                              tree if isinstance(tree, int) else None))
         for app, ex in list(self.open_exchange.items()):
             if not set(ex.reply).isdisjoint(ids):  # its reply will never be said
                 ex.done = float(row["t"])

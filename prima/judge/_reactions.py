@@ -36,7 +36,7 @@ import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 
-from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, ReactionState
+from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, Hold, ReactionState
 from prima.judge._findings import Blame, Reaction
 from prima.vocab import MAX_ANSWER_HOLD
 
@@ -403,7 +403,10 @@ class _Analyst:
                 continue
             if h.reason == "reserved" and h.before is not None:
                 nxt = self.ctx.abs.get(h.before)
-                if nxt is None or not self.goes_first(nxt, r, low, h.t):
+                if nxt is None:
+                    out += self._kept_for_gone(r, h, t1)
+                    continue
+                if not self.goes_first(nxt, r, low, h.t):
                     continue
                 until = min(nxt.start, t1)
                 out.append((h.t, until, self._blame(nxt, "kept for a reaction's next AB "
@@ -423,6 +426,19 @@ class _Analyst:
                 out.append((h.t, t1, Blame(h.holder, None, "", "",
                                            "keeps the channel (rule 4.1)", t1)))
         return out
+
+    def _kept_for_gone(self, r: ReactionState, h: Hold, t1: float
+                       ) -> list[tuple[float, float, Blame]]:
+        """A hold that kept ``r``'s devices for another reaction's next AB that never
+        started: rightly, while that reaction's stream goes before ``r``, until its
+        application cancelled the AB (a newer request of its own replaced it)."""
+        gone = self.ctx.cancelled_ab.get(h.before or -1)
+        if gone is None or gone[1] is None or \
+                not self.tree_key(gone[1], h.t) < self.reaction_key(r, h.t):
+            return []
+        until = min(gone[0], t1)
+        return [(h.t, until, Blame(h.holder, h.before, "", "",
+                                   "kept for a reaction's next AB (7.1)", until))]
 
     def _requested_ids(self, ab: int) -> tuple[int, ...]:
         return tuple(cid for cid, found in self.ctx.cmd_ab.items() if found == ab)

@@ -125,7 +125,8 @@ class Holds:
         the user (a hold decision was emitted)."""
         self._channel_held: set[AbId] = set()
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
-        self._reserved: set[AbId] = set()
+        self._reserved: dict[AbId, AbId] = {}
+        """ABs said to be kept for another reaction's next AB -> that AB."""
         """Waiting ABs kept from a reaction's reserved device (a hold decision was
         emitted)."""
         self._kept: dict[AbId, str] = {}
@@ -251,7 +252,7 @@ class Holds:
         if self._channel_held:
             self._channel_held.discard(node.id)
         if self._reserved:
-            self._reserved.discard(node.id)
+            self._reserved.pop(node.id, None)
         if self._answer_held:
             self._answer_held.discard(node.id)
         if not self.opened:
@@ -318,7 +319,7 @@ class Holds:
 
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
-        self._reserved.discard(node.id)
+        self._reserved.pop(node.id, None)
         self._answer_held.discard(node.id)
         if node.reserving and self._reserve_parked:
             self.refile_reserved()  # a next AB that kept devices is gone
@@ -389,8 +390,8 @@ class Holds:
     def reserved(self, node: Node, by: Node) -> None:
         """Record that the next AB ``by`` of another application's reaction (or reply)
         keeps the ready ``node`` from its devices (once per AB: docs/rules.md 7.1)."""
-        if node.id not in self._reserved:
-            self._reserved.add(node.id)
+        if self._reserved.get(node.id) != by.id:  # (once per AB it is kept for)
+            self._reserved[node.id] = by.id
             what = "reply" if by.protected else "reaction"
             self._log.emit(DecisionKind.HOLD, Rule.RESERVED, node,
                            detail=f"devices kept for {by.app.name}'s {what} (AB{by.id} next)",

@@ -312,8 +312,8 @@ class Selector:
             if r is not None:
                 # Kept for the reaction's next AB (docs/rules.md 7.1): it steps aside, like
                 # an AB another app's hold keeps, so that it reserves nothing meanwhile.
-                if ready:
-                    self._holds.reserved(x, r)
+                if ready or self._policies.acts_on_busy(x):  # (it would start, or cut
+                    self._holds.reserved(x, r)  # what holds its devices: said so)
                 self._holds.park(x, Rule.RESERVED, r.app)
                 return True
         if x.not_before > self._log.now:

@@ -549,3 +549,22 @@ def test_a_reaction_to_a_touch_with_no_words_holds_the_guide_while_it_lasts() ->
     h.run(until=8.0)
     legs = [d.t for d in h.starts() if d.command == "TopologicalMove"]
     assert 2.0 in legs and not [t for t in legs if 2.0 < t < 4.2] and 4.2 in legs
+
+
+def test_what_is_kept_for_a_reaction_is_said_again_for_the_next_one() -> None:
+    """7.1, in a visit prima check made: FA5's next question is kept for EA3's corner
+    remark (a reaction's next AB); EA3 replaces the remark with its message, whose first
+    AB keeps the wheels FA5's question needs (its turn to the user) in turn. The trace
+    says so a second time, naming that AB, so that the judge knows why FA5 waits (it
+    read the wait for the message as lateness)."""
+    from pathlib import Path
+
+    from prima.judge import judge
+    from prima.run import Run
+
+    visit = Path(__file__).parents[1] / "data" / "visits" / "ea3-message-over-fa5-reply.xml"
+    lines = Run(visit).run()
+    kept = [ln.before for ln in lines if ln.kind.value == "hold" and ln.reason == "reserved"
+            and ln.app == "fa5-video-timer"]
+    assert len(set(kept)) >= 2, kept
+    assert [r for r in judge(lines).reactions if r.late] == []
