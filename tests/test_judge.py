@@ -1306,6 +1306,17 @@ def test_leaving_while_talking_counts_once_per_utterance() -> None:
     assert x.moved_by == Blame("fa", 9, "TopologicalMove", "", "drove the wheels")
 
 
+def test_the_robot_pushed_while_nothing_drives_it_is_not_leaving() -> None:
+    """The robot ends 0.4 m farther from its user while it turns in place to them (a
+    FaceHuman on the wheels) or stands: a user who walked into it pushed it, it did not
+    move on its own. The same displacement while a TopologicalMove drives it is."""
+    poses = [(t, {"x": x, "y": 0.0, "heading": 0.0}, USER)
+             for t, x in ((1.5, -0.2), (2.0, -0.4), (2.5, -0.6))]
+    assert counts(_talking_while(poses, mover="FaceHuman")) == {}
+    assert counts(_talking_while(poses)) == {}
+    assert counts(_talking_while(poses, mover="TopologicalMove")) == {"leaving": 1}
+
+
 def test_the_user_walking_away_is_not_the_robot_leaving() -> None:
     report = _talking_while([(2.0, FACING, {**USER, "x": 3.0})])
     assert counts(report) == {}

@@ -315,7 +315,7 @@ class _Talk:
     """When the words run, if known."""
     gap: float = 0.0
     """How far it was from the user when the words began."""
-    pending: list[tuple[Row, Blame | None]] = field(default_factory=list)
+    pending: list[tuple[Row, Blame | None, bool]] = field(default_factory=list)
     """Poses while its words' times are not known yet (they are said after something
     else in its AB): judged at its end."""
 
@@ -331,41 +331,58 @@ class _Leaving:
         self.talking: dict[int, _Talk] = {}
         self.following = 0
         """How many ABs that follow the user run."""
+        self.driving = 0
+        """How many ABs that take the robot somewhere run (a move, following the user)."""
+        self.drove = False
+        """One of them ran since the last posed line."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
         ab = row.get("ab")
         if kind == "start" and isinstance(ab, int):
-            if any(c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
-                self.following += 1
+            self._count(row, 1)
             if row.get("text") and row.get("robot") is not None:
                 known = ctx.abs[ab].words if ab in ctx.abs else None
                 self.talking[ab] = _Talk(ab, row, None, known)
         elif kind == "end" and isinstance(ab, int):
-            if any(c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
-                self.following = max(0, self.following - 1)
+            self._count(row, -1)
             talk = self.talking.pop(ab, None)
             if talk is not None and talk.words is None and ab in ctx.abs:
                 talk.words = ctx.abs[ab].words
-                for pose, mover in talk.pending:
-                    if self._pose(talk, pose, mover, ctx):
+                for pose, mover, driven in talk.pending:
+                    if self._pose(talk, pose, mover, ctx, driven):
                         break
-        if row.get("robot") is not None and row.get("user") is not None and self.talking:
-            mover = _wheels(ctx)
-            for ab_id, talk in list(self.talking.items()):
-                if talk.words is None:
-                    talk.pending.append((row, mover))
-                elif self._pose(talk, row, mover, ctx):
-                    del self.talking[ab_id]
+        if row.get("robot") is not None and row.get("user") is not None:
+            if self.talking:
+                mover = _wheels(ctx)
+                for ab_id, talk in list(self.talking.items()):
+                    if talk.words is None:
+                        talk.pending.append((row, mover, self.driving > 0 or self.drove))
+                    elif self._pose(talk, row, mover, ctx, self.driving > 0 or self.drove):
+                        del self.talking[ab_id]
+            self.drove = False
 
-    def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context) -> bool:
-        """One posed line during ``talk``'s AB: True when it counts as leaving."""
+    def _count(self, row: Row, by: int) -> None:
+        """An AB started (``by`` 1) or ended (-1): how many follow the user, and take the
+        robot somewhere."""
+        commands = str(row.get("command") or "").split("+")
+        if any(c in _FOLLOWS for c in commands):
+            self.following = max(0, self.following + by)
+        if any(c in _TRAVELS for c in commands):
+            self.driving = max(0, self.driving + by)
+            self.drove = self.drove or by > 0
+
+    def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context,
+              driven: bool = True) -> bool:
+        """One posed line during ``talk``'s AB: True when it counts as leaving.
+        ``driven``: something took the robot somewhere since the last posed line (else
+        it did not move on its own: a user who walked into it pushed it)."""
         t = float(row["t"])
         words = talk.words
         if words is None or t < words[0] - EPS or t > words[1] + EPS:
             return False
         robot, user = xy(row["robot"]), xy(row["user"])
-        if talk.was is None or self.following:
+        if talk.was is None or self.following or not driven:
             talk.was = robot  # (from where its words began; following moves it on)
             talk.gap = math.dist(robot, user)
             return False
