@@ -1573,6 +1573,22 @@ def test_no_output_until_the_end_is_a_silence_only_if_the_end_is_far() -> None:
     assert counts(answered_then(reply_at=99.0, ends=3.5).judge()) == {}
 
 
+def test_the_robot_dancing_after_an_answer_is_no_silence() -> None:
+    """The FA's dance (a gesture from 1.0) runs on after the EA's question is answered
+    at 2.0: the robot is not silent while it dances; once the dance ends, the pause
+    before the reply (at 4.5) counts from then."""
+    def pause(dance_ends: float) -> dict[str, int]:
+        tr = answered_then(reply_at=4.5, ends=8.0)
+        tr.start(1.0, "ea", 9, 9, tree=4, command="Gesture", devices=("arm", "neck"))
+        tr.end(dance_ends, "ea", 9, 9, tree=4, command="Gesture", devices=("arm", "neck"))
+        tr.sort()
+        return counts(tr.judge(reaction_slack=5.0))
+
+    assert pause(5.0) == {}
+    assert pause(2.6) == {}  # (1.9 s from the dance's end to the reply)
+    assert pause(2.1) == {"silences": 1}  # (2.4 s)
+
+
 # ------------------------------------------------------------------ stuck
 
 def search_loop(until: float, *, other_app: bool = False) -> Trace:

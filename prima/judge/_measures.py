@@ -573,30 +573,58 @@ def _split_line(s: Split) -> str:
 # ---------------------------------------------------------------- silences
 
 class _Silences:
-    """More than ``silence`` seconds with no robot output after a user's answer."""
+    """More than ``silence`` seconds with no robot output after a user's answer: no AB
+    starts, and none runs that shows or says something (a gesture, a motion, words;
+    a Q&A only while its prompt is said)."""
 
     kinds: frozenset[str] | None = frozenset({"start", "end"})
 
     def __init__(self) -> None:
         self.found: list[Silence] = []
-        self.silent: list[tuple[Row, str]] = []
+        self.silent: list[tuple[Row, str, float | None]] = []
+        """Answers not yet followed by output, each with when the silence after it
+        began (None: output still runs)."""
+        self.running: dict[int, tuple[str, float]] = {}
+        """Running ABs -> their Command, and when their output ends (a Q&A's prompt's
+        end; inf for anything else)."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
+        t = float(row["t"])
+        ab = row.get("ab")
         if kind == "start":
-            t = float(row["t"])
-            for end, at in self.silent:
-                gap = round(t - float(end["t"]), 3)
+            for end, at, since in self.silent:
+                gap = round(t - since, 3) if since is not None else 0.0
                 if gap > ctx.th.silence + EPS:
                     self.found.append(Silence(int(end["seq"]), float(end["t"]),
                                               str(end.get("app")), gap, at))
             self.silent = []
-        elif kind == "end" and ctx.exchanges and ctx.exchanges[-1].seq == row.get("seq"):
-            self.silent.append((row, ctx.exchanges[-1].at))
+            if isinstance(ab, int):
+                detail = row.get("detail") or {}
+                listens = "QA" in str(row.get("command") or "").split("+")
+                ends = detail.get("words_end") if listens else None
+                self.running[ab] = (str(row.get("command")),
+                                    float(ends) if isinstance(ends, (int, float)) else
+                                    (t if listens else math.inf))
+        elif kind == "end":
+            if isinstance(ab, int):
+                self.running.pop(ab, None)
+            if ctx.exchanges and ctx.exchanges[-1].seq == row.get("seq"):
+                self.silent.append((row, ctx.exchanges[-1].at, self._quiet_from(t)))
+            elif self.silent and not self._showing(t):
+                self.silent = [(r, at, t if since is None else since)
+                               for r, at, since in self.silent]
+
+    def _showing(self, t: float) -> bool:
+        """Some running AB shows or says something at ``t``."""
+        return any(ends > t + EPS for _c, ends in self.running.values())
+
+    def _quiet_from(self, t: float) -> float | None:
+        return None if self._showing(t) else t
 
     def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
-        for row, at in self.silent:
-            if ctx.t - float(row["t"]) > ctx.th.silence + EPS:
+        for row, at, since in self.silent:
+            if since is not None and ctx.t - since > ctx.th.silence + EPS:
                 self.found.append(Silence(int(row["seq"]), float(row["t"]),
                                           str(row.get("app")), None, at))
         return sorted(self.found, key=lambda s: s.seq)
