@@ -1589,6 +1589,27 @@ def test_the_robot_dancing_after_an_answer_is_no_silence() -> None:
     assert pause(2.1) == {"silences": 1}  # (2.4 s)
 
 
+# ------------------------------------------------------------------ talking over the user
+
+def test_a_prompt_cut_by_its_answer_is_allowed_the_word_under_way() -> None:
+    """The Q&A's prompt (ten words, 4.4 s as its start line plans them) is answered at
+    0.5 s over its second word, and stops at 0.9 s, as said on its end line: within
+    0.3 s plus one word (0.44 s) of the answer. Stopping 0.8 s later is not."""
+    def over(stops: float) -> dict[str, int]:
+        tr = Trace()
+        prompt = "Please tell me a title or an author of a book."
+        tr.request(0.0, "ea", 1, 1, command="QA", text=prompt, devices=TALK)
+        tr.start(0.0, "ea", 1, 1, command="QA", text=prompt, devices=TALK,
+                 words=(0.0, 4.4), cuttable=True)
+        tr.say(0.5, "Uh-huh.")
+        tr.end(stops, "ea", 1, 1, command="QA", devices=TALK, words=(0.0, stops),
+               result="barge_in=True, spoken=Please tell, status=answered")
+        return {k: v for k, v in counts(tr.judge()).items() if k == "barge_in"}
+
+    assert over(0.9) == {}
+    assert over(1.3) == {"barge_in": 1}
+
+
 # ------------------------------------------------------------------ stuck
 
 def search_loop(until: float, *, other_app: bool = False) -> Trace:

@@ -87,7 +87,9 @@ class Ab:
     iteration: int = 0
     words: tuple[float, float] | None = None
     """When its words began and ended (from its start line when they begin with it,
-    from its end line otherwise)."""
+    from its end line otherwise: as said, up to a cut)."""
+    planned: tuple[float, float] | None = None
+    """When its start line said its words would begin and end (None: it did not)."""
     end: float | None = None
     end_seq: int | None = None
     end_reason: str = ""
@@ -394,7 +396,7 @@ class Context:
                 iteration=int(detail.get("iteration") or 0))
         ws, we = detail.get("words_start"), detail.get("words_end")
         if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
-            ab.words = (float(ws), float(we))
+            ab.words = ab.planned = (float(ws), float(we))
         if ab.reason == "blend":
             for d in ab.devices:
                 for other in self.running.values():

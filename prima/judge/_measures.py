@@ -874,7 +874,9 @@ class _BargeIn:
                 self._ended(ab, ctx)
 
     def _ended(self, ab: Ab, ctx: Context) -> None:
-        ws, we = ab.words or (0.0, 0.0)
+        # (the words as planned, where the start line said: a cut one's end line says
+        # them as said, up to the cut)
+        ws, we = ab.planned or ab.words or (0.0, 0.0)
         words = len(ab.text.split()) or 1
         per_word = (we - ws) / words
         stopped = min(ab.end or we, we)
