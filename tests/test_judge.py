@@ -1129,6 +1129,33 @@ def test_a_reaction_cut_counts_its_words_once_said_again_whole() -> None:
     assert counts(report) == {}
 
 
+def test_words_being_said_again_when_the_trace_ends_are_not_unheard_yet() -> None:
+    """fa's message, cut for ea's reaction, is being said again when the trace ends
+    (11.6 s to 14.1 s, the trace over at 13.0 s): not unheard (they may yet be heard
+    whole); said again and cut again, they are."""
+    message = "A message from your host."
+
+    def unheard(again_cut: bool) -> bool:
+        tr = Trace()
+        tr.event(10.0, "message")
+        tr.request(10.0, "fa", 1, 1, text=message, reactive=True)
+        tr.start(10.0, "fa", 1, 1, text=message, cuttable=True, words=(10.0, 12.5))
+        tr.touch(10.5)
+        tr.request(10.5, "ea", 2, 2, tree=1, text="Yes?", reactive=True)
+        tr.interrupt(10.5, "fa", 1, 1, by="ea", by_ab=2)
+        tr.end(10.6, "fa", 1, 1, reason="interrupt", words=(10.0, 12.5), text=message)
+        tr.request(10.6, "fa", 3, 1, text=message, reactive=True, reason="restart", before=1)
+        tr.speak(10.6, "ea", 2, 2, "Yes?", tree=1, request=False)
+        tr.start(11.6, "fa", 3, 1, text=message, reason="restart", words=(11.6, 14.1))
+        if again_cut:
+            tr.end(12.5, "fa", 3, 1, reason="barge-in", words=(11.6, 12.5), text=message)
+        tr.pose(13.0)
+        fa = next(r for r in tr.judge().reactions if r.app == "fa")
+        return fa.unheard
+
+    assert (unheard(False), unheard(True)) == (False, True)
+
+
 def _never_started(ends: float, *, cancelled: bool = False) -> Report:
     """A touch at 1 s; fa's reaction waits behind ea's sentence (uncut, to 3 s) and
     never starts: the trace ends at ``ends``. With ``cancelled``, fa's own newer request

@@ -571,9 +571,12 @@ class _Analyst:
         cut = [ab for ab in spoken if ab.end_reason in ("interrupt", "barge-in")]
         if cut and any(ab.dropped for ab in cut):
             return False  # (cut, and their request said to drop them then)
-        if any(ab.end_reason == "interrupt" and self.ctx.restarted.get(ab.id) in self.ctx.abs
-               for ab in cut):
+        again = [self.ctx.abs[self.ctx.restarted[ab.id]] for ab in cut
+                 if ab.end_reason == "interrupt" and self.ctx.restarted.get(ab.id) in self.ctx.abs]
+        if any(a.end is not None for a in again):
             return True  # (cut for another reaction, and said again but not whole)
+        if again:
+            return False  # (being said again when the trace ends: not unheard yet)
         # never said again yet: unheard once they waited longer than anything may
         since = max((ab.until(self.end) for ab in cut), default=r.t)
         return self.end - since > self.th.stuck_after + EPS
