@@ -469,3 +469,12 @@ def test_the_judge_finds_a_false_interruption_not_recovered(tmp_path: Path) -> N
     report = judge(later, thresholds=Thresholds())
     assert len(report.of("recovery")) == 1
     assert len(judge(rows, thresholds=Thresholds()).of("recovery")) == 0
+
+
+@pytest.mark.parametrize("name", ["barge-in-question", "barge-in-cough",
+                                  "barge-in-backchannel", "guide-question"])
+def test_the_voice_examples_keep_their_reviewed_traces(  # type: ignore[no-untyped-def]
+        name: str, prima_golden) -> None:
+    """The shipped examples of the user's voice, pinned (each read against its
+    situation, and judged, before it was pinned)."""
+    prima_golden(ROOT / "scenarios" / "examples" / f"{name}.xml")
