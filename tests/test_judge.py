@@ -1071,6 +1071,37 @@ def test_an_app_that_lost_its_precedence_waits_for_anything() -> None:
     assert (r.took.app, r.took.ab) == ("ea", 2)
 
 
+def test_what_started_in_the_instant_before_its_app_lost_its_precedence_went_first() -> None:
+    """ea's reaction (the latest) asks its question at 6.0 and, in that same instant but
+    after it, loses its precedence (the budget line): the question started with its
+    precedence and went first over fa's older reaction. Had the budget line come first,
+    it took fa's devices."""
+    def late(budget_first: bool) -> bool:
+        tr = Trace()
+        tr.event(4.0, "message")
+        tr.request(4.0, "fa", 1, 1, text="A message.", reactive=True)
+        tr.event(4.0, "human-found")
+        tr.speak(4.0, "ea", 2, 2, "There you are.", tree=1, reactive=True, lasts=2.0)
+        budget = {"app": "ea", "reason": "wait-share",
+                  "text": "kept other applications waiting 2 s within 60 s: it loses its "
+                          "precedence until t=66 s"}
+        if budget_first:
+            tr.line(6.0, "budget", **budget)
+        tr.request(6.0, "ea", 3, 3, tree=1, command="QA", text="Shall I go on?",
+                   reason="end-event", devices=TALK, before=2)
+        tr.start(6.0, "ea", 3, 3, tree=1, command="QA", text="Shall I go on?",
+                 devices=TALK, words=(6.0, 7.0))
+        if not budget_first:
+            tr.line(6.0, "budget", **budget)
+        tr.end(9.0, "ea", 3, 3, tree=1, command="QA", devices=TALK, words=(6.0, 7.0),
+               result="status=noinput")
+        tr.speak(9.0, "fa", 1, 1, "A message.", request=False)
+        fa = next(r for r in tr.judge().reactions if r.app == "fa")
+        return fa.late
+
+    assert (late(False), late(True)) == (False, True)
+
+
 # ------------------------------------------------------------------ reactions never heard
 
 def _message_cut_by_a_touch(*, said_again: bool, dropped: bool = False,

@@ -241,6 +241,9 @@ class Context:
         self.demoted: dict[str, list[list[float]]] = {}
         """App -> when it had lost its precedence: [from, until] (until: inf if it had
         not regained it)."""
+        self.demoted_seq: dict[str, list[int]] = {}
+        """App -> the seq of the line that said it lost its precedence, for each span:
+        what started before it in that instant started with its precedence."""
         self.blocks: dict[str, list[list[float]]] = {}
         """App -> when its begin/end block was open: [from, until]."""
         self.interrupts: dict[int, str] = {}
@@ -495,6 +498,7 @@ class Context:
         spans = self.demoted.setdefault(app, [])
         if "loses its precedence" in text:
             spans.append([float(row["t"]), float("inf")])
+            self.demoted_seq.setdefault(app, []).append(int(row["seq"]))
         elif "regains" in text and spans:
             spans[-1][1] = float(row["t"])
 
@@ -537,8 +541,16 @@ class Context:
     def during(self, spans: list[list[float]] | None, t: float) -> bool:
         return bool(spans) and any(lo - EPS <= t < hi - EPS for lo, hi in spans or ())
 
-    def demoted_at(self, app: str, t: float) -> bool:
-        return self.during(self.demoted.get(app), t)
+    def demoted_at(self, app: str, t: float, seq: int | None = None) -> bool:
+        """Whether ``app`` had lost its precedence at ``t`` (for the line ``seq`` of that
+        instant, if given: a line before the one that said it lost it is not)."""
+        spans = self.demoted.get(app)
+        if not spans:
+            return False
+        seqs = self.demoted_seq.get(app, [])
+        return any(lo - EPS <= t < hi - EPS and not (
+            seq is not None and abs(t - lo) <= EPS and i < len(seqs) and seq < seqs[i])
+            for i, (lo, hi) in enumerate(spans))
 
     def demoted_within(self, app: str, lo: float, hi: float) -> bool:
         return any(a < hi + EPS and b > lo - EPS for a, b in self.demoted.get(app, ()))

@@ -190,12 +190,12 @@ class _Analyst:
         return min((ab.until(self.end) for cid in r.commands for ab in self.cmd_abs.get(cid, ())
                     if ab.end_reason == "barge-in" and cuts.get(ab.id)), default=math.inf)
 
-    def demoted(self, app: str, tree: int, t: float) -> bool:
-        """``app`` had lost its precedence at ``t``, as far as ``tree``'s ABs go: not for a
-        reaction to the user's own action before its first words (7.6 (4)), nor for the
-        reply to the user's answer to its Q&A (its words, or its next question) before
-        its first words."""
-        if not self.ctx.demoted_at(app, t):
+    def demoted(self, app: str, tree: int, t: float, seq: int | None = None) -> bool:
+        """``app`` had lost its precedence at ``t`` (as of the line ``seq``, if given), as
+        far as ``tree``'s ABs go: not for a reaction to the user's own action before its
+        first words (7.6 (4)), nor for the reply to the user's answer to its Q&A (its
+        words, or its next question) before its first words."""
+        if not self.ctx.demoted_at(app, t, seq):
             return False
         taken = [r for r in self.ctx.tree_reactions.get(tree, ()) if r.t <= t + EPS]
         latest = max(taken, key=lambda r: r.order) if taken else None
@@ -221,7 +221,9 @@ class _Analyst:
         ctx = self.ctx
         if self.replies_to_answer(y):
             return "a reply to its answer (7.4)"
-        if self.demoted(y.app, y.tree, t):
+        # (one that started in the instant its app lost its precedence, before the line
+        # that says so, started with it)
+        if self.demoted(y.app, y.tree, t, y.seq if abs(t - y.start) <= EPS else None):
             return ""
         if y.low and not low:
             return ""
