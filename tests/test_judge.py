@@ -1255,6 +1255,23 @@ def test_words_a_later_request_of_its_own_app_cancelled_after_its_first_ab_are_n
 
 # ------------------------------------------------------------------ talking unfaced
 
+def test_a_user_off_by_the_tolerance_within_the_traces_rounding_is_not_unfaced() -> None:
+    """The trace rounds poses (millimetres, tenths of a degree): a user 30.1 degrees off
+    on its lines may be 30 or less in the run, which turned the robot for more only;
+    30.5 degrees is off."""
+    import math
+
+    def unfaced(off: float) -> int:
+        tr = Trace()
+        rad = math.radians(off)
+        tr.user = {"x": round(math.cos(rad), 3), "y": round(math.sin(rad), 3),
+                   "heading": 180.0, "detectable": True}
+        tr.speak(1.0, "ea", 1, 1, "May I go to the next panel?")
+        return len(tr.judge().of("unfaced"))
+
+    assert (unfaced(30.1), unfaced(30.5)) == (0, 1)
+
+
 def test_words_after_an_aiming_command_are_about_what_it_aims_at() -> None:
     """FA4 turns the way its user said, then asks "May I take a picture?": the words
     are about what the robot aims at, not unfaced; after a Gesture they are."""

@@ -152,13 +152,20 @@ class _Words:
     """Posed lines while its words' times are not known yet: judged at its end."""
 
 
+ROUNDED_OFF = 0.2
+"""Degrees a trace's rounded poses (positions to the millimetre, headings to the tenth
+of a degree) may put a user off the robot's heading, beyond the simulator's own
+figure: a user found off by no more than the tolerance plus this is not off."""
+
+
 def _off(row: Row, tolerance: float) -> float | None:
-    """How far off the user is on a posed line, if detectable and beyond ``tolerance``."""
+    """How far off the user is on a posed line, if detectable and beyond ``tolerance``
+    (give or take what the trace's rounding moves it by)."""
     robot, user = row.get("robot"), row.get("user")
     if robot is None or user is None or user.get("detectable") is not True:
         return None
     off = _off_heading(robot, user)
-    return off if off is not None and off > tolerance + EPS else None
+    return off if off is not None and off > tolerance + ROUNDED_OFF else None
 
 
 class _Unfaced:
