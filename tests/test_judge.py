@@ -1102,6 +1102,23 @@ def test_what_started_in_the_instant_before_its_app_lost_its_precedence_went_fir
     assert (late(False), late(True)) == (False, True)
 
 
+def test_a_perception_in_the_instant_the_user_says_what_nobody_heard_is_no_user_action() -> None:
+    """The user says something the robot does not hear (out of its range) in the very
+    instant the camera finds them: the reaction to the user found is a reaction to a
+    perception, not the user's own action; the FA's later reaction to a touch, whose
+    first words are ahead, goes first over it (7.1)."""
+    def ranks_as_user(heard: bool) -> bool:
+        tr = Trace()
+        tr.say(2.0, "Repeat that.", heard=heard)
+        tr.event(2.0, "speech" if heard else "human-found")
+        tr.request(2.0, "ea", 1, 1, text="This panel shows our robot.", reactive=True)
+        tr.speak(2.5, "ea", 1, 1, "This panel shows our robot.", request=False)
+        (r,) = tr.judge().reactions
+        return r.user
+
+    assert (ranks_as_user(False), ranks_as_user(True)) == (False, True)
+
+
 # ------------------------------------------------------------------ reactions never heard
 
 def _message_cut_by_a_touch(*, said_again: bool, dropped: bool = False,

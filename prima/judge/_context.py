@@ -33,10 +33,6 @@ heard speech, messages, the user found or lost)."""
 TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
 """Where an utterance runs."""
 
-USER_ACTIONS = frozenset({"touch", "say"})
-"""The user's lines whose event, right after at the same instant, is the user's own
-action (docs/rules.md 7.1: a touch, heard speech)."""
-
 _ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
 
 _ANSWERS = " answers the user"
@@ -279,9 +275,13 @@ class Context:
             self._window = None
             return
         last = self.last
+        # (the event a touch posts, or the words heard: not a perception that comes in
+        # the instant the user said something the robot did not hear)
         user = (last is not None and last.get("kind") == "user"
-                and last.get("action") in USER_ACTIONS
-                and abs(float(last["t"]) - float(row["t"])) <= EPS)
+                and abs(float(last["t"]) - float(row["t"])) <= EPS
+                and (last.get("action") == "touch"
+                     or (last.get("action") == "say" and name == "speech"
+                         and (last.get("detail") or {}).get("heard") is True)))
         words = (row.get("detail") or {}).get("words") if name == "speech" else None
         self._window = _Window(name, float(row["t"]), int(row["seq"]), user,
                                text=str(words or ""))
