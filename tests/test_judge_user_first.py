@@ -308,6 +308,36 @@ def test_a_stream_held_while_the_user_is_answered_waits_rightly_until_the_words(
     assert counts(_held_while_the_user_is_answered(5.0)) == {"late": 1}
 
 
+def test_a_hold_lasts_for_the_latest_reaction_to_the_user_that_holds() -> None:
+    """7.6 (1): the FA answers a touch (its words 1.0-3.0); at 2.5 the user says
+    something the FA takes, and it answers that too (a nod, then words 3.5-5.0). The EA's
+    reaction, held at 2.5 while the FA answers the user, waits rightly until the latest
+    answer's words (5.0), not only until the first one's (3.0)."""
+    arm = ("arm", "neck")
+    tr = Trace()
+    tr.speak(0.0, "fa", 1, 1, "Hello.", lasts=1.0)
+    tr.event(0.5, "message")
+    tr.request(0.5, "ea", 2, 2, tree=1, text="A message.", reactive=True)
+    tr.touch(1.0)
+    tr.request(1.0, "fa", 3, 3, tree=2, text="Hee-hee! That tickles.", reactive=True)
+    tr.start(1.0, "fa", 3, 3, tree=2, text="Hee-hee! That tickles.", words=(1.0, 3.0))
+    tr.end(3.0, "fa", 3, 3, tree=2, text="Hee-hee! That tickles.", words=(1.0, 3.0))
+    tr.say(2.5, "Papero.")
+    tr.line(2.5, "event", text="speech", detail={"words": "Papero."})
+    tr.request(2.5, "fa", 4, [4, 5], tree=3, command="Gesture", text="Yes? I'm here.",
+               reactive=True, devices=arm)
+    tr.line(2.5, "hold", app="ea", ab=2, tree=1, command="Speak",
+            text="while fa answers the user", reason="answering", devices=["speaker"])
+    tr.start(2.5, "fa", 4, 4, tree=3, command="Gesture", devices=arm)
+    tr.end(3.5, "fa", 4, 4, tree=3, command="Gesture", devices=arm)
+    tr.start(3.5, "fa", 5, 5, tree=3, text="Yes? I'm here.", words=(3.5, 5.0))
+    tr.end(5.0, "fa", 5, 5, tree=3, text="Yes? I'm here.", words=(3.5, 5.0))
+    tr.speak(5.0, "ea", 2, 2, "A message.", tree=1, request=False)
+    tr.sort()
+    ea = next(r for r in tr.judge().reactions if r.app == "ea")
+    assert not ea.late, ea.why
+
+
 def test_what_started_while_an_app_had_lost_its_precedence_is_waited_for_as_running() -> None:
     """Section 8, with the wait share: fa lost its precedence (9-15 s); ea's uncut
     utterance started meanwhile (10-17 s), rightly. When fa regains its precedence, ea's

@@ -123,12 +123,12 @@ class _Analyst:
         waiting at ``t`` kept the streams it interrupted waiting (7.6 (1)): until its first
         words were said whole (or, with none, it was over), at most its bound after it
         came."""
-        found = math.inf
+        found, latest = math.inf, -1
         for r in self.ctx.reactions:
             if r.app == app and r.user and r.t <= t + EPS:
                 until = min(self.user_until(r), r.t + MAX_ANSWER_HOLD, self._gone(r))
-                if until > t - EPS:
-                    found = min(found, until)
+                if until > t - EPS and r.order > latest:  # (the latest holds: 7.6 (1))
+                    found, latest = until, r.order
         return found
 
     def _gone(self, r: ReactionState) -> float:
