@@ -120,9 +120,9 @@ class Holds:
         """ABs parked because a reaction to the user's own action answers first
         (docs/rules.md 7.6 (1)): they take their places again when one stops keeping
         the streams it interrupted waiting."""
-        self._answer_held: set[AbId] = set()
+        self._answer_held: dict[AbId, str] = {}
         """Waiting ABs of streams not yet under way held back while a reaction answers
-        the user (a hold decision was emitted)."""
+        the user (a hold decision was emitted) -> the app said to answer."""
         self._channel_held: set[AbId] = set()
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
         self._reserved: dict[AbId, AbId] = {}
@@ -254,7 +254,7 @@ class Holds:
         if self._reserved:
             self._reserved.pop(node.id, None)
         if self._answer_held:
-            self._answer_held.discard(node.id)
+            self._answer_held.pop(node.id, None)
         if not self.opened:
             return
         app = node.app
@@ -310,9 +310,9 @@ class Holds:
 
     def answering(self, node: Node, by: App) -> None:
         """Record that ``by``'s reaction to the user's own action holds back ``node``, of a
-        stream not yet under way (once per AB: docs/rules.md 7.6 (1))."""
-        if node.id not in self._answer_held:
-            self._answer_held.add(node.id)
+        stream not yet under way (once per AB and answering app: docs/rules.md 7.6 (1))."""
+        if self._answer_held.get(node.id) != by.name:
+            self._answer_held[node.id] = by.name
             self._log.ab(DecisionKind.HOLD, Rule.ANSWERING, node,
                          f"while {by.name} answers the user")
             self._log.tell(node.app.name, "held", by=by.name, rule=Rule.ANSWERING.value)
@@ -320,7 +320,7 @@ class Holds:
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
         self._reserved.pop(node.id, None)
-        self._answer_held.discard(node.id)
+        self._answer_held.pop(node.id, None)
         if node.reserving and self._reserve_parked:
             self.refile_reserved()  # a next AB that kept devices is gone
         if node.not_before and node in self._resting:

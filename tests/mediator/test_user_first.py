@@ -568,3 +568,32 @@ def test_what_is_kept_for_a_reaction_is_said_again_for_the_next_one() -> None:
             and ln.app == "fa5-video-timer"]
     assert len(set(kept)) >= 2, kept
     assert [r for r in judge(lines).reactions if r.late] == []
+
+
+def test_a_stream_held_for_one_answer_then_another_is_said_to_be_held_for_each() -> None:
+    """7.6 (1): the EA's explanation waits while it answers the user's question (from
+    2.0 to 4.0); at 3.0 the user touches the robot and the FA answers with a nod (to
+    7.0). Once the EA's words are said, the explanation is held for the FA's answer: the
+    trace says so a second time, naming the FA, so that the judge knows why it waits past
+    the EA's words (in a visit prima check made, it read that wait as lateness)."""
+    h = Harness(duration={"Speak": 2.0, "Gesture": 4.0})
+    m = h.mediator
+
+    def answer(e: Event) -> None:
+        if e.name == "speech":
+            m.submit(Request("ea", (speak("The toilets are by the door."),), reactive=True,
+                             reaction=True, user=True))
+
+    ea = h.app("ea", AppKind.EA, on_event=answer)
+    ea.listens_for = ("toilet",)
+    h.app("fa", AppKind.FA, on_event=lambda e: e.name == "touched" and m.submit(Request(
+        "fa", (call("Gesture", name="nod"),), order=RunningOrder.ASAP, reactive=True,
+        reaction=True, user=True)))
+    m.submit(Request("ea", (speak("This panel shows our laboratory."),
+                            speak("Look at this robot."))))
+    h.at(1.0, lambda: m.hear(Event("speech", {"words": "Where is the toilet?"})))
+    h.at(3.0, lambda: m.post(Event("touched")))
+    h.run(until=12.0)
+    held = [(d.t, d.detail) for d in h.kinds(DecisionKind.HOLD)
+            if d.app == "ea" and d.rule == Rule.ANSWERING]
+    assert held == [(2.0, "while ea answers the user"), (4.0, "while fa answers the user")]
