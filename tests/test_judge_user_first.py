@@ -8,6 +8,8 @@ point is taken out (checked once by taking it out)."""
 
 from __future__ import annotations
 
+import pytest
+
 from prima.judge import Report
 from tests.test_judge import TALK, Trace, counts
 
@@ -359,18 +361,26 @@ def test_what_started_while_an_app_had_lost_its_precedence_is_waited_for_as_runn
     assert r.residual == 7.0
 
 
-def test_a_reaction_after_its_own_cut_ab_waits_for_its_restart() -> None:
+@pytest.mark.parametrize("asked", ["before the cut", "after the cut"])
+def test_a_reaction_after_its_own_cut_ab_waits_for_its_restart(asked: str) -> None:
     """Rule 3, 7.3 (2): the EA's question, asked after its own search (its latest), waits
     for it. The user's touch had the search cut for the FA's answer; the search starts
     again after the FA's reaction, which goes on (the FA follows its user): the trace
-    ends with the restart still waiting. The question waited rightly all along."""
+    ends with the restart still waiting. The question waited rightly all along, whether
+    it was asked before the cut (after the search) or after it (after the restart, which
+    never started: a visit prima check made, EA1 beside FA2)."""
     wheels = ("human-detection", "locomotion")
     tr = Trace()
     tr.request(0.0, "ea", 1, 1, command="ActiveSensingHuman", devices=WHEELS)
     tr.start(0.0, "ea", 1, 1, command="ActiveSensingHuman", devices=WHEELS, cuttable=True)
-    tr.event(1.0, "human-found")
-    tr.request(1.0, "ea", 3, 3, command="QA", text="May I go on?", reactive=True,
-               reason="after-latest", before=1, devices=TALK)
+    if asked == "before the cut":
+        tr.event(1.0, "human-found")
+        tr.request(1.0, "ea", 3, 3, command="QA", text="May I go on?", reactive=True,
+                   reason="after-latest", before=1, devices=TALK)
+    else:
+        tr.event(1.8, "human-found")
+        tr.request(1.8, "ea", 3, 3, command="QA", text="May I go on?", reactive=True,
+                   reason="after-latest", before=2, devices=TALK)
     tr.touch(1.5)
     tr.request(1.5, "fa", 4, 4, tree=1, command="TrackingHuman", reactive=True, devices=wheels)
     tr.line(1.5, "interrupt", app="ea", ab=1, tree=0, command="ActiveSensingHuman",
@@ -384,6 +394,11 @@ def test_a_reaction_after_its_own_cut_ab_waits_for_its_restart() -> None:
     tr.sort()
     report = tr.judge()
     assert "late" not in counts(report)
+    (r,) = [r for r in report.reactions if r.app == "ea"]
+    assert [(w.app, w.ab, w.rule) for w in r.waits][:1] == [
+        ("ea", 1 if asked == "before the cut" else 2,
+         "after its own AB" if asked == "before the cut" else
+         "after its own AB, never started")]
 
 
 def test_words_said_again_are_about_what_they_were_about() -> None:

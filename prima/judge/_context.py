@@ -215,6 +215,9 @@ class Context:
         self.cancelled_ab: dict[int, tuple[float, int | None]] = {}
         """AB (one never started, too) -> when it was cancelled, and its tree."""
         self.requested_at: dict[int, tuple[float, int]] = {}
+        self.requested: dict[int, tuple[str, str, str]] = {}
+        """AB -> its application, its Command and where it is asked for, from its request
+        (an AB that never started is known by this alone)."""
         self.elsewhere: set[int] = set()
         """Commands whose request said their words are about something else."""
         """AB -> when (and at which line) it was requested: the root of a request, a
@@ -297,9 +300,10 @@ class Context:
         detail = row.get("detail") or {}
         ids = command_ids(row)
         ab = row.get("ab")
+        at = str(detail.get("at") or "")
         if isinstance(ab, int):
             self.requested_at[ab] = (float(row["t"]), int(row["seq"]))
-        at = str(detail.get("at") or "")
+            self.requested[ab] = (app, str(row.get("command") or ""), at)
         tree = row.get("tree")
         if isinstance(tree, int):
             self.tree_app.setdefault(tree, app)

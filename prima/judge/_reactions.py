@@ -470,10 +470,17 @@ class _Analyst:
         t1 = first.start if first is not None else self._over(r)
         ready = r.t
         behind = self.ctx.abs.get(r.before) if r.before is not None else None
+        waiting = self.ctx.requested.get(r.before) if r.before is not None else None
         if behind is not None and behind.app == r.app:  # after its own AB, still to end
             last = self._last_of(behind)  # (said again if cut: 7.3 (2))
             # (a restart still to start when the trace ends: it waited all along)
             ready = self.end if last.id in self.ctx.restarted else last.until(self.end)
+        elif behind is None and r.before is not None and waiting is not None \
+                and waiting[0] == r.app:
+            # (after its own AB that never started, a cut AB's restart say: it waited for
+            # it all along, or until the application cancelled it)
+            gone = self.ctx.cancelled_ab.get(r.before)
+            ready = self.end if gone is None else gone[0]
         allowed, took = self.waits(r, own, frozenset(r.devices), low, r.t, r.seq, t1, ready)
         for extra, t_put, seq_put, turn in put:
             if extra:  # (the turn's wheels count from when the turn was put in line)
@@ -483,6 +490,10 @@ class _Analyst:
                 took += [(max(a, t_put), b, y) for a, b, y in taken]
         if behind is not None and ready > r.t:
             allowed.append((r.t, ready, self._blame(behind, "after its own AB", ready)))
+        elif waiting is not None and ready > r.t:
+            allowed.append((r.t, ready, Blame(r.app, r.before, waiting[1], waiting[2],
+                                              "after its own AB, never started",
+                                              round(ready, 3))))
         residual = _measure(((a, b) for a, b, _ in allowed), r.t, t1)
         free = max(0.0, (t1 - r.t) - residual)
         spoken = [ab for ab in mine if ab.text and not set(ab.ids).isdisjoint(r.commands)]
