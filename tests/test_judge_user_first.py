@@ -426,3 +426,27 @@ def test_words_said_again_are_about_what_they_were_about() -> None:
            result="status=timeout")
     tr.sort()
     assert "unfaced" not in counts(tr.judge())
+
+
+@pytest.mark.parametrize("stopped", [1.3, 1.1])
+def test_words_wait_for_a_prompt_on_its_last_word_when_they_are_ready(stopped: float) -> None:
+    """Section 8 with 7.5: the user touches the robot (0.9) while the EA asks a question
+    (its prompt 0-1.6, four words); the FA's reaction stops its wheels first (to
+    ``stopped``), then asks its own question. Its words may ask for a cut only once the
+    stop is over: at 1.3 the EA's prompt is on its last word, which is then listened to
+    for its answer (to 5.0), and the FA's words wait for it rightly. Stopped at 1.1, they
+    could have cut the prompt at its third word: then the wait is theirs (prima check of
+    EA1 beside FA2, 1 run in 200)."""
+    tr = Trace()
+    tr.ask(0.0, "ea", 1, 1, "May I go on?", "No.", 5.0, prompt_lasts=1.6, cuttable=True)
+    tr.touch(0.9)
+    tr.request(0.9, "fa", 10, [10, 11], tree=1, command="StopMoving", reactive=True,
+               reason="asap", devices=("locomotion",))
+    tr.start(0.9, "fa", 10, 10, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.end(stopped, "fa", 10, 10, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.ask(5.0, "fa", 11, 11, "May I stop following you?", "Yes.", 8.0, tree=1,
+           request=False, prompt_lasts=2.0)
+    tr.sort()
+    report = tr.judge()
+    (r,) = [r for r in report.reactions if r.app == "fa"]
+    assert r.late == (stopped < 1.2), r.why

@@ -535,7 +535,10 @@ class _Analyst:
             return 0.0
         target = heard or (spoken[0] if spoken else None)
         devices = (target.devices if target is not None else frozenset()) | TALK_DEVICES
-        allowed, _took = self.waits(r, own, devices, False, t0, first.seq, t1)
+        # (the words could ask for a cut only once the reaction's AB before them ended:
+        # a Q&A then on the last word of its prompt was no longer to be cut)
+        ready = self.ready(target) if target is not None else None
+        allowed, _took = self.waits(r, own, devices, False, t0, first.seq, t1, ready)
         spans = [(a, b) for a, b, _ in allowed]
         for ab in mine:
             spans.append((ab.start, ab.until(self.end)))
