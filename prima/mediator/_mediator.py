@@ -401,9 +401,12 @@ class Mediator:
             "unspoken": str(values.get("unspoken") or ""), "restarts": not drop,
             "resumes": resumed is not None, "by": by, "reason": reason.value}, now)
         self._call(app, lambda listener: listener.event(event), "event")
+        # (what the app's own as-soon-as-possible request drops as it is cut is cancelled
+        # by the app, as its waiting Commands are: no end event, no Q&A's no-input)
+        told = None if node.dropped else outcome
         for cmd in ended:
             if not cmd.internal:
-                self._tell(app, cmd.id, outcome)
+                self._tell(app, cmd.id, told)
 
     def _tell_cancelled(self, commands: Sequence[Command]) -> None:
         for cmd in commands:

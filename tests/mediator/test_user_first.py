@@ -597,3 +597,32 @@ def test_a_stream_held_for_one_answer_then_another_is_said_to_be_held_for_each()
     held = [(d.t, d.detail) for d in h.kinds(DecisionKind.HOLD)
             if d.app == "ea" and d.rule == Rule.ANSWERING]
     assert held == [(2.0, "while ea answers the user"), (4.0, "while fa answers the user")]
+
+
+def test_what_an_apps_own_asap_request_drops_as_it_is_cut_has_no_end_event() -> None:
+    """docs/pxml.md: a Command cancelled before it ended by a newer `order="asap"` request
+    has no end event. The user says "Stop." over the EA's question; its handler, as soon
+    as possible, says "All right." and asks again. The question, cut at a word boundary,
+    is dropped: the EA is told it was cancelled, not that it ended, so that no no-input
+    handler runs for it (EA1 went looking for its visitor and then asked twice: prima
+    check of EA1 beside FA3, 1 run in 200)."""
+    h = Harness(CUTS, duration={"QA": 4.0, "*": 1.0}, cut_after=0.2,
+                config=MediatorConfig(barge_in=True))
+    m = h.mediator
+    ended: list[int] = []
+    cancelled: list[int] = []
+
+    def stop(e: Event) -> None:
+        if e.name == "speech":
+            m.submit(Request("ea", (speak("All right."),), order=RunningOrder.ASAP,
+                             reactive=True, reaction=True, user=True))
+
+    ea = h.app("ea", AppKind.EA, on_event=stop, on_ended=lambda cid, _o: ended.append(cid),
+               on_cancelled=cancelled.append)
+    ea.listens_for = ("stop",)
+    (asked,) = m.submit(Request("ea", (call("QA", prompt="May I go to the next panel?",
+                                            grammar="g"),)))
+    h.at(1.0, lambda: m.hear(Event("speech", {"words": "Stop."})))
+    h.run(until=10.0)
+    assert [d.detail for d in h.kinds(DecisionKind.END) if d.command == "QA"] == ["dropped"]
+    assert asked in cancelled and asked not in ended
