@@ -450,3 +450,39 @@ def test_words_wait_for_a_prompt_on_its_last_word_when_they_are_ready(stopped: f
     report = tr.judge()
     (r,) = [r for r in report.reactions if r.app == "fa"]
     assert r.late == (stopped < 1.2), r.why
+
+
+def test_a_touch_answered_in_a_trees_later_words_goes_first_until_its_own_words() -> None:
+    """7.1, 7.6 (1): the FA says "Connecting the video server." (0-0.6, uncut); its
+    reaction to a message (0.4) is to say "The video setting succeeds.", then a gesture.
+    The user's words at 0.5 go to the EA; the user's touch at 0.6 goes to the FA, whose
+    reaction joins its message's tree (a stop, then its question, said 3.7-5.7 and
+    answered at 9.0). The message's words start as the touch comes (0.6-2.2), but the
+    touch ranks first until its own words are said, not the message's: the EA's answer,
+    held meanwhile, waits for the question and its listening rightly (prima check of EA1
+    beside FA5, 1 run in 200)."""
+    tr = Trace()
+    tr.speak(0.0, "fa", 0, 0, "Connecting the video server.", lasts=0.6)
+    tr.event(0.4, "message")
+    tr.request(0.4, "fa", 1, [1, 2], tree=1, text="The video setting succeeds.",
+               reactive=True)
+    tr.say(0.5, "Repeat that.")
+    tr.line(0.5, "event", text="speech", detail={"words": "Repeat that."})
+    tr.request(0.5, "ea", 10, 10, tree=5, text="We are on a tour.", reactive=True)
+    tr.touch(0.6)
+    tr.request(0.6, "fa", 3, [3, 4], tree=1, command="StopMoving", reactive=True,
+               reason="after-latest", before=2, devices=("locomotion",))
+    tr.start(0.6, "fa", 1, 1, tree=1, text="The video setting succeeds.", words=(0.6, 2.2))
+    tr.line(0.6, "hold", app="ea", ab=10, tree=5, command="Speak",
+            text="while fa answers the user", reason="answering", devices=["speaker"])
+    tr.end(2.2, "fa", 1, 1, tree=1, text="The video setting succeeds.", words=(0.6, 2.2))
+    tr.start(2.2, "fa", 2, 2, tree=1, command="Gesture", devices=("arm",))
+    tr.end(3.7, "fa", 2, 2, tree=1, command="Gesture", devices=("arm",))
+    tr.start(3.7, "fa", 3, 3, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.end(3.7, "fa", 3, 3, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.ask(3.7, "fa", 4, 4, "What's the matter with you?", "Video timer.", 9.0, tree=1,
+           request=False, prompt_lasts=2.0)
+    tr.speak(9.0, "ea", 10, 10, "We are on a tour.", tree=5, request=False)
+    tr.sort()
+    ea = next(r for r in tr.judge().reactions if r.app == "ea")
+    assert not ea.late, ea.why

@@ -105,15 +105,17 @@ class _Analyst:
     # ------------------------------------------------------------ precedence
     def user_until(self, r: ReactionState) -> float:
         """Until when a reaction to the user's own action goes first (7.1): the end of
-        the first utterance said whole in its trees."""
+        the first of its own utterances said whole (not the words of an earlier reaction
+        that its tree says first: another handling's, 7.1)."""
         key = id(r)
         found = self._user_until.get(key)
         if found is None:
             found = math.inf
+            own = set(r.commands)
             for tree in r.trees:
                 for ab in self.ctx.tree_abs.get(tree, ()):
                     if (ab.text and ab.end is not None and ab.end_reason == "completed"
-                            and ab.start >= r.t - EPS):
+                            and ab.start >= r.t - EPS and not own.isdisjoint(ab.ids)):
                         found = min(found, ab.end)
             self._user_until[key] = found
         return found
