@@ -29,6 +29,7 @@ COMPILED = [
     "prima/sim/_user.py",
     "prima/sim/_behaviors.py",
     "prima/sim/_maps.py",
+    "prima/mediator/_config.py",
     "prima/mediator/_fairness.py",
     "prima/mediator/_holds.py",
     "prima/mediator/_index.py",

@@ -22,7 +22,8 @@ from prima.batch._dispatch import (
     dispatch,
     plan,
 )
-from prima.batch._pools import TIMEOUTS, ClusterTimeouts, executor_problem, pool_for
+from prima.batch._pools import executor_problem, pool_for
+from prima.batch._timeouts import TIMEOUTS, ClusterTimeouts
 from prima.batch._records import Nullable, shape_problem
 from prima.batch._results import ResultsFile
 from prima.batch._variants import (

@@ -8,7 +8,7 @@ dies takes its tasks with it: the scheduler runs them again elsewhere, and a tas
 it gives up on (``KilledWorker``) is sent again by :func:`prima.batch.dispatch`.
 
 A cluster that cannot take the work never leaves a batch waiting for ever: each
-wait is bounded (:class:`~._pools.ClusterTimeouts`) and ends with a
+wait is bounded (:class:`~._timeouts.ClusterTimeouts`) and ends with a
 :class:`~prima.errors.ClusterError`, the runs done kept. The scheduler must answer
 Dask's own handshake within the connect timeout (distributed's client waits for
 that answer without one: a port that accepts and never answers, or an HTTP server,
@@ -27,7 +27,7 @@ import time
 from typing import Any
 
 from prima.batch._dispatch import CHUNK
-from prima.batch._pools import TIMEOUTS, ClusterTimeouts
+from prima.batch._timeouts import TIMEOUTS, ClusterTimeouts
 from prima.errors import ClusterError
 
 __all__ = ["Dask"]

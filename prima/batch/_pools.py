@@ -7,33 +7,15 @@ import math
 import os
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 from prima.batch._dispatch import Inline, Pool, Processes
+from prima.batch._timeouts import TIMEOUTS, ClusterTimeouts
 
 __all__ = ["TIMEOUTS", "ClusterTimeouts", "executor_problem", "pool_for"]
 
 _DASK = re.compile(r"dask://(?P<host>[^\s:/]+|\[[0-9a-fA-F:.]+\]):(?P<port>[0-9]{1,5})/?")
 EXECUTORS = "processes (the default) or dask://HOST:PORT"
 
-
-@dataclass(frozen=True)
-class ClusterTimeouts:
-    """How long (s) a batch waits for a Dask cluster before it stops with an error
-    (:class:`~prima.errors.ClusterError`), the runs done kept."""
-
-    connect: float = 30.0
-    """For the scheduler to answer (at the start, and again after it went silent)."""
-    worker: float = 60.0
-    """For a worker to join the scheduler (at the start, and after the last one left)."""
-    progress: float = 600.0
-    """For a run to finish while runs are out (a cluster that takes tasks and never
-    finishes one)."""
-
-
-TIMEOUTS = {"connect": "PRIMA_DASK_CONNECT_TIMEOUT", "worker": "PRIMA_DASK_WORKER_TIMEOUT",
-            "progress": "PRIMA_DASK_PROGRESS_TIMEOUT"}
-"""The environment variable that sets each of :class:`ClusterTimeouts` (seconds)."""
 
 _MAX_TIMEOUT = 1e6
 

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 from lxml import etree
 
 from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
+from prima.dsl._binder import Spot
 from prima.dsl._elements import children
 from prima.dsl._expr import (
     MEMO_TEXT,
@@ -38,7 +39,7 @@ from prima.vocab import MAX_NUMBER, AppKind
 from prima.xmlio import local_name
 
 if TYPE_CHECKING:
-    from prima.dsl._loader import Builder, Spot
+    from prima.dsl._binder import Binder as Builder
 
     Extra = tuple[str, Spot, Callable[[], Compiled | None]]
     """An additional argument as written: its name, where, and how to compile its value."""
@@ -152,7 +153,7 @@ def bind_chain(b: Builder, el: etree._Element, text: str,
         return [bind_step(b, el, text, step) for step in steps]
     key = (text, b.kind, b.max_text, b.in_handler, b.variable_key)
     found = kept.chains.get(key)
-    if found is not None and found.profile is b.profile:
+    if isinstance(found, KeptChain) and found.profile is b.profile:
         return found.replay(b, el)
     marks = (len(b.problems), len(b.refs.variables), len(b.refs.grammars), len(b.places))
     calls = [bind_step(b, el, text, step) for step in steps]

@@ -14,11 +14,7 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
-from typing import TYPE_CHECKING, Generic, TypeVar
-
-if TYPE_CHECKING:
-    from prima.dsl._commands import KeptChain
-    from prima.dsl._loader import KeptState
+from typing import Generic, TypeVar
 
 __all__ = ["MAX_KEPT_CHAINS", "MAX_KEPT_TEXT", "Kept", "keeping", "kept_now"]
 
@@ -61,11 +57,14 @@ class Store(Generic[V]):
 
 
 class Kept:
-    """The chains and states one owner keeps (see the module)."""
+    """The chains and states one owner keeps (see the module): the binder's
+    :class:`~prima.dsl._commands.KeptChain` and the loader's
+    :class:`~prima.dsl._loader.KeptState`, which each asks back for by its own type (this
+    module imports neither, so neither imports it back through the other)."""
 
     def __init__(self) -> None:
-        self.chains: Store[KeptChain] = Store(MAX_KEPT_CHAINS)
-        self.states: Store[KeptState] = Store(MAX_KEPT_TEXT)
+        self.chains: Store[object] = Store(MAX_KEPT_CHAINS)
+        self.states: Store[object] = Store(MAX_KEPT_TEXT)
 
 
 _KEPT: ContextVar[Kept | None] = ContextVar("prima_kept", default=None)

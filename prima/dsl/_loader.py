@@ -12,7 +12,7 @@ import dataclasses
 import re
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -20,6 +20,7 @@ from lxml import etree
 
 from prima.suggest import did_you_mean, similar
 from prima.catalog import ParamKind
+from prima.dsl._binder import Refs, Spot
 from prima.dsl._commands import bind_chain, bind_element, compile_attribute, element_name
 from prima.dsl._elements import elements, flag
 from prima.dsl._kept import kept_now
@@ -90,22 +91,6 @@ _NS = f"{{{NAMESPACE}}}"
 MAX_CARET_LINE = 1_000
 """Longest source line shown under a problem with a caret (characters)."""
 
-Spot = tuple[etree._Element, str | None, int]
-"""Where to point: (element, None | "#text" | attribute name, character index)."""
-
-
-@dataclass
-class _Refs:
-    """References collected during the walk, checked once everything is known."""
-
-    gotos: list[tuple[str, Spot]] = field(default_factory=list)
-    variables: list[tuple[str, Spot]] = field(default_factory=list)
-    grammars: list[tuple[str, Spot]] = field(default_factory=list)
-    handlers: list[tuple[HandlerKind, str, Spot, bool | None]] = field(default_factory=list)
-    raises: list[tuple[str, Spot]] = field(default_factory=list)
-    cancels: list[tuple[str, Spot]] = field(default_factory=list)
-
-
 _ON_INTERRUPT = {m.value: m for m in OnInterrupt}
 """``interrupt`` values (the schema refuses others)."""
 
@@ -123,7 +108,7 @@ class Builder:
         self.max_text = profile.budgets[self.kind].text
         """Longest literal text (characters): the robot's budget, at most MAX_TEXT."""
         self.problems: list[Problem] = []
-        self.refs = _Refs()
+        self.refs = Refs()
         self.variable_names = dict.fromkeys(v.get("name", "") for v in self._top("var"))
         """Every declared variable, in document order."""
         self.variable_key = frozenset(self.variable_names)
@@ -449,7 +434,7 @@ class Builder:
         line, col = self.position((el, None, 0))
         key = (written, line, col, head, self.kind, self.max_text, self.variable_key)
         found = kept.states.get(key)
-        if found is not None and found.profile is self.profile:
+        if isinstance(found, KeptState) and found.profile is self.profile:
             self._register_state(el, found.replay(self, el))
             return
         marks = _Marks.of(self)

@@ -32,7 +32,8 @@ from prima.mediator._interface import (
     Request,
     TreeId,
 )
-from prima.mediator._mediator import Mediator, MediatorConfig
+from prima.mediator._config import MediatorConfig
+from prima.mediator._mediator import Mediator
 from prima.mediator._ranking import CRITERIA, Criterion, Scope
 from prima.mediator._snapshot import HoldView, NodeView, Snapshot, TreeView
 from prima.mediator._state import NodeState

@@ -21,19 +21,16 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
 
 from prima.catalog import Catalog, CommandSpec, Param, Priority
 from prima.errors import MediationError
+from prima.mediator._config import MediatorConfig
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
 from prima.mediator._interface import Call, CommandId, Driver, Request
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._state import IN_MEMORY, App, Command, Node, NodeState, Tree
-
-if TYPE_CHECKING:
-    from prima.mediator._mediator import MediatorConfig
 from prima.vocab import AppKind, RunningOrder
 
 __all__ = ["Intake", "Link"]

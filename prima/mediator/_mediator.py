@@ -25,12 +25,12 @@ makes an operation after moving it.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
 from types import TracebackType
 
 from prima.catalog import BODY_DEVICE, CONNECT_COMMAND, SPEAKER, Catalog, ParamKind
 from prima.errors import MediationError
+from prima.mediator._config import MediatorConfig
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._fairness import Fairness
 from prima.mediator._holds import Holds
@@ -57,15 +57,10 @@ from prima.vocab import (
     ANSWERED,
     DEFAULT_BUDGETS,
     INTERRUPTED_EVENT,
-    MAX_ANSWER_HOLD,
-    MAX_BLOCK_WATCHDOG,
-    MAX_EAS,
     MAX_NEWS_PER_INSTANT,
-    MAX_STREAM_HOLD,
     NOMATCH_EVENT,
     SPEECH_EVENT,
     AppKind,
-    Budgets,
     OnInterrupt,
 )
 
@@ -77,70 +72,6 @@ _PENDING = NodeState.PENDING
 _RUNNING = NodeState.RUNNING
 _END = DecisionKind.END
 _COMPLETED = Rule.COMPLETED
-
-
-@dataclass(frozen=True)
-class MediatorConfig:
-    """Tunable bounds of the mediation rules."""
-
-    end_grace: float = 0.5
-    """Seconds after a Command's end within which a ``follows`` request stays in
-    its tree (CS exceptions (a)/(b)). A handler that requests at once is always
-    in time; one that waits on a timer or polls is not."""
-
-    max_stream_hold: float = MAX_STREAM_HOLD
-    """Upper bound on an explicit stream's hold, whatever the document asks: the
-    other application's response speed stays bounded (rule 6c)."""
-
-    max_answer_hold: float = MAX_ANSWER_HOLD
-    """Upper bound on how long a reaction to the user's own action keeps the streams it
-    interrupted waiting on every device before its first words have been said
-    (docs/rules.md 7.6 (1)): words that never come cannot hold the others for ever."""
-
-    max_block_watchdog: float = MAX_BLOCK_WATCHDOG
-    """Upper bound on a begin/end block's watchdog, whatever the document asks:
-    a runaway block cannot starve the other application (rule 3)."""
-
-    connect_channel: bool = True
-    """The connect-channel policy (docs/rules.md 7.3 (4)), when there is a channel."""
-
-    restore_state: bool = True
-    """The restore-state policy (docs/rules.md 7.3 (1)), when there is a channel."""
-
-    blend: bool = True
-    """The blend policy (docs/rules.md 7.3 (5)): on the blends the catalog declares (the
-    robot profile's ``<blend>``)."""
-
-    interrupt: bool = True
-    """The interrupt policy (docs/rules.md 7.3 (2)): on the Commands the catalog says are
-    interruptible (the robot profile's ``<interruptible>``)."""
-
-    reactions: bool = True
-    """The reactions policy (docs/rules.md 7.1): a reaction keeps the devices its next AB
-    needs; a reaction to the user's own action goes first until it has said its first
-    words."""
-
-    exchange: bool = True
-    """The exchange policy (docs/rules.md 7.4): an application's spoken reply to the answer
-    of its own Q&A goes before every other application's AB on its devices, and is
-    never cut."""
-
-    barge_in: bool = False
-    """The barge-in policy (docs/rules.md 7.5): what the user says outside a Q&A
-    (:meth:`Mediator.hear`) cuts the robot's utterance under way at a word boundary,
-    unless it is a backchannel."""
-
-    resume_pause: float = 0.6
-    """Seconds after which an utterance cut by words no application took goes on (a
-    false interruption: the robot profile's ``<hearing resume-after>``)."""
-
-    max_eas: int = MAX_EAS
-    """Most EAs registered at once (besides the one FA): each has its own budgets."""
-
-    budgets: Mapping[AppKind, Budgets] = field(default_factory=lambda: DEFAULT_BUDGETS)
-    """What one application of each role may consume (the robot profile's
-    ``<budgets>``): the mediator enforces ``waiting``, ``starts_per_instant`` and
-    the wait share."""
 
 
 class _Operation:

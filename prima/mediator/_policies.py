@@ -10,7 +10,6 @@ never looks at poses itself.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 from prima.catalog import (
     BODY_DEVICE,
@@ -19,6 +18,7 @@ from prima.catalog import (
     RESTORE_POSITION_COMMAND,
     Catalog,
 )
+from prima.mediator._config import MediatorConfig
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
 from prima.mediator._intake import Intake
@@ -29,8 +29,6 @@ from prima.mediator._ranking import preempts
 from prima.mediator._state import Node, Tree
 from prima.vocab import OnInterrupt
 
-if TYPE_CHECKING:
-    from prima.mediator._mediator import MediatorConfig
 
 __all__ = ["Policies"]
 

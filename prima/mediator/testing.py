@@ -36,7 +36,8 @@ from prima.mediator._interface import (
     ManualClock,
     Outcome,
 )
-from prima.mediator._mediator import Mediator, MediatorConfig
+from prima.mediator._config import MediatorConfig
+from prima.mediator._mediator import Mediator
 from prima.mediator._ranking import outranks, rank
 from prima.mediator._state import Node, NodeState
 from prima.vocab import AppKind, Value

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from prima.escape import terminal
+from prima.plot._names import abbreviate
 from prima.timeline import Bar, Mark, Span, Tick, Timeline, timeline
 from prima.trace import Pose
 
@@ -26,14 +27,6 @@ __all__ = ["FORMATS", "Bar", "Mark", "Pose", "Span", "Tick", "Timeline", "abbrev
 
 FORMATS = (".svg", ".png", ".pdf")
 """The timeline's picture formats, by file suffix; ``.gif`` is the animation."""
-
-
-def abbreviate(command: str, parts: int = 2) -> str:
-    """A grouped AB's name shortened: ``Speak+Gesture+PointByHand`` -> ``Speak+Gesture+...``."""
-    names = command.split("+")
-    if len(names) <= parts:
-        return command
-    return "+".join(names[:parts]) + "+..."
 
 
 def _shown(text: str | None) -> str | None:

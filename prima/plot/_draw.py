@@ -18,7 +18,7 @@ from matplotlib.patches import Patch
 
 from prima.escape import PLAIN_TEXT
 from prima.output import written_bytes
-from prima.plot import abbreviate
+from prima.plot._names import abbreviate
 from prima.timeline import Bar, Timeline, ink, runs
 
 __all__ = ["app_colors", "draw_timeline", "save_timeline", "timeline_figure"]

@@ -38,24 +38,24 @@ from prima.sim._world import World, wrap_angle
 from prima.vocab import Value
 
 if TYPE_CHECKING:
-    from prima.sim._simulator import Simulator
+    from prima.sim._host import Body
 
 __all__ = ["BEHAVIORS", "perform"]
 
 Values = dict[str, Value]
 Result = tuple[Values, bool]
 Gen = Generator[Wait, Any, Result]
-Behavior = Callable[["Simulator", Call, int, int], Gen]
+Behavior = Callable[["Body", Call, int, int], Gen]
 
 
 # ---- arguments -------------------------------------------------------------------
 
-def _arg(sim: Simulator, call: Call, name: str) -> Value:
+def _arg(sim: Body, call: Call, name: str) -> Value:
     """The argument as given, else its parameter's default in the robot's catalog."""
     return sim.catalog[call.command].arg(call.args, name)
 
 
-def _number(sim: Simulator, call: Call, name: str, required: bool = True) -> float | None:
+def _number(sim: Body, call: Call, name: str, required: bool = True) -> float | None:
     value = _arg(sim, call, name)
     if value is None:
         if required:
@@ -64,19 +64,19 @@ def _number(sim: Simulator, call: Call, name: str, required: bool = True) -> flo
     return _finite(value, f"argument {name!r}")
 
 
-def _req(sim: Simulator, call: Call, name: str) -> float:
+def _req(sim: Body, call: Call, name: str) -> float:
     value = _number(sim, call, name)
     if value is None:
         raise CommandError(f"missing argument {name!r}")
     return value
 
 
-def _text(sim: Simulator, call: Call, name: str) -> str:
+def _text(sim: Body, call: Call, name: str) -> str:
     value = _arg(sim, call, name)
     return "" if value is None else str(value)
 
 
-def _place(sim: Simulator, call: Call, name: str) -> Place | None:
+def _place(sim: Body, call: Call, name: str) -> Place | None:
     value = _arg(sim, call, name)
     if value is None:
         return None
@@ -86,33 +86,33 @@ def _place(sim: Simulator, call: Call, name: str) -> Place | None:
     return place
 
 
-def _pose(sim: Simulator) -> Values:
+def _pose(sim: Body) -> Values:
     p = sim.localize()
     return {"x": round(p.x, 3), "y": round(p.y, 3), "heading": round(p.heading, 1) % 360.0}
 
 
 # ---- motion helpers -------------------------------------------------------------------
 
-def _stop(sim: Simulator) -> Generator[Wait, Any, None]:
+def _stop(sim: Body) -> Generator[Wait, Any, None]:
     world = sim.world
     yield signal(lambda wake: world.stop(lambda: wake(True)))
 
 
-def _turn(sim: Simulator, delta: float) -> Generator[Wait, Any, None]:
+def _turn(sim: Body, delta: float) -> Generator[Wait, Any, None]:
     world = sim.world
     if world.mode:
         yield from _stop(sim)
     yield signal(lambda wake: world.turn_by(delta, wake))
 
 
-def _face(sim: Simulator, heading: float) -> Generator[Wait, Any, None]:
+def _face(sim: Body, heading: float) -> Generator[Wait, Any, None]:
     yield from _turn(sim, wrap_angle(heading - sim.world.robot_angle()))
 
 
 ARRIVED, UNDER_WAY, BLOCKED = "arrived", "under way", "blocked"
 
 
-def _period_toward(sim: Simulator, x: float, y: float) -> Generator[Wait, Any, str]:
+def _period_toward(sim: Body, x: float, y: float) -> Generator[Wait, Any, str]:
     """One control period of going to (x, y): turn toward it, then drive straight.
 
     A turn or a drive toward it that is already running goes on (a feedback
@@ -161,7 +161,7 @@ def _rewake(world: World, wake: Callable[..., None]) -> bool:
     return True
 
 
-def _heading_to(sim: Simulator, place: Place) -> float | None:
+def _heading_to(sim: Body, place: Place) -> float | None:
     """Map heading (radians) from the robot toward a place (its ``facing`` when there)."""
     x, y = sim.world.robot_xy()
     if math.hypot(place.x - x, place.y - y) <= sim.spec.place_tolerance:
@@ -171,7 +171,7 @@ def _heading_to(sim: Simulator, place: Place) -> float | None:
 
 # ---- talking ------------------------------------------------------------------------------
 
-def speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def speak(sim: Body, call: Call, cid: int, it: int) -> Gen:
     text = _text(sim, call, "text")
     n = sim.ticks(sim.speech_duration(text))
     sim.utter(cid, text, n)
@@ -179,7 +179,7 @@ def speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"duration": n / sim.kernel.hz}, True
 
 
-def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def qa(sim: Body, call: Call, cid: int, it: int) -> Gen:
     prompt = _text(sim, call, "prompt")
     timeout = _req(sim, call, "timeout")
     if timeout < 0:
@@ -219,7 +219,7 @@ FACE_STILL = math.radians(10.0)
 from there within a degree and a half."""
 
 
-def _face_rate(sim: Simulator, off: float, period: float) -> float:
+def _face_rate(sim: Body, off: float, period: float) -> float:
     """The turning rate toward a user ``off`` radians away, set for the next ``period``
     seconds: ``FACE_GAIN`` times how far off they are, but never faster than the robot can
     brake from within what is left once that period is over (it would turn past them)."""
@@ -229,7 +229,7 @@ def _face_rate(sim: Simulator, off: float, period: float) -> float:
     return math.copysign(min(FACE_GAIN * abs(off), math.sqrt(2.0 * alpha * left)), off)
 
 
-def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def face_human(sim: Body, call: Call, cid: int, it: int) -> Gen:
     """Turn to the user: while the user and the robot stand, one turn toward them; while
     they walk (or walked on while it turned), or the robot still moves (it slows down as
     it turns), after them, the turning rate set every tenth of a second from how far
@@ -256,18 +256,18 @@ def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"found": True, "distance": round(distance, 3), **_pose(sim)}, True
 
 
-def face_human_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def face_human_and_speak(sim: Body, call: Call, cid: int, it: int) -> Gen:
     values, _ = yield from face_human(sim, call, cid, it)
     said, _ = yield from speak(sim, call, cid, it)
     return {**values, **said}, True
 
 
-def turn(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def turn(sim: Body, call: Call, cid: int, it: int) -> Gen:
     yield from _turn(sim, math.radians(_req(sim, call, "angle")))
     return _pose(sim), True
 
 
-def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def turn_and_speak(sim: Body, call: Call, cid: int, it: int) -> Gen:
     angle = _req(sim, call, "angle")
     text = _text(sim, call, "text")
     n = sim.ticks(sim.speech_duration(text))
@@ -279,7 +279,7 @@ def turn_and_speak(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {**_pose(sim), "duration": n / sim.kernel.hz}, True
 
 
-def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def set_direction(sim: Body, call: Call, cid: int, it: int) -> Gen:
     heading = _number(sim, call, "heading", required=False)
     toward = _place(sim, call, "toward")
     if heading is not None and toward is None:
@@ -295,7 +295,7 @@ def set_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 
 # ---- wheels ---------------------------------------------------------------------------------
 
-def set_speed_and_time(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def set_speed_and_time(sim: Body, call: Call, cid: int, it: int) -> Gen:
     speed, seconds = _req(sim, call, "speed"), _req(sim, call, "time")
     spin = _req(sim, call, "spin")
     if seconds < 0:
@@ -309,7 +309,7 @@ def set_speed_and_time(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return _pose(sim), True
 
 
-def stop_moving(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def stop_moving(sim: Body, call: Call, cid: int, it: int) -> Gen:
     yield from _stop(sim)
     return _pose(sim), True
 
@@ -320,7 +320,7 @@ def _clamp(value: float, limits: tuple[float, float]) -> float:
     return max(limits[0], min(limits[1], value))
 
 
-def move_head(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def move_head(sim: Body, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
     pan = _clamp(_req(sim, call, "pan"), spec.head_pan_range)
     tilt = _clamp(_req(sim, call, "tilt"), spec.head_tilt_range)
@@ -333,7 +333,7 @@ def move_head(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"pan": pan, "tilt": tilt}, True
 
 
-def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def point_by_hand(sim: Body, call: Call, cid: int, it: int) -> Gen:
     spec, world, tick = sim.spec, sim.world, sim.kernel.tick
     angle = _number(sim, call, "angle", required=False)
     toward = _place(sim, call, "toward")
@@ -349,7 +349,7 @@ def point_by_hand(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"angle": round(angle, 1)}, True
 
 
-def gesture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def gesture(sim: Body, call: Call, cid: int, it: int) -> Gen:
     name = _text(sim, call, "name")
     seconds = sim.spec.gestures.get(name)
     if seconds is None:
@@ -358,7 +358,7 @@ def gesture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"gesture": name}, True
 
 
-def take_picture(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def take_picture(sim: Body, call: Call, cid: int, it: int) -> Gen:
     """Capture what the camera sees now; the capture lasts the profile's duration."""
     duration = sim.catalog[call.command].duration
     if duration is None:
@@ -421,7 +421,7 @@ def _sway_figures(call: Call, step: SwayBody) -> tuple[float, int, float]:
     return degrees, sways, sways * period
 
 
-def _joint_figures(sim: Simulator, joint: JointSpec) -> tuple[tuple[float, float], float]:
+def _joint_figures(sim: Body, joint: JointSpec) -> tuple[tuple[float, float], float]:
     """A joint's limits (deg) and rate (deg/s): the robot's own for a built-in joint."""
     if joint.low is not None and joint.high is not None and joint.rate is not None:
         return (joint.low, joint.high), joint.rate
@@ -432,7 +432,7 @@ def _joint_figures(sim: Simulator, joint: JointSpec) -> tuple[tuple[float, float
             spec.head_rate)
 
 
-def _joint_target(sim: Simulator, call: Call, step: MoveJoint) -> float:
+def _joint_target(sim: Body, call: Call, step: MoveJoint) -> float:
     """Where a step moves its joint (deg, within its limits): to an angle, or toward a
     place (its bearing from the body, as PointByHand aims the arm)."""
     name = step.joint.name
@@ -452,7 +452,7 @@ def _joint_target(sim: Simulator, call: Call, step: MoveJoint) -> float:
     return _clamp(angle, _joint_figures(sim, step.joint)[0])
 
 
-def perform_steps(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def perform_steps(sim: Body, call: Call, cid: int, it: int) -> Gen:
     """A Command the robot profile performs with a ``<perform>``: its steps in order.
 
     A hold keeps the devices for its time; a joint step moves the joint at its
@@ -486,14 +486,14 @@ def perform_steps(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return values, True
 
 
-def hold_for_duration(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def hold_for_duration(sim: Body, call: Call, cid: int, it: int) -> Gen:
     """A robot-specific Command with a duration and nothing else to say how it is
     performed: it keeps its devices for its duration (a ``<hold>`` of it)."""
     yield sleep(sim.ticks(sim.catalog[call.command].duration or 0.0))
     return {}, True
 
 
-def _perform_time(sim: Simulator, call: Call, spec: CommandSpec) -> float:
+def _perform_time(sim: Body, call: Call, spec: CommandSpec) -> float:
     """How long a ``<perform>`` will take from now, at least: its holds, and each
     joint's travel from where it is (or where an earlier step left it) at its rate.
 
@@ -521,7 +521,7 @@ def _perform_time(sim: Simulator, call: Call, spec: CommandSpec) -> float:
 
 # ---- feedback loops --------------------------------------------------------------------------
 
-def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def active_sensing_human(sim: Body, call: Call, cid: int, it: int) -> Gen:
     """One iteration: one control period of watching for the user with the view
     still or, once the user has stayed unseen for ``search_time``, one turn of the
     view (Turn-and-Search; it stops as soon as the user comes into view).
@@ -530,7 +530,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     can take the robot between any two (a search is mostly waiting). A retry
     (a watch then a turn) says ``say`` at its start; that iteration lasts until
     the words are said, and the trace shows the words on that iteration only
-    (:meth:`Simulator.quiet`).
+    (:meth:`~._simulator.Simulator.quiet`).
     """
     say = _text(sim, call, "say")
     angle = _req(sim, call, "turn")
@@ -576,7 +576,7 @@ def active_sensing_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"found": False, "turned": angle}, False
 
 
-def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def tracking_human(sim: Body, call: Call, cid: int, it: int) -> Gen:
     want = _req(sim, call, "distance")
     if want <= 0:
         raise CommandError(f"distance must be positive, not {want:g}")
@@ -607,7 +607,7 @@ def tracking_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"lost": False, "distance": round(distance, 3)}, False
 
 
-def topological_move(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def topological_move(sim: Body, call: Call, cid: int, it: int) -> Gen:
     """One iteration: one control period of going to the next place on the route.
 
     Short iterations keep the robot responsive (another application can act
@@ -624,7 +624,7 @@ def topological_move(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
         sim.navigating -= 1
 
 
-def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
+def _move_leg(sim: Body, call: Call, cid: int) -> Gen:
     goal = _place(sim, call, "to")
     if goal is None:
         raise CommandError("missing argument 'to'")
@@ -683,7 +683,7 @@ def _move_leg(sim: Simulator, call: Call, cid: int) -> Gen:
             "remaining": len(path) - 1}, done
 
 
-def _would_leave(sim: Simulator, x: float, y: float, bound: float) -> bool:
+def _would_leave(sim: Body, x: float, y: float, bound: float) -> bool:
     """Whether going on toward (x, y) for one more control period could take the robot
     farther than ``bound`` from its user, should they stay where they are: as far as
     it could drive in the period at its speed limit, and then brake to a stop. Asked
@@ -702,7 +702,7 @@ def _would_leave(sim: Simulator, x: float, y: float, bound: float) -> bool:
     return math.hypot(ux - ax, uy - ay) > bound
 
 
-def _route(sim: Simulator, goal: Place,
+def _route(sim: Body, goal: Place,
            state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
     """The places still to visit; on the way to one, keep heading for it.
 
@@ -738,7 +738,7 @@ KEEP_COURSE = 0.3
 its last iteration left it (the wheels stopping in between slide it a little)."""
 
 
-def _set_position(sim: Simulator, call: Call, cid: int,
+def _set_position(sim: Body, call: Call, cid: int,
                   heading: float | None) -> Gen:
     tx, ty = _req(sim, call, "x"), _req(sim, call, "y")
     world, spec = sim.world, sim.spec
@@ -769,11 +769,11 @@ def _set_position(sim: Simulator, call: Call, cid: int,
     return {**_pose(sim), "reached": reached}, reached
 
 
-def set_position(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def set_position(sim: Body, call: Call, cid: int, it: int) -> Gen:
     return (yield from _set_position(sim, call, cid, None))
 
 
-def set_position_and_direction(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def set_position_and_direction(sim: Body, call: Call, cid: int, it: int) -> Gen:
     return (yield from _set_position(sim, call, cid, _req(sim, call, "heading")))
 
 
@@ -805,25 +805,25 @@ duration by :func:`hold_for_duration`."""
 
 # ---- planned durations (the longest-AB budget) ---------------------------------------
 
-def _said(sim: Simulator, call: Call, name: str) -> float:
+def _said(sim: Body, call: Call, name: str) -> float:
     text = _text(sim, call, name)
     return sim.speech_duration(text) if text else 0.0
 
 
-def _turning(sim: Simulator, degrees: float) -> float:
+def _turning(sim: Body, degrees: float) -> float:
     return abs(degrees) / sim.spec.max_turn_rate
 
 
-def _gesture_time(sim: Simulator, call: Call) -> float:
+def _gesture_time(sim: Body, call: Call) -> float:
     return sim.spec.gestures.get(_text(sim, call, "name"), 0.0)
 
 
-def _search_time(sim: Simulator, call: Call) -> float:
+def _search_time(sim: Body, call: Call) -> float:
     look = max(sim.spec.search_time, _said(sim, call, "say"))
     return look + _turning(sim, _req(sim, call, "turn"))
 
 
-PLANNED: Mapping[str, Callable[[Simulator, Call], float]] = {
+PLANNED: Mapping[str, Callable[[Body, Call], float]] = {
     "Speak": lambda sim, call: _said(sim, call, "text"),
     "QA": lambda sim, call: _said(sim, call, "prompt") + max(0.0, _req(sim, call, "timeout")),
     "FaceHumanAndSpeak": lambda sim, call: _turning(sim, 180.0) + _said(sim, call, "text"),
@@ -839,7 +839,7 @@ PLANNED: Mapping[str, Callable[[Simulator, Call], float]] = {
 by the robot itself (a leg of a move, a head turn)."""
 
 
-def blended_motion(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
+def blended_motion(sim: Body, call: Call, cid: int, it: int) -> Gen:
     """A local motion blended over a global one on the devices they share (the blend
     policy): a dance step while the robot guides. The global motion keeps the wheels
     (it slows down meanwhile); the local one sways the robot in place of commanding
@@ -849,7 +849,7 @@ def blended_motion(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
     return {"blended": True, "duration": seconds}, True
 
 
-def planned(sim: Simulator, call: Call) -> float:
+def planned(sim: Body, call: Call) -> float:
     """How long performing ``call`` will take, as far as it can be known at its start."""
     performed = sim.catalog.get(call.command)
     if performed is not None and performed.perform:
@@ -861,7 +861,7 @@ def planned(sim: Simulator, call: Call) -> float:
     return (spec.duration or 0.0) if spec is not None else 0.0
 
 
-def perform(sim: Simulator, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
+def perform(sim: Body, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
     """Perform an atomic behavior's calls in order; return merged values and terminal.
 
     In a grouped AB each feedback call performs one iteration; the AB is

@@ -24,7 +24,7 @@ from prima.sim._kernel import ProcGen, Process, sleep
 from prima.sim._records import Pose, UserAction, UserActionKind
 
 if TYPE_CHECKING:
-    from prima.sim._simulator import Simulator
+    from prima.sim._host import Stage
 
 __all__ = ["ADDED_ACTIONS", "AnswerRule", "ScriptedUser", "TimedAction", "UserScript"]
 
@@ -118,7 +118,7 @@ _APPROACH_GAP = 0.15
 class ScriptedUser:
     """Plays a :class:`UserScript` in a simulator (created by the simulator)."""
 
-    def __init__(self, script: UserScript, sim: Simulator) -> None:
+    def __init__(self, script: UserScript, sim: Stage) -> None:
         self.script = script
         self._sim = sim
         self._motion: Process | None = None
