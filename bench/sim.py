@@ -37,7 +37,8 @@ from pathlib import Path
 from _measure import ROOT, cpu, interleaved, interpreter, report
 
 from prima.run import Run
-from prima.sim import Simulator, load_scenario
+from prima.scenario import load_scenario
+from prima.sim import Simulator
 from prima.trace import TextTrace, TraceLine
 
 TARGET = 1000.0

@@ -119,7 +119,8 @@ class Case:
         return float(out["cpu"])
 
     def bare(self) -> float:
-        from prima.sim import Simulator, load_scenario
+        from prima.scenario import load_scenario
+        from prima.sim import Simulator
 
         world = Simulator.from_scenario(load_scenario(self.path)).world
         space, dt, steps = world.space, world.dt, self.steps or 1

@@ -23,7 +23,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import TYPE_CHECKING, TextIO
 
 from prima import __version__, compiled
-from prima.errors import DocumentError, LocatedError, PrimaError, Problem, Severity
+from prima.errors import LocatedError, PrimaError, Problem, Severity
 from prima.escape import shown_path, terminal
 from prima.suggest import SuggestingParser, did_you_mean, unrecognized
 from prima.term import BOLD, CYAN, GREEN, RED, WHEN, YELLOW, Paint, columns, is_terminal, \
@@ -35,9 +35,8 @@ from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 if TYPE_CHECKING:
     from prima.batch import Pool
     from prima.output import Inputs
-    from prima.dsl import Checker, Header, RobotProfile, Validation
+    from prima.dsl import RobotProfile
     from prima.run import Switches
-    from prima.sim import WorldMap
 
 # Each command imports what it needs when it runs (``prima --help`` imports no lxml,
 # lark or pymunk; ``prima validate`` of documents no simulator): a cold start pays
@@ -669,144 +668,6 @@ def _missing_extra(module: str, library: str, extra: str) -> str | None:
     return None
 
 
-def _problems(load: Callable[[Path], object], path: Path) -> list[Problem]:
-    try:
-        load(path)
-    except LocatedError as exc:
-        return list(exc.problems)
-    return []
-
-
-def _scenario_checkers(validation: Validation, robot: bool) -> dict[str, Checker]:
-    """Scenario and map files are the simulator's; the CLI joins both worlds.
-
-    A scenario's check also checks every file it names, each once in the whole
-    validation: its map, its robot profile, and its FA, EA and zone EAs against
-    that profile (``robot``: the ``--robot`` profile instead, as ``prima run``
-    does), and that each names the right kind of file and each application
-    fits its slot. The simulator is imported only when a file of neither
-    PRIMA's documents nor its robot profiles is met.
-    """
-    from prima.dsl import unknown_places
-    from prima.sim import MAP_NS, SCENARIO_NS, late_inputs, load_map, load_scenario
-
-    maps: dict[Path, WorldMap] = {}
-    """The maps checked without errors, by resolved path."""
-    placed: set[tuple[Path, Path]] = set()
-    """(document, map) pairs whose places were checked: each pair once."""
-
-    def check_map(path: Path) -> list[Problem]:
-        try:
-            maps[path.resolve()] = load_map(path)
-        except LocatedError as exc:
-            return list(exc.problems)
-        return []
-
-    def check_places(map_path: Path, documents: Iterable[Path]) -> list[Problem]:
-        world = maps.get(map_path.resolve())
-        out: list[Problem] = []
-        for document in documents:
-            checked = validation.places(document)
-            pair = (document.resolve(), map_path.resolve())
-            if world is not None and checked is not None and pair not in placed:
-                placed.add(pair)
-                out.extend(unknown_places(*checked, [p.name for p in world.places],
-                                          world.name, world.source))
-        return out
-
-    def check_scenario(path: Path) -> list[Problem]:
-        # problems loading the scenario found in its map are the map's own check's
-        problems = _problems(load_scenario, path)
-        own = [p for p in problems if Path(p.file).resolve() == path.resolve()]
-        own += late_inputs(path) if not problems else []
-        return own + _check_named(validation, path, robot, MAP_NS, check_places)
-
-    return {SCENARIO_NS: check_scenario, MAP_NS: check_map}
-
-
-_SLOTS = {"fa": "fa", "ea": "ea", "zone": "ea"}
-"""A scenario's reference role -> the kind of application that runs there."""
-
-
-def _check_named(validation: Validation, scenario: Path, robot: bool, map_ns: str,
-                 check_places: Callable[[Path, Iterable[Path]], list[Problem]]) -> list[Problem]:
-    """Check the files ``scenario`` names; the problems of the scenario itself (a file of
-    the wrong kind, an application in the wrong slot, two applications of one name) are
-    returned, located at the attribute that names the file, and then, located in the
-    applications, each place they name that the scenario's map lacks (``check_places``)."""
-    from prima.dsl import NAMESPACE as PXML_NS
-    from prima.dsl import ROBOT_NAMESPACE as ROBOT_NS
-    from prima.sim import scenario_references
-
-    expected = {"map": (map_ns, "map"), "profile": (ROBOT_NS, "robot profile")}
-    out: list[Problem] = []
-    refs = []
-    for ref in scenario_references(scenario):
-        if not ref.path.is_file():  # the scenario's own check says it is not found
-            continue
-        namespace, what = expected.get(ref.role, (PXML_NS, "PXML document"))
-        found = _namespace(ref.path)
-        if found is not None and found != namespace:
-            out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR,
-                               f"'{ref.value}' is not a {what} (its root is in {found!r})"))
-        else:
-            refs.append(ref)
-    profile = validation.profile
-    for ref in refs:
-        if ref.role == "map":
-            validation.add(ref.path)
-        elif ref.role == "profile":
-            named = validation.robot(ref.path)
-            profile = profile if robot else named
-    if profile is None:  # the named profile has errors: its documents wait until it is fixed
-        return out
-    fa_name: str | None = None
-    eas: dict[str, tuple[str, Path]] = {}
-    """The EAs running from the start: name -> the path as written, and the file."""
-    for ref in (r for r in refs if r.role in _SLOTS):
-        header = validation.document(ref.path, profile)
-        message = None if header is None else _slot_fault(ref.role, ref.value, header, fa_name)
-        name = "" if header is None else header.name
-        earlier = eas.get(name) if header is not None and ref.role == "ea" else None
-        # (one file named twice: the scenario's own check says so, once)
-        if not message and earlier is not None and earlier[1] != ref.path.resolve():
-            message = (f"the EAs '{earlier[0]}' and '{ref.value}' are both named '{name}'; "
-                       "each application needs a name of its own")
-        if message:
-            out.append(Problem(str(scenario), ref.line, ref.col, Severity.ERROR, message))
-        elif header is not None and ref.role == "fa":
-            fa_name = header.name
-        elif header is not None and ref.role == "ea":
-            eas.setdefault(header.name, (ref.value, ref.path.resolve()))
-    for map_ref in (r for r in refs if r.role == "map"):
-        out.extend(check_places(map_ref.path, (r.path for r in refs if r.role in _SLOTS)))
-    return out
-
-
-def _namespace(path: Path) -> str | None:
-    """The namespace of a file's root element, or None if it cannot be read or parsed."""
-    from prima.dsl import root_namespace
-    from prima.xmlio import read_source
-
-    try:
-        return root_namespace(read_source(path, DocumentError))
-    except DocumentError:
-        return None
-
-
-def _slot_fault(role: str, written: str, header: Header, fa_name: str | None) -> str | None:
-    """What ``prima run`` would refuse about this application in this slot, if anything."""
-    slot = _SLOTS[role]
-    if header.kind in _SLOTS.values() and header.kind != slot:
-        return (f"'{written}' is an {header.kind.upper()} (kind=\"{header.kind}\"); "
-                f"it cannot run as the {slot.upper()}")
-    if role != "fa" and header.name == fa_name:
-        whose = "the EA" if role == "ea" else "this zone's EA"
-        return (f"the FA and {whose} are both named '{header.name}'; each application "
-                "needs a name of its own")
-    return None
-
-
 def _profile(path: str | None) -> RobotProfile:
     from prima.dsl import default_profile, load_profile
 
@@ -814,15 +675,14 @@ def _profile(path: str | None) -> RobotProfile:
 
 
 def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
-    from prima.dsl import Validation, collect
+    from prima.dsl import collect
+    from prima.scenario import make_validation
 
     try:
         files = collect(args.paths)
     except FileNotFoundError as exc:
         return _usage("validate", f"no such file or folder: {exc}", err)
-    robot = args.robot is not None
-    validation = Validation(_profile(args.robot), follow_declared=not robot,
-                            more_checkers=lambda: _scenario_checkers(validation, robot))
+    validation = make_validation(_profile(args.robot), robot=args.robot is not None)
     from prima.collecting import fewer_collections
 
     with fewer_collections():
@@ -841,18 +701,6 @@ def _validate(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             else f"{report.warnings} warning(s)"
         print(f"{n} file{'s' if n != 1 else ''} checked: {errors}, {warnings}", file=err)
     return EXIT_ERRORS if report.errors else EXIT_OK
-
-
-def make_validation(profile: RobotProfile, *, robot: bool = False) -> Validation:
-    """A validation as ``prima validate`` makes one: documents and robot profiles, and
-    scenarios and maps with every file they name (``robot``: every document is checked
-    against ``profile``, as ``--robot`` asks, not the scenario's robot nor the one its
-    ``robot`` attribute names). ``prima lsp`` checks an editor's buffer with it."""
-    from prima.dsl import Validation
-
-    made: Validation = Validation(profile, follow_declared=not robot,
-                                  more_checkers=lambda: _scenario_checkers(made, robot))
-    return made
 
 
 _FORMAT_OF = {".jsonl": "jsonl", ".json": "chrome-trace", ".mcap": "mcap"}
@@ -915,7 +763,7 @@ _REFERENCE_ROLES = {"fa": "the FA", "ea": "an EA", "zone": "a zone's EA", "map":
 def _scenario_inputs(scenario: str | Path, what: str = "the scenario") -> list[tuple[str, Path]]:
     """A scenario and every file it names (its documents, map and robot profile), each
     with what it is: what an output must not overwrite."""
-    from prima.sim import scenario_references
+    from prima.scenario import scenario_references
 
     path = Path(scenario)
     found: list[tuple[str, Path]] = [(what, path)]
@@ -1469,7 +1317,7 @@ def _plot(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     if isinstance(switches, str):
         return _usage("plot", switches, err)
     from prima.plot import save_animation, save_timeline, timeline
-    from prima.sim import load_map
+    from prima.scenario import load_map
 
     source = Path(args.input)
     world = None

@@ -11,24 +11,16 @@ This module is the only place that knows all four parts.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 from prima.catalog import Catalog, ParamKind
-from prima.dsl import (
-    Document,
-    RobotProfile,
-    default_profile,
-    load_document,
-    load_profile,
-    unknown_places,
-)
+from prima.dsl import Document
 from prima.errors import AppFailure, DocumentError, LocatedError, Problem, RunError, Severity
 from prima.interpreter import Interpreter, Note
 from prima.mediator import (
@@ -38,22 +30,12 @@ from prima.mediator import (
     DecisionKind,
     Event,
     Mediator,
-    MediatorConfig,
     Outcome,
     Request,
     Rule,
 )
-from prima.sim import (
-    RobotSpec,
-    Scenario,
-    Simulator,
-    SpeechTiming,
-    UserAction,
-    WorldMap,
-    ZoneEntry,
-    load_map,
-    load_scenario,
-)
+from prima.scenario import Loaded, Scenario, Setup, Switches, spec_from_profile
+from prima.sim import Simulator, SpeechTiming, UserAction, ZoneEntry
 from prima.trace import Kind, RecordKind, TraceLine, row_of
 from prima.vocab import (
     FACE_TOLERANCE,
@@ -64,10 +46,10 @@ from prima.vocab import (
     Budgets,
     OnInterrupt,
     Value,
-    policy_settings,
 )
 
-__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Loaded", "Run", "Switches", "spec_from_profile"]
+__all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Loaded", "Run", "Setup", "Switches",
+           "spec_from_profile"]
 
 MAX_IDLE_ROUNDS = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
@@ -80,27 +62,6 @@ _SHOWN_KEPT = 1024
 
 _POSED = frozenset({DecisionKind.START, DecisionKind.END, Kind.USER, Kind.EVENT, Kind.POSE})
 """Lines that carry the robot's and the user's poses."""
-
-
-def _check_slot(document: Document, role: AppKind) -> Document:
-    """An FA document runs as the FA, an EA document as the EA."""
-    if document.kind is not role:
-        kind = document.kind
-        raise DocumentError([Problem(document.path, 1, 1, Severity.ERROR,
-                                     f"this is an {kind.name} (kind=\"{kind.value}\"); "
-                                     f"it cannot run as the {role.name}")])
-    return document
-
-
-def spec_from_profile(profile: RobotProfile) -> RobotSpec:
-    """The simulator's physical figures for a robot hardware profile."""
-    return RobotSpec(
-        radius=profile.radius, max_speed=profile.max_speed, max_accel=profile.max_accel,
-        max_turn_rate=profile.max_turn_rate, speech_rate=profile.speech_rate,
-        camera_fov=profile.camera_fov, camera_range=profile.camera_range,
-        head_pan_range=profile.pan_range, head_tilt_range=profile.tilt_range,
-        gestures=dict(profile.gestures),
-    )
 
 
 @dataclass
@@ -171,77 +132,6 @@ class _Port:
         self._run.mediator.close_block(app)
 
 
-class Loaded:
-    """Maps, robot profiles and documents loaded for runs, kept by file and content, so
-    that runs of the same files (a sweep's) read and check each file once. Maps,
-    profiles and documents are immutable: runs share them. A file that cannot be
-    loaded is not kept (each run reports it as it would alone)."""
-
-    def __init__(self) -> None:
-        self._maps: dict[tuple[str, bytes], WorldMap] = {}
-        self._profiles: dict[tuple[str, bytes], RobotProfile] = {}
-        self._documents: dict[tuple[str, bytes], tuple[RobotProfile, Document]] = {}
-
-    def map(self, path: Path) -> WorldMap:
-        """The map in ``path`` (:func:`prima.sim.load_map`)."""
-        return _kept(self._maps, path, load_map)
-
-    def profile(self, path: str | Path) -> RobotProfile:
-        """The robot profile in ``path`` (:func:`prima.dsl.load_profile`)."""
-        return _kept(self._profiles, path, load_profile)
-
-    def document(self, path: str | Path, profile: RobotProfile) -> Document:
-        """The document in ``path``, checked for ``profile``
-        (:func:`prima.dsl.load_document`)."""
-        try:
-            key = (str(path), Path(path).read_bytes())
-        except OSError:
-            return load_document(path, profile)
-        found = self._documents.get(key)
-        if found is not None and found[0] is profile:
-            return found[1]
-        document = load_document(path, profile)
-        self._documents[key] = (profile, document)
-        return document
-
-
-_Loadable = TypeVar("_Loadable")
-
-
-def _kept(kept: dict[tuple[str, bytes], _Loadable], path: str | Path,
-          load: Callable[[str | Path], _Loadable]) -> _Loadable:
-    """What ``load`` makes of the file ``path``, kept by its path and content."""
-    try:
-        key = (str(path), Path(path).read_bytes())
-    except OSError:
-        return load(path)  # (which says what is wrong with the file)
-    found = kept.get(key)
-    if found is None:
-        found = kept[key] = load(path)
-    return found
-
-
-@dataclass(frozen=True)
-class Switches:
-    """What a command line may change of a scenario's own choices for its runs (``prima
-    run``, ``judge``, ``sweep``, ``test``, ``show``, ``plot`` alike): its FA, its EA,
-    its robot profile, and mediation policy switches (over the profile's and the
-    scenario's, a later one winning)."""
-
-    fa: str | None = None
-    ea: str | None = None
-    robot: str | None = None
-    policies: tuple[tuple[str, bool], ...] = ()
-
-    def __bool__(self) -> bool:
-        return bool(self.fa or self.ea or self.robot or self.policies)
-
-    def run_options(self) -> dict[str, Any]:
-        """The keyword arguments of :class:`Run` they stand for."""
-        return {"fa": self.fa, "ea": self.ea, "robot": self.robot,
-                "policies": dict(self.policies)}
-
-
 class Run:
     """One simulated run of a scenario with its FA and its EAs.
 
@@ -253,7 +143,7 @@ class Run:
     the profiles and documents they load.
     """
 
-    def __init__(self, scenario: str | Path, *, fa: str | Path | None = None,
+    def __init__(self, scenario: str | Path | Setup, *, fa: str | Path | None = None,
                  ea: str | Path | None = None, robot: str | Path | None = None,
                  seed: int | None = None, until: float | None = None,
                  sink: Callable[[TraceLine], None] | None = None,
@@ -261,47 +151,34 @@ class Run:
                  policies: Mapping[str, bool] | None = None,
                  speech: SpeechTiming | None = None, files: Loaded | None = None,
                  rows: Callable[[dict[str, object]], None] | None = None) -> None:
-        self._files = files or Loaded()
+        if isinstance(scenario, Setup):
+            if fa or ea or robot or seed is not None or until is not None or policies \
+                    or files is not None:
+                raise TypeError("a Setup is made ready already: change it with Setup.load")
+            setup = scenario
+        else:
+            setup = Setup.load(scenario, fa=fa, ea=ea, robot=robot, seed=seed, until=until,
+                               policies=policies, files=files)
+        self.setup = setup
+        self._files = setup.files
         """Where maps, profiles and documents are loaded (shared by a sweep's runs)."""
-        loaded = load_scenario(scenario, self._files.map)
-        if seed is not None:
-            loaded = dataclasses.replace(loaded, seed=seed)
+        loaded = setup.scenario
         self.scenario: Scenario = loaded
         self._folder = os.path.abspath(Path(loaded.source).parent)
         self._named: dict[str, str] = {}
         """A file's path as an error names it -> as the trace names it: relative to the
         scenario's folder (a golden trace reads the same on every machine)."""
-        self._name(loaded.source)
-        self.until = loaded.until if until is None else until
-        profile_path = robot or (loaded.resolve(loaded.profile) if loaded.profile else None)
-        self.profile = (self._files.profile(profile_path) if profile_path
-                        else default_profile())
-        self.policies: Mapping[str, bool] = policy_settings(
-            self.profile.policies, loaded.policies, policies or {})
-        """Every mediation policy's state: the defaults, switched by the profile, the
-        scenario and the caller, in that order (docs/rules.md 7.3)."""
-        self.fa_path = Path(fa) if fa else (loaded.resolve(loaded.fa) if loaded.fa else None)
-        self.ea_path = Path(ea) if ea else (loaded.resolve(loaded.ea) if loaded.ea else None)
-        self.ea_paths: list[Path] = ([self.ea_path] if self.ea_path else []) + [
-            loaded.resolve(more) for more in loaded.eas]
+        for read in setup.read:
+            self._name(read)
+        self.until = setup.until
+        self.profile = setup.profile
+        self.policies: Mapping[str, bool] = setup.policies
+        """Every mediation policy's state (:attr:`Setup.policies`)."""
+        self.fa_path = setup.fa_path
+        self.ea_path = setup.ea_path
+        self.ea_paths: list[Path] = list(setup.ea_paths)
         """The EAs running from the start (``<apps ea>`` or ``ea=``, then ``<apps><ea>``)."""
-        # Load every document up front: a broken one stops the run before it starts.
-        self._documents: dict[Path, Document] = {}
-        named: dict[str, tuple[Path, AppKind]] = {}
-        starting = [(self.fa_path, AppKind.FA)] + [(p, AppKind.EA) for p in self.ea_paths]
-        for path, role in starting:
-            if path is None:
-                continue
-            document = self._checked(path, role)
-            self._documents[path] = document
-            other = named.get(document.name)
-            if other is not None:
-                whom = ("the FA and the EA" if other[1] is AppKind.FA
-                        else f"the EAs '{other[0]}' and '{path}'")
-                raise DocumentError([Problem(str(path), 1, 1, Severity.ERROR,
-                                             f"{whom} are both named '{document.name}'; "
-                                             "each application needs a name of its own")])
-            named[document.name] = (path, role)
+        self._documents: dict[Path, Document] = dict(setup.documents)
         self.lines: list[TraceLine] = []
         self._sink = sink or self.lines.append
         self._rows = rows
@@ -325,9 +202,8 @@ class Run:
         self._elsewhere: set[int] = set()
         """Commands whose request said their words are about something else
         (``face_user`` false), while they are in working memory."""
-        self.catalog = self.profile.catalog()
-        self.sim = Simulator.from_scenario(loaded, spec=spec_from_profile(self.profile),
-                                           catalog=self.catalog)
+        self.catalog = setup.catalog
+        self.sim = Simulator.from_scenario(loaded, spec=setup.spec, catalog=self.catalog)
         self.until = self.sim.on_grid(self.until)  # (the run ends at a tick)
         self.sim.speech = speech  # None: the profile's speech rate times every utterance
         self.sim.hears_always = self.policies["barge-in"]  # else only while a Q&A listens
@@ -335,15 +211,7 @@ class Run:
         self.sim.answers_prompt = self._answers_prompt
         self.mediator = Mediator(
             self.catalog, self.sim, self.sim, record=self._decision,
-            config=MediatorConfig(budgets=self.budgets,
-                                  connect_channel=self.policies["connect-channel"],
-                                  restore_state=self.policies["restore-state"],
-                                  interrupt=self.policies["interrupt"],
-                                  blend=self.policies["blend"],
-                                  reactions=self.policies["reactions"],
-                                  exchange=self.policies["exchange"],
-                                  barge_in=self.policies["barge-in"],
-                                  resume_pause=self.profile.hearing.pause),
+            config=setup.config,
             channel=_Channel(self.sim))
         if self.policies["connect-channel"]:  # (the robot keeps facing its user while it
             self.sim.watch_facing(FACE_TOLERANCE, self.mediator.regard)  # talks: 7.6 (3))
@@ -422,17 +290,14 @@ class Run:
         return pattern.sub(lambda m: f"{self._named[m.group()[:-1]]}:", text)
 
     def _checked(self, path: Path, role: AppKind) -> Document:
-        """A document loaded for ``role``, its places written by name on the scenario's map
-        (as ``prima validate`` of the scenario checks them): else the problems."""
-        self._name(path)
-        document = _check_slot(self._files.document(path, self.profile), role)
-        self._name(document.path)
-        world = self.scenario.map
-        problems = unknown_places(str(path), document.places, [p.name for p in world.places],
-                                  world.name, world.source)
-        if problems:
-            raise DocumentError(problems)
-        return document
+        """A document loaded for ``role`` and checked (:meth:`Setup.document`); each file
+        it reads named as the trace names it."""
+        read: list[str] = []
+        try:
+            return self.setup.document(path, role, read)
+        finally:
+            for name in read:
+                self._name(name)
 
     def _load(self, path: Path, role: AppKind) -> None:
         document = self._documents.get(path) or self._checked(path, role)

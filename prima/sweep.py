@@ -42,7 +42,7 @@ from prima.batch import (
 )
 from prima.judge import MEASURES, Thresholds
 from prima.output import make_folder
-from prima.sim import load_scenario
+from prima.scenario import load_scenario
 from prima.term import BOLD, GREEN, PLAIN, RED, Cell, Paint, layout
 
 if TYPE_CHECKING:

@@ -13,17 +13,24 @@ functions) and checks that:
 - the shared vocabulary modules import nothing heavy;
 - every subpackage names its public API in ``__all__``, and it all exists;
 - a command imports only what it needs: ``prima --help`` nothing heavy,
-  ``prima validate`` of a document no simulator.
+  ``prima validate`` of a document no simulator;
+- there is no import circle anywhere, between packages or between the modules of one
+  (every import counted, deferred or under ``TYPE_CHECKING`` too), no import runs up
+  the layers (bench/architecture.py's ``LAYERS``: the shared vocabulary, the core,
+  scenario and run, what reads runs, many runs and the services, the command line),
+  and nothing imports the command line.
 """
 
 from __future__ import annotations
 
 import ast
 import importlib
+import importlib.util
 import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -40,9 +47,9 @@ HEAVY = {"lxml", "lark", "pymunk", "xmlschema"}
 
 FORBIDDEN: dict[str, set[str]] = {
     "prima.mediator": {"prima.dsl", "prima.interpreter", "prima.sim", "prima.run", "prima.trace",
-                       "prima.cli", "prima.xmlio", "prima.term"},
+                       "prima.cli", "prima.xmlio", "prima.term", "prima.scenario"},
     "prima.sim": {"prima.dsl", "prima.interpreter", "prima.run", "prima.trace", "prima.cli",
-                  "prima.term"},
+                  "prima.term", "prima.scenario"},
     "prima.dsl": {"prima.mediator", "prima.interpreter", "prima.sim", "prima.run",
                   "prima.trace", "prima.cli", "prima.term"},
     "prima.interpreter": {"prima.sim", "prima.run", "prima.trace", "prima.cli", "prima.term"},
@@ -61,6 +68,20 @@ ONLY: dict[str, set[str]] = {
     "prima.shipped": set(),
 }
 """Shared modules -> the only PRIMA units they may import."""
+
+
+def _graph() -> ModuleType:
+    """bench/architecture.py, which measures what these tests hold PRIMA to."""
+    path = ROOT.parent / "bench" / "architecture.py"
+    spec = importlib.util.spec_from_file_location("architecture_bench", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # (its dataclasses look their module up)
+    spec.loader.exec_module(module)
+    return module
+
+
+GRAPH = _graph()
 
 
 @dataclass(frozen=True)
@@ -93,9 +114,10 @@ IMPORTS = _imports()
 
 
 def unit(module: str) -> str:
-    """The package a module belongs to, or the top-level module itself."""
+    """The package a module belongs to, or the top-level module itself; a package's
+    ``__main__`` (``python -m prima.sim``) is an entry point, a unit of its own."""
     parts = module.split(".")
-    if parts[0] != "prima" or len(parts) == 1:
+    if parts[0] != "prima" or len(parts) == 1 or parts[-1] == "__main__":
         return module
     return "prima." + parts[1]
 
@@ -227,3 +249,37 @@ def test_the_compiled_build_compiles_modules_that_are_there() -> None:
                     and [getattr(t, "id", None) for t in node.targets] == ["COMPILED"])
     assert compiled and all((ROOT.parent / path).is_file() for path in compiled)
     assert "prima/trace.py" in compiled  # (what prima.compiled() looks at)
+
+
+def test_there_is_no_import_circle() -> None:
+    """Between packages and between the modules of one: a circle that a deferred import
+    or ``TYPE_CHECKING`` hides is a circle still (the mediator's parts reach its
+    configuration in a module of its own; behaviours and the scripted user are given a
+    narrow interface, not the simulator)."""
+    assert GRAPH.module_circles(ROOT.parent) == []
+
+
+def test_no_import_runs_up_the_layers() -> None:
+    assert [f"{e.importer}:{e.line} imports {e.imported}"
+            for e in GRAPH.upward(ROOT.parent)] == []
+
+
+def test_every_unit_has_its_layer() -> None:
+    units = {GRAPH.unit(name) for name in GRAPH.modules(ROOT.parent)}
+    assert sorted(u for u in units if GRAPH.layer(u) is None) == []
+
+
+def test_nothing_imports_the_command_line() -> None:
+    """Only the entry points (``python -m prima``) import ``prima.cli``: the library
+    (the language server included) reaches what a command does through the library."""
+    bad = [f"{e.importer}:{e.line}" for e in GRAPH.edges(ROOT.parent)
+           if GRAPH.unit(e.imported) == "prima.cli" and GRAPH.unit(e.importer) != "prima.cli"
+           and not e.importer.endswith("__main__")]
+    assert bad == []
+
+
+def test_the_graph_sees_deferred_and_type_only_imports() -> None:
+    """The walk finds an import inside a function and one under ``TYPE_CHECKING``."""
+    found = {(e.importer, e.imported) for e in GRAPH.edges(ROOT.parent)}
+    assert ("prima.sim._simulator", "prima.sim._setting") in found  # TYPE_CHECKING
+    assert ("prima.lsp._workspace", "prima.scenario") in found  # inside a function

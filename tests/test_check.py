@@ -39,7 +39,7 @@ from prima.judge import (
     Thresholds,
     Unfaced,
 )
-from prima.sim import load_map, load_scenario
+from prima.scenario import load_map, load_scenario
 
 ROOT = Path(__file__).parents[1]
 DATA = ROOT / "tests" / "data" / "check"

@@ -148,7 +148,7 @@ def test_every_link_of_the_docs_leads_somewhere_in_the_repository(page: Path) ->
 
 
 def test_the_shipped_maps_table_lists_every_map_and_its_places() -> None:
-    from prima.sim import load_map
+    from prima.scenario import load_map
 
     text = (ROOT / "docs" / "scenarios.md").read_text()
     section = text.split("### Shipped maps and their places", 1)[1].split("\n#", 1)[0]

@@ -14,7 +14,7 @@ from prima.cli import main
 from prima.errors import DocumentError, ScenarioError
 from prima.mediator import DecisionKind
 from prima.run import Run
-from prima.sim import load_scenario
+from prima.scenario import load_scenario
 from prima.sweep import write_variant
 from prima.trace import Kind, TraceLine, device_overlaps
 from prima.vocab import MAX_EAS

@@ -21,7 +21,7 @@ from prima.cli import main  # noqa: E402
 from prima.judge import judge  # noqa: E402
 from prima.mcap import TOPICS  # noqa: E402
 from prima.run import Run  # noqa: E402
-from prima.sim import load_scenario  # noqa: E402
+from prima.scenario import load_scenario  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"

@@ -16,7 +16,7 @@ from prima.errors import DocumentError, ScenarioError
 from prima.judge import judge
 from prima.run import Run
 from prima.trace import TraceLine, format_text
-from prima.sim import load_scenario
+from prima.scenario import load_scenario
 from prima.vocab import POLICIES, policy_settings
 from tests.dsl.test_profile import ALL, PROFILE
 

@@ -16,7 +16,7 @@ import prima.batch._work
 import prima.sweep
 from prima.cli import main
 from prima.judge import judge_file
-from prima.sim import load_scenario
+from prima.scenario import load_scenario
 from prima.batch import pool_for, record_of
 from prima.sweep import MIN_ANSWER_DELAY, format_sweep, sweep, write_variant
 

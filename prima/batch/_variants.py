@@ -23,6 +23,7 @@ from lxml import etree
 from prima.errors import Problem, ScenarioError, Severity
 from prima.escape import shown_path
 from prima.output import written
+from prima.scenario import FILE_ATTRIBUTES, SCHEDULED, USER_TIMED
 from prima.xmlio import local_name, parse_xml, read_source
 
 if TYPE_CHECKING:
@@ -34,13 +35,6 @@ __all__ = ["MIN_ANSWER_DELAY", "Bundle", "bundle_scenario", "number", "repath", 
 MIN_ANSWER_DELAY = 0.1
 """The shortest delay (s) an answer rule keeps after jitter."""
 
-_TIMED = frozenset({"say", "touch", "walk", "leave", "follow", "stop"})
-"""The user's timed actions (children of ``<user>`` with ``at``)."""
-_SCHEDULED = frozenset({"message", "sound", "event"})
-"""The environment's scheduled inputs (children of ``<scenario>`` with ``at``)."""
-_PATHS = {"map": ("href",), "apps": ("fa", "ea"), "ea": ("href",), "robot": ("profile",),
-          "zone": ("ea",)}
-"""Attributes that name files, relative to the scenario file."""
 
 
 def number(value: float) -> str:
@@ -68,12 +62,12 @@ def shift_timings(root: etree._Element, draws: random.Random, amount: float) -> 
             # an early answer (over the prompt) stays early, a late one late
             el.set("after", number(max(after, MIN_ANSWER_DELAY) if given >= 0
                                    else min(after, -MIN_ANSWER_DELAY)))
-        elif local_name(el) in _TIMED:
+        elif local_name(el) in USER_TIMED:
             last = max(last, float(el.get("at", "0")) + draws.uniform(-amount, amount))
             el.set("at", number(last))
     last = 0.0
     for el in root:
-        if isinstance(el.tag, str) and local_name(el) in _SCHEDULED:
+        if isinstance(el.tag, str) and local_name(el) in SCHEDULED:
             last = max(last, float(el.get("at", "0")) + draws.uniform(-amount, amount))
             el.set("at", number(last))
 
@@ -86,7 +80,7 @@ def _named(root: etree._Element) -> list[tuple[etree._Element, str]]:
     for el in [*root, *more]:
         if not isinstance(el.tag, str):
             continue
-        for attribute in _PATHS.get(local_name(el), ()):
+        for attribute in FILE_ATTRIBUTES.get(local_name(el), ()):
             if el.get(attribute) is not None:
                 found.append((el, attribute))
     return found

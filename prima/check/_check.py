@@ -27,7 +27,8 @@ from prima.dsl import Document, load_document, load_profile, structure_problems
 from prima.errors import DocumentError, LocatedError
 from prima.judge import Thresholds
 from prima.output import make_folder
-from prima.sim import WorldMap, load_map, load_scenario, scenario_references
+from prima.scenario import load_map, load_scenario, scenario_references
+from prima.sim import WorldMap
 from prima.sweep import SweepRun, results_header, write_variant
 from prima.xmlio import parse_xml, read_source
 

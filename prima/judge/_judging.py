@@ -63,7 +63,7 @@ def find_scenarios(folder: str | Path) -> list[Path]:
     from lxml import etree
 
     from prima.errors import LocatedError
-    from prima.sim import SCENARIO_NS
+    from prima.scenario import SCENARIO_NS
     from prima.xmlio import parse_xml, read_source
 
     found = []

@@ -45,7 +45,7 @@ def base_of(options: Options) -> Base:
     """The session's base scenario; raises the inputs' located errors."""
     first = options.inputs[0]
     if first.suffix == ".xml":
-        from prima.sim import load_scenario
+        from prima.scenario import load_scenario
 
         loaded = load_scenario(first)
         spot = user_spot(loaded.map, loaded.robot.x, loaded.robot.y, loaded.robot.heading)
@@ -57,7 +57,7 @@ def base_of(options: Options) -> Base:
 def _apps_base(options: Options) -> Base:
     from prima.check import destinations, map_for, sends, starts
     from prima.dsl import default_profile, load_document, load_profile
-    from prima.sim import load_map
+    from prima.scenario import load_map
 
     profile = load_profile(options.robot) if options.robot else default_profile()
     documents = [(path, load_document(path, profile)) for path in options.inputs]

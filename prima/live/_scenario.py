@@ -26,14 +26,8 @@ from prima.dsl import Document
 from prima.errors import PrimaError
 from prima.escape import markup
 from prima.run import Switches
-from prima.sim import (
-    SCENARIO_NS,
-    ScheduledEvent,
-    TimedAction,
-    UserActionKind,
-    WorldMap,
-    load_scenario,
-)
+from prima.scenario import SCENARIO_NS, SCHEDULED, USER_TIMED, load_scenario
+from prima.sim import ScheduledEvent, TimedAction, UserActionKind, WorldMap
 from prima.xmlio import local_name
 
 __all__ = ["ACTIONS", "Added", "Base", "for_apps", "from_scenario", "user_spot"]
@@ -42,10 +36,6 @@ ACTIONS = ("say", "touch", "walk", "follow", "stop", "message")
 """What the author may do from the page: the user's own actions, and a network
 message from the environment's server."""
 
-_TIMED = frozenset({"say", "touch", "walk", "leave", "follow", "stop"})
-"""The user's timed actions (children of ``<user>`` with ``at``)."""
-_SCHEDULED = frozenset({"message", "sound", "event"})
-"""The environment's scheduled inputs (children of ``<scenario>`` with ``at``)."""
 
 
 @dataclass(frozen=True)
@@ -127,13 +117,13 @@ class Base:
         user = _child(root, "user")
         if user is None:  # (a base always has its user: for_apps, from_scenario)
             raise PrimaError("the session has no user to save")
-        own = [c for c in _children(user) if local_name(c) in _TIMED]
+        own = [c for c in _children(user) if local_name(c) in USER_TIMED]
         for el in own:
             user.remove(el)
         mine = [a for a in added if a.kind != "message"]
         for el in _merged(own, mine, hz, until_tick):
             user.append(el)
-        scheduled = [c for c in _children(root) if local_name(c) in _SCHEDULED]
+        scheduled = [c for c in _children(root) if local_name(c) in SCHEDULED]
         for el in scheduled:
             root.remove(el)
         after = user
@@ -180,10 +170,10 @@ def from_scenario(path: Path, switches: Switches, *, seed: int | None, script: b
     if not script:
         if user is not None:
             for el in _children(user):
-                if local_name(el) in _TIMED or local_name(el) == "answer":
+                if local_name(el) in USER_TIMED or local_name(el) == "answer":
                     user.remove(el)
         for el in _children(root):
-            if local_name(el) in _SCHEDULED:
+            if local_name(el) in SCHEDULED:
                 root.remove(el)
     if user is None:
         x, y, heading = user_at or (loaded.robot.x + 1.0, loaded.robot.y, 180.0)

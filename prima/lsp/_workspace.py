@@ -160,9 +160,9 @@ class Checked(NamedTuple):
 
 
 def _validation(profile: RobotProfile, robot: bool) -> Validation:
-    """A validation exactly as ``prima validate`` makes one (its scenario checks included).
-    The one place the language server names where that is made."""
-    from prima.cli import make_validation
+    """A validation exactly as ``prima validate`` makes one (its scenario checks included):
+    :func:`prima.scenario.make_validation`, the one place where that is made."""
+    from prima.scenario import make_validation
 
     return make_validation(profile, robot=robot)
 

@@ -111,7 +111,7 @@ def _write(rows: Iterable[Mapping[str, Any]], out: TextIO, scenario: str | Path 
         raise PrimaError(f"prima show needs Plotly ({exc.name} is missing): "
                          "pip install 'prima[show]'") from exc
     from prima.show._model import build
-    from prima.sim import load_scenario
+    from prima.scenario import load_scenario
 
     world = load_scenario(scenario).map if scenario is not None else None
     sounds = ""

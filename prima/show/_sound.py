@@ -26,7 +26,7 @@ from prima.escape import terminal
 def _profile(scenario: str | Path | None) -> RobotProfile:
     """The scenario's robot (the home robot without a scenario, or without a profile)."""
     from prima.dsl import default_profile, load_profile
-    from prima.sim import load_scenario
+    from prima.scenario import load_scenario
 
     if scenario is not None:
         loaded = load_scenario(scenario)

@@ -1,7 +1,8 @@
 """The simulated robot and its world (pymunk); implements the mediator's Driver.
 
-Build a :class:`Simulator` from a scenario file (:func:`load_scenario`,
-:meth:`Simulator.from_scenario`) or directly from a :class:`WorldMap`, wire
+Build a :class:`Simulator` from a loaded scenario (:meth:`Simulator.from_scenario`:
+anything shaped as a :class:`Setting`, such as :class:`prima.scenario.Scenario`; this
+package reads no scenario file) or directly from a :class:`WorldMap`, wire
 its callbacks, then drive it with ``next_time()`` / ``advance_to(t)``, or with
 ``advance_until(t)`` when the driver has nothing to do at the simulator's own times.
 :class:`CommandRunner` drives it without documents or a mediator (tests,
@@ -11,7 +12,6 @@ Everything public is named here; the modules behind it are private.
 """
 
 from prima.sim._behaviors import BEHAVIORS
-from prima.sim._cli import main
 from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
 from prima.sim._records import (
     Picture,
@@ -24,17 +24,9 @@ from prima.sim._records import (
     ZoneEntry,
 )
 from prima.sim._runner import CommandRunner, EntryKind, TraceEntry
-from prima.sim._scenario import (
-    MAP_NS,
-    SCENARIO_NS,
-    Reference,
-    Scenario,
-    load_map,
-    load_scenario,
-    scenario_references,
-    late_inputs,
-)
-from prima.sim._simulator import Simulator
+from prima.sim._host import Body, Stage
+from prima.sim._setting import Setting
+from prima.sim._simulator import SENSE_HZ, Simulator
 from prima.sim._spec import DEFAULT_GESTURES, RobotSpec, SpeechTiming
 from prima.sim._user import ADDED_ACTIONS, AnswerRule, ScriptedUser, TimedAction, UserScript
 
@@ -42,24 +34,24 @@ __all__ = [
     "ADDED_ACTIONS",
     "BEHAVIORS",
     "DEFAULT_GESTURES",
-    "MAP_NS",
-    "SCENARIO_NS",
+    "SENSE_HZ",
     "AnswerRule",
     "Area",
+    "Body",
     "CommandRunner",
     "EntryKind",
     "Picture",
     "Place",
     "PlaceKind",
     "Pose",
-    "Reference",
     "ReplyRule",
     "RobotSpec",
-    "Scenario",
     "ScheduledEvent",
     "ScriptedUser",
+    "Setting",
     "Simulator",
     "SpeechTiming",
+    "Stage",
     "TimedAction",
     "TraceEntry",
     "UserAction",
@@ -69,9 +61,4 @@ __all__ = [
     "WorldMap",
     "Zone",
     "ZoneEntry",
-    "late_inputs",
-    "load_map",
-    "load_scenario",
-    "main",
-    "scenario_references",
 ]

@@ -1,7 +1,8 @@
-"""Entry point: ``python -m prima.sim``."""
+"""Entry point: ``python -m prima.sim`` (its commands read scenario files: they live in
+:mod:`prima.scenario`, which the simulator itself never imports)."""
 
 import sys
 
-from prima.sim import main
+from prima.scenario import main
 
 sys.exit(main())

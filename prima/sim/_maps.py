@@ -1,7 +1,7 @@
 """A building's map: walls, named places, the topological place graph, areas.
 
 Pure data plus graph search; the simulator builds its pymunk world from it,
-and :func:`~prima.sim.load_map` reads it from a map file.
+and :func:`prima.scenario.load_map` reads it from a map file.
 """
 
 from __future__ import annotations

@@ -47,7 +47,7 @@ from prima.sim._world import World
 from prima.vocab import MAX_TEXT, Value
 
 if TYPE_CHECKING:
-    from prima.sim._scenario import Scenario
+    from prima.sim._setting import Setting
 
 __all__ = ["Simulator"]
 
@@ -227,13 +227,14 @@ class Simulator:
         k.at_reserved(tick, number, functools.partial(self._post, event))
 
     @classmethod
-    def from_scenario(cls, scenario: Scenario, *, spec: RobotSpec | None = None,
+    def from_scenario(cls, scenario: Setting, *, spec: RobotSpec | None = None,
                       catalog: Catalog | None = None,
                       finished: Finished | None = None,
                       on_event: Callable[[Event], None] | None = None,
                       on_user: Callable[[UserAction], None] | None = None,
                       on_zone: Callable[[ZoneEntry], None] | None = None) -> Simulator:
-        """A simulator for a loaded scenario (``spec`` and ``catalog`` from the robot profile)."""
+        """A simulator for a loaded scenario (``spec`` and ``catalog`` from the robot profile):
+        anything with a :class:`~._setting.Setting`'s fields."""
         return cls(scenario.map, spec=spec, catalog=catalog, robot=scenario.robot,
                    user=scenario.user,
                    events=scenario.events, replies=scenario.replies, zones=scenario.zones,

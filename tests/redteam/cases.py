@@ -15,7 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from prima.dsl import load_document
-from prima.sim import load_scenario
+from prima.scenario import load_scenario
 from tests.redteam.runner import Accepted, Case, Make, Rejected
 
 ROOT = Path(__file__).resolve().parents[2]

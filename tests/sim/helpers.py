@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from prima.mediator import Call
+from prima.scenario import load_map
 from prima.sim import (
     AnswerRule,
     CommandRunner,
@@ -15,7 +16,6 @@ from prima.sim import (
     UserActionKind,
     UserScript,
     WorldMap,
-    load_map,
 )
 from prima.vocab import Value
 

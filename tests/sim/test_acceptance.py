@@ -8,16 +8,8 @@ from itertools import pairwise
 import pytest
 
 from prima.mediator import Event
-from prima.sim import (
-    CommandRunner,
-    EntryKind,
-    Pose,
-    ReplyRule,
-    Simulator,
-    UserScript,
-    WorldMap,
-    load_scenario,
-)
+from prima.scenario import load_scenario
+from prima.sim import CommandRunner, EntryKind, Pose, ReplyRule, Simulator, UserScript, WorldMap
 
 from tests.sim.helpers import EXAMPLES, call, runner, walk, world_map
 

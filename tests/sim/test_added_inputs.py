@@ -17,7 +17,8 @@ from lxml import etree
 
 from prima.errors import SimulationError
 from prima.run import Run
-from prima.sim import ScheduledEvent, TimedAction, UserActionKind, load_scenario
+from prima.scenario import load_scenario
+from prima.sim import ScheduledEvent, TimedAction, UserActionKind
 from prima.xmlio import local_name
 
 ROOT = Path(__file__).parents[2]

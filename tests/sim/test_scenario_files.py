@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from prima.errors import ScenarioError
-from prima.sim import load_map, load_scenario, main
+from prima.scenario import load_map, load_scenario, main
 
 from tests.sim.helpers import EXAMPLES, MAPS, ROOT
 

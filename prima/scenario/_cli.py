@@ -17,9 +17,8 @@ from typing import TextIO
 
 from prima.errors import ScenarioError
 from prima.mediator import Call
-from prima.sim._runner import CommandRunner
-from prima.sim._scenario import load_map, load_scenario
-from prima.sim._simulator import Simulator
+from prima.scenario._file import load_map, load_scenario
+from prima.sim import CommandRunner, Simulator
 
 __all__ = ["build_parser", "main"]
 

@@ -30,10 +30,22 @@ import pymunk
 from lxml import etree
 
 from prima.errors import Problem, ScenarioError, Severity
-from prima.sim._maps import Area, Place, PlaceKind, Wall, WorldMap
-from prima.sim._records import Pose, ReplyRule, ScheduledEvent, UserActionKind, Zone
-from prima.sim._user import AnswerRule, TimedAction, UserScript
-from prima.sim._simulator import SENSE_HZ
+from prima.sim import (
+    SENSE_HZ,
+    AnswerRule,
+    Area,
+    Place,
+    PlaceKind,
+    Pose,
+    ReplyRule,
+    ScheduledEvent,
+    TimedAction,
+    UserActionKind,
+    UserScript,
+    Wall,
+    WorldMap,
+    Zone,
+)
 from prima.vocab import MAX_EAS, MAX_RUN_TIME, MAX_SEED
 from prima.xmlio import (
     Bound,
@@ -47,8 +59,9 @@ from prima.xmlio import (
     validate,
 )
 
-__all__ = ["MAP_NS", "SCENARIO_NS", "Reference", "Scenario", "load_map", "load_scenario",
-           "scenario_references"]
+__all__ = ["BOUNDS", "FILE_ATTRIBUTES", "MAP_NS", "SCENARIO_NS", "SCHEDULED", "USER_TIMED",
+           "Reference", "Scenario", "late_inputs", "load_map", "load_scenario",
+           "safe_pattern", "scenario_references"]
 
 MAP_NS = "urn:prima:map:1"
 SCENARIO_NS = "urn:prima:scenario:1"
@@ -296,6 +309,9 @@ def _known(names: Iterable[str]) -> str:
 _ACTIONS = {k.value: k for k in (UserActionKind.SAY, UserActionKind.TOUCH, UserActionKind.WALK,
                                  UserActionKind.LEAVE, UserActionKind.FOLLOW,
                                  UserActionKind.STOP)}
+
+USER_TIMED = frozenset(_ACTIONS)
+"""The user's timed actions (children of ``<user>`` with ``at``)."""
 
 
 class _Loader:
@@ -636,6 +652,12 @@ _REFERENCES = (("map", "href", "map", ""), ("robot", "profile", "profile", ""),
 """(element, attribute, role, child) of every file a scenario may name: the attribute of
 the element itself, or of its ``child`` elements (``<apps><ea href/></apps>``)."""
 
+FILE_ATTRIBUTES: Mapping[str, tuple[str, ...]] = MappingProxyType({
+    element: tuple(a for t, a, _r, c in _REFERENCES if (c or t) == element)
+    for element in dict.fromkeys(c or t for t, _a, _r, c in _REFERENCES)})
+"""Element -> its attributes that name files, relative to the scenario file (those of
+:data:`_REFERENCES`, each element by its own name: ``<apps fa ea>``, ``<ea href>``)."""
+
 
 def scenario_references(path: str | Path) -> list[Reference]:
     """The files a scenario names, in document order; read from its XML alone, so that
@@ -661,8 +683,9 @@ def scenario_references(path: str | Path) -> list[Reference]:
     return found
 
 
-_TIMED = ("message", "sound", "event")
-"""A scenario's inputs scheduled at a time (``at``)."""
+SCHEDULED = ("message", "sound", "event")
+"""A scenario's inputs scheduled at a time (``at``): the environment's, children of
+``<scenario>``."""
 
 
 def late_inputs(path: str | Path) -> list[Problem]:
@@ -677,7 +700,7 @@ def late_inputs(path: str | Path) -> list[Problem]:
         return []
     if etree.QName(doc.root).namespace != SCENARIO_NS:
         return []
-    timed = [el for el in _children(doc.root) if local_name(el) in _TIMED]
+    timed = [el for el in _children(doc.root) if local_name(el) in SCHEDULED]
     for user in (el for el in _children(doc.root) if local_name(el) == "user"):
         timed += [el for el in _children(user) if el.get("at") is not None]
     out = []
