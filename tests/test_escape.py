@@ -86,7 +86,7 @@ def test_control_characters_reach_no_terminal(tmp_path: Path) -> None:
 def test_control_characters_reach_no_terminal_through_debug(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     scenario = speaking(tmp_path, "a\x9b2Jb")
-    monkeypatch.setattr("prima.cli._stdin", lambda: io.StringIO("break command Speak\n"
+    monkeypatch.setattr("prima.cli._debug._stdin", lambda: io.StringIO("break command Speak\n"
                                                                 "continue\nwhere\napps\n"))
     status, out, _ = _cli("debug", str(scenario))
     assert status == 0 and "a\\x9b2Jb" in out

@@ -802,4 +802,4 @@ def test_only_the_live_command_imports_the_live_page() -> None:
             if inside != "live" and any(n == "prima.live" or n.startswith(
                     ("prima.live.", "aiohttp")) for n in names):
                 importers.append((inside, node.col_offset > 0))
-    assert set(importers) == {("cli.py", True)}
+    assert set(importers) == {("cli", True)}

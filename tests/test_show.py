@@ -315,4 +315,4 @@ def test_only_the_show_command_imports_the_viewer() -> None:
             if any(n == "prima.show" or n.startswith(("prima.show.", "plotly")) for n in names):
                 importers.append((path.relative_to(ROOT / "prima").parts[0],
                                   node.col_offset > 0))
-    assert set(importers) == {("cli.py", True), ("live", True)}
+    assert set(importers) == {("cli", True), ("live", True)}

@@ -134,14 +134,14 @@ def _child(case: Case, path: Path, conn: Connection) -> None:
         out, err = io.StringIO(), io.StringIO()
         start = time.process_time()
         if case.command:
-            import prima.cli
+            import prima.cli._debug
 
             if isinstance(case.stdin, bytes):  # a language client's bytes
                 sys.stdin = io.TextIOWrapper(io.BytesIO(case.stdin))
                 sys.stdout = io.TextIOWrapper(io.BytesIO())
             else:
                 typed = case.stdin
-                prima.cli._stdin = lambda: io.StringIO(typed)  # type: ignore[attr-defined]
+                prima.cli._debug._stdin = lambda: io.StringIO(typed)
             os.environ.update(dict(case.env))
             port = path.parent / "port"  # (a port the case's input listens on)
             command = [a.replace("{path}", str(path)).replace("{dir}", str(path.parent))

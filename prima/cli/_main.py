@@ -1,0 +1,189 @@
+"""``prima``'s parser and its entry: :func:`main`. Each command is one module of this
+package (its arguments, and a call into the library), one entry of :data:`COMMANDS`."""
+
+from __future__ import annotations
+
+import argparse
+import errno
+import os
+import sys
+from collections.abc import Callable, Sequence
+from typing import TextIO
+
+from prima import __version__, compiled
+from prima.cli import (
+    _check,
+    _completion,
+    _debug,
+    _judge,
+    _live,
+    _lsp,
+    _plot,
+    _run,
+    _show,
+    _sweep,
+    _test,
+    _validate,
+)
+from prima.cli._common import (
+    EXIT_ERRORS,
+    EXIT_INTERRUPTED,
+    EXIT_PIPE,
+    Command,
+    _colour_asked,
+    _error,
+    _paint,
+    _report,
+    _usage,
+    set_colour,
+)
+from prima.cli._options import _colour_argument
+from prima.errors import LocatedError, PrimaError
+from prima.escape import terminal
+from prima.shipped import locate
+from prima.signals import EXIT_TERMINATED, terminate_as_interrupt
+from prima.suggest import SuggestingParser, unrecognized
+from prima.term import BOLD, RED
+
+__all__ = ["COMMANDS", "build_parser", "main"]
+
+# Each command imports what it needs when it runs (``prima --help`` imports no lxml,
+# lark or pymunk; ``prima validate`` of documents no simulator): a cold start pays
+# only for its own command.
+
+
+COMMANDS: tuple[Command, ...] = (
+    _validate.COMMAND, _run.COMMAND, _debug.COMMAND, _test.COMMAND, _judge.COMMAND,
+    _sweep.COMMAND, _check.COMMAND, _show.COMMAND, _plot.COMMAND, _live.COMMAND,
+    _lsp.COMMAND, _completion.COMMAND)
+"""Every ``prima`` command, in the order ``prima --help`` lists them."""
+
+
+_COMMANDS = {c.name: c for c in COMMANDS}
+
+
+def build_parser() -> SuggestingParser:
+    parser = SuggestingParser(
+        prog="prima",
+        description="PRIMA: mediate two robot applications sharing one personal robot.",
+    )
+    build = " (compiled)" if compiled() else ""
+    parser.add_argument("--version", action="version", version=f"prima {__version__}{build}")
+    _colour_argument(parser, "auto")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for command in COMMANDS:
+        command.add(commands)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
+         err: TextIO | None = None) -> int:
+    out = out or sys.stdout
+    err = err or sys.stderr
+    parser = build_parser()
+    given = list(sys.argv[1:] if argv is None else argv)
+    if "_ARGCOMPLETE" in os.environ:  # the shell asks what may come next (prima completion)
+        try:
+            from prima.completion import autocomplete
+        except ImportError:  # (no argcomplete: the shell completes file names instead)
+            return EXIT_ERRORS
+        autocomplete(parser)
+    set_colour(_colour_asked(given))
+    error = _paint(sys.stderr)("error", RED, BOLD)
+    for each in (parser, *_subparsers(parser)):
+        each.given = given  # (for a did-you-mean in a "required" error)
+        each.error_word = error
+    try:
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # as parse_args would say, with the option a misspelt one may be
+            _subparser(parser, args.command).error(unrecognized(extra, _subparser(
+                parser, args.command)))
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    set_colour(args.color)
+    problem = _locate_inputs(args)
+    if problem:
+        return _usage(args.command, problem, err)
+    command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command].execute
+    with terminate_as_interrupt() as signals:
+        status = _main(command, args, out, err)
+    return EXIT_TERMINATED if signals.terminated and status == EXIT_INTERRUPTED else status
+
+
+_INPUTS = {"scenario": None, "input": None, "paths": None, "inputs": None, "map": "map",
+           "eas": "ea", "fa": "fa", "ea": "ea", "robot": "robot"}
+"""The options and arguments that name files to read, each with what a bare name there
+names (:data:`prima.shipped.NAMED`: ``--fa fa2-follow``), or None."""
+
+
+def _locate_inputs(args: argparse.Namespace) -> str | None:
+    """Each file to read as :func:`prima.shipped.locate` finds it: one the current folder
+    lacks may be shipped with PRIMA (``scenarios/thesis/sample-03.xml`` from an install,
+    as from a checkout). Not for ``prima test --update``, which writes beside them: PRIMA's
+    own golden traces are not rewritten from outside a checkout. What is wrong with a name
+    no file can have (too long to look up), as a usage error, or None."""
+    for name in _INPUTS:
+        value = getattr(args, name, None)
+        for text in value if isinstance(value, list) else [value]:
+            problem = _unnameable(text) if isinstance(text, str) else None
+            if problem:
+                return problem
+    if getattr(args, "update", False):
+        return None
+    for name, kind in _INPUTS.items():
+        value = getattr(args, name, None)
+        if isinstance(value, str):
+            setattr(args, name, locate(value, kind))
+        elif isinstance(value, list):
+            setattr(args, name, [locate(v, kind) if isinstance(v, str) else v for v in value])
+    return None
+
+
+def _unnameable(text: str) -> str | None:
+    """Why the system cannot look ``text`` up at all (a name longer than a file's or a
+    path's may be), or None."""
+    try:
+        os.stat(text)
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            return f"{terminal(text[:40])}...: {os.strerror(exc.errno).lower()}"
+    except ValueError:  # (a NUL in it: the commands say there is no such file)
+        pass
+    return None
+
+
+def _main(command: Callable[[argparse.Namespace, TextIO, TextIO], int],
+          args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
+    try:
+        return command(args, out, err)
+    except LocatedError as exc:
+        _report(exc.problems, err)
+        return EXIT_ERRORS
+    except PrimaError as exc:  # a user's error is a message, never a traceback
+        print(f"{_error(args.command, err)} {exc}", file=err)
+        return EXIT_ERRORS
+    except BrokenPipeError:  # e.g. `prima validate apps/ | head`: the reader had enough
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the flush at exit
+        return EXIT_PIPE
+    except OSError as exc:  # the file system refused (a name too long...): a message too
+        from prima.output import shown
+
+        reason = exc.strerror or str(exc)
+        named = f"{shown(os.fsdecode(exc.filename))}: " if exc.filename is not None else ""
+        print(f"{_error(args.command, err)} {named}{reason[:1].lower() + reason[1:]}",
+              file=err)
+        return EXIT_ERRORS
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: what was written so far stays written
+        print(f"prima {args.command}: interrupted", file=err)
+        return EXIT_INTERRUPTED
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> list[SuggestingParser]:
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return [p for p in action.choices.values() if isinstance(p, SuggestingParser)]
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    chosen: argparse.ArgumentParser = action.choices[command]
+    return chosen
