@@ -40,6 +40,7 @@ from prima.trace import Kind, RecordKind, TraceLine, row_of
 from prima.vocab import (
     FACE_TOLERANCE,
     MAX_EAS,
+    POLICIES,
     RESTORE_ANGLE,
     RESTORE_DISTANCE,
     SPEECH_EVENT,
@@ -206,7 +207,9 @@ class Run:
         self.sim = Simulator.from_scenario(loaded, spec=setup.spec, catalog=self.catalog)
         self.until = self.sim.on_grid(self.until)  # (the run ends at a tick)
         self.sim.speech = speech  # None: the profile's speech rate times every utterance
-        self.sim.hears_always = self.policies["barge-in"]  # else only while a Q&A listens
+        for policy in POLICIES.values():  # (barge-in: the robot hears at any time, else
+            if policy.sim is not None:      # only while a Q&A listens)
+                setattr(self.sim, policy.sim, self.policies[policy.name])
         self.sim.backchannel = self.profile.hearing.backchannel
         self.sim.answers_prompt = self._answers_prompt
         self.mediator = Mediator(

@@ -94,7 +94,7 @@ class Spread:
     values: dict[str, Counter[float]] = field(default_factory=dict)
 
     def add(self, record: Mapping[str, Any]) -> None:
-        for m in _MEASURES:
+        for m in _rows():
             self.values.setdefault(m.name, Counter())[m.value(record)] += 1
 
     def quantiles(self, name: str) -> tuple[float, float, float, float]:
@@ -257,12 +257,17 @@ def _limit(key: str) -> Callable[[Thresholds], float]:
     return lambda thresholds: thresholds.limit(key)
 
 
-_MEASURES = (
+_TIMES = (
     _Measure("worst lateness (s)", _field("worst_lateness"), seconds=True),
     _Measure("worst first start (s)", _field("worst_latency"), seconds=True),
-    *(_Measure(m.title, _count(m.key), limit=_limit(m.key)) for m in MEASURES),
 )
-"""The rows of a sweep's table: two of times, then one per measure (its table's row)."""
+
+
+def _rows() -> tuple[_Measure, ...]:
+    """The rows of a sweep's table: two of times, then one per measure of the registry
+    (:data:`prima.judge.MEASURES`: its title, its count, its threshold)."""
+    return (*_TIMES, *(_Measure(m.title, _count(m.key), limit=_limit(m.key))
+                       for m in MEASURES))
 
 
 def format_sweep(result: Sweep, paint: Paint = PLAIN) -> str:
@@ -282,7 +287,7 @@ def format_sweep(result: Sweep, paint: Paint = PLAIN) -> str:
     table: list[list[str | Cell]] = [
         [Cell(name, (BOLD,)) for name in ("measure", "min", "median", "p95", "max",
                                            "over max")]]
-    for m in _MEASURES:
+    for m in _rows():
         over = 0 if m.limit is None else result.spread.over(m.name, m.limit(result.thresholds))
         table.append([m.name, *(_cell(v, m.seconds) for v in result.spread.quantiles(m.name)),
                       Cell("" if m.limit is None else str(over), (RED, BOLD) if over else ())])

@@ -8,7 +8,8 @@ mediator, and the mediator does not import the DSL, to learn what an EA is.
 from __future__ import annotations
 
 import enum
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from types import MappingProxyType
 
@@ -39,6 +40,7 @@ __all__ = [
     "Budgets",
     "Policy",
     "policy_settings",
+    "registered_policy",
     "RunningOrder",
     "Value",
 ]
@@ -268,43 +270,74 @@ class Policy:
     default: bool
     """On unless switched off."""
     summary: str
+    config: str | None = None
+    """The field of the mediator's configuration (:class:`prima.mediator.MediatorConfig`)
+    it switches, if any: :func:`prima.scenario.mediator_config` maps every policy there."""
+    sim: str | None = None
+    """The simulator's switch it sets, if any (:class:`prima.run.Run` sets it)."""
 
 
-POLICIES: Mapping[str, Policy] = MappingProxyType({p.name: p for p in (
+_POLICIES: dict[str, Policy] = {p.name: p for p in (
     Policy("restore-state", True, "a suspended stream, resumed with the robot moved "
                                   "away, first returns to the pose it was suspended in "
-                                  "(thesis Sec. 5.3 (1))"),
+                                  "(thesis Sec. 5.3 (1))",
+           config="restore_state"),
     Policy("interrupt", False, "a reaction cuts the other application's running atomic "
                                "behavior (an utterance at a word boundary, a gesture, a "
                                "feedback iteration); it restarts after the reaction. On "
                                "by default on a robot whose profile declares "
-                               "<interruptible> (thesis Sec. 5.3 (2))"),
+                               "<interruptible> (thesis Sec. 5.3 (2))",
+           config="interrupt"),
     Policy("blend", False, "declared local motions run over a global motion, and "
                            "speech over quieter sound, on a shared device, the robot "
                            "staying within a bound of its user; on by default on a "
-                           "robot whose profile declares <blend> (thesis Sec. 5.3 (5))"),
+                           "robot whose profile declares <blend> (thesis Sec. 5.3 (5))",
+           config="blend"),
     Policy("streams", True, "explicit stream blocks in the applications' documents keep "
                             "a Communication Stream together (thesis Sec. 5.3 (3))"),
     Policy("connect-channel", True, "before an utterance would start facing away from a "
                                     "detectable user, the robot turns to them first "
-                                    "(thesis Sec. 5.3 (4))"),
+                                    "(thesis Sec. 5.3 (4))",
+           config="connect_channel"),
     Policy("reactions", True, "a reaction keeps the devices its next atomic behavior "
                               "needs, and a reaction to the user's own action (a touch, "
                               "heard speech) goes before another application's later "
                               "reaction to a perception or network event until it has "
-                              "said its first words"),
+                              "said its first words",
+           config="reactions"),
     Policy("barge-in", False, "the robot hears its user at any time, not only while a "
                               "Q&A listens: what it hears goes to the application whose "
                               "always-on grammar takes it, and speech over the robot's "
                               "utterance cuts it at a word boundary (a backchannel does "
                               "not); on by default on a robot whose profile declares "
                               '<hearing always="true"> (thesis Sec. 5.3: stop and answer '
-                              "at once)"),
+                              "at once)",
+           config="barge_in", sim="hears_always"),
     Policy("exchange", True, "the words with which an application replies to the answer "
                              "of its own Q&A go before every other application's talk, "
-                             "reactions included, and are never cut"),
-)})
-"""Every policy, by name. ``all`` names them together in a switch."""
+                             "reactions included, and are never cut",
+           config="exchange"),
+)}
+
+POLICIES: Mapping[str, Policy] = MappingProxyType(_POLICIES)
+"""Every policy, by name: the registry every reader of policies goes through (the
+profile's and the scenario's switches, ``--policy``, the mediator's configuration
+(:attr:`Policy.config`), the simulator's switches (:attr:`Policy.sim`)). ``all`` names
+them together in a switch; :func:`registered_policy` adds one for a while."""
+
+
+@contextmanager
+def registered_policy(policy: Policy) -> Iterator[None]:
+    """While inside, ``policy`` is a policy like the others (after them): ``--policy``
+    switches it, runs layer it, and it switches its :attr:`~Policy.config` field and its
+    :attr:`~Policy.sim` switch. For a policy tried out, or a test's scratch one."""
+    if policy.name in _POLICIES or policy.name == "all":
+        raise ValueError(f"there is a policy {policy.name!r} already")
+    _POLICIES[policy.name] = policy
+    try:
+        yield
+    finally:
+        del _POLICIES[policy.name]
 
 FACE_TOLERANCE = 30.0
 """Degrees between the robot's heading and its bearing to the user beyond which it

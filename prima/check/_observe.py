@@ -17,22 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from prima.catalog import STANDARD_COMMANDS
-from prima.judge import (
-    MEASURES,
-    BargeIn,
-    Blame,
-    Elsewhere,
-    Finding,
-    Ignored,
-    Leaving,
-    Reaction,
-    Recovery,
-    Report,
-    Silence,
-    Split,
-    Stuck,
-    Unfaced,
-)
+from prima.judge import MEASURES, Blame, Report
 
 __all__ = ["MAX_FAILURES", "CheckAnalysis", "attribute"]
 
@@ -42,63 +27,6 @@ MAX_FAILURES = 5
 _MOVES = frozenset(c.name for c in STANDARD_COMMANDS if c.travels or c.aims)
 """Commands that take the robot somewhere or turn it on purpose: one of another
 application that holds the wheels keeps the robot from turning to its user."""
-
-
-def _blame(b: Blame | None) -> str:
-    return "" if b is None else str(b)
-
-
-def _whose(f: Finding, wheels: Mapping[int, Blame]) -> tuple[str, str, str, str]:
-    """A finding's culprit application, the rule it broke (in words that are the same
-    from run to run: the finding itself has the figures), the atomic behavior it waited
-    for, and where the culprit's document asks for what it did."""
-    if isinstance(f, Reaction):
-        waited = _blame(f.waits[0]) if f.waits else ""
-        what = "late" if f.late else "never heard whole"
-        if f.took is not None:  # another application's AB held its devices meanwhile
-            return f.took.app, f"its {f.took.command} held the devices of {f.app}'s " \
-                               f"reaction to {f.event} ({what})", waited, f.took.at
-        held = f.waits[0] if f.waits else None
-        if not f.late and held is not None and held.app != f.app:
-            # never heard for what the rules let hold its devices: that application's doing
-            return held.app, f"its {held.command} held the devices of {f.app}'s reaction " \
-                             f"to {f.event} ({what})", waited, held.at
-        return f.app, f"its reaction to {f.event} is {what}", waited, f.at
-    if isinstance(f, Unfaced):
-        held = wheels.get(f.seq) if f.during is None else f.turned_by
-        if held is not None:  # the robot could not be turned to the user first
-            return held.app, f"its {held.command} moved the robot: {f.app}'s {f.command} " \
-                             "was said with the user off to the side", "", held.at
-        return f.app, f"{f.command} \"{f.text}\" said with the user off to the side", "", f.at
-    if isinstance(f, Leaving):
-        if f.moved_by is not None:
-            return f.moved_by.app, f"its {f.moved_by.command} took the robot away from the " \
-                                   f"user while {f.app} spoke", "", f.moved_by.at
-        return f.app, "moved away from the user while speaking", "", f.at
-    if isinstance(f, Stuck):
-        if f.kind == "end" and f.behind is not None and f.behind.app != f.app:
-            return f.behind.app, f"its {f.behind.command} held the devices {f.app} waited " \
-                                 "for until the end", _blame(f.behind), f.behind.at
-        return f.app, f"stuck ({f.kind})", _blame(f.behind), f.at
-    return _plain(f)
-
-
-def _plain(f: Finding) -> tuple[str, str, str, str]:
-    """The findings whose culprit they name themselves, as :func:`_whose` says."""
-    if isinstance(f, Elsewhere):
-        return f.app, "resumed speaking away from where its stream was suspended", "", f.at
-    if isinstance(f, Split):
-        return f.by, f"\"{f.text}\" split {f.app}'s exchange ({f.kind})", "", f.at
-    if isinstance(f, Silence):
-        return f.app, "said nothing after the user's answer", "", f.at
-    if isinstance(f, BargeIn):
-        return f.app, f"its {f.command} talked on over the user", "", f.at
-    if isinstance(f, Ignored):
-        what = "never answered them" if f.answered is None else "answered them late"
-        return f.app, f"took the user's words and {what}", "", f.at
-    if isinstance(f, Recovery):
-        return f.app, f"its {f.command} did not go on after a false interruption", "", f.at
-    raise TypeError(f"not a finding: {f!r}")  # (every kind of finding is above)
 
 
 def attribute(report: Report, roles: Mapping[str, str],
@@ -113,7 +41,7 @@ def attribute(report: Report, roles: Mapping[str, str],
         if len(found) <= report.thresholds.limit(m.key):
             continue
         for f in found[:MAX_FAILURES]:
-            app, rule, waited, at = _whose(f, wheels or {})
+            app, rule, waited, at = m.blame(f, wheels or {})
             out.append({"measure": m.key, "app": app, "role": roles.get(app, "mediator"),
                         "rule": rule, "waited": waited, "at": at, "finding": m.line(f)})
     return out

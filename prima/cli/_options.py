@@ -229,7 +229,7 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
         name, _, state = text.partition("=")
         if name not in POLICIES and name != "all":
             return (f"--policy {text}: no policy {name!r} "
-                    f"(known: all, {', '.join(POLICIES)}){did_you_mean(name, POLICY_NAMES)}")
+                    f"(known: all, {', '.join(POLICIES)}){did_you_mean(name, policy_names())}")
         if state not in ("on", "off"):
             return f"--policy {text}: say {name}=on or {name}=off"
         if name == "all":
@@ -238,8 +238,10 @@ def _policies(given: list[str]) -> dict[str, bool] | str:
     return out
 
 
-POLICY_NAMES = ("all", *POLICIES)
-"""What ``--policy NAME=on|off`` may name: every mediation policy, or all of them."""
+def policy_names() -> tuple[str, ...]:
+    """What ``--policy NAME=on|off`` may name: every mediation policy of the registry
+    (:data:`prima.vocab.POLICIES`), or all of them."""
+    return ("all", *POLICIES)
 
 
 MAX_RUNS = 1_000_000

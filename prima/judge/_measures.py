@@ -15,11 +15,14 @@ import bisect
 import heapq
 import math
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from prima.catalog import BODY_DEVICE, SEARCH_DEVICE, STANDARD_COMMANDS
+from prima.judge import _blame as blame
+from prima.judge._blame import Wheels, Whose
 from prima.judge._context import EPS, Ab, Context, command_ids, xy
 from prima.judge._findings import (
     BargeIn,
@@ -38,7 +41,7 @@ from prima.judge._findings import (
 from prima.judge._reading import Row
 from prima.judge._thresholds import LIMITS, Limit
 
-__all__ = ["MEASURES", "Finder", "Measure", "measure"]
+__all__ = ["MEASURES", "Finder", "Measure", "measure", "registered"]
 
 
 
@@ -69,6 +72,8 @@ class Measure(Limit):
     finder: Callable[[], Finder]
     line: Callable[[Any], str]
     """One finding, in one line of ``prima judge``'s table."""
+    blame: Callable[[Any, Wheels], Whose]
+    """Whose one finding is (:mod:`._blame`): what ``prima check`` attributes it to."""
 
 
 def _short(text: str, width: int = 30) -> str:
@@ -1055,23 +1060,50 @@ def _unheard() -> Finder:
     return _Reactions(lambda r: r.unheard)
 
 
-_FINDERS: dict[str, tuple[Callable[[], Finder], Callable[[Any], str]]] = {
-    "late": (_late, _reaction_line),
-    "unheard": (_unheard, _unheard_line),
-    "unfaced": (_Unfaced, _unfaced_line),
-    "leaving": (_Leaving, _leaving_line),
-    "elsewhere": (_Elsewhere, _elsewhere_line),
-    "splits": (_Splits, _split_line),
-    "silences": (_Silences, _silence_line),
-    "stuck": (_Stuck, _stuck_line),
-    "barge_in": (_BargeIn, _barge_in_line),
-    "ignored": (_Ignored, _ignored_line),
-    "recovery": (_Recovery, _recovery_line),
+_FINDERS: dict[str, tuple[Callable[[], Finder], Callable[[Any], str],
+                          Callable[[Any, Wheels], Whose]]] = {
+    "late": (_late, _reaction_line, blame.reaction),
+    "unheard": (_unheard, _unheard_line, blame.reaction),
+    "unfaced": (_Unfaced, _unfaced_line, blame.unfaced),
+    "leaving": (_Leaving, _leaving_line, blame.leaving),
+    "elsewhere": (_Elsewhere, _elsewhere_line, blame.elsewhere),
+    "splits": (_Splits, _split_line, blame.split),
+    "silences": (_Silences, _silence_line, blame.silence),
+    "stuck": (_Stuck, _stuck_line, blame.stuck),
+    "barge_in": (_BargeIn, _barge_in_line, blame.barge_in),
+    "ignored": (_Ignored, _ignored_line, blame.ignored),
+    "recovery": (_Recovery, _recovery_line, blame.recovery),
 }
+"""Each measure's finder, its line in ``prima judge``'s table, and whose its findings
+are, by key (the light part of each entry, name and threshold, is its
+:class:`~._thresholds.Limit`)."""
 
-MEASURES: tuple[Measure, ...] = tuple(
-    Measure(m.key, m.title, m.allowed, m.finds, *_FINDERS[m.key]) for m in LIMITS)
-"""Every measure, in the order reports show them."""
+MEASURES: list[Measure] = [
+    Measure(m.key, m.title, m.allowed, m.finds, *_FINDERS[m.key]) for m in LIMITS]
+"""Every measure, in the order reports show them: the registry every reader of
+findings goes through (the judge, its report, ``prima sweep``'s rows, ``prima
+check``'s attribution, ``prima live``, the MCAP recording). :func:`registered` adds
+one for a while."""
+
+
+@contextmanager
+def registered(*measures: Measure) -> Iterator[None]:
+    """While inside, ``measures`` are measures like the others (after them): judged,
+    reported, thresholded (``max_<key>``), a row of ``prima sweep``'s table, attributed
+    by ``prima check``. For a measure tried out, or a test's scratch one; a measure of
+    PRIMA's own is an entry of :data:`~._thresholds.LIMITS` and of the finders' table."""
+    known = {m.key for m in MEASURES}
+    fresh = [m for m in measures if m.key not in known]
+    if len(fresh) != len(measures) or len({m.key for m in fresh}) != len(fresh):
+        raise ValueError("a measure is registered once, under a key of its own")
+    MEASURES.extend(fresh)
+    LIMITS.extend(fresh)
+    try:
+        yield
+    finally:
+        for m in fresh:
+            MEASURES.remove(m)
+            LIMITS.remove(m)
 
 
 def measure(key: str) -> Measure:

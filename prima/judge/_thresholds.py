@@ -41,7 +41,7 @@ class Limit:
         return f"--max-{self.key.replace('_', '-')}"
 
 
-LIMITS: tuple[Limit, ...] = (
+LIMITS: list[Limit] = [
     Limit("late", "late reactions", "late reactions allowed",
           "a reaction that starts, or says its first words, later than the mediation "
           "rules allow: free to start for more than the slack"),
@@ -77,9 +77,9 @@ LIMITS: tuple[Limit, ...] = (
     Limit("stuck", "stuck", "stuck applications allowed",
           "an application whose Commands cannot start, that searches for a user it "
           "never sees, or an atomic behavior that never ends"),
-)
+]
 """Every measure, in the order reports show them (:data:`prima.judge.MEASURES` gives
-each its finder)."""
+each its finder; :func:`prima.judge.registered` adds one to both for a while)."""
 
 
 @dataclass(frozen=True)
@@ -199,8 +199,10 @@ class Thresholds:
         raise AttributeError("Thresholds are immutable")
 
     def limit(self, measure: str) -> int:
-        """How many findings of ``measure`` (its key: ``late``) a run may show."""
-        return self.limits[f"max_{measure}"]
+        """How many findings of ``measure`` (its key: ``late``) a run may show: 0 for a
+        measure registered after these thresholds were made (the default of every
+        measure)."""
+        return self.limits.get(f"max_{measure}", 0)
 
     def replace(self, **changes: object) -> Thresholds:
         """The same thresholds with some changed."""

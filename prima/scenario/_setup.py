@@ -22,7 +22,7 @@ from prima.errors import DocumentError, Problem, Severity
 from prima.mediator import MediatorConfig
 from prima.scenario._file import Scenario, load_map, load_scenario
 from prima.sim import RobotSpec, WorldMap
-from prima.vocab import AppKind, policy_settings
+from prima.vocab import POLICIES, AppKind, policy_settings
 
 __all__ = ["Loaded", "Setup", "Switches", "check_slot", "checked", "mediator_config",
            "spec_from_profile"]
@@ -185,16 +185,12 @@ class Setup:
 
 
 def mediator_config(profile: RobotProfile, policies: Mapping[str, bool]) -> MediatorConfig:
-    """The mediator's configuration for a robot profile and the policies' states."""
-    return MediatorConfig(budgets=profile.budgets,
-                          connect_channel=policies["connect-channel"],
-                          restore_state=policies["restore-state"],
-                          interrupt=policies["interrupt"],
-                          blend=policies["blend"],
-                          reactions=policies["reactions"],
-                          exchange=policies["exchange"],
-                          barge_in=policies["barge-in"],
-                          resume_pause=profile.hearing.pause)
+    """The mediator's configuration for a robot profile and the policies' states: each
+    policy switches the field its entry names (:attr:`prima.vocab.Policy.config`)."""
+    switched: dict[str, Any] = {p.config: policies[p.name] for p in POLICIES.values()
+                                if p.config is not None}
+    return MediatorConfig(budgets=profile.budgets, resume_pause=profile.hearing.pause,
+                          **switched)
 
 
 def checked(scenario: Scenario, profile: RobotProfile, files: Loaded, path: Path,
