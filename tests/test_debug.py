@@ -73,7 +73,7 @@ def test_prima_debug_checks_its_options(monkeypatch: pytest.MonkeyPatch) -> None
     err = io.StringIO()
     assert cli.main(["debug", "no-such.xml"], out=io.StringIO(), err=err) == 2
     assert "no such file: no-such.xml" in err.getvalue()
-    monkeypatch.setattr(cli, "_stdin", lambda: io.StringIO("quit\n"))
+    monkeypatch.setattr("prima.cli._debug._stdin", lambda: io.StringIO("quit\n"))
     out = io.StringIO()
     assert cli.main(["debug", str(SAMPLE_03), "--policy", "all=off"], out=out,
                     err=io.StringIO()) == 0

@@ -290,34 +290,7 @@ class Mediator:
                 if child.state is NodeState.PENDING:
                     wm.enter_waiting(child, True)  # (its parent just finished)
         else:
-            again = wm.new_node(app, node.tree, node.commands, node.devices, node.priority,
-                                node.reactive, node.seq, node.iteration)
-            again.restarts = node.id
-            again.once = node.once or not by_user  # (one cut by another app at most)
-            again.cut_for = None if by_user else node.cut_for
-            again.taker = node.taker if by_user else None  # (it waits for its reaction)
-            if again.cut_for is not None:
-                wm.after_reactions[again.id] = again
-            # it starts like any other AB: turned to the user first, where it applies
-            again.turnable = again.faces = node.faces
-            again.parent = node.id
-            again.children = children
-            for c in children:
-                c.parent = again.id
-            detail = f"starts AB{node.id} again from its beginning"
-            if resumed is not None:
-                again.calls = resumed[0]
-                again.plain = again.facts + ("", again.calls, None, None)
-                detail = f"AB{node.id} goes on from {resumed[1]!r}"
-            if false_cut:
-                again.protected = node.protected  # (the exchange goes on: 7.4)
-                again.not_before = self._clock.after(self._config.resume_pause)
-                detail += (f" after {self._config.resume_pause:g} s (no application took "
-                           "the user's words)")
-                self._resting.append(again)
-            self._log.emit(DecisionKind.REQUEST, Rule.RESTART, again, detail=detail,
-                           before=node.id)
-            wm.enter_waiting(again, False)  # (its parent has not)
+            self._restart(node, children, resumed, false_cut)
         wm.leave(node)
         cutter = node.cut_by
         if cutter is not None and cutter.alive and cutter is not app \
@@ -338,6 +311,43 @@ class Mediator:
         for cmd in ended:
             if not cmd.internal:
                 self._tell(app, cmd.id, told)
+
+    def _restart(self, node: Node, children: list[Node],
+                 resumed: tuple[tuple[Call, ...], str] | None, false_cut: bool) -> None:
+        """A cut AB requested again in its place in its tree (:meth:`_interrupted`): from
+        its beginning, or from ``resumed`` (its calls from the sentence it was cut in);
+        after the robot's pause when no application took the user's words."""
+        wm = self._wm
+        app = node.app
+        by_user = node.by_user
+        again = wm.new_node(app, node.tree, node.commands, node.devices, node.priority,
+                            node.reactive, node.seq, node.iteration)
+        again.restarts = node.id
+        again.once = node.once or not by_user  # (one cut by another app at most)
+        again.cut_for = None if by_user else node.cut_for
+        again.taker = node.taker if by_user else None  # (it waits for its reaction)
+        if again.cut_for is not None:
+            wm.after_reactions[again.id] = again
+        # it starts like any other AB: turned to the user first, where it applies
+        again.turnable = again.faces = node.faces
+        again.parent = node.id
+        again.children = children
+        for c in children:
+            c.parent = again.id
+        detail = f"starts AB{node.id} again from its beginning"
+        if resumed is not None:
+            again.calls = resumed[0]
+            again.plain = again.facts + ("", again.calls, None, None)
+            detail = f"AB{node.id} goes on from {resumed[1]!r}"
+        if false_cut:
+            again.protected = node.protected  # (the exchange goes on: 7.4)
+            again.not_before = self._clock.after(self._config.resume_pause)
+            detail += (f" after {self._config.resume_pause:g} s (no application took "
+                       "the user's words)")
+            self._resting.append(again)
+        self._log.emit(DecisionKind.REQUEST, Rule.RESTART, again, detail=detail,
+                       before=node.id)
+        wm.enter_waiting(again, False)  # (its parent has not)
 
     def _tell_cancelled(self, commands: Sequence[Command]) -> None:
         for cmd in commands:

@@ -234,6 +234,42 @@ class Node:
         self.ranked: tuple[object, tuple[int, ...]] | None = None
         """Its full rank when no round names it, with the tree keys it was worked out
         from (``_ranking.Ranking.rank`` keeps it: valid while the tree keeps them)."""
+        self._clear_policy_state()
+        self.speaks = any(c.spec.spoken(c.call.args) for c in commands)
+        """Some Command of it says words (an utterance, a Q&A's prompt)."""
+        first = commands[0]
+        call = first.call
+        calls: tuple[Call, ...]
+        ids: tuple[CommandId, ...]
+        if len(commands) == 1:
+            spec = first.spec
+            calls = (call,)
+            ids = (first.id,)
+            name = spec.name
+            self.feedback = spec.feedback
+        else:
+            calls = tuple([c.call for c in commands])
+            ids = tuple([c.id for c in commands])
+            name = "+".join(c.spec.name for c in commands)
+            self.feedback = False
+        self.calls = calls
+        self.command_ids = ids
+        self.name = name
+        label = call.label
+        self.facts = (app.name, ab, tree.id, name, first.id, ids, ordered, reactive, iteration,
+                      label)
+        """What every decision about the AB itself says of it, in the fields of
+        ``Decision`` from ``app`` to ``label`` (none of them changes)."""
+        # (``facts`` and four more, written out: adding them up costs 0.4% of an operation)
+        self.plain = (app.name, ab, tree.id, name, first.id, ids, ordered, reactive, iteration,
+                      label, "", calls, None, None)
+        """The fields from ``app`` on of a decision about the AB itself with no detail
+        (most starts and ends): ``facts``, then no detail, its calls, no ``before`` and
+        no ``precedes`` (built once, not added up for each such decision)."""
+
+    def _clear_policy_state(self) -> None:
+        """What the policies note of a new node: nothing yet (a blend, a cut and its
+        restart, a turn to the user, a hold, the exchange's protection)."""
         self.blended: frozenset[str] = _NO_DEVICES
         """Devices it shares with another running AB (the blend policy): held by that
         one, not by this one."""
@@ -286,34 +322,3 @@ class Node:
         self.not_before = 0.0
         """It may not start before this instant (an utterance a false interruption cut
         goes on after the robot's pause)."""
-        self.speaks = any(c.spec.spoken(c.call.args) for c in commands)
-        """Some Command of it says words (an utterance, a Q&A's prompt)."""
-        first = commands[0]
-        call = first.call
-        calls: tuple[Call, ...]
-        ids: tuple[CommandId, ...]
-        if len(commands) == 1:
-            spec = first.spec
-            calls = (call,)
-            ids = (first.id,)
-            name = spec.name
-            self.feedback = spec.feedback
-        else:
-            calls = tuple([c.call for c in commands])
-            ids = tuple([c.id for c in commands])
-            name = "+".join(c.spec.name for c in commands)
-            self.feedback = False
-        self.calls = calls
-        self.command_ids = ids
-        self.name = name
-        label = call.label
-        self.facts = (app.name, ab, tree.id, name, first.id, ids, ordered, reactive, iteration,
-                      label)
-        """What every decision about the AB itself says of it, in the fields of
-        ``Decision`` from ``app`` to ``label`` (none of them changes)."""
-        # (``facts`` and four more, written out: adding them up costs 0.4% of an operation)
-        self.plain = (app.name, ab, tree.id, name, first.id, ids, ordered, reactive, iteration,
-                      label, "", calls, None, None)
-        """The fields from ``app`` on of a decision about the AB itself with no detail
-        (most starts and ends): ``facts``, then no detail, its calls, no ``before`` and
-        no ``precedes`` (built once, not added up for each such decision)."""

@@ -14,7 +14,7 @@ from plotly.colors import qualitative
 from prima.escape import markup, script_json
 from prima.show._model import Model
 from prima.sim import WorldMap
-from prima.timeline import Bar, ink, runs
+from prima.timeline import Bar, Timeline, ink, runs
 
 INSTANT = 0.05
 """The least width (s) of a bar: an atomic behavior that took no time is still seen."""
@@ -141,8 +141,29 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
     dotted), suspensions and holds hatched, releases, cuts and cancels marked."""
     fig = go.Figure()
     tl = model.timeline
-    colours = _colours(tl.apps)
     traces: dict[str, list[int]] = {"bars": [], "spans": [], "marks": []}
+    _add_bars(fig, tl, traces["bars"])
+    _add_spans(fig, model, traces["spans"])
+    _add_marks(fig, model, traces["marks"])
+    fig.update_layout(
+        uniformtext={"mode": "hide", "minsize": 8},  # no label shrunk past reading
+        barmode="overlay", height=max(200, 60 + 34 * len(tl.devices)),
+        margin={"l": 140, "r": 10, "t": 30, "b": 40}, plot_bgcolor="white",
+        legend={"orientation": "h", "y": -0.25 if len(tl.devices) > 3 else -0.5},
+        xaxis={"title": "simulated time (s)", "range": [0, max(tl.end, 1.0)],
+               "showgrid": True, "gridcolor": "#eee"},
+        yaxis={"categoryorder": "array", "categoryarray": [_esc(d) for d in tl.devices[::-1]],
+               "type": "category", "fixedrange": True},
+        dragmode="pan")
+    return fig, traces
+
+
+
+
+def _add_bars(fig: go.Figure, tl: Timeline, added: list[int]) -> None:
+    """Each application's bars (a feedback Command's run of iterations labelled once);
+    the index of each trace of bars goes to ``added``."""
+    colours = _colours(tl.apps)
     for i, app in enumerate(tl.apps):
         # non-blended first: the legend's swatch is drawn like the first bar
         bars = sorted((b for b in tl.bars if b.app == app), key=lambda b: b.blended)
@@ -151,7 +172,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         # a run of a feedback Command's iterations is labelled once (below), not each bar
         repeated = [run for run in runs(b for b in bars if not b.blended) if len(run) > 1]
         in_runs = {id(b) for run in repeated for b in run}
-        traces["bars"].append(len(fig.data))
+        added.append(len(fig.data))
         # two applications blended on a device share its row: a half each
         fig.add_trace(go.Bar(
             name=_esc(app), orientation="h", y=[_esc(b.device) for b in bars],
@@ -177,11 +198,16 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
                 textfont={"size": 10, "color": ink(colours[app])},
                 marker={"color": colours[app]}, hoverinfo="skip", showlegend=False,
                 meta="runs"))
+
+
+def _add_spans(fig: go.Figure, model: Model, added: list[int]) -> None:
+    """Suspensions and holds, hatched; the index of each of their traces to ``added``."""
+    tl = model.timeline
     for kind, (shape, colour, what) in _SPAN_STYLE.items():
         spans = [(s, d) for s in tl.spans if s.kind == kind for d in s.devices]
         if not spans:
             continue
-        traces["spans"].append(len(fig.data))
+        added.append(len(fig.data))
         fig.add_trace(go.Bar(
             name=what, orientation="h", y=[_esc(d) for _, d in spans],
             base=[s.t0 for s, _ in spans], x=[_width(s.t0, s.t1) for s, _ in spans],
@@ -192,12 +218,17 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             marker={"color": "rgba(0,0,0,0)", "line": {"width": 1, "color": colour},
                     "pattern": {"shape": shape, "fgcolor": colour, "size": 6}},
             meta=kind))
+
+
+def _add_marks(fig: go.Figure, model: Model, added: list[int]) -> None:
+    """Releases, cuts and cancels, marked; the index of each of their traces to ``added``."""
+    tl = model.timeline
     for kind, (symbol, colour, what) in _MARK_STYLE.items():
         marks = [(m, d) for m in tl.marks if m.kind == kind for d in m.devices
                  if d in tl.devices]
         if not marks:
             continue
-        traces["marks"].append(len(fig.data))
+        added.append(len(fig.data))
         fig.add_trace(go.Scatter(
             name=what, x=[m.t for m, _ in marks], y=[_esc(d) for _, d in marks],
             customdata=[model.table[m.line] for m, _ in marks], mode="markers",
@@ -206,17 +237,6 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
             hovertext=[f"{_esc(m.app)}: {what}" + (f" (AB {m.ab})" if m.ab is not None else "")
                        + f" at {m.t:.2f} s" for m, _ in marks],
             hoverinfo="text", meta="marks"))
-    fig.update_layout(
-        uniformtext={"mode": "hide", "minsize": 8},  # no label shrunk past reading
-        barmode="overlay", height=max(200, 60 + 34 * len(tl.devices)),
-        margin={"l": 140, "r": 10, "t": 30, "b": 40}, plot_bgcolor="white",
-        legend={"orientation": "h", "y": -0.25 if len(tl.devices) > 3 else -0.5},
-        xaxis={"title": "simulated time (s)", "range": [0, max(tl.end, 1.0)],
-               "showgrid": True, "gridcolor": "#eee"},
-        yaxis={"categoryorder": "array", "categoryarray": [_esc(d) for d in tl.devices[::-1]],
-               "type": "category", "fixedrange": True},
-        dragmode="pan")
-    return fig, traces
 
 
 def page(model: Model, world: WorldMap | None, title: str, sounds: str = "") -> str:

@@ -100,14 +100,44 @@ class Simulator:
         self.on_event: Callable[[Event], None] = on_event or _ignore
         self.on_user: Callable[[UserAction], None] = on_user or _ignore
         self.on_zone: Callable[[ZoneEntry], None] = on_zone or _ignore
+        self.replies: tuple[ReplyRule, ...] = tuple(replies)
+        """How the environment's servers answer what the applications send them."""
+        self._clear_records()
+        self._sense_every = hz // SENSE_HZ
+        self._poses: tuple[int, tuple[float, float, float], tuple[float, float, float] | None,
+                           bool | None] = (-1, (0.0, 0.0, 0.0), None, None)
+        """:meth:`poses` at a world version."""
+        self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
+        self._zones = tuple(zones)
+        self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
+        self._near = {p.name for p in self.map.places
+                      if robot.distance_to(p.x, p.y) <= self.spec.passing_radius}
+        self._passing_probe = (0.0, 0.0, -1.0)
+        """Where the places near the robot were last looked up, and how far the robot
+        may go from there before they can change (negative: look them up)."""
+        for ev in events:
+            self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
+        self._room = iter(self.kernel.reserve(ADDED_ACTIONS))
+        """The insertion numbers kept for inputs added as the run goes (:meth:`add_event`)."""
+        self.pace: Callable[[int], None] | None = None
+        """Called with the tick the run may go on to, where it could wait for a wall clock
+        (``prima live``): at each sensing tick while something moves, and before each jump
+        over a still stretch. It may block, and add inputs (:meth:`add_event`,
+        ``user.add``) after now; the simulator then looks at its agenda again. Pacing so
+        changes nothing of the run."""
+        self.user = ScriptedUser(user, self) if user is not None else None
+        if self.user is not None:
+            self.user.begin()
+
+    def _clear_records(self) -> None:
+        """What a new simulator has seen, said and counted: nothing yet (reports,
+        messages, pictures, sensing, what runs and what it says, hearing, facing)."""
         self.reports = 0
         """How many reports (ends, events, user actions, zone entries) so far."""
         self.inbox: deque[Mapping[str, Value]] = deque(maxlen=RECORDS_KEPT)
         """The latest network messages received (sender, text)."""
         self.outbox: deque[Mapping[str, Value]] = deque(maxlen=RECORDS_KEPT)
         """The latest messages the applications sent to the environment's servers."""
-        self.replies: tuple[ReplyRule, ...] = tuple(replies)
-        """How the environment's servers answer what the applications send them."""
         self.pictures: deque[Picture] = deque(maxlen=RECORDS_KEPT)
         """The latest camera captures."""
         self.picture_count = 0
@@ -167,31 +197,6 @@ class Simulator:
         self._off = False
         """The user was found off to the side while words were said, and has not been
         faced since (told once per stretch)."""
-        self._sense_every = hz // SENSE_HZ
-        self._poses: tuple[int, tuple[float, float, float], tuple[float, float, float] | None,
-                           bool | None] = (-1, (0.0, 0.0, 0.0), None, None)
-        """:meth:`poses` at a world version."""
-        self._lose_ticks = self.kernel.ticks(self.spec.lose_after)
-        self._zones = tuple(zones)
-        self._inside = {z.name for z in self._zones if z.area.contains(robot.x, robot.y)}
-        self._near = {p.name for p in self.map.places
-                      if robot.distance_to(p.x, p.y) <= self.spec.passing_radius}
-        self._passing_probe = (0.0, 0.0, -1.0)
-        """Where the places near the robot were last looked up, and how far the robot
-        may go from there before they can change (negative: look them up)."""
-        for ev in events:
-            self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
-        self._room = iter(self.kernel.reserve(ADDED_ACTIONS))
-        """The insertion numbers kept for inputs added as the run goes (:meth:`add_event`)."""
-        self.pace: Callable[[int], None] | None = None
-        """Called with the tick the run may go on to, where it could wait for a wall clock
-        (``prima live``): at each sensing tick while something moves, and before each jump
-        over a still stretch. It may block, and add inputs (:meth:`add_event`,
-        ``user.add``) after now; the simulator then looks at its agenda again. Pacing so
-        changes nothing of the run."""
-        self.user = ScriptedUser(user, self) if user is not None else None
-        if self.user is not None:
-            self.user.begin()
 
     def send(self, to: str, text: str) -> None:
         """An application sends ``text`` to the environment's server ``to``.

@@ -101,6 +101,19 @@ class _Joint:
         self.t1 = tick + ticks
 
 
+def _place_index(world_map: WorldMap) -> tuple[pymunk.Space, dict[pymunk.Shape, int]]:
+    """The map's places as points of a space of their own, to look up those near the
+    robot, and each point's place (its index in the map)."""
+    places = pymunk.Space()
+    place_of: dict[pymunk.Shape, int] = {}
+    for i, place in enumerate(world_map.places):
+        dot = pymunk.Circle(places.static_body, 0.0, (place.x, place.y))
+        dot.sensor = True
+        places.add(dot)
+        place_of[dot] = i
+    return places, place_of
+
+
 class World:
     """The pymunk space and the bodies in it, stepped at ``1 / hz`` seconds."""
 
@@ -145,13 +158,7 @@ class World:
         """Human detection's last answer with and without ``any_direction``: the tick,
         the version, the camera's pan and the poses it was worked out for, and the
         answer."""
-        self._places = pymunk.Space()
-        self._place_of: dict[pymunk.Shape, int] = {}
-        for i, place in enumerate(world_map.places):
-            dot = pymunk.Circle(self._places.static_body, 0.0, (place.x, place.y))
-            dot.sensor = True
-            self._places.add(dot)
-            self._place_of[dot] = i
+        self._places, self._place_of = _place_index(world_map)
         self.head_pan = _Joint()
         self.head_tilt = _Joint()
         self.arm = _Joint()
