@@ -290,3 +290,14 @@ def test_no_function_is_over_80_lines() -> None:
     """A function reads on one screen; complexity has its own gate (ruff's mccabe, at
     15 in pyproject.toml: over it, the gate fails)."""
     assert GRAPH.long_functions(ROOT.parent, 80) == []
+
+
+def test_the_architecture_page_shows_every_unit_in_its_layer() -> None:
+    """docs/architecture.md's picture names every package and module the layers give."""
+    text = (ROOT.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    picture = text.split("## Layers", 1)[1].split("```")[1]
+    shown = {name: n for n, line in enumerate(picture.splitlines())
+             for name in GRAPH.LAYERS if name != "prima"
+             and (name.split(".")[-1] in line.replace("/", " ").split()
+                  or name.replace(".", "/") + ".py" in line)}
+    assert sorted(set(GRAPH.LAYERS) - {"prima"} - set(shown)) == []
