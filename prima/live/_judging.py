@@ -10,7 +10,7 @@ by a cough that may still go on, words that may still be heard whole, an applica
 still waiting). :func:`final` tells them apart from each finding's own fields; the
 second kind is shown only when the run is over. (Judging every half second of every
 shipped scenario's prefixes, none of the findings :func:`final` passes was later
-changed or withdrawn: ``tests/test_live.py``.)
+changed or withdrawn: ``tests/live/test_live.py``.)
 """
 
 from __future__ import annotations

@@ -566,7 +566,7 @@ SURFACES = [
          command=("lsp",), stdin=_LSP_INIT + b"Content-Type: x\r\n\r\n{}\r\nnoise\r\n"
          + _lsp_frame({"jsonrpc": "2.0", "id": 2, "method": "shutdown"})
          + _lsp_frame({"jsonrpc": "2.0", "method": "exit"}), seconds=8),
-    # 19: prima live (its page's inputs: tests/test_live.py)
+    # 19: prima live (its page's inputs: tests/live/test_live.py)
     Case("live-save-over-scenario", "prima live told to save its session over its scenario",
          _speaker("hello"), Exits(2, "s.xml is the scenario ("),
          command=("live", "{path}", "--save", "{path}", "--port", "0"), seconds=6,

@@ -13,7 +13,7 @@ from prima.judge import judge_file
 from prima.run import Switches
 from prima.vocab import POLICIES
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = sorted(p for p in (ROOT / "scenarios").rglob("*.xml") if "maps" not in p.parts)
 ALL_OFF = Switches(policies=tuple((name, False) for name in POLICIES))
 

@@ -41,7 +41,7 @@ from prima.judge import (
 )
 from prima.scenario import load_map, load_scenario
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 DATA = ROOT / "tests" / "data" / "check"
 HOME = ROOT / "robots" / "home-robot.xml"
 GUIDE = ROOT / "robots" / "guide-robot.xml"

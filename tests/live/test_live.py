@@ -41,7 +41,7 @@ from prima.live import (  # noqa: E402
     check_save,
 )
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 VISIT = ROOT / "tests" / "data" / "live" / "museum-visit.xml"
 SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"
 FA1 = ROOT / "apps" / "fa" / "fa1-emotions.pxml"

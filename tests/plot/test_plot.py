@@ -16,7 +16,7 @@ from prima.cli import main
 from prima.plot import abbreviate, timeline
 from prima.run import Run
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"
 
 pytest.importorskip("matplotlib")

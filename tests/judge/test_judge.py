@@ -33,7 +33,7 @@ from prima.judge import (
 
 pytest_plugins = ["pytester"]
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 THESIS = ROOT / "scenarios" / "thesis"
 
 FACING = {"x": 0.0, "y": 0.0, "heading": 0.0}

@@ -16,7 +16,7 @@ pytest.importorskip("plotly", reason="prima show needs the show extra (plotly)")
 from prima.show import read_rows, render  # noqa: E402 - after the skip
 from tests.browser import STEPPED_CLOCK, headless_chromium, until
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 SCENARIOS = sorted(p for folder in ("thesis", "policies", "examples")
                    for p in (ROOT / "scenarios" / folder).glob("*.xml"))
 SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"

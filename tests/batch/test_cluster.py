@@ -34,7 +34,7 @@ distributed = pytest.importorskip("distributed")
 
 from prima.batch._dask import Dask  # noqa: E402 - (with the dask extra only)
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 TOUCHED = ROOT / "scenarios" / "thesis" / "sample-08.xml"
 SHORT = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
 QUICK = ClusterTimeouts(connect=0.5, worker=0.5, progress=0.5)

@@ -23,7 +23,7 @@ from prima.mcap import TOPICS  # noqa: E402
 from prima.run import Run  # noqa: E402
 from prima.scenario import load_scenario  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SAMPLE_03 = ROOT / "scenarios" / "thesis" / "sample-03.xml"
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 from prima.judge import Report
-from tests.test_judge import TALK, Trace, counts
+from tests.judge.test_judge import TALK, Trace, counts
 
 WHEELS = ("human-detection", "localization", "locomotion")
 

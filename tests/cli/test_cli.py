@@ -15,7 +15,7 @@ from prima import xmlio as _schema
 from prima.cli import main
 from tests.signalled import signalled_run
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 FIG_5_7 = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
 OFFICE = ROOT / "scenarios" / "examples" / "office-kidode.xml"
 INVALID = ROOT / "tests" / "dsl" / "data" / "invalid"

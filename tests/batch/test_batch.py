@@ -24,7 +24,7 @@ from prima.cli import main
 from prima.judge import MEASURES, Thresholds
 from prima.sweep import Spread, sweep
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 SHORT = ROOT / "scenarios" / "thesis" / "fig5-7.xml"
 """A 60-second scenario: a run takes a fraction of a second."""
 TOUCHED = ROOT / "scenarios" / "thesis" / "sample-08.xml"

@@ -21,7 +21,7 @@ from tests.browser import STEPPED_CLOCK, headless_chromium, until
 if available() is not None:
     pytest.skip(f"{available()} (.ci/run installs it)", allow_module_level=True)
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 SAMPLE_10 = ROOT / "scenarios" / "thesis" / "sample-10.xml"
 INTERRUPT = ROOT / "scenarios" / "policies" / "interrupt-on.xml"
 MODEL = spec_from_profile(default_profile()).speech_duration
