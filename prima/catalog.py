@@ -32,6 +32,7 @@ __all__ = [
     "CONNECT_COMMAND",
     "RESTORE_COMMAND",
     "RESTORE_POSITION_COMMAND",
+    "SEARCH_DEVICE",
     "MAX_HOLD",
     "MAX_SWAY",
     "STANDARD_COMMANDS",
@@ -73,6 +74,9 @@ its call occupies it."""
 
 BODY_DEVICE = "locomotion"
 """The wheels: a Command that uses them turns or moves the robot's body."""
+
+SEARCH_DEVICE = "human-detection"
+"""The camera's human detection: a Command on it looks for, faces or follows the user."""
 
 CONNECT_COMMAND = "FaceHuman"
 """The Command the connect-channel policy runs before an utterance."""
@@ -261,6 +265,12 @@ class CommandSpec:
     """How the simulator performs it, when a robot profile says (its ``<perform>``):
     these steps in order, instead of a behavior of its own. Empty: the simulator's
     own behavior for the Command."""
+
+    @property
+    def follows_user(self) -> bool:
+        """It moves the robot after its user, keeping the channel (Tracking Human):
+        following the user is not leaving them (docs/rules.md 7.6 (1), section 8)."""
+        return self.travels and not self.breaks_cc and SEARCH_DEVICE in self.devices
 
     @property
     def orients(self) -> bool:

@@ -121,9 +121,6 @@ class _Channel:
     def unfaced(self) -> bool:
         return self._sim.user_unfaced(FACE_TOLERANCE)
 
-    def still(self) -> bool:
-        return self._sim.body_still()
-
     def near(self, distance: float) -> bool:
         return self._sim.user_near(distance)
 
@@ -335,6 +332,7 @@ class Run:
         self.sim.speech = speech  # None: the profile's speech rate times every utterance
         self.sim.hears_always = self.policies["barge-in"]  # else only while a Q&A listens
         self.sim.backchannel = self.profile.hearing.backchannel
+        self.sim.answers_prompt = self._answers_prompt
         self.mediator = Mediator(
             self.catalog, self.sim, self.sim, record=self._decision,
             config=MediatorConfig(budgets=self.budgets,
@@ -347,6 +345,8 @@ class Run:
                                   barge_in=self.policies["barge-in"],
                                   resume_pause=self.profile.hearing.pause),
             channel=_Channel(self.sim))
+        if self.policies["connect-channel"]:  # (the robot keeps facing its user while it
+            self.sim.watch_facing(FACE_TOLERANCE, self.mediator.regard)  # talks: 7.6 (3))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
         self.sim.on_user = self._user
@@ -674,6 +674,22 @@ class Run:
         if said is not None:
             self._said[ab] = said
         self.mediator.finish(ab, outcome)
+
+    def _answers_prompt(self, command_id: int, words: str) -> bool:
+        """Whether words said over the prompt of the Q&A of ``command_id`` answer it
+        (docs/rules.md 7.5): its grammar takes them (then they are no backchannel); else
+        they do unless they are a backchannel or some application's always-on grammar
+        takes them (words no grammar takes answer it, as its no-match)."""
+        apps = list(self.apps.values())
+        for app in apps:
+            takes = app.interpreter.answers(command_id, words)
+            if takes is not None:
+                if takes:
+                    return True
+                break
+        if self.profile.hearing.backchannel(words):
+            return False
+        return not any(app.interpreter.takes(words) for app in apps)
 
     def _event(self, event: Event) -> None:
         self._line(Kind.EVENT, text=event.name, detail=dict(event.data))

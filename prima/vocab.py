@@ -143,6 +143,15 @@ INTERRUPTED_EVENT = "interrupted"
 """The event an application gets when the interrupt policy or the user's barge-in cut
 one of its atomic behaviors (news about the application's own Command: not reactive)."""
 
+TOUCH_EVENT = "touched"
+"""The event a touch sensor posts (a robot-specific event the simulator raises when the
+user touches the robot): always the user's own action (docs/rules.md 7.1), whatever a
+profile says."""
+
+USER_ACTION_EVENTS = frozenset({TOUCH_EVENT})
+"""Events that are the user's own action on every robot: a profile may name more
+(``<event user="true">``), never fewer (docs/rules.md 7.1)."""
+
 SPEECH_EVENT = "speech"
 """What the robot heard the user say outside a Q&A, given to the one application whose
 always-on grammar takes it (docs/rules.md 7.5): reactive, the user's own action."""
@@ -180,6 +189,11 @@ class OnInterrupt(str, enum.Enum):
 MAX_STREAM_HOLD = 30.0
 """Upper bound on an explicit stream's hold (s), whatever a document asks: the
 other application's response speed stays bounded (rule 6c)."""
+
+MAX_ANSWER_HOLD = 30.0
+"""Upper bound (s) on how long a reaction to the user's own action keeps the streams it
+interrupted waiting on every device before it has said its first words (docs/rules.md
+7.6 (1)): a reaction whose words never come cannot hold the others for ever."""
 
 MAX_BLOCK_WATCHDOG = 60.0
 """Upper bound on a begin/end block's watchdog (s), whatever a document asks: a

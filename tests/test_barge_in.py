@@ -71,10 +71,11 @@ SCENARIO = """<?xml version="1.0" encoding="UTF-8"?>
 
 
 def run(tmp_path: Path, user: str, *, interrupt: str = "", ask: str = "", policy: str = "",
-        suspended: str = "", profile: str = "") -> list[TraceLine]:
+        suspended: str = "", profile: str = "", grammars: str = "") -> list[TraceLine]:
     ea = tmp_path / "guide.pxml"
     ea.write_text(EA.replace("INTERRUPT", interrupt).replace("TALK", TALK)
-                  .replace("ASK", ask))
+                  .replace("ASK", ask)
+                  .replace('<grammar id="stop">', grammars + '<grammar id="stop">'))
     fa = tmp_path / "home.pxml"
     fa.write_text(FA.replace("SUSPENDED", suspended))
     scenario = tmp_path / "s.xml"
@@ -141,6 +142,49 @@ def test_an_answer_said_over_the_prompt_answers_the_qa_at_a_word_boundary(
     assert "status=answered" in result and "utterance=The restroom, please." in result
     assert "unspoken=" in result and qa.t - say.t <= 0.4 + 1e-6  # the word under way
     assert float(qa.detail["words_end"]) == pytest.approx(qa.t)
+
+
+def _asks_yes_or_no(tmp_path: Path, said: str) -> list[TraceLine]:
+    """The guide asks a yes/no question (after its talk); the user says ``said`` 1 s
+    before the end of its prompt."""
+    ask = '<chain>q: QA("Shall I tell you more about the robots of this lab?", yesno)</chain>'
+    user = f'<answer contains="tell you more" nth="1" after="-1" say="{said}"/>'
+    return run(tmp_path, user, ask=ask, grammars='<grammar id="yesno"><choice value="yes">'
+               'yes | sure</choice><choice value="no">no</choice></grammar>')
+
+
+def test_an_answer_over_the_prompt_is_an_answer_never_a_backchannel(tmp_path: Path) -> None:
+    """docs/rules.md 7.5: "Yes." is one of the robot's backchannels, but the question
+    whose prompt it is said over takes it as its answer: the prompt stops at the word
+    and the Q&A is answered at once, not asked again."""
+    trace = _asks_yes_or_no(tmp_path, "Yes.")
+    (qa,) = [x for x in lines(trace, "end") if x.command == "QA"]
+    assert "status=answered" in str(qa.detail.get("result"))
+    assert "utterance=Yes." in str(qa.detail.get("result"))
+    assert not lines(trace, "hear", "backchannel")
+
+
+def test_a_backchannel_the_question_does_not_take_is_one(tmp_path: Path) -> None:
+    """docs/rules.md 7.5: "Uh-huh." answers no yes/no question: the robot talks on over
+    it, and the Q&A then listens as usual (no answer: the user said nothing more)."""
+    trace = _asks_yes_or_no(tmp_path, "Uh-huh.")
+    (qa,) = [x for x in lines(trace, "end") if x.command == "QA"]
+    assert "status=noinput" in str(qa.detail.get("result"))
+    assert lines(trace, "hear", "backchannel")
+
+
+def test_words_another_grammar_takes_over_a_prompt_are_heard_as_speech(
+        tmp_path: Path) -> None:
+    """docs/rules.md 7.5: "Where is the restroom?" is no answer to a yes/no question: the
+    guide's always-on grammar takes it, the prompt is cut at the word for the answer,
+    and the question is asked again after it."""
+    trace = _asks_yes_or_no(tmp_path, "Where is the restroom?")
+    (hear,) = lines(trace, "hear")
+    assert hear.app == "guide"
+    said = [x.text for x in starts(trace, "guide")]
+    assert said[-3:] == ["Shall I tell you more about the robots of this lab?",
+                         "Next to the door.",
+                         "Shall I tell you more about the robots of this lab?"]
 
 
 # ---------------------------------------------------------------- 2. who takes the words
@@ -425,3 +469,12 @@ def test_the_judge_finds_a_false_interruption_not_recovered(tmp_path: Path) -> N
     report = judge(later, thresholds=Thresholds())
     assert len(report.of("recovery")) == 1
     assert len(judge(rows, thresholds=Thresholds()).of("recovery")) == 0
+
+
+@pytest.mark.parametrize("name", ["barge-in-question", "barge-in-cough",
+                                  "barge-in-backchannel", "guide-question"])
+def test_the_voice_examples_keep_their_reviewed_traces(  # type: ignore[no-untyped-def]
+        name: str, prima_golden) -> None:
+    """The shipped examples of the user's voice, pinned (each read against its
+    situation, and judged, before it was pinned)."""
+    prima_golden(ROOT / "scenarios" / "examples" / f"{name}.xml")

@@ -68,9 +68,9 @@ def test_a_failure_the_fa_causes_is_the_fas_and_the_check_passes(tmp_path: Path)
                        "--jobs", "1", "--out", str(tmp_path / "worst"))
     assert code == 0, out
     assert "runaway     fail FA" in out and "quiet       ok" in out
-    assert ("leaving in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
+    assert ("leaving in 2 run(s): the FA's, runaway runaway.pxml:8:20: its SetSpeedAndTime "
             "took the robot away from the user while talker spoke") in out
-    assert ("unfaced in 2 run(s): the FA's, runaway runaway.pxml:6:12: its SetSpeedAndTime "
+    assert ("unfaced in 2 run(s): the FA's, runaway runaway.pxml:8:20: its SetSpeedAndTime "
             "moved the robot") in out
     assert "0 failed by the EA, 1 by others only" in out
 
@@ -229,13 +229,13 @@ def test_a_map_given_that_lacks_the_eas_places_says_which_and_where(tmp_path: Pa
     code, _, err = cli("check", str(museum), "--fa", str(QUIET), "--robot", str(HOME),
                        "--map", str(MAPS / "office.xml"), "--runs", "1")
     assert code == 2, err
-    assert (f"prima check: error: --map {MAPS / 'office.xml'} lacks panel-1 ({museum}:67:72: "
-            f"TopologicalMove), panel-2 ({museum}:127:130: TopologicalMove)") in err
+    assert (f"prima check: error: --map {MAPS / 'office.xml'} lacks panel-1 ({museum}:68:72: "
+            f"TopologicalMove), panel-2 ({museum}:128:130: TopologicalMove)") in err
 
 
 def test_no_shipped_map_with_the_eas_places_is_a_usage_error(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match=r"no map in .* has every place ea1-museum can go to "
-                                         r"\(panel-1 \(.*ea1-museum.pxml:67:72: Topologic"):
+                                         r"\(panel-1 \(.*ea1-museum.pxml:68:72: Topologic"):
         check(ROOT / "apps" / "ea" / "ea1-museum.pxml", fas=[QUIET], robots=[HOME],
               maps=_only(tmp_path, "office.xml", "library.xml"), runs=1)
 

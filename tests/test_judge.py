@@ -934,6 +934,30 @@ def test_without_the_mediators_hold_a_free_speaker_is_free() -> None:
     assert (fa.free, fa.late) == (0.5, True)
 
 
+def test_devices_kept_for_a_next_ab_its_app_cancelled_are_kept_until_then() -> None:
+    """7.1: ea's reaction keeps the speaker for its words (AB3, after its StopMoving);
+    ea cancels those words at 11.0 (a newer request of its own): fa's words were
+    rightly kept until then, not after (then they were free)."""
+    tr = Trace()
+    tr.event(10.0, "message")
+    tr.request(10.0, "fa", 1, 1, text="A message.", reactive=True)
+    tr.event(10.0, "human-found")
+    tr.request(10.0, "ea", 2, [2, 3], tree=1, command="StopMoving", text="There you are.",
+               reactive=True, devices=("locomotion",))
+    tr.start(10.0, "ea", 2, 2, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.line(10.0, "hold", app="fa", ab=1, tree=0, command="Speak", reason="reserved",
+            text="devices kept for ea's reaction (AB3 next)", devices=["speaker"],
+            before=3, detail={"command_id": 1})
+    tr.line(11.0, "cancel", app="ea", ab=3, tree=1, command="Speak", reason="asap",
+            devices=["speaker"], detail={"command_id": 3})
+    tr.end(11.5, "ea", 2, 2, tree=1, command="StopMoving", devices=("locomotion",))
+    tr.speak(12.0, "fa", 1, 1, "A message.", request=False)
+    fa, _ea = tr.judge().reactions
+    assert (fa.residual, fa.free, fa.late) == (1.0, 1.0, True)
+    assert (("ea", 3, "kept for a reaction's next AB (7.1)", 11.0)
+            in [(w.app, w.ab, w.rule, w.until) for w in fa.waits])
+
+
 def test_a_reaction_that_goes_first_keeps_the_speaker_while_its_turn_runs() -> None:
     """7.1: ea's reaction (the latest) stops the robot (0.1 s), then the connect-channel
     policy turns the robot to the user (1 s) before ea's words: the speaker is theirs
@@ -1047,13 +1071,63 @@ def test_an_app_that_lost_its_precedence_waits_for_anything() -> None:
     assert (r.took.app, r.took.ab) == ("ea", 2)
 
 
+def test_what_started_in_the_instant_before_its_app_lost_its_precedence_went_first() -> None:
+    """ea's reaction (the latest) asks its question at 6.0 and, in that same instant but
+    after it, loses its precedence (the budget line): the question started with its
+    precedence and went first over fa's older reaction. Had the budget line come first,
+    it took fa's devices."""
+    def late(budget_first: bool) -> bool:
+        tr = Trace()
+        tr.event(4.0, "message")
+        tr.request(4.0, "fa", 1, 1, text="A message.", reactive=True)
+        tr.event(4.0, "human-found")
+        tr.speak(4.0, "ea", 2, 2, "There you are.", tree=1, reactive=True, lasts=2.0)
+        budget = {"app": "ea", "reason": "wait-share",
+                  "text": "kept other applications waiting 2 s within 60 s: it loses its "
+                          "precedence until t=66 s"}
+        if budget_first:
+            tr.line(6.0, "budget", **budget)
+        tr.request(6.0, "ea", 3, 3, tree=1, command="QA", text="Shall I go on?",
+                   reason="end-event", devices=TALK, before=2)
+        tr.start(6.0, "ea", 3, 3, tree=1, command="QA", text="Shall I go on?",
+                 devices=TALK, words=(6.0, 7.0))
+        if not budget_first:
+            tr.line(6.0, "budget", **budget)
+        tr.end(9.0, "ea", 3, 3, tree=1, command="QA", devices=TALK, words=(6.0, 7.0),
+               result="status=noinput")
+        tr.speak(9.0, "fa", 1, 1, "A message.", request=False)
+        fa = next(r for r in tr.judge().reactions if r.app == "fa")
+        return fa.late
+
+    assert (late(False), late(True)) == (False, True)
+
+
+def test_a_perception_in_the_instant_the_user_says_what_nobody_heard_is_no_user_action() -> None:
+    """The user says something the robot does not hear (out of its range) in the very
+    instant the camera finds them: the reaction to the user found is a reaction to a
+    perception, not the user's own action; the FA's later reaction to a touch, whose
+    first words are ahead, goes first over it (7.1)."""
+    def ranks_as_user(heard: bool) -> bool:
+        tr = Trace()
+        tr.say(2.0, "Repeat that.", heard=heard)
+        tr.event(2.0, "speech" if heard else "human-found")
+        tr.request(2.0, "ea", 1, 1, text="This panel shows our robot.", reactive=True)
+        tr.speak(2.5, "ea", 1, 1, "This panel shows our robot.", request=False)
+        (r,) = tr.judge().reactions
+        return r.user
+
+    assert (ranks_as_user(False), ranks_as_user(True)) == (False, True)
+
+
 # ------------------------------------------------------------------ reactions never heard
 
-def _message_cut_by_a_touch(*, said_again: bool) -> Report:
+def _message_cut_by_a_touch(*, said_again: bool, dropped: bool = False,
+                            ends: float = 12.0) -> Report:
     """fa says a message (a reaction, 10 s to 12.5 s); at 10.5 s the user touches the
     robot and ea's reaction cuts it (at 10.6 s) and speaks for 1 s. With
-    ``said_again``, fa's message restarts at 11.6 s; otherwise its application dropped
-    it. The trace ends at 12 s (before fa's words were free for 1.2 s)."""
+    ``said_again``, fa's message restarts at 11.6 s; otherwise it waits to be said
+    again until the trace ends at ``ends`` (12 s: before fa's words were free for
+    1.2 s), or, ``dropped``, its request said to drop it."""
     message = "A message from your host."
     tr = Trace()
     tr.event(10.0, "message")
@@ -1063,25 +1137,36 @@ def _message_cut_by_a_touch(*, said_again: bool) -> Report:
     tr.request(10.5, "ea", 2, 2, tree=1, text="Yes?", reactive=True)
     tr.interrupt(10.5, "fa", 1, 1, by="ea", by_ab=2)
     tr.end(10.6, "fa", 1, 1, reason="interrupt", words=(10.0, 12.5), text=message)
-    if said_again:
+    if dropped:
+        tr.rows[-1]["detail"]["interrupt"] = "dropped"
+    else:
         tr.request(10.6, "fa", 3, 1, text=message, reactive=True, reason="restart", before=1)
     tr.speak(10.6, "ea", 2, 2, "Yes?", tree=1, request=False)
     if said_again:
         tr.start(11.6, "fa", 3, 1, text=message, reason="restart", words=(11.6, 14.1))
         tr.end(14.1, "fa", 3, 1, words=(11.6, 14.1), text=message)
     else:
-        tr.pose(12.0)
+        tr.pose(ends)
     return tr.judge()
 
 
-def test_a_reaction_cut_and_never_said_again_is_unheard() -> None:
-    report = _message_cut_by_a_touch(said_again=False)
+@pytest.mark.parametrize("dropped, ends, unheard", [
+    (False, 12.0, False),   # (still to be said again when the trace ends: not yet)
+    (False, 80.0, True),    # (still waiting 69 s after the cut: more than anything may)
+    (True, 12.0, False),    # (its request said to drop it: its application's choice)
+])
+def test_a_reaction_cut_and_never_said_again_is_unheard_once_overdue(
+        dropped: bool, ends: float, unheard: bool) -> None:
+    report = _message_cut_by_a_touch(said_again=False, dropped=dropped, ends=ends)
     fa, ea = report.reactions
-    assert (fa.unheard, fa.first_utterance, fa.late) == (True, None, False)
+    assert (fa.unheard, fa.first_utterance) == (unheard, None)
     assert not ea.unheard
-    assert counts(report) == {"unheard": 1}
-    assert report.seqs("unheard") == [fa.seq]
-    assert "its words were never heard whole" in format_table([report])
+    if unheard:
+        assert counts(report) == {"unheard": 1, "late": 1}
+        assert report.seqs("unheard") == [fa.seq]
+        assert "its words were never heard whole" in format_table([report])
+    else:
+        assert counts(report) == {}
 
 
 def test_a_reaction_cut_counts_its_words_once_said_again_whole() -> None:
@@ -1090,6 +1175,33 @@ def test_a_reaction_cut_counts_its_words_once_said_again_whole() -> None:
     assert (fa.unheard, fa.first_utterance, fa.utterance_latency, fa.words_free) == (
         False, 11.6, 1.6, 0.0)
     assert counts(report) == {}
+
+
+def test_words_being_said_again_when_the_trace_ends_are_not_unheard_yet() -> None:
+    """fa's message, cut for ea's reaction, is being said again when the trace ends
+    (11.6 s to 14.1 s, the trace over at 13.0 s): not unheard (they may yet be heard
+    whole); said again and cut again, they are."""
+    message = "A message from your host."
+
+    def unheard(again_cut: bool) -> bool:
+        tr = Trace()
+        tr.event(10.0, "message")
+        tr.request(10.0, "fa", 1, 1, text=message, reactive=True)
+        tr.start(10.0, "fa", 1, 1, text=message, cuttable=True, words=(10.0, 12.5))
+        tr.touch(10.5)
+        tr.request(10.5, "ea", 2, 2, tree=1, text="Yes?", reactive=True)
+        tr.interrupt(10.5, "fa", 1, 1, by="ea", by_ab=2)
+        tr.end(10.6, "fa", 1, 1, reason="interrupt", words=(10.0, 12.5), text=message)
+        tr.request(10.6, "fa", 3, 1, text=message, reactive=True, reason="restart", before=1)
+        tr.speak(10.6, "ea", 2, 2, "Yes?", tree=1, request=False)
+        tr.start(11.6, "fa", 3, 1, text=message, reason="restart", words=(11.6, 14.1))
+        if again_cut:
+            tr.end(12.5, "fa", 3, 1, reason="barge-in", words=(11.6, 12.5), text=message)
+        tr.pose(13.0)
+        fa = next(r for r in tr.judge().reactions if r.app == "fa")
+        return fa.unheard
+
+    assert (unheard(False), unheard(True)) == (False, True)
 
 
 def _never_started(ends: float, *, cancelled: bool = False) -> Report:
@@ -1135,7 +1247,47 @@ def test_a_reaction_its_own_app_cancelled_is_neither_late_nor_unheard() -> None:
     assert counts(report) == {}
 
 
+def test_words_a_later_request_of_its_own_app_cancelled_after_its_first_ab_are_not_unheard(
+        ) -> None:
+    """The EA's reaction to a message stops the robot (its StopMoving runs), then would
+    say the message; a place reached in the meantime makes the EA ask for other words as
+    soon as possible, which cancels the message's words: its own choice, not unheard
+    (it would be, were they left waiting)."""
+    def unheard(cancelled: bool) -> bool:
+        tr = Trace()
+        tr.event(1.0, "message")
+        tr.request(1.0, "ea", 1, [1, 2], command="StopMoving", reactive=True,
+                   text="I've just got a message.", devices=("locomotion",))
+        tr.start(1.0, "ea", 1, 1, command="StopMoving", devices=("locomotion",))
+        tr.end(1.1, "ea", 1, 1, command="StopMoving", devices=("locomotion",))
+        if cancelled:
+            tr.line(1.2, "cancel", app="ea", ab=2, tree=0, command="Speak",
+                    reason="asap", devices=["speaker"], detail={"command_id": 2})
+        tr.line(70.0, "pose")
+        (r,) = tr.judge().reactions
+        return r.unheard
+
+    assert (unheard(True), unheard(False)) == (False, True)
+
+
 # ------------------------------------------------------------------ talking unfaced
+
+def test_a_user_off_by_the_tolerance_within_the_traces_rounding_is_not_unfaced() -> None:
+    """The trace rounds poses (millimetres, tenths of a degree): a user 30.1 degrees off
+    on its lines may be 30 or less in the run, which turned the robot for more only;
+    30.5 degrees is off."""
+    import math
+
+    def unfaced(off: float) -> int:
+        tr = Trace()
+        rad = math.radians(off)
+        tr.user = {"x": round(math.cos(rad), 3), "y": round(math.sin(rad), 3),
+                   "heading": 180.0, "detectable": True}
+        tr.speak(1.0, "ea", 1, 1, "May I go to the next panel?")
+        return len(tr.judge().of("unfaced"))
+
+    assert (unfaced(30.1), unfaced(30.5)) == (0, 1)
+
 
 def test_words_after_an_aiming_command_are_about_what_it_aims_at() -> None:
     """FA4 turns the way its user said, then asks "May I take a picture?": the words
@@ -1246,6 +1398,17 @@ def test_leaving_while_talking_counts_once_per_utterance() -> None:
     assert x.moved_by == Blame("fa", 9, "TopologicalMove", "", "drove the wheels")
 
 
+def test_the_robot_pushed_while_nothing_drives_it_is_not_leaving() -> None:
+    """The robot ends 0.4 m farther from its user while it turns in place to them (a
+    FaceHuman on the wheels) or stands: a user who walked into it pushed it, it did not
+    move on its own. The same displacement while a TopologicalMove drives it is."""
+    poses = [(t, {"x": x, "y": 0.0, "heading": 0.0}, USER)
+             for t, x in ((1.5, -0.2), (2.0, -0.4), (2.5, -0.6))]
+    assert counts(_talking_while(poses, mover="FaceHuman")) == {}
+    assert counts(_talking_while(poses)) == {}
+    assert counts(_talking_while(poses, mover="TopologicalMove")) == {"leaving": 1}
+
+
 def test_the_user_walking_away_is_not_the_robot_leaving() -> None:
     report = _talking_while([(2.0, FACING, {**USER, "x": 3.0})])
     assert counts(report) == {}
@@ -1259,10 +1422,11 @@ _WALKS_ROUND = [(1.5, {"x": 0.3, "y": 0.0, "heading": 0.0}, {**USER, "x": 0.5, "
 def test_following_the_user_is_not_leaving() -> None:
     """The robot gets 0.5 m farther from its user, by its own motion, while it follows
     them (a TrackingHuman runs): that is no leaving; the same motion driven by a
-    TopologicalMove is."""
-    assert counts(_talking_while(_WALKS_ROUND, mover="TrackingHuman")) == {}
+    TopologicalMove is. (The user walks round behind the robot while it talks: that is
+    talking unfaced over the words, whoever drives.)"""
+    assert counts(_talking_while(_WALKS_ROUND, mover="TrackingHuman")) == {"unfaced": 1}
     report = _talking_while(_WALKS_ROUND, mover="TopologicalMove")
-    assert counts(report) == {"leaving": 1}
+    assert counts(report) == {"leaving": 1, "unfaced": 1}
     assert report.of("leaving")[0].away == 0.5
 
 
@@ -1350,6 +1514,36 @@ def test_resumed_elsewhere(case: str, found: int) -> None:
         (e,) = report.of("elsewhere")
         assert (e.app, e.text, e.suspend_seq, e.away) == ("ea", "Look at this figure.", 1, 2.0)
         assert "from where its stream was suspended (seq 1)" in format_table([report])
+
+
+def test_a_return_suspended_on_its_way_back_still_returns_where_the_stream_was() -> None:
+    """The restore-state policy's return is itself suspended halfway back (another
+    application's reaction takes the wheels) and resumes later; the stream's words are
+    said where the stream was first suspended: not elsewhere, though 1 m from where its
+    return was suspended (prima check of EA3 beside FA3: 17 runs in 800)."""
+    tr = Trace()
+    tr.user = {**tr.user, "detectable": False}  # (not a matter of facing)
+    tr.pose(0.5)
+    tr.line(1.0, "suspend", app="ea", ab=2, tree=0, command="Speak", reason="reactivity")
+    tr.robot = {**tr.robot, "x": 2.0}  # the other app's reaction moved the robot
+    tr.pose(5.0)
+    tr.request(6.0, "ea", 3, 3, command="SetPosition", reason="restore-state", before=2,
+               devices=("locomotion",))
+    tr.start(6.0, "ea", 3, 3, command="SetPosition", devices=("locomotion",),
+             reason="restore-state")
+    tr.line(6.0, "resume", app="ea", ab=3, tree=0, command="SetPosition")
+    tr.robot = {**tr.robot, "x": 1.0}
+    tr.end(7.0, "ea", 3, 3, command="SetPosition", devices=("locomotion",))
+    tr.line(7.0, "suspend", app="ea", ab=4, tree=0, command="SetPosition",
+            reason="priority", detail={"command_id": 3})
+    tr.start(8.0, "ea", 4, 3, command="SetPosition", devices=("locomotion",),
+             reason="restore-state")
+    tr.line(8.0, "resume", app="ea", ab=4, tree=0, command="SetPosition")
+    tr.robot = {**tr.robot, "x": 0.1}
+    tr.end(9.0, "ea", 4, 3, command="SetPosition", devices=("locomotion",))
+    tr.start(9.0, "ea", 2, 2, text="Look at this figure.", words=(9.0, 10.0))
+    tr.end(10.0, "ea", 2, 2)
+    assert counts(tr.judge()) == {}
 
 
 # ------------------------------------------------------------------ split exchanges
@@ -1501,6 +1695,43 @@ def test_no_output_until_the_end_is_a_silence_only_if_the_end_is_far() -> None:
     assert counts(answered_then(reply_at=99.0, ends=3.5).judge()) == {}
 
 
+def test_the_robot_dancing_after_an_answer_is_no_silence() -> None:
+    """The FA's dance (a gesture from 1.0) runs on after the EA's question is answered
+    at 2.0: the robot is not silent while it dances; once the dance ends, the pause
+    before the reply (at 4.5) counts from then."""
+    def pause(dance_ends: float) -> dict[str, int]:
+        tr = answered_then(reply_at=4.5, ends=8.0)
+        tr.start(1.0, "ea", 9, 9, tree=4, command="Gesture", devices=("arm", "neck"))
+        tr.end(dance_ends, "ea", 9, 9, tree=4, command="Gesture", devices=("arm", "neck"))
+        tr.sort()
+        return counts(tr.judge(reaction_slack=5.0))
+
+    assert pause(5.0) == {}
+    assert pause(2.6) == {}  # (1.9 s from the dance's end to the reply)
+    assert pause(2.1) == {"silences": 1}  # (2.4 s)
+
+
+# ------------------------------------------------------------------ talking over the user
+
+def test_a_prompt_cut_by_its_answer_is_allowed_the_word_under_way() -> None:
+    """The Q&A's prompt (ten words, 4.4 s as its start line plans them) is answered at
+    0.5 s over its second word, and stops at 0.9 s, as said on its end line: within
+    0.3 s plus one word (0.44 s) of the answer. Stopping 0.8 s later is not."""
+    def over(stops: float) -> dict[str, int]:
+        tr = Trace()
+        prompt = "Please tell me a title or an author of a book."
+        tr.request(0.0, "ea", 1, 1, command="QA", text=prompt, devices=TALK)
+        tr.start(0.0, "ea", 1, 1, command="QA", text=prompt, devices=TALK,
+                 words=(0.0, 4.4), cuttable=True)
+        tr.say(0.5, "Uh-huh.")
+        tr.end(stops, "ea", 1, 1, command="QA", devices=TALK, words=(0.0, stops),
+               result="barge_in=True, spoken=Please tell, status=answered")
+        return {k: v for k, v in counts(tr.judge()).items() if k == "barge_in"}
+
+    assert over(0.9) == {}
+    assert over(1.3) == {"barge_in": 1}
+
+
 # ------------------------------------------------------------------ stuck
 
 def search_loop(until: float, *, other_app: bool = False) -> Trace:
@@ -1603,6 +1834,28 @@ def test_a_command_still_waiting_at_the_end_is_stuck() -> None:
     assert counts(search_loop(until=50.0, other_app=True).judge()) == {}
 
 
+def test_waiting_while_the_robot_follows_its_user_is_not_stuck() -> None:
+    """The FA follows the user (Tracking Human, as they asked) from 0 s to the end; the
+    EA's guide move waits for the wheels meanwhile: the user leads, nobody is stuck. The
+    same wait behind a search is."""
+    def waits_behind(command: str) -> dict[str, int]:
+        tr = Trace()
+        wheels = ("human-detection", "locomotion")
+        tr.request(0.0, "fa", 1, 1, command=command, devices=wheels)
+        tr.request(5.0, "ea", 100, 2, tree=1, command="TopologicalMove",
+                   devices=("localization", "locomotion"))
+        t, ab = 0.0, 1
+        while t < 80.0:
+            tr.start(t, "fa", ab, 1, command=command, devices=wheels, iteration=ab - 1)
+            tr.end(t + 0.5, "fa", ab, 1, command=command, devices=wheels, iteration=ab - 1)
+            t, ab = t + 0.5, ab + 1
+        tr.sort()
+        return counts(tr.judge())
+
+    assert waits_behind("TrackingHuman") == {}
+    assert waits_behind("ActiveSensingHuman") == {"stuck": 1}
+
+
 def test_a_command_stuck_at_the_end_names_what_ran_then() -> None:
     tr = search_loop(until=80.0, other_app=True)
     del tr.rows[-1]  # the search's last look still runs when the trace ends
@@ -1681,8 +1934,8 @@ def test_every_measure_has_a_threshold_and_an_option() -> None:
     assert Thresholds().limits == {f"max_{k}": 0 for k in keys}
     assert [p.option for p in PARAMETERS] == [
         "--reaction-slack", "--utterance-slack", "--react-within", "--face-tolerance",
-        "--leave-distance", "--resume-distance", "--barge-in-slack", "--answer-slack",
-        "--recovery-slack", "--silence", "--stuck-after", "--search-after"]
+        "--unfaced-for", "--leave-distance", "--resume-distance", "--barge-in-slack",
+        "--answer-slack", "--recovery-slack", "--silence", "--stuck-after", "--search-after"]
 
 
 def test_thresholds_allow_what_they_say() -> None:

@@ -65,7 +65,7 @@ def _whose(f: Finding, wheels: Mapping[int, Blame]) -> tuple[str, str, str, str]
                              f"to {f.event} ({what})", waited, held.at
         return f.app, f"its reaction to {f.event} is {what}", waited, f.at
     if isinstance(f, Unfaced):
-        held = wheels.get(f.seq)
+        held = wheels.get(f.seq) if f.during is None else f.turned_by
         if held is not None:  # the robot could not be turned to the user first
             return held.app, f"its {held.command} moved the robot: {f.app}'s {f.command} " \
                              "was said with the user off to the side", "", held.at

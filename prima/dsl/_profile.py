@@ -62,6 +62,7 @@ from prima.vocab import (
     MAX_RUN_TIME,
     MAX_TEXT,
     PREDEFINED_EVENTS,
+    USER_ACTION_EVENTS,
     AppKind,
     Budgets,
     Value,
@@ -722,7 +723,13 @@ class _Reader:
             self.error(el, f"'{name}' is a predefined event; a robot-specific "
                            "event needs a name of its own", "name")
         self.events[name] = flag(el, "reactive", default=True)
-        if flag(el, "user", default=False):
+        if name in USER_ACTION_EVENTS:
+            if el.get("user") in ("false", "0"):
+                self.error(el, f"'{name}' is always the user's own action (docs/rules.md "
+                               "7.1): a profile may name more such events, never fewer",
+                           "user")
+            self.user_events.add(name)
+        elif flag(el, "user", default=False):
             self.user_events.add(name)
 
     def _own_command(self, name: str) -> bool:

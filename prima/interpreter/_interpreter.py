@@ -51,6 +51,7 @@ from prima.vocab import (
     NEWS_EVENTS,
     PREDEFINED_EVENTS,
     SPEECH_EVENT,
+    USER_ACTION_EVENTS,
     AppKind,
     Budgets,
     TraceKind,
@@ -152,9 +153,9 @@ class Interpreter:
         self.clock = clock
         self.catalog = catalog
         self.robot_events = dict(robot_events or {})
-        self.user_events = frozenset(user_events)
-        """The events that are the user's own action (a touch): the reactions to them
-        go first (docs/rules.md 7.1)."""
+        self.user_events = frozenset(user_events) | USER_ACTION_EVENTS
+        """The events that are the user's own action (a touch, always; and what the
+        profile names): the reactions to them go first (docs/rules.md 7.1)."""
         self.gestures = frozenset(gestures) if gestures is not None else None
         """The robot's gestures (None: not checked here); an EA may use the common ones."""
         self.budgets = budgets or DEFAULT_BUDGETS[document.kind]
@@ -210,6 +211,14 @@ class Interpreter:
         if self.stopped:
             return False
         return bool(self._listening(words, {}))
+
+    def answers(self, command_id: CommandId, words: str) -> bool | None:
+        """Whether ``words`` answer the Q&A of ``command_id`` (its grammar takes them);
+        None if that is no Q&A of this application's still under way."""
+        call = self._commands.get(command_id)
+        if self.stopped or call is None or not self.catalog[call.command].listens:
+            return None
+        return self.document.grammars[call.grammar or ""].match(words) is not None
 
     def _listening(self, words: str, data: dict[str, Value]) -> tuple[Handler, ...]:
         """The speech handlers that take ``words``, in the order they are tried; ``data``

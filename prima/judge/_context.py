@@ -33,11 +33,10 @@ heard speech, messages, the user found or lost)."""
 TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
 """Where an utterance runs."""
 
-USER_ACTIONS = frozenset({"touch", "say"})
-"""The user's lines whose event, right after at the same instant, is the user's own
-action (docs/rules.md 7.1: a touch, heard speech)."""
-
 _ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
+
+_ANSWERS = " answers the user"
+"""How a hold or a suspension for a reaction to the user's own action ends its text."""
 
 LOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.breaks_cc)
 """Commands that break the Communication Channel (LOW priority)."""
@@ -84,12 +83,16 @@ class Ab:
     iteration: int = 0
     words: tuple[float, float] | None = None
     """When its words began and ended (from its start line when they begin with it,
-    from its end line otherwise)."""
+    from its end line otherwise: as said, up to a cut)."""
+    planned: tuple[float, float] | None = None
+    """When its start line said its words would begin and end (None: it did not)."""
     end: float | None = None
     end_seq: int | None = None
     end_reason: str = ""
     blended_over: bool = False
     """Another AB started blended over it (the blend policy: never cut)."""
+    dropped: bool = False
+    """It was cut and its request said to drop it: it is not said again."""
 
     @property
     def low(self) -> bool:
@@ -209,11 +212,16 @@ class Context:
         """A policy's Command (a turn, a return) -> the Command it was put before."""
         self.cancelled: dict[int, float] = {}
         """Command -> when it was cancelled."""
+        self.cancelled_ab: dict[int, tuple[float, int | None]] = {}
+        """AB (one never started, too) -> when it was cancelled, and its tree."""
         self.requested_at: dict[int, tuple[float, int]] = {}
-        self.elsewhere: set[int] = set()
-        """Commands whose request said their words are about something else."""
         """AB -> when (and at which line) it was requested: the root of a request, a
         policy's AB, a restart."""
+        self.requested: dict[int, tuple[str, str, str]] = {}
+        """AB -> its application, its Command and where it is asked for, from its request
+        (an AB that never started is known by this alone)."""
+        self.elsewhere: set[int] = set()
+        """Commands whose request said their words are about something else."""
         self.tree_app: dict[int, str] = {}
         self.tree_reactions: dict[int, list[ReactionState]] = {}
         """Tree -> the reactions that took it over, in order (the latest ranks)."""
@@ -232,10 +240,16 @@ class Context:
         self.demoted: dict[str, list[list[float]]] = {}
         """App -> when it had lost its precedence: [from, until] (until: inf if it had
         not regained it)."""
+        self.demoted_seq: dict[str, list[int]] = {}
+        """App -> the seq of the line that said it lost its precedence, for each span:
+        what started before it in that instant started with its precedence."""
         self.blocks: dict[str, list[list[float]]] = {}
         """App -> when its begin/end block was open: [from, until]."""
         self.interrupts: dict[int, str] = {}
         """AB -> the application whose reaction had it cut."""
+        self.user_cuts: dict[int, bool] = {}
+        """AB -> cut because the user spoke over it: whether an application took the
+        words (False: none did, a false interruption: it goes on after a pause)."""
 
     # ---------------------------------------------------------------- the pass
     def feed(self, row: Row) -> None:
@@ -264,9 +278,13 @@ class Context:
             self._window = None
             return
         last = self.last
+        # (the event a touch posts, or the words heard: not a perception that comes in
+        # the instant the user said something the robot did not hear)
         user = (last is not None and last.get("kind") == "user"
-                and last.get("action") in USER_ACTIONS
-                and abs(float(last["t"]) - float(row["t"])) <= EPS)
+                and abs(float(last["t"]) - float(row["t"])) <= EPS
+                and (last.get("action") == "touch"
+                     or (last.get("action") == "say" and name == "speech"
+                         and (last.get("detail") or {}).get("heard") is True)))
         words = (row.get("detail") or {}).get("words") if name == "speech" else None
         self._window = _Window(name, float(row["t"]), int(row["seq"]), user,
                                text=str(words or ""))
@@ -282,9 +300,10 @@ class Context:
         detail = row.get("detail") or {}
         ids = command_ids(row)
         ab = row.get("ab")
+        at = str(detail.get("at") or "")
         if isinstance(ab, int):
             self.requested_at[ab] = (float(row["t"]), int(row["seq"]))
-        at = str(detail.get("at") or "")
+            self.requested[ab] = (app, str(row.get("command") or ""), at)
         tree = row.get("tree")
         if isinstance(tree, int):
             self.tree_app.setdefault(tree, app)
@@ -384,7 +403,7 @@ class Context:
                 iteration=int(detail.get("iteration") or 0))
         ws, we = detail.get("words_start"), detail.get("words_end")
         if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
-            ab.words = (float(ws), float(we))
+            ab.words = ab.planned = (float(ws), float(we))
         if ab.reason == "blend":
             for d in ab.devices:
                 for other in self.running.values():
@@ -418,6 +437,7 @@ class Context:
             ab.end_seq = int(row["seq"])
             ab.end_reason = str(row.get("reason") or "")
             detail = row.get("detail") or {}
+            ab.dropped = detail.get("interrupt") == "dropped"
             ws, we = detail.get("words_start"), detail.get("words_end")
             if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
                 ab.words = (float(ws), float(we))
@@ -442,6 +462,10 @@ class Context:
         ids = command_ids(row)
         for cid in ids:
             self.cancelled.setdefault(cid, float(row["t"]))
+        ab, tree = row.get("ab"), row.get("tree")
+        if isinstance(ab, int):
+            self.cancelled_ab.setdefault(ab, (float(row["t"]),
+                                              tree if isinstance(tree, int) else None))
         for app, ex in list(self.open_exchange.items()):
             if not set(ex.reply).isdisjoint(ids):  # its reply will never be said
                 ex.done = float(row["t"])
@@ -459,10 +483,18 @@ class Context:
                 break
         if not holder and text.endswith(" is talking"):
             holder = text[:-len(" is talking")]
+        if text.endswith(_ANSWERS):  # (docs/rules.md 7.6 (1): "[while] X answers the user")
+            holder = text[:-len(_ANSWERS)].removeprefix("while ")
         before = row.get("before")
         self.holds.append(Hold(float(row["t"]), int(row["seq"]), ab,
                                str(row.get("app") or ""), str(row.get("reason") or ""),
                                holder, before if isinstance(before, int) else None))
+
+    def _suspend(self, row: Row) -> None:
+        """A stream suspended while a reaction answers the user (7.6 (1)) is held as a
+        hold line says (its other suspensions are what its ABs lost, seen on devices)."""
+        if row.get("reason") == "answering":
+            self._hold(row)
 
     def _budget(self, row: Row) -> None:
         app = str(row.get("app") or "")
@@ -470,6 +502,7 @@ class Context:
         spans = self.demoted.setdefault(app, [])
         if "loses its precedence" in text:
             spans.append([float(row["t"]), float("inf")])
+            self.demoted_seq.setdefault(app, []).append(int(row["seq"]))
         elif "regains" in text and spans:
             spans[-1][1] = float(row["t"])
 
@@ -492,6 +525,8 @@ class Context:
         text = str(row.get("text") or "")
         if isinstance(ab, int) and text.startswith("for "):
             self.interrupts[ab] = text[4:].split("'s")[0]
+        elif isinstance(ab, int) and row.get("reason") == "barge-in":
+            self.user_cuts[ab] = "goes on after" not in text
 
     def _unload(self, row: Row) -> None:
         ex = self.open_exchange.pop(str(row.get("app") or ""), None)
@@ -510,8 +545,16 @@ class Context:
     def during(self, spans: list[list[float]] | None, t: float) -> bool:
         return bool(spans) and any(lo - EPS <= t < hi - EPS for lo, hi in spans or ())
 
-    def demoted_at(self, app: str, t: float) -> bool:
-        return self.during(self.demoted.get(app), t)
+    def demoted_at(self, app: str, t: float, seq: int | None = None) -> bool:
+        """Whether ``app`` had lost its precedence at ``t`` (for the line ``seq`` of that
+        instant, if given: a line before the one that said it lost it is not)."""
+        spans = self.demoted.get(app)
+        if not spans:
+            return False
+        seqs = self.demoted_seq.get(app, [])
+        return any(lo - EPS <= t < hi - EPS and not (
+            seq is not None and abs(t - lo) <= EPS and i < len(seqs) and seq < seqs[i])
+            for i, (lo, hi) in enumerate(spans))
 
     def demoted_within(self, app: str, lo: float, hi: float) -> bool:
         return any(a < hi + EPS and b > lo - EPS for a, b in self.demoted.get(app, ()))
@@ -528,6 +571,7 @@ _HANDLERS = {
     "end": Context._end,
     "cancel": Context._cancel,
     "hold": Context._hold,
+    "suspend": Context._suspend,
     "budget": Context._budget,
     "block": Context._block,
     "release": Context._release,

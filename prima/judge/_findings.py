@@ -123,16 +123,27 @@ class Reaction:
 
 @dataclass(frozen=True)
 class Unfaced:
-    """An utterance started while the user was detectable but not faced."""
+    """An utterance said while the user was detectable but not faced: at its start, or
+    for more than a second in a row while its words ran (docs/rules.md 7.6 (3))."""
 
     seq: int
+    """The utterance's start line."""
     t: float
     app: str
     command: str
     text: str
     off: float
-    """Degrees between the robot's heading and the user's bearing."""
+    """Degrees between the robot's heading and the user's bearing (at the start, or the
+    most while its words ran)."""
     at: str = ""
+    during: float | None = None
+    """None: unfaced as its words began; else how long (s) the user was off, in a row,
+    while they ran (from the pose line at ``during_seq``)."""
+    during_seq: int | None = None
+    """The first pose line of that stretch."""
+    turned_by: Blame | None = None
+    """What drove the wheels as the robot turned away (another application's AB, or the
+    utterance's own application's), if anything did."""
 
     def to_dict(self) -> dict[str, object]:
         return dataclasses.asdict(self)

@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from prima.catalog import BODY_DEVICE, STANDARD_COMMANDS
+from prima.catalog import BODY_DEVICE, SEARCH_DEVICE, STANDARD_COMMANDS
 from prima.judge._context import EPS, Ab, Context, command_ids, xy
 from prima.judge._findings import (
     BargeIn,
@@ -40,14 +40,11 @@ from prima.judge._thresholds import LIMITS, Limit
 
 __all__ = ["MEASURES", "Finder", "Measure", "measure"]
 
-SEARCH_DEVICE = "human-detection"
-"""A feedback Command on this device looks for the user: iterating on and on while
-the user is never detectable (``search_after``), its application is stuck."""
+
 
 _AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
 _TRAVELS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
-_FOLLOWS = frozenset(c.name for c in STANDARD_COMMANDS
-                     if c.travels and SEARCH_DEVICE in c.devices and not c.breaks_cc)
+_FOLLOWS = frozenset(c.name for c in STANDARD_COMMANDS if c.follows_user)
 """Commands that move the robot after its user (Tracking Human): following the user
 is not leaving them."""
 
@@ -137,43 +134,180 @@ def _about_something_else(row: Row, before: str | None) -> bool:
     return before is not None and not _AIMING.isdisjoint(before.split("+"))
 
 
-class _Unfaced:
-    """Utterances started while the user is detectable and more than the tolerance off
-    the robot's heading."""
+@dataclass
+class _Words:
+    """An utterance addressed to the user, while its words run."""
 
-    kinds: frozenset[str] | None = frozenset({"start"})
+    row: Row
+    """Its start line."""
+    words: tuple[float, float] | None
+    """When its words run, once known (they may follow something else in its AB)."""
+    off_since: Row | None = None
+    """The first posed line of the stretch in which the user is off, if they are now."""
+    most: float = 0.0
+    """The most degrees off in that stretch."""
+    turner: Blame | None = None
+    """What drove the wheels when that stretch began."""
+    pending: list[tuple[Row, Blame | None]] = field(default_factory=list)
+    """Posed lines while its words' times are not known yet: judged at its end."""
+
+
+ROUNDED_OFF = 0.2
+"""Degrees a trace's rounded poses (positions to the millimetre, headings to the tenth
+of a degree) may put a user off the robot's heading, beyond the simulator's own
+figure: a user found off by no more than the tolerance plus this is not off."""
+
+
+def _off(row: Row, tolerance: float) -> float | None:
+    """How far off the user is on a posed line, if detectable and beyond ``tolerance``
+    (give or take what the trace's rounding moves it by)."""
+    robot, user = row.get("robot"), row.get("user")
+    if robot is None or user is None or user.get("detectable") is not True:
+        return None
+    off = _off_heading(robot, user)
+    return off if off is not None and off > tolerance + ROUNDED_OFF else None
+
+
+class _Unfaced:
+    """Utterances said while the user is detectable and more than the tolerance off the
+    robot's heading: at their start, or for more than ``unfaced_for`` seconds in a row
+    while their words run (docs/rules.md 7.6 (3): the robot keeps facing the user while
+    its words run). The user's pose is known at each posed line and held until the
+    next: a stretch runs from the first line that shows the user off to the first that
+    does not (or the words' end). While a turn to the user runs (reason
+    ``connect-channel``: the robot turns to them as fast as it can), no stretch runs:
+    one starts anew if they are still off when it is over."""
+
+    kinds: frozenset[str] | None = None
 
     def __init__(self) -> None:
         self.found: list[Unfaced] = []
         self.last_command: dict[int, str] = {}
+        self.talking: dict[int, _Words] = {}
+        self.before_of: dict[int, str | None] = {}
+        """A started AB -> the Command that started before it in its stream (what its
+        words may be about); a restart's is the AB's it starts again."""
+        self.restarts: dict[int, int] = {}
+        """A restart -> the cut AB it starts again."""
 
     def feed(self, row: Row, ctx: Context) -> None:
-        if row["kind"] != "start":
-            return
+        kind = row["kind"]
+        ab = row.get("ab")
+        if kind == "request" and row.get("reason") == "restart" and isinstance(ab, int):
+            cut = row.get("before")
+            if isinstance(cut, int):
+                self.restarts[ab] = cut
+        elif kind == "start" and isinstance(ab, int):
+            self._started(row, ab, ctx)
+        elif kind == "end" and isinstance(ab, int):
+            talk = self.talking.get(ab)
+            if talk is not None:
+                if talk.words is None and ab in ctx.abs:
+                    talk.words = ctx.abs[ab].words
+                    for pose, mover in talk.pending:
+                        if self._pose(ab, talk, pose, mover, ctx):
+                            break
+                if ab in self.talking:
+                    self._ended(ab, talk, float(row["t"]), ctx)
+        if self.talking and row.get("robot") is not None and row.get("user") is not None:
+            mover = _wheels(ctx)
+            for ab_id, talk in list(self.talking.items()):
+                if talk.words is None:
+                    talk.pending.append((row, mover))
+                else:
+                    self._pose(ab_id, talk, row, mover, ctx)
+
+    def _started(self, row: Row, ab: int, ctx: Context) -> None:
         tree = row.get("tree")
         before = self.last_command.get(tree) if isinstance(tree, int) else None
+        cut = self.restarts.pop(ab, None)
+        if cut is not None:  # (said again, its words are about what they were about)
+            before = self.before_of.get(cut, before)
+        self.before_of[ab] = before
         if isinstance(tree, int):
             self.last_command[tree] = str(row.get("command"))
         if not row.get("text") or _about_something_else(row, before) \
                 or not ctx.elsewhere.isdisjoint(command_ids(row)):
             return
-        robot, user = row.get("robot"), row.get("user")
-        if robot is None or user is None or user.get("detectable") is not True:
+        off = _off(row, ctx.th.face_tolerance)
+        if off is not None:
+            self.found.append(self._finding(row, off, ctx))
             return
-        off = _off_heading(robot, user)
-        if off is not None and off > ctx.th.face_tolerance + EPS:
-            ab = ctx.abs.get(row.get("ab", -1))
-            self.found.append(Unfaced(int(row["seq"]), float(row["t"]), str(row.get("app")),
-                                      str(row.get("command")), str(row.get("text")),
-                                      round(off, 1), ctx.at(ab) if ab is not None else ""))
+        known = ctx.abs[ab].words if ab in ctx.abs else None
+        self.talking[ab] = _Words(row, known)
+
+    def _pose(self, ab: int, talk: _Words, row: Row, mover: Blame | None,
+              ctx: Context) -> bool:
+        """One posed line while ``talk``'s AB runs: True when it is found unfaced."""
+        words = talk.words
+        t = float(row["t"])
+        if words is None or t < words[0] - EPS or t > words[1] + EPS:
+            return False
+        off = _off(row, ctx.th.face_tolerance)
+        if off is None:
+            return self._stretch(ab, talk, t, ctx)
+        if any(y.reason == "connect-channel" for y in ctx.running.values()):
+            talk.off_since = None  # (the robot turns to them: as fast as it can)
+            return False
+        if talk.off_since is None:
+            talk.off_since, talk.most, talk.turner = row, off, mover
+        talk.most = max(talk.most, off)
+        return self._stretch(ab, talk, t, ctx, going_on=True)
+
+    def _stretch(self, ab: int, talk: _Words, t: float, ctx: Context,
+                 going_on: bool = False) -> bool:
+        """The stretch the user was off in lasts until ``t`` (and goes on, if
+        ``going_on``): found when it is longer than allowed."""
+        since = talk.off_since
+        if since is None:
+            return False
+        lasted = t - float(since["t"])
+        if lasted > ctx.th.unfaced_for + EPS:
+            self.found.append(self._finding(talk.row, talk.most, ctx, round(lasted, 3),
+                                            int(since["seq"]), talk.turner))
+            del self.talking[ab]
+            return True
+        if not going_on:
+            talk.off_since = None
+        return False
+
+    def _ended(self, ab: int, talk: _Words, t: float, ctx: Context) -> None:
+        """Its AB ended: a stretch still open lasted until its words' end."""
+        words = talk.words
+        if words is not None:
+            self._stretch(ab, talk, min(t, words[1]), ctx)
+        self.talking.pop(ab, None)
+
+    @staticmethod
+    def _finding(row: Row, off: float, ctx: Context, during: float | None = None,
+                 during_seq: int | None = None, turner: Blame | None = None) -> Unfaced:
+        ab = ctx.abs.get(row.get("ab", -1))
+        return Unfaced(int(row["seq"]), float(row["t"]), str(row.get("app")),
+                       str(row.get("command")), str(row.get("text")), round(off, 1),
+                       ctx.at(ab) if ab is not None else "", during, during_seq, turner)
 
     def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
-        return self.found
+        for ab, talk in list(self.talking.items()):
+            if talk.words is not None:
+                self._stretch(ab, talk, min(ctx.t, talk.words[1]), ctx)
+        return sorted(self.found, key=lambda u: (u.seq, u.during_seq or 0))
+
+
+def _wheels(ctx: Context) -> Blame | None:
+    """The running AB that drives the wheels now, if any."""
+    for ab in ctx.running.values():
+        if "locomotion" in ab.devices:
+            return Blame(ab.app, ab.id, ab.command, ctx.at(ab), "drove the wheels")
+    return None
 
 
 def _unfaced_line(u: Unfaced) -> str:
-    return (f"seq {u.seq} t={u.t:g} {u.app} {u.command} \"{_short(u.text)}\"{_where(u.at)}: "
-            f"{u.off:g} deg off")
+    head = f"seq {u.seq} t={u.t:g} {u.app} {u.command} \"{_short(u.text)}\"{_where(u.at)}: "
+    if u.during is None:
+        return head + f"{u.off:g} deg off"
+    turned = f", turned by {u.turned_by}" if u.turned_by is not None else ""
+    return head + (f"the user off for {u.during:g} s while its words ran (from seq "
+                   f"{u.during_seq}, up to {u.off:g} deg){turned}")
 
 
 # ---------------------------------------------------------------- leaving
@@ -188,7 +322,7 @@ class _Talk:
     """When the words run, if known."""
     gap: float = 0.0
     """How far it was from the user when the words began."""
-    pending: list[tuple[Row, Blame | None]] = field(default_factory=list)
+    pending: list[tuple[Row, Blame | None, bool]] = field(default_factory=list)
     """Poses while its words' times are not known yet (they are said after something
     else in its AB): judged at its end."""
 
@@ -204,47 +338,58 @@ class _Leaving:
         self.talking: dict[int, _Talk] = {}
         self.following = 0
         """How many ABs that follow the user run."""
+        self.driving = 0
+        """How many ABs that take the robot somewhere run (a move, following the user)."""
+        self.drove = False
+        """One of them ran since the last posed line."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
         ab = row.get("ab")
         if kind == "start" and isinstance(ab, int):
-            if any(c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
-                self.following += 1
+            self._count(row, 1)
             if row.get("text") and row.get("robot") is not None:
                 known = ctx.abs[ab].words if ab in ctx.abs else None
                 self.talking[ab] = _Talk(ab, row, None, known)
         elif kind == "end" and isinstance(ab, int):
-            if any(c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
-                self.following = max(0, self.following - 1)
+            self._count(row, -1)
             talk = self.talking.pop(ab, None)
             if talk is not None and talk.words is None and ab in ctx.abs:
                 talk.words = ctx.abs[ab].words
-                for pose, mover in talk.pending:
-                    if self._pose(talk, pose, mover, ctx):
+                for pose, mover, driven in talk.pending:
+                    if self._pose(talk, pose, mover, ctx, driven):
                         break
-        if row.get("robot") is not None and row.get("user") is not None and self.talking:
-            mover = self._mover(ctx)
-            for ab_id, talk in list(self.talking.items()):
-                if talk.words is None:
-                    talk.pending.append((row, mover))
-                elif self._pose(talk, row, mover, ctx):
-                    del self.talking[ab_id]
+        if row.get("robot") is not None and row.get("user") is not None:
+            if self.talking:
+                mover = _wheels(ctx)
+                for ab_id, talk in list(self.talking.items()):
+                    if talk.words is None:
+                        talk.pending.append((row, mover, self.driving > 0 or self.drove))
+                    elif self._pose(talk, row, mover, ctx, self.driving > 0 or self.drove):
+                        del self.talking[ab_id]
+            self.drove = False
 
-    def _mover(self, ctx: Context) -> Blame | None:
-        for ab in ctx.running.values():
-            if "locomotion" in ab.devices:
-                return Blame(ab.app, ab.id, ab.command, ctx.at(ab), "drove the wheels")
-        return None
+    def _count(self, row: Row, by: int) -> None:
+        """An AB started (``by`` 1) or ended (-1): how many follow the user, and take the
+        robot somewhere."""
+        commands = str(row.get("command") or "").split("+")
+        if any(c in _FOLLOWS for c in commands):
+            self.following = max(0, self.following + by)
+        if any(c in _TRAVELS for c in commands):
+            self.driving = max(0, self.driving + by)
+            self.drove = self.drove or by > 0
 
-    def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context) -> bool:
-        """One posed line during ``talk``'s AB: True when it counts as leaving."""
+    def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context,
+              driven: bool = True) -> bool:
+        """One posed line during ``talk``'s AB: True when it counts as leaving.
+        ``driven``: something took the robot somewhere since the last posed line (else
+        it did not move on its own: a user who walked into it pushed it)."""
         t = float(row["t"])
         words = talk.words
         if words is None or t < words[0] - EPS or t > words[1] + EPS:
             return False
         robot, user = xy(row["robot"]), xy(row["user"])
-        if talk.was is None or self.following:
+        if talk.was is None or self.following or not driven:
             talk.was = robot  # (from where its words began; following moves it on)
             talk.gap = math.dist(robot, user)
             return False
@@ -292,18 +437,26 @@ class _Elsewhere:
         self.suspended_at: dict[int, tuple[int, tuple[float, float]]] = {}
         self.resumed: dict[int, tuple[int, tuple[float, float]]] = {}
         self.last_start: Row | None = None
+        self.returns: set[int] = set()
+        """The restore-state policy's returns (their Command ids)."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
         tree = row.get("tree")
-        if kind == "request" and isinstance(tree, int) and (
+        if kind == "request" and row.get("reason") == "restore-state":
+            self.returns.update(command_ids(row))
+        elif kind == "request" and isinstance(tree, int) and (
                 row.get("reactive") is True or row.get("reason") == "asap"):
             # a reaction, or a newer request, takes the stream on from where the robot is
             self.suspended_at.pop(tree, None)
             self.resumed.pop(tree, None)
         elif kind == "suspend" and isinstance(tree, int) and ctx.robot is not None:
-            self.suspended_at[tree] = (int(row["seq"]), ctx.robot)
-            self.resumed.pop(tree, None)  # (suspended again before it spoke: from here)
+            back = self.resumed.pop(tree, None)
+            if back is not None and not self.returns.isdisjoint(command_ids(row)):
+                # (suspended again on its way back: it still returns to where it was)
+                self.suspended_at[tree] = back
+            else:  # (suspended again before it spoke: from here)
+                self.suspended_at[tree] = (int(row["seq"]), ctx.robot)
         elif kind == "resume" and isinstance(tree, int) and tree in self.suspended_at:
             self.resumed[tree] = self.suspended_at.pop(tree)
             start = self.last_start
@@ -435,30 +588,58 @@ def _split_line(s: Split) -> str:
 # ---------------------------------------------------------------- silences
 
 class _Silences:
-    """More than ``silence`` seconds with no robot output after a user's answer."""
+    """More than ``silence`` seconds with no robot output after a user's answer: no AB
+    starts, and none runs that shows or says something (a gesture, a motion, words;
+    a Q&A only while its prompt is said)."""
 
     kinds: frozenset[str] | None = frozenset({"start", "end"})
 
     def __init__(self) -> None:
         self.found: list[Silence] = []
-        self.silent: list[tuple[Row, str]] = []
+        self.silent: list[tuple[Row, str, float | None]] = []
+        """Answers not yet followed by output, each with when the silence after it
+        began (None: output still runs)."""
+        self.running: dict[int, tuple[str, float]] = {}
+        """Running ABs -> their Command, and when their output ends (a Q&A's prompt's
+        end; inf for anything else)."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
+        t = float(row["t"])
+        ab = row.get("ab")
         if kind == "start":
-            t = float(row["t"])
-            for end, at in self.silent:
-                gap = round(t - float(end["t"]), 3)
+            for end, at, since in self.silent:
+                gap = round(t - since, 3) if since is not None else 0.0
                 if gap > ctx.th.silence + EPS:
                     self.found.append(Silence(int(end["seq"]), float(end["t"]),
                                               str(end.get("app")), gap, at))
             self.silent = []
-        elif kind == "end" and ctx.exchanges and ctx.exchanges[-1].seq == row.get("seq"):
-            self.silent.append((row, ctx.exchanges[-1].at))
+            if isinstance(ab, int):
+                detail = row.get("detail") or {}
+                listens = "QA" in str(row.get("command") or "").split("+")
+                ends = detail.get("words_end") if listens else None
+                self.running[ab] = (str(row.get("command")),
+                                    float(ends) if isinstance(ends, (int, float)) else
+                                    (t if listens else math.inf))
+        elif kind == "end":
+            if isinstance(ab, int):
+                self.running.pop(ab, None)
+            if ctx.exchanges and ctx.exchanges[-1].seq == row.get("seq"):
+                self.silent.append((row, ctx.exchanges[-1].at, self._quiet_from(t)))
+            elif self.silent and not self._showing(t):
+                self.silent = [(r, at, t if since is None else since)
+                               for r, at, since in self.silent]
+
+    def _showing(self, t: float) -> bool:
+        """Some running AB shows or says something at ``t``."""
+        return any(ends > t + EPS for _c, ends in self.running.values())
+
+    def _quiet_from(self, t: float) -> float | None:
+        return None if self._showing(t) else t
 
     def finish(self, ctx: Context, reactions: Sequence[Reaction]) -> Sequence[Finding]:
-        for row, at in self.silent:
-            if ctx.t - float(row["t"]) > ctx.th.silence + EPS:
+        for row, at, since in self.silent:
+            if since is not None and ctx.t - since > ctx.th.silence + EPS:
                 self.found.append(Silence(int(row["seq"]), float(row["t"]),
                                           str(row.get("app")), None, at))
         return sorted(self.found, key=lambda s: s.seq)
@@ -509,6 +690,10 @@ class _Stuck:
         self.checks: list[tuple[float, int, int]] = []
         self.stuck: dict[str, Stuck] = {}
         self.t = 0.0
+        self.following: dict[int, list[float | str]] = {}
+        """ABs that follow the user (Tracking Human) -> [start, end (inf while it runs),
+        app]: while the robot follows its user, another application's Commands that wait
+        for the wheels are not stuck (the user leads: docs/rules.md 7.6 (1))."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         t = float(row["t"])
@@ -516,6 +701,13 @@ class _Stuck:
             self._check(ctx, before=t)
             self.t = t
         kind = row["kind"]
+        ab = row.get("ab")
+        if kind in ("start", "end") and isinstance(ab, int) and any(
+                c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
+            if kind == "start":
+                self.following[ab] = [t, math.inf, str(row.get("app") or "")]
+            elif ab in self.following:
+                self.following[ab][1] = t
         if kind == "request" and row.get("reason") != "restart":
             # (a Command cut to start again has started once, as a feedback Command's
             # next iteration has: it is not counted as waiting again)
@@ -619,13 +811,26 @@ class _Stuck:
                     Blame(ab.app, ab.id, ab.command, ctx.at(ab), "never ended"))
         for app, waiting in self.waiting.items():
             late = [c for c in waiting.values()
-                    if not c.done and end - c.t > ctx.th.stuck_after + EPS]
+                    if not c.done and end - c.t - self._followed(app, c.t, end)
+                    > ctx.th.stuck_after + EPS]
             if late and app not in self.stuck:
                 first = min(late, key=lambda c: c.seq)
                 self.stuck[app] = Stuck(app, round(first.t + ctx.th.stuck_after, 3),
                                         first.seq, first.id, first.t, "end",
                                         ctx.cmd_at.get(first.id, ""), self._in_way(ctx, first))
         return sorted(self.stuck.values(), key=lambda s: (s.t, s.seq))
+
+    def _followed(self, app: str, lo: float, hi: float) -> float:
+        """How long within [lo, hi] another application's AB followed the user."""
+        spans = sorted((max(lo, float(a)), min(hi, float(b))) for a, b, who
+                       in self.following.values() if who != app)
+        total, reach = 0.0, lo
+        for a, b in spans:
+            a = max(a, reach)
+            if b > a:
+                total += b - a
+                reach = b
+        return total
 
     @staticmethod
     def _in_way(ctx: Context, command: _Command) -> Blame | None:
@@ -684,7 +889,9 @@ class _BargeIn:
                 self._ended(ab, ctx)
 
     def _ended(self, ab: Ab, ctx: Context) -> None:
-        ws, we = ab.words or (0.0, 0.0)
+        # (the words as planned, where the start line said: a cut one's end line says
+        # them as said, up to the cut)
+        ws, we = ab.planned or ab.words or (0.0, 0.0)
         words = len(ab.text.split()) or 1
         per_word = (we - ws) / words
         stopped = min(ab.end or we, we)
@@ -757,10 +964,26 @@ class _Ignored:
             answered = r.first_start if r is not None else None
             if answered is None and ctx.t - t <= allowed + EPS:
                 continue  # (the trace ended before it was due)
+            if r is not None and self._withdrawn(i, r, t + allowed, ctx):
+                continue
             if answered is None or answered - t > allowed + EPS:
                 at = (r.at if r is not None else "") or self.handled.get(i, "")
                 found.append(Ignored(seq, t, text, app, answered, round(allowed, 3), at))
         return found
+
+
+    def _withdrawn(self, i: int, r: Reaction, due: float, ctx: Context) -> bool:
+        """The user's own later words to the same application cancelled its answer before
+        it was due (docs/rules.md section 8: "Stop." over an answer still to come)."""
+        cancelled = [ctx.cancelled.get(cid) for cid in r.commands]
+        if not r.commands or any(c is None for c in cancelled):
+            return False
+        gone = max(c for c in cancelled if c is not None)
+        if gone > due + EPS or (r.first_start is not None and r.first_start < gone - EPS):
+            return False
+        app, t = self.taken[i][3], self.taken[i][1]
+        return any(other == app and t + EPS < when <= gone + EPS
+                   for _s, when, _x, other in self.taken[i + 1:])
 
 
 def _ignored_line(x: Ignored) -> str:

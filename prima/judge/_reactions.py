@@ -36,8 +36,9 @@ import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 
-from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, ReactionState
+from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, Hold, ReactionState
 from prima.judge._findings import Blame, Reaction
+from prima.vocab import MAX_ANSWER_HOLD
 
 __all__ = ["analyse"]
 
@@ -95,24 +96,52 @@ class _Analyst:
                 for cid in ex.reply:
                     replies.update(self.policy_for.get(cid, ()))
         self.replies = replies
+        self.restarts = {again: cut for cut, again in ctx.restarted.items()}
+        """An AB that starts a cut one again -> the cut one."""
         self._user_until: dict[int, float] = {}
+        self._by_tree: dict[int, list[ReactionState]] | None = None
         self._ready: dict[int, float] = {}
 
     # ------------------------------------------------------------ precedence
     def user_until(self, r: ReactionState) -> float:
         """Until when a reaction to the user's own action goes first (7.1): the end of
-        the first utterance said whole in its trees."""
+        the first of its own utterances said whole (not the words of an earlier reaction
+        that its tree says first: another handling's, 7.1)."""
         key = id(r)
         found = self._user_until.get(key)
         if found is None:
             found = math.inf
+            own = set(r.commands)
             for tree in r.trees:
                 for ab in self.ctx.tree_abs.get(tree, ()):
                     if (ab.text and ab.end is not None and ab.end_reason == "completed"
-                            and ab.start >= r.t - EPS):
+                            and ab.start >= r.t - EPS and not own.isdisjoint(ab.ids)):
                         found = min(found, ab.end)
             self._user_until[key] = found
         return found
+
+    def answered(self, app: str, t: float) -> float:
+        """Until when ``app``'s reaction to the user's own action that kept something
+        waiting at ``t`` kept the streams it interrupted waiting (7.6 (1)): until its first
+        words were said whole (or, with none, it was over), at most its bound after it
+        came."""
+        found, latest = math.inf, -1
+        for r in self.ctx.reactions:
+            if r.app == app and r.user and r.t <= t + EPS:
+                until = min(self.user_until(r), r.t + MAX_ANSWER_HOLD, self._gone(r))
+                if until > t - EPS and r.order > latest:  # (the latest holds: 7.6 (1))
+                    found, latest = until, r.order
+        return found
+
+    def _gone(self, r: ReactionState) -> float:
+        """When the last AB of ``r``'s trees ended (inf while one ran at the end)."""
+        last = 0.0
+        for tree in r.trees:
+            for ab in self.ctx.tree_abs.get(tree, ()):
+                if ab.end is None:
+                    return math.inf
+                last = max(last, ab.end)
+        return last if last else math.inf
 
     def reaction_key(self, r: ReactionState, t: float) -> tuple[int, float]:
         if r.answer:  # (the reply to an answer goes on in its Q&A's tree, with its rank)
@@ -121,17 +150,71 @@ class _Analyst:
         return (0 if user else 1, -r.order)
 
     def tree_key(self, tree: int, t: float) -> tuple[int, float]:
+        """How a tree ranks at ``t`` as the reactions that took it over say: as the latest
+        one, and first as the user's own action while a reaction to it whose first words
+        are still ahead is one of them (a later reaction to a perception that joins it
+        leaves it so, 7.1)."""
         taken = [r for r in self.ctx.tree_reactions.get(tree, ()) if r.t <= t + EPS]
         if not taken:
             return (1, math.inf)
-        return self.reaction_key(max(taken, key=lambda r: r.order), t)
+        latest = self.reaction_key(max(taken, key=lambda r: r.order), t)
+        if latest[0] and any(r.user and not r.answer and self.user_until(r) > t + EPS
+                             for r in taken):
+            return (0, latest[1])
+        return latest
 
     def replies_to_answer(self, ab: Ab) -> bool:
-        return not self.replies.isdisjoint(ab.ids)
+        """``ab`` says (or turns or returns before) the words that reply to an answer
+        (7.4); not once the user cut them with words an application took: said again,
+        they are words like any (7.6 (5))."""
+        if self.replies.isdisjoint(ab.ids):
+            return False
+        cut = self.restarts.get(ab.id)
+        seen = {ab.id}
+        while cut is not None and cut not in seen:  # (back through its restarts)
+            if self.ctx.user_cuts.get(cut):
+                return False
+            seen.add(cut)
+            cut = self.restarts.get(cut)
+        return True
 
-    def is_reply(self, r: ReactionState) -> bool:
-        """``r`` answers a heard answer with words (7.4): the exchange's reply."""
-        return r.answer and not self.replies.isdisjoint(r.commands)
+    def is_reply(self, r: ReactionState, t: float = -math.inf) -> bool:
+        """``r`` answers a heard answer with words (7.4): the exchange's reply, which
+        goes first, until ``t`` if the user cut it with words an application took by then
+        (7.6 (5): what those words start goes first)."""
+        return r.answer and not self.replies.isdisjoint(r.commands) \
+            and not self.user_cut(r) <= t + EPS
+
+    def user_cut(self, r: ReactionState) -> float:
+        """When the user's words, which an application took, cut ``r``'s words (inf:
+        they did not)."""
+        cuts = self.ctx.user_cuts
+        return min((ab.until(self.end) for cid in r.commands for ab in self.cmd_abs.get(cid, ())
+                    if ab.end_reason == "barge-in" and cuts.get(ab.id)), default=math.inf)
+
+    def demoted(self, app: str, tree: int, t: float, seq: int | None = None) -> bool:
+        """``app`` had lost its precedence at ``t`` (as of the line ``seq``, if given), as
+        far as ``tree``'s ABs go: not for a reaction to the user's own action before its
+        first words (7.6 (4)), nor for the reply to the user's answer to its Q&A (its
+        words, or its next question) before its first words."""
+        if not self.ctx.demoted_at(app, t, seq):
+            return False
+        taken = [r for r in self.ctx.tree_reactions.get(tree, ()) if r.t <= t + EPS]
+        latest = max(taken, key=lambda r: r.order) if taken else None
+        if latest is not None and latest.user and self.user_until(latest) > t + EPS:
+            return False
+        return not any(r.t <= t + EPS and self.user_until(r) > t + EPS
+                       for r in self._answers().get(tree, ()))
+
+    def _answers(self) -> dict[int, list[ReactionState]]:
+        """Tree -> the reactions to heard answers that go on in it (its replies)."""
+        if self._by_tree is None:
+            self._by_tree = {}
+            for r in self.ctx.reactions:
+                if r.answer and r.user:
+                    for tree in r.trees:
+                        self._by_tree.setdefault(tree, []).append(r)
+        return self._by_tree
 
     def goes_first(self, y: Ab, r: ReactionState, low: bool, t: float) -> str:
         """Why ``y``, of another application, went first over the reaction ``r`` (whose
@@ -140,7 +223,9 @@ class _Analyst:
         ctx = self.ctx
         if self.replies_to_answer(y):
             return "a reply to its answer (7.4)"
-        if ctx.demoted_at(y.app, t):
+        # (one that started in the instant its app lost its precedence, before the line
+        # that says so, started with it)
+        if self.demoted(y.app, y.tree, t, y.seq if abs(t - y.start) <= EPS else None):
             return ""
         if y.low and not low:
             return ""
@@ -148,7 +233,7 @@ class _Analyst:
             return "keeps the channel (rule 4.1)"
         if ctx.block_open(y.app, t):
             return "its begin/end block (rule 3)"
-        if self.is_reply(r):
+        if self.is_reply(r, t):
             return ""  # (no other reaction goes before the words that reply to an answer)
         theirs, mine = self.tree_key(y.tree, t), self.reaction_key(r, t)
         if theirs < mine:
@@ -156,10 +241,14 @@ class _Analyst:
                     else "the latest reaction first (4.2)")
         return ""
 
-    def may_cut(self, y: Ab, r: ReactionState, low: bool, t: float) -> str:
-        """Empty if the reaction may cut ``y`` (running at ``t``); else why not."""
+    def may_cut(self, y: Ab, r: ReactionState, low: bool, t: float, turn: bool = False) -> str:
+        """Empty if the reaction may cut ``y`` (running at ``t``); else why not. ``turn``:
+        for the turn to the user put before its words, which may cut its own
+        application's other stream too, for a reaction to the user's own action
+        (docs/rules.md 7.6 (1) and (3))."""
         ctx = self.ctx
-        if y.app == r.app:
+        if y.app == r.app and not (turn and r.user and y.tree not in r.trees
+                                   and self.user_until(r) > t + EPS):
             return "its own application's"
         if not y.cuttable:
             return "uncut: not interruptible"
@@ -171,15 +260,16 @@ class _Analyst:
             return "uncut: a reply to its answer (7.4)"
         if ctx.block_open(y.app, t):
             return "uncut: in a begin/end block"
-        if y.listens and (y.words is None or t >= y.words[1] - EPS):
+        said = y.planned or y.words
+        if y.listens and (said is None or t >= said[1] - EPS):
             return "uncut: a Q&A listening"
-        if ctx.demoted_at(r.app, t):
+        if ctx.demoted_at(r.app, t) and not (r.user and self.user_until(r) > t + EPS):
             return "uncut: the reacting application lost its precedence"
         if low and not y.low:
             return "uncut: it keeps the channel"
         if y.low and not low:
             return ""
-        if ctx.demoted_at(y.app, t):
+        if self.demoted(y.app, y.tree, t):
             return ""
         if self.reaction_key(r, t) < self.tree_key(y.tree, t):
             return ""
@@ -188,9 +278,11 @@ class _Analyst:
     @staticmethod
     def boundary(y: Ab, t: float) -> float:
         """Where a cut asked for at ``t`` ends ``y``: the end of the word under way, or
-        at once (a step later at most)."""
-        if y.words is not None and y.words[0] - EPS <= t < y.words[1] - EPS and y.text:
-            ws, we = y.words
+        at once (a step later at most). The words spread as planned when they started
+        (a cut AB's end line says only what was said)."""
+        words = y.planned or y.words
+        if words is not None and words[0] - EPS <= t < words[1] - EPS and y.text:
+            ws, we = words
             n = max(1, len([w for w in y.text.split() if w != "/"]))
             per = (we - ws) / n
             k = math.floor((t - ws) / per + 1e-9) + 1
@@ -214,11 +306,13 @@ class _Analyst:
         return sorted(found.values(), key=lambda ab: ab.seq)
 
     def waits(self, r: ReactionState, own: set[int], devices: frozenset[str], low: bool,
-              t0: float, seq0: int, t1: float, ready: float | None = None
+              t0: float, seq0: int, t1: float, ready: float | None = None,
+              turn: bool = False
               ) -> tuple[list[tuple[float, float, Blame]], list[tuple[float, float, Ab]]]:
         """What rightly held ``devices`` within [t0, t1], and what took them wrongly.
         ``own``: the reaction's Commands (its own ABs never count against it);
-        ``ready``: when it could first ask for a cut (after its own AB before it)."""
+        ``ready``: when it could first ask for a cut (after its own AB before it);
+        ``turn``: the devices of a turn to the user put before it (:meth:`may_cut`)."""
         ready = t0 if ready is None else max(t0, ready)
         ctx = self.ctx
         allowed: list[tuple[float, float, Blame]] = []
@@ -231,11 +325,17 @@ class _Analyst:
                 allowed.append((y.start, y_end, self._blame(y, "its own")))
                 continue
             running = y.start < t0 - EPS or (abs(y.start - t0) <= EPS and y.seq < seq0)
-            if running:
-                why = self.may_cut(y, r, low, ready)
-                stop = self.boundary(y, ready)
-                if not why and y.listens and y.words is not None \
-                        and stop >= y.words[1] - EPS:
+            # (one that started while the reacting application had lost its precedence
+            # started rightly: at its regaining, it is as one running at the event)
+            regained = None if running else self._regained(r, y.start)
+            if regained is not None and y_end <= regained + EPS:
+                continue  # (over before it regained its precedence: that wait covers it)
+            if running or regained is not None:
+                when = ready if regained is None else max(ready, regained)
+                why = self.may_cut(y, r, low, when, turn)
+                stop = self.boundary(y, when)
+                said = y.planned or y.words
+                if not why and y.listens and said is not None and stop >= said[1] - EPS:
                     why = "uncut: a Q&A on the last word of its prompt, then listening"
                 if why:
                     allowed.append((y.start, y_end, self._blame(y, why, y_end)))
@@ -256,10 +356,25 @@ class _Analyst:
                 took.append((y.start, y_end, y))
         allowed += self._holds(r, own, low, t0, t1)
         if ctx.demoted_within(r.app, t0, t1):
+            # (a reaction to the user's own action is not rationed before its first words:
+            # docs/rules.md 7.6 (4))
+            since = self.user_until(r) if r.user else -math.inf
             for lo, hi in ctx.demoted.get(r.app, ()):
-                allowed.append((lo, hi, Blame(r.app, None, "", "", "it had lost its "
-                                              "precedence (its wait share)", hi)))
+                if hi > since:
+                    allowed.append((max(lo, since), hi, Blame(
+                        r.app, None, "", "", "it had lost its precedence (its wait share)",
+                        hi)))
         return allowed, took
+
+    def _regained(self, r: ReactionState, t: float) -> float | None:
+        """When ``r``'s application regained its precedence, if it had lost it at ``t``
+        (None if it had not, or ``r`` was not rationed then: 7.6 (4))."""
+        if r.user and self.user_until(r) > t + EPS:
+            return None
+        for lo, hi in self.ctx.demoted.get(r.app, ()):
+            if lo - EPS <= t < hi - EPS:
+                return hi
+        return None
 
     def ready(self, y: Ab) -> float:
         """When ``y`` was ready to start, as far as the trace tells: when the AB before it
@@ -295,7 +410,10 @@ class _Analyst:
                 continue
             if h.reason == "reserved" and h.before is not None:
                 nxt = self.ctx.abs.get(h.before)
-                if nxt is None or not self.goes_first(nxt, r, low, h.t):
+                if nxt is None:
+                    out += self._kept_for_gone(r, h, t1)
+                    continue
+                if not self.goes_first(nxt, r, low, h.t):
                     continue
                 until = min(nxt.start, t1)
                 out.append((h.t, until, self._blame(nxt, "kept for a reaction's next AB "
@@ -306,10 +424,28 @@ class _Analyst:
                 out.append((h.t, min(until, t1), Blame(h.holder, None, "", "",
                                                        "its begin/end block (rule 3)",
                                                        until)))
+            elif h.reason == "answering":
+                until = min(self.answered(h.holder, h.t), t1)
+                out.append((h.t, until, Blame(h.holder, None, "", "",
+                                              "the user's own action answered first "
+                                              "(7.6 (1))", until)))
             elif h.reason == "keep-channel" and low:
                 out.append((h.t, t1, Blame(h.holder, None, "", "",
                                            "keeps the channel (rule 4.1)", t1)))
         return out
+
+    def _kept_for_gone(self, r: ReactionState, h: Hold, t1: float
+                       ) -> list[tuple[float, float, Blame]]:
+        """A hold that kept ``r``'s devices for another reaction's next AB that never
+        started: rightly, while that reaction's stream goes before ``r``, until its
+        application cancelled the AB (a newer request of its own replaced it)."""
+        gone = self.ctx.cancelled_ab.get(h.before or -1)
+        if gone is None or gone[1] is None or \
+                not self.tree_key(gone[1], h.t) < self.reaction_key(r, h.t):
+            return []
+        until = min(gone[0], t1)
+        return [(h.t, until, Blame(h.holder, h.before, "", "",
+                                   "kept for a reaction's next AB (7.1)", until))]
 
     def _requested_ids(self, ab: int) -> tuple[int, ...]:
         return tuple(cid for cid, found in self.ctx.cmd_ab.items() if found == ab)
@@ -327,28 +463,42 @@ class _Analyst:
         mine.sort(key=lambda ab: ab.seq)
         first = mine[0] if mine else None
         devices = set(r.devices)
-        put: list[tuple[frozenset[str], float, int]] = []
-        """A policy's AB put before the first Command: its devices, from its request."""
+        put: list[tuple[frozenset[str], float, int, bool]] = []
+        """A policy's AB put before the first Command: its devices, from its request, and
+        whether it turns the robot to the user."""
         for cid in self.policy_for.get(r.commands[0], ()) if r.commands else ():
             for ab in self.cmd_abs.get(cid, ()):
                 asked = self.ctx.requested_at.get(ab.id, (r.t, r.seq))
-                put.append((ab.devices - devices, *asked))
+                put.append((ab.devices - devices, *asked, ab.reason == "connect-channel"))
                 devices |= ab.devices
         low = any(ab.low for ab in mine[:1]) if first is not None else False
         t1 = first.start if first is not None else self._over(r)
         ready = r.t
         behind = self.ctx.abs.get(r.before) if r.before is not None else None
+        waiting = self.ctx.requested.get(r.before) if r.before is not None else None
         if behind is not None and behind.app == r.app:  # after its own AB, still to end
-            ready = self._last_of(behind).until(self.end)  # (said again if cut: 7.3 (2))
+            last = self._last_of(behind)  # (said again if cut: 7.3 (2))
+            # (a restart still to start when the trace ends: it waited all along)
+            ready = self.end if last.id in self.ctx.restarted else last.until(self.end)
+        elif behind is None and r.before is not None and waiting is not None \
+                and waiting[0] == r.app:
+            # (after its own AB that never started, a cut AB's restart say: it waited for
+            # it all along, or until the application cancelled it)
+            gone = self.ctx.cancelled_ab.get(r.before)
+            ready = self.end if gone is None else gone[0]
         allowed, took = self.waits(r, own, frozenset(r.devices), low, r.t, r.seq, t1, ready)
-        for extra, t_put, seq_put in put:
+        for extra, t_put, seq_put, turn in put:
             if extra:  # (the turn's wheels count from when the turn was put in line)
                 more, taken = self.waits(r, own, extra, low, t_put, seq_put, t1,
-                                         max(ready, t_put))
+                                         max(ready, t_put), turn)
                 allowed += [(max(a, t_put), b, blame) for a, b, blame in more]
                 took += [(max(a, t_put), b, y) for a, b, y in taken]
         if behind is not None and ready > r.t:
             allowed.append((r.t, ready, self._blame(behind, "after its own AB", ready)))
+        elif waiting is not None and ready > r.t:
+            allowed.append((r.t, ready, Blame(r.app, r.before, waiting[1], waiting[2],
+                                              "after its own AB, never started",
+                                              round(ready, 3))))
         residual = _measure(((a, b) for a, b, _ in allowed), r.t, t1)
         free = max(0.0, (t1 - r.t) - residual)
         spoken = [ab for ab in mine if ab.text and not set(ab.ids).isdisjoint(r.commands)]
@@ -381,11 +531,19 @@ class _Analyst:
         (a return put before the words, a restart) has its devices rightly held."""
         t0 = first.start
         t1 = heard.start if heard is not None else self.end
+        if heard is None:  # (what it had still to say, its own app cancelled: from then)
+            gone = [self.ctx.cancelled.get(cid) for cid in r.commands
+                    if cid not in self.ctx.cmd_ab]
+            if gone and all(g is not None for g in gone):
+                t1 = min(t1, max(g for g in gone if g is not None))
         if t1 <= t0 + EPS:
             return 0.0
         target = heard or (spoken[0] if spoken else None)
         devices = (target.devices if target is not None else frozenset()) | TALK_DEVICES
-        allowed, _took = self.waits(r, own, devices, False, t0, first.seq, t1)
+        # (the words could ask for a cut only once the reaction's AB before them ended:
+        # a Q&A then on the last word of its prompt was no longer to be cut)
+        ready = self.ready(target) if target is not None else None
+        allowed, _took = self.waits(r, own, devices, False, t0, first.seq, t1, ready)
         spans = [(a, b) for a, b, _ in allowed]
         for ab in mine:
             spans.append((ab.start, ab.until(self.end)))
@@ -398,7 +556,8 @@ class _Analyst:
 
     def _last_of(self, ab: Ab) -> Ab:
         """The AB that last starts ``ab`` again (a cut AB's restart, and its restart's),
-        or ``ab`` itself."""
+        or ``ab`` itself; one whose own restart never started is still cut and waiting
+        (``ctx.restarted`` names it)."""
         seen = {ab.id}
         while (again := self.ctx.abs.get(self.ctx.restarted.get(ab.id, -1))) is not None \
                 and again.id not in seen:
@@ -416,17 +575,32 @@ class _Analyst:
         return self.end
 
     def _unheard(self, r: ReactionState, spoken: Sequence[Ab]) -> bool:
-        """Its words were never heard whole: cut and never said again, or never said
-        long after the event; not if its own application cancelled them, nor if the
-        user spoke over them."""
-        words_cmds = {cid for ab in spoken for cid in ab.ids} or set(r.commands[:1])
-        if words_cmds <= self.ctx.cancelled.keys():
-            return False
-        if any(ab.end_reason == "interrupt" for ab in spoken):
-            return True
-        if any(ab.end_reason == "barge-in" for ab in spoken):
-            return False  # (the user spoke over them: theirs to cut, docs/rules.md 7.5)
-        return self.end - r.t > self.th.stuck_after + EPS
+        """Its words were never heard whole: cut and said again but not whole, cut and
+        not said again long after (still waiting for their turn when the trace ended
+        is not unheard yet), or never said long after the event; not if its own
+        application cancelled them, nor if they were cut and its request said to drop
+        them then (docs/rules.md 7.6 (5): words the user cut still count if they were to
+        be said again)."""
+        cancelled = self.ctx.cancelled
+        if spoken:
+            if {cid for ab in spoken for cid in ab.ids} <= cancelled.keys():
+                return False
+        else:  # (none said: what never started is what would have said them)
+            never = [cid for cid in r.commands if cid not in self.ctx.cmd_ab]
+            if never and all(cid in cancelled for cid in never):
+                return False
+        cut = [ab for ab in spoken if ab.end_reason in ("interrupt", "barge-in")]
+        if cut and any(ab.dropped for ab in cut):
+            return False  # (cut, and their request said to drop them then)
+        again = [self.ctx.abs[self.ctx.restarted[ab.id]] for ab in cut
+                 if ab.end_reason == "interrupt" and self.ctx.restarted.get(ab.id) in self.ctx.abs]
+        if any(a.end is not None for a in again):
+            return True  # (cut for another reaction, and said again but not whole)
+        if again:
+            return False  # (being said again when the trace ends: not unheard yet)
+        # never said again yet: unheard once they waited longer than anything may
+        since = max((ab.until(self.end) for ab in cut), default=r.t)
+        return self.end - since > self.th.stuck_after + EPS
 
     @staticmethod
     def _top(allowed: list[tuple[float, float, Blame]]) -> tuple[Blame, ...]:

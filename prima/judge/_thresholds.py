@@ -49,8 +49,9 @@ LIMITS: tuple[Limit, ...] = (
           "a reaction whose words are never heard whole (cut and never said again, or "
           "never said)"),
     Limit("unfaced", "talking unfaced", "utterances unfaced allowed",
-          "an utterance started while the user is detectable and more than the "
-          "tolerance off the robot's heading"),
+          "an utterance said while the user is detectable and more than the tolerance "
+          "off the robot's heading: at its start, or for more than a second in a row "
+          "while its words run"),
     Limit("leaving", "leaving while talking", "leavings while talking allowed",
           "the robot moving away from the user on its own while words addressed to "
           "them run (following the user is not leaving)"),
@@ -107,6 +108,9 @@ PARAMETERS: tuple[Parameter, ...] = (
               "(e.g. 0.2)"),
     Parameter("face_tolerance", FACE_TOLERANCE, "DEGREES",
               "largest angle to the user still counted as facing (default 30)"),
+    Parameter("unfaced_for", 1.0, "SECONDS",
+              "how long, in a row, the user may be off to the side while the robot's "
+              "words run (default 1)"),
     Parameter("leave_distance", 0.3, "METRES",
               "how far the robot may move away from the user while talking (default 0.3)"),
     Parameter("resume_distance", RESTORE_DISTANCE, "METRES",
@@ -151,7 +155,7 @@ class Thresholds:
     __slots__ = ("answer_slack", "barge_in_slack", "face_tolerance", "leave_distance",
                  "limits", "react_within", "reaction_slack", "recovery_slack",
                  "resume_distance", "search_after", "silence", "stuck_after",
-                 "utterance_slack")
+                 "unfaced_for", "utterance_slack")
 
     reaction_slack: float
     utterance_slack: float
@@ -160,6 +164,7 @@ class Thresholds:
     recovery_slack: float
     react_within: float | None
     face_tolerance: float
+    unfaced_for: float
     leave_distance: float
     resume_distance: float
     silence: float

@@ -83,6 +83,10 @@ class Rule(str, enum.Enum):
     to a perception or network event does not overtake it (docs/rules.md 7.1)."""
     REACTIVITY = "reactivity"
     """It is the latest reactive AB (response speed)."""
+    ANSWERING = "answering"
+    """Its stream waits, on every device, while a reaction to the user's own action that
+    interrupted it says its first words (a suspension, or a hold of a stream not yet
+    under way; docs/rules.md 7.6 (1)): a guide does not drive on while it answers."""
     PARENT_FINISHED = "parent-finished"
     """Its before node just finished: it continues the active stream."""
     RESUME_STREAM = "resume-stream"

@@ -27,7 +27,7 @@ budget, :mod:`._fairness`) holds nothing with its streams and blocks.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from prima.catalog import Catalog, Priority
 from prima.errors import MediationError
@@ -43,6 +43,7 @@ __all__ = ["Block", "Holds", "Stream"]
 # from its class costs far more than a module global in Python 3.11.
 _LOW = Priority.LOW
 _KEEP_CHANNEL = Rule.KEEP_CHANNEL
+_RESTORE_STATE = Rule.RESTORE_STATE
 _BLOCK = Rule.BLOCK
 _STREAM_HOLD = Rule.STREAM_HOLD
 
@@ -95,8 +96,11 @@ class Holds:
     """Streams, blocks, the channel rule, parked ABs and their deadlines."""
 
     def __init__(self, apps: Mapping[str, App], wm: WorkingMemory, log: DecisionLog,
-                 catalog: Catalog, clock: Clock) -> None:
+                 catalog: Catalog, clock: Clock, resting: Sequence[Node] = ()) -> None:
         self._apps = apps
+        self._resting = resting
+        """Words a false interruption cut, waiting out the robot's pause to go on: their
+        application is still talking with the user (the channel rule)."""
         self._clock = clock
         self._wm = wm
         self._log = log
@@ -112,9 +116,17 @@ class Holds:
         self._reserve_parked: list[Node] = []
         """ABs parked because a reaction's next AB keeps one of their devices: they take
         their places again at every end, and when a next AB is cancelled."""
+        self._answer_parked: list[Node] = []
+        """ABs parked because a reaction to the user's own action answers first
+        (docs/rules.md 7.6 (1)): they take their places again when one stops keeping
+        the streams it interrupted waiting."""
+        self._answer_held: dict[AbId, str] = {}
+        """Waiting ABs of streams not yet under way held back while a reaction answers
+        the user (a hold decision was emitted) -> the app said to answer."""
         self._channel_held: set[AbId] = set()
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
-        self._reserved: set[AbId] = set()
+        self._reserved: dict[AbId, AbId] = {}
+        """ABs said to be kept for another reaction's next AB -> that AB."""
         """Waiting ABs kept from a reaction's reserved device (a hold decision was
         emitted)."""
         self._kept: dict[AbId, str] = {}
@@ -143,13 +155,24 @@ class Holds:
                 or (blk is not None and not blk.expired and blk.tree is tree))
 
     def holder(self, node: Node) -> tuple[Rule, App] | None:
-        """Another app's talk, block or armed stream hold that keeps ``node`` from starting."""
+        """Another app's talk (its words under way, or waiting out the robot's pause after
+        a false interruption), block or armed stream hold that keeps ``node`` from
+        starting. A return of the restore-state policy's waits for any talk, its own
+        application's too: the mediator's own move never turns the robot away from words
+        addressed to the user (docs/rules.md 7.6 (3))."""
         if node.priority is _LOW:
             busy = self._wm.busy
+            anyone = node.commands[0].internal is _RESTORE_STATE
             for d in self._talk:
                 talker = busy.get(d)
-                if talker is not None and talker.app is not node.app:
+                if talker is not None and (talker.app is not node.app or anyone):
                     return _KEEP_CHANNEL, talker.app
+            if self._resting:  # (a pause in its words is no end of its talk: 7.5)
+                now = self._clock.now()
+                for n in self._resting:
+                    if n.state is NodeState.WAITING and (n.app is not node.app or anyone) \
+                            and n.not_before > now:
+                        return _KEEP_CHANNEL, n.app
         if not self.opened:
             return None
         for other in self._apps.values():
@@ -229,7 +252,9 @@ class Holds:
         if self._channel_held:
             self._channel_held.discard(node.id)
         if self._reserved:
-            self._reserved.discard(node.id)
+            self._reserved.pop(node.id, None)
+        if self._answer_held:
+            self._answer_held.pop(node.id, None)
         if not self.opened:
             return
         app = node.app
@@ -239,6 +264,8 @@ class Holds:
             blk.started = True
             blk.deadline = self._clock.after(blk.watchdog)
             self._step_aside(blk.devices)
+            self.refile_answering()  # (a block under way is concluded: 7.6 (1) holds
+            # none of its app's ABs on its devices any more)
         st = self._streams.get(app.name)
         if st is not None:
             st.devices.update(node.devices)
@@ -249,12 +276,17 @@ class Holds:
         or rank otherwise); those still held are parked again."""
         if self._channel_held and not node.devices.isdisjoint(self._talk):
             self._wm.dirty.update(self._channel_devices)
+        self.refile_talk()
+        if self._reserve_parked:
+            self.refile_reserved()
+
+    def refile_talk(self) -> None:
+        """Re-file what the channel rule parked: a talk ended, or the robot's pause after
+        a false interruption is over (one still held is parked again in the next round)."""
         if self._talk_parked:
             parked, self._talk_parked = self._talk_parked, []
             for n in parked:
                 self._wm.refile(n)
-        if self._reserve_parked:
-            self.refile_reserved()
 
     def refile_reserved(self) -> None:
         """Re-file the ABs parked for a reaction's next AB (one still kept is parked
@@ -266,11 +298,33 @@ class Holds:
             self._unkeep(n)
             self._wm.refile(n)
 
+    def refile_answering(self) -> None:
+        """Re-file the ABs a reaction to the user's own action held (one still held, by
+        it or another, is parked again in the next round)."""
+        if not self._answer_parked:
+            return
+        parked, self._answer_parked = self._answer_parked, []
+        for n in parked:
+            self._unkeep(n)
+            self._wm.refile(n)
+
+    def answering(self, node: Node, by: App) -> None:
+        """Record that ``by``'s reaction to the user's own action holds back ``node``, of a
+        stream not yet under way (once per AB and answering app: docs/rules.md 7.6 (1))."""
+        if self._answer_held.get(node.id) != by.name:
+            self._answer_held[node.id] = by.name
+            self._log.ab(DecisionKind.HOLD, Rule.ANSWERING, node,
+                         f"while {by.name} answers the user")
+            self._log.tell(node.app.name, "held", by=by.name, rule=Rule.ANSWERING.value)
+
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
-        self._reserved.discard(node.id)
+        self._reserved.pop(node.id, None)
+        self._answer_held.pop(node.id, None)
         if node.reserving and self._reserve_parked:
             self.refile_reserved()  # a next AB that kept devices is gone
+        if node.not_before and node in self._resting:
+            self.refile_talk()  # words whose pause kept others are gone (7.5)
         self._unkeep(node)
 
     def update(self) -> None:
@@ -303,6 +357,8 @@ class Holds:
             return
         if rule is Rule.RESERVED:
             self._reserve_parked.append(node)
+        elif rule is Rule.ANSWERING:
+            self._answer_parked.append(node)
         else:
             self._parked.append(node)
         if node.id not in self._kept and holder is not node.app:  # (an app's own waits
@@ -313,9 +369,11 @@ class Holds:
     def unpark_all(self) -> None:
         """A hold, block or talk ended or lost its force: re-file the parked ABs (one
         still held is parked again in the next round)."""
-        parked, self._parked = self._parked + self._talk_parked + self._reserve_parked, []
+        parked, self._parked = (self._parked + self._talk_parked + self._reserve_parked
+                                + self._answer_parked), []
         self._talk_parked = []
         self._reserve_parked = []
+        self._answer_parked = []
         for node in parked:
             self._unkeep(node)
             self._wm.refile(node)
@@ -332,8 +390,8 @@ class Holds:
     def reserved(self, node: Node, by: Node) -> None:
         """Record that the next AB ``by`` of another application's reaction (or reply)
         keeps the ready ``node`` from its devices (once per AB: docs/rules.md 7.1)."""
-        if node.id not in self._reserved:
-            self._reserved.add(node.id)
+        if self._reserved.get(node.id) != by.id:  # (once per AB it is kept for)
+            self._reserved[node.id] = by.id
             what = "reply" if by.protected else "reaction"
             self._log.emit(DecisionKind.HOLD, Rule.RESERVED, node,
                            detail=f"devices kept for {by.app.name}'s {what} (AB{by.id} next)",

@@ -7,8 +7,10 @@ The before node is decided in this order:
 2. As soon as possible: cancel the app's own not-yet-started work in trees
    that share a device with the request (a running feedback Command stops
    after its current iteration); the newest running AB there that shares a
-   device, else the newest cancelled node, is the before node; with no such
-   tree the request roots a new one (rule ``asap`` in every case).
+   device with the request's first AB (docs/rules.md 7.6 (2): never one on
+   devices it does not use), else the newest cancelled node, is the before
+   node; with no such tree the request roots a new one (rule ``asap`` in every
+   case).
 3. After latest: the app's latest Command if still in working memory
    (rule ``after-latest``); inside an open stream or block, its tree even if
    the latest Command already finished (rule ``stream``); else a new tree
@@ -77,6 +79,9 @@ class Intake:
         self._log = log
         self._driver = driver
         self._end_grace = config.end_grace
+        self._answer_hold = config.max_answer_hold
+        """How long a reaction to the user's own action may keep the streams it
+        interrupted waiting before its first words (docs/rules.md 7.6 (1))."""
         self._user_first = config.reactions
         """The reactions policy: a reaction to the user's own action goes first."""
         self._exchange = config.exchange
@@ -196,7 +201,8 @@ class Intake:
         link = self._link_follows(app, follows, now) if follows is not None else None
         cancelled: Sequence[Command] = _NONE_CANCELLED
         if order is _ASAP:
-            asap, cancelled = self._link_asap(app, all_devices, now)
+            asap, cancelled = self._link_asap(app, all_devices,
+                                              all_devices if one or group else specs[0][1], now)
             if link is None or asap[1] is not None:  # (its before node)
                 link = asap
         elif link is None:
@@ -211,13 +217,10 @@ class Intake:
             # nothing is restored of where it was suspended (restore-state)
             tree.pose = None
         # before its nodes are filed, so that they rank as its reaction
-        if (reactive or reaction) and reactive_allowed and wm.react(
-                tree, seq, user and self._user_first):
-            self._holds.reranked(tree)
+        if reactive or reaction:
+            self._react(app, tree, seq, reactive, reactive_allowed, user, now)
         turns = self._turns and face_user
-        # (docs/rules.md 7.4) words that follow the user's answer to the app's own Q&A
-        reply = self._exchange and rule is _END_EVENT and parent is not None and any(
-            c.answered for c in parent.commands)
+        reply = rule is _END_EVENT and parent is not None and self._replies(parent, tree, seq)
         if one or group:  # one AB: the usual request, or its calls grouped
             root = wm.new_node(app, tree, cmds, all_devices, prio,
                                reactive and reactive_allowed, seq)
@@ -241,6 +244,30 @@ class Intake:
             wm.enter_waiting(root, parent_finished)
         # (one call: its AB's ``command_ids`` are ``(cid,)``)
         return root.command_ids if one else tuple([c.id for c in cmds]), cancelled
+
+    def _replies(self, parent: Node, tree: Tree, seq: int) -> bool:
+        """A request that follows the end of ``parent``: whether its words reply to the
+        user's answer to the app's own Q&A (docs/rules.md 7.4: they belong to the
+        exchange). Whatever follows such an answer replies to the user's own action, not
+        rationed by the wait share until its first words (7.6 (4))."""
+        if not any(c.answered for c in parent.commands):
+            return False
+        if self._user_first:
+            self._wm.replies(tree, seq)
+        return self._exchange
+
+    def _react(self, app: App, tree: Tree, seq: int, reactive: bool, allowed: bool,
+               user: bool, now: float) -> None:
+        """A request made while handling a reactive event (``reactive``: the handling's
+        first): its tree takes over as that reaction (docs/rules.md 7.1), unless it only
+        continues its tree (``allowed`` false: it follows an end). The handling's later
+        requests are the same reaction as its first."""
+        if reactive:
+            app.reacting = seq
+        if allowed and self._wm.react(tree, seq if reactive or not app.reacting
+                                      else app.reacting, user and self._user_first,
+                                      now + self._answer_hold):
+            self._holds.reranked(tree)
 
     def _chain(self, app: App, tree: Tree, cmds: tuple[Command, ...], specs: Specs,
                parent: Node | None, reactive: bool, turns: bool, seq: int,
@@ -287,6 +314,20 @@ class Intake:
         wm.enter_waiting(node, parent_finished)
         return node
 
+    def beside(self, x: Node, call: Call, spec: CommandSpec, rule: Rule,
+               detail: str) -> Node:
+        """Put an AB of the mediator's own (a policy's) in the running ``x``'s tree to run
+        beside it, at once if its devices allow: it waits for nothing of the tree and
+        nothing waits for it. Its Command is the app's but internal."""
+        wm = self._wm
+        cmd = Command(self.next_command, x.app, call, spec, internal=rule)
+        self.next_command += 1
+        node = wm.new_node(x.app, x.tree, (cmd,), spec.devices_for(call.args), spec.priority,
+                           False, x.seq)
+        self._log.emit(DecisionKind.REQUEST, rule, node, detail=detail, request=[cmd])
+        wm.enter_waiting(node, True)  # (its tree's active stream goes on with it)
+        return node
+
     # ------------------------------------------------------------------ links
     def _link_follows(self, app: App, follows: CommandId, now: float) -> Link | None:
         """CS exceptions (a)/(b): a request made while handling X's end stays in X's tree."""
@@ -301,9 +342,13 @@ class Intake:
             return None
         return (_END_EVENT, node, node.tree, True, True, False)
 
-    def _link_asap(self, app: App, devices: frozenset[str],
+    def _link_asap(self, app: App, devices: frozenset[str], first: frozenset[str],
                    now: float) -> tuple[Link, Sequence[Command]]:
-        """As soon as possible: cancel the app's own trees that share a device."""
+        """As soon as possible: cancel the app's own trees that share a device with the
+        request (``devices``). Its first AB (on ``first``) waits only for a running AB of
+        theirs that holds one of its own devices, which it needs anyway; never for one
+        on devices it does not use (docs/rules.md 7.6 (2)): the rest of the request waits
+        for its devices as any AB does."""
         on = app.trees_on
         if len(devices) == 1:  # (one device: its trees, as they are)
             (device,) = devices
@@ -326,7 +371,7 @@ class Intake:
                         n.commands[0].cut = True
                     if n.cutting:
                         n.dropped = True  # (what is being cut goes: it does not restart)
-                    if n.devices & devices and (running is None or n.id > running.id):
+                    if n.devices & first and (running is None or n.id > running.id):
                         running = n
                 elif n.state in IN_MEMORY:
                     cancelled.extend(self.cancel(n, _ASAP_RULE, now))
@@ -399,8 +444,7 @@ def _replies(node: Node) -> bool:
     """The first AB an answer handler requested is the reply that belongs to the
     exchange (docs/rules.md 7.4): it has words, and is no question of its own (the app's
     next question ends the exchange: a reaction may take over before it)."""
-    return (not any(c.spec.listens for c in node.commands)
-            and any(c.spec.spoken(c.call.args) for c in node.commands))
+    return node.speaks and not any(c.spec.listens for c in node.commands)
 
 
 def _turnable(node: Node, before: Node | None) -> bool:
@@ -408,7 +452,6 @@ def _turnable(node: Node, before: Node | None) -> bool:
     orient the robot itself, and the AB before it in its stream did not aim the
     robot at something on purpose (the words are about that; a policy's return, or an
     AB cancelled before it ran, aimed at nothing)."""
-    return (not any(c.spec.orients for c in node.commands)
-            and any(c.spec.spoken(c.call.args) for c in node.commands)
+    return (node.speaks and not any(c.spec.orients for c in node.commands)
             and (before is None or not any(c.spec.aims and c.internal is None
                                            and not c.cancelled for c in before.commands)))

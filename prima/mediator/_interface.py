@@ -192,7 +192,6 @@ class Driver(Protocol):
         and ``unspoken`` in its outcome. False if it will not be cut (it is on its
         last word, or not running): it ends on its own, as usual."""
 
-
     def stop_words(self, ab_id: AbId) -> bool:
         """Cut the running ``ab_id`` at the end of the word under way, if it is saying
         words now (the user spoke over it: docs/rules.md 7.5), as :meth:`cut` does. False
@@ -210,9 +209,6 @@ class Channel(Protocol):
     def near(self, distance: float) -> bool:
         """The user is detectable no farther than ``distance`` (m) from the robot (the
         blend policy's bound)."""
-
-    def still(self) -> bool:
-        """The robot's body is not moving now (what holds the wheels only watches)."""
 
     def pose(self) -> Mapping[str, Value]:
         """The robot's pose now, as the arguments of the Command that returns it there

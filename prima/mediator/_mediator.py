@@ -29,7 +29,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import TracebackType
 
-from prima.catalog import CONNECT_COMMAND, SPEAKER, Catalog, ParamKind
+from prima.catalog import BODY_DEVICE, CONNECT_COMMAND, SPEAKER, Catalog, ParamKind
 from prima.errors import MediationError
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._fairness import Fairness
@@ -57,6 +57,7 @@ from prima.vocab import (
     ANSWERED,
     DEFAULT_BUDGETS,
     INTERRUPTED_EVENT,
+    MAX_ANSWER_HOLD,
     MAX_BLOCK_WATCHDOG,
     MAX_EAS,
     MAX_NEWS_PER_INSTANT,
@@ -90,6 +91,11 @@ class MediatorConfig:
     max_stream_hold: float = MAX_STREAM_HOLD
     """Upper bound on an explicit stream's hold, whatever the document asks: the
     other application's response speed stays bounded (rule 6c)."""
+
+    max_answer_hold: float = MAX_ANSWER_HOLD
+    """Upper bound on how long a reaction to the user's own action keeps the streams it
+    interrupted waiting on every device before its first words have been said
+    (docs/rules.md 7.6 (1)): words that never come cannot hold the others for ever."""
 
     max_block_watchdog: float = MAX_BLOCK_WATCHDOG
     """Upper bound on a begin/end block's watchdog, whatever the document asks:
@@ -177,7 +183,11 @@ class Mediator:
         self._app_order = 0
         self._wm = WorkingMemory(keep_next=config.reactions)
         self._log = DecisionLog(record)
-        self._holds = Holds(self._apps, self._wm, self._log, catalog, clock)
+        self._resting: list[Node] = []
+        self._beside: dict[AbId, Node] = {}
+        """Words -> the turn to the user running beside them (7.6 (3)): it ends with them."""
+        """Restarts that wait out the pause after a false interruption (``not_before``)."""
+        self._holds = Holds(self._apps, self._wm, self._log, catalog, clock, self._resting)
         # (whether the connect-channel policy can act: what Policies._connect requires)
         turns = (channel is not None and config.connect_channel
                  and catalog.get(CONNECT_COMMAND) is not None)
@@ -194,8 +204,6 @@ class Mediator:
         self._told: dict[str, int] = {}
         self._told_at = -1.0
         """News told per application at ``_told_at`` (:data:`MAX_NEWS_PER_INSTANT`)."""
-        self._resting: list[Node] = []
-        """Restarts that wait out the pause after a false interruption (``not_before``)."""
 
     # ================================================================ looking
     @property
@@ -381,8 +389,10 @@ class Mediator:
             wm.enter_waiting(again, False)  # (its parent has not)
         wm.leave(node)
         cutter = node.cut_by
-        if cutter is not None and cutter.alive and now > node.started_at:
+        if cutter is not None and cutter.alive and cutter is not app \
+                and now > node.started_at:
             # the time the cut throws away counts against the cutting app's wait share
+            # (an app's own stream, cut for its turn to the user, is no budget matter)
             self._fairness.charge(cutter, now - node.started_at)
         by = "user" if by_user else (cutter.name if cutter is not None else "")
         event = Event(INTERRUPTED_EVENT, {
@@ -391,9 +401,12 @@ class Mediator:
             "unspoken": str(values.get("unspoken") or ""), "restarts": not drop,
             "resumes": resumed is not None, "by": by, "reason": reason.value}, now)
         self._call(app, lambda listener: listener.event(event), "event")
+        # (what the app's own as-soon-as-possible request drops as it is cut is cancelled
+        # by the app, as its waiting Commands are: no end event, no Q&A's no-input)
+        told = None if node.dropped else outcome
         for cmd in ended:
             if not cmd.internal:
-                self._tell(app, cmd.id, outcome)
+                self._tell(app, cmd.id, told)
 
     def _tell_cancelled(self, commands: Sequence[Command]) -> None:
         for cmd in commands:
@@ -420,11 +433,25 @@ class Mediator:
         self._depth += 1
         self._log.now = self._clock.now()
         try:
+            if self._beside:
+                turn = self._beside.pop(ab_id, None)
+                if turn is not None and turn.state is _RUNNING:
+                    self._driver.cut(turn.id)  # (a turn beside words ends with them: 7.6 (3))
             self._end(node, outcome)
         finally:
             self._depth -= 1
         if outer:
             self._settle()
+            if BODY_DEVICE in node.devices and SPEAKER in self._wm.busy \
+                    and node.commands[0].internal is not Rule.CONNECT_CHANNEL:
+                # (the wheels are free while words run, after something else than a turn
+                # to the user moved the robot: 7.6 (3))
+                self._depth += 1
+                try:
+                    self._keep_facing()
+                finally:
+                    self._depth -= 1
+                self._settle()
             if self._log.news:
                 self._tell_news()
 
@@ -483,9 +510,10 @@ class Mediator:
         first utterance in full (docs/rules.md 7.1); the robot faces the user for the ABs
         after a turn to the user, whatever happened before it."""
         tree = node.tree
-        if tree.user and node.seq >= (tree.reaction or 0) \
-                and any(c.spec.spoken(c.call.args) for c in node.commands):
+        if tree.user and node.seq >= tree.user_since and node.speaks:
             self._wm.heard(tree)
+        if tree.answered_since and node.seq >= tree.answered_since and node.speaks:
+            self._wm.replied(tree)
         if node.commands[0].internal is Rule.CONNECT_CHANNEL:
             for child in children:
                 child.looked = tree.suspensions
@@ -552,6 +580,27 @@ class Mediator:
                     taker.fresh = False
                 return
             self.post(Event(NOMATCH_EVENT, {"words": words}, now))  # (every app sees it)
+
+    def regard(self) -> None:
+        """The user went off to the side while the robot says words (what the run's
+        Channel answers changed): an utterance addressed to them keeps facing them
+        (docs/rules.md 7.6 (3)): a turn to the user runs beside its words if the wheels
+        are free now (connect-channel); one that cannot start at once is cancelled."""
+        with self._operation():
+            self._keep_facing()
+
+    def _keep_facing(self) -> None:
+        """A turn to the user beside the words under way, if the policy puts one in (the
+        wheels are free and the user off to the side); cancelled if it cannot start at
+        once."""
+        put = self._policies.keep_facing()
+        if put is not None:
+            words, turn = put
+            self._settle()
+            if turn.state is NodeState.WAITING:
+                self._intake.cancel(turn, Rule.CONNECT_CHANNEL, self._log.now)
+            elif turn.state is _RUNNING:
+                self._beside[words.id] = turn
 
     def _talking(self) -> list[Node]:
         """The running ABs with words this robot can stop (an interruptible Command that
@@ -669,11 +718,22 @@ class Mediator:
 
     # ============================================================== deadlines
     def next_deadline(self) -> float | None:
-        """The earliest pending hold timeout, watchdog, budget deadline or end of a pause
-        after a false interruption, if any."""
+        """The earliest pending hold timeout, watchdog, budget deadline, end of a pause
+        after a false interruption, or end of an answer's hold (7.6 (1)), if any."""
         times = (self._holds.next_deadline(), self._fairness.next_deadline(),
-                 self._rest_deadline())
+                 self._rest_deadline(), self._answer_deadline())
         return min((t for t in times if t is not None), default=None)
+
+    def _answer_deadline(self) -> float | None:
+        """When the first reaction to the user's own action that has not said its first
+        words stops keeping the streams it interrupted waiting (its bound: docs/rules.md
+        7.6 (1)), if one is later than now."""
+        answering = self._wm.answering
+        if not answering:
+            return None
+        now = self._clock.now()
+        return min((t.answers_until for t in answering.values() if t.answers_until > now),
+                   default=None)
 
     def _rest_deadline(self) -> float | None:
         resting = self._resting
@@ -687,11 +747,16 @@ class Mediator:
             now = self._log.now
             self._holds.expire(now)
             self._fairness.expire()
+            if any(t.answers_until <= now for t in self._wm.answering.values()):
+                self._wm.answered = True  # (a bound passed: what it held may go)
             if self._resting:
-                for node in [n for n in self._resting if n.not_before <= now]:
+                over = [n for n in self._resting if n.not_before <= now]
+                for node in over:
                     self._resting.remove(node)
                     if node.state is NodeState.WAITING:
                         self._wm.dirty.update(node.devices)  # (its pause is over)
+                if over:  # (its app's talk goes on or ends: what the pause held may go)
+                    self._holds.refile_talk()
 
     # ================================================================ plumbing
     def _operation(self) -> _Operation:

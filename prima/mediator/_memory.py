@@ -74,6 +74,14 @@ class WorkingMemory:
         next AB of a reaction (or a reply to an answer, or an AB a policy put an AB of
         its own before) right after one of its tree's waiting or running ABs
         (docs/rules.md 7.1, 7.4)."""
+        self.answering: dict[TreeId, Tree] = {}
+        """Reactions to the user's own action in working memory that have not said their
+        first words in full (``Tree.user``): they keep the streams they interrupted
+        waiting on every device (docs/rules.md 7.6 (1)), within their bound."""
+        self.answered = False
+        """Some reaction stopped keeping the streams it interrupted waiting (it said its
+        first words, or left) since the selector last looked: what it held may go
+        (``Holds`` re-files them)."""
         self.after_reactions: dict[AbId, Node] = {}
         """Restarts that may wait for the reaction's AB they were cut for (``Node.cut_for``):
         whether they wait turns on ranks, so a re-ranked tree has them looked at again."""
@@ -99,6 +107,9 @@ class WorkingMemory:
         if not tree.live:  # it enters working memory (else it is there: see ``leave``)
             self.trees[tid] = tree
             app.trees[tid] = tree
+            if tree.user:  # (again: an end handler's request continues it, rule 6a)
+                self.answering[tid] = tree
+                self._holding()
         tree.live += 1
         app.live += 1
         counts = tree.devices
@@ -359,6 +370,8 @@ class WorkingMemory:
         if not live:
             self.trees.pop(tree.id, None)
             app.trees.pop(tree.id, None)
+            if self.answering.pop(tree.id, None) is not None:
+                self.answered = True
             if tree.suspended is not None:
                 self.suspended.pop(tree.id, None)
                 tree.suspended = None
@@ -412,13 +425,30 @@ class WorkingMemory:
         self.suspended.pop(tree.id, None)
         self._rerank(tree)
 
-    def react(self, tree: Tree, reaction: int, user: bool = False) -> bool:
-        """The tree takes over as (a later) reaction, to the user's own action if ``user``:
-        re-rank it. Whether its rank changed."""
+    def _holding(self) -> None:
+        """A reaction to the user's own action now keeps the streams it interrupted
+        waiting on every device (docs/rules.md 7.6 (1)): the best waiting AB of each
+        device is looked at again (one it holds steps aside, reserving nothing)."""
+        ranked = self.ranked
+        self.dirty.update(d for d, apps in ranked.items() if apps)
+
+    def react(self, tree: Tree, reaction: int, user: bool = False,
+              answers_until: float = 0.0) -> bool:
+        """The tree takes over as (a later) reaction, to the user's own action if ``user``
+        (it keeps the streams it interrupted waiting until its first words, at the latest
+        until ``answers_until``): re-rank it. Whether its rank changed."""
         before = tree.reaction
         if before is None or before < reaction:
             tree.reaction = reaction
-            tree.user = user
+            # (a later reaction to a perception that joins a reaction to the user's own
+            # action whose first words are ahead leaves it that: the user's words first)
+            if user:
+                tree.user = True
+                tree.user_since = reaction
+                tree.answers_until = answers_until
+                tree.answers_from = self._next_tree  # (what came into being before it)
+                self.answering[tree.id] = tree
+                self._holding()
             if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
                 self._rerank(tree)
                 if before is None and self.keep_next:  # its next ABs keep their devices
@@ -428,11 +458,30 @@ class WorkingMemory:
             return True
         return False
 
+    def replies(self, tree: Tree, seq: int) -> None:
+        """The tree replies (request ``seq``) to the user's answer to its Q&A: its first
+        words from then on are not rationed by the wait share (docs/rules.md 7.6 (4))."""
+        if not tree.answered_since:
+            tree.answered_since = seq
+            if tree.live:
+                self._rerank(tree)
+            if self.answering:  # (an earlier reaction to the user no longer holds it: 7.6 (1))
+                self.answered = True
+
+    def replied(self, tree: Tree) -> None:
+        """The tree said the first words of its reply to the user's answer in full."""
+        if tree.answered_since:
+            tree.answered_since = 0
+            if tree.live:
+                self._rerank(tree)
+
     def heard(self, tree: Tree) -> None:
         """A reaction to the user's own action said its first utterance in full: from now
         on it ranks as any reaction (docs/rules.md 7.1)."""
         if tree.user:
             tree.user = False
+            if self.answering.pop(tree.id, None) is not None:
+                self.answered = True
             if tree.live:
                 self._rerank(tree)
 

@@ -18,6 +18,7 @@ from prima.catalog import (
     RESTORE_COMMAND,
     RESTORE_POSITION_COMMAND,
     Catalog,
+    Priority,
 )
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
@@ -83,7 +84,7 @@ class Policies:
             return True
         if x.turnable and self._connect(x):
             return True  # (the pose is looked at again when the turn has been made)
-        if tree.pose is not None and any(c.spec.spoken(c.call.args) for c in x.commands):
+        if tree.pose is not None and x.speaks:
             tree.pose = None  # the resumed stream's first words start here
         return False
 
@@ -102,7 +103,7 @@ class Policies:
         if any(c.spec.travels for c in x.commands):
             x.tree.pose = None  # the stream takes the robot somewhere itself
             return False
-        if not any(c.spec.spoken(c.call.args) for c in x.commands):
+        if not x.speaks:
             return False  # (a StopMoving, a gesture: the pose is looked at before its words)
         command = RESTORE_COMMAND
         if BODY_DEVICE in x.devices or x.faces or any(c.spec.aims for c in x.commands):
@@ -124,44 +125,49 @@ class Policies:
     def _connect(self, x: Node) -> bool:
         """The connect-channel policy: before the ready utterance ``x`` starts facing
         away from a detectable user, put a turn to the user before it, in its stream
-        (once per AB). Only when the turn's devices are free, or will be within a
-        control period with the turn first in line (:meth:`_turn_waits_for`): an
-        utterance is never kept waiting for anything else on the wheels (a search's
-        turn, a 5 s drive), which a later reaction could take first. True if it now
-        waits for the turn."""
+        (once per AB). Face first, or wait (docs/rules.md 7.6 (3)): an utterance never
+        starts unfaced to be early. The turn waits for the wheels in line, as any AB of
+        its stream; a reaction's turn cuts what the interrupt policy lets it cut there
+        (:meth:`cuttable`). True if it now waits for the turn."""
         x.turnable = False
         spec = self._catalog.get(CONNECT_COMMAND)
-        if self._channel is None or spec is None or not self._config.connect_channel:
-            return False
-        busy = self._wm.busy
-        # (devices in a fixed order: whether the channel is asked, and how often,
-        # must not depend on a set's order, which changes with PYTHONHASHSEED)
-        if any(d in busy and not self._turn_waits_for(busy[d], x)
-               for d in sorted(spec.devices)) or not self._channel.unfaced():
+        if self._channel is None or spec is None or not self._config.connect_channel \
+                or not (self._channel.unfaced() or self._driven_away(x, spec.devices)):
             return False
         self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
                                    f"turns to the user before AB{x.id}")
         return True
 
-    def _turn_waits_for(self, y: Node, x: Node) -> bool:
-        """A turn to the user before ``x`` may wait for the running ``y`` on the wheels:
-        an iteration of a move that breaks the channel (it ends within a control
-        period, and the turn, keeping the channel, outranks the move's next one); for
-        a reaction's utterance, another stream's iteration with the body still
-        (a search's watch: one control period, and the reaction outranks its next
-        one), or an AB the interrupt policy will cut for the turn; or a turn to the user
-        already under way (another application's: this one then has nothing to turn)."""
-        if y.name == CONNECT_COMMAND:
-            return True  # the robot turns to the user already: the turn follows at once
-        if not y.feedback:
-            return x.tree.reaction is not None and self._config.interrupt \
-                and self.cuttable(y, x)
-        if y.priority < x.priority:
-            return True
-        if x.tree.reaction is None or y.tree is x.tree:
-            return False  # (the app's own reaction to the user's words is another tree)
-        return (self._channel is not None and self._channel.still()) or \
-            (self._config.interrupt and self.cuttable(y, x))
+    def _driven_away(self, x: Node, wheels: frozenset[str]) -> bool:
+        """Whether another application's AB that breaks the channel (a move, a return to
+        a pose) holds the wheels the turn to the user needs: faced now, the robot would
+        be turned away while ``x``'s words run, so they face first, or wait (docs/rules.md
+        7.6 (3))."""
+        busy = self._wm.busy
+        for d in wheels:
+            y = busy.get(d)
+            if y is not None and y.app is not x.app and y.priority is Priority.LOW:
+                return True
+        return False
+
+    def keep_facing(self) -> tuple[Node, Node] | None:
+        """The connect-channel policy while words run (docs/rules.md 7.6 (3): the robot
+        keeps facing the user while its words run): the user went off to the side while
+        an utterance addressed to them is under way; if the wheels are free, a turn to
+        the user runs beside its words, in its stream. The words' AB and the turn, if
+        put, are returned."""
+        spec = self._catalog.get(CONNECT_COMMAND)
+        if self._channel is None or spec is None or not self._config.connect_channel:
+            return None
+        busy = self._wm.busy
+        if any(d in busy for d in spec.devices):
+            return None  # (what holds the wheels turns the robot as it will: its doing)
+        talking = sorted({n.id: n for n in busy.values() if n.speaks and n.faces}.items())
+        if not talking or not self._channel.unfaced():
+            return None
+        x = talking[0][1]
+        return x, self._intake.beside(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
+                                      f"keeps facing the user while AB{x.id} speaks")
 
     def acts_on_busy(self, x: Node) -> bool:
         """Whether a policy may act for ``x`` on busy devices: share them (blend) or
@@ -227,8 +233,13 @@ class Policies:
         """Whether the reaction's AB ``x`` may cut the running ``y`` (docs/rules.md 7.3 (2)):
         another application's, outranked, of interruptible Commands its request lets
         be cut, in no block, not blended; never a reply to an answer (7.4), and never
-        twice by another application (a restart is not cut again)."""
-        if y.app is x.app or y.once or y.protected or not preempts(x, y):
+        twice by another application (a restart is not cut again). A reaction to the
+        user's own action turning to the user may cut its own application's other
+        stream there too (7.6 (1) and (3): a search's sweep, a gesture)."""
+        if y.once or y.protected or not preempts(x, y):
+            return False
+        if y.app is x.app and not (y.tree is not x.tree and x.tree.user
+                                   and x.commands[0].internal is Rule.CONNECT_CHANNEL):
             return False
         if y.blended or any(d in self._wm.blending for d in y.devices):
             return False  # blended ABs are never cut

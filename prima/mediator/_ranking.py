@@ -93,7 +93,14 @@ def _exchange(node: Node, _pjf: Collection[int]) -> Key:
 
 
 def _wait_share(node: Node, _pjf: Collection[int]) -> Key:
-    return (1,) if node.app.demoted else (0,)
+    # (docs/rules.md 7.6 (4): a reaction to the user's own action, and a reply to the user's
+    # answer, is not rationed until its first utterance is said in full: the user paces
+    # these, one per action)
+    if node.app.demoted:
+        tree = node.tree
+        return (0,) if (tree.user and tree.reaction is not None) or tree.answered_since \
+            else (1,)
+    return (0,)
 
 
 def _user_first(node: Node, _pjf: Collection[int]) -> Key:
@@ -127,7 +134,8 @@ CRITERIA: tuple[Criterion, ...] = (
     # also when their app lost its precedence: one AB per answer the user gave (the
     # user paces it), and the wait share's bound allows one AB past the share.
     Criterion(Rule.WAIT_SHARE, Scope.TREE, _wait_share, standing=True),
-    # (budget) an app that kept the others waiting beyond its share ranks after them.
+    # (budget) an app that kept the others waiting beyond its share ranks after them, but
+    # for its reaction to the user's own action until its first words (7.6 (4)).
     Criterion(Rule.USER_FIRST, Scope.TREE, _user_first, standing=True),
     # 2. ABs of a reaction first: a reaction to the user's own action until its first
     #    utterance is said in full (docs/rules.md 7.1), ...
@@ -165,6 +173,15 @@ def outranks(x: Node, y: Node) -> bool:
     return _standing(x) < _standing(y)
 
 
+def goes_before(r: Node, x: Node) -> bool:
+    """Whether ``r``'s stream goes before ``x``'s on what an AB keeps whatever the waiting
+    order, priority aside (an exchange's reply, precedence, the user first, the latest
+    reaction): the same for every AB of a tree but a reply's own, so no two trees go
+    before each other, and no chain of ABs waiting for those that go before them
+    closes on itself."""
+    return _standing(r)[1:] < _standing(x)[1:]
+
+
 def keeps_for(r: Node, x: Node) -> bool:
     """Whether the pending next AB ``r`` of a reaction (or a reply) keeps a device it
     will use from the waiting ``x`` of another application (docs/rules.md 7.1): ``r``'s
@@ -180,8 +197,11 @@ def preempts(x: Node, y: Node) -> bool:
     """Whether the waiting AB ``x`` outranks the running AB ``y`` on what a running
     AB keeps (:func:`outranks`). The interrupt policy cuts ``y`` for ``x`` only then,
     and never for an app that lost its precedence (the wait share): a budget that
-    flips back and forth must not cut and restart the same ABs over and over."""
-    if x.app.demoted:
+    flips back and forth must not cut and restart the same ABs over and over. A
+    reaction to the user's own action is not rationed until its first words (7.6 (4)):
+    the user paces those, one per action."""
+    tree = x.tree
+    if x.app.demoted and not ((tree.user and tree.reaction is not None) or tree.answered_since):
         return False
     return outranks(x, y)
 

@@ -27,7 +27,7 @@ from prima.mediator._interface import AbId, AtomicBehavior, Driver
 from prima.mediator._log import DecisionLog
 from prima.mediator._memory import WorkingMemory
 from prima.mediator._policies import Policies
-from prima.mediator._ranking import Rank, keeps_for, outranks
+from prima.mediator._ranking import Rank, goes_before, keeps_for
 from prima.mediator._state import App, Node, NodeState, Tree
 
 __all__ = ["Selector", "atomic_behavior"]
@@ -43,6 +43,7 @@ _BLEND = Rule.BLEND
 _RESTART = Rule.RESTART
 _FREE_DEVICES = Rule.FREE_DEVICES
 _KEEP_CHANNEL = Rule.KEEP_CHANNEL
+_ANSWERING = Rule.ANSWERING
 _NO_DEVICES: frozenset[str] = frozenset()
 _NO_NODES: list[Node] = []  # (never changed)
 _NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
@@ -186,6 +187,9 @@ class Selector:
         """The view of every round that names no AB (it keeps nothing of a round)."""
         self._naming = _Round(wm.index, names=True)
         """The view of every round that names ABs (pointed at them round by round)."""
+        self._answered: list[tuple[Node, Tree]] = []
+        """ABs of streams under way that a round held for a reaction to the user's own
+        action, with its tree: their streams are suspended once the round is over."""
 
     def settle(self) -> None:
         """Run rounds until nothing more can start."""
@@ -198,6 +202,9 @@ class Selector:
             if wm.unreserved:  # what a reaction's next AB kept may go now (7.1)
                 wm.unreserved = False
                 holds.refile_reserved()
+            if wm.answered:  # what a reaction to the user held may go now (7.6 (1))
+                wm.answered = False
+                holds.refile_answering()
             new, dirty, pjf = wm.new, wm.dirty, wm.pjf
             if not (new or dirty or pjf):
                 break
@@ -256,6 +263,8 @@ class Selector:
                     overrun[x.app.name] = x.app
         if later:
             self._suspend_resume(later)
+        if self._answered:
+            self._suspend_for_answers()
         if pjf:
             self._unname(pjf)
             view.name(_NONE_NAMED)  # (it keeps no AB past its round)
@@ -277,6 +286,86 @@ class Selector:
                 wm.resume(tree)
                 if self._holds.opened:
                     self._holds.unpark_all()  # a stream under way again: no hold keeps it
+
+    def _suspend_for_answers(self) -> None:
+        """Suspend the streams whose next AB a round held for a reaction to the user's own
+        action (docs/rules.md 7.6 (1)): at their IU boundary, on every device."""
+        held, self._answered = self._answered, []
+        wm = self._wm
+        log = self._log
+        for x, by in held:
+            tree = x.tree
+            if tree.suspended is None and tree.live:
+                log.ab(_SUSPEND, _ANSWERING, x, f"while {by.app.name} answers the user")
+                log.tell(x.app.name, "suspended", by=by.app.name, rule=_ANSWERING.value)
+                if wm.suspend(tree):
+                    self._policies.suspending(tree)
+            elif tree.live:  # (suspended by another AB's start in the round: held, said so)
+                self._holds.answering(x, by.app)
+
+    def _kept_back(self, x: Node, ready: bool) -> bool:
+        """Whether ``x``, held by no hold, waits all the same: kept for another
+        reaction's next AB (then parked), in its pause after a false interruption, or
+        after the reaction it was cut for."""
+        if self._wm.reserving:
+            r = self._reserved(x)
+            if r is not None:
+                # Kept for the reaction's next AB (docs/rules.md 7.1): it steps aside, like
+                # an AB another app's hold keeps, so that it reserves nothing meanwhile.
+                if ready or self._policies.acts_on_busy(x):  # (it would start, or cut
+                    self._holds.reserved(x, r)  # what holds its devices: said so)
+                self._holds.park(x, Rule.RESERVED, r.app)
+                return True
+        if x.not_before > self._log.now:
+            return True  # (its pause after a false interruption: it keeps its rank)
+        # (one a hold keeps is parked below: it reserves nothing)
+        return x.cut_for is not None and self._after_its_reaction(x, x.cut_for)
+
+    def _held_for_answer(self, x: Node) -> bool:
+        """Whether ``x``'s stream waits while a reaction answers the user (docs/rules.md
+        7.6 (1)): then ``x`` is parked, and its stream, if under way, is suspended once
+        the round is over (else the hold is noted)."""
+        answering = self._answering(x)
+        if answering is None:
+            return False
+        if x.tree.started and x.tree.suspended is None:
+            self._answered.append((x, answering))  # (suspended once the round is over)
+        else:  # (a new stream, or one suspended already, by another AB: held, said so)
+            self._holds.answering(x, answering.app)
+        self._holds.park(x, _ANSWERING, answering.app)
+        return True
+
+    def _answering(self, x: Node) -> Tree | None:
+        """The reaction to the user's own action that keeps ``x``'s stream waiting now
+        (docs/rules.md 7.6 (1)): the latest that has not said its first words (or, with
+        none, is in working memory), within its bound, that interrupted ``x``'s stream
+        (a stream that was there when it became a reaction to the user, and no later
+        reaction). A reply to an answer (7.4),
+        following the user, and an AB of a block under way (rule 3: a started block is
+        concluded) are never held so."""
+        if x.protected:
+            return None
+        tree = x.tree
+        now = self._log.now
+        mine = tree.reaction
+        if tree.answered_since and (mine is None or tree.answered_since > mine):
+            mine = tree.answered_since  # (its reply to the user's answer: as a reaction)
+        found: Tree | None = None
+        for t in self._wm.answering.values():
+            if t is tree or t.answers_until <= now or tree.id >= t.answers_from:
+                continue  # (its own, its bound passed, or a stream that came after it)
+            reaction = t.reaction or 0
+            if mine is not None and mine > reaction:
+                continue  # (a later reaction is a stream of its own, not interrupted; so
+                # is the reply to the user's later answer)
+            if found is None or reaction > (found.reaction or 0):
+                found = t
+        if found is None or all(c.spec.follows_user for c in x.commands):
+            return None
+        block = self._holds.block(x.app)
+        if block is not None and block.reserving and not block.devices.isdisjoint(x.devices):
+            return None
+        return found
 
     def _unname(self, pjf: Mapping[AbId, Node]) -> None:
         """"Parent just finished" lasts one round: at its end, others may rank above
@@ -307,13 +396,16 @@ class Selector:
         it while it waits: no hold parks it (no stream or block is open, and it breaks
         no channel: only a LOW AB is held by another app's talk) and no policy acts on
         busy devices for it (blend, interrupt: not on a busy device it needs that
-        :meth:`Policies.may_act_on` rules out). What the index's answer for a dirty device
+        :meth:`Policies.may_act_on` rules out), and no reaction answers the user (7.6 (1):
+        it may hold what the round looks at). What the index's answer for a dirty device
         is need not be known: ``WorkingMemory.ranked`` counts the waiting, unparked ABs
         on each device by priority, which is whom the index (and a round's named ABs)
         can answer with. This is the common round that follows a start or an end on a
         busy device: most of what a round would cost is finding its candidates.
         """
         wm = self._wm
+        if wm.answering:
+            return False  # (a reaction answers the user: what a round looks at may be held)
         busy = wm.busy
         ranked = wm.ranked
         opened = self._holds.opened
@@ -410,9 +502,11 @@ class Selector:
     def _after_its_reaction(self, x: Node, cut_for: Node) -> bool:
         """Whether the restart ``x`` waits, in its place, for the reaction's AB it was cut
         for (7.3 (2)): while that AB steps aside for another reaction's next AB (7.1) and
-        outranks it; not for a next AB after ``x`` in its own tree (that one waits for
-        ``x``: they would wait for each other)."""
-        if cut_for.state is not _WAITING or not outranks(cut_for, x):
+        its stream goes before ``x``'s, priority aside (``x``'s stream may have become a
+        later reaction since, to the user's own action: then it goes first); not for a
+        next AB after ``x`` in its own tree (that one waits for ``x``: they would wait
+        for each other)."""
+        if cut_for.state is not _WAITING or not goes_before(cut_for, x):
             return False
         # (as it is now, ranks may have moved since; one in x's own tree waits for x)
         return self._reserved(cut_for, besides=x.tree) is not None
@@ -435,22 +529,12 @@ class Selector:
         wm = self._wm
         holds = self._holds
         held = holds.holder(x) if holds.opened or x.priority is _LOW else None
+        if held is None and wm.answering and self._held_for_answer(x):
+            return False
         best = view.best
         ready = self._ready(x, best)
-        reserving = wm.reserving
-        if held is None and reserving:
-            r = self._reserved(x)
-            if r is not None:
-                # Kept for the reaction's next AB (docs/rules.md 7.1): it steps aside, like
-                # an AB another app's hold keeps, so that it reserves nothing meanwhile.
-                if ready:
-                    holds.reserved(x, r)
-                holds.park(x, Rule.RESERVED, r.app)
-                return False
-        if held is None and x.not_before > self._log.now:
-            return False  # (its pause after a false interruption: it keeps its rank)
-        if held is None and x.cut_for is not None and self._after_its_reaction(x, x.cut_for):
-            return False  # (one a hold keeps is parked below: it reserves nothing)
+        if held is None and self._kept_back(x, ready):
+            return False
         x.blended = _NO_DEVICES
         policies = self._policies
         if ready:

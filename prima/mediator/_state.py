@@ -51,7 +51,8 @@ class App:
     """One registration of an application."""
 
     __slots__ = ("name", "kind", "listener", "alive", "order", "latest", "active",
-                 "idle_since", "trees", "trees_on", "live", "demoted", "budgets", "fresh")
+                 "idle_since", "trees", "trees_on", "live", "demoted", "budgets", "fresh",
+                 "reacting")
 
     def __init__(self, name: str, kind: AppKind, listener: AppListener, order: int,
                  budgets: Budgets) -> None:
@@ -77,6 +78,10 @@ class App:
         """Its ABs in working memory (pending, waiting or running): the waiting budget."""
         self.demoted = False
         """It kept others waiting beyond its wait-share budget: it has lost its precedence."""
+        self.reacting = 0
+        """The sequence number of its latest reaction's first request (``reactive``): the
+        requests it makes later in the same handling (``reaction``) are that same reaction
+        (docs/rules.md 7.1), not later ones."""
         self.fresh = False
         """It is handling words of the user's it took (docs/rules.md 7.5): its first request
         after latest starts a stream of its own, which goes before the stream it talked
@@ -119,7 +124,8 @@ class Tree:
     """One AB tree (one Communication Stream)."""
 
     __slots__ = ("id", "app", "live", "running", "suspended", "nodes", "reaction",
-                 "user", "started", "pose", "devices", "parked", "keys", "suspensions")
+                 "user", "started", "pose", "devices", "parked", "keys", "suspensions",
+                 "answers_until", "answers_from", "user_since", "answered_since")
 
     def __init__(self, tid: TreeId, app: App) -> None:
         self.id = tid
@@ -147,9 +153,26 @@ class Tree:
         self.user = False
         """A reaction to the user's own action (a touch, heard speech) that has not yet
         said its first utterance in full: no later reaction of another application to
-        a perception or network event overtakes it (docs/rules.md 7.1)."""
+        a perception or network event overtakes it (docs/rules.md 7.1); a later reaction
+        to such an event that joins the tree leaves it so until then."""
+        self.answered_since = 0
+        """The sequence number of the request with which it replies to the user's answer to
+        its Q&A (words, or its next question), until its first utterance from then on is
+        said in full (0: none): the user's own action, not rationed by the wait share
+        (docs/rules.md 7.6 (4))."""
+        self.user_since = 0
+        """With ``user``: the sequence number of that reaction: its first utterance is
+        the first one of its requests or later ones said in full."""
         self.started = False
         """Some AB of it has started: it is a stream under way, not a new one."""
+        self.answers_until = 0.0
+        """With ``user``: until when, at the latest, it keeps the streams it interrupted
+        waiting on every device before its first words (docs/rules.md 7.6 (1);
+        ``MediatorConfig.max_answer_hold`` after it became a reaction to the user)."""
+        self.answers_from = 0
+        """With ``user``: the first tree id that came into being after it became a reaction
+        to the user: only trees before it (and no later reaction) are streams it
+        interrupted (docs/rules.md 7.6 (1))."""
         self.pose: Mapping[str, Value] | None = None
         """The robot's pose when it was last suspended, until the restore-state
         policy has put its return before the stream's next AB (or found none needed)."""
@@ -178,7 +201,8 @@ class Node:
                  "name", "command_ids", "feedback", "calls", "parked", "turnable", "cutting",
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
-                 "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for")
+                 "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for",
+                 "speaks")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -262,6 +286,8 @@ class Node:
         self.not_before = 0.0
         """It may not start before this instant (an utterance a false interruption cut
         goes on after the robot's pause)."""
+        self.speaks = any(c.spec.spoken(c.call.args) for c in commands)
+        """Some Command of it says words (an utterance, a Q&A's prompt)."""
         first = commands[0]
         call = first.call
         calls: tuple[Call, ...]

@@ -70,6 +70,7 @@ from prima.mediator import (
     Priority,
     Rule,
     Snapshot,
+    TreeView,
 )
 from prima.vocab import DEFAULT_BUDGETS, Budgets
 
@@ -114,6 +115,30 @@ class Streams:
     taken_for: dict[AbId, str] = field(default_factory=dict)
     """Restarts of words the user cut for the app that took them -> that app: they wait
     for its reaction (7.5), whose next AB keeps their devices as another app's would."""
+    user_order: dict[TreeId, int] = field(default_factory=dict)
+    """Reactions to the user's own action -> the order of that reaction's first request
+    (its first words are the first of its requests or later ones said whole)."""
+    user_since: dict[TreeId, float] = field(default_factory=dict)
+    """Reactions to the user's own action -> when they became one (7.6 (1)'s bound)."""
+    user_from: dict[TreeId, TreeId] = field(default_factory=dict)
+    """... -> the first tree id no decision had named by then: the trees before it are
+    the streams it interrupted (a later one is a stream of its own)."""
+    newest: TreeId = -1
+    """The largest tree id any decision named so far."""
+    answer_hold: float = 30.0
+    """How long a reaction to the user keeps the streams it interrupted waiting, at most,
+    while its first words are ahead (``MediatorConfig.max_answer_hold``)."""
+    following: frozenset[str] = frozenset()
+    """The Commands that follow the user (never held so: following is not leaving)."""
+    answered: dict[TreeId, int] = field(default_factory=dict)
+    """Trees replying to the user's answer to their Q&A -> the order of that request,
+    until their first words from then on are said in full: the user's own action, not
+    rationed by the wait share (7.6 (4))."""
+    returns: set[CommandId] = field(default_factory=set)
+    """The restore-state policy's returns (they wait for any talk: 7.6 (3))."""
+    resting: dict[AbId, float] = field(default_factory=dict)
+    """Restarts of words a false interruption cut -> the instant the robot's pause ends
+    (they may not start before it; their application is still talking meanwhile)."""
 
     def keeps(self, r: NodeView, n: NodeView) -> bool:
         """Whether ``r`` (a reaction's next AB) is of an app it may keep ``n`` from: another
@@ -147,7 +172,11 @@ class _View:
     def of(cls, snap: Snapshot, talk: frozenset[str], streams: Streams) -> _View:
         nodes = {n.ab: n for tree in snap.trees for n in tree.nodes}
         busy = {d: nodes[ab] for d, ab in snap.busy}
-        talkers = frozenset(n.app for d, n in busy.items() if d in talk)
+        # (an app whose words a false interruption cut, waiting out the pause to go on,
+        # is still talking: 7.5)
+        talkers = frozenset([n.app for d, n in busy.items() if d in talk] + [
+            nodes[ab].app for ab, due in streams.resting.items()
+            if due > snap.t and ab in nodes and nodes[ab].state is NodeState.WAITING])
         waiting = sorted((nodes[ab] for ab in snap.waiting), key=rank_key(snap, streams))
         def in_line(p: NodeView) -> bool:
             """Waiting or running, or pending behind a policy's AB put before it (that
@@ -198,8 +227,11 @@ class _View:
                 and not self.behind_hold(r, n.app)]
 
     def channel_held(self, n: NodeView) -> bool:
-        """A Command that breaks the channel waits while another app talks."""
-        return n.priority is Priority.LOW and bool(self.talkers - {n.app})
+        """A Command that breaks the channel waits while another app talks; the
+        restore-state policy's return, while any app talks (its own too: 7.6 (3))."""
+        return n.priority is Priority.LOW and bool(
+            self.talkers if not self.streams.returns.isdisjoint(n.command_ids)
+            else self.talkers - {n.app})
 
     def holders(self, n: NodeView) -> list[str]:
         """Other, non-demoted apps whose block or armed stream hold keeps ``n``."""
@@ -207,9 +239,43 @@ class _View:
                 if _applies(h, n, self.snap.demoted, self.streams, self.snap.suspended)]
 
     def held(self, n: NodeView) -> bool:
-        """Held by the channel rule, another app's hold, or kept for another app's
-        reaction (7.1): it reserves nothing."""
-        return self.channel_held(n) or bool(self.holders(n)) or self.kept_for(n) is not None
+        """Held by the channel rule, another app's hold, kept for another app's reaction
+        (7.1), or waiting while a reaction answers the user (7.6 (1)): it reserves
+        nothing."""
+        return self.channel_held(n) or bool(self.holders(n)) or self.kept_for(n) is not None \
+            or self.answer_holder(n) is not None
+
+    def answer_holder(self, n: NodeView) -> TreeView | None:
+        """The reaction to the user's own action (of another tree) that has not said its
+        first words, within its bound, that keeps ``n``'s stream waiting on every device
+        (7.6 (1)), the latest of them: only a stream there when it became one, and no
+        later reaction (that is a stream of its own); never for a reply to an answer,
+        following the user, or an AB of its app's block under way."""
+        streams = self.streams
+        if streams.replying(n) or not streams.user:
+            return None
+        if all(c in streams.following for c in n.command.split("+")):
+            return None
+        if any(h.kind == "block" and h.app == n.app and set(h.devices) & set(n.devices)
+               for h in self.snap.holds):
+            return None
+        mine = streams.reaction.get(n.tree)
+        replying = streams.answered.get(n.tree)
+        if replying is not None and (mine is None or replying > mine):
+            mine = replying  # (the reply to the user's later answer is no stream it holds)
+        found: TreeView | None = None
+        for tree in self.snap.trees:
+            if tree.id == n.tree or tree.id not in streams.user \
+                    or tree.id not in streams.reaction or n.tree >= streams.user_from[tree.id]:
+                continue
+            if self.snap.t >= streams.user_since[tree.id] + streams.answer_hold:
+                continue  # (its bound passed)
+            order = streams.reaction[tree.id]
+            if mine is not None and mine > order:
+                continue
+            if found is None or order > streams.reaction[found.id]:
+                found = tree
+        return found
 
 
 def _applies(h: HoldView, n: NodeView, demoted: Iterable[str], streams: Streams,
@@ -241,19 +307,24 @@ def standing_key(snap: Snapshot, streams: Streams
                  ) -> Callable[[NodeView], tuple[int, int, int, int, tuple[int, int]]]:
     """What an AB keeps whatever the waiting order: HIGH first (a reply to an answer
     ranks as HIGH, and so does a return put before it); the reply to an answer (7.4);
-    apps that lost their precedence after the others; reactions to the user's own
-    action whose first words are not yet said; the latest reaction (7.1)."""
+    apps that lost their precedence after the others (but for their reactions to the
+    user's own action, 7.6 (4)); reactions to the user's own action whose first words
+    are not yet said; the latest reaction (7.1)."""
     demoted = set(snap.demoted)
     reaction = streams.reaction
     user = streams.user
+    answered = streams.answered
     replying = streams.replying
 
     def key(n: NodeView) -> tuple[int, int, int, int, tuple[int, int]]:
+        answering = n.tree in user and n.tree in reaction
         return (
             0 if n.priority is Priority.HIGH or replying(n) else 1,
             0 if replying(n) else 1,
-            1 if n.app in demoted else 0,
-            0 if n.tree in user and n.tree in reaction else 1,
+            # (7.6 (4): the user's own action is answered past the share, until its words;
+            # so is the user's answer to a Q&A)
+            1 if n.app in demoted and not (answering or n.tree in answered) else 0,
+            0 if answering else 1,
             (0, -reaction[n.tree]) if n.tree in reaction else (1, 0),
         )
     return key
@@ -290,11 +361,12 @@ def _left_waiting(v: _View, cut_for: Mapping[AbId, AbId]) -> list[AbId]:
 def _after_its_reaction(v: _View, n: NodeView, cut_for: Mapping[AbId, AbId]) -> bool:
     """A restart waits (in its place) for the reaction's AB it was cut for while that AB
     steps aside for another reaction's next AB (not one after the restart in its own
-    tree) and outranks it (7.3 (2), 7.1)."""
+    tree) and its stream goes before the restart's, priority aside (7.3 (2), 7.1)."""
     r = v.nodes.get(cut_for.get(n.ab, -1))
     if r is None or r.state is not NodeState.WAITING:
         return False
-    return v.kept_for(r, besides=n.tree) is not None and v.standing(r) < v.standing(n)
+    return v.kept_for(r, besides=n.tree) is not None \
+        and v.standing(r)[1:] < v.standing(n)[1:]
 
 
 def keeping(snap: Snapshot, streams: Streams, talk: frozenset[str] = TALK,
@@ -324,6 +396,12 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
         elif n.parked_by == n.app:
             pass  # (a restart waiting for its own app's reaction to the user's words, 7.5)
         elif not v.channel_held(n):
+            answering = v.answer_holder(n)
+            if answering is not None:
+                # held while another app's reaction answers the user (7.6 (1))
+                if answering.app != n.app and answering.app not in v.snap.demoted:
+                    out.add(answering.app)
+                continue
             # Kept by several apps' holds (three apps or more): the wait is the
             # parking hold's doing; the others would keep nothing it did not.
             holders = v.holders(n)
@@ -436,11 +514,17 @@ class Oracle:
         self._uncontended: set[AbId] = set()
         """Running ABs that started while no other app wanted their devices."""
         self._requested: dict[CommandId, str] = {}
-        self.streams = Streams()
+        self.streams = Streams(answer_hold=config.max_answer_hold, following=frozenset(
+            c.name for c in catalog.commands.values() if c.follows_user))
         self._reactions: set[CommandId] = set()
         """First Commands of the requests made while handling a reactive event."""
         self._users: set[CommandId] = set()
         """... of those, the ones handling the user's own action (7.1)."""
+        self._continuing: set[CommandId] = set()
+        """... of those, the ones a handling asked for after its first request: the same
+        reaction as that one (7.1)."""
+        self._reacting: dict[str, int] = {}
+        """App -> the order of its latest reaction's first request."""
         self._answering: set[CommandId] = set()
         """First Commands of the requests made while handling a Q&A's answer (7.4)."""
         self._reply_commands: dict[CommandId, AbId] = {}
@@ -456,7 +540,7 @@ class Oracle:
         """ABs cut because the user spoke over them, with the hear decision (7.5)."""
         self._rest: dict[AbId, float] = {}
         """Cut by words no app took, ended: when the robot's pause is over."""
-        self._resting: dict[AbId, float] = {}
+        self._resting: dict[AbId, float] = self.streams.resting
         """ABs that start such a cut AB again, and the instant they may start."""
         self._cut_for: dict[AbId, AbId] = {}
         """A cut AB, then its restart -> the reaction's AB it was cut for."""
@@ -483,15 +567,19 @@ class Oracle:
 
     # ------------------------------------------------------------ the app side
     def requested(self, app: str, ids: Sequence[CommandId], reaction: bool = False,
-                  user: bool = False, answer: bool = False) -> None:
+                  user: bool = False, answer: bool = False, first: bool = True) -> None:
         """``app`` requested the Commands ``ids``; ``reaction``: while handling a
         reactive event (the caller set ``Request.reactive`` or ``reaction``), ``user``:
-        the user's own action (``Request.user``); ``answer``: ``follows`` names a Q&A the
-        user answered (its reply, if words, belongs to the exchange: 7.4)."""
+        the user's own action (``Request.user``), ``first``: the handling's first request
+        (``Request.reactive``: a later one is the same reaction, 7.1); ``answer``:
+        ``follows`` names a Q&A the user answered (its reply, if words, belongs to the
+        exchange: 7.4)."""
         for c in ids:
             self._requested[c] = app
         if reaction and ids:
             self._reactions.add(ids[0])
+            if not first:
+                self._continuing.add(ids[0])
             if user:
                 self._users.add(ids[0])
         if answer and ids:
@@ -555,17 +643,7 @@ class Oracle:
                                                   and d.rule is Rule.RESTART):
             self._interrupt(d)
         elif d.kind is DecisionKind.REQUEST:
-            self._requests += 1
-            for cid in d.command_ids:
-                self._order[cid] = self._requests
-            if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
-                    and d.tree is not None):
-                self.streams.reaction[d.tree] = self._requests
-                if d.command_id in self._users:
-                    self.streams.user.add(d.tree)
-                else:
-                    self.streams.user.discard(d.tree)
-            self._reply(d)
+            self._request(d)
         elif d.kind is DecisionKind.START and d.ab is not None:
             self._start(d.ab, d, suspended)
         elif d.kind is DecisionKind.END and d.ab is not None:
@@ -577,11 +655,45 @@ class Oracle:
                 self.fail(f"t={d.t:g}: AB{d.ab} was cancelled after it started "
                           f"({d.rule.value}: {d.detail or 'no detail'})")
 
+    def _request(self, d: Decision) -> None:
+        """A request joined working memory: its order, its words, whether its tree is now
+        a reaction (to the user's own action), whether it is a reply."""
+        self._requests += 1
+        if d.tree is not None and d.tree > self.streams.newest:
+            self.streams.newest = d.tree
+        for cid in d.command_ids:
+            self._order[cid] = self._requests
+        if d.command_id in self._reactions and d.command_id not in self._continuing \
+                and d.app is not None:
+            self._reacting[d.app] = self._requests
+        if (d.command_id in self._reactions and d.rule is not Rule.END_EVENT
+                and d.tree is not None):
+            order = self._requests
+            if d.command_id in self._continuing and d.app in self._reacting:
+                order = self._reacting[d.app]  # (the same reaction as its first request)
+            if self.streams.reaction.get(d.tree, -1) >= order:
+                self._reply(d)
+                return  # (already that reaction, or a later one)
+            self.streams.reaction[d.tree] = order
+            if d.command_id in self._users:
+                self.streams.user.add(d.tree)
+                self.streams.user_order[d.tree] = order
+                self.streams.user_since[d.tree] = d.t
+                self.streams.user_from[d.tree] = self.streams.newest + 1
+            # (a later reaction to a perception leaves a reaction to the user whose first
+            # words are ahead one: the user's words first, 7.1)
+        if (d.command_id in self._answering and d.rule is Rule.END_EVENT
+                and d.tree is not None and self._config.reactions):
+            self.streams.answered.setdefault(d.tree, self._requests)
+        self._reply(d)
+
     def _reply(self, d: Decision) -> None:
         """A request's root AB is a reply (7.4): the first AB an answer handler requested,
         with words and no question of its own; or a policy's AB put before one."""
         if d.ab is None:
             return
+        if d.rule is Rule.RESTORE_STATE:
+            self.streams.returns.update(d.command_ids)
         if d.precedes is not None:
             self.streams.deferred.add(d.precedes)
             first = self._reply_commands.get(d.precedes)
@@ -607,10 +719,15 @@ class Oracle:
             self.fail(f"t={d.t:g}: AB{ab} ended but was not running")
             return
         if (d.rule is Rule.COMPLETED and d.tree in self.streams.user
-                and self._order.get(d.command_id or 0, 0) >= self.streams.reaction[d.tree]
+                and self._order.get(d.command_id or 0, 0) >= self.streams.user_order[d.tree]
                 and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
             self.streams.user.discard(d.tree)  # the reaction's first words were said in full
             self._heard.append(d)
+        answered = self.streams.answered
+        if (d.rule is Rule.COMPLETED and d.tree in answered
+                and self._order.get(d.command_id or 0, 0) >= answered[d.tree]
+                and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
+            del answered[d.tree]  # the reply's first words were said in full
         if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
             self._interrupt(d)
         b.ended.add(ab)
@@ -884,11 +1001,14 @@ class Oracle:
                            and n.ab not in gone for n in rivals + fresh):
                     self._uncontended.add(d.ab)
                 elif (d.ab in self.streams.replies
-                      or not self.streams.before_replies.isdisjoint(d.command_ids)) and (
+                      or not self.streams.before_replies.isdisjoint(d.command_ids)
+                      or d.tree in self.streams.user
+                      or d.tree in self.streams.answered) and (
                         d.app in prev.snap.demoted or d.app in v.snap.demoted):
                     # the words that reply to an answer go first past the share too
                     # (7.4): one AB per answer the user gave, the user's pace (and what
-                    # a policy put before them: each iteration of a return)
+                    # a policy put before them: each iteration of a return); so does a
+                    # reaction to the user's own action until its first words (7.6 (4))
                     self._uncontended.add(d.ab)
                 gone.add(d.ab)
 
@@ -910,7 +1030,9 @@ class Oracle:
         # what is kept for it, and what it keeps as it waits first in line for a device
         # still busy, is not a precedence taken within the share)
         excused = {r.ab for r in [*v.nexts, *v.waiting]
-                   if self.streams.replying(r) and r.app in v.snap.demoted}
+                   if (self.streams.replying(r) or r.tree in self.streams.user
+                       or r.tree in self.streams.answered)
+                   and r.app in v.snap.demoted}
         self._took.update(v.snap.t, _keeping(v, self._uncontended, excused))
         self._demoted.update(v.snap.t, v.snap.demoted)
 

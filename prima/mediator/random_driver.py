@@ -120,8 +120,9 @@ class Act:
     role: str
     """``fa``, ``ea`` (the EA loaded at the time) or ``eb`` (the EA beside it)."""
     kind: str
-    """``submit``, ``event``, ``speech`` (the user says ``commands[0]``), ``stream`` or
-    ``block`` (open, or close if open), ``swap``."""
+    """``submit``, ``event``, ``speech`` (the user says ``commands[0]``), ``regard`` (the
+    user goes off to the side), ``stream`` or ``block`` (open, or close if open),
+    ``swap``."""
     commands: tuple[str, ...] = ()
     asap: bool = False
     reactive: bool = False
@@ -138,6 +139,8 @@ class Act:
     def __str__(self) -> str:
         if self.kind == "speech":
             return f"t={self.t:g} user says {self.commands[0]!r}"
+        if self.kind == "regard":
+            return f"t={self.t:g} user goes off to the side"
         if self.kind != "submit":
             extra = "" if self.kind in ("event", "swap") else f" {self.hold:g}s"
             devs = f" {list(self.devices)}" if self.devices else ""
@@ -279,7 +282,7 @@ def scenario(seed: int) -> Scenario:
         iterations=tuple(r.randint(1, 5) for _ in range(r.randint(1, 3))),
         immediate=r.random() < 0.3, config=config, horizon=horizon,
     )
-    return _hearing(_replying(_blending(_interrupting(_beside(sc)))))
+    return _regarding(_hearing(_replying(_blending(_interrupting(_beside(sc))))))
 
 
 REPLIES = ("Speak", "Speak", "FaceHumanAndSpeak", "QA", "Gesture", "")
@@ -357,6 +360,21 @@ def _hearing(sc: Scenario) -> Scenario:
                                  resume_pause=r.choice((0.0, 0.25, 0.6)))
     return dataclasses.replace(sc, acts=tuple(acts), scripts=scripts, beside=beside,
                                config=config, hearing=True)
+
+
+def _regarding(sc: Scenario) -> Scenario:
+    """In half the seeds whose robot turns to its user (connect-channel), the user goes
+    off to the side at a few moments, whatever the robot does (``regard`` acts: the run
+    tells the mediator, which keeps an utterance under way facing them, docs/rules.md
+    7.6 (3)). From a generator of its own (the other draws stay)."""
+    r = random.Random(f"prima-regard:{sc.seed}")
+    if not sc.facing or r.random() >= 0.5:
+        return sc
+    grid = int(sc.horizon * 4)
+    acts = [*sc.acts, *(Act(r.randint(0, grid) / 4, "fa", "regard")
+                        for _ in range(r.randint(1, 3)))]
+    acts.sort(key=lambda a: a.t)
+    return dataclasses.replace(sc, acts=tuple(acts))
 
 
 def _beside(sc: Scenario) -> Scenario:
@@ -458,10 +476,6 @@ class _Facing:
         self.asked += 1
         return self.asked % self.period != 0
 
-    def still(self) -> bool:
-        self.asked += 1
-        return self.asked % 2 == 0
-
     def near(self, distance: float) -> bool:
         self.asked += 1
         return self.asked % self.period != 1
@@ -519,6 +533,7 @@ class _Run:
         """Submit (errors go to the caller: inside a handler, they fail the app)."""
         self.oracle.requested(request.app, self.m.submit(request),
                               reaction=request.reactive or request.reaction,
+                              first=request.reactive,
                               user=request.user, answer=request.follows in self.answered)
 
     def guarded(self, request: Request) -> None:
@@ -532,6 +547,8 @@ class _Run:
         name = self.names[a.role]
         if a.kind == "swap":
             self.swap(a.role)
+        elif a.kind == "regard":  # (the user goes off to the side, whatever runs)
+            self.m.regard()
         elif a.kind == "speech":  # (the user, whoever is loaded)
             words = a.commands[0]
             self.m.hear(Event("speech", {"words": words, "backchannel": words == "uh-huh"}))

@@ -205,20 +205,54 @@ def qa(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
 # ---- turning --------------------------------------------------------------------------------
 
 FACE_AIM = math.radians(5.0)
-"""Face Human turns again, toward where the user is now, while it is this far off them
-(the user walked on while it turned), at most ``FACE_TRIES`` times in all."""
-FACE_TRIES = 3
+"""Face Human turns until the robot is this close to facing its user."""
+FACE_GAIN = 6.0
+"""How fast Face Human turns after a user who walks (rad/s per rad off them): a user
+who walks round the robot stays within a few degrees (a walk round at 1 m, about
+25 degrees a second, is followed within about 5)."""
+FACE_WITHIN = 4.0
+"""Seconds Face Human follows a user who keeps walking round the robot, at most."""
+
+
+FACE_STILL = math.radians(10.0)
+"""Face Human is done turning only below this turning rate (rad/s): the robot brakes
+from there within a degree and a half."""
+
+
+def _face_rate(sim: Simulator, off: float, period: float) -> float:
+    """The turning rate toward a user ``off`` radians away, set for the next ``period``
+    seconds: ``FACE_GAIN`` times how far off they are, but never faster than the robot can
+    brake from within what is left once that period is over (it would turn past them)."""
+    alpha = math.radians(sim.spec.turn_accel)
+    turning = abs(sim.world.robot.angular_velocity)
+    left = max(0.0, abs(off) - turning * period)
+    return math.copysign(min(FACE_GAIN * abs(off), math.sqrt(2.0 * alpha * left)), off)
 
 
 def face_human(sim: Simulator, call: Call, cid: int, it: int) -> Gen:
-    world = sim.world
-    seen, distance = world.sees_user(sim.kernel.tick, any_direction=True)
+    """Turn to the user: while the user and the robot stand, one turn toward them; while
+    they walk (or walked on while it turned), or the robot still moves (it slows down as
+    it turns), after them, the turning rate set every tenth of a second from how far
+    off they are (never faster than it can brake from before it faces them), until the
+    robot faces them (within ``FACE_AIM``, nearly still) or ``FACE_WITHIN`` has passed."""
+    world, k = sim.world, sim.kernel
+    seen, distance = world.sees_user(k.tick, any_direction=True)
     if not seen:
         return {"found": False}, True
-    for _ in range(FACE_TRIES):
+    if world.mode:
+        world.stop()  # (it brakes as it turns: no stop first)
+    elif not world.human_moving:
         yield from _turn(sim, world.user_bearing())
-        if abs(world.user_bearing()) <= FACE_AIM:
+    end = k.tick + sim.ticks(FACE_WITHIN)
+    period = k.hz // 10
+    while k.tick < end:
+        off = world.user_bearing()
+        if abs(off) <= FACE_AIM and abs(world.robot.angular_velocity) <= FACE_STILL:
             break
+        world.command(0.0, _face_rate(sim, off, period / k.hz))
+        yield sleep(period)
+    if world.mode:
+        yield from _stop(sim)
     return {"found": True, "distance": round(distance, 3), **_pose(sim)}, True
 
 

@@ -156,7 +156,17 @@ class Simulator:
         over a Q&A's prompt answers it, stopping the prompt at a word boundary."""
         self.backchannel: Callable[[str], bool] = _never
         """Whether words only show that the user follows (the robot profile's
-        backchannels): they answer no prompt."""
+        backchannels)."""
+        self.answers_prompt: Callable[[int, str], bool] | None = None
+        """Whether words said over the prompt of the Q&A of a Command id answer it (a run
+        asks the Q&A's grammar, docs/rules.md 7.5: words it takes are its answer, never
+        a backchannel); None: any words but a backchannel do."""
+        self._facing: tuple[float, Callable[[], None]] | None = None
+        """While words are said: the tolerance (degrees) beyond which the user is off to
+        the side, and whom to tell when they go off (:meth:`watch_facing`)."""
+        self._off = False
+        """The user was found off to the side while words were said, and has not been
+        faced since (told once per stretch)."""
         self._sense_every = hz // SENSE_HZ
         self._poses: tuple[int, tuple[float, float, float], tuple[float, float, float] | None,
                            bool | None] = (-1, (0.0, 0.0, 0.0), None, None)
@@ -419,6 +429,7 @@ class Simulator:
         if self.speech is not None:
             ends = tuple(min(ticks, self.ticks(at)) for at in self.speech.said(text)[1])
         self._speech[command_id] = (self.kernel.tick, tuple(text.split()), ticks, ends)
+        self._off = False  # (new words: whether the user goes off is watched afresh)
 
     def speech_duration(self, text: str) -> float:
         """How long saying ``text`` takes: by :attr:`speech` if given, else by the speech
@@ -577,10 +588,6 @@ class Simulator:
         world = self.world
         return world.has_user and self.user_detectable() and world.user_distance() <= distance
 
-    def body_still(self) -> bool:
-        """The wheels are neither driving nor turning the robot now."""
-        return not self.world.moving()
-
     def user_pose(self) -> Pose | None:
         """Where the user is, or None in a scenario without a user."""
         return self.world.user_pose() if self.world.has_user else None
@@ -691,10 +698,11 @@ class Simulator:
 
     def hear(self, text: str) -> bool:
         """The user says ``text``: True if the robot heard it. A listening Q&A takes it;
-        else, if the robot hears at any time, an answer said over a Q&A's prompt
-        answers it (not a backchannel), and anything else is a ``speech`` event with
-        its ``words`` and whether it is a ``backchannel``. Blank words (empty, spaces,
-        tabs) are no speech: never heard, they neither answer nor cut the robot."""
+        else, if the robot hears at any time, words said over a Q&A's prompt that answer
+        it (:attr:`answers_prompt`) stop the prompt and answer it, and anything else is a
+        ``speech`` event with its ``words`` and whether it is a ``backchannel``. Blank
+        words (empty, spaces, tabs) are no speech: never heard, they neither answer nor
+        cut the robot."""
         if not self.hearable() or not text.strip():
             return False
         mic = self._mic
@@ -705,8 +713,9 @@ class Simulator:
         backchannel = self.backchannel(text)
         # (a prompt whose words were hushed before they began is being cut: not asking)
         cid = next((c for c in self._prompting if c in self._speech), None) \
-            if self._prompting and not backchannel else None
-        if cid is not None:
+            if self._prompting else None
+        if cid is not None and (not backchannel if self.answers_prompt is None
+                                else self.answers_prompt(cid, text)):
             wake = self._prompting.pop(cid)
             wake((text, *self._stop_prompt(cid)))
             return True
@@ -803,7 +812,30 @@ class Simulator:
             if not k.due():
                 return
 
+    def watch_facing(self, tolerance: float, off: Callable[[], None]) -> None:
+        """While the robot says words, call ``off`` (a report) each time the user, being
+        detectable, goes more than ``tolerance`` degrees off its heading: the user walked
+        round it, or something turned it away (a run's mediator turns it back: docs/
+        rules.md 7.6 (3)). Looked at with the other senses, while anything moves."""
+        self._facing = (tolerance, off)
+
+    def _watch_facing(self, facing: tuple[float, Callable[[], None]]) -> None:
+        now = self.kernel.tick
+        if not any(words and start <= now < start + ticks
+                   for start, words, ticks, _ends in self._speech.values()):
+            self._off = False
+            return
+        tolerance, off = facing
+        if not self.user_unfaced(tolerance):
+            self._off = False
+        elif not self._off:
+            self._off = True
+            self.reports += 1
+            off()
+
     def _sense(self) -> None:
+        if self._facing is not None and self._speech:
+            self._watch_facing(self._facing)
         if self._sensing:
             self._update_monitor()
         if self._zones and self.world.mode:

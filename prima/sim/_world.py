@@ -346,12 +346,6 @@ class World:
         """The fastest the robot drives now (m/s)."""
         return self._vmax
 
-    def moving(self) -> bool:
-        """The wheels drive or turn the body (or sway it), or it has not come to rest."""
-        body = self.robot
-        return self.mode != _IDLE or self._sway is not None \
-            or body.velocity.length > 1e-3 or abs(body.angular_velocity) > 1e-3
-
     def sway(self, amplitude: float, sways: int, steps: int, owner: int) -> None:
         """Sway the body about its heading, ``amplitude`` radians either way, ``sways``
         whole times in ``steps`` steps, on top of whatever drives the wheels (alone it
@@ -464,10 +458,13 @@ class World:
             ux = self._ux
             self._halt()
             self.mode = _VELOCITY
+            body = self.robot
             if lin:
                 self._v, self._w = v, 0.0
+                body.velocity = (math.cos(body.angle) * v, math.sin(body.angle) * v)
             else:
                 self._v, self._w = 0.0, v * ux
+                body.angular_velocity = v * ux  # (the body keeps its speed as it brakes)
         self._cmd_v = self._cmd_w = 0.0
         if stopped is not None:
             self._on_stopped.append(stopped)

@@ -58,6 +58,8 @@ def test_minimal_profile_loads() -> None:
     ({"rest": '<event name="message"/>'}, 15, "is a predefined event"),
     ({"tilt": "45"}, 5, "tilt range is empty"),
     ({"rest": '<gesture name="nod" duration="-1"/>'}, 15, "gesture"),
+    # docs/rules.md 7.1: a touch is always the user's own action
+    ({"rest": '<event name="touched" user="false"/>'}, 15, "always the user's own action"),
     # a local motion is a Command the profile declares for it, never one apps move with
     ({"rest": '<blend local="Turn" over="TopologicalMove" devices="locomotion"/>'}, 15,
      "makes the common Command 'Turn' a local motion"),
@@ -70,6 +72,16 @@ def test_profile_errors(kwargs: dict[str, str], line: int, fragment: str) -> Non
         _load(**kwargs)
     assert any(p.line == line and fragment in p.message for p in info.value.problems), \
         info.value.problems
+
+
+def test_a_touch_is_the_users_own_action_whatever_the_profile_says() -> None:
+    """docs/rules.md 7.1: a profile that declares its touch sensor without ``user`` still
+    has a touch that is the user's own action; it may name more such events."""
+    profile = parse_profile(PROFILE.format(
+        devices=ALL, tilt="-30",
+        rest='<event name="touched"/><event name="patted" user="true"/>'
+             '<event name="bumped"/>').encode(), "r.xml")
+    assert profile.user_events == {"touched", "patted"}
 
 
 def test_a_robot_specific_command_without_a_duration_has_none() -> None:

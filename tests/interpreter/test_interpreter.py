@@ -95,6 +95,20 @@ def test_first_request_of_a_reactive_event_is_reactive_and_only_the_first() -> N
     assert interp.state == "t"
 
 
+def test_a_touch_is_the_users_own_action_on_any_robot() -> None:
+    """docs/rules.md 7.1: the interpreter is given no user events by its robot here, yet
+    what it requests while handling a touch is a reaction to the user's own action; a
+    perception event's is not."""
+    interp, port, *_ = make(
+        '<state id="s" initial="true"><on event="touched"><chain>Speak("Hee-hee!")</chain>'
+        '</on><on event="human-found"><chain>Speak("Hello.")</chain></on></state>')
+    interp.event(Event("touched"))
+    interp.event(Event("human-found"))
+    touched, found = port.requests
+    assert touched.user and touched.reaction
+    assert not found.user and found.reaction
+
+
 def test_handler_can_turn_reactivity_off_and_timers_follow_their_flag() -> None:
     interp, port, clock, *_ = make(
         '<state id="s" initial="true"><entry><timer name="tick" after="5" reactive="true"/>'

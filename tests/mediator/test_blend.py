@@ -29,9 +29,6 @@ class User:
     def near(self, distance: float) -> bool:
         return self.close
 
-    def still(self) -> bool:
-        return False
-
     def pose(self) -> Mapping[str, Value]:
         return {"x": 0.0, "y": 0.0, "heading": 0.0}
 

@@ -23,9 +23,6 @@ class Facing:
         self.asked += 1
         return not self.faced
 
-    def still(self) -> bool:
-        return False
-
     def near(self, distance: float) -> bool:
         return True
 
@@ -74,7 +71,10 @@ def test_a_faced_or_aimed_utterance_is_left_as_it_is() -> None:
     assert "FaceHuman" not in [c for _t, _a, c, _r in starts(h)]
 
 
-def test_no_channel_no_turn_and_the_turn_never_waits_for_busy_wheels() -> None:
+def test_no_channel_no_turn_and_words_wait_for_busy_wheels_to_turn_first() -> None:
+    """Without a channel, no turn. With one, face first or wait (docs/rules.md 7.6 (3)):
+    the FA's words never start unfaced to be early; they wait for the EA's 5 s drive
+    on the wheels, which no reaction cuts, then for the turn to the user."""
     h = Harness(duration=2.0)
     h.app("fa", AppKind.FA)
     h.mediator.submit(req("fa", speak("Hello.")))
@@ -88,7 +88,8 @@ def test_no_channel_no_turn_and_the_turn_never_waits_for_busy_wheels() -> None:
     h.mediator.submit(req("ea", call("SetSpeedAndTime", speed=0.3, time=5.0)))
     h.mediator.submit(req("fa", speak("I am over here.")))
     h.run(until=10.0)
-    assert [(t, c) for t, _a, c, _r in starts(h)] == [(0.0, "SetSpeedAndTime"), (0.0, "Speak")]
+    assert [(t, c) for t, _a, c, _r in starts(h)] == [
+        (0.0, "SetSpeedAndTime"), (5.0, "FaceHuman"), (6.0, "Speak")]
 
 
 def test_a_reply_to_an_answer_is_turned_for_too() -> None:
@@ -109,10 +110,11 @@ def test_a_reply_to_an_answer_is_turned_for_too() -> None:
         (0.0, "FaceHuman"), (1.0, "QA"), (4.0, "FaceHuman"), (5.0, "Speak")]
 
 
-def test_the_turn_waits_only_for_a_moves_iteration() -> None:
-    """A Topological Move's iteration (it breaks the channel) ends within a control
-    period and the turn outranks its next one: the turn waits for it. A search's
-    iteration keeps the channel and may be long (its turn): the words go at once."""
+def test_the_turn_waits_for_an_iteration_on_the_wheels() -> None:
+    """Face first, or wait (docs/rules.md 7.6 (3)): a Topological Move's iteration (it
+    breaks the channel) or a search's ends within a control period, and the reaction's
+    turn outranks the next one: the turn waits for it, and the words for the turn. (No
+    iteration is cut on this robot, which declares nothing interruptible.)"""
     def run(command: str) -> list[tuple[float, str, str]]:
         h = Harness(duration={"TopologicalMove": 0.5, "ActiveSensingHuman": 0.5,
                               "FaceHuman": 1.0, "*": 2.0},
@@ -128,8 +130,8 @@ def test_the_turn_waits_only_for_a_moves_iteration() -> None:
 
     assert run("TopologicalMove")[:3] == [(0.0, "ea", "TopologicalMove"),
                                           (0.5, "fa", "FaceHuman"), (1.5, "fa", "Speak")]
-    assert run("ActiveSensingHuman")[:2] == [(0.0, "ea", "ActiveSensingHuman"),
-                                             (0.2, "fa", "Speak")]
+    assert run("ActiveSensingHuman")[:3] == [(0.0, "ea", "ActiveSensingHuman"),
+                                             (0.5, "fa", "FaceHuman"), (1.5, "fa", "Speak")]
 
 
 def test_a_stream_suspended_after_its_turn_is_turned_for_again_when_it_resumes() -> None:

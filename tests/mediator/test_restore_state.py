@@ -24,9 +24,6 @@ class Robot:
     def unfaced(self) -> bool:
         return False
 
-    def still(self) -> bool:
-        return False
-
     def near(self, distance: float) -> bool:
         return True
 
@@ -135,3 +132,23 @@ def test_before_words_that_aim_the_robot_only_the_position_is_restored() -> None
     assert [(c, r) for _t, _a, c, r in commands(h)][-2:] == [
         ("SetPosition", Rule.RESTORE_STATE),
         ("SetDirection+PointByHand+Speak", Rule.FREE_DEVICES)]
+
+
+
+def test_the_return_waits_for_its_own_applications_other_words() -> None:
+    """7.6 (3), in a visit prima check made: EA3's words at a corner are cut for FA6's
+    answer to a touch; its message, asked for meanwhile, starts when the answer is
+    over, and the corner's words are to be said again after a return to where they
+    were suspended. That return, the mediator's own move, waits for the message's
+    words (it turned the robot away from the visitor mid-sentence)."""
+    from pathlib import Path
+
+    from prima.judge import judge
+    from prima.run import Run
+
+    visit = Path(__file__).parents[1] / "data" / "visits" / "ea3-message-at-a-corner.xml"
+    lines = Run(visit).run()
+    held = [ln for ln in lines if ln.kind.value == "hold" and ln.reason == "keep-channel"
+            and ln.command == "SetPositionAndDirection"]
+    assert held and held[0].app == "ea3-navigate"
+    assert judge(lines).of("unfaced") == ()
