@@ -9,8 +9,8 @@ or :func:`prima.tracefile.read_trace`), in trace order, become
   detail says it shared the device (the blend policy);
 - wait spans: ``suspend``, from a ``suspend`` line until its stream (the tree)
   resumes or the AB it was suspended at starts, ends or is cancelled; ``hold``,
-  from a ``hold`` line until that AB starts, ends or is cancelled, or (but for the
-  channel rule, ``keep-channel``) its holder releases;
+  from a ``hold`` line until that AB starts, ends or is cancelled, or is held anew
+  (another reason, another holder), or (a stream hold, a block) its holder releases;
 - marks: instant decisions (release, cancel, interrupt, failure, error, unload);
 - ticks: what the user did and the events posted;
 - the robot's and the user's poses, and the trace's end.
@@ -43,8 +43,12 @@ _OVER = re.compile(r" on ([^,\s]+)")
 """The devices in a blended start's ``over`` detail (``over AB12 on locomotion``)."""
 _FREED = re.compile(r" on (.+)$")
 """The devices a release frees, in its text (``block on arm, camera``)."""
-_KEPT_FOR = re.compile(r"devices kept for (.+)$")
-"""The holder of a stream hold or a block, in its ``hold`` line's text."""
+_KEPT_FOR = re.compile(r"devices kept for ([^\s']+)|while (\S+) answers the user")
+"""The holder of a stream hold, a block, a reaction's next AB or an answer to the user, in
+its ``hold`` line's text."""
+_NOT_RELEASED = frozenset({"keep-channel", "answering", "reserved"})
+"""Holds no ``release`` line ends: the channel rule's, one while another reaction answers
+the user, one for a reaction's next AB (they end with their AB, or its next hold)."""
 _ENDS_WAIT = frozenset({"start", "end", "cancel"})
 """What ends the waits of an AB: it starts, ends, or is cancelled."""
 _MARKS = frozenset({"release", "cancel", "interrupt", "failure", "error", "unload"})
@@ -85,8 +89,9 @@ class Span:
     line: int = 0
     """The index of the ``suspend`` or ``hold`` line among the rows."""
     holder: str = ""
-    """A hold's holder: the app whose stream hold or block kept the devices, as its line
-    names it (empty: unnamed, the channel rule's, or a suspension)."""
+    """A hold's holder: the app whose stream hold, block, reaction's next AB or answer to
+    the user kept the devices, as its line names it (empty: unnamed, the channel
+    rule's, or a suspension)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -205,13 +210,10 @@ _Wait = tuple[str, str, int | None]
 """A wait's key: (``suspend`` or ``hold``, the waiting app, the AB it is about)."""
 
 
-def _holder(hold: Row) -> str | None:
-    """The app whose stream hold or block a ``hold`` line says keeps the devices (None:
-    the channel rule's, which ends only with its AB)."""
-    if hold.get("reason") == "keep-channel":
-        return None
+def _holder(hold: Row) -> str:
+    """The app a ``hold`` line says keeps the devices ("": it names none)."""
     holder = _KEPT_FOR.match(str(hold.get("text") or ""))
-    return holder.group(1) if holder else ""  # ("": unnamed, any release ends it)
+    return (holder.group(1) or holder.group(2)) if holder else ""
 
 
 class Builder:
@@ -298,16 +300,21 @@ class Builder:
         poses.append((t, pose))
 
     def wait(self, key: _Wait, i: int, row: Row) -> None:
-        """A suspend or hold line begins a wait (unless that AB's is under way)."""
-        if key in self.waiting:
-            return
+        """A suspend or hold line begins a wait (unless that AB's is under way; a hold for
+        another reason or holder ends the one under way and begins its own)."""
+        under_way = self.waiting.get(key)
+        if under_way is not None:
+            was = under_way[1]
+            if key[0] == "suspend" or (was.get("reason"), was.get("text")) == (
+                    row.get("reason"), row.get("text")):
+                return
+            self.close(key, float(row["t"]))
         self.waiting[key] = (i, row)
         if key[0] == "suspend":
             self.streams.setdefault((key[1], row.get("tree")), []).append((key, i))
-        else:
-            holder = _holder(row)
-            if holder is not None:
-                self.holders.setdefault(holder, []).append((key, i))
+        elif row.get("reason") not in _NOT_RELEASED:
+            # ("": unnamed, any release ends it)
+            self.holders.setdefault(_holder(row), []).append((key, i))
 
     def ends_waits(self, kind: str, app: str, ab: int | None, row: Row, t: float) -> None:
         """Close the waits this line ends: the waiting AB starts, ends or is cancelled; a
@@ -341,10 +348,10 @@ class Builder:
 
     def close(self, key: _Wait, t: float) -> None:
         i, row = self.waiting.pop(key)
-        holder = _holder(row) if key[0] == "hold" else None
+        holder = _holder(row) if key[0] == "hold" else ""
         self.out.spans.append(Span(key[0], key[1], key[2], str(row.get("command") or ""),
                                    float(row["t"]), t, str(row.get("reason") or ""),
-                                   _devices(row), i, holder or ""))
+                                   _devices(row), i, holder))
 
     def bars(self, start: Row, t1: float, ended: bool) -> None:
         blended = blended_devices(_detail(start).get("over"))

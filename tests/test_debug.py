@@ -35,7 +35,10 @@ def test_a_scripted_session_breaks_on_the_touch_and_shows_the_suspended_stream()
     # FA2 stopped the robot for its reaction: EA3's guiding stream is suspended
     assert "suspended: stream 0 of ea3-navigate (most recent): AB49 TopologicalMove" in out
     assert "fa2-follow (fa): state asking" in out and "goal = 'kidode-room'" in out
-    assert out.rstrip().endswith("stopped at t=27.14 s")
+    # ten lines on, still in the touch's instant: EA3's stream held while FA2 answers
+    assert "26.34   R   ea3-navigate holds TopologicalMove back (while fa2-follow answers " \
+        "the user)  [answering]" in out
+    assert out.rstrip().endswith("stopped at t=26.34 s")
 
 
 def test_breakpoints_on_a_command_a_state_an_event_an_app_and_a_time() -> None:

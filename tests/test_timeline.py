@@ -199,7 +199,7 @@ def test_a_block_hold_ends_at_its_holders_release_in_a_real_run(scenario: str) -
     assert holds and all(s.holder == release.app != s.app for s in holds)
     assert [s.t1 for s in holds] == [release.t] * len(holds)  # the release, not the AB's start
     started = {r["ab"]: r["t"] for r in rows if r["kind"] == "start"}
-    assert all(started.get(s.ab, tl.end) > release.t for s in holds)
+    assert all(started.get(s.ab, tl.end) >= release.t for s in holds)  # (not before it)
     assert set(holds[0].devices) <= set(release.devices)  # parsed to the devices' names
     assert all(d.replace("-", "").isalpha() for d in release.devices), release.devices
 

@@ -215,13 +215,13 @@ class Context:
         self.cancelled_ab: dict[int, tuple[float, int | None]] = {}
         """AB (one never started, too) -> when it was cancelled, and its tree."""
         self.requested_at: dict[int, tuple[float, int]] = {}
+        """AB -> when (and at which line) it was requested: the root of a request, a
+        policy's AB, a restart."""
         self.requested: dict[int, tuple[str, str, str]] = {}
         """AB -> its application, its Command and where it is asked for, from its request
         (an AB that never started is known by this alone)."""
         self.elsewhere: set[int] = set()
         """Commands whose request said their words are about something else."""
-        """AB -> when (and at which line) it was requested: the root of a request, a
-        policy's AB, a restart."""
         self.tree_app: dict[int, str] = {}
         self.tree_reactions: dict[int, list[ReactionState]] = {}
         """Tree -> the reactions that took it over, in order (the latest ranks)."""

@@ -442,18 +442,26 @@ class _Elsewhere:
         self.suspended_at: dict[int, tuple[int, tuple[float, float]]] = {}
         self.resumed: dict[int, tuple[int, tuple[float, float]]] = {}
         self.last_start: Row | None = None
+        self.returns: set[int] = set()
+        """The restore-state policy's returns (their Command ids)."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
         tree = row.get("tree")
-        if kind == "request" and isinstance(tree, int) and (
+        if kind == "request" and row.get("reason") == "restore-state":
+            self.returns.update(command_ids(row))
+        elif kind == "request" and isinstance(tree, int) and (
                 row.get("reactive") is True or row.get("reason") == "asap"):
             # a reaction, or a newer request, takes the stream on from where the robot is
             self.suspended_at.pop(tree, None)
             self.resumed.pop(tree, None)
         elif kind == "suspend" and isinstance(tree, int) and ctx.robot is not None:
-            self.suspended_at[tree] = (int(row["seq"]), ctx.robot)
-            self.resumed.pop(tree, None)  # (suspended again before it spoke: from here)
+            back = self.resumed.pop(tree, None)
+            if back is not None and not self.returns.isdisjoint(command_ids(row)):
+                # (suspended again on its way back: it still returns to where it was)
+                self.suspended_at[tree] = back
+            else:  # (suspended again before it spoke: from here)
+                self.suspended_at[tree] = (int(row["seq"]), ctx.robot)
         elif kind == "resume" and isinstance(tree, int) and tree in self.suspended_at:
             self.resumed[tree] = self.suspended_at.pop(tree)
             start = self.last_start

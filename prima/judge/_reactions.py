@@ -260,7 +260,8 @@ class _Analyst:
             return "uncut: a reply to its answer (7.4)"
         if ctx.block_open(y.app, t):
             return "uncut: in a begin/end block"
-        if y.listens and (y.words is None or t >= y.words[1] - EPS):
+        said = y.planned or y.words
+        if y.listens and (said is None or t >= said[1] - EPS):
             return "uncut: a Q&A listening"
         if ctx.demoted_at(r.app, t) and not (r.user and self.user_until(r) > t + EPS):
             return "uncut: the reacting application lost its precedence"
@@ -277,9 +278,11 @@ class _Analyst:
     @staticmethod
     def boundary(y: Ab, t: float) -> float:
         """Where a cut asked for at ``t`` ends ``y``: the end of the word under way, or
-        at once (a step later at most)."""
-        if y.words is not None and y.words[0] - EPS <= t < y.words[1] - EPS and y.text:
-            ws, we = y.words
+        at once (a step later at most). The words spread as planned when they started
+        (a cut AB's end line says only what was said)."""
+        words = y.planned or y.words
+        if words is not None and words[0] - EPS <= t < words[1] - EPS and y.text:
+            ws, we = words
             n = max(1, len([w for w in y.text.split() if w != "/"]))
             per = (we - ws) / n
             k = math.floor((t - ws) / per + 1e-9) + 1
@@ -331,8 +334,8 @@ class _Analyst:
                 when = ready if regained is None else max(ready, regained)
                 why = self.may_cut(y, r, low, when, turn)
                 stop = self.boundary(y, when)
-                if not why and y.listens and y.words is not None \
-                        and stop >= y.words[1] - EPS:
+                said = y.planned or y.words
+                if not why and y.listens and said is not None and stop >= said[1] - EPS:
                     why = "uncut: a Q&A on the last word of its prompt, then listening"
                 if why:
                     allowed.append((y.start, y_end, self._blame(y, why, y_end)))

@@ -17,6 +17,7 @@ from prima.catalog import (
     RESTORE_COMMAND,
     RESTORE_POSITION_COMMAND,
     Catalog,
+    Priority,
 )
 from prima.mediator._config import MediatorConfig
 from prima.mediator._decisions import DecisionKind, Rule
@@ -129,11 +130,23 @@ class Policies:
         x.turnable = False
         spec = self._catalog.get(CONNECT_COMMAND)
         if self._channel is None or spec is None or not self._config.connect_channel \
-                or not self._channel.unfaced():
+                or not (self._channel.unfaced() or self._driven_away(x, spec.devices)):
             return False
         self._intake.insert_before(x, Call(CONNECT_COMMAND), spec, Rule.CONNECT_CHANNEL,
                                    f"turns to the user before AB{x.id}")
         return True
+
+    def _driven_away(self, x: Node, wheels: frozenset[str]) -> bool:
+        """Whether another application's AB that breaks the channel (a move, a return to
+        a pose) holds the wheels the turn to the user needs: faced now, the robot would
+        be turned away while ``x``'s words run, so they face first, or wait (docs/rules.md
+        7.6 (3))."""
+        busy = self._wm.busy
+        for d in wheels:
+            y = busy.get(d)
+            if y is not None and y.app is not x.app and y.priority is Priority.LOW:
+                return True
+        return False
 
     def keep_facing(self) -> tuple[Node, Node] | None:
         """The connect-channel policy while words run (docs/rules.md 7.6 (3): the robot

@@ -1516,6 +1516,36 @@ def test_resumed_elsewhere(case: str, found: int) -> None:
         assert "from where its stream was suspended (seq 1)" in format_table([report])
 
 
+def test_a_return_suspended_on_its_way_back_still_returns_where_the_stream_was() -> None:
+    """The restore-state policy's return is itself suspended halfway back (another
+    application's reaction takes the wheels) and resumes later; the stream's words are
+    said where the stream was first suspended: not elsewhere, though 1 m from where its
+    return was suspended (prima check of EA3 beside FA3: 17 runs in 800)."""
+    tr = Trace()
+    tr.user = {**tr.user, "detectable": False}  # (not a matter of facing)
+    tr.pose(0.5)
+    tr.line(1.0, "suspend", app="ea", ab=2, tree=0, command="Speak", reason="reactivity")
+    tr.robot = {**tr.robot, "x": 2.0}  # the other app's reaction moved the robot
+    tr.pose(5.0)
+    tr.request(6.0, "ea", 3, 3, command="SetPosition", reason="restore-state", before=2,
+               devices=("locomotion",))
+    tr.start(6.0, "ea", 3, 3, command="SetPosition", devices=("locomotion",),
+             reason="restore-state")
+    tr.line(6.0, "resume", app="ea", ab=3, tree=0, command="SetPosition")
+    tr.robot = {**tr.robot, "x": 1.0}
+    tr.end(7.0, "ea", 3, 3, command="SetPosition", devices=("locomotion",))
+    tr.line(7.0, "suspend", app="ea", ab=4, tree=0, command="SetPosition",
+            reason="priority", detail={"command_id": 3})
+    tr.start(8.0, "ea", 4, 3, command="SetPosition", devices=("locomotion",),
+             reason="restore-state")
+    tr.line(8.0, "resume", app="ea", ab=4, tree=0, command="SetPosition")
+    tr.robot = {**tr.robot, "x": 0.1}
+    tr.end(9.0, "ea", 4, 3, command="SetPosition", devices=("locomotion",))
+    tr.start(9.0, "ea", 2, 2, text="Look at this figure.", words=(9.0, 10.0))
+    tr.end(10.0, "ea", 2, 2)
+    assert counts(tr.judge()) == {}
+
+
 # ------------------------------------------------------------------ split exchanges
 
 def _answered(reply: str, *, reactive: bool = False) -> Report:

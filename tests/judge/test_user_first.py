@@ -486,3 +486,26 @@ def test_a_touch_answered_in_a_trees_later_words_goes_first_until_its_own_words(
     tr.sort()
     ea = next(r for r in tr.judge().reactions if r.app == "ea")
     assert not ea.late, ea.why
+
+
+def test_a_cut_is_due_at_the_end_of_the_word_under_way_as_the_words_were_planned() -> None:
+    """Section 8: the EA's prompt "May I go to the next panel?" (seven words, 0-2.8 s as
+    planned) is under way when the user touches the robot (0.44, in its second word): the
+    cut is due at that word's end (0.8), where the FA's words start, on time. The end
+    line of the cut Q&A says only the words said (0-0.8): spread over those, the word
+    under way ended at 0.46, and the FA was read as late (prima check of EA1 beside FA1,
+    1 run in 8,000)."""
+    tr = Trace()
+    tr.request(0.0, "ea", 1, 1, command="QA", text="May I go to the next panel?", devices=TALK)
+    tr.start(0.0, "ea", 1, 1, command="QA", text="May I go to the next panel?", devices=TALK,
+             cuttable=True, words=(0.0, 2.8))
+    tr.touch(0.44)
+    tr.request(0.44, "fa", 2, 2, tree=1, text="Hee-hee! That tickles.", reactive=True,
+               reason="asap")
+    tr.interrupt(0.44, "ea", 1, 1, by="fa", by_ab=2)
+    tr.end(0.8, "ea", 1, 1, command="QA", devices=TALK, reason="interrupt",
+           words=(0.0, 0.8), text="May I go to the next panel?")
+    tr.speak(0.8, "fa", 2, 2, "Hee-hee! That tickles.", tree=1, request=False)
+    tr.sort()
+    fa = next(r for r in tr.judge().reactions if r.app == "fa")
+    assert not fa.late, fa.why

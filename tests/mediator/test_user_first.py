@@ -427,6 +427,30 @@ def test_a_turn_beside_words_ends_with_them() -> None:
         (0.0, "QA"), (0.5, "FaceHuman"), (2.0, "FaceHumanAndSpeak")]
 
 
+def test_words_face_first_while_another_app_drives_the_robot_away() -> None:
+    """7.6 (3): the robot faces its user, but the EA is turning it to a heading of its own
+    (a SetPositionAndDirection, 0-3.0) when the FA's reaction to a message is to speak
+    (1.0). Started now, the words would run while the robot turns away: they face first,
+    or wait. The turn to the user cuts the EA's drive where the robot may cut it, then
+    the words follow; where it may cut nothing, the turn waits for the drive to end (a
+    visit prima check made: FA5's words ran 1 s unfaced beside EA3's return, 1 run in
+    800)."""
+    for catalog, turn in ((CUTS, 1.0), (None, 3.0)):
+        facing = Facing()
+        facing.faced = True
+        h = Harness(catalog, duration={"SetPositionAndDirection": 3.0, "FaceHuman": 0.5,
+                                       "*": 2.0},
+                    outcome=feedback_iterations(1), channel=facing)
+        m = h.mediator
+        h.app("fa", AppKind.FA)
+        h.app("ea", AppKind.EA)
+        m.submit(Request("ea", (call("SetPositionAndDirection", x=1.0, y=2.0, heading=90.0),)))
+        h.at(1.0, lambda m=m: m.submit(Request("fa", (speak("The video setting succeeds."),),
+                                               reactive=True, reaction=True)))
+        h.run(until=8.0)
+        assert _answer(h) == [(turn, "FaceHuman"), (turn + 0.5, "Speak")], catalog
+
+
 # ---------------------------------------------------------------- 7.1: one handling
 
 def test_what_one_handling_asks_is_one_reaction_its_first_words_end_its_precedence() -> None:

@@ -38,7 +38,7 @@ def test_a_scenario_and_its_jsonl_trace_make_the_same_page(tmp_path: Path) -> No
     status, said = _cli("show", str(trace), "--scenario", str(SAMPLE_03),
                         "--out", str(from_trace))
     assert status == 0, said
-    assert "349 atomic behavior(s)" in said
+    assert "353 atomic behavior(s)" in said
     # the same but for the title (the input's name)
     assert (from_scenario.read_text().replace("sample-03", "run")
             == from_trace.read_text())
@@ -73,7 +73,11 @@ def test_the_timeline_draws_waits_as_spans_and_blends_on_half_rows() -> None:
     fig, traces = timeline_figure(model)
     hold = next(t for t in fig.data if t.meta == "hold")
     spans = [s for s in model.timeline.spans if s.kind == "hold"]
-    assert len(spans) == 2  # EA1's move held while FA3 talks, before and after the dance
+    # EA1's move kept for FA3's reaction's next AB, then held while FA3 talks, before the
+    # dance; held while FA3 talks after it
+    assert [(s.reason, s.holder) for s in spans] == [
+        ("reserved", "fa3-dance"), ("keep-channel", ""), ("keep-channel", "")]
+    assert spans[0].t1 == spans[1].t0  # (held anew: one wait ends where the next begins)
     bases = [span.t0 for span in spans for _d in span.devices]
     assert list(hold.base) == bases and min(hold.x) > 0.5
     assert [model.rows[i]["kind"] for i in hold.customdata] == ["hold"] * len(bases)
@@ -88,10 +92,10 @@ def test_the_timeline_draws_waits_as_spans_and_blends_on_half_rows() -> None:
 
 
 def test_a_feedback_commands_iterations_are_one_labelled_bar() -> None:
-    """As ``prima plot`` draws them: a run of iterations (``TrackingHuman x192``) is one
+    """As ``prima plot`` draws them: a run of iterations (``TrackingHuman x195``) is one
     bar without seams, labelled once, over its iterations' bars, which keep their hover
     and click (the run's bar takes neither) and no label of their own. An iteration cut
-    and restarted ends one run and begins the next (``x3``, then ``x192``)."""
+    and restarted ends one run and begins the next (``x3``, then ``x195``)."""
     from prima.show._model import build
     from prima.show._page import timeline_figure
 
@@ -100,7 +104,7 @@ def test_a_feedback_commands_iterations_are_one_labelled_bar() -> None:
     labelled = [t for t in fig.data if t.meta == "runs"]
     assert labelled and all(t.hoverinfo == "skip" for t in labelled)
     labels = [text for t in labelled for text in t.text]
-    assert {"TrackingHuman x3", "TrackingHuman x192", "TopologicalMove x43"} <= set(labels)
+    assert {"TrackingHuman x3", "TrackingHuman x195", "TopologicalMove x43"} <= set(labels)
     texts = {ab: text for i in traces["bars"]
              for ab, text in zip(fig.data[i].customdata, fig.data[i].text, strict=True)}
     tracking = [b.ab for b in model.timeline.bars if b.command == "TrackingHuman"]
