@@ -157,9 +157,9 @@ class _Round:
             alive = self._alive
             if alive is None:
                 alive = self._alive = one.devices if one.state is _WAITING else _NO_DEVICES
-            if device not in alive:
-                return top
-            if one.state is not _WAITING or one.parked is not None:
+            if device not in alive or one.state is not _WAITING:
+                return top  # (an AB that waits no more does not wait again in its round)
+            if one.parked is not None:
                 self._alive = alive - {device}
                 return top
             if top is None or top is one:
