@@ -44,7 +44,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from _measure import ROOT, compiled_copy, cpu, in_tree, interleaved, interpreter, report
+from _measure import (ROOT, compiled_copy, cpu, in_checkout, in_tree, interleaved, interpreter,
+                      report)
 
 SCENARIOS = {name: ROOT / "scenarios" / "thesis" / f"{name}.xml"
              for name in ("sample-03", "sample-07", "sample-10")}
@@ -110,10 +111,10 @@ class Case:
     def sweep(self) -> float:
         first = self.round * self.runs  # distinct runs every round
         self.round += 1
-        done = subprocess.run([sys.executable, __file__, "--child", str(self.path),
-                               "--runs", str(self.runs), "--first", str(first)],
-                              capture_output=True, text=True, check=False,
-                              env={**os.environ, "PYTHONPATH": str(self.tree)})
+        done = subprocess.run(in_checkout(self.tree, [__file__, "--child", str(self.path),
+                                                      "--runs", str(self.runs),
+                                                      "--first", str(first)]),
+                              capture_output=True, text=True, check=False)
         if done.returncode:
             sys.exit(done.stderr)
         out = json.loads(done.stdout)
@@ -213,8 +214,8 @@ def peak(argv: list[str], tree: Path) -> tuple[float, float, float]:
     (summed PSS, sampled ten times a second while it runs: what all its processes hold
     at once) and of its largest process (``ru_maxrss`` of the process waited for: the
     largest of the process and its children); and its CPU seconds, with its children."""
-    process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                               env={**os.environ, "PYTHONPATH": str(tree)}, cwd=tree)
+    process = subprocess.Popen(in_checkout(tree, argv), stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL, cwd=tree)
     whole = 0
     sampling = os.path.exists("/proc/self/smaps_rollup")
     while True:
@@ -235,7 +236,7 @@ def memory(args: argparse.Namespace, tree: Path) -> int:
     wholes, peaks = [], []
     with tempfile.TemporaryDirectory() as scratch:
         for n in counts:
-            argv = [sys.executable, "-m", "prima", "sweep", str(args.scenario), "--runs", str(n),
+            argv = ["-m", "prima", "sweep", str(args.scenario), "--runs", str(n),
                     "--jitter", str(JITTER), "--worst", "0", "--results",
                     str(Path(scratch) / f"{n}.jsonl")]
             if args.jobs:
