@@ -43,6 +43,15 @@ def in_tree(path: Path, tree: Path) -> Path | None:
     return theirs if theirs.exists() else None
 
 
+def in_checkout(tree: Path, argv: Sequence[str]) -> list[str]:
+    """The command line that runs ``argv`` (a script and its arguments, ``-m MODULE ...``
+    or ``-c CODE ...``) with the build of the checkout ``tree``, wholly on its own files:
+    its ``prima`` and its robots, schemas, applications and scenarios too, whatever this
+    environment has installed (``bench/_tree.py``: an editable install of this checkout
+    would map today's in). Run it from any folder."""
+    return [sys.executable, str(Path(__file__).with_name("_tree.py")), str(tree), *argv]
+
+
 def cpu(fn: Callable[[], object]) -> float:
     """CPU seconds this process spends in ``fn()``."""
     start = time.process_time()
@@ -129,7 +138,7 @@ def compiled_copy(folder: Path) -> Path:
     the checkout copied there (:func:`copy_checkout`), its modules compiled in place, and
     checked to load compiled. Needs mypy (the lint extra), a C compiler and Python's
     headers; about three minutes of CPU time (docs/judging.md, A compiled build). Returns
-    ``folder``, a tree to run (``PYTHONPATH``) like a checkout. (In place, not ``pip
+    ``folder``, a tree to run (:func:`in_checkout`) like a checkout. (In place, not ``pip
     install``: the tests and benchmarks run in that tree, beside the compiled modules.)"""
     copy_checkout(folder)
     print(f"building the compiled build in {folder} (about three minutes of CPU time) ...",
@@ -140,9 +149,9 @@ def compiled_copy(folder: Path) -> Path:
     if done.returncode != 0:
         sys.exit("the compiled build failed:\n" + "\n".join(
             (done.stdout + done.stderr).strip().splitlines()[-20:]))
-    check = subprocess.run([sys.executable, "-c", "import prima, sys; "
-                            "sys.exit(0 if prima.compiled() else 1)"], cwd=folder,
-                           env={**os.environ, "PYTHONPATH": str(folder)}, check=False)
+    check = subprocess.run(in_checkout(folder, ["-c", "import prima, sys; "
+                                                "sys.exit(0 if prima.compiled() else 1)"]),
+                           check=False)
     if check.returncode != 0:
         sys.exit(f"{folder}: built, but prima does not load compiled there")
     return folder

@@ -21,14 +21,13 @@ from __future__ import annotations
 import argparse
 import copy
 import json
-import os
 import subprocess
 import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from _measure import ROOT, compiled_copy, in_tree
+from _measure import ROOT, compiled_copy, in_checkout, in_tree
 
 JITTER = 5.0
 SEED = 7
@@ -77,8 +76,7 @@ def variants(scenario: Path, folder: Path, runs: int) -> list[Path]:
 
 def hashes(tree: Path, paths: list[Path]) -> list[str]:
     """Each path's trace hash as the build in ``tree`` runs it, in a process of its own."""
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    done = subprocess.run([sys.executable, "-c", _HASH, *map(str, paths)], env=env,
+    done = subprocess.run(in_checkout(tree, ["-c", _HASH, *map(str, paths)]),
                           capture_output=True, text=True, check=False, cwd=tree)
     if done.returncode != 0:
         sys.exit(f"{tree}: {done.stderr.strip().splitlines()[-1] if done.stderr else 'failed'}")

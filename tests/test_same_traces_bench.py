@@ -73,3 +73,28 @@ def test_the_compiled_builds_copy_has_the_checkouts_files_and_none_built(
                  "scenarios/thesis/sample-01.xml", "tests/conftest.py"):
         assert (tmp_path / name).is_file(), name
     assert not list(tmp_path.rglob("*.so")) and not list(tmp_path.rglob("__pycache__"))
+
+
+def test_another_checkout_runs_wholly_on_its_own_files(tmp_path: Path) -> None:
+    """``bench/_tree.py`` (``_measure.in_checkout``): another checkout's build imports its
+    own ``prima`` and finds its own robots, schemas, applications and scenarios, not
+    those an editable install of this checkout maps in (an earlier build ran with
+    today's robot profiles, or crashed on them)."""
+    import subprocess
+
+    _bench()
+    import _measure
+
+    tree = _other_build(tmp_path)
+    (tree / "pyproject.toml").write_text(
+        (ROOT / "pyproject.toml").read_text(encoding="utf-8"), encoding="utf-8")
+    code = ("import prima, json; from importlib import resources; print(json.dumps("
+            "[prima.__file__] + [str(resources.files(f'prima.{n}').joinpath(f)) for n, f in "
+            "(('robots', 'home-robot.xml'), ('schemas', 'pxml.xsd'), ('apps', 'fa'), "
+            "('scenarios', 'thesis'))]))")
+    done = subprocess.run(_measure.in_checkout(tree, ["-c", code]), capture_output=True,
+                          text=True, check=True, cwd=tmp_path)
+    found = [Path(p) for p in __import__("json").loads(done.stdout)]
+    assert found == [tree / "prima" / "__init__.py", tree / "robots" / "home-robot.xml",
+                     tree / "schemas" / "pxml.xsd", tree / "apps" / "fa",
+                     tree / "scenarios" / "thesis"]

@@ -372,6 +372,35 @@ def test_worker_processes_are_replaced_every_few_tasks() -> None:
     assert len(set(pids)) == 3
 
 
+def _nap() -> int:
+    import os
+    import time
+
+    time.sleep(0.2)
+    return os.getpid()
+
+
+def test_a_retiring_pool_never_overlaps_a_fresh_one() -> None:
+    """The fresh workers are forked only once the retiring ones have finished their
+    last task and exited: the process tree never holds more than ``jobs`` workers (its
+    memory stays flat however many pools a long sweep goes through)."""
+    import multiprocessing
+
+    from prima.batch import Processes
+
+    pool = Processes(2, recycle=1)
+    executor = pool.executor()
+    alive = []
+    futures = []
+    for _ in range(6):  # three pools of two workers, each taking two tasks
+        futures.append(executor.submit(_nap))
+        alive.append(len(multiprocessing.active_children()))
+    pids = [f.result() for f in futures]
+    pool.close()
+    assert max(alive) == 2, alive
+    assert len(set(pids)) >= 4  # (fresh workers took over)
+
+
 def test_a_sweep_whose_workers_are_replaced_says_the_same(tmp_path: Path) -> None:
     from prima.batch import Processes
 

@@ -127,16 +127,18 @@ process costs one fork per 500 runs."""
 class _Recycling(concurrent.futures.Executor):
     """Worker processes that are replaced after :data:`RECYCLE` tasks each: the tasks
     go to one pool of ``workers`` processes until it has taken ``workers * RECYCLE``;
-    that pool then finishes what it took and lets its processes go, and a fresh pool
-    takes the next tasks."""
+    the next task waits until that pool has finished what it took and its processes
+    have exited, and a fresh pool takes it. The two never overlap: the whole process
+    tree holds at most ``workers`` workers at any time, so its memory stays flat however
+    many pools a batch goes through (a retiring pool that went on beside the fresh one
+    held twice the workers while its last tasks ran). What this costs is the last tasks'
+    unevenness, once per pool: the workers that finish first wait for the last one."""
 
     def __init__(self, workers: int, recycle: int) -> None:
         self.workers = workers
         self.limit = workers * recycle
         self._pool: concurrent.futures.ProcessPoolExecutor | None = None
         self._taken = 0
-        self._retired: list[tuple[concurrent.futures.ProcessPoolExecutor,
-                                  list[concurrent.futures.Future[Any]]]] = []
         self._futures: list[concurrent.futures.Future[Any]] = []
 
     def submit(self, fn: Callable[..., Any], /, *args: Any,
@@ -153,25 +155,24 @@ class _Recycling(concurrent.futures.Executor):
         return future
 
     def _retire(self) -> None:
-        """Let the current pool finish what it took (its processes then exit); forget the
-        retired pools that have."""
-        if self._pool is not None:
-            self._pool.shutdown(wait=False)
-            self._retired.append((self._pool, self._futures))
-            self._pool, self._futures = None, []
-        for pool, futures in list(self._retired):
-            if all(f.done() for f in futures):
-                pool.shutdown()  # (its processes are leaving: it waits for them to exit)
-                self._retired.remove((pool, futures))
+        """Let the current pool finish what it took, and wait for its processes to exit.
+        (The tasks' results stay in their futures, for the batch to collect; Ctrl-C
+        meanwhile stops the pool as it would any time, :meth:`Processes.stop`.)"""
+        pool = self._pool
+        if pool is None:
+            return
+        concurrent.futures.wait(self._futures)
+        pool.shutdown()  # (it waits for its processes to exit)
+        self._pool, self._futures = None, []
 
     def pools(self) -> list[concurrent.futures.ProcessPoolExecutor]:
-        """Every pool that may still have processes: the retired ones, then the current."""
-        return [p for p, _ in self._retired] + ([self._pool] if self._pool else [])
+        """The pool that may have processes (none, or the current one)."""
+        return [self._pool] if self._pool else []
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         for pool in self.pools():
             pool.shutdown(wait=wait, cancel_futures=cancel_futures)
-        self._pool, self._retired, self._futures = None, [], []
+        self._pool, self._futures = None, []
 
 
 class Processes:

@@ -417,6 +417,8 @@ class Holds:
     # ----------------------------------------------------------- deadlines
     def next_deadline(self) -> float | None:
         """The earliest pending hold timeout or watchdog, if any."""
+        if not self.opened:  # (no stream or block is open: asked at every wake of a run)
+            return None
         best: float | None = None
         for app in self._apps.values():
             st, blk = self._streams.get(app.name), self._blocks.get(app.name)
@@ -428,6 +430,8 @@ class Holds:
 
     def expire(self, now: float) -> None:
         """End every hold whose timeout and every block whose watchdog has passed."""
+        if not self.opened:
+            return
         for app in list(self._apps.values()):
             st, blk = self._streams.get(app.name), self._blocks.get(app.name)
             if st is not None and st.armed and st.deadline <= now:

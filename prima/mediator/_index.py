@@ -121,6 +121,7 @@ class WaitIndex:
     def add(self, node: Node) -> None:
         """File a waiting AB (again, after it was parked: its old entries go stale)."""
         node.version += 1
+        node.unfiled = False
         if node.head is None:
             self.ranking.node_keys(node)
         head = node.head

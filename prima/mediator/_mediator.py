@@ -661,9 +661,21 @@ class Mediator:
     def next_deadline(self) -> float | None:
         """The earliest pending hold timeout, watchdog, budget deadline, end of a pause
         after a false interruption, or end of an answer's hold (7.6 (1)), if any."""
-        times = (self._holds.next_deadline(), self._fairness.next_deadline(),
-                 self._rest_deadline(), self._answer_deadline())
-        return min((t for t in times if t is not None), default=None)
+        # (the earliest of those that are not None, written out: asked at every wake of
+        # a run, and most often only the wait share's is set)
+        best = self._holds.next_deadline()
+        t = self._fairness.next_deadline()
+        if t is not None and (best is None or t < best):
+            best = t
+        if self._resting:
+            t = self._rest_deadline()
+            if t is not None and (best is None or t < best):
+                best = t
+        if self._wm.answering:
+            t = self._answer_deadline()
+            if t is not None and (best is None or t < best):
+                best = t
+        return best
 
     def _answer_deadline(self) -> float | None:
         """When the first reaction to the user's own action that has not said its first

@@ -252,11 +252,17 @@ class WorkingMemory:
             self._reserve_children(node)
         node.app.active += 1
         self.waiting += 1
-        self.index.add(node)
+        if parent_finished:
+            # Not filed in the index yet: the next round names it, and ranks it against
+            # the index's answer on each device (``_rounds._Round``) as it would if it
+            # were filed; that round files it only if it still waits then (most ABs whose
+            # parent just finished start in it: the next iteration of a feedback loop).
+            node.unfiled = True
+            self.pjf[node.id] = node
+        else:
+            self.index.add(node)
         self._rank_in(node)
         self.new.append(node)
-        if parent_finished:
-            self.pjf[node.id] = node
 
     def unwait(self, node: Node) -> None:
         """A waiting, unparked AB goes back to pending: an AB was put before it (a
@@ -389,6 +395,10 @@ class WorkingMemory:
         its next ABs reserve are looked at again (whom they outrank changed)."""
         dirty = self.dirty
         dirty.update(self.index.rerank(tree))
+        if self.pjf:  # (the devices of its ABs the index does not hold yet: as if it did)
+            for n in self.pjf.values():
+                if n.tree is tree and n.unfiled and n.state is _WAITING and n.parked is None:
+                    dirty.update(n.devices)
         if self.after_reactions:  # (whether a restart waits for its reaction may change with it)
             for ab, n in list(self.after_reactions.items()):
                 if n.state is _WAITING:

@@ -63,15 +63,20 @@ class _Round:
     """One round's ranking: the index, plus the ABs whose parent just finished.
 
     Parent-finished lasts one round, so it is not in the index: each device's
-    parent-finished ABs are heaped here (built on first need), and a device's
-    best AB is the better of the index's answer and this heap's top. A round
+    parent-finished ABs are heaped here (built on first need; not for a round that
+    names one AB, the most common), and a device's best AB is the better of the
+    index's answer and this heap's top. (The ABs a round names are not even filed in
+    the index until the round is over, and then only those that still wait: most
+    start in it. The answer is the same: an AB ranks better named than filed, so
+    whether the index holds it does not change which of the two is better.) A round
     that names no AB ranks as the index does. The selector keeps two views and
     reuses them round after round (so no round leaves a view behind as garbage:
     ``best`` holds a bound method of its view, a reference cycle): the plain one,
     and the one it points at the ABs each round names (:meth:`name`).
     """
 
-    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named", "_kept")
+    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named", "_kept",
+                 "_one", "_alive")
 
     def __init__(self, index: WaitIndex, *, names: bool) -> None:
         self.pjf: Mapping[AbId, Node] = _NONE_NAMED
@@ -83,6 +88,13 @@ class _Round:
         are kept on the ABs)."""
         self._kept: dict[str, tuple[Node | None, int, int]] = {}
         """Device -> the best AB :meth:`_best` found, its version, the index's serial."""
+        self._one: Node | None = None
+        """The AB the round names when it names one (most rounds that name any: the next
+        iteration of a feedback loop, or the follow-up of the AB that ended): its heaps
+        are not built (:meth:`_find`)."""
+        self._alive: frozenset[str] | None = None
+        """With ``_one``: the devices on which its heap would still hold it (None: not
+        built yet)."""
         self.best: Callable[[str], Node | None] = self._best if names else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
         answer for the view of rounds that name no AB)."""
@@ -95,6 +107,8 @@ class _Round:
         """Point the view at the ABs a round names (what it kept of the last is gone)."""
         self.pjf = pjf
         self._heaps = None
+        self._one = next(iter(pjf.values())) if len(pjf) == 1 else None
+        self._alive = None
         self._named.clear()
         self._kept.clear()
 
@@ -135,6 +149,22 @@ class _Round:
     def _find(self, device: str) -> Node | None:
         """What :meth:`_best` answers, worked out."""
         top = self._index.top(device)
+        one = self._one
+        if one is not None:
+            # One named AB: what its heaps would answer, without them. They would be built
+            # at the first ask, with an entry on each of its devices if it waits then, and
+            # its entry on a device dropped when an ask finds it waiting no more or parked.
+            alive = self._alive
+            if alive is None:
+                alive = self._alive = one.devices if one.state is _WAITING else _NO_DEVICES
+            if device not in alive or one.state is not _WAITING:
+                return top  # (an AB that waits no more does not wait again in its round)
+            if one.parked is not None:
+                self._alive = alive - {device}
+                return top
+            if top is None or top is one:
+                return one
+            return top if self.rank(top) < self.rank(one) else one
         heaps = self._heaps
         if heaps is None:
             heaps = self._heaps = self._heap_named()
@@ -369,11 +399,16 @@ class Selector:
 
     def _unname(self, pjf: Mapping[AbId, Node]) -> None:
         """"Parent just finished" lasts one round: at its end, others may rank above
-        the ABs it named (their devices are dirty)."""
-        dirty = self._wm.dirty
+        the ABs it named (their devices are dirty); those that still wait unparked are
+        filed in the index now (``WorkingMemory.enter_waiting`` left them out of it:
+        most start in the round that names them)."""
+        wm = self._wm
+        dirty = wm.dirty
         for n in pjf.values():
             if n.state is _WAITING:
                 dirty.update(n.devices)
+                if n.unfiled and n.parked is None:
+                    wm.index.add(n)
 
     def _counted(self, app: App) -> bool:
         """Count one more start of ``app`` at this instant; False past its budget."""

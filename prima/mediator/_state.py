@@ -202,7 +202,7 @@ class Node:
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
                  "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for",
-                 "speaks")
+                 "speaks", "unfiled")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -226,6 +226,10 @@ class Node:
         """The request's sequence number: smaller is older."""
         self.version = 0
         """Bumped whenever its waiting-index entries go stale."""
+        self.unfiled = False
+        """Waiting, but not yet in the waiting index: its parent just finished, and the
+        round that names it files it only if it still waits then
+        (``WorkingMemory.enter_waiting``)."""
         self.head: tuple[int, ...] | None = None
         self.order: tuple[int, ...] | None = None
         """Its keys under the NODE ranking criteria before and after the first TREE
