@@ -4,8 +4,10 @@ status, never a traceback, the finished runs kept whole in the results file.
 A real ``prima sweep`` runs in a process group of its own, on two worker processes, and
 the signal goes to the whole group, as a terminal's Ctrl-C does (the workers get it
 too). Each point is reached by waiting for what the sweep has written, not for a time:
-at start-up (at once), as the pool is made (the results file has its header), while the
-runs go (it has records) and while they are written (many records).
+at start-up (as soon as PRIMA has taken the signals, while the command's modules load),
+as the pool is made (the results file has its header), while the runs go (it has
+records) and while they are written (many records). A signal while Python itself starts
+(its ``site`` module, before any of PRIMA's code) is Python's to handle, not PRIMA's.
 """
 
 from __future__ import annotations
@@ -49,13 +51,29 @@ def _records(results: Path) -> int:
         return -1
 
 
+def _took_the_signals(pid: int) -> bool:
+    """Whether the process ``pid`` catches SIGTERM: ``prima``'s entry point does so first
+    thing (Python itself leaves it at its default), so PRIMA's code is running."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return True  # (gone, or no /proc: nothing to wait for)
+    caught = next((line.split()[1] for line in status.splitlines()
+                   if line.startswith("SigCgt:")), "0")
+    return bool(int(caught, 16) >> (signal.SIGTERM - 1) & 1)
+
+
 def _interrupted(results: Path, sig: signal.Signals, lines: int | None) -> tuple[int, str]:
     """A sweep given ``sig`` (its process group) once its results file has ``lines``
-    lines (None: at once): its exit status and what it said on standard error."""
+    lines (None: as soon as PRIMA has taken the signals): its exit status and what it
+    said on standard error."""
     process = subprocess.Popen(_sweep(results, "--results"), stdout=subprocess.DEVNULL,
                                stderr=subprocess.PIPE, start_new_session=True, cwd=ROOT)
     try:
         deadline = time.monotonic() + BOUND
+        while lines is None and not _took_the_signals(process.pid) \
+                and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.0005)
         while lines is not None and _records(results) < lines and process.poll() is None \
                 and time.monotonic() < deadline:
             time.sleep(0.002)
