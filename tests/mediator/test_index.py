@@ -35,6 +35,7 @@ def test_a_stream_that_never_ends_leaves_no_bookkeeping_behind() -> None:
     assert len(sizes) >= 5 and max(sizes) <= 20, sizes
 
 
+@pytest.mark.pure  # (it counts calls by patching WaitIndex: a compiled class is not patched)
 def test_an_ab_whose_parent_just_finished_is_filed_only_if_it_waits(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """An AB end re-ranks only what it touches: the next iteration of a feedback loop
