@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from prima.mediator import Call, Decision, DecisionKind, Request, RunningOrder, Rule
 from prima.mediator.testing import Harness
+from prima.vocab import Value
 
 
 def call(command: str, **args: object) -> Call:
@@ -55,3 +58,25 @@ def ghost(h: Harness, *calls: Call, asap: bool = False) -> None:
     for c in calls:
         h.mediator.submit(req("ghost", c, asap=True))
     h.mediator.unregister("ghost")
+
+
+class Facing:
+    """A robot that faces away until it turns to the user (FaceHuman): a test sets
+    ``faced`` where the robot would; ``asked`` counts the mediator's questions."""
+
+    def __init__(self, faced: bool = False) -> None:
+        self.faced = faced
+        self.asked = 0
+
+    def unfaced(self) -> bool:
+        self.asked += 1
+        return not self.faced
+
+    def near(self, distance: float) -> bool:
+        return True
+
+    def pose(self) -> Mapping[str, Value]:
+        return {"x": 0.0, "y": 0.0, "heading": 0.0}
+
+    def displaced(self, pose: Mapping[str, Value]) -> bool:
+        return False

@@ -33,7 +33,7 @@ from prima.mediator import (
 )
 from prima.mediator.testing import Harness
 from prima.vocab import DEFAULT_BUDGETS, AppKind as Role, Budgets
-from tests.mediator.helpers import call, speak
+from tests.mediator.helpers import Facing, call, speak
 
 CUTS = Catalog.standard().interruptible(Catalog.standard().usually_interruptible())
 """A robot that cuts utterances, Q&A prompts, gestures and feedback iterations."""
@@ -50,24 +50,6 @@ def text_starts(h: Harness, app: str) -> list[tuple[float, str]]:
 def first(h: Harness, app: str, words: str) -> float:
     return next(t for t, said in text_starts(h, app) if said == words)
 
-
-class Facing:
-    """A robot that never faces its user until it turns to them (connect-channel)."""
-
-    def __init__(self) -> None:
-        self.faced = False
-
-    def unfaced(self) -> bool:
-        return not self.faced
-
-    def near(self, distance: float) -> bool:
-        return True
-
-    def pose(self) -> Mapping[str, Value]:
-        return {"x": 0.0, "y": 0.0, "heading": 0.0}
-
-    def displaced(self, pose: Mapping[str, Value]) -> bool:
-        return False
 
 
 # ---------------------------------------------------------------- 7.1: the next AB's devices

@@ -4,33 +4,11 @@ user first, in the same stream."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 
 from prima.mediator import AppKind, DecisionKind, MediatorConfig, Outcome, Request, Rule
 from prima.mediator.testing import Harness
-from prima.vocab import Value
-from tests.mediator.helpers import call, req, speak
+from tests.mediator.helpers import Facing, call, req, speak
 
-
-class Facing:
-    """A robot that faces away until it turns to the user (FaceHuman)."""
-
-    def __init__(self, faced: bool = False) -> None:
-        self.faced = faced
-        self.asked = 0
-
-    def unfaced(self) -> bool:
-        self.asked += 1
-        return not self.faced
-
-    def near(self, distance: float) -> bool:
-        return True
-
-    def pose(self) -> Mapping[str, Value]:
-        return {"x": 0.0, "y": 0.0, "heading": 0.0}
-
-    def displaced(self, pose: Mapping[str, Value]) -> bool:
-        return False
 
 
 

@@ -6,7 +6,6 @@ taking it out).
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
 
 import pytest
 
@@ -20,11 +19,10 @@ from prima.mediator import (
     Request,
     Rule,
     RunningOrder,
-    Value,
 )
 from prima.mediator.testing import Harness, feedback_iterations
 from prima.vocab import DEFAULT_BUDGETS, AppKind as Role, Budgets
-from tests.mediator.helpers import call, speak
+from tests.mediator.helpers import Facing, call, speak
 
 
 def _starts(h: Harness, app: str) -> list[tuple[float, str]]:
@@ -310,24 +308,6 @@ def test_an_answer_whose_words_never_come_holds_the_others_at_most_its_bound() -
 CUTS = Catalog.standard().interruptible(Catalog.standard().usually_interruptible())
 """A robot that cuts utterances, Q&A prompts, gestures and feedback iterations."""
 
-
-class Facing:
-    """A robot that faces its user only once it has turned to them."""
-
-    def __init__(self) -> None:
-        self.faced = False
-
-    def unfaced(self) -> bool:
-        return not self.faced
-
-    def near(self, distance: float) -> bool:
-        return True
-
-    def pose(self) -> Mapping[str, Value]:
-        return {"x": 0.0, "y": 0.0, "heading": 0.0}
-
-    def displaced(self, pose: Mapping[str, Value]) -> bool:
-        return False
 
 
 def _sweeping(own: bool, catalog: Catalog | None) -> Harness:
