@@ -17,7 +17,10 @@ import heapq
 from collections.abc import Callable, Generator
 from typing import Any
 
-__all__ = ["Kernel", "ProcGen", "Process", "Wait", "Waker", "signal", "sleep", "until"]
+from prima.errors import SimulationError
+
+__all__ = ["Kernel", "ProcGen", "Process", "Room", "Wait", "Waker", "signal", "sleep",
+           "until"]
 
 Waker = Callable[[Any], None]
 
@@ -193,3 +196,29 @@ class Kernel:
             self._wake(self.tick + wait.ticks, proc, token, wait.timeout)
         if wait.pred is not None:
             self._polls.append((proc, token, wait.pred))
+
+
+class Room:
+    """Insertion numbers a kernel keeps (:meth:`Kernel.reserve`) for work added as a run
+    goes (a live user's actions, a network message sent live): each is done at its time,
+    after now, where the work scheduled for that tick beforehand goes."""
+
+    def __init__(self, kernel: Kernel, n: int, what: str) -> None:
+        self._kernel = kernel
+        self._numbers = iter(kernel.reserve(n))
+        self._n = n
+        self._what = what
+        """What is added, for the errors (``input``, ``action``)."""
+
+    def add(self, at: float, fn: Callable[[], None]) -> None:
+        """Do ``fn`` at ``at`` (s). Raises SimulationError for a time not after now, or
+        past the number kept."""
+        k = self._kernel
+        tick = round(at * k.hz)
+        if tick <= k.tick:
+            raise SimulationError(f"an {self._what} added at {at:g} s comes too late: the "
+                                  f"run is at {k.tick / k.hz:g} s")
+        number = next(self._numbers, None)
+        if number is None:
+            raise SimulationError(f"at most {self._n} {self._what}s may be added to a run")
+        k.at_reserved(tick, number, fn)

@@ -30,7 +30,7 @@ from prima.catalog import Blend, Catalog
 from prima.errors import SimulationError
 from prima.mediator import AtomicBehavior, Call, Event, Outcome
 from prima.sim._behaviors import perform
-from prima.sim._kernel import Kernel, Process, Waker
+from prima.sim._kernel import Kernel, Process, Room, Waker
 from prima.sim._maps import Place, WorldMap
 from prima.sim._records import (
     Picture,
@@ -117,7 +117,7 @@ class Simulator:
         may go from there before they can change (negative: look them up)."""
         for ev in events:
             self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
-        self._room = iter(self.kernel.reserve(ADDED_ACTIONS))
+        self._room = Room(self.kernel, ADDED_ACTIONS, "input")
         """The insertion numbers kept for inputs added as the run goes (:meth:`add_event`)."""
         self.pace: Callable[[int], None] | None = None
         """Called with the tick the run may go on to, where it could wait for a wall clock
@@ -221,15 +221,7 @@ class Simulator:
         among the inputs of that tick (a network message sent live, ``prima live``): a
         scenario with the same inputs at the same times makes the same run. Raises
         SimulationError for a time not after now, or past the bound."""
-        k = self.kernel
-        tick = round(event.at * k.hz)
-        if tick <= k.tick:
-            raise SimulationError(f"an input added at {event.at:g} s comes too late: the "
-                                  f"run is at {self.now():g} s")
-        number = next(self._room, None)
-        if number is None:
-            raise SimulationError(f"at most {ADDED_ACTIONS} inputs may be added to a run")
-        k.at_reserved(tick, number, functools.partial(self._post, event))
+        self._room.add(event.at, functools.partial(self._post, event))
 
     @classmethod
     def from_scenario(cls, scenario: Setting, *, spec: RobotSpec | None = None,

@@ -14,13 +14,12 @@ from __future__ import annotations
 import functools
 import math
 import re
-from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from prima.errors import SimulationError
 
-from prima.sim._kernel import ProcGen, Process, sleep
+from prima.sim._kernel import ProcGen, Process, Room, sleep
 from prima.sim._records import Pose, UserAction, UserActionKind
 
 if TYPE_CHECKING:
@@ -127,7 +126,7 @@ class ScriptedUser:
         self._matched = [0] * len(script.answers)
         self._asked: tuple[str, AnswerRule | None] | None = None
         """The prompt the robot is asking, and the rule that answers it (None: none)."""
-        self._room: Iterator[int] = iter(())
+        self._room: Room | None = None
         """The insertion numbers kept for actions added as the run goes (:meth:`add`)."""
 
     def begin(self) -> None:
@@ -136,7 +135,7 @@ class ScriptedUser:
         k = self._sim.kernel
         for action in self.script.actions:
             k.at(round(action.at * k.hz), functools.partial(self._do, action))
-        self._room = iter(k.reserve(ADDED_ACTIONS))
+        self._room = Room(k, ADDED_ACTIONS, "action")
 
     def add(self, action: TimedAction) -> None:
         """Do ``action`` at its time, after now, as if the script had listed it last among
@@ -144,15 +143,9 @@ class ScriptedUser:
         script of the same actions at the same times makes the same run. Its tick is a
         report, so the run loop gets control there as it would from the script's own
         reckoning. Raises SimulationError for a time not after now, or past the bound."""
-        k = self._sim.kernel
-        tick = round(action.at * k.hz)
-        if tick <= k.tick:
-            raise SimulationError(f"an action added at {action.at:g} s comes too late: the "
-                                  f"run is at {self._sim.now():g} s")
-        number = next(self._room, None)
-        if number is None:
-            raise SimulationError(f"at most {ADDED_ACTIONS} actions may be added to a run")
-        k.at_reserved(tick, number, functools.partial(self._added, action))
+        if self._room is None:
+            raise SimulationError("actions are added once the user's script has begun")
+        self._room.add(action.at, functools.partial(self._added, action))
 
     def _added(self, action: TimedAction) -> None:
         self._sim.reports += 1

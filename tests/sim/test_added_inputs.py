@@ -113,3 +113,18 @@ def test_an_input_for_a_tick_already_run_is_refused() -> None:
     with pytest.raises(SimulationError, match="too late"):
         run.sim.add_event(ScheduledEvent(1.0, "message", {"sender": "a", "text": "b"}))
     user.add(TimedAction(run.sim.now() + 0.02, UserActionKind.TOUCH))  # the next tick: fine
+
+
+def test_the_inputs_added_to_a_run_are_bounded() -> None:
+    """A run keeps room for a bounded number of added inputs (the simulator's and the
+    scripted user's, each ADDED_ACTIONS): one more is refused, as is one for now."""
+    from prima.sim._kernel import Kernel, Room
+
+    kernel = Kernel(50)
+    room = Room(kernel, 2, "input")
+    room.add(1.0, lambda: None)
+    room.add(0.5, lambda: None)
+    with pytest.raises(SimulationError, match="at most 2 inputs may be added to a run"):
+        room.add(2.0, lambda: None)
+    with pytest.raises(SimulationError, match="an input added at 0 s comes too late"):
+        Room(kernel, 1, "input").add(0.0, lambda: None)
