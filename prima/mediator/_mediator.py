@@ -194,6 +194,7 @@ class Mediator:
         self._apps.pop(app.name, None)
         self._fairness.registrations()
         for tree in sorted(app.trees.values(), key=lambda t: t.id):
+            self._wm.heard(tree)  # (an app gone answers nobody: what it held may go, 7.6 (1))
             for node in list(tree.nodes.values()):
                 if node.state is NodeState.RUNNING:
                     if node.feedback:

@@ -395,6 +395,8 @@ class WorkingMemory:
         its next ABs reserve are looked at again (whom they outrank changed)."""
         dirty = self.dirty
         dirty.update(self.index.rerank(tree))
+        if tree.parked:  # (an AB of it kept for another's next AB may outrank that one now)
+            self.unreserved = True
         if self.pjf:  # (the devices of its ABs the index does not hold yet: as if it did)
             for n in self.pjf.values():
                 if n.tree is tree and n.unfiled and n.state is _WAITING and n.parked is None:

@@ -136,6 +136,8 @@ class Streams:
     rationed by the wait share (7.6 (4))."""
     returns: set[CommandId] = field(default_factory=set)
     """The restore-state policy's returns (they wait for any talk: 7.6 (3))."""
+    unloaded: set[str] = field(default_factory=set)
+    """Apps unloaded: a reaction of theirs answers nobody (what ABs of it still run)."""
     resting: dict[AbId, float] = field(default_factory=dict)
     """Restarts of words a false interruption cut -> the instant the robot's pause ends
     (they may not start before it; their application is still talking meanwhile)."""
@@ -265,7 +267,7 @@ class _View:
             mine = replying  # (the reply to the user's later answer is no stream it holds)
         found: TreeView | None = None
         for tree in self.snap.trees:
-            if tree.id == n.tree or tree.id not in streams.user \
+            if tree.id == n.tree or tree.id not in streams.user or tree.app in streams.unloaded \
                     or tree.id not in streams.reaction or n.tree >= streams.user_from[tree.id]:
                 continue
             if self.snap.t >= streams.user_since[tree.id] + streams.answer_hold:
@@ -637,6 +639,7 @@ class Oracle:
             b.kinds[d.app] = AppKind[d.detail]
         elif d.kind is DecisionKind.UNLOAD and d.app is not None:
             b.unloaded.add(d.app)
+            self.streams.unloaded.add(d.app)
         elif d.kind is DecisionKind.HEAR:
             self._hear = d
         elif d.kind is DecisionKind.INTERRUPT or (d.kind is DecisionKind.REQUEST

@@ -273,6 +273,25 @@ def test_a_later_reaction_is_no_stream_the_answer_interrupted() -> None:
     assert not [d for d in h.decisions if d.rule is Rule.ANSWERING]
 
 
+def test_an_answer_whose_app_is_unloaded_holds_the_others_no_more() -> None:
+    """7.6 (1): the EA's answer to the user's touch is a turn (till 4.5), then words;
+    the FA's gestures wait meanwhile (from 2.0). The EA is unloaded at 2.5 (its words
+    cancelled, its turn, under way, concluded): it answers nobody any more, and the
+    FA's stream goes on at once, not when the turn ends."""
+    h = Harness(duration={"Gesture": 1.0, "Turn": 3.0, "Speak": 3.0})
+    m = h.mediator
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    m.submit(Request("fa", tuple(call("Gesture", name="wave") for _ in range(4))))
+    h.at(1.5, lambda: m.submit(Request(
+        "ea", (call("Turn", angle=90.0), speak("The toilets are by the door.")),
+        reactive=True, reaction=True, user=True)))
+    h.at(2.5, lambda: m.unregister("ea"))
+    h.run(until=10.0)
+    assert [d.t for d in h.starts() if d.app == "fa"] == [0.0, 1.0, 2.5, 3.5]
+    assert [(d.t, d.command) for d in h.starts() if d.app == "ea"] == [(1.5, "Turn")]
+
+
 def test_a_block_under_way_is_concluded_while_the_user_is_answered() -> None:
     """Rule 3 beside 7.6 (1): a started block is always concluded."""
     h = Harness(duration={"Gesture": 1.0, "Speak": 3.0})
