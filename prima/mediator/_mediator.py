@@ -459,6 +459,7 @@ class Mediator:
         if node.commands[0].internal is Rule.CONNECT_CHANNEL:
             for child in children:
                 child.looked = tree.suspensions
+                child.faced_at = self._log.now
 
     def _next_iteration(self, node: Node, children: list[Node]) -> Node:
         """Insert a feedback Command's next iteration between ``node`` and its children."""

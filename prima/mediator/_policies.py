@@ -78,6 +78,11 @@ class Policies:
         if x.looked != tree.suspensions:
             x.looked = tree.suspensions  # its stream was suspended since it was last looked
             x.turnable = x.faces  # at: whether it faces the user, anew
+        elif x.faced_at is not None and x.faced_at < self._log.now:
+            # It waited (for the speaker) after its turn: the user may have walked off
+            # meanwhile. Face first, or wait (docs/rules.md 7.6 (3)): looked at anew.
+            x.faced_at = None
+            x.turnable = x.faces
         if tree.pose is not None and self._restore(x):
             return True
         if x.turnable and self._connect(x):

@@ -202,7 +202,7 @@ class Node:
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
                  "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for",
-                 "speaks", "unfiled")
+                 "speaks", "unfiled", "faced_at")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -292,6 +292,9 @@ class Node:
         """Its tree's ``suspensions`` when the connect-channel policy last set
         ``turnable``: after a suspension, whether it faces the user is looked at anew
         (a turn made before it may have been undone meanwhile)."""
+        self.faced_at: float | None = None
+        """When the turn to the user put before it ended; words that did not start in that
+        instant (they waited for the speaker) look whether they face the user again."""
         self.protected = False
         """The words with which an application replies to the answer of its own Q&A: they
         belong to the exchange (docs/rules.md 7.4): they outrank every other application's

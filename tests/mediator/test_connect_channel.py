@@ -138,3 +138,25 @@ def test_a_stream_suspended_after_its_turn_is_turned_for_again_when_it_resumes()
                                (3.5, "ea", "Speak", Rule.REACTIVITY),
                                (5.5, "fa", "FaceHuman", Rule.CONNECT_CHANNEL),
                                (7.0, "fa", "Speak", Rule.FREE_DEVICES)]
+
+
+def test_words_that_waited_after_their_turn_look_at_the_user_again() -> None:
+    """Face first, or wait (docs/rules.md 7.6 (3)): the FA's words are turned for (to
+    1.5 s); meanwhile the EA took the speaker (0.5 to 3.5 s). The user walks off to the
+    side at 2.0 s: when the speaker is free, the FA's words, which waited after their
+    turn, turn to the user again before they start, not 3.5 s later unfaced. Words that
+    start in the instant their turn ends are not looked at twice (no second turn)."""
+    facing = Facing()
+    h = Harness(duration={"FaceHuman": 1.5, "Speak": 3.0}, channel=facing)
+    h.app("fa", AppKind.FA)
+    h.app("ea", AppKind.EA)
+    h.mediator.submit(req("fa", speak("What's the matter with you?")))
+    h.at(0.5, lambda: h.mediator.submit(Request(
+        "ea", (speak("This panel shows robots."),), face_user=False)))
+    h.at(1.5, lambda: setattr(facing, "faced", True))  # (the turn ends)
+    h.at(2.0, lambda: setattr(facing, "faced", False))  # (the user walks off)
+    h.run(until=20.0)
+    assert starts(h) == [(0.0, "fa", "FaceHuman", Rule.CONNECT_CHANNEL),
+                         (0.5, "ea", "Speak", Rule.FREE_DEVICES),
+                         (3.5, "fa", "FaceHuman", Rule.CONNECT_CHANNEL),
+                         (5.0, "fa", "Speak", Rule.FREE_DEVICES)]
