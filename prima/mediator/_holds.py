@@ -120,9 +120,10 @@ class Holds:
         """ABs parked because a reaction to the user's own action answers first
         (docs/rules.md 7.6 (1)): they take their places again when one stops keeping
         the streams it interrupted waiting."""
-        self._answer_held: dict[AbId, str] = {}
+        self._answer_held: dict[AbId, tuple[int, int | None]] = {}
         """Waiting ABs of streams not yet under way held back while a reaction answers
-        the user (a hold decision was emitted) -> the app said to answer."""
+        the user (a hold decision was emitted) -> that reaction (its tree, its order): a
+        later reaction to the user that holds them again is said anew."""
         self._channel_held: set[AbId] = set()
         """Waiting ABs held back by the channel rule (a hold decision was emitted)."""
         self._reserved: dict[AbId, AbId] = {}
@@ -308,14 +309,15 @@ class Holds:
             self._unkeep(n)
             self._wm.refile(n)
 
-    def answering(self, node: Node, by: App) -> None:
-        """Record that ``by``'s reaction to the user's own action holds back ``node``, of a
-        stream not yet under way (once per AB and answering app: docs/rules.md 7.6 (1))."""
-        if self._answer_held.get(node.id) != by.name:
-            self._answer_held[node.id] = by.name
-            self._log.ab(DecisionKind.HOLD, Rule.ANSWERING, node,
-                         f"while {by.name} answers the user")
-            self._log.tell(node.app.name, "held", by=by.name, rule=Rule.ANSWERING.value)
+    def answering(self, node: Node, by: Tree) -> None:
+        """Record that ``by``, a reaction to the user's own action, holds back ``node``, of
+        a stream not yet under way (once per AB and reaction: docs/rules.md 7.6 (1))."""
+        key = (by.id, by.reaction)
+        if self._answer_held.get(node.id) != key:
+            self._answer_held[node.id] = key
+            name = by.app.name
+            self._log.ab(DecisionKind.HOLD, Rule.ANSWERING, node, f"while {name} answers the user")
+            self._log.tell(node.app.name, "held", by=name, rule=Rule.ANSWERING.value)
 
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)

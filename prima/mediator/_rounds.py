@@ -331,7 +331,7 @@ class Selector:
                 if wm.suspend(tree):
                     self._policies.suspending(tree)
             elif tree.live:  # (suspended by another AB's start in the round: held, said so)
-                self._holds.answering(x, by.app)
+                self._holds.answering(x, by)
 
     def _kept_back(self, x: Node, ready: bool) -> bool:
         """Whether ``x``, held by no hold, waits all the same: kept for another
@@ -361,7 +361,7 @@ class Selector:
         if x.tree.started and x.tree.suspended is None:
             self._answered.append((x, answering))  # (suspended once the round is over)
         else:  # (a new stream, or one suspended already, by another AB: held, said so)
-            self._holds.answering(x, answering.app)
+            self._holds.answering(x, answering)
         self._holds.park(x, _ANSWERING, answering.app)
         return True
 

@@ -292,6 +292,29 @@ def test_an_answer_whose_app_is_unloaded_holds_the_others_no_more() -> None:
     assert [(d.t, d.command) for d in h.starts() if d.app == "ea"] == [(1.5, "Turn")]
 
 
+def test_a_stream_held_for_a_second_answer_is_said_to_be_held_again() -> None:
+    """7.6 (1): a second EA's head move (asked at 0.2) waits for the first EA's (to
+    3.0); it is held while the FA answers the user's touch at 0.5 (its words to 1.5).
+    The user touches the robot again at 2.5: the FA's second answer holds it anew, and
+    a second `hold` says so (what reads the trace, the judge, knows why it waits
+    then)."""
+    h = Harness(duration={"Speak": 1.0, "MoveHead": 3.0, "*": 2.0})
+    m = h.mediator
+    h.app("fa", AppKind.FA, on_event=lambda e: e.name == "touched" and m.submit(Request(
+        "fa", (speak("Hee-hee! That tickles."), call("PointByHand", angle=0.5)),
+        reactive=True, reaction=True, user=True)))
+    h.app("ea", AppKind.EA)
+    h.app("eb", AppKind.EA)
+    m.submit(Request("ea", (call("MoveHead", pan=0.3),)))
+    h.at(0.2, lambda: m.submit(Request("eb", (call("MoveHead", pan=-0.5),))))
+    h.at(0.5, lambda: m.post(Event("touched")))
+    h.at(2.5, lambda: m.post(Event("touched")))
+    h.run(until=12.0)
+    held = [(d.t, d.rule) for d in h.kinds(DecisionKind.HOLD) if d.app == "eb"]
+    assert held == [(0.5, Rule.ANSWERING), (2.5, Rule.ANSWERING)]
+    assert _starts(h, "eb") == [(4.5, "MoveHead")]
+
+
 def test_a_block_under_way_is_concluded_while_the_user_is_answered() -> None:
     """Rule 3 beside 7.6 (1): a started block is always concluded."""
     h = Harness(duration={"Gesture": 1.0, "Speak": 3.0})
