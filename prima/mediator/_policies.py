@@ -80,9 +80,11 @@ class Policies:
             x.turnable = x.faces  # at: whether it faces the user, anew
         elif x.faced_at is not None and x.faced_at < self._log.now:
             # It waited (for the speaker) after its turn: the user may have walked off
-            # meanwhile. Face first, or wait (docs/rules.md 7.6 (3)): looked at anew.
+            # meanwhile. Face first, or wait (docs/rules.md 7.6 (3)): looked at anew, once.
             x.faced_at = None
-            x.turnable = x.faces
+            if not x.relooked:
+                x.relooked = True
+                x.turnable = x.faces
         if tree.pose is not None and self._restore(x):
             return True
         if x.turnable and self._connect(x):

@@ -202,7 +202,7 @@ class Node:
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
                  "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for",
-                 "speaks", "unfiled", "faced_at")
+                 "speaks", "unfiled", "faced_at", "relooked")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
@@ -295,6 +295,10 @@ class Node:
         self.faced_at: float | None = None
         """When the turn to the user put before it ended; words that did not start in that
         instant (they waited for the speaker) look whether they face the user again."""
+        self.relooked = False
+        """They did, once: another wait after the second turn starts them as they are
+        (two apps' turns and returns could otherwise take the wheels from each other
+        for ever)."""
         self.protected = False
         """The words with which an application replies to the answer of its own Q&A: they
         belong to the exchange (docs/rules.md 7.4): they outrank every other application's
