@@ -18,8 +18,9 @@ system), the median over interleaved rounds, and shown as a ratio to a bare
 The targets we hold these to are checked at the end. With ``--against TREE`` (a
 checkout of an earlier build: ``git worktree add /tmp/before 74e2f0f``, installed
 in an environment of its own whose interpreter ``--against-python`` names), ``prima
---version`` and ``prima validate`` of that build's own copy of the document run in
-the same rounds, from that tree, and this build must cost no more than it.
+--version``, ``prima validate`` of that build's own copy of the document and its own
+17 thesis scenarios run in the same rounds, from that tree, and this build must cost
+no more than it.
 
 Compiled bytecode: an installed PRIMA has its ``.pyc`` files (pip compiles
 them at install), but a checkout under ``PYTHONDONTWRITEBYTECODE`` would
@@ -53,7 +54,8 @@ TARGETS = {
 
 
 EARLIER = " (earlier build)"
-AGAINST = ("prima --version", "prima validate (one document)")
+AGAINST = ("prima --version", "prima validate (one document)",
+           f"{len(THESIS)} thesis scenarios (separate runs)")
 """The cases measured on an earlier build too (``--against``): this build's cost must be
 at most that build's."""
 
@@ -80,10 +82,13 @@ def earlier_cases(tree: Path, python: str) -> dict[str, Callable[[], float]]:
     it this build's robots), on its own copy of the document."""
     def run(*argv: str) -> Callable[[], float]:
         return lambda: child_cpu([python, "-m", "prima", *argv], cwd=tree)
+    runs = [run("run", str(tree / path.relative_to(ROOT))) for path in THESIS]
     return {
         f"prima --version{EARLIER}": run("--version"),
         f"prima validate (one document){EARLIER}": run(
             "validate", str(tree / ONE_DOCUMENT.relative_to(ROOT))),
+        f"{len(THESIS)} thesis scenarios (separate runs){EARLIER}":
+            lambda: sum(each() for each in runs),
     }
 
 
