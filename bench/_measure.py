@@ -22,7 +22,7 @@ import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -59,7 +59,8 @@ def cpu(fn: Callable[[], object]) -> float:
     return time.process_time() - start
 
 
-def child_cpu(argv: Sequence[str], *, ok: tuple[int, ...] = (0,)) -> float:
+def child_cpu(argv: Sequence[str], *, ok: tuple[int, ...] = (0,), cwd: Path | None = None,
+              env: Mapping[str, str] | None = None) -> float:
     """CPU seconds (user + system) of one cold process running ``argv``.
 
     The process's output is swallowed; an exit status not in ``ok`` stops the
@@ -67,7 +68,8 @@ def child_cpu(argv: Sequence[str], *, ok: tuple[int, ...] = (0,)) -> float:
     command measures nothing.
     """
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    done = subprocess.run(list(argv), capture_output=True, text=True, check=False)
+    done = subprocess.run(list(argv), capture_output=True, text=True, check=False, cwd=cwd,
+                          env=None if env is None else dict(env))
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode not in ok:
         sys.exit(f"{' '.join(argv)} exited {done.returncode}:\n{done.stderr}")

@@ -24,7 +24,6 @@ Imports nothing of PRIMA (any module may use it).
 
 from __future__ import annotations
 
-import html
 import json
 import os
 import re
@@ -90,6 +89,8 @@ _SURROGATE = re.compile("[\ud800-\udfff]")
 def markup(text: str) -> str:
     """Text shown as itself inside HTML (or a Plotly label); undecodable bytes of a file
     name as ``\\xff``."""
+    import html  # (its entities table is large: only the pages and pictures need it)
+
     return html.escape(_SURROGATE.sub(_escape_one, text))
 
 

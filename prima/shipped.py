@@ -17,7 +17,6 @@ with PRIMA).
 
 from __future__ import annotations
 
-from importlib import resources
 from pathlib import Path
 
 __all__ = ["FOLDERS", "NAMED", "locate", "shipped"]
@@ -39,6 +38,8 @@ def shipped(*parts: str) -> Path | None:
     names = [name for part in parts for name in Path(part).parts]
     if not names or names[0] not in FOLDERS or ".." in names:
         return None
+    from importlib import resources  # (only when a file is looked for where PRIMA is)
+
     try:
         top = resources.files(FOLDERS[names[0]])
     except ModuleNotFoundError:  # (an install without that folder's package)

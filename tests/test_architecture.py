@@ -232,6 +232,24 @@ def test_validating_a_document_imports_no_simulator_mediator_or_interpreter() ->
                                          "prima.interpreter", "prima.run"} == set()
 
 
+def test_prima_version_imports_no_command() -> None:
+    status, modules = _imported_by("--version")
+    assert status == 0
+    assert {m for m in modules if m.startswith("prima.cli._")} <= {
+        "prima.cli._main", "prima.cli._common", "prima.cli._options"}
+    assert "prima.judge" not in modules
+
+
+def test_a_command_imports_no_other_commands_module() -> None:
+    app = Path(__file__).resolve().parents[1] / "apps" / "fa" / "fa2-follow.pxml"
+    status, modules = _imported_by("validate", str(app))
+    assert status == 0
+    commands = {m for m in modules if m.startswith("prima.cli._")} - {
+        "prima.cli._main", "prima.cli._common", "prima.cli._options"}
+    assert commands == {"prima.cli._validate"}
+    assert {"prima.judge", "urllib.request", "http.client"} & modules == set()
+
+
 def test_every_package_is_installed() -> None:
     """A non-editable install ships only the packages pyproject.toml lists."""
     import tomllib

@@ -179,3 +179,10 @@ class _BarLine:
 
     def __exit__(self, *_exc: object) -> None:
         self.end()
+
+
+def _colour_argument(parser: argparse.ArgumentParser, default: str = argparse.SUPPRESS) -> None:
+    """``--color``, before the command or after it (there, only when given)."""
+    parser.add_argument("--color", choices=WHEN, default=default,
+                        help="colour the output: auto (default: on a terminal, unless "
+                             "NO_COLOR is set; FORCE_COLOR forces it), always or never")

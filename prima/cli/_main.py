@@ -1,35 +1,23 @@
 """``prima``'s parser and its entry: :func:`main`. Each command is one module of this
-package (its arguments, and a call into the library), one entry of :data:`COMMANDS`."""
+package (its arguments, and a call into the library), one name in :data:`NAMES`."""
 
 from __future__ import annotations
 
 import argparse
 import errno
+import importlib
 import os
 import sys
 from collections.abc import Callable, Sequence
 from typing import TextIO
 
 from prima import __version__, compiled
-from prima.cli import (
-    _check,
-    _completion,
-    _debug,
-    _judge,
-    _live,
-    _lsp,
-    _plot,
-    _run,
-    _show,
-    _sweep,
-    _test,
-    _validate,
-)
 from prima.cli._common import (
     EXIT_ERRORS,
     EXIT_INTERRUPTED,
     EXIT_PIPE,
     Command,
+    _colour_argument,
     _colour_asked,
     _error,
     _paint,
@@ -37,32 +25,47 @@ from prima.cli._common import (
     _usage,
     set_colour,
 )
-from prima.cli._options import _colour_argument
 from prima.errors import LocatedError, PrimaError
 from prima.escape import terminal
-from prima.shipped import locate
 from prima.signals import EXIT_TERMINATED, terminate_as_interrupt
 from prima.suggest import SuggestingParser, unrecognized
 from prima.term import BOLD, RED
 
-__all__ = ["COMMANDS", "build_parser", "main"]
+__all__ = ["NAMES", "build_parser", "command", "main"]
 
 # Each command imports what it needs when it runs (``prima --help`` imports no lxml,
-# lark or pymunk; ``prima validate`` of documents no simulator): a cold start pays
-# only for its own command.
+# lark or pymunk; ``prima validate`` of documents no simulator), and the parser imports
+# only the module of the command the line names: a cold start pays for its own command.
+
+NAMES: tuple[str, ...] = ("validate", "run", "debug", "test", "judge", "sweep", "check",
+                          "show", "plot", "live", "lsp", "completion")
+"""Every ``prima`` command, in the order ``prima --help`` lists them: the command ``NAME``
+is the module ``prima/cli/_NAME.py`` and its ``COMMAND``."""
 
 
-COMMANDS: tuple[Command, ...] = (
-    _validate.COMMAND, _run.COMMAND, _debug.COMMAND, _test.COMMAND, _judge.COMMAND,
-    _sweep.COMMAND, _check.COMMAND, _show.COMMAND, _plot.COMMAND, _live.COMMAND,
-    _lsp.COMMAND, _completion.COMMAND)
-"""Every ``prima`` command, in the order ``prima --help`` lists them."""
+def command(name: str) -> Command:
+    """The command ``name`` of :data:`NAMES` (its module imported now)."""
+    found: Command = importlib.import_module(f"prima.cli._{name}").COMMAND
+    return found
 
 
-_COMMANDS = {c.name: c for c in COMMANDS}
+def _named(given: Sequence[str]) -> str | None:
+    """The command a command line names (its first word that is no option, past
+    ``--color``'s value), if it is one of :data:`NAMES`; else None."""
+    words = iter(given)
+    for word in words:
+        if word in ("--color", "--colour"):
+            next(words, None)
+        elif not word.startswith("-"):
+            return word if word in NAMES else None
+    return None
 
 
-def build_parser() -> SuggestingParser:
+def build_parser(given: Sequence[str] | None = None) -> SuggestingParser:
+    """``prima``'s parser; for the command line ``given``, only the command it names (the
+    others' modules are not imported), and none at all for ``prima --version``. Every
+    command when ``given`` is None, or for ``prima --help``, a mistyped command,
+    completion."""
     parser = SuggestingParser(
         prog="prima",
         description="PRIMA: mediate two robot applications sharing one personal robot.",
@@ -71,8 +74,12 @@ def build_parser() -> SuggestingParser:
     parser.add_argument("--version", action="version", version=f"prima {__version__}{build}")
     _colour_argument(parser, "auto")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for command in COMMANDS:
-        command.add(commands)
+    named = None if given is None else _named(given)
+    version = given is not None and named is None and "--version" in given \
+        and not {"-h", "--help"} & set(given)
+    for name in NAMES:
+        if (named is None and not version) or name == named:
+            command(name).add(commands)
     return parser
 
 
@@ -80,9 +87,10 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
          err: TextIO | None = None) -> int:
     out = out or sys.stdout
     err = err or sys.stderr
-    parser = build_parser()
     given = list(sys.argv[1:] if argv is None else argv)
-    if "_ARGCOMPLETE" in os.environ:  # the shell asks what may come next (prima completion)
+    completing = "_ARGCOMPLETE" in os.environ
+    parser = build_parser(None if completing else given)
+    if completing:  # the shell asks what may come next (prima completion)
         try:
             from prima.completion import autocomplete
         except ImportError:  # (no argcomplete: the shell completes file names instead)
@@ -104,9 +112,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     problem = _locate_inputs(args)
     if problem:
         return _usage(args.command, problem, err)
-    command: Callable[[argparse.Namespace, TextIO, TextIO], int] = _COMMANDS[args.command].execute
+    execute: Callable[[argparse.Namespace, TextIO, TextIO], int] = command(args.command).execute
     with terminate_as_interrupt() as signals:
-        status = _main(command, args, out, err)
+        status = _main(execute, args, out, err)
     return EXIT_TERMINATED if signals.terminated and status == EXIT_INTERRUPTED else status
 
 
@@ -130,6 +138,8 @@ def _locate_inputs(args: argparse.Namespace) -> str | None:
                 return problem
     if getattr(args, "update", False):
         return None
+    from prima.shipped import locate
+
     for name, kind in _INPUTS.items():
         value = getattr(args, name, None)
         if isinstance(value, str):

@@ -10,10 +10,10 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
+from prima.cli._common import _colour_argument as _colour_argument  # (re-exported)
 from prima.cli._common import _usage
 from prima.escape import shown_path
 from prima.suggest import did_you_mean
-from prima.term import WHEN
 from prima.vocab import MAX_RUN_TIME, MAX_SEED, POLICIES
 
 if TYPE_CHECKING:
@@ -64,13 +64,6 @@ def _policy_argument(parser: argparse.ArgumentParser) -> None:
                         help="switch a mediation policy, over the profile's and the "
                              f"scenario's (repeatable; NAME: all, {', '.join(POLICIES)}; "
                              "docs/mediator.md, Policies)")
-
-
-def _colour_argument(parser: argparse.ArgumentParser, default: str = argparse.SUPPRESS) -> None:
-    """``--color``, before the command or after it (there, only when given)."""
-    parser.add_argument("--color", choices=WHEN, default=default,
-                        help="colour the output: auto (default: on a terminal, unless "
-                             "NO_COLOR is set; FORCE_COLOR forces it), always or never")
 
 
 def _batch_arguments(parser: argparse.ArgumentParser) -> None:

@@ -18,7 +18,6 @@ import sys
 from collections.abc import Iterable
 from importlib import resources
 from pathlib import Path
-from xml.sax.saxutils import escape
 
 from prima.catalog import STANDARD_COMMANDS, CommandSpec, Param, ParamKind
 from prima.dsl._commands import element_name
@@ -43,8 +42,13 @@ _TYPES = {
 _INDENT = "      "
 
 
+def _escape(text: str) -> str:
+    """``text`` as XML character data (``&``, ``<`` and ``>`` escaped)."""
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
 def _doc(text: str, indent: str) -> str:
-    return (f"{indent}<xs:annotation><xs:documentation>{escape(text)}"
+    return (f"{indent}<xs:annotation><xs:documentation>{_escape(text)}"
             "</xs:documentation></xs:annotation>\n")
 
 
