@@ -131,8 +131,8 @@ def main() -> int:
     parser.add_argument("--no-bytecode", action="store_true",
                         help="leave the environment's bytecode setting as it is")
     parser.add_argument("--against", type=Path, metavar="TREE",
-                        help="an earlier build's checkout: prima --version and validate "
-                             "measured there too, in the same rounds")
+                        help="an earlier build's checkout: prima --version, validate and "
+                             "the thesis runs measured there too, in the same rounds")
     parser.add_argument("--against-python", metavar="PYTHON", default=sys.executable,
                         help="the interpreter of an environment with TREE installed "
                              "(default: this one)")
