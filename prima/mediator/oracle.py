@@ -398,6 +398,10 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
         elif n.parked_by == n.app:
             pass  # (a restart waiting for its own app's reaction to the user's words, 7.5)
         elif not v.channel_held(n):
+            holders = v.holders(n)
+            if n.parked_by in holders:  # (another app's block parked it: that hold's doing,
+                out.add(n.parked_by)    # whoever answers the user meanwhile)
+                continue
             answering = v.answer_holder(n)
             if answering is not None:
                 # held while another app's reaction answers the user (7.6 (1))
@@ -406,7 +410,6 @@ def _keeping(v: _View, uncontended: Collection[AbId] = (),
                 continue
             # Kept by several apps' holds (three apps or more): the wait is the
             # parking hold's doing; the others would keep nothing it did not.
-            holders = v.holders(n)
             if not holders:  # kept for another app's reaction (7.1): its precedence
                 holders = v.keepers(n, excused)
             out.update([n.parked_by] if n.parked_by in holders else holders)
