@@ -194,10 +194,15 @@ def results_header(command: str, jobs: list[Job], names: list[str]) -> dict[str,
 
 
 def check_documents(scenario: Path, switches: Switches | None) -> None:
-    """Load the scenario and every document it runs, as a run would: a bad one stops
-    the batch here, located (LocatedError), before any run."""
+    """Check the scenario as ``prima validate`` does (:func:`prima.scenario.check_scenario`,
+    unless the command line swaps its FA or EA), then load it and every document it runs,
+    as a run would: a bad one stops the batch here, located (LocatedError), before any
+    run, with the lines ``prima run`` gives for it."""
     from prima.run import Run
+    from prima.scenario import check_scenario
 
+    if not (switches and (switches.fa or switches.ea)):
+        check_scenario(scenario, switches.robot if switches else None)
     Run(scenario, **(switches.run_options() if switches else {}))
 
 
@@ -219,8 +224,8 @@ def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
     if runs < 1 or not (math.isfinite(jitter) and jitter >= 0):
         raise ValueError("runs must be 1 or more and jitter a number of seconds from 0 up")
     source, jitter = Path(scenario), float(jitter)
-    name = load_scenario(source).name  # a bad scenario stops here, located
-    check_documents(source, switches)
+    check_documents(source, switches)  # a bad scenario stops here, located
+    name = load_scenario(source).name
     job = Job(bundle_scenario(source, switches), runs, seed, jitter, thresholds)
     result = Sweep(source, name, runs, jitter, seed, thresholds, keep=keep, switches=switches)
     out = ResultsFile(results, results_header("sweep", [job], [name])) if results else None

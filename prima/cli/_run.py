@@ -40,6 +40,7 @@ def add(commands: Commands) -> None:
 def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.output import written
     from prima.run import Run
+    from prima.scenario import check_scenario
     from prima.trace import TraceLine
 
     if args.format is None:  # (the file's extension says, as its reader would read it)
@@ -48,6 +49,8 @@ def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     if problem:
         return _usage("run", problem, err)
     chosen = FORMATS[args.format]
+    if not (args.fa or args.ea):  # (the scenario's own applications run: validate's lines)
+        check_scenario(args.scenario, args.robot)
     # Everything is loaded and checked before the output is opened; then each trace
     # line is written as the run makes it (``writer`` is opened below, before the run).
     run = Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
