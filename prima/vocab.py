@@ -272,7 +272,8 @@ class Policy:
     summary: str
     config: str | None = None
     """The field of the mediator's configuration (:class:`prima.mediator.MediatorConfig`)
-    it switches, if any: :func:`prima.scenario.mediator_config` maps every policy there."""
+    it switches, if any: :func:`prima.scenario.mediator_config` maps every policy there,
+    and the field defaults to :attr:`default` (``prima.mediator``'s ``policy_default``)."""
     sim: str | None = None
     """The simulator's switch it sets, if any (:class:`prima.run.Run` sets it)."""
 
