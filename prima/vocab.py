@@ -295,7 +295,8 @@ _POLICIES: dict[str, Policy] = {p.name: p for p in (
                            "robot whose profile declares <blend> (thesis Sec. 5.3 (5))",
            config="blend"),
     Policy("streams", True, "explicit stream blocks in the applications' documents keep "
-                            "a Communication Stream together (thesis Sec. 5.3 (3))"),
+                            "a Communication Stream together (thesis Sec. 5.3 (3))",
+           config="streams"),
     Policy("connect-channel", True, "before an utterance would start facing away from a "
                                     "detectable user, the robot turns to them first "
                                     "(thesis Sec. 5.3 (4))",

@@ -55,6 +55,12 @@ class MediatorConfig:
     """Upper bound on a begin/end block's watchdog, whatever the document asks:
     a runaway block cannot starve the other application (rule 3)."""
 
+    streams: bool = policy_default("streams")
+    """The streams policy (docs/rules.md 6c): explicit stream blocks keep a Communication
+    Stream together. Off, :meth:`Mediator.open_stream` and :meth:`Mediator.close_stream`
+    do nothing: stream blocks are plain sequences (the thesis' PRIMA, which had begin/end
+    blocks of an AB, thesis Sec. 4.1 (2), but no explicit Communication Streams)."""
+
     connect_channel: bool = policy_default("connect_channel")
     """The connect-channel policy (docs/rules.md 7.3 (4)), when there is a channel."""
 
