@@ -197,16 +197,20 @@ def results_header(command: str, jobs: list[Job], names: list[str]) -> dict[str,
 
 
 def check_documents(scenario: Path, switches: Switches | None) -> None:
-    """Check the scenario as ``prima validate`` does (:func:`prima.scenario.check_scenario`,
-    unless the command line swaps its FA or EA), then load it and every document it runs,
-    as a run would: a bad one stops the batch here, located (LocatedError), before any
-    run, with the lines ``prima run`` gives for it."""
+    """Load the scenario and every document it runs, as a run would: a bad one stops the
+    batch here, located (LocatedError), before any run, with the lines ``prima run``
+    gives for it (``prima validate``'s, :func:`prima.scenario.checked_load`, unless the
+    command line swaps its FA or EA)."""
     from prima.run import Run
-    from prima.scenario import check_scenario
+    from prima.scenario import checked_load
 
-    if not (switches and (switches.fa or switches.ea)):
-        check_scenario(scenario, switches.robot if switches else None)
-    Run(scenario, **(switches.run_options() if switches else {}))
+    def load() -> Run:
+        return Run(scenario, **(switches.run_options() if switches else {}))
+
+    if switches and (switches.fa or switches.ea):
+        load()
+    else:
+        checked_load(scenario, switches.robot if switches else None, load)
 
 
 def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,

@@ -4,15 +4,16 @@ application in the slot it fits, and the places the applications name on its map
 
 One function makes the validation every reader of scenarios uses
 (:func:`make_validation`): ``prima validate``, ``prima lsp`` (an editor's buffer),
-and ``prima run`` and ``prima sweep`` before they run (:func:`check_scenario`), so that
-the same bad scenario gives the same problems at the same places from all of them.
+and ``prima run`` and ``prima sweep`` when a scenario does not load
+(:func:`checked_load`), so that the same bad scenario gives the same problems at the
+same places from all of them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from prima.errors import DocumentError, LocatedError, Problem, ScenarioError, Severity
 
@@ -20,7 +21,10 @@ if TYPE_CHECKING:
     from prima.dsl import Checker, Header, RobotProfile, Validation
     from prima.sim import WorldMap
 
-__all__ = ["check_scenario", "make_validation", "scenario_checkers", "scenario_problems"]
+_T = TypeVar("_T")
+
+__all__ = ["check_scenario", "checked_load", "make_validation", "scenario_checkers",
+           "scenario_problems"]
 
 
 def _problems(load: Callable[[Path], object], path: Path) -> list[Problem]:
@@ -195,3 +199,15 @@ def check_scenario(scenario: str | Path, robot: str | Path | None = None) -> Non
     problems = scenario_problems(scenario, robot)
     if any(p.severity is Severity.ERROR for p in problems):
         raise ScenarioError(sorted(problems, key=lambda p: p.severity is not Severity.ERROR))
+
+
+def checked_load(scenario: str | Path, robot: str | Path | None, load: Callable[[], _T]) -> _T:
+    """``load()`` (a run made ready from ``scenario``); when it fails on a bad file, the
+    scenario's validation (:func:`check_scenario`) says what is wrong, as ``prima
+    validate`` and ``prima lsp`` do, if it finds an error, else the load's own error
+    stands. A scenario that loads costs no second reading."""
+    try:
+        return load()
+    except LocatedError:
+        check_scenario(scenario, robot)
+        raise
