@@ -81,8 +81,11 @@ LIMIT = 20e-6
 """Acceptance: each median at most this (seconds per operation)."""
 
 _BIG = Budgets(waiting=10**7, starts_per_instant=10**7, wait_share=10**6, wait_window=60.0)
-CONFIG = MediatorConfig(budgets={AppKind.FA: _BIG, AppKind.EA: _BIG})
-"""One app may keep 10,000 ABs waiting, and never loses its precedence."""
+CONFIG = MediatorConfig(budgets={AppKind.FA: _BIG, AppKind.EA: _BIG},
+                        interrupt=True, blend=True)
+"""One app may keep 10,000 ABs waiting, and never loses its precedence; the interrupt and
+blend policies on (off by default), so that ``--robot``'s blends and interruptible
+Commands give them work."""
 CATALOG = Catalog.standard()
 """The Commands the workloads request (``--robot``: a robot profile's, whose blends
 and interruptible Commands give the blend and interrupt policies work to weigh)."""

@@ -101,14 +101,10 @@ class _Channel:
 
 
 class _Port:
-    """What an interpreter may ask of the mediator, and nothing more. With the
-    ``streams`` policy off, explicit stream blocks are plain sequences: the mediator
-    never hears of them (the thesis' PRIMA, which had begin/end blocks of an AB,
-    thesis Sec. 4.1 (2), but no explicit Communication Streams)."""
+    """What an interpreter may ask of the mediator, and nothing more."""
 
     def __init__(self, run: Run) -> None:
         self._run = run
-        self._streams = run.policies["streams"]
 
     def submit(self, request: Request) -> tuple[int, ...]:
         self._run.requesting = request
@@ -118,12 +114,10 @@ class _Port:
             self._run.requesting = None
 
     def open_stream(self, app: str, hold: float) -> None:
-        if self._streams:
-            self._run.mediator.open_stream(app, hold)
+        self._run.mediator.open_stream(app, hold)
 
     def close_stream(self, app: str) -> None:
-        if self._streams:
-            self._run.mediator.close_stream(app)
+        self._run.mediator.close_stream(app)
 
     def open_block(self, app: str, *, devices: frozenset[str] | None = None,
                    watchdog: float) -> None:

@@ -13,7 +13,9 @@ Run ``i``'s offsets come from ``random.Random`` seeded with the sweep's seed and
 ``i``, so results are the same whatever runs them (:mod:`prima.batch`: this
 machine's processes or a Dask cluster) and however many workers. Each variant
 is an ordinary scenario file (:func:`write_variant`): the worst runs can be
-written out and replayed with ``prima run`` or ``prima judge``. A sweep keeps no
+written out and replayed with ``prima run`` or ``prima judge`` (the command line's
+policy switches written in; its runs are given them as ``prima run --policy`` gives
+them, through :class:`~prima.scenario.Setup`). A sweep keeps no
 run's report: each run's record goes to the results file (``results``) as it
 comes, and the sweep keeps only the spread of each measure and its worst runs,
 so its memory does not grow with the number of runs.
@@ -21,6 +23,7 @@ so its memory does not grow with the number of runs.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
 from collections.abc import Callable, Mapping
@@ -189,16 +192,25 @@ def results_header(command: str, jobs: list[Job], names: list[str]) -> dict[str,
     """A results file's first line: what batch it is of (a resumed one must match)."""
     return {"prima": f"{command} results", "version": 1, "jobs": [
         {"scenario": name, "runs": job.runs, "seed": job.seed, "jitter": job.jitter,
-         "thresholds": job.thresholds.to_dict(), "digest": job.bundle.digest}
+         "thresholds": job.thresholds.to_dict(), "digest": job.digest}
         for name, job in zip(names, jobs, strict=True)]}
 
 
 def check_documents(scenario: Path, switches: Switches | None) -> None:
-    """Load the scenario and every document it runs, as a run would: a bad one stops
-    the batch here, located (LocatedError), before any run."""
+    """Load the scenario and every document it runs, as a run would: a bad one stops the
+    batch here, located (LocatedError), before any run, with the lines ``prima run``
+    gives for it (``prima validate``'s, :func:`prima.scenario.checked_load`, unless the
+    command line swaps its FA or EA)."""
     from prima.run import Run
+    from prima.scenario import checked_load
 
-    Run(scenario, **(switches.run_options() if switches else {}))
+    def load() -> Run:
+        return Run(scenario, **(switches.run_options() if switches else {}))
+
+    if switches and (switches.fa or switches.ea):
+        load()
+    else:
+        checked_load(scenario, switches.robot if switches else None, load)
 
 
 def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
@@ -219,9 +231,13 @@ def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,
     if runs < 1 or not (math.isfinite(jitter) and jitter >= 0):
         raise ValueError("runs must be 1 or more and jitter a number of seconds from 0 up")
     source, jitter = Path(scenario), float(jitter)
-    name = load_scenario(source).name  # a bad scenario stops here, located
-    check_documents(source, switches)
-    job = Job(bundle_scenario(source, switches), runs, seed, jitter, thresholds)
+    check_documents(source, switches)  # a bad scenario stops here, located
+    name = load_scenario(source).name
+    # The policy switches go to each run as prima run --policy gives them (the bundle
+    # keeps the scenario's own); the worst runs' files have them written in, to replay.
+    files = dataclasses.replace(switches, policies=()) if switches else None
+    job = Job(bundle_scenario(source, files), runs, seed, jitter, thresholds,
+              policies=switches.policies if switches else ())
     result = Sweep(source, name, runs, jitter, seed, thresholds, keep=keep, switches=switches)
     out = ResultsFile(results, results_header("sweep", [job], [name])) if results else None
     result.interrupted = collect([job], result.add, out=out, resume=resume, progress=progress,

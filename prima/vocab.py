@@ -272,7 +272,8 @@ class Policy:
     summary: str
     config: str | None = None
     """The field of the mediator's configuration (:class:`prima.mediator.MediatorConfig`)
-    it switches, if any: :func:`prima.scenario.mediator_config` maps every policy there."""
+    it switches, if any: :func:`prima.scenario.mediator_config` maps every policy there,
+    and the field defaults to :attr:`default` (``prima.mediator``'s ``policy_default``)."""
     sim: str | None = None
     """The simulator's switch it sets, if any (:class:`prima.run.Run` sets it)."""
 
@@ -294,7 +295,8 @@ _POLICIES: dict[str, Policy] = {p.name: p for p in (
                            "robot whose profile declares <blend> (thesis Sec. 5.3 (5))",
            config="blend"),
     Policy("streams", True, "explicit stream blocks in the applications' documents keep "
-                            "a Communication Stream together (thesis Sec. 5.3 (3))"),
+                            "a Communication Stream together (thesis Sec. 5.3 (3))",
+           config="streams"),
     Policy("connect-channel", True, "before an utterance would start facing away from a "
                                     "detectable user, the robot turns to them first "
                                     "(thesis Sec. 5.3 (4))",

@@ -26,7 +26,7 @@ SLOW = (
     "tests/mediator/test_idle_rounds.py::test_a_round_skipped_as_idle",
     "tests/test_interrupt.py::test_a_sweep",  # sweeps stopped by signals, then resumed
     "tests/test_interrupt.py::test_a_signal_at_any_moment_of_a_sweep",
-    "tests/test_validate_places.py::test_the_cost_stays_linear",  # CPU time at two sizes
+    "tests/scenario/test_validate_places.py::test_the_cost_stays_linear",  # CPU time at two sizes
     "tests/test_term.py::test_colour_on_a_terminal_only",  # each command under a pty
     "tests/check/test_check.py::test_the_example_ea_written_from_the_docs_passes_every_cell",
 )

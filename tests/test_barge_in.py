@@ -200,7 +200,7 @@ def _catalog() -> Catalog:
 
 def _harness() -> tuple[Harness, dict[str, object]]:
     h = Harness(_catalog(), duration={"Speak": 4.0, "Gesture": 1.0},
-                config=MediatorConfig(barge_in=True))
+                config=MediatorConfig(barge_in=True, interrupt=True, blend=True))
     apps = {name: h.app(name, kind) for name, kind in
             (("fa", AppKind.FA), ("ea", AppKind.EA), ("eb", AppKind.EA))}
     return h, apps
@@ -251,7 +251,7 @@ def test_what_a_handler_of_the_users_words_asks_after_its_first_request_follows_
     as soon as possible; what the handler asks next follows it in that stream: "All
     right." is said before the question, never after it."""
     h = Harness(_catalog(), duration={"Speak": 1.0, "QA": 2.0},
-                config=MediatorConfig(barge_in=True))
+                config=MediatorConfig(barge_in=True, interrupt=True, blend=True))
     m = h.mediator
 
     def stop(e: Event) -> None:
@@ -341,7 +341,7 @@ def test_stop_drops_what_the_user_cut(tmp_path: Path) -> None:
 
 def test_the_bound_of_one_cut_is_for_other_apps_not_for_the_user() -> None:
     h = Harness(_catalog(), duration={"Speak": 4.0, "Gesture": 1.0}, cut_after=0.4,
-                config=MediatorConfig(barge_in=True, interrupt=True, resume_pause=0.0))
+                config=MediatorConfig(barge_in=True, interrupt=True, resume_pause=0.0, blend=True))
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
     m = h.mediator
@@ -364,7 +364,7 @@ def test_a_reply_cut_by_words_no_app_took_goes_on_before_a_reaction() -> None:
     reply: the touch reaction that came meanwhile waits for its end."""
     h = Harness(_catalog(), duration={"Speak": 4.0, "QA": 2.0}, cut_after=0.2,
                 outcome=lambda ab: Outcome({"status": "answered", "utterance": "yes"}),
-                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+                config=MediatorConfig(barge_in=True, resume_pause=0.6, interrupt=True, blend=True))
     m = h.mediator
     asked: list[int] = []
 

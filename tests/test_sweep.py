@@ -78,6 +78,43 @@ def test_a_variant_holds_the_command_lines_policies_over_the_scenarios(
         [line.to_dict() for line in Run(scenario, policies=dict(given)).run()]
 
 
+@pytest.mark.pure
+def test_a_sweeps_policy_switches_reach_its_runs_as_prima_runs_do(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--policy`` switches go to every run of a sweep through ``Setup.load``, as ``prima
+    run --policy`` gives them (the scenario the runs read keeps its own switches); the
+    results file's header says which switches its runs had (a resume must match them);
+    the worst runs' files have them written in, so that they replay alone."""
+    from prima.run import Run, Setup, Switches
+
+    scenario = ROOT / "scenarios" / "policies" / "interrupt-on.xml"
+    given = (("all", False), ("interrupt", True))
+    asked: list[object] = []
+    load = Setup.load.__func__  # type: ignore[attr-defined]
+
+    def spy(cls: type[Setup], *args: Any, **kwargs: Any) -> Setup:
+        asked.append(kwargs.get("policies"))
+        return load(cls, *args, **kwargs)  # type: ignore[no-any-return]
+
+    monkeypatch.setattr(Setup, "load", classmethod(spy))
+    result = sweep(scenario, runs=2, jitter=1.0, jobs=1, keep=1,
+                   switches=Switches(policies=given), results=tmp_path / "r.jsonl")
+    assert result.done == 2
+    assert asked and all(policies == dict(given) for policies in asked)
+    header = json.loads((tmp_path / "r.jsonl").read_text().splitlines()[0])
+    monkeypatch.undo()
+    plain = sweep(scenario, runs=1, jitter=1.0, jobs=1, keep=0, results=tmp_path / "p.jsonl")
+    assert plain.done == 1
+    assert header["jobs"][0]["digest"] != json.loads(
+        (tmp_path / "p.jsonl").read_text().splitlines()[0])["jobs"][0]["digest"]
+    worst = result.write_worst(1, tmp_path / "worst")[0]
+    assert dict(load_scenario(worst).policies) == dict(given)
+    assert [line.to_dict() for line in Run(worst).run()] == [
+        line.to_dict() for line in Run(write_variant(scenario, tmp_path / "v.xml", seed=0,
+                                                     index=result.kept[0].index, jitter=1.0),
+                                       policies=dict(given)).run()]
+
+
 def test_no_jitter_no_change(tmp_path: Path) -> None:
     path = write_variant(BUSY, tmp_path / "v.xml", seed=1, index=0, jitter=0.0)
     assert timings(path) == timings(BUSY)

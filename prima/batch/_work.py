@@ -11,6 +11,8 @@ as one task (:func:`run_chunk`).
 from __future__ import annotations
 
 import copy
+import hashlib
+import json
 import math
 import tempfile
 import time
@@ -68,6 +70,19 @@ class Job:
     jitter: float
     thresholds: Thresholds
     analysis: Analysis | None = None
+    policies: tuple[tuple[str, bool], ...] = ()
+    """The command line's policy switches, over the profile's and the scenario's: each
+    run is given them as ``prima run --policy`` gives them (``Run(policies=...)``)."""
+
+    @property
+    def digest(self) -> str:
+        """A hash of what the runs run: the bundle, and the policy switches if any (a
+        results file's header names it; a resumed batch must match it)."""
+        if not self.policies:
+            return self.bundle.digest
+        h = hashlib.sha256(self.bundle.digest.encode())
+        h.update(b"\0policies\0" + json.dumps(list(self.policies)).encode())
+        return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -124,7 +139,7 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
     record: dict[str, Any] = {"run": index}
     try:
         made: list[Mapping[str, Any]] = []
-        Run(path, files=files, rows=made.append).run()
+        Run(path, files=files, rows=made.append, policies=dict(job.policies)).run()
         lines: Iterable[Mapping[str, Any]] = made
         observer = job.analysis.observer() if job.analysis is not None else None
         if observer is not None:

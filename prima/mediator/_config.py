@@ -1,5 +1,9 @@
 """The mediator's tunable bounds and policy switches: in a module of their own, which
-the mediator's parts (intake, policies, rounds) read without importing the mediator."""
+the mediator's parts (intake, policies, rounds) read without importing the mediator.
+
+Each policy switch defaults to its policy's default in the registry
+(:data:`prima.vocab.POLICIES`, :func:`policy_default`): a mediator made without a
+configuration mediates as a run whose profile and scenario switch no policy."""
 
 from __future__ import annotations
 
@@ -12,11 +16,21 @@ from prima.vocab import (
     MAX_BLOCK_WATCHDOG,
     MAX_EAS,
     MAX_STREAM_HOLD,
+    POLICIES,
     AppKind,
     Budgets,
 )
 
-__all__ = ["MediatorConfig"]
+__all__ = ["MediatorConfig", "policy_default"]
+
+
+def policy_default(config: str) -> bool:
+    """The default of the policy that switches the configuration's field ``config``
+    (:attr:`prima.vocab.Policy.config`): the one place a policy's default is written."""
+    found = [p.default for p in POLICIES.values() if p.config == config]
+    if len(found) != 1:
+        raise LookupError(f"{len(found)} policies switch the mediator's {config!r}")
+    return found[0]
 
 
 @dataclass(frozen=True)
@@ -41,31 +55,37 @@ class MediatorConfig:
     """Upper bound on a begin/end block's watchdog, whatever the document asks:
     a runaway block cannot starve the other application (rule 3)."""
 
-    connect_channel: bool = True
+    streams: bool = policy_default("streams")
+    """The streams policy (docs/rules.md 6c): explicit stream blocks keep a Communication
+    Stream together. Off, :meth:`Mediator.open_stream` and :meth:`Mediator.close_stream`
+    do nothing: stream blocks are plain sequences (the thesis' PRIMA, which had begin/end
+    blocks of an AB, thesis Sec. 4.1 (2), but no explicit Communication Streams)."""
+
+    connect_channel: bool = policy_default("connect_channel")
     """The connect-channel policy (docs/rules.md 7.3 (4)), when there is a channel."""
 
-    restore_state: bool = True
+    restore_state: bool = policy_default("restore_state")
     """The restore-state policy (docs/rules.md 7.3 (1)), when there is a channel."""
 
-    blend: bool = True
+    blend: bool = policy_default("blend")
     """The blend policy (docs/rules.md 7.3 (5)): on the blends the catalog declares (the
     robot profile's ``<blend>``)."""
 
-    interrupt: bool = True
+    interrupt: bool = policy_default("interrupt")
     """The interrupt policy (docs/rules.md 7.3 (2)): on the Commands the catalog says are
     interruptible (the robot profile's ``<interruptible>``)."""
 
-    reactions: bool = True
+    reactions: bool = policy_default("reactions")
     """The reactions policy (docs/rules.md 7.1): a reaction keeps the devices its next AB
     needs; a reaction to the user's own action goes first until it has said its first
     words."""
 
-    exchange: bool = True
+    exchange: bool = policy_default("exchange")
     """The exchange policy (docs/rules.md 7.4): an application's spoken reply to the answer
     of its own Q&A goes before every other application's AB on its devices, and is
     never cut."""
 
-    barge_in: bool = False
+    barge_in: bool = policy_default("barge_in")
     """The barge-in policy (docs/rules.md 7.5): what the user says outside a Q&A
     (:meth:`Mediator.hear`) cuts the robot's utterance under way at a word boundary,
     unless it is a backchannel."""

@@ -612,7 +612,10 @@ class Mediator:
 
     # ======================================================== streams, blocks
     def open_stream(self, app: str, hold: float) -> None:
-        """Begin an explicit stream block (rule 6c): one CS, held while the app waits."""
+        """Begin an explicit stream block (rule 6c): one CS, held while the app waits.
+        With the streams policy off, nothing: the block is a plain sequence."""
+        if not self._config.streams:
+            return
         a = self._app(app)
         if self._holds.stream(a) is not None:
             raise MediationError(f"{app}: a stream is already open")
@@ -623,7 +626,10 @@ class Mediator:
                                     self._latest_tree(a))
 
     def close_stream(self, app: str) -> None:
-        """End the explicit stream block; its hold (if any) is released."""
+        """End the explicit stream block; its hold (if any) is released. With the
+        streams policy off, nothing."""
+        if not self._config.streams:
+            return
         a = self._app(app)
         if self._holds.stream(a) is None:
             raise MediationError(f"{app}: no stream is open")

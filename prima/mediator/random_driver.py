@@ -271,6 +271,7 @@ def scenario(seed: int) -> Scenario:
                   key=lambda a: a.t)
     durations = tuple(r.choice(DURATIONS) for _ in range(r.randint(1, 4)))
     config = MediatorConfig(
+        interrupt=True, blend=True,  # (what is cut and blends: the scenario's catalog)
         end_grace=r.choice((0.5, 0.5, 0.0, 1.0)),
         max_stream_hold=r.choice((30.0, 30.0, 1.0)),
         max_block_watchdog=r.choice((60.0, 60.0, 2.0)),

@@ -42,7 +42,15 @@ from prima.mediator._ranking import outranks, rank
 from prima.mediator._state import Node, NodeState
 from prima.vocab import AppKind, Value
 
-__all__ = ["Harness", "ScriptedApp", "ScriptedDriver", "feedback_iterations", "plain_scan"]
+__all__ = ["CUTS_AND_BLENDS", "Harness", "ScriptedApp", "ScriptedDriver",
+           "feedback_iterations", "plain_scan"]
+
+CUTS_AND_BLENDS = MediatorConfig(interrupt=True, blend=True)
+"""The configuration a :class:`Harness` mediates with unless given one: the interrupt and
+blend policies on (a robot's profile switches them on where it declares
+``<interruptible>`` and ``<blend>``; off, they are off by default), so that a test's
+catalog alone says what may be cut and what blends, as the mediator's tests were
+written."""
 
 Durations = float | Mapping[str, float] | Callable[[AtomicBehavior], float]
 
@@ -165,7 +173,7 @@ class Harness:
 
     def __init__(self, catalog: Catalog | None = None, *, duration: Durations = 1.0,
                  outcome: Callable[[AtomicBehavior], Outcome] | None = None,
-                 config: MediatorConfig = MediatorConfig(), immediate: bool = False,
+                 config: MediatorConfig = CUTS_AND_BLENDS, immediate: bool = False,
                  keep: bool = True, channel: Channel | None = None,
                  cut_after: float = 0.0) -> None:
         self.clock = ManualClock()

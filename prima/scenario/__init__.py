@@ -5,8 +5,10 @@ scenario made ready to run.
   :class:`Scenario`, every number bounded (:data:`BOUNDS`); :func:`scenario_references`
   locates the files it names, :func:`late_inputs` what it times after its end.
 - :func:`make_validation` is the one validation of scenarios, maps and the files they
-  name: ``prima validate``, ``prima lsp`` and the sweep's variants (through ``prima
-  run``'s :class:`Setup`) report the same problem for the same file.
+  name: ``prima validate`` and ``prima lsp`` report its problems, and ``prima run`` and
+  ``prima sweep``, when a scenario does not load, stop on them (:func:`checked_load`,
+  :func:`check_scenario`, through :func:`scenario_problems`): the same problem for the
+  same file, at the same place.
 - :class:`Setup` is a scenario made ready to run (profile, catalog, documents, every
   policy layered and mapped once into the mediator's configuration);
   :class:`~prima.run.Run` takes one.
@@ -25,7 +27,13 @@ import importlib
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from prima.scenario._checks import make_validation, scenario_checkers
+    from prima.scenario._checks import (
+        check_scenario,
+        checked_load,
+        make_validation,
+        scenario_checkers,
+        scenario_problems,
+    )
     from prima.scenario._cli import main
     from prima.scenario._file import (
         BOUNDS,
@@ -52,12 +60,15 @@ if TYPE_CHECKING:
     )
 
 __all__ = ["BOUNDS", "FILE_ATTRIBUTES", "MAP_NS", "SCENARIO_NS", "SCHEDULED", "USER_TIMED",
-           "Loaded", "Reference", "Scenario", "Setup", "Switches", "check_slot", "late_inputs",
-           "load_map", "load_scenario", "main", "make_validation", "mediator_config",
-           "safe_pattern", "scenario_checkers", "scenario_references", "spec_from_profile"]
+           "Loaded", "Reference", "Scenario", "Setup", "Switches", "check_scenario", "check_slot",
+           "checked_load",
+           "late_inputs", "load_map", "load_scenario", "main", "make_validation",
+           "mediator_config", "safe_pattern", "scenario_checkers", "scenario_problems",
+           "scenario_references", "spec_from_profile"]
 
 _WHERE = {
-    **dict.fromkeys(("make_validation", "scenario_checkers"), "_checks"),
+    **dict.fromkeys(("check_scenario", "checked_load", "make_validation", "scenario_checkers",
+                     "scenario_problems"), "_checks"),
     "main": "_cli",
     **dict.fromkeys(("BOUNDS", "FILE_ATTRIBUTES", "MAP_NS", "SCENARIO_NS", "SCHEDULED",
                      "USER_TIMED", "Reference", "Scenario", "late_inputs", "load_map",

@@ -4,22 +4,27 @@ application in the slot it fits, and the places the applications name on its map
 
 One function makes the validation every reader of scenarios uses
 (:func:`make_validation`): ``prima validate``, ``prima lsp`` (an editor's buffer),
-and, through :mod:`prima.dsl`'s :class:`~prima.dsl.Validation`, the same checkers.
+and ``prima run`` and ``prima sweep`` when a scenario does not load
+(:func:`checked_load`), so that the same bad scenario gives the same problems at the
+same places from all of them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
-from prima.errors import DocumentError, LocatedError, Problem, Severity
+from prima.errors import DocumentError, LocatedError, Problem, ScenarioError, Severity
 
 if TYPE_CHECKING:
     from prima.dsl import Checker, Header, RobotProfile, Validation
     from prima.sim import WorldMap
 
-__all__ = ["make_validation", "scenario_checkers"]
+_T = TypeVar("_T")
+
+__all__ = ["check_scenario", "checked_load", "make_validation", "scenario_checkers",
+           "scenario_problems"]
 
 
 def _problems(load: Callable[[Path], object], path: Path) -> list[Problem]:
@@ -170,3 +175,39 @@ def make_validation(profile: RobotProfile, *, robot: bool = False) -> Validation
     made: Validation = Validation(profile, follow_declared=not robot,
                                   more_checkers=lambda: scenario_checkers(made, robot))
     return made
+
+
+def scenario_problems(scenario: str | Path, robot: str | Path | None = None) -> list[Problem]:
+    """The problems of ``scenario`` and of every file it names, as ``prima validate
+    SCENARIO`` reports them (``robot``: as ``--robot ROBOT`` does): its validation
+    (:func:`make_validation`), in the order it finds them. Raises DocumentError for a
+    ``robot`` profile that cannot be loaded."""
+    from prima.collecting import fewer_collections
+    from prima.dsl import default_profile, load_profile
+
+    profile = load_profile(robot) if robot else default_profile()
+    with fewer_collections():
+        report = make_validation(profile, robot=robot is not None).run([Path(scenario)])
+    return list(report.problems)
+
+
+def check_scenario(scenario: str | Path, robot: str | Path | None = None) -> None:
+    """Raise ScenarioError with the problems :func:`scenario_problems` finds, errors
+    first, when one of them is an error: what ``prima run`` and ``prima sweep`` check
+    before they run, so that they stop on a scenario with the lines ``prima validate``
+    and ``prima lsp`` give for it."""
+    problems = scenario_problems(scenario, robot)
+    if any(p.severity is Severity.ERROR for p in problems):
+        raise ScenarioError(sorted(problems, key=lambda p: p.severity is not Severity.ERROR))
+
+
+def checked_load(scenario: str | Path, robot: str | Path | None, load: Callable[[], _T]) -> _T:
+    """``load()`` (a run made ready from ``scenario``); when it fails on a bad file, the
+    scenario's validation (:func:`check_scenario`) says what is wrong, as ``prima
+    validate`` and ``prima lsp`` do, if it finds an error, else the load's own error
+    stands. A scenario that loads costs no second reading."""
+    try:
+        return load()
+    except LocatedError:
+        check_scenario(scenario, robot)
+        raise

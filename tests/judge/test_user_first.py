@@ -3,7 +3,7 @@ point: talking unfaced over the words, a reaction to the user's own action not r
 by the wait share, the user's cut ending an exchange's protection, a turn to the user
 that may cut its own application's sweep, streams held while the user is answered, and
 ignored speech that the user's own later words withdrew. Each trace is written by hand
-(:class:`tests.test_judge.Trace`), and each test fails when the judge's reading of its
+(:class:`tests.judge.helpers.Trace`), and each test fails when the judge's reading of its
 point is taken out (checked once by taking it out)."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 from prima.judge import Report
-from tests.judge.test_judge import TALK, Trace, counts
+from tests.judge.helpers import TALK, Trace, counts
 
 WHEELS = ("human-detection", "localization", "locomotion")
 

@@ -200,7 +200,7 @@ def test_a_later_reaction_to_the_user_still_goes_first() -> None:
 # ---------------------------------------------------------------- 7.4: the exchange
 
 def exchange(reply: str, *, cuts: bool = False, message: float = 2.0,
-             config: MediatorConfig = MediatorConfig()) -> Harness:
+             config: MediatorConfig = MediatorConfig(interrupt=True, blend=True)) -> Harness:
     """The EA asks (3 s); the FA's reaction to a message arrives while it listens (at
     ``message``); the user answers at 3 s; the EA replies at once with ``reply`` (words
     or a question). With ``cuts``, the robot cuts Speak (after 0.3 s)."""
@@ -265,7 +265,8 @@ def test_a_reply_goes_first_even_when_its_app_lost_its_precedence() -> None:
     the reaction follows it."""
     budgets = {Role.FA: DEFAULT_BUDGETS[Role.FA],
                Role.EA: Budgets(wait_share=0.5, wait_window=60.0)}
-    h = exchange("words", cuts=True, config=MediatorConfig(budgets=budgets))
+    h = exchange("words", cuts=True,
+                 config=MediatorConfig(budgets=budgets, interrupt=True, blend=True))
     lost = [d for d in h.kinds(DecisionKind.BUDGET) if d.app == "ea"]
     assert lost and lost[0].t == 2.5
     assert first(h, "ea", "Nice to meet you, Hanako.") == 3.0
@@ -284,7 +285,8 @@ def test_a_reply_that_is_a_question_goes_after_the_reaction() -> None:
 def test_the_exchange_policy_off_lets_the_reaction_cut_in() -> None:
     """With the exchange policy off (the thesis' PRIMA), the reaction (the latest)
     takes the speaker at the answer."""
-    h = Harness(duration={"QA": 3.0, "*": 2.0}, config=MediatorConfig(exchange=False),
+    h = Harness(duration={"QA": 3.0, "*": 2.0},
+                config=MediatorConfig(exchange=False, interrupt=True, blend=True),
                 outcome=lambda ab: Outcome({"status": "answered", "utterance": "yes"}))
     m = h.mediator
     asked: list[int] = []
@@ -388,7 +390,7 @@ def test_the_time_a_cut_throws_away_counts_against_the_cutting_apps_share() -> N
     budgets = {Role.FA: DEFAULT_BUDGETS[Role.FA],
                Role.EA: Budgets(wait_share=5.0, wait_window=60.0)}
     h = Harness(CUTS, duration=lambda ab: 10.0 if ab.app == "fa" else 0.5, cut_after=0.0,
-                config=MediatorConfig(budgets=budgets))
+                config=MediatorConfig(budgets=budgets, interrupt=True, blend=True))
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
     h.mediator.submit(Request("fa", (speak("Once upon a time, a robot told a story."),)))

@@ -37,7 +37,7 @@ class User:
 
 
 def guide_and_dance(blends: tuple[Blend, ...] = (DANCE,), user: User | None = None,
-                    config: MediatorConfig = MediatorConfig()) -> Harness:
+                    config: MediatorConfig = MediatorConfig(interrupt=True, blend=True)) -> Harness:
     """The EA guides (a move of four 0.5 s iterations); at 0.7 s the FA dances
     (a 1 s Turn, reactive)."""
     h = Harness(Catalog.standard().with_blends(blends),
@@ -74,7 +74,8 @@ def test_a_dance_step_blends_over_the_move_and_the_move_goes_on_under_it() -> No
 def test_no_blend_undeclared_off_or_beyond_the_bound() -> None:
     """Without a declared blend, with the policy off, or with the user farther than
     the bound, the dance waits for the move's iteration (and the move for it)."""
-    for h in (guide_and_dance(blends=()), guide_and_dance(config=MediatorConfig(blend=False)),
+    for h in (guide_and_dance(blends=()),
+              guide_and_dance(config=MediatorConfig(blend=False, interrupt=True)),
               guide_and_dance(user=User(near=False))):
         assert Rule.BLEND not in [r for *_x, r in starts(h)]
         assert starts(h)[2][:2] == (1.0, "Turn")

@@ -132,7 +132,8 @@ def test_a_stream_suspended_after_its_turn_is_turned_for_again_when_it_resumes()
         h.run(until=20.0)
         return starts(h)
 
-    for config in (MediatorConfig(), MediatorConfig(restore_state=False)):
+    for config in (MediatorConfig(interrupt=True, blend=True),
+                   MediatorConfig(restore_state=False, interrupt=True, blend=True)):
         assert run(config) == [(0.0, "fa", "FaceHuman", Rule.CONNECT_CHANNEL),
                                (1.5, "ea", "SetDirection", Rule.FREE_DEVICES),
                                (3.5, "ea", "Speak", Rule.REACTIVITY),

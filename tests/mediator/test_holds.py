@@ -58,6 +58,19 @@ def test_reactive_input_is_not_held() -> None:
     assert start_of(h, 2).t == 2.0 and h.kinds(DecisionKind.HOLD) == []
 
 
+def test_with_the_streams_policy_off_a_stream_block_is_a_plain_sequence() -> None:
+    """The streams policy switches the mediator's own stream blocks (its registry entry's
+    ``config``): off, the mediator never hears of them (no hold, no stream tree), as in
+    the thesis' PRIMA, and closing one is no misuse."""
+    h = _h(duration=1.0, config=MediatorConfig(streams=False))
+    _library(h)
+    h.run()
+    first, second = h.kinds(DecisionKind.REQUEST)
+    assert second.rule is not Rule.STREAM and second.tree != first.tree
+    assert h.mediator.snapshot().holds == ()
+    h.mediator.close_stream("ea")
+
+
 def test_the_hold_times_out() -> None:
     """Without the timeout a stream that waits forever would starve the other app."""
     h = _h(duration=1.0)

@@ -23,7 +23,7 @@ CUTS = Catalog.standard().interruptible(["Speak", "Gesture"])
 
 
 def explain_then_touch(catalog: Catalog = CUTS, on_interrupt: OnInterrupt = OnInterrupt.RESTART,
-                       config: MediatorConfig = MediatorConfig(),
+                       config: MediatorConfig = MediatorConfig(interrupt=True, blend=True),
                        reaction: bool = True) -> tuple[Harness, list[Event], list[int]]:
     """The EA explains for 6 s; at 1 s a touch: the FA reacts with a 2 s utterance."""
     h = Harness(catalog, duration=lambda ab: 6.0 if ab.app == "ea" else 2.0,
@@ -83,7 +83,7 @@ def test_nothing_is_cut_without_a_declaration_an_opt_out_or_a_reaction() -> None
     off, or the waiting AB is no reaction: the reaction waits for the utterance's end."""
     for h, _e, _d in (explain_then_touch(Catalog.standard()),
                       explain_then_touch(on_interrupt=OnInterrupt.NEVER),
-                      explain_then_touch(config=MediatorConfig(interrupt=False)),
+                      explain_then_touch(config=MediatorConfig(interrupt=False, blend=True)),
                       explain_then_touch(reaction=False)):
         assert not h.kinds(DecisionKind.INTERRUPT)
         assert [t for t, *_x in starts(h)][:2] == [0.0, 6.0]

@@ -62,7 +62,8 @@ def test_the_users_own_words_are_answered_past_the_wait_share() -> None:
     kept its precedence: the user paces these, one per action."""
     budgets = {Role.FA: DEFAULT_BUDGETS[Role.FA],
                Role.EA: Budgets(wait_share=0.5, wait_window=60.0)}
-    h = Harness(duration={"QA": 3.0, "*": 2.0}, config=MediatorConfig(budgets=budgets))
+    h = Harness(duration={"QA": 3.0, "*": 2.0},
+                config=MediatorConfig(budgets=budgets, interrupt=True, blend=True))
     m = h.mediator
     h.app("ea", AppKind.EA)
     h.app("fa", AppKind.FA, on_event=lambda e: e.name == "message" and m.submit(Request(
@@ -90,7 +91,8 @@ def test_the_users_answer_is_replied_to_past_the_wait_share(reply: str) -> None:
     it: past the reply's first words, the EA is demoted again."""
     budgets = {Role.FA: DEFAULT_BUDGETS[Role.FA],
                Role.EA: Budgets(wait_share=0.5, wait_window=60.0)}
-    h = Harness(duration={"QA": 3.0, "*": 2.0}, config=MediatorConfig(budgets=budgets),
+    h = Harness(duration={"QA": 3.0, "*": 2.0},
+                config=MediatorConfig(budgets=budgets, interrupt=True, blend=True),
                 outcome=lambda ab: Outcome({"status": "answered", "utterance": "no"}))
     m = h.mediator
     asked: list[int] = []
@@ -334,7 +336,7 @@ def test_an_answer_whose_words_never_come_holds_the_others_at_most_its_bound() -
     FA's stream waiting no longer than ``max_answer_hold`` (here 5 s)."""
     h = Harness(duration={"Gesture": 1.0, "TrackingHuman": 0.5, "Speak": 3.0},
                 outcome=feedback_iterations(10_000),
-                config=MediatorConfig(max_answer_hold=5.0))
+                config=MediatorConfig(max_answer_hold=5.0, interrupt=True, blend=True))
     m = h.mediator
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
@@ -527,7 +529,7 @@ def test_a_pause_after_a_false_interruption_is_no_end_of_the_talk() -> None:
     the user: the EA's move, which breaks the channel, does not drive off in the pause."""
     h = Harness(CUTS, duration={"Speak": 4.0, "TopologicalMove": 0.5}, cut_after=0.1,
                 outcome=feedback_iterations(100),
-                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+                config=MediatorConfig(barge_in=True, resume_pause=0.6, interrupt=True, blend=True))
     m = h.mediator
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
@@ -547,7 +549,7 @@ def test_what_the_pause_held_goes_when_the_pause_is_over() -> None:
     pause is over: the FA is no longer talking (it waited for ever)."""
     h = Harness(CUTS, duration={"Speak": 4.0, "TopologicalMove": 0.5}, cut_after=0.1,
                 outcome=feedback_iterations(2),
-                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+                config=MediatorConfig(barge_in=True, resume_pause=0.6, interrupt=True, blend=True))
     m = h.mediator
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
@@ -567,7 +569,7 @@ def test_what_the_pause_held_goes_when_the_words_it_paused_are_gone() -> None:
     while the FA was talking, starts then (it waited for ever)."""
     h = Harness(CUTS, duration={"Speak": 4.0, "TopologicalMove": 0.5}, cut_after=0.1,
                 outcome=feedback_iterations(2),
-                config=MediatorConfig(barge_in=True, resume_pause=0.6))
+                config=MediatorConfig(barge_in=True, resume_pause=0.6, interrupt=True, blend=True))
     m = h.mediator
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
@@ -653,7 +655,7 @@ def test_what_an_apps_own_asap_request_drops_as_it_is_cut_has_no_end_event() -> 
     handler runs for it (EA1 went looking for its visitor and then asked twice: prima
     check of EA1 beside FA3, 1 run in 200)."""
     h = Harness(CUTS, duration={"QA": 4.0, "*": 1.0}, cut_after=0.2,
-                config=MediatorConfig(barge_in=True))
+                config=MediatorConfig(barge_in=True, interrupt=True, blend=True))
     m = h.mediator
     ended: list[int] = []
     cancelled: list[int] = []

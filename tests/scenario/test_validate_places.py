@@ -17,7 +17,7 @@ from pathlib import Path
 from prima.cli import main
 from prima.dsl import PlaceRef, literal_places, load_document
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 
 
 def run(*argv: str) -> tuple[int, str, str]:

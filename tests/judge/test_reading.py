@@ -1,0 +1,109 @@
+"""The judge reading traces: trace files (every bad line located), a run's lines and
+their jsonl alike, and whole runs of shipped scenarios (sample 5 under each set of rules;
+each finder fed every kind of line it needs).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from prima.errors import TraceError
+from prima.judge import MEASURES, judge, judge_file, load_trace
+from tests.judge.helpers import ROOT, THESIS, counts
+
+
+# ------------------------------------------------------------------ reading traces
+
+def test_load_trace_locates_every_bad_line(tmp_path: Path) -> None:
+    path = tmp_path / "bad.jsonl"
+    path.write_text("\n".join([
+        '{"t": 0, "seq": 0, "kind": "load", "app": "fa"}',
+        '{"t": 1, "seq": 1, "kind": "event", "text": "touched"',
+        '',
+        '{"t": 1, "kind": "event"}',
+        '[1, 2]',
+        '{"t": 2, "seq": 4, "kind": "start", "devices": "speaker"}',
+        '{"t": 2, "seq": 5, "kind": "pose"}',
+        '{"t": 0.5, "seq": 6, "kind": "pose"}',
+        '{"t": 3, "seq": 7, "kind": "pose", "robot": {"x": 1}}',
+    ]) + "\n", encoding="utf-8")
+    with pytest.raises(TraceError) as caught:
+        load_trace(path)
+    assert [str(p) for p in caught.value.problems] == [
+        f"{path}:2:54: error: not a JSON object: Expecting ',' delimiter",
+        f"{path}:4:1: error: missing field 'seq'",
+        f"{path}:5:1: error: a trace line must be a JSON object",
+        f"{path}:6:1: error: field 'devices' has the wrong type (str)",
+        f"{path}:8:1: error: time goes backwards (0.5 after 2)",
+        f"{path}:9:1: error: field 'robot' needs numbers x, y and heading",
+    ]
+
+
+def test_an_empty_trace_is_an_error(tmp_path: Path) -> None:
+    path = tmp_path / "empty.jsonl"
+    path.write_text("\n", encoding="utf-8")
+    with pytest.raises(TraceError, match="empty.jsonl:1:1: error: the trace has no lines"):
+        load_trace(path)
+
+
+def test_a_trace_line_and_its_jsonl_are_judged_alike(tmp_path: Path) -> None:
+    from prima.run import Run
+    from prima.trace import jsonl_row
+
+    lines = Run(THESIS / "fig5-7.xml").run()
+    path = tmp_path / "fig5-7.jsonl"
+    path.write_text("".join(map(jsonl_row, lines)), encoding="utf-8")
+    assert judge(lines).to_dict() == judge(load_trace(path)).to_dict()
+
+
+# ------------------------------------------------------------------ the shipped scenarios
+
+def test_sample_05_is_natural_under_the_rules() -> None:
+    """Figure 5.9's situation, mediated by every policy: no fault at all."""
+    report = judge_file(THESIS / "sample-05.xml")
+    assert report.ok and counts(report) == {}
+
+
+def test_sample_05_under_the_thesis_rules_has_exactly_its_split_exchange() -> None:
+    """With every policy off (the thesis' PaPeRo), FA5's news of the video server comes
+    between the user's answer to EA2 and EA2's reply: the split the thesis' subjects
+    disliked; EA2's reply, kept waiting for it, is late by the amended rules (7.4), and
+    nothing else."""
+    from prima.run import Switches
+
+    report = judge_file(THESIS / "sample-05.xml", switches=Switches(policies=(("all", False),)))
+    assert counts(report) == {"late": 1, "splits": 1}
+    (s,) = report.of("splits")
+    assert (s.kind, s.app, s.by, s.text, s.t) == (
+        "reply", "ea2-library", "fa5-video-timer", "The video setting succeeds.", 40.8)
+    answered = next(r for r in report.reactions if r.text == "The C Primer.")
+    assert answered.t == 40.8 and answered.app == "ea2-library"
+    assert s.anchor_seq < s.seq < answered.first_start_seq  # answer, FA5, EA2's reply
+
+
+def test_sample_05_with_an_explicit_stream_has_none() -> None:
+    """FA5's video-server exchange in an explicit stream keeps it whole, even with every
+    other policy off."""
+    from prima.run import Switches
+
+    off = Switches(policies=(("all", False), ("streams", True)))
+    assert judge_file(THESIS / "sample-05-stream.xml", switches=off).of("splits") == ()
+
+
+@pytest.mark.parametrize("scenario", [
+    "policies/connect-channel-off.xml", "policies/restore-state-off.xml",
+    "policies/streams-off.xml", "examples/barge-in-question.xml", "thesis/sample-08.xml"])
+def test_each_finder_is_fed_every_kind_of_line_it_needs(scenario: str,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    # A finder is fed only the kinds of line it names; fed every line, it finds the same.
+    from prima.run import Run
+
+    lines = Run(ROOT / "scenarios" / scenario).run()
+    narrow = judge(lines)
+    for m in MEASURES:
+        monkeypatch.setattr(type(m.finder()), "kinds", None)
+    every = judge(lines)
+    assert (every.reactions, dict(every.findings)) == (narrow.reactions, dict(narrow.findings))
+    assert any(narrow.findings.values()) or narrow.reactions
