@@ -210,7 +210,6 @@ class Run:
             self.catalog, self.sim, self.sim, record=self._decision,
             config=setup.config,
             channel=_Channel(self.sim))
-        self._config = setup.config
         if setup.config.connect_channel:  # (the robot keeps facing its user while it
             self.sim.watch_facing(FACE_TOLERANCE, self.mediator.regard)  # talks: 7.6 (3))
         self.sim.finished = self._finished
@@ -513,7 +512,7 @@ class Run:
         are interruptible on this robot and their request allows it) and, for words said
         as it starts, when they end (the judge's cuts, listening and talking)."""
         ids = d.command_ids or ((d.command_id,) if d.command_id is not None else ())
-        if (self._config.interrupt and d.calls
+        if (self.setup.config.interrupt and d.calls
                 and all(self.catalog[c.command].interruptible for c in d.calls)
                 and all(self._requested.get(cid, ("", True))[1] for cid in ids)):
             detail["cuttable"] = True
