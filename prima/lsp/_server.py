@@ -13,12 +13,15 @@ from __future__ import annotations
 import re
 import sys
 from bisect import bisect_right
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TextIO
+from urllib.parse import unquote
 
 from lsprotocol import types
 from pygls.lsp.server import LanguageServer
+from pygls.protocol import LanguageServerProtocol
+from pygls.protocol.language_server import lsp_method
 from pygls.uris import from_fs_path, to_fs_path
 from pygls.workspace import PositionCodec
 
@@ -29,7 +32,12 @@ from prima.lsp._features import Features, Item, Target
 from prima.lsp._schedule import DEBOUNCE, Diagnostics
 from prima.lsp._workspace import Buffer, Workspace, resolved
 
-__all__ = ["TRIGGERS", "PrimaServer", "build_server"]
+__all__ = ["MAX_OPEN", "TRIGGERS", "PrimaServer", "build_server"]
+
+MAX_OPEN = 1_000
+"""Documents the server holds open at once (each of at most ``MAX_MESSAGE`` bytes): one
+the editor opens beyond them is not held nor checked (one line on stderr says so) until
+another is closed; requests about it are answered empty, as for any file not open."""
 
 TRIGGERS = ["<", '"', "'", "(", ",", ".", "=", " ", ":", "[", "{"]
 """Characters after which an editor asks for completions on its own."""
@@ -57,12 +65,34 @@ _TOKEN = re.compile(r"[\w\-.:]+")
 _LINE_END = re.compile(r"[\r\n]")
 
 
+class _Protocol(LanguageServerProtocol):
+    """pygls's protocol, holding at most :data:`MAX_OPEN` documents open."""
+
+    _server: PrimaServer
+
+    @lsp_method(types.TEXT_DOCUMENT_DID_OPEN)
+    def lsp_text_document__did_open(self, params: types.DidOpenTextDocumentParams
+                                    ) -> Iterator[Any]:
+        held = self.workspace.text_documents
+        uri = params.text_document.uri
+        if unquote(uri) not in held and len(held) >= MAX_OPEN:
+            self._server.refused(uri)
+            return
+        yield from super().lsp_text_document__did_open(params)
+
+    @lsp_method(types.TEXT_DOCUMENT_DID_CHANGE)
+    def lsp_text_document__did_change(self, params: types.DidChangeTextDocumentParams
+                                      ) -> Iterator[Any]:
+        if unquote(params.text_document.uri) in self.workspace.text_documents:
+            yield from super().lsp_text_document__did_change(params)  # (else: refused)
+
+
 class PrimaServer(LanguageServer):
     """A language server with PRIMA's workspace, and its diagnostics' schedule."""
 
     def __init__(self, robot: Path | None, *, debounce: float = DEBOUNCE,
                  err: TextIO | None = None) -> None:
-        super().__init__("prima", __version__,
+        super().__init__("prima", __version__, protocol_cls=_Protocol,
                          text_document_sync_kind=types.TextDocumentSyncKind.Incremental)
         self.robot = robot
         self.err = err or sys.stderr
@@ -75,6 +105,8 @@ class PrimaServer(LanguageServer):
         self.depends: dict[str, frozenset[Path]] = {}
         """What each open document's last check depended on."""
         self._settled = False
+        self._refusing = False
+        """A document was opened beyond :data:`MAX_OPEN` since one was last closed."""
 
     def files(self) -> Workspace:
         """PRIMA's view of the workspace, made on first need (after initialize)."""
@@ -130,6 +162,7 @@ class PrimaServer(LanguageServer):
         """``uri`` is closed: its diagnostics cleared, the documents that read it checked
         again (they now read the file on disk)."""
         path = _path(uri)
+        self._refusing = False
         self.files().close(path)
         self.features().drop(path)
         self.diagnostics.drop(uri)
@@ -144,6 +177,15 @@ class PrimaServer(LanguageServer):
         caps: Any = self.client_capabilities.text_document
         return bool(caps and caps.completion and caps.completion.completion_item
                     and caps.completion.completion_item.snippet_support)
+
+    def refused(self, uri: str) -> None:
+        """The editor opened ``uri`` beyond :data:`MAX_OPEN` documents: said once until a
+        document is closed."""
+        if not self._refusing:
+            self._refusing = True
+            print(f"prima lsp: {MAX_OPEN:,} documents are open: {uri} and any opened after "
+                  "it are not checked (close one, then open them again)", file=self.err,
+                  flush=True)
 
     def _failed(self, uri: str, exc: Exception) -> None:
         print(f"prima lsp: checking {uri} failed: {type(exc).__name__}: {exc}",

@@ -265,3 +265,46 @@ def test_a_document_change_rechecks_the_scenario_that_runs_it_and_no_other(
         assert any("it cannot run as the EA" in d["message"] for d in wrong)
 
     run(tmp_path, test)
+
+
+@pytest.mark.slow
+def test_documents_opened_beyond_the_bound_are_not_held(tmp_path: Path) -> None:
+    """At most MAX_OPEN documents are held open: one opened beyond them is not checked,
+    its changes are read past, and one line on stderr says so (once, however many come);
+    once another is closed, it is opened and checked as any."""
+    from prima.lsp._server import MAX_OPEN
+
+    paths = [tmp_path / f"notes-{i}.xml" for i in range(MAX_OPEN + 2)]
+    text = '<?xml version="1.0"?>\n<notes/>\n'
+
+    async def test(raw: Raw) -> None:
+        raw.send(*(did_open(path, text) for path in paths[:MAX_OPEN]))
+        seen: set[str] = set()
+        while len(seen) < MAX_OPEN:
+            message = await raw.read()
+            if message.get("method") == PUBLISH:
+                seen.add(message["params"]["uri"])
+        over, also = paths[MAX_OPEN:]
+        raw.send(did_open(over, text), did_change(over, 2, text), did_open(also, text))
+        ask = raw.call("textDocument/hover", {"textDocument": {"uri": uri(over)},
+                                              "position": {"line": 1, "character": 2}})
+        raw.send(ask)
+        while (message := await raw.read()).get("id") != ask["id"]:
+            assert message.get("method") != PUBLISH or message["params"]["uri"] not in (
+                uri(over), uri(also))
+        assert message["result"] is None
+        raw.send({"jsonrpc": "2.0", "method": "textDocument/didClose",
+                  "params": {"textDocument": {"uri": uri(paths[0])}}}, did_open(over, text))
+        await published(raw, uri(over), 1)
+
+    said: list[bytes] = []
+
+    async def session() -> None:
+        async with Raw(tmp_path) as raw:
+            await test(raw)
+        said.append(raw.stderr)
+
+    asyncio.run(session())
+    assert said[0].decode().splitlines() == [
+        f"prima lsp: {MAX_OPEN:,} documents are open: {uri(paths[MAX_OPEN])} and any opened "
+        "after it are not checked (close one, then open them again)"]
