@@ -537,7 +537,8 @@ class Oracle:
         self._order: dict[CommandId, int] = {}
         """Command -> the order of the request that asked for it."""
         self._heard: list[Decision] = []
-        """The ends in this operation that said a user reaction's first words in full."""
+        """The ends in this operation that said a user reaction's first words in full, or
+        a reply's to the user's answer (7.6 (4): ranks changed within the operation)."""
         self._restarts: set[AbId] = set()
         """ABs that start a cut AB again: never cut by another application (7.3 (2): at
         most one cut; the user's barge-in may cut them, 7.5)."""
@@ -734,6 +735,7 @@ class Oracle:
                 and self._order.get(d.command_id or 0, 0) >= answered[d.tree]
                 and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
             del answered[d.tree]  # the reply's first words were said in full
+            self._heard.append(d)
         if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
             self._interrupt(d)
         b.ended.add(ab)
@@ -921,9 +923,9 @@ class Oracle:
         if not starts or any(d.kind is DecisionKind.BUDGET for d in new):
             return  # (a precedence changed within the operation: ranks moved meanwhile)
         if self._heard:
-            # a reaction to the user's own action said its first words within the
-            # operation (an utterance that takes no time): the starts before that were
-            # ranked with it first, the view knows it no longer is
+            # a reaction to the user's own action (or a reply to the user's answer) said
+            # its first words within the operation (an utterance that takes no time): the
+            # starts before that were ranked with it first, the view knows it no longer is
             last = max(new.index(h) for h in self._heard)
             starts = [d for d in starts if new.index(d) > last]
         held = {d.ab for d in new if d.kind is DecisionKind.HOLD}
