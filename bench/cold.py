@@ -110,16 +110,15 @@ def check_targets(medians: dict[str, float]) -> bool:
     """Print each target and whether it is met; whether all are."""
     print("targets:")
     met_all = True
-    limits = dict(TARGETS)
-    limits.update((name, medians[name + EARLIER]) for name in AGAINST
-                  if name + EARLIER in medians)
-    for name, limit in limits.items():
+    limits = [(name, limit, fmt_time(limit)) for name, limit in TARGETS.items()]
+    limits += [(name, medians[name + EARLIER], "the earlier build's "
+                f"{fmt_time(medians[name + EARLIER])}") for name in AGAINST
+               if name + EARLIER in medians]
+    for name, limit, than in limits:
         met = medians[name] <= limit
         met_all = met_all and met
-        than = "the earlier build's" if name in AGAINST and name not in TARGETS \
-            else fmt_time(limit)
         print(f"  {name:<40} {fmt_time(medians[name]):>9} <= {than:>7}: "
-              f"{'met' if met else 'NOT met'}")
+              f"{'met' if met else 'NOT met'} ({medians[name] / limit:.2f}x)")
     print(interpreter())
     return met_all
 
