@@ -405,6 +405,8 @@ class WorkingMemory:
             for ab, n in list(self.after_reactions.items()):
                 if n.state is _WAITING:
                     dirty.update(n.devices)
+                    if n.parked is not None:  # (stepped aside for its reaction: looked
+                        self.unreserved = True  # at again, as what a next AB kept)
                 elif n.state is not _PENDING:
                     del self.after_reactions[ab]
         if self.reserving:

@@ -349,7 +349,16 @@ class Selector:
         if x.not_before > self._log.now:
             return True  # (its pause after a false interruption: it keeps its rank)
         # (one a hold keeps is parked below: it reserves nothing)
-        return x.cut_for is not None and self._after_its_reaction(x, x.cut_for)
+        if x.cut_for is not None:
+            r = self._after_its_reaction(x, x.cut_for)
+            if r is not None:
+                # It waits for the reaction it was cut for, which steps aside for ``r``:
+                # it steps aside too, reserving nothing, as what ``r`` keeps (else what
+                # goes before ``r`` in its stream, a return, could wait for it: all
+                # three would wait for each other)
+                self._holds.park(x, Rule.RESERVED, r.app)
+                return True
+        return False
 
     def _held_for_answer(self, x: Node) -> bool:
         """Whether ``x``'s stream waits while a reaction answers the user (docs/rules.md
@@ -534,17 +543,17 @@ class Selector:
         self._holds.park(y, Rule.RESERVED, r.app)
         return True
 
-    def _after_its_reaction(self, x: Node, cut_for: Node) -> bool:
-        """Whether the restart ``x`` waits, in its place, for the reaction's AB it was cut
-        for (7.3 (2)): while that AB steps aside for another reaction's next AB (7.1) and
-        its stream goes before ``x``'s, priority aside (``x``'s stream may have become a
-        later reaction since, to the user's own action: then it goes first); not for a
-        next AB after ``x`` in its own tree (that one waits for ``x``: they would wait
-        for each other)."""
+    def _after_its_reaction(self, x: Node, cut_for: Node) -> Node | None:
+        """The next AB of another reaction (7.1) that the reaction's AB the restart ``x``
+        was cut for steps aside for, while its stream goes before ``x``'s, priority aside
+        (``x``'s stream may have become a later reaction since, to the user's own action:
+        then it goes first): ``x`` waits for it too (7.3 (2)); not for a next AB after
+        ``x`` in its own tree (that one waits for ``x``: they would wait for each other).
+        None: ``x`` does not wait."""
         if cut_for.state is not _WAITING or not goes_before(cut_for, x):
-            return False
+            return None
         # (as it is now, ranks may have moved since; one in x's own tree waits for x)
-        return self._reserved(cut_for, besides=x.tree) is not None
+        return self._reserved(cut_for, besides=x.tree)
 
     def _ready(self, x: Node, best: Callable[[str], Node | None]) -> bool:
         """Whether ``x``'s devices are free and it ranks best on each."""

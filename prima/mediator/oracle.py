@@ -350,18 +350,18 @@ def _left_waiting(v: _View, cut_for: Mapping[AbId, AbId]) -> list[AbId]:
     reserved: set[str] = set()
     out: list[AbId] = []
     for n in v.waiting:
-        if v.held(n) or v.kept_for(n) is not None:
-            continue  # (kept for a reaction's next AB, it steps aside too: 7.1)
+        if v.held(n) or v.kept_for(n) is not None or _after_its_reaction(v, n, cut_for):
+            continue  # (kept for a reaction's next AB, it steps aside too: 7.1; so does a
+            # restart waiting for the reaction it was cut for, reserving nothing: 7.3 (2))
         devices = set(n.devices)
-        if not devices & reserved and not any(d in v.busy for d in devices) \
-                and not _after_its_reaction(v, n, cut_for):
+        if not devices & reserved and not any(d in v.busy for d in devices):
             out.append(n.ab)
         reserved |= devices
     return out
 
 
 def _after_its_reaction(v: _View, n: NodeView, cut_for: Mapping[AbId, AbId]) -> bool:
-    """A restart waits (in its place) for the reaction's AB it was cut for while that AB
+    """A restart waits (stepping aside) for the reaction's AB it was cut for while that AB
     steps aside for another reaction's next AB (not one after the restart in its own
     tree) and its stream goes before the restart's, priority aside (7.3 (2), 7.1)."""
     r = v.nodes.get(cut_for.get(n.ab, -1))

@@ -52,7 +52,7 @@ def test_thousands_of_random_scenarios_keep_every_invariant() -> None:
 
 FOUND = (77000003429, 77000001268, 77000007298, 77000008886, 77000012445, 78000011328,
          78000018342, 79000019769, 4242000039872, 4242000053838, 2000002071,
-         4343000008614, 4343000034092, 4343000054841, 4343000154069)
+         4343000008614, 4343000034092, 4343000054841, 4343000154069, 4343000353473)
 """Seeds of the long run in which the oracle once found a violation (an AB held for ever
 after a false interruption's pause, one kept from the wheels by an AB a reaction to the
 user held, three streams waiting for each other; a reaction to the user whose app was
@@ -61,7 +61,9 @@ replying to the user's answer, outranks; words turned for again and again, each 
 suspending the other app's return, which their wait let run; a wait another app's block
 or stream hold made, charged by the oracle to the app answering the user meanwhile; an AB
 started while its tree replied to the user's answer, whose reply's first words, taking no
-time, were said later in the same operation): each stays clean."""
+time, were said later in the same operation; a restart waiting for the reaction it was
+cut for, which stepped aside for the next AB of a reaction whose return the restart kept
+from the wheels): each stays clean."""
 
 
 @pytest.mark.parametrize("seed", FOUND)
