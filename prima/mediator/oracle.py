@@ -950,6 +950,7 @@ class Oracle:
                   and not self._talk.isdisjoint(d.devices)}
         rivals = [n for n in v.waiting
                   if n.ab in before and not v.held(n) and v.kept_for(n) is None
+                  and not _after_its_reaction(v, n, self._cut_for)  # (it steps aside)
                   and (not were_next or v.kept_for(n, were_next) is None)
                   and not (n.priority is Priority.LOW and talked - {n.app})]
         kept = {n.ab for n in prev.nexts}
