@@ -538,7 +538,8 @@ class Oracle:
         """Command -> the order of the request that asked for it."""
         self._heard: list[Decision] = []
         """The ends in this operation that said a user reaction's first words in full, or
-        a reply's to the user's answer (7.6 (4): ranks changed within the operation)."""
+        a reply's to the user's answer (7.6 (4)), and the unloads in it (an app gone
+        answers nobody, 7.6 (1)): ranks and holds changed within the operation."""
         self._restarts: set[AbId] = set()
         """ABs that start a cut AB again: never cut by another application (7.3 (2): at
         most one cut; the user's barge-in may cut them, 7.5)."""
@@ -644,6 +645,7 @@ class Oracle:
         elif d.kind is DecisionKind.UNLOAD and d.app is not None:
             b.unloaded.add(d.app)
             self.streams.unloaded.add(d.app)
+            self._heard.append(d)  # (its reaction to the user holds nothing from now on)
         elif d.kind is DecisionKind.HEAR:
             self._hear = d
         elif d.kind is DecisionKind.INTERRUPT or (d.kind is DecisionKind.REQUEST
@@ -924,8 +926,9 @@ class Oracle:
             return  # (a precedence changed within the operation: ranks moved meanwhile)
         if self._heard:
             # a reaction to the user's own action (or a reply to the user's answer) said
-            # its first words within the operation (an utterance that takes no time): the
-            # starts before that were ranked with it first, the view knows it no longer is
+            # its first words within the operation (an utterance that takes no time), or
+            # its app was unloaded: the starts before that were ranked with it first (and
+            # its hold in force), the view knows it no longer is
             last = max(new.index(h) for h in self._heard)
             starts = [d for d in starts if new.index(d) > last]
         held = {d.ab for d in new if d.kind is DecisionKind.HOLD}
