@@ -463,6 +463,8 @@ class WorkingMemory:
                 tree.answers_from = self._next_tree  # (what came into being before it)
                 self.answering[tree.id] = tree
                 self._holding()
+            elif tree.user:  # (a later reaction joins a reaction to the user whose words
+                self._holding()  # are ahead: it is the latest now, whom it holds changed)
             if tree.live:  # (else it has no AB in the index, nor keys: ``forget`` cleared them)
                 self._rerank(tree)
                 if before is None and self.keep_next:  # its next ABs keep their devices
