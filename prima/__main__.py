@@ -51,6 +51,14 @@ def _done(status: int) -> None:
 
     signal.signal(signal.SIGINT, leave)
     signal.signal(signal.SIGTERM, leave)
+    # Python's own shutdown may race a worker pool's wakeup pipe (concurrent.futures'
+    # exit handler writes to it as its manager thread closes it: "Exception ignored
+    # in: <module 'threading'> ... Bad file descriptor"): not the command's words.
+    sys.unraisablehook = _unsaid
+
+
+def _unsaid(_unraisable: object) -> None:
+    """What Python reports, once the command is done, of an error it ignores."""
 
 
 if __name__ == "__main__":
