@@ -204,13 +204,9 @@ def check_documents(scenario: Path, switches: Switches | None) -> None:
     from prima.run import Run
     from prima.scenario import checked_load
 
-    def load() -> Run:
-        return Run(scenario, **(switches.run_options() if switches else {}))
-
-    if switches and (switches.fa or switches.ea):
-        load()
-    else:
-        checked_load(scenario, switches.robot if switches else None, load)
+    checked_load(scenario, switches.robot if switches else None,
+                 lambda: Run(scenario, **(switches.run_options() if switches else {})),
+                 swapped=bool(switches and (switches.fa or switches.ea)))
 
 
 def sweep(scenario: str | Path, *, runs: int, jitter: float, seed: int = 0,

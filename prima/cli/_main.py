@@ -54,7 +54,7 @@ def _named(given: Sequence[str]) -> str | None:
     ``--color``'s value), if it is one of :data:`NAMES`; else None."""
     words = iter(given)
     for word in words:
-        if word in ("--color", "--colour"):
+        if word == "--color":
             next(words, None)
         elif not word.startswith("-"):
             return word if word in NAMES else None

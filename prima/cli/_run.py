@@ -51,14 +51,13 @@ def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     chosen = FORMATS[args.format]
     # Everything is loaded and checked before the output is opened; then each trace
     # line is written as the run makes it (``writer`` is opened below, before the run).
-    # A bad scenario is said as prima validate says it (its own applications, not
-    # swapped ones: those are checked as they load).
+    # A bad scenario is said as prima validate says it.
     def load() -> Run:
         return Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
                    seed=args.seed, until=args.until, sink=lambda line: write(line),
                    pose_rate=args.pose_rate, policies=args.policy)
 
-    run = load() if args.fa or args.ea else checked_load(args.scenario, args.robot, load)
+    run = checked_load(args.scenario, args.robot, load, swapped=bool(args.fa or args.ea))
     with contextlib.ExitStack() as files:
         # (a binary format's file is written by its writer, a file of its own)
         to = files.enter_context(written(args.out, partial=True)) \

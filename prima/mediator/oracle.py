@@ -479,7 +479,6 @@ class _Books:
     """What the decisions told so far."""
 
     kinds: dict[str, AppKind] = field(default_factory=dict)
-    unloaded: set[str] = field(default_factory=set)
     started: set[AbId] = field(default_factory=set)
     ended: set[AbId] = field(default_factory=set)
     cancelled: set[AbId] = field(default_factory=set)
@@ -643,7 +642,6 @@ class Oracle:
         if d.kind is DecisionKind.LOAD and d.app is not None:
             b.kinds[d.app] = AppKind[d.detail]
         elif d.kind is DecisionKind.UNLOAD and d.app is not None:
-            b.unloaded.add(d.app)
             self.streams.unloaded.add(d.app)
             self._heard.append(d)  # (its reaction to the user holds nothing from now on)
         elif d.kind is DecisionKind.HEAR:

@@ -193,21 +193,25 @@ def scenario_problems(scenario: str | Path, robot: str | Path | None = None) -> 
 
 def check_scenario(scenario: str | Path, robot: str | Path | None = None) -> None:
     """Raise ScenarioError with the problems :func:`scenario_problems` finds, errors
-    first, when one of them is an error: what ``prima run`` and ``prima sweep`` check
-    before they run, so that they stop on a scenario with the lines ``prima validate``
-    and ``prima lsp`` give for it."""
+    first, when one of them is an error: what ``prima run`` and ``prima sweep`` say of a
+    scenario that does not load (:func:`checked_load`), the lines ``prima validate`` and
+    ``prima lsp`` give for it."""
     problems = scenario_problems(scenario, robot)
     if any(p.severity is Severity.ERROR for p in problems):
         raise ScenarioError(sorted(problems, key=lambda p: p.severity is not Severity.ERROR))
 
 
-def checked_load(scenario: str | Path, robot: str | Path | None, load: Callable[[], _T]) -> _T:
+def checked_load(scenario: str | Path, robot: str | Path | None, load: Callable[[], _T], *,
+                 swapped: bool = False) -> _T:
     """``load()`` (a run made ready from ``scenario``); when it fails on a bad file, the
     scenario's validation (:func:`check_scenario`) says what is wrong, as ``prima
     validate`` and ``prima lsp`` do, if it finds an error, else the load's own error
-    stands. A scenario that loads costs no second reading."""
+    stands. A scenario that loads costs no second reading. ``swapped``: the command line
+    swaps its FA or EA, so the scenario's own do not run and are not what is said (the
+    documents that run are checked as they load)."""
     try:
         return load()
     except LocatedError:
-        check_scenario(scenario, robot)
+        if not swapped:
+            check_scenario(scenario, robot)
         raise
