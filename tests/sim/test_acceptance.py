@@ -86,6 +86,23 @@ def test_tracking_human_keeps_the_distance_band_while_the_user_walks_a_route() -
     assert sim.robot_pose().distance_to(9, 5.5) < 1.5
 
 
+def test_a_robot_following_a_user_who_stands_comes_to_rest() -> None:
+    # the user walks off and stops; the robot follows and settles at its distance: once
+    # there, its wheels stand still and the world is no longer stepped (the controller's
+    # last requests, far below the wheels' least speed, move nothing)
+    r = runner("museum", Pose(7, 3, 0), Pose(8, 3, 0), walk(2, 10, 3))
+    r.queue(call("TrackingHuman", distance=1.0))
+    r.run(30)
+    sim = r.sim
+    assert abs(sim.world.user_distance() - 1.0) < sim.spec.tracking_band
+    assert sim.robot_pose().distance_to(9, 3) < 0.1  # it really followed
+    steps = sim.steps
+    r.run(60)
+    assert sim.world.mode == 0, "the wheels should stand still"
+    assert sim.steps == steps, f"{sim.steps - steps} physics steps while nothing moved"
+    assert len(r.ends("TrackingHuman")) >= 100  # it kept tracking all the while
+
+
 def test_tracking_human_loses_a_user_who_walks_behind_a_wall() -> None:
     # office: robot in the hall, user walks out of the hall and behind its wall
     r = runner("office", Pose(3, 3, 0), Pose(4.2, 3, 0), walk(1, 7, 3), walk(5, 7.5, 3.5))
