@@ -53,13 +53,18 @@ def package_dirs(tree: Path) -> dict[str, Path]:
 
 class _TreeFinder(importlib.abc.MetaPathFinder):
     """Finds each mapped package in its folder of the tree (a namespace package when the
-    folder has no ``__init__.py``, as the import system makes one)."""
+    folder has no ``__init__.py``, as the import system makes one), and a compiled
+    build's shared runtime (mypyc's ``<hash>__mypyc`` extension, which a build in place
+    leaves at the tree's top, beside ``prima/``: every compiled module imports it)."""
 
-    def __init__(self, dirs: dict[str, Path]) -> None:
+    def __init__(self, tree: Path, dirs: dict[str, Path]) -> None:
+        self.tree = tree
         self.dirs = dirs
 
     def find_spec(self, fullname: str, path: Sequence[str] | None = None,
                   target: ModuleType | None = None) -> importlib.machinery.ModuleSpec | None:
+        if fullname.endswith("__mypyc") and "." not in fullname:
+            return importlib.machinery.PathFinder.find_spec(fullname, [str(self.tree)])
         folder = self.dirs.get(fullname)
         if folder is None:
             return None
@@ -87,7 +92,7 @@ def isolate(tree: Path) -> None:
     sys.path_importer_cache.clear()
     for name in [n for n in sys.modules if n == "prima" or n.startswith("prima.")]:
         del sys.modules[name]
-    sys.meta_path.insert(0, _TreeFinder(package_dirs(tree)))
+    sys.meta_path.insert(0, _TreeFinder(tree, package_dirs(tree)))
 
 
 def main(argv: list[str]) -> None:

@@ -98,3 +98,22 @@ def test_another_checkout_runs_wholly_on_its_own_files(tmp_path: Path) -> None:
     assert found == [tree / "prima" / "__init__.py", tree / "robots" / "home-robot.xml",
                      tree / "schemas" / "pxml.xsd", tree / "apps" / "fa",
                      tree / "scenarios" / "thesis"]
+
+
+def test_another_checkouts_compiled_runtime_is_found_at_its_top(tmp_path: Path) -> None:
+    """A compiled build made in place (``--compiled``) has mypyc's shared runtime, a
+    top-level ``<hash>__mypyc`` module, beside ``prima/``: every compiled module imports
+    it, so ``bench/_tree.py`` finds it there (it did not, and ``bench/sweep.py
+    --compiled`` stopped with ``No module named '...__mypyc'``)."""
+    import subprocess
+
+    _bench()
+    import _measure
+
+    tree = _other_build(tmp_path)
+    (tree / "0123abcd__mypyc.py").write_text("BUILT = 'here'\n", encoding="utf-8")
+    code = "import importlib; print(importlib.import_module('0123abcd__mypyc').BUILT)"
+    done = subprocess.run(_measure.in_checkout(tree, ["-c", code]), capture_output=True,
+                          text=True, check=False, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "here"
