@@ -31,7 +31,7 @@ from prima.catalog import (
 )
 from prima.errors import CommandError
 from prima.mediator import AtomicBehavior, Call
-from prima.sim._kernel import Wait, signal, sleep, until
+from prima.sim._kernel import Wait, idle, signal, sleep, until
 from prima.sim._maps import Place
 from prima.sim._records import Picture
 from prima.sim._world import World, wrap_angle
@@ -597,14 +597,29 @@ def tracking_human(sim: Body, call: Call, cid: int, it: int) -> Gen:
             yield from _stop(sim)
             sim.end_loop(cid)
             return {"lost": True}, True
+        still = not world.mode
+        version = world.version
         seen, d = world.sees_user(k.tick)
         if seen:
             distance = d
             err = d - want
             v = 0.0 if abs(err) < dead else 2.0 * (err - math.copysign(dead, err))
             world.command(max(v, -0.5 * sim.spec.max_speed), 3.0 * world.user_bearing())
-        yield sleep(min(period, end - k.tick))
+        if still and not world.mode:  # (at its distance and facing the user: it stays)
+            yield idle(min(period, end - k.tick), _settled(sim, version, k.tick), end)
+        else:
+            yield sleep(min(period, end - k.tick))
     return {"lost": False, "distance": round(distance, 3)}, False
+
+
+def _settled(sim: Body, version: int, tick: int) -> Callable[[], bool]:
+    """Whether a robot that tracks the user, and found nothing to do at ``tick``, would
+    find nothing again: no body has moved since ``version``, the camera looks the same
+    way, and the user is still seen (:func:`idle`)."""
+    world = sim.world
+    pan = world.head_pan.at(tick)
+    return lambda: (world.version == version and sim.seen and not world.mode
+                    and world.head_pan.at(sim.kernel.tick) == pan)
 
 
 def topological_move(sim: Body, call: Call, cid: int, it: int) -> Gen:

@@ -19,7 +19,7 @@ from typing import Any
 
 from prima.errors import SimulationError
 
-__all__ = ["Kernel", "ProcGen", "Process", "Room", "Wait", "Waker", "signal", "sleep",
+__all__ = ["Kernel", "ProcGen", "Process", "Room", "Wait", "Waker", "idle", "signal", "sleep",
            "until"]
 
 Waker = Callable[[Any], None]
@@ -28,10 +28,11 @@ Waker = Callable[[Any], None]
 class Wait:
     """What a process waits for; whichever comes first resumes it."""
 
-    __slots__ = ("ticks", "pred", "start", "timeout")
+    __slots__ = ("ticks", "pred", "start", "timeout", "unchanged", "until")
 
     def __init__(self, ticks: int | None = None, pred: Callable[[], bool] | None = None,
-                 start: Callable[[Waker], bool] | None = None, timeout: Any = None) -> None:
+                 start: Callable[[Waker], bool] | None = None, timeout: Any = None,
+                 unchanged: Callable[[], bool] | None = None, until: int | None = None) -> None:
         self.ticks = ticks
         """Resume with ``timeout`` after this many ticks."""
         self.pred = pred
@@ -39,6 +40,11 @@ class Wait:
         self.start = start
         """Called with a waker; return False if there is nothing to wait for."""
         self.timeout = timeout
+        self.unchanged = unchanged
+        """An idle sleep (:func:`idle`): whether the process would, woken now, do nothing."""
+        self.until = until
+        """An idle sleep: the tick before which the process sleeps ``ticks`` again and
+        again while it does nothing (at that tick it does something: it ends)."""
 
 
 def sleep(ticks: int) -> Wait:
@@ -55,6 +61,20 @@ _SLEEPS: dict[int, Wait] = {}
 """The waits of :func:`sleep` by length (the kernel never changes a wait: processes
 share them; a behavior sleeps its control period again and again)."""
 _SLEEPS_KEPT = 1024
+
+
+def idle(ticks: int, unchanged: Callable[[], bool], until: int | None = None) -> Wait:
+    """Sleep ``ticks`` (at least one), as a process that polls something and has just
+    found nothing to do: while ``unchanged()`` holds, waking it would do nothing again,
+    and it would sleep ``ticks`` again (up to ``until``, where it would end). The
+    kernel may then skip such wakes (:meth:`Kernel.skip_idle`): it keeps the process on
+    its grid, as if it had woken, without waking it."""
+    return Wait(ticks=max(1, ticks), unchanged=unchanged,
+                until=until if until is not None else _NEVER)
+
+
+_NEVER = 1 << 60
+"""An idle sleep's ``until`` when it has none: never (a tick no run reaches)."""
 
 
 def until(pred: Callable[[], bool], ticks: int | None = None) -> Wait:
@@ -74,13 +94,15 @@ ProcGen = Generator[Wait, Any, Any]
 class Process:
     """A running generator with a token that invalidates stale wake-ups."""
 
-    __slots__ = ("gen", "token", "alive", "exit")
+    __slots__ = ("gen", "token", "alive", "exit", "idle")
 
     def __init__(self, gen: ProcGen, exit: Callable[[Any], None] | None) -> None:
         self.gen = gen
         self.token = 0
         self.alive = True
         self.exit = exit
+        self.idle: Wait | None = None
+        """The idle sleep (:func:`idle`) it sleeps in, if it sleeps in one."""
 
 
 class Kernel:
@@ -129,6 +151,21 @@ class Kernel:
     def next_tick(self) -> int | None:
         return self._heap[0][0] if self._heap else None
 
+    def polls_hold(self) -> bool:
+        """Whether a predicate a process waits for (:func:`until`) holds now. (The
+        predicates only read: asking is harmless.)"""
+        return any(pred() for proc, token, pred in self._polls
+                   if proc.alive and proc.token == token)
+
+    def idle_first(self, limit: int) -> bool:
+        """Whether the agenda's first work, due by ``limit``, wakes a process that
+        sleeps in an idle sleep (:meth:`skip_idle` may skip it)."""
+        heap = self._heap
+        if not heap:
+            return False
+        tick, _seq, what, wake = heap[0]
+        return wake is not None and tick <= limit and what.idle is not None
+
     def due(self) -> bool:
         return bool(self._heap) and self._heap[0][0] <= self.tick
 
@@ -144,6 +181,30 @@ class Kernel:
                 self._fire(what, *wake)
             ran = True
         return ran
+
+    def skip_idle(self, limit: int) -> int:
+        """Skip the wakes, up to the tick ``limit``, of processes that sleep in an idle
+        sleep (:func:`idle`) and would do nothing: each is put to sleep again as its
+        wake would (the same ticks, in the same order), without waking it. Only the
+        first wake of the agenda is looked at, again and again: nothing else is due
+        before it. The caller knows that nothing a process reads changes meanwhile (the
+        simulator: no body moves); returns how many wakes were skipped."""
+        heap = self._heap
+        skipped = 0
+        while heap:
+            tick, _seq, proc, wake = heap[0]
+            if wake is None or tick > limit:
+                break
+            wait = proc.idle
+            if (wait is None or not proc.alive or proc.token != wake[0] or tick >= wait.until
+                    or not wait.unchanged()):
+                break
+            proc.token += 1
+            self._seq += 1
+            heapq.heapreplace(heap, (tick + min(wait.ticks, wait.until - tick), self._seq,
+                                     proc, (proc.token, wait.timeout)))
+            skipped += 1
+        return skipped
 
     def check_polls(self) -> None:
         """Resume processes whose awaited predicate now holds."""
@@ -186,6 +247,7 @@ class Kernel:
                 proc.exit(stop.value)
             return
         token = proc.token
+        proc.idle = wait if wait.unchanged is not None else None
         if wait.start is not None:
             def waker(v: Any = True) -> None:
                 self._wake(self.tick, proc, token, v)

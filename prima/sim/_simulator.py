@@ -149,6 +149,9 @@ class Simulator:
         self.on_sample: Callable[[], None] = _ignore
         self.steps = 0
         """Physics steps taken so far."""
+        self.skipped = 0
+        """Wakes of processes that would have done nothing, skipped so far
+        (:meth:`_skip_idle`)."""
         self.seen = False
         """Human detection's current belief: the user is in view."""
         self.navigating = 0
@@ -477,6 +480,8 @@ class Simulator:
         last = max(self._first_tick(t), k.tick)
         before = self.reports
         while True:
+            if k.idle_first(last):
+                self._skip_idle(last)
             own = self._next_tick()
             step = max(last if own is None else min(own, last), k.tick)
             self._run_to(step, True)
@@ -528,6 +533,8 @@ class Simulator:
                                     or k.tick < world.joints_until or world.swaying)):
                         break
             else:
+                if k.idle_first(target):
+                    self._skip_idle(target)
                 nxt = k.next_tick()
                 jump = target if nxt is None or nxt > target else max(nxt, k.tick)
                 if pace is not None and jump > k.tick:
@@ -799,6 +806,25 @@ class Simulator:
         w = self.world
         return bool(w.mode or w.human_moving or self.kernel.tick < w.joints_until
                     or w.swaying)
+
+    def _skip_idle(self, limit: int) -> None:
+        """Skip the wakes up to ``limit`` of processes that would do nothing woken
+        (:meth:`Kernel.skip_idle`). While no body moves, nothing any process reads
+        changes until the agenda's next other work, if that work changes nothing
+        either: human detection would find nothing new and no predicate a process
+        waits for holds. (Not while a live run keeps pace with the clock.)"""
+        if (self.pace is None and not self._moving() and self._monitor_steady()
+                and not self.kernel.polls_hold()):
+            self.skipped += self.kernel.skip_idle(limit)
+
+    def _monitor_steady(self) -> bool:
+        """Whether human detection's monitor, asked now, would change nothing
+        (:meth:`_update_monitor`); with no body moving, until the agenda's next work."""
+        if not self._sensing:
+            return True
+        seen, _distance = self.world.sees_user(self.kernel.tick)
+        waiting = self.seen and self._sighted and self._unseen_since is None
+        return waiting if seen else not waiting
 
     def _settle(self) -> None:
         k = self.kernel

@@ -14,16 +14,18 @@ from __future__ import annotations
 import functools
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from prima.errors import SimulationError
 
-from prima.sim._kernel import ProcGen, Process, Room, sleep
+from prima.sim._kernel import ProcGen, Process, Room, idle, sleep
 from prima.sim._records import Pose, UserAction, UserActionKind
 
 if TYPE_CHECKING:
     from prima.sim._host import Stage
+    from prima.sim._world import World
 
 __all__ = ["ADDED_ACTIONS", "AnswerRule", "ScriptedUser", "TimedAction", "UserScript"]
 
@@ -279,6 +281,9 @@ class ScriptedUser:
                 self._step_aside(rx, ry, hx, hy, d, speed)
             elif world.human_moving:
                 self._set_velocity(0.0, 0.0)
+            else:  # (where they stand, it stays so until someone moves)
+                yield idle(period, _unmoved(world, world.version))
+                continue
             yield sleep(period)
 
     def _in_the_way(self, rx: float, ry: float, hx: float, hy: float, d: float) -> bool:
@@ -330,3 +335,9 @@ class ScriptedUser:
         self._record(UserActionKind.TOUCH, target=None if touched else "missed")
         if touched:
             sim.emit("touched", {})
+
+
+def _unmoved(world: World, version: int) -> Callable[[], bool]:
+    """Whether no body has moved since ``version`` and the user stands: a following
+    user who found nothing to do then finds nothing again (:func:`idle`)."""
+    return lambda: world.version == version and not world.human_moving

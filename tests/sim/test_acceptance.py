@@ -103,6 +103,42 @@ def test_a_robot_following_a_user_who_stands_comes_to_rest() -> None:
     assert len(r.ends("TrackingHuman")) >= 100  # it kept tracking all the while
 
 
+def test_a_robot_tracking_a_user_who_stands_is_not_woken_for_nothing() -> None:
+    # once it has settled at its distance, each iteration of TrackingHuman wakes only to
+    # end: its control wakes in between (10 a second) would find nothing to do
+    r = runner("museum", Pose(7, 3, 0), Pose(8, 3, 0), walk(2, 10, 3))
+    r.queue(call("TrackingHuman", distance=1.0))
+    r.run(30)
+    sim = r.sim
+    skipped, ends = sim.skipped, len(r.ends("TrackingHuman"))
+    r.run(60)
+    iterations = len(r.ends("TrackingHuman")) - ends
+    wakes = round(30 * 10)  # its control wakes in 30 s, the iterations' ends among them
+    assert iterations >= 50
+    assert sim.skipped - skipped >= wakes - iterations - 2, (sim.skipped - skipped, iterations)
+
+
+@pytest.mark.pure  # (it turns the skipping off by patching the simulator)
+def test_a_run_whose_idle_wakes_are_skipped_is_the_run_that_wakes_them(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # a follower, a tracker and a search: the same events, ends and poses either way
+    def run() -> tuple[list[object], int]:
+        r = runner("museum", Pose(7, 3, 0), Pose(8, 3, 0), walk(2, 10, 3), walk(40, 6, 6))
+        r.queue(call("TrackingHuman", distance=1.0))
+        r.run(50)
+        r.queue(call("ActiveSensingHuman", turn=45))
+        r.run(70)
+        return [*r.trace, r.sim.robot_pose(), r.sim.world.user_pose()], r.sim.skipped
+
+    skipping, skipped = run()
+    assert skipped > 100
+    monkeypatch.setattr(Simulator, "_skip_idle", lambda self, limit: None)
+    waking, none = run()
+    assert none == 0
+    assert len(skipping) > 100
+    assert skipping == waking
+
+
 def test_tracking_human_loses_a_user_who_walks_behind_a_wall() -> None:
     # office: robot in the hall, user walks out of the hall and behind its wall
     r = runner("office", Pose(3, 3, 0), Pose(4.2, 3, 0), walk(1, 7, 3), walk(5, 7.5, 3.5))

@@ -106,4 +106,4 @@ def test_in_whole_runs_the_kept_answer_is_always_the_fresh_one() -> None:
     """Every answer human detection gives in runs that search, turn, track, guide and
     dance is the one working it out afresh from the poses gives."""
     asked = sum(_checked_run(name) for name in ("sample-03", "sample-09", "fig5-2", "sample-07"))
-    assert asked > 10_000
+    assert asked > 5_000  # (about 8,000: fewer since wakes that would find nothing are skipped)

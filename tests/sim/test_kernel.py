@@ -1,0 +1,74 @@
+"""The kernel's agenda: skipping the wakes of a process that would do nothing
+(``Kernel.skip_idle``) leaves every other piece of work where it was, in its order."""
+
+from __future__ import annotations
+
+from prima.sim._kernel import Kernel, ProcGen, idle, sleep
+
+END = 40
+
+
+def _run(skip: bool) -> tuple[list[tuple[int, str]], int, int]:
+    """A poller on a 3-tick grid that acts once something has moved, beside work that
+    moves it at tick 10 and work at tick 12 scheduled before and after the poller's
+    wake there: what happened, in order, the poller's wakes and the wakes skipped."""
+    k = Kernel(10)
+    log: list[tuple[int, str]] = []
+    moved = [False]
+    woken = [0]
+
+    def poller() -> ProcGen:
+        while True:
+            woken[0] += 1
+            if moved[0]:
+                moved[0] = False
+                log.append((k.tick, "acts"))
+                yield sleep(3)
+            else:  # nothing to do: woken while nothing moves, it would do nothing again
+                yield idle(3, lambda: not moved[0])
+
+    def move() -> None:
+        moved[0] = True
+        log.append((k.tick, "moves"))
+        k.at(12, lambda: log.append((k.tick, "late")))  # after the poller's wake at 12
+
+    k.spawn(poller())
+    k.at(10, move)
+    k.at(12, lambda: log.append((k.tick, "early")))  # before the poller's wake at 12
+    k.at(25, lambda: moved.__setitem__(0, True))
+    skipped = 0
+    while True:
+        if skip:
+            skipped += k.skip_idle(END)
+        nxt = k.next_tick()
+        if nxt is None or nxt > END:
+            break
+        k.tick = nxt
+        k.run_due()
+    return log, woken[0], skipped
+
+
+def test_skipped_wakes_leave_every_other_work_in_its_place() -> None:
+    log, woken, skipped = _run(skip=True)
+    assert (log, woken + skipped) == _run(skip=False)[:2]
+    assert log == [(10, "moves"), (12, "early"), (12, "acts"), (12, "late"), (27, "acts")]
+    assert skipped >= 8 and woken <= 6, (woken, skipped)
+
+
+def test_a_wake_where_the_process_would_end_is_not_skipped() -> None:
+    k = Kernel(10)
+    ended: list[int] = []
+
+    def iteration() -> ProcGen:
+        end = 10
+        while k.tick < end:
+            yield idle(min(4, end - k.tick), lambda: True, end)
+        ended.append(k.tick)
+
+    k.spawn(iteration())
+    k.run_due()  # (its start: now idle until 4)
+    assert k.skip_idle(100) == 2  # 4 and 8; the wake at 10 (not 12) is its end
+    assert k.next_tick() == 10
+    k.tick = 10
+    k.run_due()
+    assert ended == [10]
