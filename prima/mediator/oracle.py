@@ -535,7 +535,7 @@ class Oracle:
         """The Commands of replies (7.4), and the AB of each."""
         self._order: dict[CommandId, int] = {}
         """Command -> the order of the request that asked for it."""
-        self._heard: list[Decision] = []
+        self._reranked: list[Decision] = []
         """The ends in this operation that said a user reaction's first words in full, or
         a reply's to the user's answer (7.6 (4)), and the unloads in it (an app gone
         answers nobody, 7.6 (1)): ranks and holds changed within the operation."""
@@ -608,7 +608,7 @@ class Oracle:
         """After an operation: read the new decisions, then check the snapshot."""
         new = decisions[self._seen:]
         self._seen = len(decisions)
-        self._heard.clear()
+        self._reranked.clear()
         before = set(self._prev.snap.suspended) if self._prev is not None else set()
         suspended = set(before)  # what this operation's starts resume leaves it
         for d in new:
@@ -643,7 +643,7 @@ class Oracle:
             b.kinds[d.app] = AppKind[d.detail]
         elif d.kind is DecisionKind.UNLOAD and d.app is not None:
             self.streams.unloaded.add(d.app)
-            self._heard.append(d)  # (its reaction to the user holds nothing from now on)
+            self._reranked.append(d)  # (its reaction to the user holds nothing from now on)
         elif d.kind is DecisionKind.HEAR:
             self._hear = d
         elif d.kind is DecisionKind.INTERRUPT or (d.kind is DecisionKind.REQUEST
@@ -729,13 +729,13 @@ class Oracle:
                 and self._order.get(d.command_id or 0, 0) >= self.streams.user_order[d.tree]
                 and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
             self.streams.user.discard(d.tree)  # the reaction's first words were said in full
-            self._heard.append(d)
+            self._reranked.append(d)
         answered = self.streams.answered
         if (d.rule is Rule.COMPLETED and d.tree in answered
                 and self._order.get(d.command_id or 0, 0) >= answered[d.tree]
                 and any(self._catalog[c.command].spoken(c.args) for c in d.calls)):
             del answered[d.tree]  # the reply's first words were said in full
-            self._heard.append(d)
+            self._reranked.append(d)
         if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
             self._interrupt(d)
         b.ended.add(ab)
@@ -922,12 +922,12 @@ class Oracle:
                   and d.ab in v.nodes]
         if not starts or any(d.kind is DecisionKind.BUDGET for d in new):
             return  # (a precedence changed within the operation: ranks moved meanwhile)
-        if self._heard:
+        if self._reranked:
             # a reaction to the user's own action (or a reply to the user's answer) said
             # its first words within the operation (an utterance that takes no time), or
             # its app was unloaded: the starts before that were ranked with it first (and
             # its hold in force), the view knows it no longer is
-            last = max(new.index(h) for h in self._heard)
+            last = max(new.index(h) for h in self._reranked)
             starts = [d for d in starts if new.index(d) > last]
         held = {d.ab for d in new if d.kind is DecisionKind.HOLD}
         before = {n.ab for n in prev.waiting if not prev.held(n) and prev.kept_for(n) is None
