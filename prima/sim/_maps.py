@@ -93,6 +93,10 @@ class Area:
         return {"name": self.name, "x1": self.x1, "y1": self.y1, "x2": self.x2, "y2": self.y2}
 
 
+_CELL = 2.0
+"""The side (m) of the squares a map files its places by (:meth:`WorldMap.places_in`)."""
+
+
 @dataclass(frozen=True)
 class WorldMap:
     """Walls, places, undirected place-graph edges and areas of one building."""
@@ -107,6 +111,9 @@ class WorldMap:
     _index: Mapping[str, Place] = field(init=False, repr=False, compare=False)
     _adjacent: Mapping[str, tuple[tuple[str, float], ...]] = field(
         init=False, repr=False, compare=False)
+    _grid: Mapping[tuple[int, int], tuple[int, ...]] = field(
+        init=False, repr=False, compare=False)
+    """The places by the square of :data:`_CELL` metres they are in (their indices)."""
 
 
     def outline(self) -> list[tuple[float, float]]:
@@ -127,6 +134,26 @@ class WorldMap:
         object.__setattr__(self, "_index", index)
         object.__setattr__(self, "_adjacent",
                            {k: tuple(v) for k, v in adjacent.items()})
+        grid: dict[tuple[int, int], list[int]] = {}
+        for i, p in enumerate(self.places):
+            grid.setdefault((math.floor(p.x / _CELL), math.floor(p.y / _CELL)), []).append(i)
+        object.__setattr__(self, "_grid", {k: tuple(v) for k, v in grid.items()})
+
+    def places_in(self, x1: float, y1: float, x2: float, y2: float) -> list[int]:
+        """The places in the box from (x1, y1) to (x2, y2), edges included, and maybe
+        some more near it (their indices, in no particular order): the candidates a
+        search for the places near a point measures. It looks only at the squares the
+        box covers, or at every place when they are fewer."""
+        cx1, cx2 = math.floor(x1 / _CELL), math.floor(x2 / _CELL)
+        cy1, cy2 = math.floor(y1 / _CELL), math.floor(y2 / _CELL)
+        if (cx2 - cx1 + 1) * (cy2 - cy1 + 1) > len(self.places):
+            return list(range(len(self.places)))
+        grid = self._grid
+        found: list[int] = []
+        for cx in range(cx1, cx2 + 1):
+            for cy in range(cy1, cy2 + 1):
+                found.extend(grid.get((cx, cy), ()))
+        return found
 
     def place(self, name: str) -> Place | None:
         """The place called ``name``, or None."""

@@ -24,11 +24,10 @@ only if something moved: the robot, the user or the camera (a step in which
 nothing moved keeps the answer). A pose written on a body directly, from outside,
 must be followed by :meth:`World.moved`.
 
-The map's places sit in a pymunk space of their own (never stepped, so the
-physics is the same with or without it): :meth:`World.places_near` asks its
-spatial index which places are near a point, instead of measuring the
-distance to every place, and says how far the point may move before the
-answer can change.
+The map files its places by the squares of a grid (:meth:`WorldMap.places_in`,
+made once per map, not per run): :meth:`World.places_near` asks it which places
+may be near a point, instead of measuring the distance to every place, and
+says how far the point may move before the answer can change.
 
 The user is a kinematic body moved by the scripted user. Head and arm
 angles, and those of the joints a robot profile declares (a laser pointer's
@@ -54,7 +53,6 @@ WALL = 0b001
 ROBOT = 0b010
 HUMAN = 0b100
 _SIGHT = pymunk.ShapeFilter(mask=WALL)
-_ANY = pymunk.ShapeFilter()
 HUMAN_RADIUS = 0.25
 _PLACE_MARGIN = 1e-3
 """A margin (m) for rounding: the places' index is asked about a box this much
@@ -108,19 +106,6 @@ class _Joint:
         self.t1 = tick + ticks
 
 
-def _place_index(world_map: WorldMap) -> tuple[pymunk.Space, dict[pymunk.Shape, int]]:
-    """The map's places as points of a space of their own, to look up those near the
-    robot, and each point's place (its index in the map)."""
-    places = pymunk.Space()
-    place_of: dict[pymunk.Shape, int] = {}
-    for i, place in enumerate(world_map.places):
-        dot = pymunk.Circle(places.static_body, 0.0, (place.x, place.y))
-        dot.sensor = True
-        places.add(dot)
-        place_of[dot] = i
-    return places, place_of
-
-
 class World:
     """The pymunk space and the bodies in it, stepped at ``1 / hz`` seconds."""
 
@@ -165,7 +150,6 @@ class World:
         """Human detection's last answer with and without ``any_direction``: the tick,
         the version, the camera's pan and the poses it was worked out for, and the
         answer."""
-        self._places, self._place_of = _place_index(world_map)
         self.head_pan = _Joint()
         self.head_tilt = _Joint()
         self.arm = _Joint()
@@ -304,16 +288,15 @@ class World:
         how far (m) the point may move before any place comes within ``radius`` or
         leaves it (at most ``slack``).
 
-        The places' spatial index finds the candidates within ``radius + slack``;
-        each is then measured as a scan of every place would measure it, so the
-        places found are the scan's.
+        The map's index of its places finds the candidates within ``radius +
+        slack`` (:meth:`WorldMap.places_in`); each is then measured as a scan of
+        every place would measure it, so the places found are the scan's.
         """
         m = radius + slack + _PLACE_MARGIN
-        hits = self._places.bb_query(pymunk.BB(x - m, y - m, x + m, y + m), _ANY)
         places = self.map.places
         found = []
         clear = slack
-        for i in sorted(self._place_of[dot] for dot in hits):
+        for i in sorted(self.map.places_in(x - m, y - m, x + m, y + m)):
             d = math.hypot(places[i].x - x, places[i].y - y)
             if d <= radius:
                 found.append(i)

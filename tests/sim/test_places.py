@@ -1,5 +1,5 @@
-"""The places near the robot, found by pymunk's spatial index, are exactly those a
-scan measuring every place finds, at the same ticks."""
+"""The places near the robot, found by the map's grid of its places, are exactly those
+a scan measuring every place finds, at the same ticks."""
 
 from __future__ import annotations
 
@@ -41,6 +41,24 @@ def test_places_near_finds_exactly_what_a_scan_of_every_place_finds() -> None:
             found, _clear = world.places_near(x, y, radius, slack)
             assert found == _scan(floor.places, x, y, radius), (x, y, radius)
     assert len(world.places_near(10.0, 10.0, RADIUS)[0]) >= 4  # the places on the radius
+
+
+def test_the_grid_offers_every_place_in_a_box_and_looks_at_no_more_squares_than_places(
+) -> None:
+    floor = WorldMap("signed", places=tuple(
+        Place(f"p{i}", PlaceKind.POINT, x, y)
+        for i, (x, y) in enumerate([(-3.0, -3.0), (-0.5, 0.5), (0.0, 0.0), (2.0, 2.0),
+                                    (3.99, -4.0), (40.0, 40.0)])))
+    rnd = random.Random(5)
+    for _ in range(2000):
+        x1, y1 = rnd.uniform(-6, 6), rnd.uniform(-6, 6)
+        x2, y2 = x1 + rnd.uniform(0, 5), y1 + rnd.uniform(0, 5)
+        inside = {i for i, p in enumerate(floor.places) if x1 <= p.x <= x2 and y1 <= p.y <= y2}
+        offered = floor.places_in(x1, y1, x2, y2)
+        assert inside <= set(offered) and len(offered) == len(set(offered))
+    assert floor.places_in(0.0, 0.0, 0.0, 0.0) == [2]  # (a box that is a point, on one)
+    assert sorted(floor.places_in(-1e6, -1e6, 1e6, 1e6)) == list(range(6))  # (all, no scan
+    # of a trillion squares)
 
 
 def test_the_answer_holds_as_long_as_places_near_says() -> None:
