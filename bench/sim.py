@@ -1,6 +1,6 @@
 """Benchmark: the full stack on moving robots, against bare pymunk stepping.
 
-Usage: python bench/sim.py [--repeats 5] [--until S] [SCENARIO ...]
+Usage: python bench/sim.py [--repeats 5] [--until S] [--compiled] [SCENARIO ...]
 
 Each scenario runs through the whole stack, ``prima.run.Run``: its documents,
 their interpreters, the mediator and the simulator, with every trace line made
@@ -24,17 +24,26 @@ interleaved rounds) and their ratio; then simulated seconds per CPU second,
 against the target of 1,000x real time.
 
 Any other scenario files may be named instead (``scenarios/thesis/*.xml``).
+
+``--compiled`` measures this checkout's compiled build (``setup.py``,
+``PRIMA_MYPYC=1``), built first in a temporary copy, and holds each scenario's
+full stack to at most 5x its bare peer (Fig. 5.7, mostly a robot standing
+still, to 10x).
 """
 
 from __future__ import annotations
 
 import argparse
+import subprocess
 import sys
+import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from _measure import ROOT, cpu, interleaved, interpreter, report
+from _measure import ROOT, compiled_copy, cpu, in_checkout, interleaved, interpreter, report
+
+import prima
 
 from prima.run import Run
 from prima.scenario import load_scenario
@@ -50,6 +59,10 @@ SCENARIOS = {
     "sample-03": ROOT / "scenarios" / "thesis" / "sample-03.xml",
     "sample-09": ROOT / "scenarios" / "thesis" / "sample-09.xml",
 }
+PEER_TARGET = {"fig5-7": 10.0}
+"""The compiled build's full stack at most this many times its bare peer (by the
+scenario's name; :data:`PEER_TARGET_DEFAULT` for any other)."""
+PEER_TARGET_DEFAULT = 5.0
 SHORT = 600.0
 """Scenarios shorter than this (simulated seconds) run ``--loops`` times per round."""
 
@@ -108,7 +121,16 @@ def main(argv: list[str] | None = None) -> int:
                         help="end every run at this simulated time (default: the scenario's)")
     parser.add_argument("--loops", type=int, default=10,
                         help="runs per round of a scenario shorter than 600 s (default 10)")
+    parser.add_argument("--compiled", action="store_true",
+                        help="measure this checkout's compiled build (setup.py, "
+                             "PRIMA_MYPYC=1), built first in a temporary copy: needs mypy, "
+                             "a C compiler and Python's headers, about three minutes of CPU time")
     args = parser.parse_args(argv)
+    if args.compiled:
+        given = [a for a in (sys.argv[1:] if argv is None else argv) if a != "--compiled"]
+        with tempfile.TemporaryDirectory(prefix="prima-compiled-") as scratch:
+            tree = compiled_copy(Path(scratch))
+            return subprocess.run(in_checkout(tree, [__file__, *given]), check=False).returncode
     named = {p.stem: p for p in args.scenarios} if args.scenarios else SCENARIOS
     cases: dict[str, Case] = {}
     for name, path in named.items():
@@ -134,6 +156,15 @@ def main(argv: list[str] | None = None) -> int:
         met = met and ok
         print(f"  {name:<{width}}  {speed:>9,.0f}x  {'met' if ok else 'NOT met'}")
     print("target met on every scenario" if met else "target NOT met on every scenario")
+    if prima.compiled():
+        others = ", ".join(f"{k} {v:g}x" for k, v in PEER_TARGET.items())
+        print("\nfull stack / bare pymunk, the compiled build (target: at most "
+              f"{PEER_TARGET_DEFAULT:g}x; {others})")
+        for name in cases:
+            ratio = medians[f"{name} full stack"] / medians[f"{name} bare pymunk"]
+            ok = ratio <= PEER_TARGET.get(name, PEER_TARGET_DEFAULT)
+            met = met and ok
+            print(f"  {name:<{width}}  {ratio:>8.2f}x  {'met' if ok else 'NOT met'}")
     print(interpreter())
     return 0 if met else 1
 
