@@ -113,7 +113,7 @@ def test_a_robot_tracking_a_user_who_stands_is_not_woken_for_nothing() -> None:
     skipped, ends = sim.skipped, len(r.ends("TrackingHuman"))
     r.run(60)
     iterations = len(r.ends("TrackingHuman")) - ends
-    wakes = round(30 * 10)  # its control wakes in 30 s, the iterations' ends among them
+    wakes = 30 * 10  # its control wakes in 30 s, the iterations' ends among them
     assert iterations >= 50
     assert sim.skipped - skipped >= wakes - iterations - 2, (sim.skipped - skipped, iterations)
 
@@ -121,7 +121,8 @@ def test_a_robot_tracking_a_user_who_stands_is_not_woken_for_nothing() -> None:
 @pytest.mark.pure  # (it turns the skipping off by patching the simulator)
 def test_a_run_whose_idle_wakes_are_skipped_is_the_run_that_wakes_them(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    # a follower, a tracker and a search: the same events, ends and poses either way
+    # a tracker, a user who stands and walks off again, then a search: the same trace
+    # (events, starts, ends) and poses either way
     def run() -> tuple[list[object], int]:
         r = runner("museum", Pose(7, 3, 0), Pose(8, 3, 0), walk(2, 10, 3), walk(40, 6, 6))
         r.queue(call("TrackingHuman", distance=1.0))
