@@ -31,11 +31,15 @@ from typing import Any
 
 __all__ = ["PLAIN_TEXT", "json_line", "markup", "script_json", "shown_path", "terminal"]
 
-_TERMINAL = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028-\u202e\u2066-\u2069"
-                       "\ud800-\udfff]")
+_TERMINAL = ("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028-\u202e\u2066-\u2069"
+             "\ud800-\udfff]")
 """What :func:`terminal` escapes: C0, DEL and C1 controls, the line and paragraph
 separators, the bidirectional controls (U+061C, U+200E, U+200F, U+202A to U+202E,
-U+2066 to U+2069: they reorder what a terminal shows after them) and undecodable bytes."""
+U+2066 to U+2069: they reorder what a terminal shows after them) and undecodable bytes.
+
+(This module's patterns are compiled on their first use, through :mod:`re`'s own cache:
+every command imports this module, and compiling them all would cost each command's
+start about a millisecond, most of them never used.)"""
 _NAMED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
@@ -54,7 +58,7 @@ def terminal(text: str) -> str:
     line and paragraph separators, the bidirectional controls and undecodable bytes as
     ``\\n``, ``\\x1b``, ``\\u2028``, ``\\u202e``, ``\\xff``... A document cannot forge a
     line, reorder one or send an escape sequence."""
-    return _TERMINAL.sub(_escape_one, text)
+    return re.sub(_TERMINAL, _escape_one, text)
 
 
 def shown_path(path: str | os.PathLike[str]) -> str:
@@ -63,8 +67,8 @@ def shown_path(path: str | os.PathLike[str]) -> str:
     return terminal(os.fspath(path))
 
 
-_JSON_UNSAFE = re.compile("[\u0085\u2028\u2029\ud800-\udfff]")
-_SCRIPT_UNSAFE = re.compile("[<>&\u0085\u2028\u2029\ud800-\udfff]")
+_JSON_UNSAFE = "[\u0085\u2028\u2029\ud800-\udfff]"
+_SCRIPT_UNSAFE = "[<>&\u0085\u2028\u2029\ud800-\udfff]"
 
 
 def _u(match: re.Match[str]) -> str:
@@ -74,16 +78,16 @@ def _u(match: re.Match[str]) -> str:
 def json_line(value: object) -> str:
     """``value`` as JSON on one line (no newline at its end): non-ASCII kept as itself but
     for what a reader might split a line at or a UTF-8 file cannot hold."""
-    return _JSON_UNSAFE.sub(_u, json.dumps(value, ensure_ascii=False))
+    return re.sub(_JSON_UNSAFE, _u, json.dumps(value, ensure_ascii=False))
 
 
 def script_json(value: object) -> str:
     """``value`` as compact JSON safe inside an HTML ``<script>`` element."""
     text = json.dumps(value, ensure_ascii=False, separators=(",", ":"))
-    return _SCRIPT_UNSAFE.sub(_u, text)
+    return re.sub(_SCRIPT_UNSAFE, _u, text)
 
 
-_SURROGATE = re.compile("[\ud800-\udfff]")
+_SURROGATE = "[\ud800-\udfff]"
 
 
 def markup(text: str) -> str:
@@ -91,7 +95,7 @@ def markup(text: str) -> str:
     name as ``\\xff``."""
     import html  # (its entities table is large: only the pages and pictures need it)
 
-    return html.escape(_SURROGATE.sub(_escape_one, text))
+    return html.escape(re.sub(_SURROGATE, _escape_one, text))
 
 
 PLAIN_TEXT: dict[Any, Any] = {"text.parse_math": False, "text.usetex": False}

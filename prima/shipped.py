@@ -1,7 +1,7 @@
 """What ships with PRIMA besides its code: the applications (``apps/fa``, ``apps/ea``),
 the robot profiles (``robots/``), the scenarios and their maps (``scenarios/``) and the
 schemas (``schemas/``), each a package of data (``prima.apps``, ``prima.robots``,
-``prima.scenarios``, ``prima.schemas``) found through :mod:`importlib.resources`.
+``prima.scenarios``, ``prima.schemas``) found in the package's folder (:func:`packaged`).
 
 A checkout keeps these folders at its top; an install keeps them in the package, beside
 one another as in the checkout (``prima/apps``, ``prima/scenarios``, ...), so a scenario's
@@ -17,9 +17,11 @@ with PRIMA).
 
 from __future__ import annotations
 
+import importlib
+import sys
 from pathlib import Path
 
-__all__ = ["FOLDERS", "NAMED", "locate", "shipped"]
+__all__ = ["FOLDERS", "NAMED", "locate", "packaged", "shipped"]
 
 FOLDERS = {"apps": "prima.apps", "robots": "prima.robots", "scenarios": "prima.scenarios",
            "schemas": "prima.schemas"}
@@ -30,6 +32,19 @@ NAMED = {"fa": ("apps/fa", ".pxml"), "ea": ("apps/ea", ".pxml"), "robot": ("robo
 """What a bare name names, by kind: ``--fa fa2-follow`` is ``apps/fa/fa2-follow.pxml``."""
 
 
+def packaged(package: str, *names: str) -> Path:
+    """The file ``names`` in the folder of one of PRIMA's packages
+    (``packaged("prima.schemas", "pxml.xsd")``), on disk: the file
+    :func:`importlib.resources.files` names. PRIMA is installed as files (by pip, or as
+    an editable install of a checkout), never run from a zip archive, so the package's
+    folder is enough; importing :mod:`importlib.resources` would cost every command
+    about 6 ms of its start (it brings :mod:`tempfile`, :mod:`shutil` and
+    :mod:`zipfile`). Raises :class:`ModuleNotFoundError` for an install without that
+    package."""
+    module = sys.modules.get(package) or importlib.import_module(package)
+    return Path(next(iter(module.__path__))).joinpath(*names)
+
+
 def shipped(*parts: str) -> Path | None:
     """The shipped file or folder at ``parts`` (``shipped("apps", "fa")``,
     ``shipped("scenarios/maps")``), or None when this install has no such thing.
@@ -38,15 +53,10 @@ def shipped(*parts: str) -> Path | None:
     names = [name for part in parts for name in Path(part).parts]
     if not names or names[0] not in FOLDERS or ".." in names:
         return None
-    from importlib import resources  # (only when a file is looked for where PRIMA is)
-
     try:
-        top = resources.files(FOLDERS[names[0]])
+        path = packaged(FOLDERS[names[0]], *names[1:])
     except ModuleNotFoundError:  # (an install without that folder's package)
         return None
-    if not isinstance(top, Path):  # (not a folder on disk: a zip archive, say)
-        return None
-    path = top.joinpath(*names[1:])
     if not _exists(path):
         return None
     try:

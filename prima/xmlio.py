@@ -39,7 +39,6 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
 from functools import cache, cached_property
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -47,6 +46,7 @@ from lxml import etree
 
 from prima.suggest import similar
 from prima.errors import LocatedError, Problem, Severity
+from prima.shipped import packaged
 
 if TYPE_CHECKING:
     import xmlschema
@@ -554,7 +554,7 @@ Hint = Callable[[etree._Element, str, str], "str | None"]
 
 
 def _read(name: str) -> bytes:
-    return resources.files("prima.schemas").joinpath(name).read_bytes()
+    return packaged("prima.schemas", name).read_bytes()
 
 
 @cache
@@ -569,9 +569,8 @@ def schema(name: str) -> xmlschema.XMLSchema:
     """xmlschema's form of ``schemas/<name>``, built once per process, on first need."""
     import xmlschema  # imported lazily: only documents with errors need it
 
-    ref = resources.files("prima.schemas").joinpath(name)
-    with resources.as_file(ref) as path, _ascii_selector_checks():
-        return xmlschema.XMLSchema(str(path))
+    with _ascii_selector_checks():
+        return xmlschema.XMLSchema(str(packaged("prima.schemas", name)))
 
 
 _ASCII_NAME_START = "[A-Za-z_:]"

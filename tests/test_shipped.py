@@ -13,7 +13,7 @@ import pytest
 from importlib import resources
 
 from prima.cli import main
-from prima.shipped import FOLDERS, locate, shipped
+from prima.shipped import FOLDERS, locate, packaged, shipped
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = {folder: Path(str(resources.files(package))) for folder, package in FOLDERS.items()}
@@ -25,6 +25,18 @@ own (a tree run from elsewhere, the compiled build's copy, borrows the install's
 def elsewhere(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     monkeypatch.chdir(tmp_path)
     return tmp_path
+
+
+@pytest.mark.parametrize(("package", "name"), [
+    ("prima.schemas", "pxml.xsd"), ("prima.robots", "home-robot.xml"),
+    ("prima.dsl", "pxml.lark"), ("prima.apps", "fa")])
+def test_a_packaged_file_is_the_one_importlib_resources_names(package: str, name: str) -> None:
+    """PRIMA finds its data files in its packages' folders, without importing
+    importlib.resources (tests/test_architecture.py): the same files it would name."""
+    assert packaged(package, name) == Path(str(resources.files(package).joinpath(name)))
+    assert packaged(package, name).exists()
+    with pytest.raises(ModuleNotFoundError):
+        packaged("prima.no_such_package", name)
 
 
 def test_the_shipped_folders_are_the_checkouts(elsewhere: Path) -> None:

@@ -16,11 +16,10 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Iterable
-from importlib import resources
-from pathlib import Path
 
 from prima.catalog import STANDARD_COMMANDS, CommandSpec, Param, ParamKind
 from prima.dsl._commands import element_name
+from prima.shipped import packaged
 
 __all__ = ["BEGIN", "END", "command_elements", "schema_source"]
 
@@ -86,9 +85,8 @@ def schema_source(current: str) -> str:
 
 
 def main() -> None:
-    with resources.as_file(resources.files("prima.schemas").joinpath("pxml.xsd")) as path:
-        target = Path(path)
-        target.write_text(schema_source(target.read_text(encoding="utf-8")), encoding="utf-8")
+    target = packaged("prima.schemas", "pxml.xsd")
+    target.write_text(schema_source(target.read_text(encoding="utf-8")), encoding="utf-8")
     print(f"wrote {target}", file=sys.stderr)
 
 

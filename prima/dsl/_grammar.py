@@ -20,8 +20,9 @@ one (see :mod:`prima.dsl._syntax`).
 from __future__ import annotations
 
 from functools import lru_cache
-from importlib import resources
 from typing import TYPE_CHECKING
+
+from prima.shipped import packaged
 
 if TYPE_CHECKING:
     from lark import Lark
@@ -29,7 +30,7 @@ if TYPE_CHECKING:
 
 def grammar() -> str:
     """The text of ``pxml.lark``."""
-    return resources.files("prima.dsl").joinpath("pxml.lark").read_text(encoding="utf-8")
+    return packaged("prima.dsl", "pxml.lark").read_text(encoding="utf-8")
 
 
 def build(source: str | None = None) -> Lark:

@@ -29,7 +29,6 @@ from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Any
 from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 
 from lxml import etree
@@ -56,6 +55,7 @@ from prima.catalog import (
 from prima.dsl._elements import elements, flag
 from prima.dsl._model import words
 from prima.errors import DocumentError, Problem
+from prima.shipped import packaged
 from prima.vocab import (
     DEFAULT_BUDGETS,
     MAX_NUMBER,
@@ -776,5 +776,5 @@ def load_profile(path: str | Path) -> RobotProfile:
 @lru_cache(maxsize=1)
 def default_profile() -> RobotProfile:
     """The shipped small home robot (``robots/home-robot.xml``)."""
-    ref = resources.files("prima.robots").joinpath(DEFAULT_PROFILE)
-    return parse_profile(ref.read_bytes(), f"robots/{DEFAULT_PROFILE}")
+    return parse_profile(packaged("prima.robots", DEFAULT_PROFILE).read_bytes(),
+                         f"robots/{DEFAULT_PROFILE}")
