@@ -115,12 +115,16 @@ class WorldMap:
         init=False, repr=False, compare=False)
     """The places by the square of :data:`_CELL` metres they are in (their indices)."""
 
-
     def outline(self) -> list[tuple[float, float]]:
         """The points that span the map: the walls' ends and the places (to frame it)."""
         points = [(w.x1, w.y1) for w in self.walls] + [(w.x2, w.y2) for w in self.walls]
         return points + [(p.x, p.y) for p in self.places]
+
     def __post_init__(self) -> None:
+        for x, y in self.outline():  # (a map file's are bounded; one built in Python too)
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise SimulationError(f"map {self.name!r}: a wall or a place is not at a "
+                                      f"finite position ({x}, {y})")
         index = {p.name: p for p in self.places}
         if len(index) != len(self.places):
             raise SimulationError(f"map {self.name!r} has duplicate place names")

@@ -8,7 +8,8 @@ import random
 
 import pytest
 
-from prima.sim import CommandRunner, Place, PlaceKind, Pose, Simulator, WorldMap
+from prima.errors import SimulationError
+from prima.sim import CommandRunner, Place, PlaceKind, Pose, Simulator, Wall, WorldMap
 from tests.sim.helpers import call
 
 RADIUS = 1.5  # the robot spec's passing radius
@@ -59,6 +60,17 @@ def test_the_grid_offers_every_place_in_a_box_and_looks_at_no_more_squares_than_
     assert floor.places_in(0.0, 0.0, 0.0, 0.0) == [2]  # (a box that is a point, on one)
     assert sorted(floor.places_in(-1e6, -1e6, 1e6, 1e6)) == list(range(6))  # (all, no scan
     # of a trillion squares)
+
+
+@pytest.mark.parametrize("at", [math.inf, -math.inf, math.nan])
+def test_a_map_built_in_python_refuses_a_place_or_a_wall_at_no_finite_position(
+        at: float) -> None:
+    """A map file's numbers are bounded; a map built in Python says what is wrong with it
+    (its places are filed by squares, which a position at infinity has none of)."""
+    with pytest.raises(SimulationError, match="not at a finite position"):
+        WorldMap("m", places=(Place("a", PlaceKind.HALL, at, 0.0),))
+    with pytest.raises(SimulationError, match="not at a finite position"):
+        WorldMap("m", walls=(Wall(0.0, 0.0, 1.0, at),))
 
 
 def test_the_answer_holds_as_long_as_places_near_says() -> None:
