@@ -608,18 +608,20 @@ def _ascii_selector_checks() -> Iterator[None]:
             cls.pattern = None
 
 
-_NS = re.compile(r"\{[^}'\s]*\}")
+# The patterns that read the validators' messages are compiled on their first use (through
+# re's own cache, ``re.compile(_NS)``): only a file with a fault needs them, and compiling
+# them all would cost every command that reads a file about a millisecond of its start.
+_NS = r"\{[^}'\s]*\}"
 """A namespace in Clark notation (``{urn:prima:pxml:1}state``); not libxml2's sets of
 values (``{'asap', 'after-latest'}``)."""
-_ATTR_VALUE = re.compile(
-    r"^attribute (?P<name>[\w:\-]+)=(?P<value>'.*?'|\".*?\")?:? ?(?P<rest>.*)$", re.S)
-_NOT_ALLOWED = re.compile(r"^'(?P<name>[\w:\-]+)' attribute not allowed")
-_UNEXPECTED = re.compile(r"Unexpected child with tag '(?P<tag>[^']+)' at position (?P<pos>\d+)")
-_MISSING = re.compile(r"missing required attribute '(?P<name>[\w:\-]+)'")
+_ATTR_VALUE = r"(?s)^attribute (?P<name>[\w:\-]+)=(?P<value>'.*?'|\".*?\")?:? ?(?P<rest>.*)$"
+_NOT_ALLOWED = r"^'(?P<name>[\w:\-]+)' attribute not allowed"
+_UNEXPECTED = r"Unexpected child with tag '(?P<tag>[^']+)' at position (?P<pos>\d+)"
+_MISSING = r"missing required attribute '(?P<name>[\w:\-]+)'"
 
 
 def _clean(text: str) -> str:
-    text = _NS.sub("", text)
+    text = re.compile(_NS).sub("", text)
     return " ".join(text.split())
 
 
@@ -644,7 +646,7 @@ def _problems(doc: XmlDocument, xsd: xmlschema.XMLSchema, hint: Hint | None) -> 
     for err in xsd.iter_errors(doc.root):
         el = err.elem if isinstance(err.elem, etree._Element) else doc.root
         reason = _clean(err.reason or str(err))
-        m = _UNEXPECTED.search(reason)
+        m = re.compile(_UNEXPECTED).search(reason)
         if m:
             if el not in children:
                 children[el] = [c for c in el if isinstance(c.tag, str)]
@@ -687,14 +689,14 @@ def _reworded(doc: XmlDocument, el: etree._Element, reason: str, hint: Hint | No
     """One of xmlschema's reasons about ``el`` (its attributes or its content), reworded;
     ``wanted`` says in plain words what the value must be, when the validator is known."""
     tag = f"<{local_name(el)}>"
-    m = _ATTR_VALUE.match(reason)
+    m = re.compile(_ATTR_VALUE).match(reason)
     if m:
         return _bad_value(doc, el, m.group("name"), wanted or _clean(m.group("rest")), hint)
-    m = _NOT_ALLOWED.match(reason)
+    m = re.compile(_NOT_ALLOWED).match(reason)
     if m:
         return doc.problem(el, f"{tag}: attribute '{m.group('name')}' is not allowed here",
                            attribute=m.group("name"))
-    m = _MISSING.search(reason)
+    m = re.compile(_MISSING).search(reason)
     if m:
         return doc.problem(el, f"{tag}: missing required attribute '{m.group('name')}'")
     if "is not complete" in reason:
@@ -715,11 +717,10 @@ def _bad_value(doc: XmlDocument, el: etree._Element, name: str, reason: str,
 
 # libxml2's wording, e.g. "Element '{urn:prima:pxml:1}state', attribute 'x': The
 # attribute 'x' is not allowed." (the element is found from the entry's path)
-_LIBXML2 = re.compile(r"^Element '(?P<tag>[^']*)'(?:, attribute '(?P<attr>[^']*)')?: (?P<rest>.*)$",
-                      re.S)
-_LIBXML2_MISSING = re.compile(r"The attribute '(?P<name>[^']+)' is required but missing")
-_LIBXML2_EXPECTED = re.compile(r"Expected is (?:one of )?\( (?P<tags>.*?) \)")
-_STEP = re.compile(r"(?P<name>[^/\[]+)(?:\[(?P<pos>\d+)\])?")
+_LIBXML2 = r"(?s)^Element '(?P<tag>[^']*)'(?:, attribute '(?P<attr>[^']*)')?: (?P<rest>.*)$"
+_LIBXML2_MISSING = r"The attribute '(?P<name>[^']+)' is required but missing"
+_LIBXML2_EXPECTED = r"Expected is (?:one of )?\( (?P<tags>.*?) \)"
+_STEP = r"(?P<name>[^/\[]+)(?:\[(?P<pos>\d+)\])?"
 
 
 def _libxml2_problems(doc: XmlDocument, log: Sequence[etree._LogEntry],
@@ -731,7 +732,7 @@ def _libxml2_problems(doc: XmlDocument, log: Sequence[etree._LogEntry],
 
 def _from_libxml2(doc: XmlDocument, entry: etree._LogEntry, hint: Hint | None) -> Problem:
     el = _at_path(doc.root, entry.path or "")
-    m = _LIBXML2.match(_clean(entry.message or ""))
+    m = re.compile(_LIBXML2).match(_clean(entry.message or ""))
     if el is None or m is None:
         return Problem(doc.name, max(entry.line, 1), max(entry.column, 1), Severity.ERROR,
                        f"schema: {_clean(entry.message or '')}")
@@ -741,11 +742,11 @@ def _from_libxml2(doc: XmlDocument, entry: etree._LogEntry, hint: Hint | None) -
                            attribute=attr)
     if attr is not None:
         return _bad_value(doc, el, attr, _libxml2_value(rest.rstrip(".")), hint)
-    missing = _LIBXML2_MISSING.search(rest)
+    missing = re.compile(_LIBXML2_MISSING).search(rest)
     if missing:
         return doc.problem(el, f"<{local_name(el)}>: missing required attribute "
                                f"'{missing.group('name')}'")
-    expected = _LIBXML2_EXPECTED.search(rest)
+    expected = re.compile(_LIBXML2_EXPECTED).search(rest)
     if "This element is not expected" in rest:
         parent = el.getparent()
         if parent is not None:
@@ -757,29 +758,28 @@ def _from_libxml2(doc: XmlDocument, entry: etree._LogEntry, hint: Hint | None) -
 
 
 # libxml2's reason a value is bad: the facet or the built-in type that refused it
-_LIBXML2_FACET = re.compile(r"^\[facet '(?P<facet>\w+)'\] (?P<rest>.*)$", re.S)
+_LIBXML2_FACET = r"(?s)^\[facet '(?P<facet>\w+)'\] (?P<rest>.*)$"
 _LIBXML2_FACET_VALUE = {
-    "enumeration": re.compile(r"the set \{(?P<v>.*)\}$", re.S),
-    "pattern": re.compile(r"by the pattern '(?P<v>.*)'$", re.S),
-    "minInclusive": re.compile(r"allowed \('(?P<v>[^']*)'\)$"),
-    "maxInclusive": re.compile(r"allowed \('(?P<v>[^']*)'\)$"),
-    "minExclusive": re.compile(r"greater than '(?P<v>[^']*)'$"),
-    "maxExclusive": re.compile(r"less than '(?P<v>[^']*)'$"),
-    "minLength": re.compile(r"length of '(?P<v>\d+)'$"),
-    "maxLength": re.compile(r"length of '(?P<v>\d+)'$"),
-    "length": re.compile(r"length of '(?P<v>\d+)'$"),
+    "enumeration": r"(?s)the set \{(?P<v>.*)\}$",
+    "pattern": r"(?s)by the pattern '(?P<v>.*)'$",
+    "minInclusive": r"allowed \('(?P<v>[^']*)'\)$",
+    "maxInclusive": r"allowed \('(?P<v>[^']*)'\)$",
+    "minExclusive": r"greater than '(?P<v>[^']*)'$",
+    "maxExclusive": r"less than '(?P<v>[^']*)'$",
+    "minLength": r"length of '(?P<v>\d+)'$",
+    "maxLength": r"length of '(?P<v>\d+)'$",
+    "length": r"length of '(?P<v>\d+)'$",
 }
-_LIBXML2_TYPE = re.compile(r"^'.*' is not a valid value of the atomic type 'xs:(?P<type>\w+)'$",
-                           re.S)
+_LIBXML2_TYPE = r"(?s)^'.*' is not a valid value of the atomic type 'xs:(?P<type>\w+)'$"
 
 
 def _libxml2_value(reason: str) -> str:
     """libxml2's reason a value is bad, in the plain words xmlschema's are put in (by the
     facet or built-in type named in it); as libxml2 says it for any other."""
-    m = _LIBXML2_FACET.match(reason)
+    m = re.compile(_LIBXML2_FACET).match(reason)
     if m and m.group("facet") in _LIBXML2_FACET_VALUE:
         facet = m.group("facet")
-        found = _LIBXML2_FACET_VALUE[facet].search(m.group("rest"))
+        found = re.compile(_LIBXML2_FACET_VALUE[facet]).search(m.group("rest"))
         if found:
             value = found.group("v")
             if facet == "enumeration":
@@ -789,7 +789,7 @@ def _libxml2_value(reason: str) -> str:
             if facet.startswith(("min", "max")) and "Length" not in facet:
                 value = _number_text(_decimal(value))
             return _facet_words(facet, value)
-    m = _LIBXML2_TYPE.match(reason)
+    m = re.compile(_LIBXML2_TYPE).match(reason)
     if m and m.group("type") in _TYPE_WORDS:
         return _TYPE_WORDS[m.group("type")]
     return reason
@@ -893,8 +893,8 @@ def _one_of(values: Sequence[str]) -> str:
     return f"must be one of {', '.join(quoted[:-1])} or {quoted[-1]}"
 
 
-_ATOM = re.compile(r"(\[(?P<cls>(?:\\.|[^\]\\])+)\]|\\(?P<esc>.)|(?P<lit>[^\\\[\](){}|.*+?^$]))"
-                   r"(?P<q>[*+?]?)")
+_ATOM = (r"(\[(?P<cls>(?:\\.|[^\]\\])+)\]|\\(?P<esc>.)|(?P<lit>[^\\\[\](){}|.*+?^$]))"
+         r"(?P<q>[*+?]?)")
 _RANGES = (("A-Za-z", "a letter", "letters"), ("A-Z", "an upper-case letter", "upper-case letters"),
            ("a-z", "a lower-case letter", "lower-case letters"), ("0-9", "a digit", "digits"))
 
@@ -906,7 +906,7 @@ def _pattern_words(regex: str) -> str:
     parts: list[str] = []
     at = 0
     while at < len(regex):
-        m = _ATOM.match(regex, at)
+        m = re.compile(_ATOM).match(regex, at)
         if m is None:
             return f"must match the pattern {regex}"
         at = m.end()
@@ -956,7 +956,7 @@ def _at_path(root: etree._Element, path: str) -> etree._Element | None:
         return None
     el: etree._Element | None = root
     for depth, step in enumerate(steps):
-        m = _STEP.fullmatch(step)
+        m = re.compile(_STEP).fullmatch(step)
         if m is None or el is None:
             return None
         pos = int(m.group("pos") or 1) - 1
