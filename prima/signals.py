@@ -13,10 +13,11 @@ from __future__ import annotations
 import contextlib
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 __all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "Terminated", "deferred", "note_terminated",
-           "terminate_as_interrupt"]
+           "sticky", "terminate_as_interrupt"]
 
 EXIT_INTERRUPTED = 128 + signal.SIGINT
 EXIT_TERMINATED = 128 + signal.SIGTERM
@@ -105,6 +106,47 @@ def deferred() -> Iterator[None]:
         if noted.signals:  # (raised in place of what the block raised, if it did)
             first = signal.Signals(noted.signals[0])
             _raise_as(first, previous[first])
+
+
+@contextlib.contextmanager
+def sticky() -> Iterator[Callable[[], None]]:
+    """Meanwhile, SIGINT and SIGTERM do what their handlers do, and are noted too; the
+    check it gives raises, as its handler would, one that came and was lost.
+
+    Python runs a signal's handler wherever the main thread is. In a weakref's callback
+    or a finalizer, which the cycle collector may run at any moment, what the handler
+    raises is printed as ignored and dropped: a Ctrl-C that came then would not stop a
+    batch, which would run to its end. A loop calls the check where it may stop (after
+    each wait): a signal that stopped it as it should has left its block already. In the
+    main thread only (elsewhere no handler can be set: the check does nothing); a signal
+    whose handler is not Python's (ignored, or the system's default) is left as it is."""
+    if threading.current_thread() is not threading.main_thread():
+        yield lambda: None
+        return
+    previous: dict[signal.Signals, Callable[[int, Any], Any]] = {}
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        handler = signal.getsignal(signum)
+        if callable(handler):
+            previous[signum] = handler
+    noted: list[signal.Signals] = []
+
+    def handle(signum: int, _frame: object) -> None:
+        noted.append(signal.Signals(signum))
+        _raise_as(signum, previous[signal.Signals(signum)])
+
+    def check() -> None:
+        if noted:
+            first = noted[0]
+            noted.clear()
+            _raise_as(first, previous[first])
+
+    for signum in previous:
+        signal.signal(signum, handle)
+    try:
+        yield check
+    finally:
+        for signum, kept in previous.items():
+            signal.signal(signum, kept)
 
 
 def _raise_as(signum: int, handler: object) -> None:

@@ -18,11 +18,12 @@ import signal
 import subprocess
 import sys
 import time
+import weakref
 from pathlib import Path
 
 import pytest
 
-from prima.signals import Terminated, deferred, terminate_as_interrupt
+from prima.signals import Terminated, deferred, sticky, terminate_as_interrupt
 
 ROOT = Path(__file__).parents[1]
 SCENARIO = ROOT / "scenarios" / "thesis" / "sample-08.xml"
@@ -162,3 +163,56 @@ def test_a_deferred_signal_is_raised_when_the_block_ends(
         finished.append("outer")
     assert finished == ["inner", "outer"]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def _dropped_by_a_finalizer(sig: signal.Signals) -> None:
+    """``sig`` comes while a weakref's callback runs (as the cycle collector may run one
+    at any moment): what its handler raises there is printed as ignored, and dropped."""
+
+    class Box:
+        pass
+
+    def callback(_ref: object) -> None:
+        signal.raise_signal(sig)
+        for _ in range(100):  # (the handler runs here, inside the callback)
+            pass
+
+    box = Box()
+    kept = weakref.ref(box, callback)
+    del box
+    assert kept() is None
+
+
+@pytest.mark.parametrize("sig, raised", [(signal.SIGINT, KeyboardInterrupt),
+                                         (signal.SIGTERM, Terminated)])
+def test_a_signal_a_finalizer_dropped_is_raised_at_the_next_check(
+        sig: signal.Signals, raised: type[BaseException],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    dropped: list[object] = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: dropped.append(u.exc_type))
+    with terminate_as_interrupt(), sticky() as check:
+        check()  # (nothing came: nothing raised)
+        _dropped_by_a_finalizer(sig)
+        assert dropped == [raised]  # Python dropped it ...
+        with pytest.raises(raised):
+            check()  # ... and the check raises it
+        check()  # (once)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_sweep_stops_on_a_ctrl_c_a_finalizer_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The Ctrl-C of the CI run that found this: it came while the collector ran a module
+    lock's weakref callback, and the sweep ran to its end."""
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: None)
+    from prima.sweep import sweep
+
+    seen: list[int] = []
+
+    def progress(done: int, total: int) -> None:
+        seen.append(done)
+        if len(seen) == 1:
+            _dropped_by_a_finalizer(signal.SIGINT)
+
+    result = sweep(SCENARIO, runs=6, jitter=1.0, jobs=1, progress=progress)
+    assert result.interrupted
+    assert seen == [seen[0]] and seen[0] < 6

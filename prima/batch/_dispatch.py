@@ -27,7 +27,7 @@ from prima.batch._results import ResultsFile
 from prima.batch._work import CPU, Chunk, Job, run_chunk
 from prima.errors import ClusterError
 from prima.escape import shown_path
-from prima.signals import deferred
+from prima.signals import deferred, sticky
 
 __all__ = ["CHUNK", "RECYCLE", "Inline", "Pool", "Processes", "chunk_size", "collect", "dispatch",
            "plan"]
@@ -273,8 +273,12 @@ _LOST = 3
 class _Flight:
     """A batch's chunks: those to send (the first run's first), and those out."""
 
-    def __init__(self, jobs: Sequence[Job], pool: Pool, size: int, skip: int) -> None:
+    def __init__(self, jobs: Sequence[Job], pool: Pool, size: int, skip: int,
+                 check: Callable[[], None] = lambda: None) -> None:
         self.pool = pool
+        self.check = check
+        """Raises a signal that came and was lost (:func:`prima.signals.sticky`): called
+        after each wait."""
         self.order = _Order(jobs, skip)
         self.queue: list[tuple[int, int, int, Chunk]] = []
         """(position, attempt, count, chunk): the chunks to send, the first run's first."""
@@ -326,6 +330,7 @@ class _Flight:
         while True:  # (a pool that may never finish its tasks is watched meanwhile)
             done, _ = concurrent.futures.wait(self.flying, timeout=self.pool.poll,
                                               return_when=concurrent.futures.FIRST_COMPLETED)
+            self.check()
             if done:
                 break
             self.pool.watch(time.monotonic() - self.since)
@@ -359,14 +364,15 @@ def dispatch(jobs: Sequence[Job], pool: Pool, *, size: int, skip: int = 0,
     """
     finished = skip
     try:
-        flight = _Flight(jobs, pool, size, skip)
-        while flight.queue or flight.flying:
-            flight.send()
-            records = flight.collect()
-            yield from flight.order.add(records)
-            finished += len(records)
-            if records and progress is not None:
-                progress(finished)
+        with sticky() as stop_if_signalled:  # (a Ctrl-C a finalizer dropped stops it too)
+            flight = _Flight(jobs, pool, size, skip, stop_if_signalled)
+            while flight.queue or flight.flying:
+                flight.send()
+                records = flight.collect()
+                yield from flight.order.add(records)
+                finished += len(records)
+                if records and progress is not None:
+                    progress(finished)
     except BaseException:  # Ctrl-C, or a fault of the batch's own: stop the workers now
         with deferred():  # (a second Ctrl-C meanwhile is noted, and the stop finishes)
             pool.stop()
