@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -117,7 +118,8 @@ def sticky() -> Iterator[Callable[[], None]]:
     or a finalizer, which the cycle collector may run at any moment, what the handler
     raises is printed as ignored and dropped: a Ctrl-C that came then would not stop a
     batch, which would run to its end. A loop calls the check where it may stop (after
-    each wait): a signal that stopped it as it should has left its block already. In the
+    each wait): a signal that stopped it as it should has left its block already. (What
+    Python would print of one it dropped is not printed: the check says it.) In the
     main thread only (elsewhere no handler can be set: the check does nothing); a signal
     whose handler is not Python's (ignored, or the system's default) is left as it is."""
     if threading.current_thread() is not threading.main_thread():
@@ -140,11 +142,19 @@ def sticky() -> Iterator[Callable[[], None]]:
             noted.clear()
             _raise_as(first, previous[first])
 
+    said = sys.unraisablehook
+
+    def unraisable(dropped: Any) -> None:
+        if not (noted and isinstance(dropped.exc_value, KeyboardInterrupt)):
+            said(dropped)  # (a dropped signal is raised at the check: not a word here)
+
     for signum in previous:
         signal.signal(signum, handle)
+    sys.unraisablehook = unraisable
     try:
         yield check
     finally:
+        sys.unraisablehook = said
         for signum, kept in previous.items():
             signal.signal(signum, kept)
 

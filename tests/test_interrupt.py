@@ -19,6 +19,7 @@ import subprocess
 import sys
 import time
 import weakref
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -165,16 +166,16 @@ def test_a_deferred_signal_is_raised_when_the_block_ends(
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
-def _dropped_by_a_finalizer(sig: signal.Signals) -> None:
-    """``sig`` comes while a weakref's callback runs (as the cycle collector may run one
-    at any moment): what its handler raises there is printed as ignored, and dropped."""
+def _in_a_finalizer(action: Callable[[], object]) -> None:
+    """``action`` runs in a weakref's callback (as the cycle collector may run one at any
+    moment): what it raises there, Python prints as ignored, and drops."""
 
     class Box:
         pass
 
     def callback(_ref: object) -> None:
-        signal.raise_signal(sig)
-        for _ in range(100):  # (the handler runs here, inside the callback)
+        action()
+        for _ in range(100):  # (a signal's handler runs here, inside the callback)
             pass
 
     box = Box()
@@ -183,27 +184,37 @@ def _dropped_by_a_finalizer(sig: signal.Signals) -> None:
     assert kept() is None
 
 
+def _value_error() -> None:
+    raise ValueError
+
+
 @pytest.mark.parametrize("sig, raised", [(signal.SIGINT, KeyboardInterrupt),
                                          (signal.SIGTERM, Terminated)])
 def test_a_signal_a_finalizer_dropped_is_raised_at_the_next_check(
         sig: signal.Signals, raised: type[BaseException],
         monkeypatch: pytest.MonkeyPatch) -> None:
-    dropped: list[object] = []
-    monkeypatch.setattr(sys, "unraisablehook", lambda u: dropped.append(u.exc_type))
+    printed: list[object] = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: printed.append(u.exc_type))
+    with terminate_as_interrupt():
+        _in_a_finalizer(lambda: signal.raise_signal(sig))
+    assert printed == [raised]  # without: printed as ignored, and dropped
+    printed.clear()
     with terminate_as_interrupt(), sticky() as check:
         check()  # (nothing came: nothing raised)
-        _dropped_by_a_finalizer(sig)
-        assert dropped == [raised]  # Python dropped it ...
+        _in_a_finalizer(lambda: signal.raise_signal(sig))
         with pytest.raises(raised):
-            check()  # ... and the check raises it
+            check()  # the check raises it, and it was not printed
         check()  # (once)
+        _in_a_finalizer(_value_error)  # what else a finalizer raises is printed
+    assert printed == [ValueError]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
 def test_a_sweep_stops_on_a_ctrl_c_a_finalizer_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
     """The Ctrl-C of the CI run that found this: it came while the collector ran a module
     lock's weakref callback, and the sweep ran to its end."""
-    monkeypatch.setattr(sys, "unraisablehook", lambda u: None)
+    printed: list[object] = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: printed.append(u.exc_type))
     from prima.sweep import sweep
 
     seen: list[int] = []
@@ -211,8 +222,9 @@ def test_a_sweep_stops_on_a_ctrl_c_a_finalizer_dropped(monkeypatch: pytest.Monke
     def progress(done: int, total: int) -> None:
         seen.append(done)
         if len(seen) == 1:
-            _dropped_by_a_finalizer(signal.SIGINT)
+            _in_a_finalizer(lambda: signal.raise_signal(signal.SIGINT))
 
     result = sweep(SCENARIO, runs=6, jitter=1.0, jobs=1, progress=progress)
     assert result.interrupted
     assert seen == [seen[0]] and seen[0] < 6
+    assert printed == []  # (it says it was interrupted, in one line: nothing else)
