@@ -29,7 +29,8 @@ def elsewhere(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 @pytest.mark.parametrize(("package", "name"), [
     ("prima.schemas", "pxml.xsd"), ("prima.robots", "home-robot.xml"),
-    ("prima.dsl", "pxml.lark"), ("prima.apps", "fa")])
+    ("prima.dsl", "pxml.lark"), ("prima.apps", "fa"), ("prima.show", "draw.js"),
+    ("prima.live", "live.js"), ("prima.mcap", "foxglove-layout.json")])
 def test_a_packaged_file_is_the_one_importlib_resources_names(package: str, name: str) -> None:
     """PRIMA finds its data files in its packages' folders, without importing
     importlib.resources (tests/test_architecture.py): the same files it would name."""

@@ -4,9 +4,9 @@
 from __future__ import annotations
 
 import functools
-from importlib import resources
 
 from prima.escape import markup
+from prima.shipped import packaged
 
 __all__ = ["page", "plotly_script"]
 
@@ -23,9 +23,8 @@ def plotly_script() -> str:
 def _assets() -> tuple[str, str]:
     from prima.show import drawing, style
 
-    files = resources.files("prima.live")
-    script = drawing() + files.joinpath("live.js").read_text(encoding="utf-8")
-    css = style() + files.joinpath("live.css").read_text(encoding="utf-8")
+    script = drawing() + packaged("prima.live", "live.js").read_text(encoding="utf-8")
+    css = style() + packaged("prima.live", "live.css").read_text(encoding="utf-8")
     return script, css
 
 

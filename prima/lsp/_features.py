@@ -13,7 +13,6 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 
 from prima.catalog import CommandSpec, Param, ParamKind
@@ -22,6 +21,7 @@ from prima.lsp._chain import At, ChainContext, calls, context, labels, token_at
 from prima.lsp._schemas import AttributeInfo, ElementInfo, element_info
 from prima.lsp._workspace import Buffer, Place, Setting, Workspace
 from prima.lsp._xml import Attr, Tag, Where, locate
+from prima.shipped import packaged
 from prima.vocab import PREDEFINED_EVENTS
 
 __all__ = ["MAX_KEPT", "Features", "Hover", "Item", "Target", "event_fields"]
@@ -205,8 +205,8 @@ class _Doc:
     def profile_file(self) -> Path | None:
         if self.setting.profile_path is not None:
             return self.setting.profile_path
-        ref = resources.files("prima.robots").joinpath("home-robot.xml")
-        return Path(str(ref)) if Path(str(ref)).is_file() else None
+        ref = packaged("prima.robots", "home-robot.xml")
+        return ref if ref.is_file() else None
 
     def gestures(self) -> list[str]:
         names = list(self.setting.profile.gestures)

@@ -12,9 +12,10 @@ serves its own; the layout for the home robot's devices ships as
 from __future__ import annotations
 
 from collections.abc import Sequence
-from importlib import resources
 
 import foxglove.layouts as fl
+
+from prima.shipped import packaged
 
 __all__ = ["ATTACHMENT", "HOME_DEVICES", "layout", "shipped"]
 
@@ -69,4 +70,4 @@ def layout(devices: Sequence[str] = HOME_DEVICES, apps: Sequence[str] = ()) -> f
 
 def shipped() -> str:
     """The shipped layout file's text (the home robot's devices; no application rows)."""
-    return resources.files("prima.mcap").joinpath(ATTACHMENT).read_text(encoding="utf-8")
+    return packaged("prima.mcap", ATTACHMENT).read_text(encoding="utf-8")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 import shutil
-from importlib import resources
 from typing import Any, TextIO
 
 import plotly.graph_objects as go
@@ -12,6 +11,7 @@ import plotly.io as pio
 from plotly.colors import qualitative
 
 from prima.escape import markup, script_json
+from prima.shipped import packaged
 from prima.show._model import Model
 from prima.sim import WorldMap
 from prima.timeline import Bar, Timeline, ink, runs
@@ -35,12 +35,12 @@ _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": [
 
 def drawing() -> str:
     """The script both pages draw with (``draw.js``: ``PrimaDraw``)."""
-    return resources.files("prima.show").joinpath("draw.js").read_text(encoding="utf-8")
+    return packaged("prima.show", "draw.js").read_text(encoding="utf-8")
 
 
 def style() -> str:
     """The style both pages share (``show.css``)."""
-    return resources.files("prima.show").joinpath("show.css").read_text(encoding="utf-8")
+    return packaged("prima.show", "show.css").read_text(encoding="utf-8")
 
 
 def figure_json(fig: go.Figure) -> dict[str, Any]:
@@ -272,8 +272,7 @@ def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
     map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
                            config=_CONFIG)
     del map_fig
-    files = resources.files("prima.show")
-    player = drawing() + files.joinpath("player.js").read_text(encoding="utf-8")
+    player = drawing() + packaged("prima.show", "player.js").read_text(encoding="utf-8")
     css = style()
     speeds = "".join(f'<option value="{s}"{" selected" if s == "1" else ""}>{s}x</option>'
                      for s in ("0.5", "1", "2", "4", "8", "16", "32"))
