@@ -121,7 +121,8 @@ class WorldMap:
         return points + [(p.x, p.y) for p in self.places]
 
     def __post_init__(self) -> None:
-        for x, y in self.outline():  # (a map file's are bounded; one built in Python too)
+        # (a map file's numbers are bounded already: this is for a map built in Python)
+        for x, y in self.outline():
             if not (math.isfinite(x) and math.isfinite(y)):
                 raise SimulationError(f"map {self.name!r}: a wall or a place is not at a "
                                       f"finite position ({x}, {y})")
