@@ -21,6 +21,7 @@ import time
 import weakref
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -228,3 +229,31 @@ def test_a_sweep_stops_on_a_ctrl_c_a_finalizer_dropped(monkeypatch: pytest.Monke
     assert result.interrupted
     assert seen == [seen[0]] and seen[0] < 6
     assert printed == []  # (it says it was interrupted, in one line: nothing else)
+
+
+@pytest.mark.pure
+def test_a_run_stops_on_a_ctrl_c_a_finalizer_dropped(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """prima run checks at every trace line it writes: the run stops at the next one, its
+    trace up to then written, in one line."""
+    from prima.cli import main
+    from prima.run import Run
+
+    printed: list[object] = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: printed.append(u.exc_type))
+    real = Run._event
+
+    def event(self: Run, happened: Any) -> None:
+        if not printed:
+            _in_a_finalizer(lambda: signal.raise_signal(signal.SIGINT))
+            printed.append("dropped")
+        real(self, happened)
+
+    monkeypatch.setattr(Run, "_event", event)
+    trace = tmp_path / "t.txt"
+    assert main(["run", str(SCENARIO), "--out", str(trace)]) == 130
+    assert printed == ["dropped"]  # (and nothing printed of it)
+    said = capsys.readouterr().err.splitlines()
+    assert len(said) == 1 and said[0].startswith("prima run: interrupted at t=")
+    assert trace.read_text(encoding="utf-8").strip()

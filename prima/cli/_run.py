@@ -10,6 +10,7 @@ from typing import TextIO
 from prima.cli._common import EXIT_INTERRUPTED, EXIT_OK, Command, Commands, _paint, _usage
 from prima.cli._options import _colour_argument, _policy_argument, _run_usage, _scenario_arguments
 from prima.escape import shown_path
+from prima.signals import sticky
 
 from prima.cli._formats import FORMATS, Opening, format_by_suffix, format_usage
 
@@ -64,7 +65,10 @@ def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
             if args.out and not chosen.binary else out
         writer = chosen.opens(Opening(run, args.out, to, files, _paint(to)))
 
+        stop_if_signalled = files.enter_context(sticky())
+
         def write(line: TraceLine) -> None:
+            stop_if_signalled()  # (a Ctrl-C a finalizer dropped stops the run too)
             writer.write(line)
 
         try:
