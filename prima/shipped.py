@@ -18,7 +18,6 @@ with PRIMA).
 from __future__ import annotations
 
 import importlib
-import sys
 from pathlib import Path
 
 __all__ = ["FOLDERS", "NAMED", "locate", "packaged", "shipped"]
@@ -41,8 +40,7 @@ def packaged(package: str, *names: str) -> Path:
     about 6 ms of its start (it brings :mod:`tempfile`, :mod:`shutil` and
     :mod:`zipfile`). Raises :class:`ModuleNotFoundError` for an install without that
     package."""
-    module = sys.modules.get(package) or importlib.import_module(package)
-    return Path(next(iter(module.__path__))).joinpath(*names)
+    return Path(next(iter(importlib.import_module(package).__path__))).joinpath(*names)
 
 
 def shipped(*parts: str) -> Path | None:

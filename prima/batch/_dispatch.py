@@ -274,7 +274,7 @@ class _Flight:
     """A batch's chunks: those to send (the first run's first), and those out."""
 
     def __init__(self, jobs: Sequence[Job], pool: Pool, size: int, skip: int,
-                 check: Callable[[], None] = lambda: None) -> None:
+                 check: Callable[[], None]) -> None:
         self.pool = pool
         self.check = check
         """Raises a signal that came and was lost (:func:`prima.signals.sticky`): called
