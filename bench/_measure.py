@@ -135,6 +135,12 @@ def copy_checkout(folder: Path) -> None:
             shutil.copy2(ROOT / name, folder / name)
 
 
+COMPILED_HELP = ("measure this checkout's compiled build (setup.py, PRIMA_MYPYC=1), built "
+                 "first in a temporary copy: needs mypy, a C compiler and Python's headers, "
+                 "about three minutes of CPU time")
+"""The help of a benchmark's ``--compiled`` (:func:`compiled_copy`)."""
+
+
 def compiled_copy(folder: Path) -> Path:
     """This checkout's compiled build (``setup.py``, ``PRIMA_MYPYC=1``), made in ``folder``:
     the checkout copied there (:func:`copy_checkout`), its modules compiled in place, and

@@ -41,7 +41,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from _measure import ROOT, compiled_copy, cpu, in_checkout, interleaved, interpreter, report
+from _measure import (COMPILED_HELP, ROOT, compiled_copy, cpu, in_checkout, interleaved,
+                      interpreter, report)
 
 import prima
 
@@ -121,10 +122,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="end every run at this simulated time (default: the scenario's)")
     parser.add_argument("--loops", type=int, default=10,
                         help="runs per round of a scenario shorter than 600 s (default 10)")
-    parser.add_argument("--compiled", action="store_true",
-                        help="measure this checkout's compiled build (setup.py, "
-                             "PRIMA_MYPYC=1), built first in a temporary copy: needs mypy, "
-                             "a C compiler and Python's headers, about three minutes of CPU time")
+    parser.add_argument("--compiled", action="store_true", help=COMPILED_HELP)
     args = parser.parse_args(argv)
     if args.compiled:
         given = [a for a in (sys.argv[1:] if argv is None else argv) if a != "--compiled"]

@@ -45,8 +45,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from _measure import (ROOT, compiled_copy, cpu, in_checkout, in_tree, interleaved, interpreter,
-                      report)
+from _measure import (COMPILED_HELP, ROOT, compiled_copy, cpu, in_checkout, in_tree,
+                      interleaved, interpreter, report)
 
 SCENARIOS = {name: ROOT / "scenarios" / "thesis" / f"{name}.xml"
              for name in ("sample-03", "sample-07", "sample-10")}
@@ -281,10 +281,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--scenario", type=Path, default=ROOT / "scenarios" / "thesis" /
                         "fig5-7.xml", help="the scenario --memory sweeps (default fig5-7)")
     parser.add_argument("--jobs", type=int, help="--memory: the sweeps' --jobs")
-    parser.add_argument("--compiled", action="store_true",
-                        help="measure this checkout's compiled build (setup.py, "
-                             "PRIMA_MYPYC=1), built first in a temporary copy: needs mypy, "
-                             "a C compiler and Python's headers, about three minutes of CPU time")
+    parser.add_argument("--compiled", action="store_true", help=COMPILED_HELP)
     parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--first", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
