@@ -27,8 +27,10 @@ def _terminated(_signum: int, _frame: object) -> None:
 
 def main() -> int:
     """Run the command the process' arguments name; its exit status."""
-    signal.signal(signal.SIGTERM, _terminated)  # (as Ctrl-C: the command's own sets it too)
     try:
+        # (as Ctrl-C: the command's own sets it too. Inside the try: a SIGTERM that comes
+        # as it is set is handled at once, while setting it still returns)
+        signal.signal(signal.SIGTERM, _terminated)
         from prima.cli import main as command
 
         status = command()

@@ -257,3 +257,31 @@ def test_a_run_stops_on_a_ctrl_c_a_finalizer_dropped(
     said = capsys.readouterr().err.splitlines()
     assert len(said) == 1 and said[0].startswith("prima run: interrupted at t=")
     assert trace.read_text(encoding="utf-8").strip()
+
+
+def test_a_sigterm_as_the_entry_point_takes_it_is_one_line(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    """CI's start-up case: the signal came the moment ``prima`` set its handler, which
+    ran while ``signal.signal`` was still returning, before the entry point's ``try``:
+    a traceback. (Here it is raised right as the handler is set.)"""
+    import prima.__main__ as entry
+
+    real = signal.signal
+
+    def setting(signum: int, handler: Any) -> Any:
+        previous = real(signum, handler)
+        if signum == signal.SIGTERM and handler is entry._terminated:
+            signal.raise_signal(signal.SIGTERM)
+        return previous
+
+    before = signal.getsignal(signal.SIGTERM)
+    monkeypatch.setattr(signal, "signal", setting)
+    monkeypatch.setattr(entry, "_done", lambda status: None)  # (it would end this process)
+    try:
+        status = entry.main()
+    except Terminated:  # (a KeyboardInterrupt: it would stop the whole test session)
+        pytest.fail("the SIGTERM escaped the entry point")
+    finally:
+        real(signal.SIGTERM, before)
+    assert status == 143
+    assert capsys.readouterr().err == "prima: interrupted\n"
