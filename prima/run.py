@@ -35,6 +35,7 @@ from prima.mediator import (
     Rule,
 )
 from prima.scenario import Loaded, Scenario, Setup, Switches, spec_from_profile
+from prima.signals import stop_if_signalled
 from prima.sim import Simulator, SpeechTiming, UserAction, ZoneEntry
 from prima.trace import Kind, RecordKind, TraceLine, row_of
 from prima.vocab import (
@@ -374,6 +375,7 @@ class Run:
     # ------------------------------------------------------------ recording
 
     def _line(self, kind: RecordKind, **fields: Any) -> None:
+        stop_if_signalled()  # (a Ctrl-C a finalizer dropped stops the run here)
         if kind is Kind.ERROR:
             fields["text"] = self._portable(str(fields.get("text") or ""))
         if kind in _POSED:

@@ -11,6 +11,7 @@ it on SIGTERM too.
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import sys
 import threading
@@ -18,7 +19,7 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 __all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "Terminated", "deferred", "note_terminated",
-           "sticky", "terminate_as_interrupt"]
+           "sticky", "stop_if_signalled", "terminate_as_interrupt"]
 
 EXIT_INTERRUPTED = 128 + signal.SIGINT
 EXIT_TERMINATED = 128 + signal.SIGTERM
@@ -109,54 +110,58 @@ def deferred() -> Iterator[None]:
             _raise_as(first, previous[first])
 
 
+_checks: list[Callable[[], None]] = []
+"""The check of the :func:`sticky` block open in this process, if one is."""
+os.register_at_fork(after_in_child=_checks.clear)  # (a worker forked in one has none)
+
+
+def stop_if_signalled() -> None:
+    """Raise a Ctrl-C or SIGTERM that came and was lost, if a :func:`sticky` block is
+    open (in the main thread: elsewhere, nothing). For what makes one step of work after
+    another and may stop between two, whoever runs it: a run, at each line of its trace."""
+    if _checks:
+        _checks[0]()
+
+
 @contextlib.contextmanager
 def sticky() -> Iterator[Callable[[], None]]:
-    """Meanwhile, SIGINT and SIGTERM do what their handlers do, and are noted too; the
-    check it gives raises, as its handler would, one that came and was lost.
+    """Meanwhile, a Ctrl-C or SIGTERM that Python drops is kept: the check it gives (and
+    :func:`stop_if_signalled`) raises it.
 
     Python runs a signal's handler wherever the main thread is. In a weakref's callback
     or a finalizer, which the cycle collector may run at any moment, what the handler
     raises is printed as ignored and dropped: a Ctrl-C that came then would not stop a
     batch, which would run to its end. A loop calls the check where it may stop (after
-    each wait): a signal that stopped it as it should has left its block already. (What
-    Python would print of one it dropped is not printed: the check says it.) In the
-    main thread only (elsewhere no handler can be set: the check does nothing); a signal
-    whose handler is not Python's (ignored, or the system's default) is left as it is."""
-    if threading.current_thread() is not threading.main_thread():
-        yield lambda: None
+    each wait, at each trace line). What Python would print of the dropped signal is not
+    printed (the check raises it); anything else a finalizer raises is printed as
+    before. The check does nothing in a thread other than the main one (where no
+    signal's handler runs). Nested, the inner blocks give the outermost's check."""
+    if _checks:
+        yield _checks[0]
         return
-    previous: dict[signal.Signals, Callable[[int, Any], Any]] = {}
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        handler = signal.getsignal(signum)
-        if callable(handler):
-            previous[signum] = handler
-    noted: list[signal.Signals] = []
-
-    def handle(signum: int, _frame: object) -> None:
-        noted.append(signal.Signals(signum))
-        _raise_as(signum, previous[signal.Signals(signum)])
+    dropped: list[BaseException] = []
 
     def check() -> None:
-        if noted:
-            first = noted[0]
-            noted.clear()
-            _raise_as(first, previous[first])
+        if dropped and threading.get_ident() == threading.main_thread().ident:
+            lost = dropped[0]
+            dropped.clear()
+            raise lost.with_traceback(None)
 
     said = sys.unraisablehook
 
-    def unraisable(dropped: Any) -> None:
-        if not (noted and isinstance(dropped.exc_value, KeyboardInterrupt)):
-            said(dropped)  # (a dropped signal is raised at the check: not a word here)
+    def unraisable(what: Any) -> None:
+        if isinstance(what.exc_value, KeyboardInterrupt):  # (or Terminated)
+            dropped.append(what.exc_value)  # (raised at the check: not a word here)
+        else:
+            said(what)
 
-    for signum in previous:
-        signal.signal(signum, handle)
     sys.unraisablehook = unraisable
+    _checks.append(check)
     try:
         yield check
     finally:
+        _checks.clear()
         sys.unraisablehook = said
-        for signum, kept in previous.items():
-            signal.signal(signum, kept)
 
 
 def _raise_as(signum: int, handler: object) -> None:

@@ -232,16 +232,26 @@ def test_a_sweep_stops_on_a_ctrl_c_a_finalizer_dropped(monkeypatch: pytest.Monke
 
 
 @pytest.mark.pure
-def test_a_run_stops_on_a_ctrl_c_a_finalizer_dropped(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+@pytest.mark.parametrize("command, said", [
+    (["run", str(SCENARIO), "--out", "{tmp}/t.txt"], "prima run: interrupted at t="),
+    (["debug", str(SCENARIO)], "prima debug: interrupted at t="),
+    (["test", str(ROOT / "scenarios" / "thesis" / "sample-0*.xml")], "prima test: interrupted"),
+    (["judge", str(SCENARIO), str(SCENARIO)], "prima judge: interrupted"),
+    (["show", str(SCENARIO), "--out", "{tmp}/t.html"], "prima show: interrupted"),
+])
+def test_a_command_that_runs_a_scenario_stops_on_a_ctrl_c_a_finalizer_dropped(
+        command: list[str], said: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
         capsys: pytest.CaptureFixture[str]) -> None:
-    """prima run checks at every trace line it writes: the run stops at the next one, its
-    trace up to then written, in one line."""
+    """A run checks at every line of its trace (``stop_if_signalled``): whichever command
+    runs it stops at the next one, in one line, what it wrote kept."""
+    import glob
+
     from prima.cli import main
     from prima.run import Run
 
     printed: list[object] = []
     monkeypatch.setattr(sys, "unraisablehook", lambda u: printed.append(u.exc_type))
+    monkeypatch.setattr(sys, "stdin", __import__("io").StringIO("continue\n"))
     real = Run._event
 
     def event(self: Run, happened: Any) -> None:
@@ -251,12 +261,14 @@ def test_a_run_stops_on_a_ctrl_c_a_finalizer_dropped(
         real(self, happened)
 
     monkeypatch.setattr(Run, "_event", event)
-    trace = tmp_path / "t.txt"
-    assert main(["run", str(SCENARIO), "--out", str(trace)]) == 130
+    argv = [a.format(tmp=tmp_path) for a in command]
+    argv = [found for a in argv for found in (sorted(glob.glob(a)) if "*" in a else [a])]
+    assert main(argv) == 130
     assert printed == ["dropped"]  # (and nothing printed of it)
-    said = capsys.readouterr().err.splitlines()
-    assert len(said) == 1 and said[0].startswith("prima run: interrupted at t=")
-    assert trace.read_text(encoding="utf-8").strip()
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(said), err
+    if command[0] == "run":
+        assert (tmp_path / "t.txt").read_text(encoding="utf-8").strip()
 
 
 def test_a_sigterm_as_the_entry_point_takes_it_is_one_line(

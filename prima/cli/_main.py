@@ -27,7 +27,7 @@ from prima.cli._common import (
 )
 from prima.errors import LocatedError, PrimaError
 from prima.escape import terminal
-from prima.signals import EXIT_TERMINATED, terminate_as_interrupt
+from prima.signals import EXIT_TERMINATED, sticky, terminate_as_interrupt
 from prima.suggest import SuggestingParser, unrecognized
 from prima.term import BOLD, RED
 
@@ -113,7 +113,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     if problem:
         return _usage(args.command, problem, err)
     execute: Callable[[argparse.Namespace, TextIO, TextIO], int] = command(args.command).execute
-    with terminate_as_interrupt() as signals:
+    # (sticky: a Ctrl-C a finalizer dropped stops the command at its next step, such as a
+    # run's next trace line, rather than nowhere)
+    with terminate_as_interrupt() as signals, sticky():
         status = _main(execute, args, out, err)
     return EXIT_TERMINATED if signals.terminated and status == EXIT_INTERRUPTED else status
 

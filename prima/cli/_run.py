@@ -10,7 +10,6 @@ from typing import TextIO
 from prima.cli._common import EXIT_INTERRUPTED, EXIT_OK, Command, Commands, _paint, _usage
 from prima.cli._options import _colour_argument, _policy_argument, _run_usage, _scenario_arguments
 from prima.escape import shown_path
-from prima.signals import sticky
 
 from prima.cli._formats import FORMATS, Opening, format_by_suffix, format_usage
 
@@ -42,7 +41,6 @@ def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     from prima.output import written
     from prima.run import Run
     from prima.scenario import checked_load
-    from prima.trace import TraceLine
 
     if args.format is None:  # (the file's extension says, as its reader would read it)
         args.format = format_by_suffix(args.out)
@@ -55,7 +53,7 @@ def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
     # A bad scenario is said as prima validate says it.
     def load() -> Run:
         return Run(args.scenario, fa=args.fa, ea=args.ea, robot=args.robot,
-                   seed=args.seed, until=args.until, sink=lambda line: write(line),
+                   seed=args.seed, until=args.until, sink=lambda line: writer.write(line),
                    pose_rate=args.pose_rate, policies=args.policy)
 
     run = checked_load(args.scenario, args.robot, load, swapped=bool(args.fa or args.ea))
@@ -64,12 +62,6 @@ def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
         to = files.enter_context(written(args.out, partial=True)) \
             if args.out and not chosen.binary else out
         writer = chosen.opens(Opening(run, args.out, to, files, _paint(to)))
-
-        stop_if_signalled = files.enter_context(sticky())
-
-        def write(line: TraceLine) -> None:
-            stop_if_signalled()  # (a Ctrl-C a finalizer dropped stops the run too)
-            writer.write(line)
 
         try:
             run.run()
