@@ -57,7 +57,8 @@ MAX_IDLE_ROUNDS = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
 
 POSE_RATE = 2.0
-"""Pose samples per simulated second in the trace, by default."""
+"""Pose samples per simulated second in the trace, by default (at most: a sample that
+would repeat the poses of the line with poses before it is left out)."""
 
 _SHOWN_KEPT = 1024
 """How many calls' words and shown arguments a run keeps (:meth:`Run._shown`)."""
@@ -179,6 +180,8 @@ class Run:
         self._sink = sink or self.lines.append
         self._rows = rows
         self._count = 0
+        self._posed: tuple[object, float] = (None, -1.0)
+        """The poses the last line with poses carried (:meth:`Simulator.poses`), and when."""
         self.budgets: Mapping[AppKind, Budgets] = self.profile.budgets
         self.apps: dict[str, _App] = {}
         self._paths: dict[str, Path] = {}
@@ -207,17 +210,15 @@ class Run:
                 setattr(self.sim, policy.sim, self.policies[policy.name])
         self.sim.backchannel = self.profile.hearing.backchannel
         self.sim.answers_prompt = self._answers_prompt
-        self.mediator = Mediator(
-            self.catalog, self.sim, self.sim, record=self._decision,
-            config=setup.config,
-            channel=_Channel(self.sim))
+        self.mediator = Mediator(self.catalog, self.sim, self.sim, record=self._decision,
+                                 config=setup.config, channel=_Channel(self.sim))
         if setup.config.connect_channel:  # (the robot keeps facing its user while it
             self.sim.watch_facing(FACE_TOLERANCE, self.mediator.regard)  # talks: 7.6 (3))
         self.sim.finished = self._finished
         self.sim.on_event = self._event
         self.sim.on_user = self._user
         self.sim.on_zone = self._zone
-        self.sim.sample_poses(pose_rate, lambda: self._line(Kind.POSE))
+        self.sim.sample_poses(pose_rate, self._sample)
         self._port = _Port(self)
 
     # ------------------------------------------------------------ the loop
@@ -240,6 +241,8 @@ class Run:
             last = sim.now()
             if idle > MAX_IDLE_ROUNDS:
                 raise RunError(f"run loop stuck at t={last}")
+        if self.sim.sample_every and self._posed[1] < sim.now():
+            self._line(Kind.POSE)  # (where everyone ends, even if still: the trace's end)
         return self.lines
 
     def _begin(self) -> None:
@@ -249,7 +252,7 @@ class Run:
         for path in self.ea_paths:
             self._load(path, AppKind.EA)
         if self.sim.sample_every:
-            self._line(Kind.POSE)  # where everyone starts; the samples follow
+            self._sample()  # where everyone starts (unless a line said it); samples follow
 
     # ------------------------------------------------------------ applications
 
@@ -379,7 +382,9 @@ class Run:
         if kind is Kind.ERROR:
             fields["text"] = self._portable(str(fields.get("text") or ""))
         if kind in _POSED:
-            fields["robot"], user, detectable = self.sim.poses()
+            posed = self.sim.poses()
+            self._posed = (posed, self.sim.now())
+            fields["robot"], user, detectable = posed
             if user is not None:
                 fields["user"] = user
                 fields["detectable"] = detectable
@@ -388,6 +393,14 @@ class Run:
         else:
             self._sink(TraceLine.made(self.sim.now(), self._count, kind, fields))
         self._count += 1
+
+    def _sample(self) -> None:
+        """A pose sample, unless it would repeat the poses of the line with poses before
+        it: while the robot and the user stand still, time passes without a line (a
+        trace's length follows what happens, not how long; a reader holds each line's
+        poses until the next line with poses)."""
+        if self.sim.poses() != self._posed[0]:
+            self._line(Kind.POSE)
 
     def _decision(self, d: Decision) -> None:
         if d.kind is DecisionKind.FAILURE:

@@ -204,13 +204,31 @@ def test_a_missed_touch_reads_as_one() -> None:
         "does not reach the robot to touch it")
 
 
-def test_the_jsonl_trace_carries_poses_at_a_fixed_rate(office) -> None:  # type: ignore[no-untyped-def]
-    poses = [line for line in office if line.kind is Kind.POSE]
-    assert [line.t for line in poses[:5]] == [0.0, 0.5, 1.0, 1.5, 2.0]
-    assert len(poses) == 2 * 120 + 1
-    posed = [line for line in office if line.kind in (DecisionKind.START, DecisionKind.END,
-                                                     Kind.USER, Kind.EVENT, Kind.POSE)]
+_POSED = (DecisionKind.START, DecisionKind.END, Kind.USER, Kind.EVENT, Kind.POSE)
+
+
+@pytest.mark.pure  # (it has the run keep every sample: a compiled Run's methods are fixed)
+def test_the_jsonl_trace_carries_poses_at_a_fixed_rate_where_they_changed(
+        office, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
+    """Pose samples come at fixed instants (2 a second); the ones left out are exactly
+    those that would repeat the poses of the line with poses before them: while the
+    robot and the user stand still, time passes without a line. The last says where
+    they are as the run ends, whatever it repeats (a trace ends when its run does)."""
+    posed = [line for line in office if line.kind in _POSED]
     assert all(line.robot is not None and line.user is not None for line in posed)
+    poses = [line for line in office if line.kind is Kind.POSE]
+    assert all(line.t * 2 == round(line.t * 2) for line in poses)
+    monkeypatch.setattr(Run, "_sample", lambda run: run._line(Kind.POSE))  # (every one)
+    every = [line for line in Run(OFFICE, until=120).run() if line.kind in _POSED]
+    assert len([line for line in every if line.kind is Kind.POSE]) == 2 * 120 + 1
+    kept = [line for before, line in zip([None, *every], every, strict=False)
+            if line.kind is not Kind.POSE or before is None or line is every[-1]
+            or (line.robot, line.user, line.detectable)
+            != (before.robot, before.user, before.detectable)]
+    assert office[-1].kind is Kind.POSE and office[-1].t == 120.0
+    assert [(x.t, x.kind, x.robot, x.user) for x in kept] == \
+        [(x.t, x.kind, x.robot, x.user) for x in posed]
+    assert len(poses) < len(every) - len(posed) + len(poses) - 40  # (many were repeats)
     record = json.loads(format_jsonl(poses[:1]))
     assert set(record["robot"]) == {"x", "y", "heading"}
 
@@ -241,6 +259,7 @@ class _WakingEveryTime(Run):
             self.mediator.advance()
             for app in list(self.apps.values()):
                 self._guard(app, app.interpreter.advance)
+        self._line(Kind.POSE)  # (where everyone ends)
         return self.lines
 
 

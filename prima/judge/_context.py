@@ -195,7 +195,11 @@ class Context:
         """The line before the one being fed."""
         self.robot: tuple[float, float] | None = None
         self.last_seen = 0.0
-        """The latest time a posed line showed the user detectable."""
+        """Until when the user was known detectable: now while the latest line with poses
+        shows them so; else the time of the line with poses that first showed them not
+        (a line's poses hold until the next line that has some)."""
+        self._seeing = False
+        """The latest line with poses showed the user detectable."""
         # atomic behaviors
         self.abs: dict[int, Ab] = {}
         self.running: dict[int, Ab] = {}
@@ -259,10 +263,13 @@ class Context:
             self._heard = None
             self.t = t
         self.lines += 1
+        if self._seeing:
+            self.last_seen = t
         if row.get("robot") is not None:
             self.robot = xy(row["robot"])
             user = row.get("user")
-            if user is not None and user.get("detectable") is True:
+            self._seeing = user is not None and user.get("detectable") is True
+            if self._seeing:
                 self.last_seen = t
         handler = _HANDLERS.get(row["kind"])
         if handler is not None:

@@ -179,9 +179,10 @@ class _Unfaced:
     while their words run (docs/rules.md 7.6 (3): the robot keeps facing the user while
     its words run). The user's pose is known at each posed line and held until the
     next: a stretch runs from the first line that shows the user off to the first that
-    does not (or the words' end). While a turn to the user runs (reason
-    ``connect-channel``: the robot turns to them as fast as it can), no stretch runs:
-    one starts anew if they are still off when it is over."""
+    does not (or the words' end), and is measured whole when it ends. While a turn to
+    the user runs (reason ``connect-channel``: the robot turns to them as fast as it
+    can), no stretch runs: the one running ends as the turn starts, and one starts anew
+    if they are still off when it is over."""
 
     kinds: frozenset[str] | None = None
 
@@ -249,31 +250,28 @@ class _Unfaced:
         if words is None or t < words[0] - EPS or t > words[1] + EPS:
             return False
         off = _off(row, ctx.th.face_tolerance)
-        if off is None:
+        if off is None or any(y.reason == "connect-channel" for y in ctx.running.values()):
+            # (faced again; or the robot turns to them, as fast as it can)
             return self._stretch(ab, talk, t, ctx)
-        if any(y.reason == "connect-channel" for y in ctx.running.values()):
-            talk.off_since = None  # (the robot turns to them: as fast as it can)
-            return False
         if talk.off_since is None:
             talk.off_since, talk.most, talk.turner = row, off, mover
         talk.most = max(talk.most, off)
-        return self._stretch(ab, talk, t, ctx, going_on=True)
+        return False
 
-    def _stretch(self, ab: int, talk: _Words, t: float, ctx: Context,
-                 going_on: bool = False) -> bool:
-        """The stretch the user was off in lasts until ``t`` (and goes on, if
-        ``going_on``): found when it is longer than allowed."""
+    def _stretch(self, ab: int, talk: _Words, t: float, ctx: Context) -> bool:
+        """The stretch the user was off in, if one runs, ends at ``t``: found when it
+        lasted longer than allowed (how long: the whole stretch, which a line with the
+        same poses in the middle of it neither ends nor measures)."""
         since = talk.off_since
         if since is None:
             return False
+        talk.off_since = None
         lasted = t - float(since["t"])
         if lasted > ctx.th.unfaced_for + EPS:
             self.found.append(self._finding(talk.row, talk.most, ctx, round(lasted, 3),
                                             int(since["seq"]), talk.turner))
             del self.talking[ab]
             return True
-        if not going_on:
-            talk.off_since = None
         return False
 
     def _ended(self, ab: int, talk: _Words, t: float, ctx: Context) -> None:
@@ -327,7 +325,7 @@ class _Talk:
     """When the words run, if known."""
     gap: float = 0.0
     """How far it was from the user when the words began."""
-    pending: list[tuple[Row, Blame | None, bool]] = field(default_factory=list)
+    pending: list[tuple[Row, Blame | None, bool, Row | None]] = field(default_factory=list)
     """Poses while its words' times are not known yet (they are said after something
     else in its AB): judged at its end."""
 
@@ -347,6 +345,8 @@ class _Leaving:
         """How many ABs that take the robot somewhere run (a move, following the user)."""
         self.drove = False
         """One of them ran since the last posed line."""
+        self.held: Row | None = None
+        """The last line with the robot's and the user's poses (they hold until the next)."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
@@ -361,18 +361,20 @@ class _Leaving:
             talk = self.talking.pop(ab, None)
             if talk is not None and talk.words is None and ab in ctx.abs:
                 talk.words = ctx.abs[ab].words
-                for pose, mover, driven in talk.pending:
-                    if self._pose(talk, pose, mover, ctx, driven):
+                for pose, mover, driven, held in talk.pending:
+                    if self._pose(talk, pose, mover, ctx, driven, held):
                         break
         if row.get("robot") is not None and row.get("user") is not None:
             if self.talking:
                 mover = _wheels(ctx)
+                driven = self.driving > 0 or self.drove
                 for ab_id, talk in list(self.talking.items()):
                     if talk.words is None:
-                        talk.pending.append((row, mover, self.driving > 0 or self.drove))
-                    elif self._pose(talk, row, mover, ctx, self.driving > 0 or self.drove):
+                        talk.pending.append((row, mover, driven, self.held))
+                    elif self._pose(talk, row, mover, ctx, driven, self.held):
                         del self.talking[ab_id]
             self.drove = False
+            self.held = row
 
     def _count(self, row: Row, by: int) -> None:
         """An AB started (``by`` 1) or ended (-1): how many follow the user, and take the
@@ -385,16 +387,23 @@ class _Leaving:
             self.drove = self.drove or by > 0
 
     def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context,
-              driven: bool = True) -> bool:
+              driven: bool = True, held: Row | None = None) -> bool:
         """One posed line during ``talk``'s AB: True when it counts as leaving.
         ``driven``: something took the robot somewhere since the last posed line (else
-        it did not move on its own: a user who walked into it pushed it)."""
+        it did not move on its own: a user who walked into it pushed it). ``held``: the
+        posed line before it, whose poses held until it."""
         t = float(row["t"])
         words = talk.words
         if words is None or t < words[0] - EPS or t > words[1] + EPS:
             return False
         robot, user = xy(row["robot"]), xy(row["user"])
-        if talk.was is None or self.following or not driven:
+        if (talk.was is None and held is not None and t > words[0] + EPS
+                and not self.following and driven):
+            # (the first line in its words comes after they began: where the robot was
+            # as they began is where the line before it put it)
+            talk.was = xy(held["robot"])
+            talk.gap = math.dist(talk.was, xy(held["user"]))
+        elif talk.was is None or self.following or not driven:
             talk.was = robot  # (from where its words began; following moves it on)
             talk.gap = math.dist(robot, user)
             return False

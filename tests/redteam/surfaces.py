@@ -466,7 +466,7 @@ SURFACES = [
          command=("run", "{path}", "--format", "mcap", "--out", "{dir}/r.mcap"),
          then=_kept("r.mcap"), seconds=6),
     Case("jsonl-fails-midway", "a jsonl trace that cannot be written whole",
-         _earlier("r.jsonl"), Exits(1, "cannot write"), file_limit=2048,
+         _earlier("r.jsonl"), Exits(1, "cannot write"), file_limit=512,
          command=("run", "{path}", "--format", "jsonl", "--out", "{dir}/r.jsonl"),
          then=_kept("r.jsonl")),
     Case("page-fails-midway", "a page that cannot be written whole", _earlier("p.html"),
