@@ -390,10 +390,10 @@ class Context:
         command = str(row.get("command") or "")
         if "QA" in command.split("+"):
             ex.kind = "question"
-        elif row.get("text"):
-            ex.kind = "words"
+        elif row.get("text") and not TALK_DEVICES.isdisjoint(row.get("devices") or ()):
+            ex.kind = "words"  # (its first AB speaks: a request line's devices are its)
         else:
-            ex.kind = "other"
+            ex.kind = "other"  # (a reply that aims or points first, then speaks, too)
         ex.reply = ids
 
     def _start(self, row: Row) -> None:
@@ -429,6 +429,8 @@ class Context:
         ex = self.open_exchange.get(ab.app)
         if ex is None or not ex.reply:
             return
+        if ex.kind == "words" and ex.reply_ab is None and ex.reply[0] in ab.ids and not ab.text:
+            ex.kind = "other"  # (its first AB, on the speaker, says nothing: a sound)
         if ex.kind == "words" and ab.text and not set(ab.ids).isdisjoint(ex.reply):
             ex.reply_ab = ab.id
         elif ex.kind == "question" and not set(ab.ids).isdisjoint(ex.reply):

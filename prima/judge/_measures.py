@@ -128,6 +128,10 @@ def _off_heading(robot: Row, user: Row) -> float | None:
     return float(abs((bearing - robot["heading"] + 180.0) % 360.0 - 180.0))
 
 
+_POLICY_REASONS = frozenset({"connect-channel", "restore-state"})
+"""The reasons of the ABs a policy puts in a stream (none aims at anything of its app's)."""
+
+
 def _about_something_else(row: Row, before: str | None) -> bool:
     """An utterance that is not for the user's face: its AB turns or points the robot
     itself (FaceHumanAndSpeak, a Speak grouped with a PointByHand), or the AB before
@@ -195,6 +199,11 @@ class _Unfaced:
         words may be about); a restart's is the AB's it starts again."""
         self.restarts: dict[int, int] = {}
         """A restart -> the cut AB it starts again."""
+        self.after_ab: dict[int, int | None] = {}
+        """A request's first Command -> the AB it follows in its stream, as the request
+        says (None: none)."""
+        self.after_command: dict[int, int] = {}
+        """A chain's later Command -> the Command before it in the chain."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
@@ -203,6 +212,12 @@ class _Unfaced:
             cut = row.get("before")
             if isinstance(cut, int):
                 self.restarts[ab] = cut
+        elif kind == "request":
+            ids = command_ids(row)
+            before = row.get("before")
+            if ids:
+                self.after_ab[ids[0]] = before if isinstance(before, int) else None
+            self.after_command.update(zip(ids[1:], ids, strict=False))
         elif kind == "start" and isinstance(ab, int):
             self._started(row, ab, ctx)
         elif kind == "end" and isinstance(ab, int):
@@ -223,9 +238,29 @@ class _Unfaced:
                 else:
                     self._pose(ab_id, talk, row, mover, ctx)
 
+    def _before(self, row: Row, ctx: Context) -> str | None:
+        """The Command of the AB an AB follows in its stream, as the mediator links them
+        (docs/rules.md 7.3 (4)): the AB its request follows, or the one before it in its
+        chain; not an AB of another request that started in between (an ``asap``
+        StopMoving beside it). None: it follows none, or one that never ran or that a
+        policy put there (aimed at nothing of the application's)."""
+        ids = command_ids(row)
+        first = ids[0] if ids else None
+        if first in self.after_command:
+            ab_id = ctx.cmd_ab.get(self.after_command[first])
+        elif first in self.after_ab:
+            ab_id = self.after_ab[first]
+        else:  # (no request line seen for it: the latest start of its tree)
+            tree = row.get("tree")
+            return self.last_command.get(tree) if isinstance(tree, int) else None
+        ab = ctx.abs.get(ab_id) if ab_id is not None else None
+        if ab is None or ab.reason in _POLICY_REASONS:
+            return None
+        return ab.command
+
     def _started(self, row: Row, ab: int, ctx: Context) -> None:
         tree = row.get("tree")
-        before = self.last_command.get(tree) if isinstance(tree, int) else None
+        before = self._before(row, ctx)
         cut = self.restarts.pop(ab, None)
         if cut is not None:  # (said again, its words are about what they were about)
             before = self.before_of.get(cut, before)

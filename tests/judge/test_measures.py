@@ -212,6 +212,31 @@ def test_words_after_an_aiming_command_are_about_what_it_aims_at() -> None:
     assert (after("Turn"), after("Gesture")) == (0, 1)
 
 
+def test_the_ab_words_follow_is_the_one_their_request_follows() -> None:
+    """A panel's words ask "Do you like it?" after the group that aimed the robot at the
+    panel (their request follows it), while a message's ``asap`` StopMoving joins the
+    stream beside them and starts first: the words are still about the panel, as the
+    mediator has it (it does not turn the robot to the user for them). Words whose
+    request follows the StopMoving are not."""
+    def asked(follows: int) -> int:
+        tr = Trace()
+        tr.user = {"x": -1.0, "y": 0.0, "heading": 0.0, "detectable": True}
+        aim = ("localization", "locomotion", "speaker")
+        tr.request(0.0, "ea", 1, 1, command="SetDirection+Speak", text="Look.", devices=aim)
+        tr.start(0.0, "ea", 1, 1, command="SetDirection+Speak", text="Look.", devices=aim,
+                 words=(0.0, 1.0))
+        tr.request(0.5, "ea", 2, 2, command="StopMoving", devices=("locomotion",), before=1)
+        tr.request(0.5, "ea", 3, 3, command="QA", text="Do you like it?", devices=TALK,
+                   before=follows, reason="end-event")
+        tr.end(1.0, "ea", 1, 1, command="SetDirection+Speak", devices=aim, words=(0.0, 1.0))
+        tr.start(1.0, "ea", 2, 2, command="StopMoving", devices=("locomotion",))
+        tr.ask(1.0, "ea", 3, 3, "Do you like it?", "Yes.", at=3.0, request=False)
+        tr.end(1.0, "ea", 2, 2, command="StopMoving", devices=("locomotion",))
+        return len(tr.judge().of("unfaced"))
+
+    assert (asked(follows=1), asked(follows=2)) == (0, 1)
+
+
 def test_words_whose_request_says_they_are_about_something_else_are_not_unfaced() -> None:
     """FA7's "Look where the red dot is." (face-user="false": about the spot its laser
     shows): its request line says so, and it is not counted; the same words asked for
@@ -520,6 +545,38 @@ def test_another_apps_utterance_before_a_reply_without_words_splits_the_exchange
     assert counts(report) == {"splits": 1}
     assert [(s.kind, s.by) for s in report.of("splits")] == [("answer", "fa")]
     assert counts(_answered("turn", reactive=True)) == {}
+
+
+def _answered_aiming_first(first: str, *, reactive: bool) -> Report:
+    """ea's Q&A is answered at 3 s and its answer handler asks for a chain whose first
+    Command says nothing (``SetDirection`` to a shelf, or a robot's own ``Beep`` on the
+    speaker), then says where the book is; fa says something at 3.5 s, between the two
+    (in reaction to a touch, if ``reactive``)."""
+    tr = Trace()
+    tr.ask(0.0, "ea", 1, 1, "Which book?", "The C Primer.", at=3.0)
+    aim = ("localization", "locomotion") if first == "SetDirection" else ("speaker",)
+    tr.request(3.0, "ea", 2, [2, 3], command=first, text="It is on shelf A.",
+               reason="end-event", before=1, devices=aim)
+    tr.start(3.0, "ea", 2, 2, command=first, devices=aim)
+    if reactive:
+        tr.touch(3.5)
+    tr.speak(3.5, "fa", 4, 4, "Hee-hee!", tree=1, reactive=reactive, at="fa.pxml:40:7")
+    tr.end(4.0, "ea", 2, 2, command=first, devices=aim)
+    tr.sort()
+    tr.speak(4.5, "ea", 3, 3, "It is on shelf A.", request=False)
+    tr.pose(6.0)
+    return tr.judge()
+
+
+@pytest.mark.parametrize("first", ["SetDirection", "Beep"])
+def test_a_reply_that_aims_before_its_words_is_no_reply_of_words(first: str) -> None:
+    """7.4 keeps a reply with its answer when the first AB the answer handler asks for
+    is an utterance (the mediator protects that AB): a reply that aims first, then
+    speaks, is one without words, as a turn is: the exchange ended as it began to aim,
+    and another application's words before the reply's (a reaction's or not) split
+    nothing."""
+    assert counts(_answered_aiming_first(first, reactive=True)) == {}
+    assert counts(_answered_aiming_first(first, reactive=False)) == {}
 
 
 def test_no_reply_no_split() -> None:
