@@ -84,9 +84,15 @@ class SweepRun:
         """How long (s) its latest reaction was free to start beyond the slack."""
         return _time(self.record.get("worst_lateness"))
 
-    def rank(self) -> tuple[int, float, int]:
-        """Worst first: most thresholds exceeded, then latest reaction, then first run."""
-        return (-self.breaches, -self.worst_lateness(), self.index)
+    @property
+    def findings(self) -> int:
+        """How many faults its measures found, all told."""
+        return sum((self.record.get("counts") or {}).values())
+
+    def rank(self) -> tuple[int, int, float, int]:
+        """Worst first: most thresholds exceeded, then most faults, then latest reaction,
+        then first run."""
+        return (-self.breaches, -self.findings, -self.worst_lateness(), self.index)
 
 
 @dataclass
@@ -173,7 +179,8 @@ class Sweep:
             self.kept = sorted([*self.kept, run], key=SweepRun.rank)[: self.keep]
 
     def worst(self, k: int) -> list[SweepRun]:
-        """The ``k`` worst runs kept: most thresholds exceeded, then latest reaction."""
+        """The ``k`` worst runs kept: most thresholds exceeded, then most faults, then
+        latest reaction."""
         return self.kept[:k]
 
     def write_worst(self, k: int, folder: str | Path) -> list[Path]:

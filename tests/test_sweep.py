@@ -18,7 +18,7 @@ from prima.cli import main
 from prima.judge import judge_file
 from prima.scenario import load_scenario
 from prima.batch import pool_for, record_of
-from prima.sweep import MIN_ANSWER_DELAY, format_sweep, sweep, write_variant
+from prima.sweep import MIN_ANSWER_DELAY, SweepRun, format_sweep, sweep, write_variant
 
 ROOT = Path(__file__).parents[1]
 THESIS = ROOT / "scenarios" / "thesis"
@@ -155,6 +155,18 @@ def test_same_seed_same_output_whatever_the_jobs(tmp_path: Path,
     for name in (p.name for p in (tmp_path / "worst-of-jobs-1").iterdir()):
         assert (tmp_path / "worst-of-jobs-1" / name).read_bytes() == \
             (tmp_path / "worst-of-jobs-2" / name).read_bytes()
+
+
+def test_the_worst_runs_have_the_most_faults_after_the_most_thresholds() -> None:
+    """Ranked worst first: thresholds exceeded, then faults found (a run unfaced five
+    times is worse than one unfaced once), then the latest reaction."""
+    def run(index: int, counts: dict[str, int], late: float = 0.0) -> SweepRun:
+        breaches = [f"{k}: {n} > 0 (seq 1)" for k, n in counts.items() if n]
+        return SweepRun(index, {"breaches": breaches, "counts": counts, "worst_lateness": late})
+
+    once, often = run(0, {"unfaced": 1}, late=2.0), run(1, {"unfaced": 5})
+    two = run(2, {"unfaced": 1, "late": 1})
+    assert sorted([once, often, two], key=SweepRun.rank) == [two, often, once]
 
 
 def test_a_written_worst_run_replays_its_measures(tmp_path: Path) -> None:

@@ -89,7 +89,8 @@ class Cell:
     """Runs that exceeded each measure's threshold."""
     ea_measures: Counter[str] = field(default_factory=Counter)
     failures: dict[tuple[str, ...], Failure] = field(default_factory=dict)
-    worst: list[tuple[tuple[int, int, float, int], int, SweepRun]] = field(default_factory=list)
+    worst: list[tuple[tuple[int, int, int, float, int], int, SweepRun]] = field(
+        default_factory=list)
     """The worst runs: (rank, scenario number, run)."""
     worst_start: float = 0.0
     """The latest first start of a reaction that started (s)."""
