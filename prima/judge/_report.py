@@ -141,6 +141,10 @@ def _reaction_rows(report: Report, paint: Paint, columns: int | None) -> list[st
     return rows(width, paint)
 
 
+_TITLES = max(len(m.title) for m in MEASURES)
+"""How wide a run's block sets its measures' titles (each count in one column)."""
+
+
 def _count_style(n: int, limit: int) -> tuple[str, ...]:
     return (RED, BOLD) if n > limit else (YELLOW,) if n else ()
 
@@ -155,7 +159,7 @@ def _block(report: Report, paint: Paint, columns: int | None) -> list[str]:
         mark = "  > max " + str(limit) if len(items) > limit else ""
         rows += layout([[m.title, Cell(f"{len(items)}{mark}",
                                        _count_style(len(items), limit))]],
-                       minimum=(22,), indent="  ", paint=paint)
+                       minimum=(_TITLES,), indent="  ", paint=paint)
         rows += [f"      {m.line(item)}" for item in items[:10]]
         if len(items) > 10:
             rows.append(f"      ... and {len(items) - 10} more")

@@ -77,6 +77,17 @@ def test_the_table_shows_reactions_counts_and_a_summary() -> None:
     assert table.splitlines()[-1].endswith("FAIL: late reactions 1 > 0")
 
 
+def test_the_counts_of_every_measure_stand_in_one_column() -> None:
+    """The longest title (unrecovered interruptions) does not push its count out."""
+    table = format_table([reaction_behind(speech_ends=12.0, reacts_at=12.4).judge()])
+    titled = {m.title: line for line in table.splitlines() for m in MEASURES
+              if line.startswith(f"  {m.title} ")}
+    assert len(titled) == len(MEASURES)
+    columns = {line.index(line.split()[-1] if "max" not in line else line.split()[-4])
+               for line in titled.values()}
+    assert len(columns) == 1, titled
+
+
 # ------------------------------------------------------------------ the command line
 
 def cli(*argv: str) -> tuple[int, str, str]:
