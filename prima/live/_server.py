@@ -22,6 +22,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import math
 import re
 import threading
 import time
@@ -337,7 +338,7 @@ class Server:
                 raise LiveError("give act, control or save")
         except (LiveError, OutputError) as exc:
             await owner.ws.send_str(_json({"refused": str(exc)}))
-        except ValueError:
+        except (ValueError, RecursionError):  # (nested past the decoder's depth: no JSON)
             await owner.ws.send_str(_json({"refused": "send JSON"}))
 
     def _rate(self, owner: _Owner) -> None:
@@ -358,6 +359,8 @@ class Server:
             value = message.get("seconds" if what == "step" else "speed")
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise LiveError(f"{what}: give a number")
+            if isinstance(value, int) and abs(value) > 2**53:  # (past any step or speed; no float)
+                value = math.inf if value > 0 else -math.inf
             (session.step if what == "step" else session.set_speed)(float(value))
         else:
             raise LiveError("control: play, pause, step or speed")

@@ -80,7 +80,7 @@ def _words(value: object, what: str, longest: int) -> str:
 
 def _coordinate(value: object, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) \
-            or not math.isfinite(value) or abs(value) > MAX_COORDINATE:
+            or abs(value) > MAX_COORDINATE or not math.isfinite(value):  # (ints of any size)
         raise LiveError(f"{what}: a number of metres within {MAX_COORDINATE:,g} of the origin")
     return round(float(value), 2)
 

@@ -177,6 +177,7 @@ def test_a_session_refuses_what_it_cannot_keep_and_changes_nothing(tmp_path: Pat
                       ({"act": "walk", "x": "1", "y": 2}, "number"),
                       ({"act": "walk", "x": float("nan"), "y": 2}, "number"),
                       ({"act": "walk", "x": 1e9, "y": 2}, "metres"),
+                      ({"act": "walk", "x": 10**400, "y": 2}, "metres"),
                       ({"act": "message", "sender": "", "text": "hi"}, "sender")]:
         with pytest.raises(LiveError, match=said):
             session.act(bad)
@@ -378,6 +379,10 @@ def test_what_a_page_may_not_do(tmp_path: Path) -> None:
                             json.dumps({"act": "walk", "x": 1}), json.dumps({"nothing": 1}),
                             json.dumps({"control": "speed", "speed": 0}),
                             json.dumps({"control": "step", "seconds": 1e9}),
+                            "[" * 50_000,  # (deeper than the JSON decoder goes)
+                            json.dumps({"control": "step", "seconds": 10**400}),
+                            json.dumps({"control": "speed", "speed": -10**400}),
+                            json.dumps({"act": "walk", "x": 10**400, "y": 1}),
                             json.dumps({"save": True, "path": "/etc/passwd"})]:
                     await page.ws.send_str(bad)
                     reply = await page.reply()
