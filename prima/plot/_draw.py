@@ -7,6 +7,7 @@ hash salt, no date), and so is a PNG or a PDF (no date or software version).
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -196,5 +197,9 @@ def save_timeline(tl: Timeline, path: str | Path, title: str = "") -> None:
     with matplotlib.rc_context({"svg.hashsalt": "prima", "svg.fonttype": "none",
                                 "font.family": "DejaVu Sans", **PLAIN_TEXT}):
         fig = timeline_figure(tl, title)
+        # drawn in memory, then written: a full disk under matplotlib's PDF writer fails in
+        # its own clean-up (an AttributeError), not with the disk's OSError
+        picture = io.BytesIO()
+        fig.savefig(picture, format=suffix[1:], dpi=150, metadata=_METADATA.get(suffix))
         with written_bytes(path) as out:
-            fig.savefig(out, format=suffix[1:], dpi=150, metadata=_METADATA.get(suffix))
+            out.write(picture.getbuffer())

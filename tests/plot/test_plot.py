@@ -151,6 +151,15 @@ def test_usage_errors_are_one_line(argv: list[str], message: str, tmp_path: Path
     assert len(err.splitlines()) == 1 and message in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("suffix", [".svg", ".png", ".pdf"])
+def test_a_full_disk_is_one_line(suffix: str, tmp_path: Path) -> None:
+    full = tmp_path / f"full{suffix}"
+    full.symlink_to("/dev/full")  # (a target that is not a regular file is written directly)
+    status, err = plot(str(SAMPLE_03), "-o", str(full), "--until", "5")
+    assert (status, err) == (1, f"prima plot: error: cannot write {full}: no space left on "
+                                "device\n")
+
+
 def test_without_matplotlib_it_says_how_to_install_it(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib fails
