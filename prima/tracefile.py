@@ -22,7 +22,7 @@ import json
 import math
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from prima.errors import Problem, Severity, TraceError
 
@@ -141,8 +141,8 @@ def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
     count = 0
     try:
         with path.open(encoding="utf-8", newline="\n") as lines:
-            for number, line in enumerate(lines, start=1):
-                if len(line) > MAX_LINE:
+            for number, line in enumerate(_lines(lines), start=1):
+                if line is None:
                     problems.append(_problem(name, number, 1, "the line is longer than "
                                                               f"{MAX_LINE:,} characters"))
                 elif line.strip():
@@ -164,6 +164,18 @@ def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
         problems.append(_problem(name, 1, 1, "the trace has no lines"))
     if problems:
         raise TraceError(problems)
+
+
+def _lines(file: TextIO) -> Iterator[str | None]:
+    """The file's lines; None for one longer than :data:`MAX_LINE`, which is read past
+    a piece at a time, never held whole (a file of gigabytes with no line break)."""
+    while line := file.readline(MAX_LINE + 1):
+        if len(line) <= MAX_LINE:
+            yield line
+            continue
+        while not line.endswith("\n") and (line := file.readline(MAX_LINE)):
+            pass
+        yield None
 
 
 class _Unbounded(ValueError):

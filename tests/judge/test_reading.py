@@ -41,6 +41,27 @@ def test_load_trace_locates_every_bad_line(tmp_path: Path) -> None:
     ]
 
 
+def test_a_line_too_long_is_read_past_never_held(tmp_path: Path) -> None:
+    import tracemalloc
+
+    from prima.tracefile import MAX_LINE
+
+    path = tmp_path / "long.jsonl"
+    with path.open("w", encoding="utf-8") as out:  # 48 MiB on one line, then a good line
+        out.write('{"t": 0, "seq": 0, "kind": "load", "app": "' + "x" * (48 << 20) + '"}\n'
+                  '{"t": 1, "seq": 1, "kind": "load", "app": "fa"}\n')
+    tracemalloc.start()
+    try:
+        with pytest.raises(TraceError) as caught:
+            load_trace(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert [str(p) for p in caught.value.problems] == [
+        f"{path}:1:1: error: the line is longer than {MAX_LINE:,} characters"]
+    assert peak < 16 << 20, f"{peak:,} bytes to read past a long line"
+
+
 def test_an_empty_trace_is_an_error(tmp_path: Path) -> None:
     path = tmp_path / "empty.jsonl"
     path.write_text("\n", encoding="utf-8")
