@@ -578,8 +578,9 @@ class Features:
                                      + (f"\n\n{what}" if what else ""), at, end)
                     return None
                 if name in doc.index.variables:
-                    return Hover(f"**variable {name}**\n\n```xml\n"
-                                 f"{_var_doc(doc.index.variables[name], doc.source)}\n```",
+                    source = _var_doc(doc.index.variables[name], doc.source)
+                    fence = _fence(source)
+                    return Hover(f"**variable {name}**\n\n{fence}xml\n{source}\n{fence}",
                                  at, end)
                 if name in FUNCTIONS:
                     return Hover(f"**{name}()**: {FUNCTIONS[name][-1]}", at, end)
@@ -702,6 +703,14 @@ class Features:
 
 def _var_doc(tag: Tag, source: str) -> str:
     return source[tag.start:tag.end]
+
+
+def _fence(source: str) -> str:
+    """A Markdown code fence that no line of ``source`` closes: more backticks than its
+    longest run of them (a document's ```` ``` ```` line would end a fence of three, and
+    what follows it would be read as Markdown: headings, links, remote images)."""
+    longest = max((len(run) for run in re.findall("`+", source)), default=0)
+    return "`" * max(3, longest + 1)
 
 
 def _element_markdown(info: ElementInfo) -> str:

@@ -227,6 +227,23 @@ def test_hover_shows_the_documentation_of_commands_elements_and_attributes() -> 
     run(ROOT, test)
 
 
+def test_hover_shows_a_variables_source_in_a_fence_it_cannot_close(tmp_path: Path) -> None:
+    ea = tmp_path / "fenced.pxml"
+    declared = ('<var name="v" expr="\'x\n```\n# not code\n![seen](https://example.org/p.png)'
+                '\n````\'"/>')
+    text = (f'<pxml xmlns="urn:prima:pxml:1" kind="ea" name="fenced">\n{declared}\n'
+            '<state id="s" initial="true"><entry><log text="{v}"/></entry></state></pxml>\n')
+    ea.write_text(text, encoding="utf-8")
+
+    async def test(s: Session) -> None:
+        assert await s.open(ea) == []
+        found = await s.hover(ea, *where(text, "{v}", 1))
+        assert found is not None and isinstance(found.contents, types.MarkupContent)
+        assert found.contents.value == f"**variable v**\n\n`````xml\n{declared}\n`````"
+
+    run(tmp_path, test)
+
+
 def test_go_to_definition_finds_a_state_a_label_and_a_variable() -> None:
     text = SHIPPED.read_text(encoding="utf-8")
 
