@@ -30,6 +30,7 @@ from prima.collecting import settle
 from prima.errors import Problem, Severity
 from prima.lsp._features import Features, Item, Target
 from prima.lsp._schedule import DEBOUNCE, Diagnostics
+from prima.lsp._stream import MAX_MESSAGE
 from prima.lsp._workspace import Buffer, Workspace, resolved
 
 __all__ = ["MAX_OPEN", "TRIGGERS", "PrimaServer", "build_server"]
@@ -83,8 +84,14 @@ class _Protocol(LanguageServerProtocol):
     @lsp_method(types.TEXT_DOCUMENT_DID_CHANGE)
     def lsp_text_document__did_change(self, params: types.DidChangeTextDocumentParams
                                       ) -> Iterator[Any]:
-        if unquote(params.text_document.uri) in self.workspace.text_documents:
-            yield from super().lsp_text_document__did_change(params)  # (else: refused)
+        uri = params.text_document.uri
+        held = self.workspace.text_documents
+        if unquote(uri) in held:  # (else: refused)
+            yield from super().lsp_text_document__did_change(params)
+            doc = held.get(unquote(uri))
+            if doc is not None and _outgrown(doc.source):
+                self.workspace.remove_text_document(uri)
+                self._server.outgrown(uri)
 
 
 class PrimaServer(LanguageServer):
@@ -187,9 +194,22 @@ class PrimaServer(LanguageServer):
                   "it are not checked (close one, then open them again)", file=self.err,
                   flush=True)
 
+    def outgrown(self, uri: str) -> None:
+        """The editor's changes made ``uri`` longer than :data:`MAX_MESSAGE` bytes: it is
+        no longer held nor checked (as if closed) until it is opened again."""
+        print(f"prima lsp: {uri} grew past {MAX_MESSAGE:,} bytes: it is not held nor "
+              "checked (close it, then open it again)", file=self.err, flush=True)
+        self.closed(uri)
+
     def _failed(self, uri: str, exc: Exception) -> None:
         print(f"prima lsp: checking {uri} failed: {type(exc).__name__}: {exc}",
               file=self.err, flush=True)
+
+
+def _outgrown(source: str) -> bool:
+    """A document's text is longer than :data:`MAX_MESSAGE` bytes (as UTF-8)."""
+    return len(source) > MAX_MESSAGE // 4 and len(source.encode("utf-8", "surrogatepass")) \
+        > MAX_MESSAGE
 
 
 def _path(uri: str) -> Path:

@@ -267,6 +267,49 @@ def test_a_document_change_rechecks_the_scenario_that_runs_it_and_no_other(
     run(tmp_path, test)
 
 
+def test_a_document_edits_make_longer_than_the_bound_is_no_longer_held(
+        tmp_path: Path) -> None:
+    """A document is held of at most MAX_MESSAGE bytes however the editor grows it: the
+    edit that takes it past the bound drops it (one line on stderr; requests about it are
+    answered empty, its later changes read past); opened again, it is checked as any."""
+    path = tmp_path / "notes.xml"
+    text = '<?xml version="1.0"?>\n<notes/>\n'
+    chunk = "<!--" + "x" * (3 << 20) + "-->\n"
+
+    def grow(version: int) -> dict[str, Any]:
+        return {"jsonrpc": "2.0", "method": "textDocument/didChange", "params": {
+            "textDocument": {"uri": uri(path), "version": version},
+            "contentChanges": [{"range": {"start": {"line": 1, "character": 0},
+                                          "end": {"line": 1, "character": 0}},
+                                "text": chunk}]}}
+
+    async def test(raw: Raw) -> None:
+        raw.send(did_open(path, text))
+        await published(raw, uri(path), 1)
+        raw.send(grow(2), grow(3), grow(4), grow(5))  # 3, 6, 9 MiB: dropped; read past
+        ask = raw.call("textDocument/hover", {"textDocument": {"uri": uri(path)},
+                                              "position": {"line": 1, "character": 2}})
+        raw.send(ask)
+        while (message := await raw.read()).get("id") != ask["id"]:
+            pass
+        assert message["result"] is None
+        raw.send(did_open(path, text))
+        await published(raw, uri(path), 1)
+
+    said: list[bytes] = []
+
+    async def session() -> None:
+        async with Raw(tmp_path) as raw:
+            await test(raw)
+        said.append(raw.stderr)
+
+    asyncio.run(session())
+    assert 3 * len(chunk) > MAX_MESSAGE > 2 * len(chunk)
+    assert said[0].decode().splitlines() == [
+        f"prima lsp: {uri(path)} grew past {MAX_MESSAGE:,} bytes: it is not held nor "
+        "checked (close it, then open it again)"]
+
+
 @pytest.mark.slow
 def test_documents_opened_beyond_the_bound_are_not_held(tmp_path: Path) -> None:
     """At most MAX_OPEN documents are held open: one opened beyond them is not checked,
