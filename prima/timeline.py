@@ -23,18 +23,23 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from prima.trace import Pose, user_words
 
-__all__ = ["JOIN", "NO_DEVICE", "Bar", "Builder", "Mark", "Span", "Tick", "Timeline",
+__all__ = ["JOIN", "MAX_ROWS", "NO_DEVICE", "Bar", "Builder", "Mark", "Span", "Tick", "Timeline",
            "blended_devices", "ink", "runs", "timeline"]
 
 Row = Mapping[str, Any]
 
 NO_DEVICE = "(no device)"
 """The row of an atomic behavior that occupies no device (last of the devices)."""
+
+MAX_ROWS = 64
+"""Devices a timeline draws at most, in the order first occupied (a robot has a dozen; a
+trace that names thousands, forged or not, would make a picture of gigabytes): the rest
+are counted in :attr:`Timeline.hidden` and said under the picture."""
 
 JOIN = 0.05
 """Seconds between two bars of one run (:func:`runs`) at most."""
@@ -147,6 +152,8 @@ class Timeline:
     """The poses on every line that has them, in time order."""
     end: float = 0.0
     """The time of the trace's last line."""
+    hidden: int = 0
+    """Devices beyond :data:`MAX_ROWS`, not drawn (nor what ran on them)."""
 
     def speech(self) -> list[Bar]:
         """The robot's words: the first bar of each AB with text."""
@@ -379,10 +386,24 @@ class Builder:
         out.apps = list(self.apps)
         named = [d for d in self.named if d not in self.occupied]
         out.devices = [*self.occupied, *sorted(named, key=lambda d: d == NO_DEVICE)]  # (last)
+        if len(out.devices) > MAX_ROWS:
+            _keep_rows(out)
         place = {d: i for i, d in enumerate(out.devices)}
         out.bars.sort(key=lambda b: (b.t0, b.ab, place[b.device]))
         out.spans.sort(key=lambda s: (s.t0, s.app, s.line))
         return out
+
+
+def _keep_rows(out: Timeline) -> None:
+    """Keep the first :data:`MAX_ROWS` devices, and what ran or waited on them."""
+    out.hidden = len(out.devices) - MAX_ROWS
+    out.devices = out.devices[:MAX_ROWS]
+    kept = set(out.devices)
+    out.bars = [b for b in out.bars if b.device in kept]
+    out.spans = [replace(s, devices=tuple(d for d in s.devices if d in kept))
+                 for s in out.spans]
+    out.marks = [replace(m, devices=tuple(d for d in m.devices if d in kept))
+                 for m in out.marks]
 
 
 def timeline(rows: Iterable[Row]) -> Timeline:

@@ -160,6 +160,28 @@ def test_a_full_disk_is_one_line(suffix: str, tmp_path: Path) -> None:
                                 "device\n")
 
 
+def test_a_trace_of_a_thousand_devices_draws_the_first_64(tmp_path: Path) -> None:
+    """A forged trace whose every AB names a device of its own (a picture of gigabytes,
+    drawn whole): the first MAX_ROWS devices are drawn, the rest said under them."""
+    import json
+
+    from prima.timeline import MAX_ROWS
+
+    trace = tmp_path / "many.jsonl"
+    lines = []
+    for i in range(1_000):
+        row = {"app": "ea", "ab": i, "command": "Speak", "devices": [f"d{i}"]}
+        lines.append({"t": i / 10, "seq": 2 * i, "kind": "start", **row})
+        lines.append({"t": i / 10 + 0.05, "seq": 2 * i + 1, "kind": "end", **row})
+    trace.write_text("".join(json.dumps(r) + "\n" for r in lines), encoding="utf-8")
+    tl = timeline(lines)
+    assert (tl.devices, tl.hidden) == ([f"d{i}" for i in range(MAX_ROWS)], 1_000 - MAX_ROWS)
+    assert {b.device for b in tl.bars} == set(tl.devices)
+    out = tmp_path / "many.svg"
+    assert plot(str(trace), "-o", str(out))[0] == 0
+    assert f"{1_000 - MAX_ROWS} more devices not drawn" in out.read_text(encoding="utf-8")
+
+
 def test_without_matplotlib_it_says_how_to_install_it(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib fails
