@@ -45,6 +45,10 @@ commands (a prefix will do, or one letter: s c b w m a h q):
   help                  this text
   quit                  stop the run here"""
 
+MAX_COMMAND = 1 << 16
+"""The longest command line read, in characters: a longer one (standard input that is
+not text, ``< /dev/zero``) is refused, and read in pieces of this size meanwhile."""
+
 _KINDS = ("app", "command", "state", "event", "user", "time")
 _ALIASES = {"s": "step", "c": "continue", "b": "break", "w": "where", "m": "memory",
             "a": "apps", "h": "help", "q": "quit"}
@@ -140,10 +144,16 @@ class Debugger:
         while True:
             self._out.write("(prima) ")
             self._out.flush()
-            text = self._in.readline()
+            text = self._in.readline(MAX_COMMAND + 1)
             if not text:
                 self._say("")
                 raise _Quit  # end of input: stop here
+            if len(text) > MAX_COMMAND:  # (its rest read in pieces, never held whole)
+                while text and not text.endswith("\n"):
+                    text = self._in.readline(MAX_COMMAND)
+                self._say(f"cannot read that line: it is longer than {MAX_COMMAND:,} "
+                          "characters")
+                continue
             try:
                 words = shlex.split(text, comments=True) if text.strip() else []
             except ValueError as exc:  # an unclosed quote: "don't" said as a word
@@ -241,10 +251,11 @@ class Debugger:
         return False
 
     def _delete(self, args: list[str]) -> bool:
-        if len(args) != 1 or not args[0].isdigit() or not 1 <= int(args[0]) <= len(self.breaks):
+        number = _count(args[0]) if len(args) == 1 else None
+        if number is None or not 1 <= number <= len(self.breaks):
             self._say(f"delete takes a breakpoint's number (1 to {len(self.breaks)})")
             return False
-        removed = self.breaks.pop(int(args[0]) - 1)
+        removed = self.breaks.pop(number - 1)
         self._say(f"deleted breakpoint {args[0]} ({removed})")
         return False
 
@@ -256,7 +267,8 @@ class Debugger:
         return False
 
     def _show_history(self, args: list[str]) -> bool:
-        n = int(args[0]) if args and args[0].isdigit() else 10
+        n = _count(args[0]) if args else None
+        n = 10 if n is None else n
         for line in list(self._history)[-n:]:
             self._say(self._describe(line))
         return False
@@ -316,6 +328,14 @@ class Debugger:
             self._width = max([APP_WIDTH, *map(len, self._known("app"))])
         return f"{line.seq:5d} {line.t:8.2f}   {who}   {line.app or '':<{self._width}} " \
             f"{describe(line)}"
+
+
+def _count(text: str) -> int | None:
+    """A number typed as ASCII digits (a longer one than 18 digits is as many as 10**18),
+    or None: ``str.isdigit`` takes ``²`` too, and ``int`` refuses it, or 5,000 digits."""
+    if not (text.isascii() and text.isdigit()):
+        return None
+    return int(text) if len(text) <= 18 else 10**18
 
 
 def _shown(value: Value) -> str:

@@ -56,6 +56,14 @@ def test_breakpoints_on_a_command_a_state_an_event_an_app_and_a_time() -> None:
     assert "delete takes a breakpoint's number (1 to 1)" in out
 
 
+def test_a_line_that_is_no_command_line_is_never_held_whole() -> None:
+    # (standard input that is not text, < /dev/zero, has no line end: read whole, it took
+    # all the memory there is; split as words, all the time)
+    out = session("\0" * 70_000 + "\nstep\nq\n")
+    assert "(prima) cannot read that line: it is longer than 65,536 characters" in out
+    assert "    0     0.00   R   fa2-follow   loads fa2-follow.pxml (fa)" in out
+
+
 def test_bad_commands_are_told_and_the_end_of_input_stops_the_run() -> None:
     out = session("frobnicate\nstep x\nbreak colour red\nbreak time soon\nh\nstep 2\n")
     assert "unknown command 'frobnicate'" in out
@@ -65,6 +73,15 @@ def test_bad_commands_are_told_and_the_end_of_input_stops_the_run() -> None:
     assert "commands (a prefix will do" in out
     assert out.rstrip().endswith("s")  # "stopped at t=... s": end of input quits
     assert "stopped at t=" in out
+
+
+def test_a_number_that_is_no_number_is_told_not_a_traceback() -> None:
+    huge = "9" * 5000  # (past what int() converts)
+    out = session(f"b time 100\nhistory \u00b2\nhistory {huge}\ndelete \u00b2\n"
+                  f"delete {huge}\nstep 2\nhistory {huge}\nq\n")
+    assert out.count("delete takes a breakpoint's number (1 to 1)") == 2
+    assert "1     0.00   R   fa2-follow   state sleeping" in out
+    assert out.rstrip().endswith("stopped at t=0 s")
 
 
 def test_continue_with_no_breakpoint_runs_to_the_end() -> None:
