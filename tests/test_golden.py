@@ -50,6 +50,33 @@ def test_prima_test_cli(tmp_path: Path) -> None:
     assert code == 1 and out.startswith(f"different {path}\n---")
 
 
+def test_a_golden_trace_that_is_a_pipe_or_not_text_is_one_located_line(
+        tmp_path: Path) -> None:
+    import os
+
+    path = scenario(tmp_path)
+    golden = golden_path(path)
+
+    def cli(*argv: str) -> tuple[int, str, str]:
+        out, err = io.StringIO(), io.StringIO()
+        return main(["test", *argv], out=out, err=err), out.getvalue(), err.getvalue()
+
+    golden.write_bytes(b"  No.\n \xff\xfe\n")
+    assert cli(str(path)) == (1, "", f"{golden}:2:2: error: the golden trace is not UTF-8 "
+                                     "text\n1 scenario(s): 1 failed\n")
+    golden.unlink()
+    golden.mkdir()
+    assert cli(str(path))[2].startswith(f"{golden}:1:1: error: the golden trace is a folder")
+    golden.rmdir()
+    os.mkfifo(golden)  # (opened, it would wait for a writer: the test would hang)
+    assert cli(str(path))[2].startswith(f"{golden}:1:1: error: the golden trace is not a "
+                                        "regular file: PRIMA reads only regular files")
+    golden.unlink()
+    golden.write_bytes(b"\xff")
+    assert cli("--update", str(path))[:2] == (0, f"updated   {path}\n")  # rewritten
+    assert cli(str(path))[:2] == (0, f"same      {path}\n")
+
+
 def test_pytest_fixture(pytester: pytest.Pytester, tmp_path: Path) -> None:
     path = scenario(tmp_path)
     pytester.makepyfile(f"""
