@@ -150,6 +150,22 @@ def test_every_command_refuses_a_file_in_the_way_alike(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ea.pxml", "file", "map.xml", "s.xml"]
 
 
+def test_a_file_named_with_a_slash_at_its_end_is_refused_not_written_over(
+        tmp_path: Path) -> None:
+    scenario = speaking(tmp_path, "hello", until=2)
+    notes = tmp_path / "notes.txt"
+    notes.write_text("my notes\n")
+    for argv in (["run", str(scenario), "--out", f"{notes}/"],
+                 ["run", str(scenario), "--out", f"{tmp_path / 'new'}/"],
+                 ["sweep", str(scenario), "--runs", "1", "--jitter", "0", "--jobs", "1",
+                  "--worst", "0", "--results", f"{notes}/"]):
+        status, out, err = _cli(*argv)
+        assert (status, out) == (2, ""), (argv, err)
+        assert err.endswith(f"error: {argv[-2]} {argv[-1]} names a folder (it ends with /): "
+                            "give the file's name\n"), err
+    assert notes.read_text() == "my notes\n" and not (tmp_path / "new").exists()
+
+
 def test_a_failed_write_takes_away_the_folders_it_made(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     scenario = speaking(tmp_path, "hello")
