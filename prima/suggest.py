@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, NoReturn
 
 __all__ = ["SuggestingParser", "did_you_mean", "similar", "unrecognized"]
@@ -71,6 +71,9 @@ class SuggestingParser(argparse.ArgumentParser):
 
     given: Sequence[str] = ()
     error_word = "error"
+    escape: Callable[[str], str] | None = None
+    """What makes an error message safe for a terminal (what it quotes of the command
+    line, a file's name, may hold an escape sequence), set with ``error_word``."""
 
     def error(self, message: str) -> NoReturn:
         if message.startswith("the following arguments are required"):
@@ -79,6 +82,8 @@ class SuggestingParser(argparse.ArgumentParser):
             hint = unrecognized(unknown, self) if unknown else ""
             if "did you mean" in hint:
                 message += hint[hint.index(" ("):]
+        if self.escape is not None:
+            message = self.escape(message)
         self.print_usage(sys.stderr)
         self.exit(2, f"{self.prog}: {self.error_word}: {message}\n")
 

@@ -93,6 +93,22 @@ def test_control_characters_reach_no_terminal_through_debug(
     assert not re.search("[\x00-\x09\x0b-\x1f\x7f-\x9f]", out)
 
 
+def test_a_file_name_or_an_option_in_a_usage_error_reaches_no_terminal(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    forged = str(tmp_path / "\x1b]0;owned\x07\x1b[2J.xml")
+    shown = forged.replace("\x1b", "\\x1b").replace("\x07", "\\x07")
+    batch = ["--runs", "1", "--jitter", "0"]
+    for argv in (["run", forged], ["validate", forged], ["judge", forged], ["test", forged],
+                 ["debug", forged], ["sweep", forged, *batch],
+                 ["check", "cafe", "--scenario", forged], ["run", forged, "--\x1b[2J"],
+                 ["sweep", forged, *batch, "--executor", "\x9b2J"]):
+        status, out, err = _cli(*argv)
+        err += capsys.readouterr().err  # (argparse's own errors: to sys.stderr)
+        assert status == 2 and out == "", (argv, err)
+        assert not re.search("[\x00-\x09\x0b-\x1f\x7f-\x9f]", err), (argv, err)
+        assert shown in err or "\\x1b[2J" in err or "\\x9b2J" in err, (argv, err)
+
+
 def test_words_cannot_blank_the_review_page(tmp_path: Path) -> None:
     pytest.importorskip("plotly")
     scenario = speaking(tmp_path, "<!--<script> </script> and on")

@@ -101,7 +101,8 @@ def _caret(problem: Problem) -> str:
 
 
 def _usage(command: str, message: str, err: TextIO) -> int:
-    print(f"{_error(command, err)} {message}", file=err)
+    # (escaped: a file's name, an option's value in it may hold an escape sequence)
+    print(f"{_error(command, err)} {terminal(message)}", file=err)
     return EXIT_USAGE
 
 

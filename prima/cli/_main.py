@@ -101,6 +101,7 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None,
     for each in (parser, *_subparsers(parser)):
         each.given = given  # (for a did-you-mean in a "required" error)
         each.error_word = error
+        each.escape = terminal
     try:
         args, extra = parser.parse_known_args(argv)
         if extra:  # as parse_args would say, with the option a misspelt one may be
