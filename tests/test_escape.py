@@ -76,6 +76,25 @@ def test_a_line_separator_in_an_utterance_keeps_the_trace_readable(
     assert _cli("judge", str(trace))[0] == 0
 
 
+def test_a_forged_trace_drives_no_terminal_through_the_judges_findings(
+        tmp_path: Path) -> None:
+    forged = "\x1b]0;owned\x07\x1b[2J\u202e\x9b"
+    rows = [{"t": 0, "seq": 0, "kind": "event", "text": "touched" + forged},
+            {"t": 0, "seq": 1, "kind": "request", "app": "a" + forged, "ab": 1, "tree": 1,
+             "command": "Speak", "text": "hi" + forged, "reactive": True,
+             "reason": "new-tree", "devices": ["speaker"],
+             "detail": {"command_id": 1, "at": forged + ".pxml:1:1"}},
+            {"t": 100, "seq": 2, "kind": "start", "app": "a" + forged, "ab": 1, "tree": 1,
+             "command": "Speak", "text": "hi" + forged, "devices": ["speaker"],
+             "detail": {"command_id": 1}}]
+    trace = tmp_path / f"{forged}.jsonl"
+    trace.write_text("".join(json_line(r) + "\n" for r in rows), encoding="utf-8")
+    status, out, _ = _cli("judge", str(trace))
+    assert status == 1 and re.search(r"\n  late reactions +1  > max 0\n", out), out
+    assert "seq 0 t=0 a\\x1b]0;owned\\x07\\x1b[2J\\u202e\\x9b touched" in out, out
+    assert not re.search("[\x00-\x09\x0b-\x1f\x7f-\x9f\u202e]", out), out
+
+
 def test_control_characters_reach_no_terminal(tmp_path: Path) -> None:
     scenario = speaking(tmp_path, "a\x7fb\x9b2Jc")  # (XML has no C0 control characters)
     status, out, _ = _cli("run", str(scenario))

@@ -6,6 +6,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
+from prima.escape import terminal
 from prima.judge._findings import Finding, Reaction
 from prima.judge._measures import MEASURES
 from prima.judge._thresholds import Thresholds
@@ -150,7 +151,7 @@ def _count_style(n: int, limit: int) -> tuple[str, ...]:
 
 
 def _block(report: Report, paint: Paint, columns: int | None) -> list[str]:
-    rows = [f"{paint(report.name, BOLD)}  ({report.end:g} s, {report.lines} lines, "
+    rows = [f"{paint(terminal(report.name), BOLD)}  ({report.end:g} s, {report.lines} lines, "
             f"{len(report.reactions)} reactions)"]
     rows += _reaction_rows(report, paint, columns)
     for m in MEASURES:
@@ -160,7 +161,8 @@ def _block(report: Report, paint: Paint, columns: int | None) -> list[str]:
         rows += layout([[m.title, Cell(f"{len(items)}{mark}",
                                        _count_style(len(items), limit))]],
                        minimum=(_TITLES,), indent="  ", paint=paint)
-        rows += [f"      {m.line(item)}" for item in items[:10]]
+        # (escaped, as the tables' cells are: an app's name, its words, where it is written)
+        rows += [f"      {terminal(m.line(item))}" for item in items[:10]]
         if len(items) > 10:
             rows.append(f"      ... and {len(items) - 10} more")
     return rows
