@@ -781,8 +781,8 @@ class _Stuck:
         app = str(row.get("app") or "")
         before = row.get("before")
         pred = None
-        if isinstance(before, int) and before in ctx.abs:
-            pred = ctx.abs[before].ids[0]
+        if isinstance(before, int) and before in ctx.abs and ctx.abs[before].ids:
+            pred = ctx.abs[before].ids[0]  # (a forged start line may name no Command)
         t = float(row["t"])
         for cid in command_ids(row):
             command = _Command(cid, app, t, int(row["seq"]), pred)
@@ -854,8 +854,9 @@ class _Stuck:
         self._check(ctx, before=end)
         for ab in sorted(ctx.running.values(), key=lambda a: a.seq):
             if end - ab.start > ctx.th.stuck_after + EPS and ab.app not in self.stuck:
-                self.stuck[ab.app] = Stuck(
-                    ab.app, round(ab.start + ctx.th.stuck_after, 3), ab.seq, ab.ids[0],
+                self.stuck[ab.app] = Stuck(  # (a forged start line may name no Command: -1)
+                    ab.app, round(ab.start + ctx.th.stuck_after, 3), ab.seq,
+                    ab.ids[0] if ab.ids else -1,
                     ab.start, "ab", ctx.at(ab),
                     Blame(ab.app, ab.id, ab.command, ctx.at(ab), "never ended"))
         for app, waiting in self.waiting.items():

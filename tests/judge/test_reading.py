@@ -62,6 +62,21 @@ def test_a_line_too_long_is_read_past_never_held(tmp_path: Path) -> None:
     assert peak < 16 << 20, f"{peak:,} bytes to read past a long line"
 
 
+def test_a_forged_start_line_that_names_no_command_is_judged_not_a_crash(
+        tmp_path: Path) -> None:
+    # (a start line's Command ids are optional to the reader: an AB that names none, one
+    # linked after it, and one that never ends are judged, not an IndexError)
+    path = tmp_path / "forged.jsonl"
+    path.write_text("\n".join([
+        '{"t": 0, "seq": 0, "kind": "start", "app": "a", "ab": 1, "devices": ["speaker"]}',
+        '{"t": 0, "seq": 1, "kind": "request", "app": "a", "ab": 2, "before": 1, '
+        '"detail": {"command_id": 2}}',
+        '{"t": 100, "seq": 2, "kind": "log", "app": "a"}',
+    ]) + "\n", encoding="utf-8")
+    report = judge_file(path)
+    assert [s.kind for s in report.of("stuck")] == ["ab"]
+
+
 def test_an_empty_trace_is_an_error(tmp_path: Path) -> None:
     path = tmp_path / "empty.jsonl"
     path.write_text("\n", encoding="utf-8")
