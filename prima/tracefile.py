@@ -13,7 +13,10 @@ characters ``str.splitlines`` takes for line ends: a writer escapes those
 (:func:`prima.escape.json_line`) and a reader does not split a line there. Numbers
 are bounded where they are read: a whole number of more than :data:`MAX_DIGITS`
 digits (or, for ``t`` and ``seq``, beyond 2^63) is a located error, never a crash
-of the reader that would turn it into a float or a text.
+of the reader that would turn it into a float or a text. At most :data:`MAX_RUNNING`
+atomic behaviors run at once (a start line past them is a located error): what reads a
+trace works on the ABs running at each line, and a forged trace of thousands running at
+once would cost it time and memory by their square.
 """
 
 from __future__ import annotations
@@ -26,7 +29,8 @@ from typing import Any, TextIO
 
 from prima.errors import Problem, Severity, TraceError
 
-__all__ = ["MAX_DIGITS", "MAX_LINE", "MAX_NUMBER", "MAX_PROBLEMS", "Row", "check_row",
+__all__ = ["MAX_DIGITS", "MAX_LINE", "MAX_NUMBER", "MAX_PROBLEMS", "MAX_RUNNING", "Row",
+           "check_row",
            "load_trace", "read_trace", "rows"]
 
 Row = Mapping[str, Any]
@@ -44,6 +48,10 @@ where it is read, located, before any reader turns it into a float or a text."""
 
 MAX_NUMBER = 64
 """The most characters of a number with a fraction or an exponent in a trace."""
+
+MAX_RUNNING = 64
+"""The most atomic behaviors a trace has running at once (started, not yet ended): a
+robot runs at most one on each of its devices, two where the blend policy shares one."""
 
 _LARGEST = 2**63
 
@@ -139,6 +147,7 @@ def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
     problems: list[Problem] = []
     last_t = 0.0
     count = 0
+    running: set[int] = set()
     try:
         with path.open(encoding="utf-8", newline="\n") as lines:
             for number, line in enumerate(_lines(lines), start=1):
@@ -149,6 +158,8 @@ def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
                     row, wrong, col = _decode(line.removesuffix("\n").removesuffix("\r"))
                     if wrong is None and row["t"] < last_t - _EPS:
                         wrong = f"time goes backwards ({row['t']} after {last_t})"
+                    if wrong is None:
+                        wrong = _running(row, running)
                     if wrong is not None:
                         problems.append(_problem(name, number, col, wrong))
                     else:
@@ -176,6 +187,22 @@ def _lines(file: TextIO) -> Iterator[str | None]:
         while not line.endswith("\n") and (line := file.readline(MAX_LINE)):
             pass
         yield None
+
+
+def _running(row: Row, running: set[int]) -> str | None:
+    """Keep ``running`` (the ABs started and not yet ended) up to date with a checked line;
+    what is wrong with a start line past :data:`MAX_RUNNING` of them."""
+    ab = row.get("ab")
+    if not isinstance(ab, int):
+        return None
+    if row["kind"] == "start" and ab not in running:
+        if len(running) >= MAX_RUNNING:
+            return (f"more than {MAX_RUNNING} atomic behaviors running at once (a robot runs "
+                    "one on each of its devices)")
+        running.add(ab)
+    elif row["kind"] == "end":
+        running.discard(ab)
+    return None
 
 
 class _Unbounded(ValueError):

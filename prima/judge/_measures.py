@@ -143,6 +143,22 @@ def _about_something_else(row: Row, before: str | None) -> bool:
     return before is not None and not _AIMING.isdisjoint(before.split("+"))
 
 
+class _Posed:
+    """A posed line that ABs wait to judge until their words' times are known: one object
+    for all of them (a tuple would be made anew for each in the compiled build)."""
+
+    __slots__ = ("driven", "held", "mover", "row")
+
+    def __init__(self, row: Row, mover: Blame | None, driven: bool = True,
+                 held: Row | None = None) -> None:
+        self.row = row
+        self.mover = mover
+        self.driven = driven
+        """Something took the robot somewhere since the posed line before it."""
+        self.held = held
+        """The posed line before it."""
+
+
 @dataclass
 class _Words:
     """An utterance addressed to the user, while its words run."""
@@ -157,7 +173,7 @@ class _Words:
     """The most degrees off in that stretch."""
     turner: Blame | None = None
     """What drove the wheels when that stretch began."""
-    pending: list[tuple[Row, Blame | None]] = field(default_factory=list)
+    pending: list[_Posed] = field(default_factory=list)
     """Posed lines while its words' times are not known yet: judged at its end."""
 
 
@@ -225,16 +241,17 @@ class _Unfaced:
             if talk is not None:
                 if talk.words is None and ab in ctx.abs:
                     talk.words = ctx.abs[ab].words
-                    for pose, mover in talk.pending:
-                        if self._pose(ab, talk, pose, mover, ctx):
+                    for posed in talk.pending:
+                        if self._pose(ab, talk, posed.row, posed.mover, ctx):
                             break
                 if ab in self.talking:
                     self._ended(ab, talk, float(row["t"]), ctx)
         if self.talking and row.get("robot") is not None and row.get("user") is not None:
             mover = _wheels(ctx)
+            posed = _Posed(row, mover)  # (one for every AB it waits in: not one each)
             for ab_id, talk in list(self.talking.items()):
                 if talk.words is None:
-                    talk.pending.append((row, mover))
+                    talk.pending.append(posed)
                 else:
                     self._pose(ab_id, talk, row, mover, ctx)
 
@@ -360,7 +377,7 @@ class _Talk:
     """When the words run, if known."""
     gap: float = 0.0
     """How far it was from the user when the words began."""
-    pending: list[tuple[Row, Blame | None, bool, Row | None]] = field(default_factory=list)
+    pending: list[_Posed] = field(default_factory=list)
     """Poses while its words' times are not known yet (they are said after something
     else in its AB): judged at its end."""
 
@@ -396,16 +413,17 @@ class _Leaving:
             talk = self.talking.pop(ab, None)
             if talk is not None and talk.words is None and ab in ctx.abs:
                 talk.words = ctx.abs[ab].words
-                for pose, mover, driven, held in talk.pending:
-                    if self._pose(talk, pose, mover, ctx, driven, held):
+                for posed in talk.pending:
+                    if self._pose(talk, posed.row, posed.mover, ctx, posed.driven, posed.held):
                         break
         if row.get("robot") is not None and row.get("user") is not None:
             if self.talking:
                 mover = _wheels(ctx)
                 driven = self.driving > 0 or self.drove
+                posed = _Posed(row, mover, driven, self.held)  # (one for every AB it waits in)
                 for ab_id, talk in list(self.talking.items()):
                     if talk.words is None:
-                        talk.pending.append((row, mover, driven, self.held))
+                        talk.pending.append(posed)
                     elif self._pose(talk, row, mover, ctx, driven, self.held):
                         del self.talking[ab_id]
             self.drove = False

@@ -84,6 +84,50 @@ def test_an_empty_trace_is_an_error(tmp_path: Path) -> None:
         load_trace(path)
 
 
+def _forged(path: Path, running: int, poses: int) -> Path:
+    """A trace in which ``running`` ABs that speak start and never end (their words' times
+    unknown), then ``poses`` posed lines come."""
+    poses_ = '"robot": {"x": 0, "y": 0, "heading": 0}, ' \
+        '"user": {"x": 1, "y": 0, "heading": 180, "detectable": true}'
+    lines = [f'{{"t": 0, "seq": {i}, "kind": "start", "app": "a", "ab": {i}, "tree": {i}, '
+             f'"command": "Speak", "text": "hi", "devices": ["speaker"], '
+             f'"detail": {{"command_id": {i}}}, {poses_}}}' for i in range(running)]
+    lines += [f'{{"t": 0, "seq": {running + i}, "kind": "pose", {poses_}}}'
+              for i in range(poses)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def test_a_forged_trace_with_more_abs_running_than_a_robot_has_is_refused(
+        tmp_path: Path) -> None:
+    from prima.tracefile import MAX_RUNNING
+
+    path = _forged(tmp_path / "forged.jsonl", MAX_RUNNING + 2, 1)
+    with pytest.raises(TraceError) as caught:
+        judge_file(path)
+    assert [str(p) for p in caught.value.problems] == [
+        f"{path}:{line}:1: error: more than {MAX_RUNNING} atomic behaviors running at once "
+        "(a robot runs one on each of its devices)" for line in (MAX_RUNNING + 1, MAX_RUNNING + 2)]
+
+
+def test_abs_whose_words_are_not_yet_known_share_the_posed_lines_they_wait_for(
+        tmp_path: Path) -> None:
+    import tracemalloc
+
+    from prima.tracefile import MAX_RUNNING
+
+    path = _forged(tmp_path / "forged.jsonl", MAX_RUNNING, 4000)
+    tracemalloc.start()
+    try:
+        judge_file(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    # (a pair per AB per posed line, for the unfaced and the leaving measures each, came
+    # to about 37 MiB here; shared, the whole judging peaks at about 8)
+    assert peak < 16 * 2**20, f"{peak / 2**20:.1f} MiB"
+
+
 def test_a_trace_line_and_its_jsonl_are_judged_alike(tmp_path: Path) -> None:
     from prima.run import Run
     from prima.trace import jsonl_row
