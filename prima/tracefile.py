@@ -30,8 +30,7 @@ from typing import Any, TextIO
 from prima.errors import Problem, Severity, TraceError
 
 __all__ = ["MAX_DIGITS", "MAX_LINE", "MAX_NUMBER", "MAX_PROBLEMS", "MAX_RUNNING", "Row",
-           "check_row",
-           "load_trace", "read_trace", "rows"]
+           "check_row", "load_trace", "read_trace", "rows"]
 
 Row = Mapping[str, Any]
 """One line of a trace, as its jsonl dict."""

@@ -16,7 +16,7 @@ import json
 import math
 import tempfile
 import time
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -118,18 +118,12 @@ def record_of(report: Report) -> dict[str, Any]:
     }
 
 
-def _tee(rows: Iterable[Mapping[str, Any]], observer: Observer) -> Iterator[Mapping[str, Any]]:
-    for row in rows:
-        observer.feed(row)
-        yield row
-
-
 def run_one(job: Job, index: int, root: etree._Element, folder: Path,
             files: Loaded | None = None) -> dict[str, Any]:
     """Run ``index`` of ``job`` (its scenario's parsed ``root``, unpacked in ``folder``),
     judged: its record (without its job's number). A run that fails is a record with
     its ``error``. Runs given the same ``files`` load the job's documents once."""
-    from prima.judge import judge
+    from prima.judge import Judging
     from prima.run import Run
 
     variant = copy.deepcopy(root)
@@ -138,13 +132,16 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
     path.write_bytes(etree.tostring(variant, encoding="UTF-8", xml_declaration=True))
     record: dict[str, Any] = {"run": index}
     try:
-        made: list[Mapping[str, Any]] = []
-        Run(path, files=files, rows=made.append, policies=dict(job.policies)).run()
-        lines: Iterable[Mapping[str, Any]] = made
+        judging = Judging(job.thresholds, f"run {index}")
         observer = job.analysis.observer() if job.analysis is not None else None
-        if observer is not None:
-            lines = _tee(lines, observer)
-        report = judge(lines, thresholds=job.thresholds, name=f"run {index}")
+
+        def feed(row: Mapping[str, Any]) -> None:  # (judged as it goes: no line is kept)
+            if observer is not None:
+                observer.feed(row)
+            judging.feed(row)
+
+        Run(path, files=files, rows=feed, policies=dict(job.policies)).run()
+        report = judging.report()
         record.update(record_of(report))
         if observer is not None and job.analysis is not None:
             record[job.analysis.key] = observer.finish(report)

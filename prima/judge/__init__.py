@@ -36,22 +36,22 @@ if TYPE_CHECKING:
         Stuck,
         Unfaced,
     )
-    from prima.judge._judging import find_scenarios, judge, judge_file
+    from prima.judge._judging import Judging, find_scenarios, judge, judge_file
     from prima.judge._measures import MEASURES, Measure, measure, registered
     from prima.judge._reading import load_trace
     from prima.judge._report import Report, format_summary, format_table
 
 __all__ = ["LIMITS", "MEASURES", "PARAMETERS", "BargeIn", "Blame", "Elsewhere", "Finding",
-           "Ignored", "Leaving", "Limit", "Measure", "Parameter", "Reaction", "Recovery",
-           "Report", "Silence", "Split", "Stuck", "Thresholds", "Unfaced", "find_scenarios",
-           "format_summary", "format_table", "judge", "judge_file", "load_trace", "measure",
-           "registered"]
+           "Ignored", "Judging", "Leaving", "Limit", "Measure", "Parameter", "Reaction",
+           "Recovery", "Report", "Silence", "Split", "Stuck", "Thresholds", "Unfaced",
+           "find_scenarios", "format_summary", "format_table", "judge", "judge_file",
+           "load_trace", "measure", "registered"]
 
 _WHERE = {
     **dict.fromkeys(("BargeIn", "Blame", "Elsewhere", "Finding", "Ignored", "Leaving",
                      "Reaction", "Recovery", "Silence", "Split", "Stuck", "Unfaced"),
                     "_findings"),
-    **dict.fromkeys(("find_scenarios", "judge", "judge_file"), "_judging"),
+    **dict.fromkeys(("Judging", "find_scenarios", "judge", "judge_file"), "_judging"),
     **dict.fromkeys(("MEASURES", "Measure", "measure", "registered"), "_measures"),
     "load_trace": "_reading",
     **dict.fromkeys(("Report", "format_summary", "format_table"), "_report"),

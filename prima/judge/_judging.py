@@ -11,35 +11,57 @@ from prima.errors import TraceError
 from prima.judge._context import Context
 from prima.judge._measures import MEASURES, Finder
 from prima.judge._reactions import analyse
-from prima.judge._reading import as_rows, read_trace
+from prima.judge._reading import Row, as_rows, read_trace
 from prima.judge._report import Report
 from prima.judge._thresholds import Thresholds
 
 if TYPE_CHECKING:
     from prima.run import Switches
 
-__all__ = ["find_scenarios", "judge", "judge_file"]
+__all__ = ["Judging", "find_scenarios", "judge", "judge_file"]
+
+
+class Judging:
+    """A trace judged as it is made: :meth:`feed` each of its lines (a jsonl dict, in
+    trace order), then take the :meth:`report`. A run judged so holds none of its lines
+    (:func:`judge_file` of a scenario, a sweep's and a check's runs): what it keeps is
+    the judge's own, however long the run."""
+
+    def __init__(self, thresholds: Thresholds | None = None, name: str = "") -> None:
+        self.th = thresholds if thresholds is not None else Thresholds()
+        self.name = name
+        self.ctx = Context(self.th)
+        self.finders = [(m, m.finder()) for m in MEASURES]
+        self._fed: dict[str, list[Finder]] = {}
+        """The finders each kind of line goes to, in order."""
+
+    def feed(self, row: Row) -> None:
+        """One line of the trace, after the ones before it."""
+        self.ctx.feed(row)
+        kind = row["kind"]
+        those = self._fed.get(kind)
+        if those is None:
+            those = self._fed[kind] = [f for _m, f in self.finders
+                                       if f.kinds is None or kind in f.kinds]
+        for finder in those:
+            finder.feed(row, self.ctx)
+        self.ctx.fed(row)
+
+    def report(self) -> Report:
+        """What the lines fed show."""
+        ctx = self.ctx
+        reactions = analyse(ctx, ctx.t)
+        findings = {m.key: tuple(finder.finish(ctx, reactions)) for m, finder in self.finders}
+        return Report(self.name, ctx.t, ctx.lines, self.th, tuple(reactions), findings)
 
 
 def judge(trace: Iterable[object], *, thresholds: Thresholds | None = None,
           name: str = "") -> Report:
     """Measure a trace's naturalness: TraceLine objects or jsonl dicts, in trace order."""
-    th = thresholds if thresholds is not None else Thresholds()
-    ctx = Context(th)
-    finders = [(m, m.finder()) for m in MEASURES]
-    fed: dict[str, list[Finder]] = {}  # the finders each kind of line goes to, in order
+    judging = Judging(thresholds, name)
     for row in as_rows(trace):
-        ctx.feed(row)
-        kind = row["kind"]
-        those = fed.get(kind)
-        if those is None:
-            those = fed[kind] = [f for _m, f in finders if f.kinds is None or kind in f.kinds]
-        for finder in those:
-            finder.feed(row, ctx)
-        ctx.fed(row)
-    reactions = analyse(ctx, ctx.t)
-    findings = {m.key: tuple(finder.finish(ctx, reactions)) for m, finder in finders}
-    return Report(name, ctx.t, ctx.lines, th, tuple(reactions), findings)
+        judging.feed(row)
+    return judging.report()
 
 
 def judge_file(path: str | Path, *, thresholds: Thresholds | None = None,
@@ -54,7 +76,9 @@ def judge_file(path: str | Path, *, thresholds: Thresholds | None = None,
     from prima.run import Run  # only now: the whole stack comes with it
 
     options = switches.run_options() if switches else {}
-    return judge(Run(path, **options).run(), thresholds=thresholds, name=name)
+    judging = Judging(thresholds, name)
+    Run(path, rows=judging.feed, **options).run()  # (judged as it goes: no line is kept)
+    return judging.report()
 
 
 def find_scenarios(folder: str | Path) -> list[Path]:

@@ -187,3 +187,31 @@ def test_each_finder_is_fed_every_kind_of_line_it_needs(scenario: str,
     every = judge(lines)
     assert (every.reactions, dict(every.findings)) == (narrow.reactions, dict(narrow.findings))
     assert any(narrow.findings.values()) or narrow.reactions
+
+
+def test_a_scenario_is_judged_as_it_runs_holding_none_of_its_lines(tmp_path: Path) -> None:
+    # (an EA whose timers fire on every step makes a long trace of lines no measure keeps:
+    # judged after the run, they were all held, some 33 MiB here, growing with the run)
+    import tracemalloc
+
+    (tmp_path / "map.xml").write_text(
+        '<map xmlns="urn:prima:map:1" name="m"><place name="a" x="0" y="0"/></map>\n')
+    timers = range(20)
+    (tmp_path / "ea.pxml").write_text(
+        '<pxml xmlns="urn:prima:pxml:1" kind="ea" name="t">'
+        + "".join(f'<on event="t{i}"><timer name="t{i}" after="0.01"/></on>' for i in timers)
+        + '<state id="s" initial="true"><entry>'
+        + "".join(f'<timer name="t{i}" after="0.01"/>' for i in timers)
+        + "</entry></state></pxml>\n")
+    scenario = tmp_path / "s.xml"
+    scenario.write_text('<scenario xmlns="urn:prima:scenario:1" name="s" until="20">'
+                        '<map href="map.xml"/><apps ea="ea.pxml"/><robot place="a"/>'
+                        "</scenario>\n")
+    tracemalloc.start()
+    try:
+        report = judge_file(scenario)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert report.lines > 30_000
+    assert peak < 16 * 2**20, f"{peak / 2**20:.1f} MiB"
