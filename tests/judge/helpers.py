@@ -138,6 +138,15 @@ class Trace:
     def pose(self, t: float) -> None:
         self.line(t, "pose")
 
+    def drives_then_speaks(self, t: float, words: str) -> tuple[str, ...]:
+        """ea asks for a SetPosition+Speak at ``t`` and it starts (its words' times known
+        only from its end line); its devices."""
+        devices = ("localization", "locomotion", "speaker")
+        self.request(t, "ea", 1, [1, 2], command="SetPosition+Speak", text=words,
+                     devices=devices)
+        self.start(t, "ea", 1, 1, command="SetPosition+Speak", text=words, devices=devices)
+        return devices
+
     def judge(self, **thresholds: Any) -> Report:
         return judge(self.rows, thresholds=Thresholds(**thresholds), name="hand-written")
 

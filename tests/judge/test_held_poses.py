@@ -86,12 +86,8 @@ def test_where_the_robot_was_as_its_words_began_is_where_the_line_before_put_it(
     """A SetPosition+Speak's words begin at 2 s, after its drive; the first line in them
     is at 2.5 s, once the robot has rolled on 0.5 m away from its user: it left them
     while talking, whether or not a sample at 2 s repeats where it stood."""
-    devices = ("localization", "locomotion", "speaker")
     tr = Trace()
-    tr.request(1.0, "ea", 1, [1, 2], command="SetPosition+Speak", text="Here is the panel.",
-               devices=devices)
-    tr.start(1.0, "ea", 1, 1, command="SetPosition+Speak", text="Here is the panel.",
-             devices=devices)
+    devices = tr.drives_then_speaks(1.0, "Here is the panel.")
     _repeat(tr, 1.5)
     _repeat(tr, 2.0)
     tr.robot = {"x": -0.5, "y": 0.0, "heading": 0.0}

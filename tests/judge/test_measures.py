@@ -376,12 +376,8 @@ def test_in_a_grouped_ab_only_moving_while_its_words_run_is_leaving(
         moves_while_it_speaks: bool, found: int) -> None:
     """A SetPosition+Speak drives 1 m away from the user, then speaks (its words from
     3 s to 4 s, known from its end line): the drive before the words is no leaving."""
-    devices = ("localization", "locomotion", "speaker")
     tr = Trace()
-    tr.request(1.0, "ea", 1, [1, 2], command="SetPosition+Speak", text="Here is the panel.",
-               devices=devices)
-    tr.start(1.0, "ea", 1, 1, command="SetPosition+Speak", text="Here is the panel.",
-             devices=devices)
+    devices = tr.drives_then_speaks(1.0, "Here is the panel.")
     for t, x in ((1.5, -0.4), (2.0, -0.8), (3.0, -1.0)):
         tr.robot = {"x": x, "y": 0.0, "heading": 0.0}
         tr.pose(t)

@@ -267,6 +267,19 @@ def test_a_document_change_rechecks_the_scenario_that_runs_it_and_no_other(
     run(tmp_path, test)
 
 
+def _said(root: Path, test: Callable[[Raw], Awaitable[None]]) -> list[str]:
+    """What the server said on stderr, line by line, in a session that ``test`` drives."""
+    said: list[bytes] = []
+
+    async def session() -> None:
+        async with Raw(root) as raw:
+            await test(raw)
+        said.append(raw.stderr)
+
+    asyncio.run(session())
+    return said[0].decode().splitlines()
+
+
 def test_a_document_edits_make_longer_than_the_bound_is_no_longer_held(
         tmp_path: Path) -> None:
     """A document is held of at most MAX_MESSAGE bytes however the editor grows it: the
@@ -296,16 +309,8 @@ def test_a_document_edits_make_longer_than_the_bound_is_no_longer_held(
         raw.send(did_open(path, text))
         await published(raw, uri(path), 1)
 
-    said: list[bytes] = []
-
-    async def session() -> None:
-        async with Raw(tmp_path) as raw:
-            await test(raw)
-        said.append(raw.stderr)
-
-    asyncio.run(session())
     assert 3 * len(chunk) > MAX_MESSAGE > 2 * len(chunk)
-    assert said[0].decode().splitlines() == [
+    assert _said(tmp_path, test) == [
         f"prima lsp: {uri(path)} grew past {MAX_MESSAGE:,} bytes: it is not held nor "
         "checked (close it, then open it again)"]
 
@@ -340,14 +345,6 @@ def test_documents_opened_beyond_the_bound_are_not_held(tmp_path: Path) -> None:
                   "params": {"textDocument": {"uri": uri(paths[0])}}}, did_open(over, text))
         await published(raw, uri(over), 1)
 
-    said: list[bytes] = []
-
-    async def session() -> None:
-        async with Raw(tmp_path) as raw:
-            await test(raw)
-        said.append(raw.stderr)
-
-    asyncio.run(session())
-    assert said[0].decode().splitlines() == [
+    assert _said(tmp_path, test) == [
         f"prima lsp: {MAX_OPEN:,} documents are open: {uri(paths[MAX_OPEN])} and any opened "
         "after it are not checked (close one, then open them again)"]
