@@ -135,12 +135,13 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
         judging = Judging(job.thresholds, f"run {index}")
         observer = job.analysis.observer() if job.analysis is not None else None
 
-        def feed(row: Mapping[str, Any]) -> None:  # (judged as it goes: no line is kept)
+        def feed(row: Mapping[str, Any]) -> None:  # (judged as it goes: few lines are kept)
             if observer is not None:
                 observer.feed(row)
             judging.feed(row)
 
-        Run(path, files=files, rows=feed, policies=dict(job.policies)).run()
+        Run(path, files=files, rows=feed if observer is not None else judging.feed,
+            policies=dict(job.policies)).run()
         report = judging.report()
         record.update(record_of(report))
         if observer is not None and job.analysis is not None:

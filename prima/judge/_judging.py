@@ -21,11 +21,16 @@ if TYPE_CHECKING:
 __all__ = ["Judging", "find_scenarios", "judge", "judge_file"]
 
 
+HELD = 4096
+"""Lines :meth:`Judging.feed` holds at most before the judge reads them: a run judged as
+it goes holds no more of its trace, however long it is."""
+
+
 class Judging:
     """A trace judged as it is made: :meth:`feed` each of its lines (a jsonl dict, in
-    trace order), then take the :meth:`report`. A run judged so holds none of its lines
-    (:func:`judge_file` of a scenario, a sweep's and a check's runs): what it keeps is
-    the judge's own, however long the run."""
+    trace order), then take the :meth:`report`. A run judged so holds at most
+    :data:`HELD` of its lines (:func:`judge_file` of a scenario, a sweep's and a check's
+    runs): what it keeps is the judge's own, however long the run."""
 
     def __init__(self, thresholds: Thresholds | None = None, name: str = "") -> None:
         self.th = thresholds if thresholds is not None else Thresholds()
@@ -34,21 +39,36 @@ class Judging:
         self.finders = [(m, m.finder()) for m in MEASURES]
         self._fed: dict[str, list[Finder]] = {}
         """The finders each kind of line goes to, in order."""
+        self._held: list[Row] = []
+        """Lines fed and not yet read (:meth:`feed`)."""
 
     def feed(self, row: Row) -> None:
-        """One line of the trace, after the ones before it."""
-        self.ctx.feed(row)
-        kind = row["kind"]
-        those = self._fed.get(kind)
-        if those is None:
-            those = self._fed[kind] = [f for _m, f in self.finders
-                                       if f.kinds is None or kind in f.kinds]
-        for finder in those:
-            finder.feed(row, self.ctx)
-        self.ctx.fed(row)
+        """One line of the trace, after the ones before it (read in batches of at most
+        :data:`HELD` lines: the judge's loop is at its fastest so)."""
+        held = self._held
+        held.append(row)
+        if len(held) >= HELD:
+            self.feed_all(held)
+            held.clear()
+
+    def feed_all(self, rows: Iterable[Row]) -> None:
+        """Lines of the trace, in order, after the ones before them (the judge's one
+        loop: a trace judged whole goes through it once)."""
+        ctx, fed, finders = self.ctx, self._fed, self.finders
+        for row in rows:
+            ctx.feed(row)
+            kind = row["kind"]
+            those = fed.get(kind)
+            if those is None:
+                those = fed[kind] = [f for _m, f in finders if f.kinds is None or kind in f.kinds]
+            for finder in those:
+                finder.feed(row, ctx)
+            ctx.fed(row)
 
     def report(self) -> Report:
         """What the lines fed show."""
+        self.feed_all(self._held)
+        self._held.clear()
         ctx = self.ctx
         reactions = analyse(ctx, ctx.t)
         findings = {m.key: tuple(finder.finish(ctx, reactions)) for m, finder in self.finders}
@@ -59,8 +79,7 @@ def judge(trace: Iterable[object], *, thresholds: Thresholds | None = None,
           name: str = "") -> Report:
     """Measure a trace's naturalness: TraceLine objects or jsonl dicts, in trace order."""
     judging = Judging(thresholds, name)
-    for row in as_rows(trace):
-        judging.feed(row)
+    judging.feed_all(as_rows(trace))
     return judging.report()
 
 
@@ -77,7 +96,7 @@ def judge_file(path: str | Path, *, thresholds: Thresholds | None = None,
 
     options = switches.run_options() if switches else {}
     judging = Judging(thresholds, name)
-    Run(path, rows=judging.feed, **options).run()  # (judged as it goes: no line is kept)
+    Run(path, rows=judging.feed, **options).run()  # (judged as it goes: few lines held)
     return judging.report()
 
 
