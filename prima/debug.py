@@ -22,6 +22,7 @@ from prima.dsl import Document
 from prima.run import Run
 from prima.suggest import did_you_mean
 from prima.trace import APP_WIDTH, Kind, TraceLine, describe
+from prima.tracefile import bounded_lines
 from prima.vocab import Value
 
 __all__ = ["Break", "Debugger", "HELP"]
@@ -91,6 +92,8 @@ class Debugger:
     def __init__(self, scenario: str | Path, inp: TextIO, out: TextIO,
                  **run_options: object) -> None:
         self._in = inp
+        self._lines = bounded_lines(inp, MAX_COMMAND)
+        """The commands' lines, as they are read (None: one too long)."""
         self._out = out
         self.breaks: list[Break] = []
         self._steps = 0
@@ -144,13 +147,11 @@ class Debugger:
         while True:
             self._out.write("(prima) ")
             self._out.flush()
-            text = self._in.readline(MAX_COMMAND + 1)
-            if not text:
+            text = next(self._lines, "")
+            if text == "":
                 self._say("")
                 raise _Quit  # end of input: stop here
-            if len(text) > MAX_COMMAND:  # (its rest read in pieces, never held whole)
-                while text and not text.endswith("\n"):
-                    text = self._in.readline(MAX_COMMAND)
+            if text is None:  # (read past in pieces, never held whole)
                 self._say(f"cannot read that line: it is longer than {MAX_COMMAND:,} "
                           "characters")
                 continue

@@ -30,7 +30,7 @@ from typing import Any, TextIO
 from prima.errors import Problem, Severity, TraceError
 
 __all__ = ["MAX_DIGITS", "MAX_LINE", "MAX_NUMBER", "MAX_PROBLEMS", "MAX_RUNNING", "Row",
-           "check_row", "load_trace", "read_trace", "rows"]
+           "bounded_lines", "check_row", "load_trace", "read_trace", "rows"]
 
 Row = Mapping[str, Any]
 """One line of a trace, as its jsonl dict."""
@@ -149,7 +149,7 @@ def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
     running: set[int] = set()
     try:
         with path.open(encoding="utf-8", newline="\n") as lines:
-            for number, line in enumerate(_lines(lines), start=1):
+            for number, line in enumerate(bounded_lines(lines, MAX_LINE), start=1):
                 if line is None:
                     problems.append(_problem(name, number, 1, "the line is longer than "
                                                               f"{MAX_LINE:,} characters"))
@@ -176,14 +176,15 @@ def read_trace(path: str | Path) -> Iterator[dict[str, Any]]:
         raise TraceError(problems)
 
 
-def _lines(file: TextIO) -> Iterator[str | None]:
-    """The file's lines; None for one longer than :data:`MAX_LINE`, which is read past
-    a piece at a time, never held whole (a file of gigabytes with no line break)."""
-    while line := file.readline(MAX_LINE + 1):
-        if len(line) <= MAX_LINE:
+def bounded_lines(file: TextIO, limit: int) -> Iterator[str | None]:
+    """The file's lines, read as they are asked for; None for one longer than ``limit``
+    characters, which is read past a piece at a time, never held whole (a file of
+    gigabytes with no line break, ``/dev/zero``)."""
+    while line := file.readline(limit + 1):
+        if len(line) <= limit:
             yield line
             continue
-        while not line.endswith("\n") and (line := file.readline(MAX_LINE)):
+        while not line.endswith("\n") and (line := file.readline(limit)):
             pass
         yield None
 
