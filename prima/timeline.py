@@ -155,6 +155,11 @@ class Timeline:
     hidden: int = 0
     """Devices beyond :data:`MAX_ROWS`, not drawn (nor what ran on them)."""
 
+    def time_axis(self) -> str:
+        """The time axis's title, which says how many devices are not drawn, if any."""
+        more = f"; {self.hidden:,} more devices not drawn" if self.hidden else ""
+        return f"simulated time (s){more}"
+
     def speech(self) -> list[Bar]:
         """The robot's words: the first bar of each AB with text."""
         seen: set[int] = set()

@@ -82,8 +82,7 @@ def draw_timeline(ax: Axes, tl: Timeline, *, width_pt: float, labels: bool = Tru
     ax.set_ylim(-max(len(rows), 1) + 0.5, 0.5)
     ax.set_yticks([-i for i in range(len(rows))], rows, fontsize=_FONT)
     ax.tick_params(axis="x", labelsize=_FONT)
-    ax.set_xlabel("simulated time (s)" + (f"; {tl.hidden:,} more devices not drawn"
-                                          if tl.hidden else ""), fontsize=_FONT)
+    ax.set_xlabel(tl.time_axis(), fontsize=_FONT)
     ax.grid(axis="x", color="#dddddd", linewidth=0.5)
     ax.set_axisbelow(True)
     for i in range(len(rows) - 1):

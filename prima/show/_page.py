@@ -150,9 +150,7 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         barmode="overlay", height=max(200, 60 + 34 * len(tl.devices)),
         margin={"l": 140, "r": 10, "t": 30, "b": 40}, plot_bgcolor="white",
         legend={"orientation": "h", "y": -0.25 if len(tl.devices) > 3 else -0.5},
-        xaxis={"title": "simulated time (s)" + (f"; {tl.hidden:,} more devices not drawn"
-                                                if tl.hidden else ""),
-               "range": [0, max(tl.end, 1.0)],
+        xaxis={"title": tl.time_axis(), "range": [0, max(tl.end, 1.0)],
                "showgrid": True, "gridcolor": "#eee"},
         yaxis={"categoryorder": "array", "categoryarray": [_esc(d) for d in tl.devices[::-1]],
                "type": "category", "fixedrange": True},
