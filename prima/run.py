@@ -381,17 +381,18 @@ class Run:
         stop_if_signalled()  # (a Ctrl-C a finalizer dropped stops the run here)
         if kind is Kind.ERROR:
             fields["text"] = self._portable(str(fields.get("text") or ""))
+        now = self.sim.now()
         if kind in _POSED:
             posed = self.sim.poses()
-            self._posed = (posed, self.sim.now())
+            self._posed = (posed, now)
             fields["robot"], user, detectable = posed
             if user is not None:
                 fields["user"] = user
                 fields["detectable"] = detectable
         if self._rows is not None:
-            self._rows(row_of(self.sim.now(), self._count, kind, fields))
+            self._rows(row_of(now, self._count, kind, fields))
         else:
-            self._sink(TraceLine.made(self.sim.now(), self._count, kind, fields))
+            self._sink(TraceLine.made(now, self._count, kind, fields))
         self._count += 1
 
     def _sample(self) -> None:

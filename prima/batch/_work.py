@@ -16,7 +16,7 @@ import json
 import math
 import tempfile
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -135,13 +135,15 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
         judging = Judging(job.thresholds, f"run {index}")
         observer = job.analysis.observer() if job.analysis is not None else None
 
-        def feed(row: Mapping[str, Any]) -> None:  # (judged as it goes: few lines are kept)
-            if observer is not None:
-                observer.feed(row)
-            judging.feed(row)
+        feed: Callable[[Mapping[str, Any]], None] = judging.feed  # (few lines are kept)
+        if observer is not None:
+            watch, judged = observer.feed, judging.feed
 
-        Run(path, files=files, rows=feed if observer is not None else judging.feed,
-            policies=dict(job.policies)).run()
+            def feed(row: Mapping[str, Any]) -> None:
+                watch(row)
+                judged(row)
+
+        Run(path, files=files, rows=feed, policies=dict(job.policies)).run()
         report = judging.report()
         record.update(record_of(report))
         if observer is not None and job.analysis is not None:
