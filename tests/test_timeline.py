@@ -10,6 +10,7 @@ import pytest
 
 from prima.run import Run
 from prima.timeline import NO_DEVICE, Bar, Span, blended_devices, runs, timeline
+from tests.work import bytecodes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -208,9 +209,6 @@ def test_the_cost_is_linear_in_the_number_of_open_waits() -> None:
     """Thousands of waits open at once (suspended streams, holds of one holder) close by
     key, not by scanning every open wait on every line: 8x the rows take 8x the work,
     not 64x. The work is counted, not timed: the bytecodes run in prima/timeline.py."""
-    import sys
-    from types import FrameType
-
     import prima.timeline
 
     def rows(n: int) -> list[dict[str, Any]]:
@@ -225,23 +223,11 @@ def test_the_cost_is_linear_in_the_number_of_open_waits() -> None:
         return out
 
     def work(n: int) -> int:
-        data, count = rows(n), [0]
-
-        def trace(frame: FrameType, event: str, arg: object) -> Any:
-            if frame.f_code.co_filename != prima.timeline.__file__:
-                return None
-            frame.f_trace_opcodes = True
-            if event == "opcode":
-                count[0] += 1
-            return trace
-
-        sys.settrace(trace)
-        try:
-            tl = timeline(data)
-        finally:
-            sys.settrace(None)
-        assert len(tl.spans) == 2 * n
-        return count[0]
+        data = rows(n)
+        made: list[Any] = []
+        count = bytecodes(lambda: made.append(timeline(data)), only=prima.timeline.__file__)
+        assert len(made[0].spans) == 2 * n
+        return count
 
     small, large = work(200), work(1600)
     assert large < 8 * 1.25 * small, (small, large)  # (sorting adds a log factor)

@@ -10,8 +10,9 @@ of atomic behaviors, not of lines (poses are not kept).
 
 from __future__ import annotations
 
+import bisect
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,7 +21,7 @@ from prima.judge._reading import Row
 from prima.judge._thresholds import Thresholds
 
 __all__ = ["EPS", "TALK_DEVICES", "UNMEASURED_EVENTS", "Ab", "Context", "Exchange", "Hold",
-           "ReactionState", "xy"]
+           "ReactionState", "span_at", "xy"]
 
 EPS = 1e-6
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
@@ -229,6 +230,8 @@ class Context:
         self.tree_app: dict[int, str] = {}
         self.tree_reactions: dict[int, list[ReactionState]] = {}
         """Tree -> the reactions that took it over, in order (the latest ranks)."""
+        self.tree_taken: dict[int, float] = {}
+        """Tree -> when a reaction first took it over."""
         self.tree_abs: dict[int, list[Ab]] = {}
         # reactions
         self.reactions: list[ReactionState] = []
@@ -240,15 +243,18 @@ class Context:
         self.exchanges: list[Exchange] = []
         self.open_exchange: dict[str, Exchange] = {}
         """App -> its exchange whose reply is not yet known or not yet over."""
+        self.replied: dict[int, list[Exchange]] = {}
+        """An AB -> the exchanges whose reply's words it says (``reply_ab``)."""
         self.holds: list[Hold] = []
         self.demoted: dict[str, list[list[float]]] = {}
         """App -> when it had lost its precedence: [from, until] (until: inf if it had
-        not regained it)."""
+        not regained it), in time order and apart (:func:`span_at`)."""
         self.demoted_seq: dict[str, list[int]] = {}
         """App -> the seq of the line that said it lost its precedence, for each span:
         what started before it in that instant started with its precedence."""
         self.blocks: dict[str, list[list[float]]] = {}
-        """App -> when its begin/end block was open: [from, until]."""
+        """App -> when its begin/end block was open: [from, until], in time order and
+        apart (:func:`span_at`)."""
         self.interrupts: dict[int, str] = {}
         """AB -> the application whose reaction had it cut."""
         self.user_cuts: dict[int, bool] = {}
@@ -358,13 +364,10 @@ class Context:
         if row.get("text"):
             r.words = True
         tree = row.get("tree")
-        if isinstance(tree, int):
-            if tree not in r.trees:
-                r.trees.append(tree)
+        if isinstance(tree, int) and tree not in r.trees:  # (a tree it had not taken yet)
+            r.trees.append(tree)
             if not r.answer:  # (a reply continues its Q&A's tree: no reaction of its own)
-                taken = self.tree_reactions.setdefault(tree, [])
-                if r not in taken:
-                    taken.append(r)
+                self._taken(tree, r)
         for cid in ids:
             r.commands.append(cid)
             self.reaction_cmds[cid] = r
@@ -379,7 +382,11 @@ class Context:
             return
         r = ReactionState("", float(row["t"]), int(row["seq"]), app, False, "",
                           int(row["seq"]), trees=[tree])
+        self._taken(tree, r)
+
+    def _taken(self, tree: int, r: ReactionState) -> None:
         self.tree_reactions.setdefault(tree, []).append(r)
+        self.tree_taken[tree] = min(r.t, self.tree_taken.get(tree, r.t))
 
     def _exchange_request(self, row: Row, app: str, ids: tuple[int, ...]) -> None:
         ex = self.open_exchange.get(app)
@@ -432,7 +439,10 @@ class Context:
         if ex.kind == "words" and ex.reply_ab is None and ex.reply[0] in ab.ids and not ab.text:
             ex.kind = "other"  # (its first AB, on the speaker, says nothing: a sound)
         if ex.kind == "words" and ab.text and not set(ab.ids).isdisjoint(ex.reply):
+            if ex.reply_ab is not None:  # (words said again: a cut reply started anew)
+                self.replied[ex.reply_ab] = [e for e in self.replied[ex.reply_ab] if e is not ex]
             ex.reply_ab = ab.id
+            self.replied.setdefault(ab.id, []).append(ex)
         elif ex.kind == "question" and not set(ab.ids).isdisjoint(ex.reply):
             ex.done = ab.start
             del self.open_exchange[ab.app]
@@ -510,6 +520,8 @@ class Context:
         text = str(row.get("text") or "")
         spans = self.demoted.setdefault(app, [])
         if "loses its precedence" in text:
+            if spans and spans[-1][1] == _OPEN:
+                return  # (a forged trace's second loss: it had not regained it)
             spans.append([float(row["t"]), float("inf")])
             self.demoted_seq.setdefault(app, []).append(int(row["seq"]))
         elif "regains" in text and spans:
@@ -519,6 +531,8 @@ class Context:
         app = str(row.get("app") or "")
         spans = self.blocks.setdefault(app, [])
         if row.get("text") == "open":
+            if spans and spans[-1][1] == _OPEN:
+                return  # (a forged trace's second open: one close ends the block)
             spans.append([float(row["t"]), float("inf")])
         elif spans and spans[-1][1] == float("inf"):
             spans[-1][1] = float(row["t"])
@@ -552,7 +566,8 @@ class Context:
         return ""
 
     def during(self, spans: list[list[float]] | None, t: float) -> bool:
-        return bool(spans) and any(lo - EPS <= t < hi - EPS for lo, hi in spans or ())
+        span = span_at(spans or (), t)
+        return span is not None and t < span[1] - EPS
 
     def demoted_at(self, app: str, t: float, seq: int | None = None) -> bool:
         """Whether ``app`` had lost its precedence at ``t`` (for the line ``seq`` of that
@@ -560,16 +575,37 @@ class Context:
         spans = self.demoted.get(app)
         if not spans:
             return False
+        i = bisect.bisect_right(spans, t + EPS, key=_from) - 1
+        if i < 0 or t >= spans[i][1] - EPS:
+            return False
         seqs = self.demoted_seq.get(app, [])
-        return any(lo - EPS <= t < hi - EPS and not (
-            seq is not None and abs(t - lo) <= EPS and i < len(seqs) and seq < seqs[i])
-            for i, (lo, hi) in enumerate(spans))
+        return not (seq is not None and abs(t - spans[i][0]) <= EPS and i < len(seqs)
+                    and seq < seqs[i])
 
     def demoted_within(self, app: str, lo: float, hi: float) -> bool:
-        return any(a < hi + EPS and b > lo - EPS for a, b in self.demoted.get(app, ()))
+        spans = self.demoted.get(app, ())
+        i = bisect.bisect_left(spans, hi + EPS, key=_from) - 1
+        return i >= 0 and spans[i][1] > lo - EPS  # (the spans' ends go on as their starts)
 
     def block_open(self, app: str, t: float) -> bool:
         return self.during(self.blocks.get(app), t)
+
+
+_OPEN = float("inf")
+"""The end of a span still open."""
+
+
+def _from(span: Sequence[float]) -> float:
+    return span[0]
+
+
+def span_at(spans: Sequence[list[float]], t: float) -> list[float] | None:
+    """The last of ``spans`` that began at or before ``t`` (None: none did). Spans in time
+    order and apart (each begins where or after the one before it ended, as a context
+    keeps them) hold ``t`` only if that one does; found by bisection, so that a long
+    trace's many spans cost no more per question."""
+    i = bisect.bisect_right(spans, t + EPS, key=_from) - 1
+    return spans[i] if i >= 0 else None
 
 
 _HANDLERS = {

@@ -23,7 +23,7 @@ from typing import Any, Protocol
 from prima.catalog import BODY_DEVICE, SEARCH_DEVICE, STANDARD_COMMANDS
 from prima.judge import _blame as blame
 from prima.judge._blame import Wheels, Whose
-from prima.judge._context import EPS, Ab, Context, command_ids, xy
+from prima.judge._context import EPS, Ab, Context, Exchange, command_ids, xy
 from prima.judge._findings import (
     BargeIn,
     Blame,
@@ -575,6 +575,11 @@ class _Splits:
     def __init__(self) -> None:
         self.found: dict[int, Split] = {}
         self.streams: dict[str, Row] = {}
+        self.live: list[Exchange] = []
+        """The exchanges an utterance may still split, in the order they came (those
+        over for good are dropped: :meth:`_live`)."""
+        self.taken = 0
+        """How many of the context's exchanges :attr:`live` has taken."""
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
@@ -598,15 +603,13 @@ class _Splits:
         # chains from its end and answer handlers is part of it too: docs/rules.md 7.1)
         reacting = ab is not None and (
             any(cid in ctx.reaction_cmds for cid in ab.ids)
-            or any(r.t <= t + EPS for r in ctx.tree_reactions.get(ab.tree, ())))
+            or ctx.tree_taken.get(ab.tree, math.inf) <= t + EPS)
         at = ctx.at(ab) if ab is not None else ""
-        for ex in ctx.exchanges:
-            if ex.app == app or ex.t > t + EPS or (ex.done is not None and ex.done <= t + EPS):
+        for ex in self._live(ctx, t):
+            if ex.app == app or ex.t > t + EPS:
                 continue
             if ex.kind == "none":
                 continue  # (nothing asked for at the answer: the exchange ended with it)
-            if ex.kind == "other" and self._answered_since(ex, ctx, t):
-                continue
             if ex.kind == "words" or not reacting:
                 kind = "reply" if ex.kind == "words" else (
                     "question" if ex.kind == "question" else "answer")
@@ -618,6 +621,22 @@ class _Splits:
                     self._add(Split(int(row["seq"]), t, other, app, str(row.get("text")),
                                     "stream", int(opened["seq"]), at))
 
+    def _live(self, ctx: Context, t: float) -> list[Exchange]:
+        """The exchanges not over at ``t``. One over stays over, as times only go on:
+        its reply's words ended; it had nothing asked for at its answer (decided by
+        the first request after it); or, replied to without words, its application has
+        started something since. So each exchange is looked at until it is over, not
+        at every utterance after it (a long trace's cost stays linear)."""
+        fresh = ctx.exchanges[self.taken:]
+        if fresh:
+            self.live += fresh
+            self.taken += len(fresh)
+        self.live = [ex for ex in self.live if not (
+            (ex.done is not None and ex.done <= t + EPS)
+            or (ex.kind == "none" and ex.t < t - EPS)
+            or (ex.kind == "other" and self._answered_since(ex, ctx, t)))]
+        return self.live
+
     @staticmethod
     def _answered_since(ex: Any, ctx: Context, t: float) -> bool:
         """The app of an exchange replied with no words and has started something since
@@ -627,8 +646,9 @@ class _Splits:
 
     def _cut(self, row: Row, app: str, ctx: Context) -> None:
         ab = row.get("ab")
-        for ex in ctx.exchanges:
-            if ex.app == app and ex.reply_ab == ab:
+        for ex in sorted(ctx.replied.get(ab, ()) if isinstance(ab, int) else (),
+                         key=lambda ex: ex.seq):  # (in the order they came)
+            if ex.app == app:
                 self._add(Split(int(row["seq"]), float(row["t"]), app,
                                 ctx.interrupts.get(ab if isinstance(ab, int) else -1, "?"),
                                 str(row.get("text") or ""), "reply", ex.seq, ex.at))

@@ -36,9 +36,21 @@ import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 
-from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, Hold, ReactionState
+from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, Hold, ReactionState, span_at
 from prima.judge._findings import Blame, Reaction
 from prima.vocab import MAX_ANSWER_HOLD
+
+
+def _hold_t(h: Hold) -> float:
+    return h.t
+
+
+def _from(span: Sequence[float]) -> float:
+    return span[0]
+
+
+def _until(span: Sequence[float]) -> float:
+    return span[1]
 
 __all__ = ["analyse"]
 
@@ -101,6 +113,10 @@ class _Analyst:
         self._user_until: dict[int, float] = {}
         self._by_tree: dict[int, list[ReactionState]] | None = None
         self._ready: dict[int, float] = {}
+        self._places: dict[int, int] = {}
+        """An AB (its ``id()``: a forged trace may start one AB twice) -> where it is
+        in its tree's ABs (:meth:`_place`)."""
+        self._requested_by: dict[int, tuple[int, ...]] | None = None
 
     # ------------------------------------------------------------ precedence
     def user_until(self, r: ReactionState) -> float:
@@ -359,7 +375,10 @@ class _Analyst:
             # (a reaction to the user's own action is not rationed before its first words:
             # docs/rules.md 7.6 (4))
             since = self.user_until(r) if r.user else -math.inf
-            for lo, hi in ctx.demoted.get(r.app, ()):
+            spans = ctx.demoted.get(r.app, ())
+            # (those that meet [t0, t1]: the spans are in time order, and apart)
+            first = bisect.bisect_right(spans, t0 - EPS, key=_until)
+            for lo, hi in spans[first:bisect.bisect_left(spans, t1 + EPS, key=_from)]:
                 if hi > since:
                     allowed.append((max(lo, since), hi, Blame(
                         r.app, None, "", "", "it had lost its precedence (its wait share)",
@@ -371,10 +390,8 @@ class _Analyst:
         (None if it had not, or ``r`` was not rationed then: 7.6 (4))."""
         if r.user and self.user_until(r) > t + EPS:
             return None
-        for lo, hi in self.ctx.demoted.get(r.app, ()):
-            if lo - EPS <= t < hi - EPS:
-                return hi
-        return None
+        span = span_at(self.ctx.demoted.get(r.app, ()), t)
+        return span[1] if span is not None and t < span[1] - EPS else None
 
     def ready(self, y: Ab) -> float:
         """When ``y`` was ready to start, as far as the trace tells: when the AB before it
@@ -384,7 +401,7 @@ class _Analyst:
         if found is None:
             found = y.start
             tree = self.ctx.tree_abs.get(y.tree, ())
-            i = next((k for k, ab in enumerate(tree) if ab is y), 0) - 1
+            i = self._place(y, tree) - 1
             precedes = self.ctx.precedes
             # (a policy's AB put before it, a turn or a return, was part of its wait)
             while i >= 0 and any(precedes.get(cid) in y.ids for cid in tree[i].ids):
@@ -397,13 +414,25 @@ class _Analyst:
             self._ready[y.id] = found
         return found
 
+    def _place(self, y: Ab, tree: Sequence[Ab]) -> int:
+        """Where ``y`` is in its tree's ABs (0 if it is not there): every AB of the tree
+        is placed at once, the first time one is asked for."""
+        found = self._places.get(id(y))
+        if found is None:
+            for k, ab in enumerate(tree):
+                self._places[id(ab)] = k
+            found = self._places.setdefault(id(y), 0)
+        return found
+
     def _holds(self, r: ReactionState, own: set[int], low: bool, t0: float,
                t1: float) -> list[tuple[float, float, Blame]]:
         """The holds the mediator reports on the reaction's ABs that the rules allow."""
         out: list[tuple[float, float, Blame]] = []
-        for h in self.ctx.holds:
-            if h.t < t0 - EPS or h.t > t1 + EPS:
-                continue
+        holds = self.ctx.holds  # (in trace order: their times never go back)
+        for k in range(bisect.bisect_left(holds, t0 - EPS, key=_hold_t), len(holds)):
+            h = holds[k]
+            if h.t > t1 + EPS:
+                break
             held = self.ctx.abs.get(h.ab)
             ids = held.ids if held is not None else self._requested_ids(h.ab)
             if own.isdisjoint(ids):
@@ -419,8 +448,8 @@ class _Analyst:
                 out.append((h.t, until, self._blame(nxt, "kept for a reaction's next AB "
                                                           "(7.1)", until)))
             elif h.reason == "block":
-                spans = self.ctx.blocks.get(h.holder, ())
-                until = next((hi for lo, hi in reversed(spans) if lo <= h.t + EPS), t1)
+                span = span_at(self.ctx.blocks.get(h.holder, ()), h.t)
+                until = t1 if span is None else span[1]
                 out.append((h.t, min(until, t1), Blame(h.holder, None, "", "",
                                                        "its begin/end block (rule 3)",
                                                        until)))
@@ -448,7 +477,13 @@ class _Analyst:
                                    "kept for a reaction's next AB (7.1)", until))]
 
     def _requested_ids(self, ab: int) -> tuple[int, ...]:
-        return tuple(cid for cid, found in self.ctx.cmd_ab.items() if found == ab)
+        """The Commands requested as ``ab`` (indexed once, the first time it is asked)."""
+        if self._requested_by is None:
+            by: dict[int, list[int]] = {}
+            for cid, found in self.ctx.cmd_ab.items():
+                by.setdefault(found, []).append(cid)
+            self._requested_by = {found: tuple(cids) for found, cids in by.items()}
+        return self._requested_by.get(ab, ())
 
     def _blame(self, y: Ab, rule: str, until: float | None = None) -> Blame:
         return Blame(y.app, y.id, y.command, self.ctx.at(y), rule,

@@ -13,9 +13,8 @@ from __future__ import annotations
 
 import importlib.util
 import sys
-from collections.abc import Callable
 from pathlib import Path
-from types import FrameType, ModuleType
+from types import ModuleType
 from typing import Any
 
 import pytest
@@ -23,6 +22,7 @@ import pytest
 from prima.mediator import Mediator
 from prima.mediator.random_driver import _Run, scenario
 from prima.mediator._state import NodeState
+from tests.work import bytecodes
 
 BENCH = Path(__file__).parents[2] / "bench" / "mediator.py"
 SMALL, LARGE = 20, 2_000
@@ -42,26 +42,6 @@ def _bench() -> ModuleType:
 
 
 bench = _bench()
-
-
-def bytecodes(fn: Callable[[], object]) -> int:
-    """How many Python bytecodes ``fn()`` executes (its callees' included)."""
-    count = 0
-
-    def trace(frame: FrameType, event: str, _arg: Any) -> Any:
-        nonlocal count
-        frame.f_trace_opcodes = True
-        if event == "opcode":
-            count += 1
-        return trace
-
-    previous = sys.gettrace()
-    sys.settrace(trace)
-    try:
-        fn()
-    finally:
-        sys.settrace(previous)
-    return count
 
 
 def _per_operation(name: str, n: int) -> float:

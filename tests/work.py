@@ -1,0 +1,34 @@
+"""Work counted, not timed: the Python bytecodes a call executes (``sys.settrace`` with
+opcode events), the same on a loaded machine as on an idle one. A test of how work
+grows compares the counts of a small and a large input (the pure build only: compiled
+code executes no bytecodes to count)."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from types import FrameType
+from typing import Any
+
+
+def bytecodes(fn: Callable[[], object], only: str | None = None) -> int:
+    """How many Python bytecodes ``fn()`` executes (its callees' included; with
+    ``only``, those of the code in that file alone)."""
+    count = 0
+
+    def trace(frame: FrameType, event: str, _arg: Any) -> Any:
+        nonlocal count
+        if only is not None and frame.f_code.co_filename != only:
+            return None
+        frame.f_trace_opcodes = True
+        if event == "opcode":
+            count += 1
+        return trace
+
+    previous = sys.gettrace()
+    sys.settrace(trace)
+    try:
+        fn()
+    finally:
+        sys.settrace(previous)
+    return count
