@@ -8,6 +8,7 @@ runs the scenario and compares; goldens are written only when asked
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import difflib
 import enum
@@ -17,6 +18,7 @@ import stat
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import BinaryIO
 
 from prima.errors import Problem, Severity, TraceError
 from prima.output import written
@@ -91,41 +93,85 @@ def check(scenario: Path, *, update: bool = False, switches: Switches | None = N
         # (a named pipe is written to, not read first: reading it would wait for a writer;
         # a golden trace that cannot be read is rewritten)
         with contextlib.suppress(TraceError):
-            if golden.is_file() and _read_golden(golden) == actual:
+            if golden.is_file() and _golden_is(golden, actual):
                 return Result(scenario, Status.SAME)
         with written(golden) as out:
             out.write(actual)
         return Result(scenario, Status.UPDATED)
     if not golden.exists():
         return Result(scenario, Status.MISSING)
-    expected = _read_golden(golden)
-    if expected == actual:
+    if _golden_is(golden, actual):
         return Result(scenario, Status.SAME)
+    expected = _read_golden(golden)  # (the diff needs it whole)
     return Result(scenario, Status.DIFFERENT,
                   shifted_diff(expected, actual, str(golden), f"{scenario} (this run)"))
+
+
+PIECE = 1 << 20
+"""How many bytes of a golden trace are read at a time to compare it with a run's."""
+
+
+def _golden_is(golden: Path, actual: str) -> bool:
+    """Whether the golden trace's text is ``actual``, read and compared a piece at a time
+    (:data:`PIECE` bytes): the golden trace of a long run is never held whole, and the
+    reading stops at the first difference. What :func:`_read_golden` refuses raises the
+    same :class:`~prima.errors.TraceError`."""
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    at = 0
+    with _opened(golden) as data:
+        try:
+            while piece := data.read(PIECE):
+                text = decoder.decode(piece)
+                if actual[at:at + len(text)] != text:
+                    return False
+                at += len(text)
+            text = decoder.decode(b"", final=True)
+        except OSError as exc:
+            raise _unreadable(golden, exc) from exc
+        except UnicodeDecodeError:  # (read whole, to say where; it is said as an error)
+            return _read_golden(golden) == actual
+    return actual[at:] == text
 
 
 def _read_golden(golden: Path) -> str:
     """A golden trace's text. A named pipe, a device or a folder in its place, a file that
     cannot be read or is not UTF-8 raise :class:`~prima.errors.TraceError`, located (a
     named pipe is not opened: reading it would wait for a writer for ever)."""
-    def fail(line: int, col: int, message: str) -> TraceError:
-        return TraceError([Problem(str(golden), line, col, Severity.ERROR, message)])
-
-    try:
-        mode = os.stat(golden).st_mode
-        if not stat.S_ISREG(mode):
-            kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file"
-            raise fail(1, 1, f"the golden trace is {kind}: PRIMA reads only regular files")
-        data = golden.read_bytes()
-    except OSError as exc:
-        raise fail(1, 1, f"cannot read the golden trace: {exc.strerror or exc}") from exc
+    with _opened(golden) as file:
+        try:
+            data = file.read()
+        except OSError as exc:
+            raise _unreadable(golden, exc) from exc
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         before = data[:exc.start]
-        raise fail(before.count(b"\n") + 1, exc.start - (before.rfind(b"\n") + 1) + 1,
-                   "the golden trace is not UTF-8 text") from exc
+        raise _failed(golden, before.count(b"\n") + 1,
+                      exc.start - (before.rfind(b"\n") + 1) + 1,
+                      "the golden trace is not UTF-8 text") from exc
+
+
+def _opened(golden: Path) -> BinaryIO:
+    """A golden trace opened to be read. A named pipe, a device or a folder in its place,
+    or a file that cannot be opened, raise :class:`~prima.errors.TraceError`, located (a
+    named pipe is not opened: reading it would wait for a writer for ever)."""
+    try:
+        mode = os.stat(golden).st_mode
+        if not stat.S_ISREG(mode):
+            kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file"
+            raise _failed(golden, 1, 1,
+                          f"the golden trace is {kind}: PRIMA reads only regular files")
+        return golden.open("rb")
+    except OSError as exc:
+        raise _unreadable(golden, exc) from exc
+
+
+def _failed(golden: Path, line: int, col: int, message: str) -> TraceError:
+    return TraceError([Problem(str(golden), line, col, Severity.ERROR, message)])
+
+
+def _unreadable(golden: Path, exc: OSError) -> TraceError:
+    return _failed(golden, 1, 1, f"cannot read the golden trace: {exc.strerror or exc}")
 
 
 _ROW = re.compile(r"^(?P<no>\s*\d+) +(?P<t>\d+\.\d+)(?P<rest>   .*)$")

@@ -77,6 +77,31 @@ def test_a_golden_trace_that_is_a_pipe_or_not_text_is_one_located_line(
     assert cli(str(path))[:2] == (0, f"same      {path}\n")
 
 
+def test_a_long_golden_trace_is_never_held_whole_to_be_compared(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The run's own trace is in memory; of its golden trace, a piece at a time (a golden
+    trace of 300 MB took 1.2 GB)."""
+    import tracemalloc
+
+    path = scenario(tmp_path)
+    check(path, update=True)
+    golden = golden_path(path)
+    long = golden.read_text() * (32_000_000 // golden.stat().st_size)
+    golden.write_text(long)
+
+    def traced(*_args: object) -> str:  # (what is counted: from the run's trace on)
+        tracemalloc.start()
+        return long
+
+    monkeypatch.setattr("prima.golden.format_text", traced)
+    try:
+        assert check(path).status == "same"
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < len(long) // 4, f"{peak:,} bytes for a golden trace of {len(long):,}"
+
+
 def test_pytest_fixture(pytester: pytest.Pytester, tmp_path: Path) -> None:
     path = scenario(tmp_path)
     pytester.makepyfile(f"""
