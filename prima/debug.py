@@ -11,6 +11,7 @@ Stopped at a line, the state shown is the state as that decision is made.
 from __future__ import annotations
 
 import dataclasses
+import math
 import shlex
 from collections import deque
 from collections.abc import Callable, Mapping
@@ -212,8 +213,10 @@ class Debugger:
             return False
         if args[0] == "time":
             try:
-                float(value)
+                seconds = float(value)
             except ValueError:
+                seconds = math.nan
+            if not math.isfinite(seconds):  # (no line would ever stop at nan or inf)
                 self._say(f"break time takes seconds, not {value!r}")
                 return False
         self.breaks.append(Break(args[0], value))
@@ -270,7 +273,7 @@ class Debugger:
     def _show_history(self, args: list[str]) -> bool:
         n = _count(args[0]) if args else None
         n = 10 if n is None else n
-        for line in list(self._history)[-n:]:
+        for line in list(self._history)[-n:] if n else []:  # (history 0: none of them)
             self._say(self._describe(line))
         return False
 

@@ -84,6 +84,21 @@ def test_a_number_that_is_no_number_is_told_not_a_traceback() -> None:
     assert out.rstrip().endswith("stopped at t=0 s")
 
 
+def test_a_time_that_is_no_finite_number_is_refused() -> None:
+    out = session("b time nan\nb time inf\nb time -inf\nb time 1e999\nbreaks\nq\n")
+    for typed in ("nan", "inf", "-inf", "1e999"):
+        assert f"break time takes seconds, not {typed!r}" in out
+    assert "no breakpoints" in out
+
+
+def test_history_0_shows_no_line() -> None:
+    out = session("step 3\nhistory 0\nhistory 2\nq\n")
+    told = out.split("(prima) history 0\n")[1].split("(prima) ")[0]
+    assert told == ""
+    told = out.split("(prima) history 2\n")[1].split("(prima) ")[0]
+    assert len(told.splitlines()) == 2
+
+
 def test_continue_with_no_breakpoint_runs_to_the_end() -> None:
     out = session("c\n")
     assert out.rstrip().endswith("the run ended at t=250 s")
