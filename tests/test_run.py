@@ -114,6 +114,24 @@ def test_cli_writes_the_format_its_file_name_says(tmp_path: Path) -> None:
     assert (tmp_path / "x.jsonl").read_text(encoding="utf-8").startswith("  No.")
 
 
+@pytest.mark.parametrize("form", ["text", "jsonl", "chrome-trace"])
+def test_out_dash_is_standard_output_not_a_file_named_dash(
+        form: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli("run", str(OFFICE), "--until", "5", "--format", form, "-o", "-")
+    assert (code, err) == (0, "") and not (tmp_path / "-").exists()
+    assert out == run_cli("run", str(OFFICE), "--until", "5", "--format", form)[1]
+
+
+def test_out_dash_is_refused_for_a_binary_recording(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli("run", str(OFFICE), "--format", "mcap", "-o", "-")
+    assert (code, out) == (2, "") and not (tmp_path / "-").exists()
+    assert err == ("prima run: error: --format mcap writes a binary file: give --out FILE, "
+                   "not - (standard output)\n")
+
+
 def test_cli_reports_bad_inputs(tmp_path: Path) -> None:
     assert run_cli("run", "nope.xml")[0] == 2
     assert run_cli("run", str(OFFICE), "--until", "-1")[0] == 2

@@ -147,8 +147,10 @@ def format_by_suffix(out: str | None) -> str:
 
 
 def format_usage(name: str, out: str | None) -> str | None:
-    """What a format needs besides: a file to write, an extra installed."""
+    """What a format needs besides: a file to write (``--out -`` is standard output, no
+    file), an extra installed."""
     chosen = FORMATS[name]
-    if chosen.binary and not out:
-        return f"--format {name} writes a binary file: give --out FILE"
+    if chosen.binary and (not out or out == "-"):
+        return (f"--format {name} writes a binary file: give --out FILE"
+                + (", not - (standard output)" if out == "-" else ""))
     return _missing_extra(*chosen.extra) if chosen.extra else None

@@ -29,7 +29,7 @@ def add(commands: Commands) -> None:
                           "Format, for Perfetto or chrome://tracing; mcap: a recording for "
                           "Foxglove (with --out; the mcap extra)")
     run.add_argument("-o", "--out", metavar="FILE",
-                     help="write the trace to FILE instead of stdout")
+                     help="write the trace to FILE instead of stdout (-: to stdout, as without it)")
     run.add_argument("--pose-rate", type=float, default=2.0, metavar="HZ",
                      help="pose samples per simulated second in the jsonl trace "
                           "(default: 2; 0: none)")
@@ -44,7 +44,10 @@ def execute(args: argparse.Namespace, out: TextIO, err: TextIO) -> int:
 
     if args.format is None:  # (the file's extension says, as its reader would read it)
         args.format = format_by_suffix(args.out)
-    problem = _run_usage(args) or format_usage(args.format, args.out)
+    given = args.out
+    if given == "-":  # standard output, as without --out (no file named "-" is written)
+        args.out = None
+    problem = _run_usage(args) or format_usage(args.format, given)
     if problem:
         return _usage("run", problem, err)
     chosen = FORMATS[args.format]
