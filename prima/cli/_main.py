@@ -7,6 +7,7 @@ import argparse
 import errno
 import importlib
 import os
+import stat
 import sys
 from collections.abc import Callable, Sequence
 from typing import TextIO
@@ -126,30 +127,61 @@ _INPUTS = {"scenario": None, "input": None, "paths": None, "inputs": None, "map"
 """The options and arguments that name files to read, each with what a bare name there
 names (:data:`prima.shipped.NAMED`: ``--fa fa2-follow``), or None."""
 
+_FOLDERS_TOO = ("paths",)
+"""The arguments that may name a folder as well as a file (``prima validate``, ``prima
+test`` and ``prima judge`` search it)."""
+
 
 def _locate_inputs(args: argparse.Namespace) -> str | None:
     """Each file to read as :func:`prima.shipped.locate` finds it: one the current folder
     lacks may be shipped with PRIMA (``scenarios/thesis/sample-03.xml`` from an install,
     as from a checkout). Not for ``prima test --update``, which writes beside them: PRIMA's
     own golden traces are not rewritten from outside a checkout. What is wrong with a name
-    no file can have (too long to look up), as a usage error, or None."""
+    no file can have (too long to look up), or with what a name found is (a folder where
+    a file is expected, a named pipe), as a usage error, or None."""
     for name in _INPUTS:
         value = getattr(args, name, None)
         for text in value if isinstance(value, list) else [value]:
             problem = _unnameable(text) if isinstance(text, str) else None
             if problem:
                 return problem
-    if getattr(args, "update", False):
-        return None
-    from prima.shipped import locate
+    if not getattr(args, "update", False):
+        from prima.shipped import locate
 
-    for name, kind in _INPUTS.items():
+        for name, kind in _INPUTS.items():
+            value = getattr(args, name, None)
+            if isinstance(value, str):
+                setattr(args, name, locate(value, kind))
+            elif isinstance(value, list):
+                setattr(args, name, [locate(v, kind) if isinstance(v, str) else v
+                                     for v in value])
+    if args.command == "validate":  # (it reports such a file at file:1:1, and goes on)
+        return None
+    for name in _INPUTS:
         value = getattr(args, name, None)
-        if isinstance(value, str):
-            setattr(args, name, locate(value, kind))
-        elif isinstance(value, list):
-            setattr(args, name, [locate(v, kind) if isinstance(v, str) else v for v in value])
+        for text in value if isinstance(value, list) else [value]:
+            problem = _not_a_file(text, name in _FOLDERS_TOO) if isinstance(text, str) else None
+            if problem:
+                return problem
     return None
+
+
+def _not_a_file(text: str, folder: bool) -> str | None:
+    """Why what ``text`` names cannot be read as a file: it is a folder (unless ``folder``
+    may be one), a named pipe, a device or a socket; or None, for a regular file or for
+    nothing at all (the command says there is no such file). It is looked at, never
+    opened: reading a named pipe would wait for a writer for ever."""
+    try:
+        mode = os.stat(text).st_mode
+    except (OSError, ValueError):
+        return None
+    if stat.S_ISREG(mode) or (folder and stat.S_ISDIR(mode)):
+        return None
+    if stat.S_ISDIR(mode):
+        return f"{text}: is a folder, not a file"
+    kind = "a named pipe" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode) \
+        else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else None
+    return f"{text}: is {kind}, not a regular file" if kind else f"{text}: is not a regular file"
 
 
 def _unnameable(text: str) -> str | None:

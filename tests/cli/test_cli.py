@@ -259,6 +259,42 @@ def test_a_folder_given_as_the_robot_profile_is_a_located_error(tmp_path: Path) 
     assert f"{tmp_path}:1:1: error: a directory: PRIMA reads only regular files" in err
 
 
+FILES_ONLY = [
+    ["run", "{thing}"], ["run", str(FIG_5_7), "--fa", "{thing}"],
+    ["run", str(FIG_5_7), "--ea", "{thing}"], ["run", str(FIG_5_7), "--robot", "{thing}"],
+    ["debug", "{thing}"], ["test", str(FIG_5_7), "--robot", "{thing}"],
+    ["show", "{thing}.jsonl"], ["plot", "{thing}.jsonl", "-o", "x.svg"],
+    ["plot", str(ROOT / "apps" / "fa" / "fa2-follow.pxml"), "--map", "{thing}", "-o", "x.svg"],
+    ["sweep", "{thing}", "--runs", "2", "--jitter", "1"], ["check", "{thing}"],
+    ["lsp", "--robot", "{thing}"],
+]
+"""Command lines with a place for a file and never a folder (``{thing}``)."""
+
+
+@pytest.mark.parametrize(("kind", "argv"), [
+    *(("folder", argv) for argv in FILES_ONLY), *(("pipe", argv) for argv in FILES_ONLY),
+    ("pipe", ["judge", "{thing}.jsonl"]), ("pipe", ["test", "{thing}.xml"]),
+])
+def test_a_folder_or_a_named_pipe_given_as_a_file_is_said_as_what_it_is(
+        kind: str, argv: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Not "no such file"; and the named pipe is never opened (that would wait for ever)."""
+    monkeypatch.chdir(tmp_path)
+    given = [word.replace("{thing}", "thing") for word in argv]
+    thing = next(word for word in given if word.startswith("thing"))
+    if kind == "folder":
+        os.mkdir(thing)
+    else:
+        os.mkfifo(thing)
+    code, out, err = run(*given)
+    said = "is a folder, not a file" if kind == "folder" else \
+        "is a named pipe, not a regular file"
+    assert (code, out, err) == (2, "", f"prima {given[0]}: error: {thing}: {said}\n")
+
+
+def test_a_folder_where_a_folder_may_be_is_searched_not_refused(tmp_path: Path) -> None:
+    assert run("judge", str(tmp_path))[2] == f"prima judge: error: no scenario in {tmp_path}\n"
+
+
 def test_a_scenario_is_checked_with_every_file_it_names(tmp_path: Path) -> None:
     _pxml(tmp_path, "fa", "fa", '<entry><goto state="nowhere"/></entry>')
     _pxml(tmp_path, "ea", "ea")
