@@ -747,6 +747,9 @@ class _Command:
     seq: int
     pred: int | None
     """The Command ahead of it in its stream, if known."""
+    devices: frozenset[str] = frozenset()
+    """The devices its AB needs, as its request says (a request names its first
+    Command's: empty for a chain's later ones)."""
     done: bool = False
 
 
@@ -822,8 +825,10 @@ class _Stuck:
         if isinstance(before, int) and before in ctx.abs and ctx.abs[before].ids:
             pred = ctx.abs[before].ids[0]  # (a forged start line may name no Command)
         t = float(row["t"])
+        devices = frozenset(str(d) for d in row.get("devices") or ())
         for cid in command_ids(row):
-            command = _Command(cid, app, t, int(row["seq"]), pred)
+            command = _Command(cid, app, t, int(row["seq"]), pred, devices)
+            devices = frozenset()
             self.commands[cid] = command
             self.waiting.setdefault(app, {})[cid] = command
             if pred is not None:
@@ -922,11 +927,12 @@ class _Stuck:
 
     @staticmethod
     def _in_way(ctx: Context, command: _Command) -> Blame | None:
-        """What ran when the trace ended on the devices a waiting Command's AB needs."""
+        """What ran when the trace ended on the devices a waiting Command's AB needs
+        (as its AB or its request says; None when neither says)."""
         mine = next((ab for ab in ctx.abs.values() if command.id in ab.ids), None)
-        devices = mine.devices if mine is not None else frozenset()
+        devices = mine.devices if mine is not None else command.devices
         for ab in ctx.running.values():
-            if ab.devices & devices or not devices:
+            if ab.devices & devices:
                 return Blame(ab.app, ab.id, ab.command, ctx.at(ab), "ran at the end")
         return None
 

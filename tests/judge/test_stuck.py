@@ -6,7 +6,9 @@ never sees the user, a Command still waiting at the end. Each trace is written b
 from __future__ import annotations
 
 from prima.judge import Blame, Report
-from tests.judge.helpers import Trace, counts
+from tests.judge.helpers import TALK, Trace, counts
+
+WHEELS = ("localization", "locomotion")
 
 
 # ------------------------------------------------------------------ stuck
@@ -138,6 +140,27 @@ def test_a_command_stuck_at_the_end_names_what_ran_then() -> None:
     del tr.rows[-1]  # the search's last look still runs when the trace ends
     (s,) = tr.judge().of("stuck")
     assert s.behind == Blame("fa", 8, "ActiveSensingHuman", "", "ran at the end")
+
+
+def test_what_ran_at_the_end_is_named_only_on_the_devices_the_request_needs() -> None:
+    """The EA's move never started: its request says it needs the wheels. The FA's Q&A,
+    on the speaker, was not in its way; the FA's own move, on the wheels, was."""
+    def behind(fa_moves: bool) -> Blame | None:
+        tr = Trace()
+        tr.request(0.0, "fa", 1, 1, command="QA", text="Shall we?", devices=TALK)
+        tr.start(0.0, "fa", 1, 1, command="QA", text="Shall we?", devices=TALK)
+        if fa_moves:
+            tr.request(0.0, "fa", 2, 2, tree=2, command="TopologicalMove", devices=WHEELS)
+            tr.start(0.0, "fa", 2, 2, tree=2, command="TopologicalMove", devices=WHEELS)
+        tr.request(1.0, "ea", 100, 3, tree=1, command="TopologicalMove", devices=WHEELS)
+        tr.pose(80.0)
+        tr.sort()
+        (s,) = [s for s in tr.judge().of("stuck") if s.app == "ea"]
+        assert (s.kind, s.command_id) == ("end", 3)
+        return s.behind
+
+    assert behind(fa_moves=False) is None
+    assert behind(fa_moves=True) == Blame("fa", 2, "TopologicalMove", "", "ran at the end")
 
 
 def test_a_cancelled_command_is_not_waiting() -> None:
