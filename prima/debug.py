@@ -271,8 +271,10 @@ class Debugger:
         return False
 
     def _show_history(self, args: list[str]) -> bool:
-        n = _count(args[0]) if args else None
-        n = 10 if n is None else n
+        n = _count(args[0]) if args else 10
+        if n is None:
+            self._say(f"history takes a number of lines, not {args[0]!r}")
+            return False
         for line in list(self._history)[-n:] if n else []:  # (history 0: none of them)
             self._say(self._describe(line))
         return False

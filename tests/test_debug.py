@@ -91,6 +91,12 @@ def test_a_time_that_is_no_finite_number_is_refused() -> None:
     assert "no breakpoints" in out
 
 
+def test_history_of_no_number_is_refused() -> None:
+    out = session("step 3\nhistory abc\nq\n")
+    assert out.split("(prima) history abc\n")[1].startswith(
+        "history takes a number of lines, not 'abc'\n(prima) ")
+
+
 def test_history_0_shows_no_line() -> None:
     out = session("step 3\nhistory 0\nhistory 2\nq\n")
     told = out.split("(prima) history 0\n")[1].split("(prima) ")[0]
