@@ -108,6 +108,9 @@ def check_target(path: str | os.PathLike[str], inputs: Inputs = ()) -> str | Non
     ``inputs`` is refused. Raises :class:`~prima.errors.OutputError` for a name the
     file system cannot take (too long, say)."""
     target = Path(path)
+    if isinstance(path, str) and path == "-":  # (prima run's --out takes it: its trace)
+        return "- is standard output, where this command writes no file: name a file (./- " \
+               "for one named -)"
     if isinstance(path, str) and path.endswith(("/", os.sep)):
         # (Path drops the slash: notes.txt/ would write over the file notes.txt)
         return f"{shown(path)} names a folder (it ends with /): give the file's name"

@@ -166,6 +166,22 @@ def test_a_file_named_with_a_slash_at_its_end_is_refused_not_written_over(
     assert notes.read_text() == "my notes\n" and not (tmp_path / "new").exists()
 
 
+def test_a_dash_is_refused_where_no_trace_goes_to_standard_output(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """prima run's --out - is its trace on standard output; a page or a report is a file
+    (it wrote one named -)."""
+    scenario = speaking(tmp_path, "hello", until=2)
+    monkeypatch.chdir(tmp_path)
+    argv = [["show", str(scenario), "--out", "-"],
+            ["sweep", str(scenario), "--runs", "1", "--jitter", "0", "--results", "-"]]
+    for command in argv:
+        status, out, err = _cli(*command)
+        assert (status, out) == (2, ""), (command, err)
+        assert err == f"prima {command[0]}: error: {command[-2]} - is standard output, where " \
+                      "this command writes no file: name a file (./- for one named -)\n", err
+    assert not (tmp_path / "-").exists()
+
+
 def test_a_failed_write_takes_away_the_folders_it_made(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     scenario = speaking(tmp_path, "hello")
