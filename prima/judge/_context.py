@@ -21,7 +21,7 @@ from prima.judge._reading import Row
 from prima.judge._thresholds import Thresholds
 
 __all__ = ["EPS", "TALK_DEVICES", "UNMEASURED_EVENTS", "Ab", "Context", "Exchange", "Hold",
-           "ReactionState", "span_at", "xy"]
+           "ReactionState", "span_at", "spans_meeting", "xy"]
 
 EPS = 1e-6
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
@@ -583,9 +583,7 @@ class Context:
                     and seq < seqs[i])
 
     def demoted_within(self, app: str, lo: float, hi: float) -> bool:
-        spans = self.demoted.get(app, ())
-        i = bisect.bisect_left(spans, hi + EPS, key=_from) - 1
-        return i >= 0 and spans[i][1] > lo - EPS  # (the spans' ends go on as their starts)
+        return bool(spans_meeting(self.demoted.get(app, ()), lo, hi))
 
     def block_open(self, app: str, t: float) -> bool:
         return self.during(self.blocks.get(app), t)
@@ -599,6 +597,10 @@ def _from(span: Sequence[float]) -> float:
     return span[0]
 
 
+def _until(span: Sequence[float]) -> float:
+    return span[1]
+
+
 def span_at(spans: Sequence[list[float]], t: float) -> list[float] | None:
     """The last of ``spans`` that began at or before ``t`` (None: none did). Spans in time
     order and apart (each begins where or after the one before it ended, as a context
@@ -606,6 +608,13 @@ def span_at(spans: Sequence[list[float]], t: float) -> list[float] | None:
     trace's many spans cost no more per question."""
     i = bisect.bisect_right(spans, t + EPS, key=_from) - 1
     return spans[i] if i >= 0 else None
+
+
+def spans_meeting(spans: Sequence[list[float]], lo: float, hi: float) -> Sequence[list[float]]:
+    """The ``spans`` that meet [lo, hi], of spans in time order and apart (their ends go
+    on as their starts do), found by bisection."""
+    first = bisect.bisect_right(spans, lo - EPS, key=_until)
+    return spans[first:bisect.bisect_left(spans, hi + EPS, key=_from)]
 
 
 _HANDLERS = {

@@ -36,21 +36,18 @@ import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 
-from prima.judge._context import EPS, TALK_DEVICES, Ab, Context, Hold, ReactionState, span_at
+from prima.judge._context import (
+    EPS,
+    TALK_DEVICES,
+    Ab,
+    Context,
+    Hold,
+    ReactionState,
+    span_at,
+    spans_meeting,
+)
 from prima.judge._findings import Blame, Reaction
 from prima.vocab import MAX_ANSWER_HOLD
-
-
-def _hold_t(h: Hold) -> float:
-    return h.t
-
-
-def _from(span: Sequence[float]) -> float:
-    return span[0]
-
-
-def _until(span: Sequence[float]) -> float:
-    return span[1]
 
 __all__ = ["analyse"]
 
@@ -58,6 +55,10 @@ _TICK = 0.02
 """A cut reaches its word boundary on the simulator's next step at the latest."""
 
 Span = tuple[float, float]
+
+
+def _hold_t(h: Hold) -> float:
+    return h.t
 
 
 def _measure(spans: Iterable[Span], lo: float, hi: float) -> float:
@@ -375,10 +376,7 @@ class _Analyst:
             # (a reaction to the user's own action is not rationed before its first words:
             # docs/rules.md 7.6 (4))
             since = self.user_until(r) if r.user else -math.inf
-            spans = ctx.demoted.get(r.app, ())
-            # (those that meet [t0, t1]: the spans are in time order, and apart)
-            first = bisect.bisect_right(spans, t0 - EPS, key=_until)
-            for lo, hi in spans[first:bisect.bisect_left(spans, t1 + EPS, key=_from)]:
+            for lo, hi in spans_meeting(ctx.demoted.get(r.app, ()), t0, t1):
                 if hi > since:
                     allowed.append((max(lo, since), hi, Blame(
                         r.app, None, "", "", "it had lost its precedence (its wait share)",
