@@ -331,7 +331,7 @@ def check(ea: str | Path, *, fas: Sequence[Path], robots: Sequence[Path],
     ``map_file`` is given).
     ``visitors``: the generated visits' visitors (default: all of :data:`VISITS`)."""
     ea_path = Path(ea)
-    document = load_document(ea_path, load_profile(robots[0]))
+    document = _loaded(ea_path, robots)
     for fa in fas:  # (one that cannot run on a robot is that cell's n/a)
         _a_document(fa)
     for scenario in scenarios:  # a scenario of the EA's own with errors stops the check
@@ -352,6 +352,19 @@ def check(ea: str | Path, *, fas: Sequence[Path], robots: Sequence[Path],
         if out is not None and worst:
             _write_worst(result, out, worst)
     return result
+
+
+def _loaded(ea: Path, robots: Sequence[Path]) -> Document:
+    """The EA loaded on the first robot it can run on: on another, its cells are n/a (a
+    device that one robot lacks, say). Raises the first robot's LocatedError when it runs
+    on none of them."""
+    failed: list[LocatedError] = []
+    for robot in robots:
+        try:
+            return load_document(ea, load_profile(robot))
+        except LocatedError as exc:
+            failed.append(exc)
+    raise failed[0]
 
 
 def _run(result: Check, pool: Pool | None, results: str | Path | None, resume: bool,

@@ -448,6 +448,25 @@ def test_an_fa_that_is_no_document_stops_the_check_located(tmp_path: Path, text:
     assert out == ""
 
 
+def test_an_ea_that_one_robot_cannot_run_is_n_a_there_and_checked_on_the_others(
+        tmp_path: Path) -> None:
+    """Its block needs an arm, which the guide robot lacks: that column is n/a, whichever
+    robot comes first; only an EA that runs on no robot stops the check."""
+    ea = tmp_path / "waver.pxml"
+    ea.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="waver">\n'
+                  '  <block id="b" devices="arm speaker">\n'
+                  '    <state id="s" initial="true"><entry><chain>Speak("Hello.")</chain>'
+                  "</entry></state>\n  </block>\n</pxml>\n")
+    code, out, err = cli("check", str(ea), "--fa", str(QUIET), "--robot", str(GUIDE),
+                         "--robot", str(HOME), "--runs", "1")
+    assert code == 0, err
+    assert f"quiet / guide-robot: n/a: {ea}:2:" in out and "unknown device 'arm'" in out
+    assert re.search(r"quiet on home-robot, map \w+: ok", out), out
+    code, out, err = cli("check", str(ea), "--fa", str(QUIET), "--robot", str(GUIDE),
+                         "--runs", "1")
+    assert (code, out) == (1, "") and f"{ea}:2:" in err and "unknown device 'arm'" in err
+
+
 def test_a_check_in_which_no_cell_can_run_fails() -> None:
     fa7 = ROOT / "apps" / "fa" / "fa7-spotlight.pxml"  # (it needs the guide robot)
     code, out, err = cli("check", str(TALKER), "--fa", str(fa7), "--robot", str(HOME),
