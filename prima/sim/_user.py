@@ -164,18 +164,19 @@ class ScriptedUser:
         self._asked = (prompt, None)
         if sim.world.user_distance() > sim.spec.hearing_range:
             return
+        chosen = None
         for i, rule in enumerate(self.script.answers):
             if not rule.matches(prompt):
                 continue
-            self._matched[i] += 1
-            if rule.nth is not None and self._matched[i] != rule.nth:
-                continue
-            self._asked = (prompt, rule)
-            if rule.after < 0 and rule.say is not None:  # over the prompt, before its end
+            self._matched[i] += 1  # (every rule that matches counts the asking: nth)
+            if chosen is None and (rule.nth is None or self._matched[i] == rule.nth):
+                chosen = rule
+        if chosen is not None:
+            self._asked = (prompt, chosen)
+            if chosen.after < 0 and chosen.say is not None:  # over the prompt, before its end
                 k = sim.kernel
-                at = k.tick + max(1, ticks + round(rule.after * k.hz))
-                k.at(at, functools.partial(self.say, rule.say))
-            return
+                at = k.tick + max(1, ticks + round(chosen.after * k.hz))
+                k.at(at, functools.partial(self.say, chosen.say))
 
     def hear_question(self, prompt: str) -> None:
         """The robot asked ``prompt`` and now listens: answer by the rule chosen when it

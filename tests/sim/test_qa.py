@@ -46,6 +46,18 @@ def test_silent_rule_and_nth_rule() -> None:
     assert [e.data.get("utterance") for e in r.ends("QA")] == [None, "No.", "Yes."]
 
 
+def test_nth_counts_every_asking_a_rule_matches_whichever_rule_answered() -> None:
+    """The first asking is the first rule's; the second is the second rule's second (it
+    was counted when the first rule answered); the third, the last rule's."""
+    rules = (AnswerRule("Not yet.", contains="did you", nth=1),
+             AnswerRule(None, contains="did you", nth=2),  # silent the second time
+             AnswerRule("Yes, I did.", contains="did you"))
+    r = runner("museum", ROBOT, USER, answers=rules)
+    r.queue(*[call("QA", prompt="Did you take your pills?", grammar="g", timeout=3)] * 3)
+    r.run(60)
+    assert [e.data.get("utterance") for e in r.ends("QA")] == ["Not yet.", None, "Yes, I did."]
+
+
 def test_an_unexpected_answer_is_passed_on_verbatim() -> None:
     r = runner("museum", ROBOT, USER, answers=(AnswerRule("Banana!", contains="channel"),))
     r.queue(call("QA", prompt="Please select a TV channel.", grammar="g"))
