@@ -318,12 +318,15 @@ def visit_scenario(visit: Visit, ea: Document, fa: Document, world: tuple[Path, 
                                          for r in remarks(doc, visit.visitor)]),
         "  </user>",
     ]
+    inputs: list[tuple[float, str, str]] = []  # (listed in time order, as a scenario must)
     for k, sender in enumerate(s for s in listens(ea, "message", "sender") if s):
         text = f"A message for the visitor from {sender}."
-        lines.append(f'  <message at="{(45 + 40 * k) * t:g}" sender={quoteattr(sender)} '
-                     f"text={quoteattr(text)}/>")
+        inputs.append(((45 + 40 * k) * t, "message",
+                       f"sender={quoteattr(sender)} text={quoteattr(text)}"))
     for k, sound in enumerate(s for doc in (ea, fa) for s in listens(doc, "sound-heard", "sound")):
-        lines.append(f'  <sound at="{(60 + 50 * k) * t:g}" name={quoteattr(sound or "tune")}/>')
+        inputs.append(((60 + 50 * k) * t, "sound", f"name={quoteattr(sound or 'tune')}"))
+    for at, kind, attributes in sorted(inputs, key=lambda i: i[0]):  # (stable at one time)
+        lines.append(f'  <{kind} at="{at:g}" {attributes}/>')
     for doc in (ea, fa):
         for to in dict.fromkeys(s.to for s in sends(doc)):
             hints = _hints(doc, to) if doc is ea and visit.visitor == "willing" else []

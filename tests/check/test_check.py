@@ -198,6 +198,32 @@ def test_a_visit_answers_from_the_grammars_and_sends_what_the_ea_listens_for(
     assert (remark.get("at"), remark.get("text")) == ("115", "Papero.")
 
 
+def test_a_visit_lists_its_messages_and_sounds_in_time_order(tmp_path: Path) -> None:
+    """An EA that listens to two senders (messages at 45 and 85 s) beside FA3, which
+    listens for a tune (at 60 s): the sound goes between them, so that the visit loads
+    (it was an n/a cell: a sound listed after a later message)."""
+    ea_path = tmp_path / "desk.pxml"
+    ea_path.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="desk">\n'
+                       '  <on event="message" cond="event.sender == \'host\'">'
+                       '<chain>Speak("From the host.")</chain></on>\n'
+                       '  <on event="message" cond="event.sender == \'security\'">'
+                       '<chain>Speak("From security.")</chain></on>\n'
+                       '  <state id="s" initial="true"/>\n</pxml>\n')
+    fa_path = ROOT / "apps" / "fa" / "fa3-dance.pxml"
+    ea, fa = (load_document(p, default_profile()) for p in (ea_path, fa_path))
+    maps = [(MAPS / "office.xml", load_map(MAPS / "office.xml"))]
+    world = map_for(ea, maps)
+    assert world is not None
+    text = visit_scenario(Visit("willing"), ea, fa, world, (ea_path, fa_path))
+    path = tmp_path / "visit.xml"
+    path.write_text(text)
+    load_scenario(path)  # a valid scenario
+    root = etree.fromstring(text.encode())
+    inputs = [(etree.QName(e).localname, e.get("at")) for e in root
+              if etree.QName(e).localname in ("message", "sound")]
+    assert inputs == [("message", "45"), ("sound", "60"), ("message", "85")]
+
+
 @pytest.mark.parametrize("visitor, said", [
     ("willing", [("115", "Toilet."), ("127", "Stop."), ("139", "Repeat that."),
                  ("151", "Papero.")]),
