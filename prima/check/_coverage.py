@@ -47,10 +47,13 @@ def _call_label(call: CommandCall) -> str:
 
 
 def _answer_values(grammar: Grammar) -> list[tuple[str, str]]:
-    """(value, label) for each answer a grammar takes, then nomatch and noinput."""
+    """(value, label) for each answer a grammar takes, then nomatch and noinput (no
+    nomatch for a grammar with a pattern of ``*`` alone: it takes every answer)."""
     out = [(f"choice:{c.value}", f"'{c.value}'") for c in grammar.choices]
     out += [(f"pattern:{k}", f"pattern '{p.source}'") for k, p in enumerate(grammar.patterns)]
-    return [*out, ("nomatch", "an answer it does not take"), ("noinput", "silence")]
+    if not any(all(item == "*" for item in p.items) for p in grammar.patterns):
+        out.append(("nomatch", "an answer it does not take"))
+    return [*out, ("noinput", "silence")]
 
 
 def items(document: Document) -> list[Item]:

@@ -16,6 +16,7 @@ from lxml import etree
 from prima.batch import Inline, Processes
 from prima.check import (
     VISITS,
+    Coverage,
     Verdict,
     Visit,
     attribute,
@@ -153,6 +154,22 @@ def test_coverage_names_what_never_ran_and_min_coverage_fails_the_check(
     assert "lines never reached: 23-24" in out
     assert cli("check", str(TALKER), "--fa", str(QUIET), "--robot", str(HOME), "--runs", "1",
                "--jobs", "1", "--min-coverage", "80", "--out", str(tmp_path))[0] == 0
+
+
+@pytest.mark.parametrize("pattern, nomatch", [("*", False), ("i am *", True)])
+def test_a_grammar_that_takes_any_words_has_no_answer_it_does_not_take(
+        tmp_path: Path, pattern: str, nomatch: bool) -> None:
+    """Coverage lists what a run can reach: a pattern of ``*`` alone takes every answer."""
+    ea = tmp_path / "who.pxml"
+    ea.write_text('<pxml xmlns="urn:prima:pxml:1" kind="ea" name="who">\n'
+                  f'  <grammar id="g"><pattern>{pattern}</pattern></grammar>\n'
+                  '  <state id="s" initial="true"><entry>'
+                  '<chain>who: QA("Who are you?", g)</chain></entry></state>\n</pxml>\n')
+    labels = [i.label for i in Coverage(load_document(ea, default_profile())).items
+              if i.kind == "answers"]
+    assert labels == [f"who: QA -> pattern '{pattern}'",
+                      *(["who: QA -> an answer it does not take"] if nomatch else []),
+                      "who: QA -> silence"]
 
 
 def test_each_visitor_reaches_an_answer_the_others_do_not() -> None:
