@@ -30,13 +30,19 @@ __all__ = [
     "Blend",
     "BUILTIN_JOINTS",
     "CONNECT_COMMAND",
+    "HOLD_SECONDS",
+    "MAX_HOLD",
+    "MAX_SWAY",
+    "MAX_SWAY_PERIOD",
     "RESTORE_COMMAND",
     "RESTORE_POSITION_COMMAND",
     "SEARCH_DEVICE",
-    "MAX_HOLD",
-    "MAX_SWAY",
     "STANDARD_COMMANDS",
     "STANDARD_DEVICES",
+    "STEP_LIMITS",
+    "SWAY_DEGREES",
+    "SWAY_PERIOD",
+    "SWAY_SECONDS",
     "SYMBOLIC_KINDS",
     "TALK_DEVICES",
     "ArgRef",
@@ -50,6 +56,7 @@ __all__ = [
     "Primitive",
     "Priority",
     "RaiseEvent",
+    "Range",
     "SwayBody",
 ]
 
@@ -128,6 +135,29 @@ SYMBOLIC_KINDS = frozenset({ParamKind.PLACE, ParamKind.GESTURE, ParamKind.GRAMMA
 
 
 @dataclass(frozen=True)
+class Range:
+    """The numbers a number argument may take, and how a value outside them is refused.
+
+    The one rule for both checks: ``prima validate`` reports an argument whose value
+    is a constant outside it (``QA(..., timeout=-3)``), and the simulated robot ends a
+    Command whose argument's value is outside it with that error, word for word.
+    """
+
+    says: str
+    """The refusal, without the value: ``timeout must not be negative``."""
+    low: float | None = None
+    high: float | None = None
+    above: bool = False
+    """A value must be greater than ``low``, not equal to it."""
+
+    def refusal(self, value: float) -> str | None:
+        """Why ``value`` is refused (``timeout must not be negative, not -3``), or None."""
+        fits = ((self.low is None or (value > self.low if self.above else value >= self.low))
+                and (self.high is None or value <= self.high))
+        return None if fits else f"{self.says}, not {value:g}"
+
+
+@dataclass(frozen=True)
 class Param:
     """One motion argument of a Command."""
 
@@ -142,6 +172,8 @@ class Param:
     empty): Active Sensing Human's ``say`` adds the speaker."""
     shown: bool = True
     """Shown among the Command's arguments in the trace (a Q&A's timeout is not)."""
+    limits: Range | None = None
+    """For a number: the values the robot takes (None: any finite number)."""
 
     def describe(self) -> str:
         """One line for people: its kind, unit, whether it may be left out and its default,
@@ -182,6 +214,9 @@ class JointSpec:
 MAX_HOLD = 3_600.0
 """Longest one ``<hold>`` step of a ``<perform>`` may last (s), written or given."""
 
+HOLD_SECONDS = Range(f"a hold lasts 0 to {MAX_HOLD:g} s", 0.0, MAX_HOLD)
+"""The seconds a ``<hold>`` step is given by its Command's argument."""
+
 
 @dataclass(frozen=True)
 class Hold:
@@ -203,6 +238,16 @@ class MoveJoint:
 
 MAX_SWAY = 90.0
 """Widest a ``<sway>`` step may sway the body either way (deg)."""
+
+MAX_SWAY_PERIOD = 60.0
+"""Longest one whole sway of a ``<sway>`` step may take (s)."""
+
+SWAY_DEGREES = Range(f"a sway turns more than 0 and at most {MAX_SWAY:g} degrees either way",
+                     0.0, MAX_SWAY, above=True)
+SWAY_PERIOD = Range(f"a sway's period is more than 0 and at most {MAX_SWAY_PERIOD:g} s",
+                    0.0, MAX_SWAY_PERIOD, above=True)
+SWAY_SECONDS = Range(f"a sway lasts more than 0 and at most {MAX_HOLD:g} s", 0.0, MAX_HOLD,
+                     above=True)
 
 
 @dataclass(frozen=True)
@@ -227,6 +272,16 @@ class RaiseEvent:
 Primitive = Hold | MoveJoint | SwayBody | RaiseEvent
 """One step of a ``<perform>``: what the simulator does, in order, to perform a
 Command a profile declares or implements its own way."""
+
+STEP_LIMITS: Mapping[type, Mapping[str, Range]] = MappingProxyType({
+    Hold: MappingProxyType({"seconds": HOLD_SECONDS}),
+    SwayBody: MappingProxyType({"degrees": SWAY_DEGREES, "period": SWAY_PERIOD,
+                                "seconds": SWAY_SECONDS}),
+})
+"""The range of each number a step takes from its Command's arguments (``{name}``), by
+the step's kind and field: an argument a step takes must lie in the step's range too
+(:meth:`CommandSpec.limits`). A joint's angle is any finite number (it stops at the
+joint's limit)."""
 
 
 @dataclass(frozen=True)
@@ -265,6 +320,22 @@ class CommandSpec:
     """How the simulator performs it, when a robot profile says (its ``<perform>``):
     these steps in order, instead of a behavior of its own. Empty: the simulator's
     own behavior for the Command."""
+    ranges: Mapping[str, tuple[Range, ...]] = field(init=False, repr=False, compare=False)
+    """Argument -> every range it must lie in (:meth:`limits`), found once: the robot
+    asks at every number argument of every Command it starts."""
+
+    def __post_init__(self) -> None:
+        found: dict[str, list[Range]] = {}
+        for p in self.params:
+            if p.limits is not None:
+                found.setdefault(p.name, []).append(p.limits)
+        for step in self.perform:
+            for field_name, limits in STEP_LIMITS.get(type(step), {}).items():
+                operand = getattr(step, field_name)
+                if isinstance(operand, ArgRef):
+                    found.setdefault(operand.name, []).append(limits)
+        object.__setattr__(self, "ranges", MappingProxyType(
+            {name: tuple(ranges) for name, ranges in found.items()}))
 
     @property
     def follows_user(self) -> bool:
@@ -321,6 +392,20 @@ class CommandSpec:
         for p in self.params:
             if p.name == name:
                 return p
+        return None
+
+    def limits(self, name: str) -> tuple[Range, ...]:
+        """Every range argument ``name`` must lie in: its parameter's own, and that of
+        each step of the Command's ``<perform>`` that takes it (a hold's seconds)."""
+        return self.ranges.get(name, ())
+
+    def refusal(self, name: str, value: float) -> str | None:
+        """Why the robot refuses ``value`` for argument ``name`` (``timeout must not be
+        negative, not -3``), or None: the first of its :meth:`limits` it is outside."""
+        for limits in self.limits(name):
+            said = limits.refusal(value)
+            if said is not None:
+                return said
         return None
 
     def arg(self, args: Mapping[str, Value], name: str) -> Value:
@@ -392,10 +477,11 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
                   _P("grammar", ParamKind.GRAMMAR, doc="answer grammar declared in the document"),
                   _P("into", ParamKind.VARIABLE, False, doc="variable that receives the answer"),
                   _P("timeout", _N, False, 8.0, "s", "how long to listen for an answer",
-                     shown=False)],
+                     shown=False, limits=Range("timeout must not be negative", 0.0))],
           doc="Say a prompt, then listen for an answer until a timeout: one atomic behavior."),
     _spec("TrackingHuman", "human-detection locomotion", fb=True, travels=True,
-          params=[_P("distance", _N, False, 1.0, "m", "comfortable distance to keep")],
+          params=[_P("distance", _N, False, 1.0, "m", "comfortable distance to keep",
+                     limits=Range("distance must be positive", 0.0, above=True))],
           doc="Follow the user at a comfortable distance, one iteration at a time, until stopped."),
     _spec("FaceHumanAndSpeak", "human-detection locomotion speaker",
           params=[_P("text", _T, doc="the words said once the robot faces the user")],
@@ -413,7 +499,8 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
           doc="Turn the body in place by an angle.", aims=True),
     _spec("SetSpeedAndTime", "locomotion", travels=True,
           params=[_P("speed", _N, unit="m/s", doc="forward speed (negative: backward)"),
-                  _P("time", _N, unit="s", doc="how long to drive"),
+                  _P("time", _N, unit="s", doc="how long to drive",
+                     limits=Range("time must not be negative", 0.0)),
                   _P("spin", _N, False, 0.0, "deg/s", "turning rate while moving")],
           doc="Drive at a speed for a time."),
     _spec("StopMoving", "locomotion", doc="Stop the wheels."),

@@ -216,7 +216,7 @@ def bind_step(b: Builder, el: etree._Element, text: str, step: ChainStep) -> Com
     spots: dict[str, Spot] = {}
     after_named = False
     for pos, arg in enumerate(step.args):
-        arg_spot: Spot = (el, "#text", arg.index)
+        arg_spot: Spot = (el, "#text", _written_at(arg, text))
         name_spot: Spot = (el, "#text", arg.name_index) if arg.name else arg_spot
         param = _chain_param(b, spec, pos, arg, arg_spot, name_spot, after_named)
         after_named = after_named or arg.name is not None
@@ -290,6 +290,12 @@ def _chain_value(b: Builder, param: Param, arg: ChainArg, text: str, spot: Spot)
 _HYPHENATED = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\s*-\s*[A-Za-z0-9_]+)+$")
 
 
+def _written_at(arg: ChainArg, text: str) -> int:
+    """Where a chain argument's value is written from: its first token, or the sign or
+    word before it (``-3`` from its ``-``)."""
+    return span(arg.tree, text)[0]
+
+
 def _source(arg: ChainArg, text: str) -> str:
     start, end = span(arg.tree, text)
     return text[start:end]
@@ -348,21 +354,43 @@ def _check_signature(b: Builder, spec: CommandSpec, where: Spot, spots: dict[str
 
 def _check_numbers(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
                    spots: dict[str, Spot]) -> None:
-    """A number argument whose value is known when the document loads (a literal, or an
-    expression of constants) must be a number: ``Turn(angle="ninety")``, ``Turn(true)`` and
-    ``angle="{'ninety'}"`` would fail when requested. Such an argument is dropped."""
+    """Each number argument of the Command: :func:`check_number`, against its ranges. An
+    argument that is no number is dropped."""
     for param in spec.params:
         compiled = args.get(param.name)
-        if param.kind is not ParamKind.NUMBER or compiled is None or not compiled.constant:
-            continue
-        value = compiled.evaluate(_NO_SCOPE)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            el, where, _index = spot = spots[param.name]
-            written = el.get(where, "") if where not in (None, "#text") else compiled.source
-            shown = written if len(written) <= 20 else written[:17] + "..."
-            form = "argument " + param.name if where == "#text" else f"attribute {where}"
-            b.error(spot, f"{form}={shown}: expected a number, or an expression giving one")
+        if param.kind is ParamKind.NUMBER and compiled is not None and not check_number(
+                b, compiled, spots[param.name], param.name, spec):
             del args[param.name]
+
+
+def check_number(b: Builder, compiled: Compiled, spot: Spot, name: str,
+                 spec: CommandSpec | None = None) -> bool:
+    """Whether the number argument ``name`` (or a ``<timer>``'s ``after``) may have its
+    value, as far as it is known when the document loads; False after an error at
+    ``spot`` when it is no number.
+
+    A constant one (a literal, or an expression of constants) must be a number:
+    ``Turn(angle="ninety")``, ``Turn(true)`` and ``angle="{'ninety'}"`` would fail when
+    requested. A constant argument of ``spec`` must also lie within the ranges the robot
+    takes (:meth:`~prima.catalog.CommandSpec.refusal`: the rule the robot applies when it
+    performs the Command, said in its words), or the Command would fail when performed:
+    ``QA(..., timeout=-3)``. A value computed from variables is checked when the
+    application runs.
+    """
+    if not compiled.constant:
+        return True
+    value = compiled.evaluate(_NO_SCOPE)
+    el, where, _index = spot
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        written = el.get(where, "") if where not in (None, "#text") else compiled.source
+        shown = written if len(written) <= 20 else written[:17] + "..."
+        form = "argument " + name if where == "#text" else f"attribute {where}"
+        b.error(spot, f"{form}={shown}: expected a number, or an expression giving one")
+        return False
+    refusal = None if spec is None else spec.refusal(name, value)
+    if spec is not None and refusal is not None:
+        b.error(spot, f"{spec.name}: {refusal}")
+    return True
 
 
 def _extras(b: Builder, spec: CommandSpec, extras: Sequence[Extra]) -> dict[str, Compiled]:

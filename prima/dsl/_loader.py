@@ -21,7 +21,13 @@ from lxml import etree
 from prima.suggest import did_you_mean, similar
 from prima.catalog import ParamKind
 from prima.dsl._binder import Refs, Spot
-from prima.dsl._commands import bind_chain, bind_element, compile_attribute, element_name
+from prima.dsl._commands import (
+    bind_chain,
+    bind_element,
+    check_number,
+    compile_attribute,
+    element_name,
+)
 from prima.dsl._elements import elements, flag
 from prima.dsl._kept import kept_now
 from prima.dsl._expr import (
@@ -667,7 +673,9 @@ class Builder:
             self.error((el, "reactive", 0), "only an FA may mark its own events reactive")
         self.note_timer(name, reactive, (el, "reactive", 0), (el, "name", 0))
         after = compile_attribute(self, ParamKind.NUMBER, el, "after")
-        return StartTimer(name, after, reactive, self.loc_of(el)) if after else None
+        if after is None or not check_number(self, after, (el, "after", 0), "after"):
+            return None  # (a constant that is no number: the interpreter would refuse it)
+        return StartTimer(name, after, reactive, self.loc_of(el))
 
     def note_timer(self, name: str, reactive: bool, flag_at: Spot, name_at: Spot) -> None:
         """A timer started: every start of one timer gives it the same reactive flag."""

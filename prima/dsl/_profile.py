@@ -50,6 +50,8 @@ from prima.catalog import (
     Primitive,
     Priority,
     RaiseEvent,
+    Range,
+    STEP_LIMITS,
     SwayBody,
 )
 from prima.dsl._elements import elements, flag
@@ -609,7 +611,8 @@ class _Reader:
                 break
             kind = local_name(step)
             if kind == "hold":
-                seconds = self._operand(step, "seconds", spec, args, ParamKind.NUMBER)
+                seconds = self._operand(step, "seconds", spec, args, ParamKind.NUMBER,
+                                        STEP_LIMITS[Hold]["seconds"])
                 if seconds is not None and not isinstance(seconds, str):
                     steps.append(Hold(seconds))
             elif kind == "joint":
@@ -634,7 +637,7 @@ class _Reader:
         if "locomotion" not in spec.devices:
             self.error(step, f"a <sway> step moves the body: {spec.name} must use the device "
                              f"'locomotion' (its devices: {_listed(sorted(spec.devices))})")
-        found = [self._operand(step, a, spec, args, ParamKind.NUMBER)
+        found = [self._operand(step, a, spec, args, ParamKind.NUMBER, STEP_LIMITS[SwayBody][a])
                  for a in ("degrees", "period", "seconds")]
         numbers = [f for f in found if f is not None and not isinstance(f, str)]
         if len(numbers) != 3:
@@ -672,10 +675,12 @@ class _Reader:
                          None if isinstance(toward, float) else toward)
 
     def _operand(self, step: etree._Element, attribute: str, spec: CommandSpec,
-                 args: Mapping[str, Param], kind: ParamKind) -> float | str | ArgRef | None:
-        """A step's attribute: ``{name}`` (an argument of ``kind``), else a literal (a
-        number within its :data:`FIGURES` bound, or a place name); None if absent or
-        wrong (with a problem)."""
+                 args: Mapping[str, Param], kind: ParamKind,
+                 limits: Range | None = None) -> float | str | ArgRef | None:
+        """A step's attribute: ``{name}`` (an argument of ``kind``; its default, when the
+        call gives it none, within the step's ``limits``), else a literal (a number within
+        its :data:`FIGURES` bound, or a place name); None if absent or wrong (with a
+        problem)."""
         raw = step.get(attribute)
         if raw is None:
             return None
@@ -690,7 +695,14 @@ class _Reader:
                 self.error(step, f"'{raw}' is a {param.kind.value} argument of {spec.name}; "
                                  f"{attribute}= takes a {kind.value}", attribute)
                 return None
-            return ArgRef(name, param.default)
+            default = param.default
+            refusal = (limits.refusal(default) if limits is not None and not param.required
+                       and isinstance(default, (int, float)) else None)
+            if refusal is not None:
+                self.error(step, f"'{raw}' defaults to {default:g}: {spec.name} called "
+                                 f"without it would fail ({refusal})", attribute)
+                return None
+            return ArgRef(name, default)
         if kind is not ParamKind.NUMBER:
             return raw
         value = number(self.doc, step, attribute, FIGURES[(local_name(step), attribute)], 0.0)

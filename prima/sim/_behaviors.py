@@ -20,13 +20,16 @@ from collections.abc import Callable, Generator, Mapping
 from typing import TYPE_CHECKING, Any
 
 from prima.catalog import (
-    MAX_HOLD,
-    MAX_SWAY,
+    HOLD_SECONDS,
+    SWAY_DEGREES,
+    SWAY_PERIOD,
+    SWAY_SECONDS,
     ArgRef,
     CommandSpec,
     Hold,
     JointSpec,
     MoveJoint,
+    Range,
     SwayBody,
 )
 from prima.errors import CommandError
@@ -56,12 +59,20 @@ def _arg(sim: Body, call: Call, name: str) -> Value:
 
 
 def _number(sim: Body, call: Call, name: str, required: bool = True) -> float | None:
+    """A number argument, within the ranges its Command's catalog entry gives it
+    (:meth:`~prima.catalog.CommandSpec.refusal`: the rules ``prima validate`` checks a
+    constant argument against, so that a document that validates is not refused here
+    for one)."""
     value = _arg(sim, call, name)
     if value is None:
         if required:
             raise CommandError(f"missing argument {name!r}")
         return None
-    return _finite(value, f"argument {name!r}")
+    number = _finite(value, f"argument {name!r}")
+    refusal = sim.catalog[call.command].refusal(name, number)
+    if refusal is not None:
+        raise CommandError(refusal)
+    return number
 
 
 def _req(sim: Body, call: Call, name: str) -> float:
@@ -182,8 +193,6 @@ def speak(sim: Body, call: Call, cid: int, it: int) -> Gen:
 def qa(sim: Body, call: Call, cid: int, it: int) -> Gen:
     prompt = _text(sim, call, "prompt")
     timeout = _req(sim, call, "timeout")
-    if timeout < 0:
-        raise CommandError(f"timeout must not be negative, not {timeout:g}")
     n = sim.ticks(sim.speech_duration(prompt))
     sim.asking(prompt, n)
     sim.utter(cid, prompt, n)
@@ -298,8 +307,6 @@ def set_direction(sim: Body, call: Call, cid: int, it: int) -> Gen:
 def set_speed_and_time(sim: Body, call: Call, cid: int, it: int) -> Gen:
     speed, seconds = _req(sim, call, "speed"), _req(sim, call, "time")
     spin = _req(sim, call, "spin")
-    if seconds < 0:
-        raise CommandError(f"time must not be negative, not {seconds:g}")
     world = sim.world
     if world.mode:
         yield from _stop(sim)
@@ -396,11 +403,15 @@ def _finite(value: Value, what: str) -> float:
     return number
 
 
+def _within(value: float, limits: Range) -> float:
+    refusal = limits.refusal(value)
+    if refusal is not None:
+        raise CommandError(refusal)
+    return value
+
+
 def _hold_seconds(call: Call, step: Hold) -> float:
-    seconds = _finite(_given(call, step.seconds), "a hold's seconds")
-    if not 0.0 <= seconds <= MAX_HOLD:
-        raise CommandError(f"a hold lasts 0 to {MAX_HOLD:g} s, not {seconds:g}")
-    return seconds
+    return _within(_finite(_given(call, step.seconds), "a hold's seconds"), HOLD_SECONDS)
 
 
 def _sway_figures(call: Call, step: SwayBody) -> tuple[float, int, float]:
@@ -409,14 +420,9 @@ def _sway_figures(call: Call, step: SwayBody) -> tuple[float, int, float]:
     degrees = _finite(_given(call, step.degrees), "a sway's degrees")
     period = _finite(_given(call, step.period), "a sway's period")
     seconds = _finite(_given(call, step.seconds), "a sway's seconds")
-    if not 0.0 < degrees <= MAX_SWAY:
-        raise CommandError(f"a sway turns more than 0 and at most {MAX_SWAY:g} degrees "
-                           f"either way, not {degrees:g}")
-    if not 0.0 < period <= 60.0:
-        raise CommandError(f"a sway's period is more than 0 and at most 60 s, not {period:g}")
-    if not 0.0 < seconds <= MAX_HOLD:
-        raise CommandError(f"a sway lasts more than 0 and at most {MAX_HOLD:g} s, "
-                           f"not {seconds:g}")
+    degrees = _within(degrees, SWAY_DEGREES)
+    period = _within(period, SWAY_PERIOD)
+    seconds = _within(seconds, SWAY_SECONDS)
     sways = max(1, int(seconds / period + 1e-9))
     return degrees, sways, sways * period
 
@@ -578,8 +584,6 @@ def active_sensing_human(sim: Body, call: Call, cid: int, it: int) -> Gen:
 
 def tracking_human(sim: Body, call: Call, cid: int, it: int) -> Gen:
     want = _req(sim, call, "distance")
-    if want <= 0:
-        raise CommandError(f"distance must be positive, not {want:g}")
     k, world = sim.kernel, sim.world
     if not sim.seen:
         found = yield until(lambda: sim.seen, sim.ticks(sim.spec.lose_after))
@@ -840,7 +844,7 @@ def _search_time(sim: Body, call: Call) -> float:
 
 PLANNED: Mapping[str, Callable[[Body, Call], float]] = {
     "Speak": lambda sim, call: _said(sim, call, "text"),
-    "QA": lambda sim, call: _said(sim, call, "prompt") + max(0.0, _req(sim, call, "timeout")),
+    "QA": lambda sim, call: _said(sim, call, "prompt") + _req(sim, call, "timeout"),
     "FaceHumanAndSpeak": lambda sim, call: _turning(sim, 180.0) + _said(sim, call, "text"),
     "TurnAndSpeak": lambda sim, call: max(_turning(sim, _req(sim, call, "angle")),
                                           _said(sim, call, "text")),
@@ -886,10 +890,12 @@ def perform(sim: Body, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
     """
     values: Values = {}
     terminal = True
-    try:
-        length = sum(planned(sim, call) for call in ab.calls if call.command in sim.catalog)
-    except CommandError as exc:
-        return {"error": str(exc)}, True
+    length = 0.0
+    for call in ab.calls:
+        try:
+            length += planned(sim, call) if call.command in sim.catalog else 0.0
+        except CommandError as exc:  # an unusable argument: nothing has started
+            return {"error": f"{call.command}: {exc}"}, True
     if length > sim.longest_for(ab.app):
         return {"error": f"{ab.calls[0].command} would take {length:g} s; no atomic behavior "
                          f"of {ab.app} may take more than {sim.longest_for(ab.app):g} s "

@@ -317,6 +317,9 @@ BREAKS = {
     "scenarios/maps/library.xml": (('<wall x1="8" y1="1"', '<wall x1="8" y1="1e999"'),),
     "apps/fa/fa1-emotions.pxml": (("<state ", "<state  bogus=\"1\" "),),
     "robots/guide-robot.xml": (("<gesture ", "<gesture speed=\"fast\" "),),
+    "apps/ea/ea2-library.pxml": (('<timer name="ask-later" after="30"/>',
+                                  '<timer name="ask-later" after="{\'later\'}"/>'),
+                                 ('{book}?", yesno)', '{book}?", yesno, timeout=-1)')),
 }
 """Damage done to copies of shipped files (each text replaced once, where it is)."""
 
@@ -341,7 +344,7 @@ def _shipped_tree(folder: Path, broken: bool) -> list[Path]:
 def test_every_file_gets_exactly_what_prima_validate_reports(tmp_path: Path,
                                                              broken: bool) -> None:
     """Every shipped document, profile, scenario and map (and copies with faults typed
-    into five of them), open in the editor: the diagnostics are prima validate's lines
+    into six of them), open in the editor: the diagnostics are prima validate's lines
     for that file, as ``prima validate apps scenarios robots`` checks it (a document with
     the first scenario that runs it): the same problems, wording and positions."""
     files = _shipped_tree(tmp_path, broken)
