@@ -240,7 +240,11 @@ class Policies:
         be cut, in no block, not blended; never a reply to an answer (7.4), and never
         twice by another application (a restart is not cut again). A reaction to the
         user's own action turning to the user may cut its own application's other
-        stream there too (7.6 (1) and (3): a search's sweep, a gesture)."""
+        stream there too (7.6 (1) and (3): a search's sweep, a gesture). A feedback
+        iteration whose loop its own application stopped (with an as-soon-as-possible
+        request that now waits behind it) may be cut all the same: 7.3 (2) lets a
+        reaction cut a feedback iteration whatever waits behind it, and the cut ends the
+        loop there, as the iteration's own end would have (it is not started again)."""
         if y.once or y.protected or not preempts(x, y):
             return False
         if y.app is x.app and not (y.tree is not x.tree and x.tree.user
@@ -249,7 +253,7 @@ class Policies:
         if y.blended or any(d in self._wm.blending for d in y.devices):
             return False  # blended ABs are never cut
         if not all(c.spec.interruptible and c.on_interrupt is not OnInterrupt.NEVER
-                   and not c.cut for c in y.commands):
+                   for c in y.commands):
             return False
         block = self._holds.block(y.app)
         return block is None or not (block.devices & y.devices)

@@ -13,8 +13,9 @@ from prima.mediator import (
     MediatorConfig,
     Request,
     Rule,
+    RunningOrder,
 )
-from prima.mediator.testing import Harness
+from prima.mediator.testing import Harness, feedback_iterations
 from prima.vocab import OnInterrupt
 from tests.mediator.helpers import call, req, speak
 
@@ -118,3 +119,33 @@ def test_a_cut_that_the_ab_outlives_changes_nothing() -> None:
     assert not h.kinds(DecisionKind.INTERRUPT)
     assert [(t, r) for t, _a, _x, r in starts(h)] == [(0.0, Rule.FREE_DEVICES),
                                                       (6.0, Rule.FREE_DEVICES)]
+
+
+def test_a_touch_cuts_a_search_sweep_whose_app_reacted_to_finding_the_user() -> None:
+    """The EA's search sweep says "Where are you?" (a feedback iteration); the user is
+    found at once, and its handler asks as soon as possible for a stop and words, which
+    stops the loop when the sweep ends and waits behind it. A touch then: the FA's
+    reaction to the user's own action is the latest and outranks the EA's earlier one to
+    a perception (docs/rules.md 7.1), so it cuts the sweep as it would cut any feedback
+    iteration (7.3 (2), 7.6 (3)): the EA's own reaction waiting behind it changes
+    nothing. The sweep is not started again (its app stopped its loop)."""
+    h = Harness(Catalog.standard().interruptible(["Speak", "ActiveSensingHuman"]),
+                duration=lambda ab: 3.0 if ab.calls[0].command == "ActiveSensingHuman"
+                else 1.0, outcome=feedback_iterations(5), cut_after=0.2)
+    h.app("ea", AppKind.EA)
+    h.app("fa", AppKind.FA)
+    h.mediator.submit(req("ea", call("ActiveSensingHuman", say="Where are you?")))  # AB1
+    h.mediator.submit(Request("ea", (call("StopMoving"), call("FaceHumanAndSpeak",
+                                                               text="There you are.")),
+                              order=RunningOrder.ASAP, reactive=True, reaction=True))
+    h.at(0.5, lambda: h.mediator.submit(Request(
+        "fa", (speak("Hee-hee! That tickles."),), reactive=True, reaction=True, user=True)))
+    h.run(until=20.0)
+    (cut,) = h.kinds(DecisionKind.INTERRUPT)
+    assert (cut.t, cut.app, cut.ab) == (0.5, "ea", 1)
+    assert [(d.t, d.app, d.command) for d in h.starts()] == [
+        (0.0, "ea", "ActiveSensingHuman"),
+        (0.7, "fa", "Speak"),  # at the cut, not at the sweep's end (3.0)
+        (1.7, "ea", "StopMoving"),  # after fa's words (7.6 (1)), the EA's reaction
+        (2.7, "ea", "FaceHumanAndSpeak")]
+    assert not [d for d in h.kinds(DecisionKind.REQUEST) if d.rule is Rule.RESTART]
