@@ -20,8 +20,8 @@ from prima.catalog import STANDARD_COMMANDS
 from prima.judge._reading import Row
 from prima.judge._thresholds import Thresholds
 
-__all__ = ["EPS", "TALK_DEVICES", "UNMEASURED_EVENTS", "Ab", "Context", "Exchange", "Hold",
-           "ReactionState", "span_at", "spans_meeting", "xy"]
+__all__ = ["EPS", "FOLLOW_COMMANDS", "TALK_DEVICES", "UNMEASURED_EVENTS", "Ab", "Context",
+           "Exchange", "Hold", "ReactionState", "span_at", "spans_meeting", "xy"]
 
 EPS = 1e-6
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
@@ -41,6 +41,9 @@ _ANSWERS = " answers the user"
 
 LOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.breaks_cc)
 """Commands that break the Communication Channel (LOW priority)."""
+
+FOLLOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.follows_user)
+"""Commands that move the robot after its user (Tracking Human)."""
 
 
 def xy(pose: Mapping[str, Any]) -> tuple[float, float]:
@@ -227,6 +230,10 @@ class Context:
         (an AB that never started is known by this alone)."""
         self.elsewhere: set[int] = set()
         """Commands whose request said their words are about something else."""
+        self.waiting_devices: dict[int, frozenset[str]] = {}
+        """Command -> the devices of the AB it waits as, from a ``hold`` or ``suspend``
+        line that names that AB before it starts (a request line gives only its first
+        AB's devices: a chain's later Command is known by these lines alone)."""
         self.tree_app: dict[int, str] = {}
         self.tree_reactions: dict[int, list[ReactionState]] = {}
         """Tree -> the reactions that took it over, in order (the latest ranks)."""
@@ -490,10 +497,18 @@ class Context:
                 ex.done = float(row["t"])
                 del self.open_exchange[app]
 
+    def _waits_as(self, row: Row) -> None:
+        """A line names a waiting AB with its devices: note them for its Commands."""
+        devices = row.get("devices")
+        if devices:
+            for cid in command_ids(row):
+                self.waiting_devices.setdefault(cid, frozenset(devices))
+
     def _hold(self, row: Row) -> None:
         ab = row.get("ab")
         if not isinstance(ab, int):
             return
+        self._waits_as(row)
         text = str(row.get("text") or "")
         holder = ""
         for marker in ("kept for ", "for "):
@@ -514,6 +529,8 @@ class Context:
         hold line says (its other suspensions are what its ABs lost, seen on devices)."""
         if row.get("reason") == "answering":
             self._hold(row)
+        elif isinstance(row.get("ab"), int):
+            self._waits_as(row)
 
     def _budget(self, row: Row) -> None:
         app = str(row.get("app") or "")

@@ -38,6 +38,7 @@ from collections.abc import Iterable, Sequence
 
 from prima.judge._context import (
     EPS,
+    FOLLOW_COMMANDS,
     TALK_DEVICES,
     Ab,
     Context,
@@ -59,6 +60,10 @@ Span = tuple[float, float]
 
 def _hold_t(h: Hold) -> float:
     return h.t
+
+
+def _until(span: Span) -> float:
+    return span[1]
 
 
 def _measure(spans: Iterable[Span], lo: float, hi: float) -> float:
@@ -118,6 +123,8 @@ class _Analyst:
         """An AB (its ``id()``: a forged trace may start one AB twice) -> where it is
         in its tree's ABs (:meth:`_place`)."""
         self._requested_by: dict[int, tuple[int, ...]] | None = None
+        self._following: dict[str, tuple[list[Span], list[float]]] = {}
+        """App -> when other applications followed the user (:meth:`_followed`)."""
 
     # ------------------------------------------------------------ precedence
     def user_until(self, r: ReactionState) -> float:
@@ -572,7 +579,7 @@ class _Analyst:
         if t1 <= t0 + EPS:
             return 0.0
         target = heard or (spoken[0] if spoken else None)
-        devices = (target.devices if target is not None else frozenset()) | TALK_DEVICES
+        devices = (target.devices if target is not None else self._unsaid(r)) | TALK_DEVICES
         # (the words could ask for a cut only once the reaction's AB before them ended:
         # a Q&A then on the last word of its prompt was no longer to be cut)
         ready = self.ready(target) if target is not None else None
@@ -586,6 +593,20 @@ class _Analyst:
                 waiting, _ = self.waits(r, own, ab.devices, ab.low, lo, asked[1], ab.start)
                 spans += [(a, b) for a, b, _ in waiting]
         return max(0.0, (t1 - t0) - _measure(spans, t0, t1))
+
+    def _unsaid(self, r: ReactionState) -> frozenset[str]:
+        """The devices of the AB that was to say the reaction's words and never started,
+        as a line that named it while it waited says (a hold, a suspension): its own
+        devices, not only the talk devices, are what kept it (the wheels a
+        FaceHumanAndSpeak needs while another application follows the user). Empty
+        when no line named it."""
+        for cid in r.commands:
+            if cid in self.ctx.cmd_ab:
+                continue  # (it started)
+            devices = self.ctx.waiting_devices.get(cid)
+            if devices is not None and not TALK_DEVICES.isdisjoint(devices):
+                return devices
+        return frozenset()
 
     def _last_of(self, ab: Ab) -> Ab:
         """The AB that last starts ``ab`` again (a cut AB's restart, and its restart's),
@@ -631,9 +652,36 @@ class _Analyst:
             return True  # (cut for another reaction, and said again but not whole)
         if again:
             return False  # (being said again when the trace ends: not unheard yet)
-        # never said again yet: unheard once they waited longer than anything may
+        # never said again yet: unheard once they waited longer than anything may (the
+        # time another application followed the user meanwhile aside, as for stuck: the
+        # user leads the robot, as they asked, and that reaction goes on, 7.1)
         since = max((ab.until(self.end) for ab in cut), default=r.t)
-        return self.end - since > self.th.stuck_after + EPS
+        return self.end - since - self._followed(r.app, since) > self.th.stuck_after + EPS
+
+    def _followed(self, app: str, since: float) -> float:
+        """How long from ``since`` to the trace's end another application's AB followed
+        the user (a Tracking Human). The ABs are gathered once for each ``app``, into
+        stretches apart in time with the time each and those after it sum to, so that a
+        long trace's many reactions ask at no more cost."""
+        found = self._following.get(app)
+        if found is None:
+            union: list[Span] = []
+            for a, b in sorted((ab.start, ab.until(self.end)) for ab in self.ctx.abs.values()
+                               if ab.app != app
+                               and not FOLLOW_COMMANDS.isdisjoint(ab.command.split("+"))):
+                if union and a <= union[-1][1]:
+                    union[-1] = (union[-1][0], max(b, union[-1][1]))
+                else:
+                    union.append((a, b))
+            onward = [0.0] * (len(union) + 1)
+            for i in range(len(union) - 1, -1, -1):
+                onward[i] = onward[i + 1] + union[i][1] - union[i][0]
+            found = self._following[app] = (union, onward)
+        union, onward = found
+        i = bisect.bisect_right(union, since, key=_until)  # (the first that ends after it)
+        if i == len(union):
+            return 0.0
+        return onward[i] - max(0.0, since - union[i][0])
 
     @staticmethod
     def _top(allowed: list[tuple[float, float, Blame]]) -> tuple[Blame, ...]:

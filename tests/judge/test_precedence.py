@@ -295,6 +295,54 @@ def test_a_reaction_that_goes_first_keeps_the_speaker_while_its_turn_runs() -> N
     assert counts(report) == {}
 
 
+def _words_behind_a_later_reaction_that_follows(until: float) -> Report:
+    """ea reacts to the user found at 10 s: StopMoving (0.5 s), then FaceHumanAndSpeak
+    "There you are." (the wheels, the camera and the speaker). fa reacts to the user found
+    a moment later (its own search's end): "I found you." (2 s), then it follows the user
+    (TrackingHuman, 0.5 s iterations) until ``until``. ea's words, kept for fa's next AB as
+    the mediator says (a ``reserved`` hold, which names their devices), never start: fa's
+    reaction is the latest, and its tree, following the user, goes first (4.2, 7.1)."""
+    tr = Trace()
+    follow = ("human-detection", "locomotion")
+    words = ("human-detection", "locomotion", "speaker")
+    tr.event(10.0, "human-found")
+    tr.request(10.0, "ea", 1, [1, 2], command="StopMoving", text="There you are.",
+               reactive=True, devices=("locomotion",))
+    tr.start(10.0, "ea", 1, 1, command="StopMoving", devices=("locomotion",))
+    tr.event(10.2, "human-found")
+    tr.request(10.2, "fa", 3, [3, 4], tree=1, text="I found you.", reactive=True)
+    tr.start(10.2, "fa", 3, 3, tree=1, text="I found you.", words=(10.2, 12.2))
+    tr.end(10.5, "ea", 1, 1, command="StopMoving", devices=("locomotion",))
+    tr.line(10.5, "hold", app="ea", ab=2, tree=0, command="FaceHumanAndSpeak",
+            reason="reserved", text="devices kept for fa's reaction (AB4 next)",
+            devices=list(words), before=4, detail={"command_id": 2})
+    tr.end(12.2, "fa", 3, 3, tree=1, words=(10.2, 12.2), text="I found you.")
+    t, ab = 12.2, 4
+    while t < until - 1e-9:
+        tr.start(t, "fa", ab, 4, tree=1, command="TrackingHuman", devices=follow,
+                 iteration=ab - 4, reason="reactivity")
+        tr.end(t + 0.5, "fa", ab, 4, tree=1, command="TrackingHuman", devices=follow,
+               iteration=ab - 4, result="distance=1.0, lost=False")
+        t, ab = round(t + 0.5, 3), ab + 1
+    return tr.judge()
+
+
+@pytest.mark.parametrize("until", [40.2, 100.2])
+def test_words_that_wait_for_a_later_reaction_following_the_user_are_not_late(
+        until: float) -> None:
+    """7.1 and 4.2: the latest reaction's tree goes first for as long as it is in working
+    memory, its following the user too (7.6 (1): following is not leaving). ea's words
+    wait for fa's TrackingHuman on the wheels and the camera, which their
+    FaceHumanAndSpeak needs (as the hold line says), not only for the free speaker:
+    neither late nor, while fa follows the user, unheard (as a Command kept waiting by
+    following is not stuck)."""
+    report = _words_behind_a_later_reaction_that_follows(until)
+    ea, fa = report.reactions
+    assert (ea.app, ea.latency, ea.first_utterance, ea.words_free) == ("ea", 0.0, None, 0.0)
+    assert (ea.late, ea.unheard, fa.late) == (False, False, False)
+    assert counts(report) == {}
+
+
 def _held_by(hold: str | None) -> Report:
     """A message comes for fa at 10 s and fa starts at 12 s, though nothing runs on its
     devices: ea's begin/end block (open from 9 s to 12 s) reserves the speaker, or, for
