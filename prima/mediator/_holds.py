@@ -130,6 +130,9 @@ class Holds:
         """ABs said to be kept for another reaction's next AB -> that AB."""
         """Waiting ABs kept from a reaction's reserved device (a hold decision was
         emitted)."""
+        self._behind: dict[AbId, AbId] = {}
+        """ABs said to wait on behind the feedback loop that such a next AB started ->
+        that AB."""
         self._kept: dict[AbId, str] = {}
         """ABs parked by a stream hold or block -> the holder's name."""
         self.opened = False
@@ -254,6 +257,7 @@ class Holds:
             self._channel_held.discard(node.id)
         if self._reserved:
             self._reserved.pop(node.id, None)
+            self._behind.pop(node.id, None)
         if self._answer_held:
             self._answer_held.pop(node.id, None)
         if not self.opened:
@@ -322,6 +326,7 @@ class Holds:
     def cancelled(self, node: Node) -> None:
         self._channel_held.discard(node.id)
         self._reserved.pop(node.id, None)
+        self._behind.pop(node.id, None)
         self._answer_held.pop(node.id, None)
         if node.reserving and self._reserve_parked:
             self.refile_reserved()  # a next AB that kept devices is gone
@@ -399,6 +404,25 @@ class Holds:
                            detail=f"devices kept for {by.app.name}'s {what} (AB{by.id} next)",
                            before=by.id)
             self._log.tell(node.app.name, "held", by=by.app.name, rule=Rule.RESERVED.value)
+
+    def kept_for(self, node: Node, by: Node) -> bool:
+        """Whether a hold said ``node`` was kept for the next AB ``by`` of another
+        application's reaction, and no line has said yet that it waits on behind it."""
+        return self._reserved.get(node.id) == by.id and self._behind.get(node.id) != by.id
+
+    def behind(self, node: Node, by: Node, rule: Rule) -> None:
+        """Record that ``node``, which a hold said was kept for the next AB ``by`` of
+        another application's reaction (or reply), waits on behind it now that ``by``
+        starts a feedback loop: its iterations rank as ``by`` does, by ``rule``, while
+        their tree is in working memory (docs/rules.md 7.1: following the user goes on),
+        so no other line would say why ``node`` still waits (once per AB and loop)."""
+        if self.kept_for(node, by):
+            self._behind[node.id] = by.id
+            what = "reply" if by.protected else "reaction"
+            self._log.emit(DecisionKind.HOLD, rule, node,
+                           detail=f"waits for {by.app.name}'s {what} (its loop AB{by.id} "
+                                  f"{by.name} goes on)", before=by.id)
+            self._log.tell(node.app.name, "held", by=by.app.name, rule=rule.value)
 
     def note(self, node: Node, rule: Rule, holder: App) -> None:
         """Record that ``holder`` keeps ``node`` waiting (once per hold)."""

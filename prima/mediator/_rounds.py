@@ -650,14 +650,18 @@ class Selector:
             log.tell(x.app.name, "resumed", rule=rule.value)
             later.append((False, x.tree))
         if losers:
-            self._suspend_losers(x, losers, rule, started, later)
+            self._suspend_losers(x, losers, rule, started, later, view)
 
     def _suspend_losers(self, x: Node, losers: list[Node], rule: Rule, started: list[Node],
-                        later: list[tuple[bool, Tree]]) -> None:
+                        later: list[tuple[bool, Tree]], view: _Round) -> None:
         busy = self._wm.busy
         for loser in losers:
             tree = loser.tree
-            if tree is x.tree or tree.suspended is not None:
+            if tree is x.tree:
+                continue
+            if tree.suspended is not None:
+                if x.feedback:  # (a loop it was kept for starts: it may wait on for good)
+                    self._behind(x, loser, started, view)
                 continue
             if later and any(is_suspend and t is tree for is_suspend, t in later):
                 continue
@@ -672,3 +676,21 @@ class Selector:
                                  f"lost to AB{x.id} ({x.app.name})")
                     self._log.tell(loser.app.name, "suspended", by=x.app.name, rule=rule.value)
                     later.append((True, tree))
+
+    def _behind(self, x: Node, loser: Node, started: list[Node], view: _Round) -> None:
+        """The first iteration ``x`` of a feedback loop of another application's reaction
+        (or reply) starts, and ``loser``, of a suspended stream, which a hold said was kept
+        for ``x``, lost to it on rank alone. The loop's iterations win as ``x`` did for as
+        long as their tree is in working memory (docs/rules.md 7.1: following the user
+        goes on), and no line would say why ``loser`` still waits: a hold line says it,
+        and its application is told (7.5)."""
+        holds = self._holds
+        if not holds.kept_for(loser, x):
+            return
+        busy = self._wm.busy
+        for d in loser.sorted_devices:
+            running = busy.get(d)
+            if running is not None and running not in started:
+                return  # (it waits for an AB already running: that is why)
+        if holds.holder(loser) is None and self._reserved(loser) is None:
+            holds.behind(loser, x, view.separating(x, loser))

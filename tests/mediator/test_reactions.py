@@ -3,8 +3,10 @@ splits a question from its reply, nor holds back a reaction."""
 
 from __future__ import annotations
 
-from prima.mediator import AppKind, Event, Outcome, Request
-from prima.mediator.testing import Harness
+from prima.catalog import Catalog
+from prima.mediator import AppKind, DecisionKind, Event, Outcome, Request, Rule
+from prima.mediator.testing import Harness, feedback_iterations
+from prima.vocab import OnInterrupt
 from tests.mediator.helpers import call, req, speak
 
 
@@ -191,3 +193,31 @@ def test_a_stream_hold_delays_the_resumption_of_a_suspended_stream() -> None:
     h.run(until=60.0)
     assert start_of(h, "fa", "Connecting the video server.") == 1.0
     assert start_of(h, "ea", "a title.") == 12.0  # the hold armed at 2 for 10 s
+
+
+def test_a_hold_says_why_an_ab_kept_for_a_later_reactions_loop_waits_on() -> None:
+    """7.1 and 7.5: ea's reaction (its words, then a FaceHumanAndSpeak) loses the speaker
+    to fa's later reaction ("I found you.", then following the user); ea's
+    FaceHumanAndSpeak is held for fa's TrackingHuman, its next AB (``reserved``). When the
+    TrackingHuman starts, that hold is over, yet its iterations go on winning the wheels
+    for as long as fa's reaction is in working memory: a hold line says so, once, with
+    the rule that put them first, and ea is told it is held."""
+    h = Harness(Catalog.standard().interruptible(["Speak"]),
+                duration={"Speak": 2.0, "TrackingHuman": 0.5, "*": 1.0},
+                outcome=feedback_iterations(1000))
+    m = h.mediator
+    events: list[Event] = []
+    h.app("ea", AppKind.EA, on_event=events.append)
+    h.app("fa", AppKind.FA)
+    m.submit(Request("ea", (speak("Oh."), call("FaceHumanAndSpeak", text="There you are.")),
+                     reactive=True, reaction=True, on_interrupt=OnInterrupt.NEVER))
+    h.at(0.5, lambda: m.submit(Request("fa", (speak("I found you."), call("TrackingHuman")),
+                                       reactive=True, reaction=True)))
+    h.run(until=20.0)
+    holds = [(d.t, d.app, d.command, d.rule, d.before) for d in h.kinds(DecisionKind.HOLD)]
+    track = next(d.ab for d in h.starts() if d.command == "TrackingHuman")
+    assert holds == [(2.0, "ea", "FaceHumanAndSpeak", Rule.RESERVED, track),
+                     (4.0, "ea", "FaceHumanAndSpeak", Rule.REACTIVITY, track)]
+    assert "FaceHumanAndSpeak" not in [d.command for d in h.starts()]
+    assert [(e.data["by"], e.data["rule"]) for e in events if e.name == "held"] == [
+        ("fa", "reserved"), ("fa", "reactivity")]
