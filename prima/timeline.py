@@ -22,14 +22,15 @@ means.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Mapping
+from array import array
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, overload
 
 from prima.trace import Pose, user_words
 
-__all__ = ["JOIN", "MAX_ROWS", "NO_DEVICE", "Bar", "Builder", "Mark", "Span", "Tick", "Timeline",
-           "blended_devices", "ink", "runs", "timeline"]
+__all__ = ["JOIN", "MAX_ROWS", "NO_DEVICE", "Bar", "Builder", "Mark", "Poses", "Span", "Tick",
+           "Timeline", "blended_devices", "ink", "runs", "timeline"]
 
 Row = Mapping[str, Any]
 
@@ -129,6 +130,51 @@ class Tick:
     """What the user did (``say``, ``walk``, ``touch``, ...); empty for an event."""
 
 
+class Poses(Sequence[tuple[float, Pose]]):
+    """Pose samples in time order, each ``(t, (x, y, heading))``, kept as one array of
+    floats, four a sample: a long run has hundreds of thousands of them, which as tuples
+    of floats took five times the room."""
+
+    def __init__(self, samples: Iterable[tuple[float, Pose]] = ()) -> None:
+        self.floats = array("d")
+        """t, x, y and heading of each sample, one after the other."""
+        for sample in samples:
+            self.append(sample)
+
+    def append(self, sample: tuple[float, Pose]) -> None:
+        t, pose = sample
+        self.floats.extend((t, *pose))
+
+    def __len__(self) -> int:
+        return len(self.floats) // 4
+
+    @overload
+    def __getitem__(self, index: int) -> tuple[float, Pose]: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[tuple[float, Pose]]: ...
+
+    def __getitem__(self, index: int | slice) -> tuple[float, Pose] | list[tuple[float, Pose]]:
+        if isinstance(index, slice):
+            return [self[k] for k in range(*index.indices(len(self)))]
+        k = index + len(self) if index < 0 else index
+        if not 0 <= k < len(self):
+            raise IndexError("pose sample out of range")
+        t, x, y, heading = self.floats[4 * k:4 * k + 4]
+        return (t, (x, y, heading))
+
+    def __iter__(self) -> Iterator[tuple[float, Pose]]:
+        floats = self.floats
+        for k in range(0, len(floats), 4):
+            yield (floats[k], (floats[k + 1], floats[k + 2], floats[k + 3]))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Sequence) and list(self) == list(other)
+
+    def __repr__(self) -> str:
+        return f"Poses({list(self)!r})"
+
+
 @dataclass
 class Timeline:
     """A run's device timeline."""
@@ -147,9 +193,10 @@ class Timeline:
     """In trace order."""
     ticks: list[Tick] = field(default_factory=list)
     """In trace order."""
-    robot: list[tuple[float, Pose]] = field(default_factory=list)
-    user: list[tuple[float, Pose]] = field(default_factory=list)
-    """The poses on every line that has them, in time order."""
+    robot: Poses = field(default_factory=Poses)
+    user: Poses = field(default_factory=Poses)
+    """The poses on every line that has them, in time order (of a run of equal ones, the
+    first and the last)."""
     end: float = 0.0
     """The time of the trace's last line."""
     hidden: int = 0
@@ -300,11 +347,11 @@ class Builder:
         if kind in _MARKS and app is not None:
             self.mark(i, row, kind, app, ab, t)
 
-    def posed(self, who: str, poses: list[tuple[float, Pose]], t: float, pose: Pose) -> None:
+    def posed(self, who: str, poses: Poses, t: float, pose: Pose) -> None:
         """A pose sample; of a run of equal ones, only the first and the last are kept
         (what lies between them is the same pose, however it is interpolated)."""
         if poses and poses[-1][1] == pose:
-            self.still[who] = (t, poses[-1][1])  # the run's last, for now
+            self.still[who] = (t, pose)  # the run's last, for now
             return
         last = self.still.pop(who, None)
         if last is not None:

@@ -170,6 +170,26 @@ def test_every_pose_is_kept_in_time_order() -> None:
     assert tl.user == [(0.0, (0.0, 0.0, 0.0))]
 
 
+def test_a_long_runs_poses_are_held_as_floats() -> None:
+    """Four floats a pose sample (an array), not a tuple of a time and a tuple of floats:
+    a long run has hundreds of thousands of them (``bench/big_trace.py``)."""
+    import tracemalloc
+
+    samples = 20_000
+    rows = (row(k * 0.5, "pose", None, robot={"x": k * 0.1, "y": 1.0, "heading": 90.0},
+                user={"x": 2.0, "y": k * 0.1, "heading": 0.0}) for k in range(samples))
+    tracemalloc.start()
+    try:
+        tl = timeline(rows)
+        held = tracemalloc.get_traced_memory()[0]
+    finally:
+        tracemalloc.stop()
+    assert len(tl.robot) == len(tl.user) == samples
+    assert tl.robot[-1] == ((samples - 1) * 0.5, ((samples - 1) * 0.1, 1.0, 90.0))
+    # (as tuples, about 174 bytes a sample)
+    assert held < 48 * 2 * samples, f"{held / (2 * samples):.0f} bytes a sample"
+
+
 @pytest.mark.parametrize("scenario", ["thesis/sample-03", "thesis/sample-07",
                                       "policies/interrupt-on"])
 def test_every_wait_of_a_run_closes_where_the_trace_says(scenario: str) -> None:

@@ -53,7 +53,7 @@ def pose_at(poses: Sequence[tuple[float, Pose]], t: float) -> Pose | None:
 
 def _bounds(tl: Timeline, world: WorldMap | None) -> tuple[float, float, float, float]:
     points = (world.outline() if world is not None else []) + [
-        (pose[0], pose[1]) for _, pose in tl.robot + tl.user]
+        (pose[0], pose[1]) for _, pose in [*tl.robot, *tl.user]]
     xs, ys = [x for x, _ in points], [y for _, y in points]
     if not xs:
         return (0.0, 1.0, 0.0, 1.0)

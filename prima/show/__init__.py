@@ -145,8 +145,8 @@ def map_figure(world: WorldMap | None, robot: _Pose | None,
     from prima.timeline import Timeline
 
     page = _drawn()
-    model = Model(Timeline(), [], robot=[(0.0, *robot)] if robot else [],
-                  user=[(0.0, *user)] if user else [])
+    model = Model(Timeline(), [], robot=[(0.0, robot)] if robot else [],
+                  user=[(0.0, user)] if user else [])
     fig, index = page.map_figure(model, world)
     return {**page.figure_json(fig), **index}
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, TextIO
 
 from prima.escape import script_json
-from prima.timeline import Builder, Timeline
+from prima.timeline import Builder, Poses, Timeline
 from prima.trace import Pose
 
 Row = Mapping[str, Any]
@@ -49,13 +49,14 @@ class Model:
     table: Sequence[int] = field(default_factory=list)
     """A trace line's index -> its row in the table (-1: a pose sample, not in it)."""
     bubbles: list[Bubble] = field(default_factory=list)
-    robot: list[tuple[float, float, float, float]] = field(default_factory=list)
-    """(t, x, y, heading) of the robot, in time order (:func:`build` moves the timeline's
-    poses here)."""
-    user: list[tuple[float, float, float, float]] = field(default_factory=list)
-    abs: dict[int, list[int]] = field(default_factory=dict)
+    robot: Sequence[tuple[float, Pose]] = field(default_factory=Poses)
+    """(t, (x, y, heading)) of the robot, in time order (:func:`build` moves the
+    timeline's poses here)."""
+    user: Sequence[tuple[float, Pose]] = field(default_factory=Poses)
+    abs: dict[int, array[int]] = field(default_factory=dict)
     """AB id -> its start row, its end row (-1 until it has one) and the rows of its
-    lines (:meth:`ab_json` writes them as the page reads them)."""
+    lines (:meth:`ab_json` writes them as the page reads them), as an array of whole
+    numbers: a long run has hundreds of thousands of ABs."""
     count: int = 0
     """The table's rows."""
     starts: int = 0
@@ -74,9 +75,15 @@ class Model:
         yield "}"
 
 
-def _distinct(poses: Sequence[tuple[float, Pose]]) -> list[tuple[float, float, float, float]]:
-    """(t, x, y, heading) of each pose, a repeat of the one before dropped."""
-    return [(t, *pose) for k, (t, pose) in enumerate(poses) if k == 0 or poses[k - 1] != (t, pose)]
+def _distinct(poses: Poses) -> Poses:
+    """The pose samples, a repeat of the one before (the same time and pose) dropped."""
+    out = Poses()
+    last = None
+    for sample in poses:
+        if sample != last:
+            out.append(sample)
+        last = sample
+    return out
 
 
 def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
@@ -85,7 +92,7 @@ def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
     builder = Builder()
     table = array("q")
     kept: list[dict[str, Any]] = []
-    abs_: dict[int, list[int]] = {}
+    abs_: dict[int, array[int]] = {}
     j = starts = 0
     for i, row in enumerate(rows):
         builder.feed(i, row)
@@ -101,7 +108,7 @@ def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
             spool.write(("," if j else "") + script_json(row))
         ab = row.get("ab")
         if ab is not None:
-            info = abs_.setdefault(int(ab), [-1, -1])
+            info = abs_.setdefault(int(ab), array("q", (-1, -1)))
             info.append(j)
             if kind == "start":
                 info[0], info[1] = j, -1
@@ -111,7 +118,7 @@ def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
     tl = builder.finish()
     model = Model(tl, kept, table, robot=_distinct(tl.robot), user=_distinct(tl.user),
                   abs=abs_, count=j, starts=starts)
-    tl.robot, tl.user = [], []  # moved into the model's robot and user (one copy is enough)
+    tl.robot, tl.user = Poses(), Poses()  # moved into the model's (one copy is enough)
     model.bubbles = sorted(
         [Bubble("robot", b.t0, max(b.t1, b.t0 + ROBOT_SAYS_FOR), b.text or "")
          for b in tl.speech()]

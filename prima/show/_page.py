@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import io
 import shutil
+from array import array
+from collections.abc import Iterable, Iterator
+from itertools import chain, islice
 from typing import Any, TextIO
 
 import plotly.graph_objects as go
@@ -15,6 +18,7 @@ from prima.shipped import packaged
 from prima.show._model import Model
 from prima.sim import WorldMap
 from prima.timeline import Bar, Timeline, ink, runs
+from prima.trace import Pose
 
 INSTANT = 0.05
 """The least width (s) of a bar: an atomic behavior that took no time is still seen."""
@@ -29,6 +33,8 @@ _MARK_STYLE = {
 _SOUND_TOGGLE = ('<label title="the words, heard at 0.5x to 4x"><input id="sound" '
                  'type="checkbox" checked> sound</label>')
 """With sound in the page: a switch for it beside the playback controls."""
+_PIECE = 4096
+"""The items of a long JSON array written at a time (:func:`_write_json`)."""
 _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": ["select2d",
                                                                                "lasso2d"]}
 
@@ -66,9 +72,11 @@ def _colours(apps: list[str]) -> dict[str, str]:
 
 
 def _bounds(model: Model, world: WorldMap | None) -> tuple[float, float, float, float]:
-    points = (world.outline() if world is not None else []) + [
-        (x, y) for _, x, y, _h in model.robot + model.user]
-    xs, ys = [x for x, _ in points], [y for _, y in points]
+    xs, ys = array("d"), array("d")  # (a long run's points, never held as tuples)
+    for x, y in chain(world.outline() if world is not None else [],
+                      ((pose[0], pose[1]) for _, pose in chain(model.robot, model.user))):
+        xs.append(x)
+        ys.append(y)
     if not xs:
         return (0.0, 1.0, 0.0, 1.0)
     return (min(xs) - 0.5, max(xs) + 0.5, min(ys) - 0.5, max(ys) + 0.5)
@@ -108,18 +116,18 @@ def map_figure(model: Model, world: WorldMap | None) -> tuple[go.Figure, dict[st
             hovertext=[_esc(f"{p.name} ({p.kind.value})") for p in world.places], hoverinfo="text"))
     for who, poses, colour in (("robot", model.robot, "#2c3e50"),
                                ("user", model.user, "#e67e22")):
-        fig.add_trace(go.Scatter(x=[p[1] for p in poses], y=[p[2] for p in poses],
+        fig.add_trace(go.Scatter(x=[p[0] for _, p in poses], y=[p[1] for _, p in poses],
                                  mode="lines", name=f"{who}'s path", hoverinfo="skip",
                                  line={"color": colour, "width": 1, "dash": "dot"},
                                  opacity=0.35))
     index: dict[str, int] = {}
     for who, poses, colour, symbol in (("robot", model.robot, "#2c3e50", "triangle-up"),
                                        ("user", model.user, "#e67e22", "arrow-up")):
-        first = poses[0] if poses else (0.0, 0.0, 0.0, 0.0)
+        _t, first = poses[0] if poses else (0.0, (0.0, 0.0, 0.0))
         index[who] = len(fig.data)
-        fig.add_trace(go.Scatter(x=[first[1]], y=[first[2]], mode="markers", name=who,
+        fig.add_trace(go.Scatter(x=[first[0]], y=[first[1]], mode="markers", name=who,
                                  marker={"size": 18, "color": colour, "symbol": symbol,
-                                         "angle": _angle(first[3]),
+                                         "angle": _angle(first[2]),
                                          "line": {"width": 1, "color": "white"}},
                                  visible=bool(poses), hoverinfo="name"))
     x0, x1, y0, y1 = _bounds(model, world)
@@ -138,13 +146,31 @@ def _width(t0: float, t1: float) -> float:
 
 def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
     """One row per device: the ABs' bars by application (blended ones on half a row,
-    dotted), suspensions and holds hatched, releases, cuts and cancels marked."""
+    dotted), suspensions and holds hatched, releases, cuts and cancels marked; and which
+    traces are bars, waits and marks (:func:`_drawn`)."""
+    fig = _timeline_layout(model.timeline)
+    for trace in _timeline_traces(model):
+        fig.add_trace(trace)
+    return fig, _drawn([trace.meta for trace in fig.data])
+
+
+def _timeline_traces(model: Model) -> Iterator[go.Bar | go.Scatter]:
+    """The timeline's traces, made one at a time (:func:`write_page` writes each and lets
+    it go before the next is made): each application's bars, the waits, the marks."""
+    return chain(_bars(model.timeline), _spans(model), _marks(model))
+
+
+def _drawn(metas: list[str]) -> dict[str, list[int]]:
+    """Which of the timeline's traces (by their ``meta``) are bars, waits and marks."""
+    return {"bars": [k for k, meta in enumerate(metas) if meta == "bars"],
+            "spans": [k for k, meta in enumerate(metas) if meta in _SPAN_STYLE],
+            "marks": [k for k, meta in enumerate(metas) if meta == "marks"]}
+
+
+def _timeline_layout(tl: Timeline) -> go.Figure:
+    """A figure with no traces yet, laid out as the timeline: a row per device, the run's
+    time across."""
     fig = go.Figure()
-    tl = model.timeline
-    traces: dict[str, list[int]] = {"bars": [], "spans": [], "marks": []}
-    _add_bars(fig, tl, traces["bars"])
-    _add_spans(fig, model, traces["spans"])
-    _add_marks(fig, model, traces["marks"])
     fig.update_layout(
         uniformtext={"mode": "hide", "minsize": 8},  # no label shrunk past reading
         barmode="overlay", height=max(200, 60 + 34 * len(tl.devices)),
@@ -155,14 +181,11 @@ def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
         yaxis={"categoryorder": "array", "categoryarray": [_esc(d) for d in tl.devices[::-1]],
                "type": "category", "fixedrange": True},
         dragmode="pan")
-    return fig, traces
+    return fig
 
 
-
-
-def _add_bars(fig: go.Figure, tl: Timeline, added: list[int]) -> None:
-    """Each application's bars (a feedback Command's run of iterations labelled once);
-    the index of each trace of bars goes to ``added``."""
+def _bars(tl: Timeline) -> Iterator[go.Bar]:
+    """Each application's bars (a feedback Command's run of iterations labelled once)."""
     colours = _colours(tl.apps)
     for i, app in enumerate(tl.apps):
         # non-blended first: the legend's swatch is drawn like the first bar
@@ -172,9 +195,8 @@ def _add_bars(fig: go.Figure, tl: Timeline, added: list[int]) -> None:
         # a run of a feedback Command's iterations is labelled once (below), not each bar
         repeated = [run for run in runs(b for b in bars if not b.blended) if len(run) > 1]
         in_runs = {id(b) for run in repeated for b in run}
-        added.append(len(fig.data))
         # two applications blended on a device share its row: a half each
-        fig.add_trace(go.Bar(
+        yield go.Bar(
             name=_esc(app), orientation="h", y=[_esc(b.device) for b in bars],
             base=[b.t0 for b in bars], x=[_width(b.t0, b.t1) for b in bars],
             width=[0.4 if b.blended else 0.8 for b in bars],
@@ -186,10 +208,10 @@ def _add_bars(fig: go.Figure, tl: Timeline, added: list[int]) -> None:
             hoverinfo="text", textposition="inside", insidetextanchor="start", textangle=0,
             textfont={"size": 10}, marker={"color": colours[app], "pattern": {
                 "shape": ["." if b.blended else "" for b in bars], "fgcolor": "white"}},
-            meta="bars"))
+            meta="bars")
         if repeated:  # over a run's bars, one bar without seams, labelled once; hovers and
             # clicks go through it to the iteration under the pointer
-            fig.add_trace(go.Bar(
+            yield go.Bar(
                 name=_esc(app), orientation="h", y=[_esc(r[0].device) for r in repeated],
                 base=[r[0].t0 for r in repeated],
                 x=[_width(r[0].t0, r[-1].t1) for r in repeated], width=0.8, offset=-0.4,
@@ -197,18 +219,17 @@ def _add_bars(fig: go.Figure, tl: Timeline, added: list[int]) -> None:
                 textposition="inside", insidetextanchor="start", textangle=0,
                 textfont={"size": 10, "color": ink(colours[app])},
                 marker={"color": colours[app]}, hoverinfo="skip", showlegend=False,
-                meta="runs"))
+                meta="runs")
 
 
-def _add_spans(fig: go.Figure, model: Model, added: list[int]) -> None:
-    """Suspensions and holds, hatched; the index of each of their traces to ``added``."""
+def _spans(model: Model) -> Iterator[go.Bar]:
+    """Suspensions and holds, hatched."""
     tl = model.timeline
     for kind, (shape, colour, what) in _SPAN_STYLE.items():
         spans = [(s, d) for s in tl.spans if s.kind == kind for d in s.devices]
         if not spans:
             continue
-        added.append(len(fig.data))
-        fig.add_trace(go.Bar(
+        yield go.Bar(
             name=what, orientation="h", y=[_esc(d) for _, d in spans],
             base=[s.t0 for s, _ in spans], x=[_width(s.t0, s.t1) for s, _ in spans],
             customdata=[model.table[s.line] for s, _ in spans],
@@ -217,26 +238,25 @@ def _add_spans(fig: go.Figure, model: Model, added: list[int]) -> None:
             hoverinfo="text",
             marker={"color": "rgba(0,0,0,0)", "line": {"width": 1, "color": colour},
                     "pattern": {"shape": shape, "fgcolor": colour, "size": 6}},
-            meta=kind))
+            meta=kind)
 
 
-def _add_marks(fig: go.Figure, model: Model, added: list[int]) -> None:
-    """Releases, cuts and cancels, marked; the index of each of their traces to ``added``."""
+def _marks(model: Model) -> Iterator[go.Scatter]:
+    """Releases, cuts and cancels, marked."""
     tl = model.timeline
     for kind, (symbol, colour, what) in _MARK_STYLE.items():
         marks = [(m, d) for m in tl.marks if m.kind == kind for d in m.devices
                  if d in tl.devices]
         if not marks:
             continue
-        added.append(len(fig.data))
-        fig.add_trace(go.Scatter(
+        yield go.Scatter(
             name=what, x=[m.t for m, _ in marks], y=[_esc(d) for _, d in marks],
             customdata=[model.table[m.line] for m, _ in marks], mode="markers",
             marker={"symbol": symbol, "size": 12, "color": colour, "line": {"width": 2,
                                                                             "color": colour}},
             hovertext=[f"{_esc(m.app)}: {what}" + (f" (AB {m.ab})" if m.ab is not None else "")
                        + f" at {m.t:.2f} s" for m, _ in marks],
-            hoverinfo="text", meta="marks"))
+            hoverinfo="text", meta="marks")
 
 
 def page(model: Model, world: WorldMap | None, title: str, sounds: str = "") -> str:
@@ -247,19 +267,59 @@ def page(model: Model, world: WorldMap | None, title: str, sounds: str = "") -> 
     return out.getvalue()
 
 
-def _write_figure(fig: go.Figure, div_id: str, out: TextIO) -> None:
-    """The figure's div and the script that draws it, as ``plotly.io.to_html`` writes them
-    (without Plotly's JavaScript), one trace at a time: a long run's timeline is never
-    held as one JSON text (Plotly's own writer holds it three times over)."""
+def _write_json(value: Any, out: TextIO) -> None:
+    """``value`` as :func:`~prima.escape.script_json` writes it, each long array a piece at
+    a time: a long run's trace of bars is never held as one JSON text."""
+    if isinstance(value, dict) and all(isinstance(key, str) for key in value):
+        out.write("{")
+        for k, (key, item) in enumerate(value.items()):
+            out.write(("," if k else "") + script_json(key) + ":")
+            _write_json(item, out)
+        out.write("}")
+    elif isinstance(value, (list, tuple)):
+        _write_array(value, out)
+    else:
+        out.write(script_json(value))
+
+
+def _write_array(items: Iterable[Any], out: TextIO) -> None:
+    """A JSON array of ``items`` as :func:`~prima.escape.script_json` writes it,
+    :data:`_PIECE` items at a time."""
+    items = iter(items)
+    out.write("[")
+    comma = ""
+    while piece := list(islice(items, _PIECE)):
+        out.write(comma + script_json(piece)[1:-1])
+        comma = ","
+    out.write("]")
+
+
+def _write_poses(poses: Iterable[tuple[float, Pose]], out: TextIO) -> None:
+    """Pose samples as the player reads them, ``[[t, x, y, heading], ...]``."""
+    _write_array(([t, *pose] for t, pose in poses), out)
+
+
+def _write_figure(div_id: str, traces: Iterable[go.Bar | go.Scatter], fig: go.Figure,
+                  out: TextIO) -> list[str]:
+    """The div of a figure of ``traces`` laid out as ``fig`` (its traces are not drawn)
+    and the script that draws it, as ``plotly.io.to_html`` writes them (without Plotly's
+    JavaScript), a piece at a time: each trace is written and let go before the next one
+    is made, and a long run's timeline is never held as one JSON text (Plotly's own
+    writer holds it three times over). Returns each trace's ``meta``."""
     out.write(f'<div style="height:100%; width:100%;"><div id="{div_id}" '
               'class="plotly-graph-div" style="height:100%; width:100%;"></div><script>'
               'window.PLOTLYENV=window.PLOTLYENV || {};'
               f'if (document.getElementById("{div_id}")) {{Plotly.newPlot("{div_id}",[')
-    for k, trace in enumerate(fig.data):
-        out.write(("," if k else "") + script_json(trace.to_plotly_json()))
+    metas: list[str] = []
+    for k, trace in enumerate(traces):
+        metas.append(trace.meta)
+        out.write("," if k else "")
+        _write_json(trace.to_plotly_json(), out)
+        del trace  # (not held here while the next one is made)
     layout = go.Figure(layout=fig.layout).to_dict()["layout"]  # with its template
     out.write(f"],{script_json(layout)},{script_json({**_CONFIG, 'responsive': True})})}};"
               "</script></div>")
+    return metas
 
 
 def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
@@ -267,7 +327,7 @@ def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
     """Write the page to ``out`` piece by piece; the table's rows are ``model.rows``, or
     the JSON :func:`~prima.show._model.build` spooled (copied in chunks, never read
     whole); ``sounds``: the utterances' audio elements (``prima show --audio``), if
-    any. The model is spent: its poses are let go once written."""
+    any."""
     map_fig, who = map_figure(model, world)
     map_html = pio.to_html(map_fig, include_plotlyjs=True, full_html=False, div_id="map",
                            config=_CONFIG)
@@ -299,19 +359,13 @@ def write_page(model: Model, world: WorldMap | None, title: str, out: TextIO,
 <div id="map-box">""")
     out.write(map_html)
     del map_html
-    # the poses, written down and let go (the model is spent by this): a long run's
-    # samples take more room as tuples than the timeline's figure needs while it is made
-    robot, user = script_json(model.robot), script_json(model.user)
-    model.robot, model.user = [], []
-    model.timeline.robot, model.timeline.user = [], []
-    timeline, traces = timeline_figure(model)
     out.write("""</div>
 <aside id="details"><p class="hint">Click a bar of the timeline or a line of the trace
 to jump there and see why the mediator decided it.</p></aside>
 </section>
 <section id="timeline-box">""")
-    _write_figure(timeline, "timeline", out)
-    del timeline
+    traces = _drawn(_write_figure("timeline", _timeline_traces(model),
+                                  _timeline_layout(model.timeline), out))
     out.write("""<div id="playhead"></div></section>
 <section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
@@ -327,8 +381,11 @@ const PRIMA_SHOW = {"end":""")
     else:
         spool.seek(0)
         shutil.copyfileobj(spool, out)
-    out.write(f'],"robot":{robot},"user":{user},'
-              f'"bubbles":{script_json([[b.who, b.start, b.end, b.text] for b in model.bubbles])},'
+    out.write('],"robot":')
+    _write_poses(model.robot, out)
+    out.write(',"user":')
+    _write_poses(model.user, out)
+    out.write(f',"bubbles":{script_json([[b.who, b.start, b.end, b.text] for b in model.bubbles])},'
               '"abs":')
     for piece in model.ab_json():
         out.write(piece)

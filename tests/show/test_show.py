@@ -112,6 +112,35 @@ def test_a_feedback_commands_iterations_are_one_labelled_bar() -> None:
     assert any(text == "Speak" for text in texts.values())  # a lone AB keeps its label
 
 
+def test_a_long_runs_page_is_written_a_piece_at_a_time() -> None:
+    """The timeline of a long run is written a trace at a time and each long array of a
+    trace in pieces, never as one JSON text (which, escaped for the page, took several
+    times its size): what writing the page takes beyond a short run's hardly grows."""
+    import os
+    import tracemalloc
+
+    from prima.show._model import build
+    from prima.show._page import write_page
+
+    def peak(abs_: int) -> int:
+        model = build(line for ab in range(1, abs_ + 1) for line in (
+            {"t": ab * 2.0, "seq": 2 * ab, "kind": "start", "app": "a", "ab": ab,
+             "command": "Speak", "text": f"<words> & {ab}", "devices": ["speaker"]},
+            {"t": ab * 2.0 + 1.0, "seq": 2 * ab + 1, "kind": "end", "app": "a", "ab": ab}))
+        with open(os.devnull, "w", encoding="utf-8") as out:
+            tracemalloc.start()
+            try:
+                write_page(model, None, "run", out)
+                return tracemalloc.get_traced_memory()[1]
+            finally:
+                tracemalloc.stop()
+
+    peak(100)  # (Plotly's modules imported and its JavaScript read once)
+    short, long = peak(2_000), peak(30_000)
+    # (as one text, 21 MiB more here, some 800 bytes an AB)
+    assert long - short < 400 * 28_000, f"{(long - short) / 28_000:.0f} bytes more an AB"
+
+
 @pytest.mark.parametrize("content, message", [
     ('{"t": 0, "seq": 0, "kind": "start"}\nnot json\n', "run.jsonl:2:1: error: not a JSON"),
     ('{"t": 0, "kind": "start"}\n', "run.jsonl:1:1: error: missing field 'seq'"),
