@@ -97,6 +97,8 @@ class Ab:
     """Another AB started blended over it (the blend policy: never cut)."""
     dropped: bool = False
     """It was cut and its request said to drop it: it is not said again."""
+    place: int = 0
+    """Where it is among its tree's ABs (``Context.tree_abs``)."""
 
     @property
     def low(self) -> bool:
@@ -434,7 +436,9 @@ class Context:
         self.running[ab_id] = ab
         for d in ab.devices:
             self.on_device.setdefault(d, []).append(ab)
-        self.tree_abs.setdefault(ab.tree, []).append(ab)
+        siblings = self.tree_abs.setdefault(ab.tree, [])
+        ab.place = len(siblings)
+        siblings.append(ab)
         for cid in ab.ids:
             self.cmd_ab[cid] = ab_id
         self._reply_started(ab)

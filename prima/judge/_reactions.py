@@ -119,9 +119,6 @@ class _Analyst:
         self._user_until: dict[int, float] = {}
         self._by_tree: dict[int, list[ReactionState]] | None = None
         self._ready: dict[int, float] = {}
-        self._places: dict[int, int] = {}
-        """An AB (its ``id()``: a forged trace may start one AB twice) -> where it is
-        in its tree's ABs (:meth:`_place`)."""
         self._requested_by: dict[int, tuple[int, ...]] | None = None
         self._following: dict[str, tuple[list[Span], list[float]]] = {}
         """App -> when other applications followed the user (:meth:`_followed`)."""
@@ -406,7 +403,7 @@ class _Analyst:
         if found is None:
             found = y.start
             tree = self.ctx.tree_abs.get(y.tree, ())
-            i = self._place(y, tree) - 1
+            i = y.place - 1
             precedes = self.ctx.precedes
             # (a policy's AB put before it, a turn or a return, was part of its wait)
             while i >= 0 and any(precedes.get(cid) in y.ids for cid in tree[i].ids):
@@ -417,16 +414,6 @@ class _Analyst:
             if asked is not None:
                 found = max(found, min(asked[0], y.start))
             self._ready[y.id] = found
-        return found
-
-    def _place(self, y: Ab, tree: Sequence[Ab]) -> int:
-        """Where ``y`` is in its tree's ABs (0 if it is not there): every AB of the tree
-        is placed at once, the first time one is asked for."""
-        found = self._places.get(id(y))
-        if found is None:
-            for k, ab in enumerate(tree):
-                self._places[id(ab)] = k
-            found = self._places.setdefault(id(y), 0)
         return found
 
     def _holds(self, r: ReactionState, own: set[int], low: bool, t0: float,
