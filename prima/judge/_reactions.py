@@ -532,9 +532,10 @@ class _Analyst:
         heard = next((ab for ab in spoken if ab.end_reason == "completed"), None)
         words = r.words or bool(spoken)
         words_free = 0.0
+        words_waits: tuple[tuple[Blame, ...], Blame | None] = ((), None)
         cut_by_user = heard is None and any(ab.end_reason == "barge-in" for ab in spoken)
         if first is not None and words and not cut_by_user:  # (the user's own cut: 7.5)
-            words_free = self._words_free(r, own, mine, spoken, first, heard)
+            words_free, words_waits = self._words_free(r, own, mine, spoken, first, heard)
         found = Reaction(
             r.event, r.t, r.seq, r.app, r.order, tuple(r.commands), tuple(r.trees),
             tuple(sorted(devices)), user=r.user, at=r.at, residual=round(residual, 3),
@@ -546,13 +547,18 @@ class _Analyst:
             words=words, words_free=round(words_free, 3),
             unheard=words and heard is None and self._unheard(r, spoken),
             text=r.text, waits=self._top(allowed), took=self._culprit(took, allowed, r.t, t1))
-        why = self._why(found)
+        why, by_words = self._why(found)
+        if by_words:  # (late for its words: what they waited for, not its first AB)
+            return dataclasses.replace(found, late=True, why=why, waits=words_waits[0],
+                                       took=words_waits[1])
         return dataclasses.replace(found, late=bool(why), why=why)
 
     def _words_free(self, r: ReactionState, own: set[int], mine: Sequence[Ab],
-                    spoken: Sequence[Ab], first: Ab, heard: Ab | None) -> float:
+                    spoken: Sequence[Ab], first: Ab, heard: Ab | None
+                    ) -> tuple[float, tuple[tuple[Blame, ...], Blame | None]]:
         """How long, after its first start, the reaction's first words were free to
-        start but did not. They are rightly kept while their devices are rightly held
+        start but did not, and what they waited for and what took their devices (as
+        for a first start). They are rightly kept while their devices are rightly held
         (as a first start is), while one of the reaction's own ABs runs (a filler, a
         turn to the user), and while one of its own ABs that was requested and waits
         (a return put before the words, a restart) has its devices rightly held."""
@@ -564,13 +570,14 @@ class _Analyst:
             if gone and all(g is not None for g in gone):
                 t1 = min(t1, max(g for g in gone if g is not None))
         if t1 <= t0 + EPS:
-            return 0.0
+            return 0.0, ((), None)
         target = heard or (spoken[0] if spoken else None)
         devices = (target.devices if target is not None else self._unsaid(r)) | TALK_DEVICES
         # (the words could ask for a cut only once the reaction's AB before them ended:
         # a Q&A then on the last word of its prompt was no longer to be cut)
         ready = self.ready(target) if target is not None else None
-        allowed, _took = self.waits(r, own, devices, False, t0, first.seq, t1, ready)
+        allowed, took = self.waits(r, own, devices, False, t0, first.seq, t1, ready)
+        waits = (self._top(allowed), self._culprit(took, allowed, t0, t1))
         spans = [(a, b) for a, b, _ in allowed]
         for ab in mine:
             spans.append((ab.start, ab.until(self.end)))
@@ -579,7 +586,7 @@ class _Analyst:
                 lo = max(asked[0], t0)
                 waiting, _ = self.waits(r, own, ab.devices, ab.low, lo, asked[1], ab.start)
                 spans += [(a, b) for a, b, _ in waiting]
-        return max(0.0, (t1 - t0) - _measure(spans, t0, t1))
+        return max(0.0, (t1 - t0) - _measure(spans, t0, t1)), waits
 
     def _unsaid(self, r: ReactionState) -> frozenset[str]:
         """The devices of the AB that was to say the reaction's words and never started,
@@ -697,27 +704,29 @@ class _Analyst:
             return None
         return self._blame(best[1], "took its devices", best[1].until(self.end))
 
-    def _why(self, r: Reaction) -> str:
+    def _why(self, r: Reaction) -> tuple[str, bool]:
+        """Why the reaction is late (empty: it is not), and whether its words made it
+        so (its first start was in time)."""
         t = self.th
         if t.react_within is not None:
             if r.latency is None:
-                return "never started"
+                return "never started", False
             if r.latency > t.react_within + EPS:
-                return f"started after {r.latency:g} s (allowed {t.react_within:g} s)"
+                return f"started after {r.latency:g} s (allowed {t.react_within:g} s)", False
             bound = t.react_within + t.utterance_slack
             if r.utterance_latency is not None and r.utterance_latency > bound + EPS:
-                return f"spoke after {r.utterance_latency:g} s (allowed {bound:g} s)"
-            return ""
+                return f"spoke after {r.utterance_latency:g} s (allowed {bound:g} s)", False
+            return "", False
         if r.free > t.reaction_slack + EPS:
             what = "never started" if r.latency is None else f"started after {r.latency:g} s"
             return (f"{what}: free to start for {r.free:g} s (the rules let it wait "
-                    f"{r.residual:g} s, and {t.reaction_slack:g} s more)")
+                    f"{r.residual:g} s, and {t.reaction_slack:g} s more)"), False
         if r.words_free > t.reaction_slack + t.utterance_slack + EPS:
             said = ("its words never said whole" if r.first_utterance is None
                     else f"spoke after {r.utterance_latency:g} s")
             return (f"{said}: its words were free to start for {r.words_free:g} s "
-                    f"(allowed {t.reaction_slack + t.utterance_slack:g} s)")
-        return ""
+                    f"(allowed {t.reaction_slack + t.utterance_slack:g} s)"), True
+        return "", False
 
 
 def analyse(ctx: Context, end: float) -> list[Reaction]:

@@ -188,6 +188,24 @@ def test_the_first_words_may_wait_for_what_holds_the_speaker() -> None:
                                 "(allowed 1.2 s)")
 
 
+def test_a_reaction_late_for_its_words_names_what_took_their_devices() -> None:
+    """The FA's gesture starts at once on the free arm; as it ends, the EA starts a
+    sentence on the speaker its words were waiting for: the finding names that sentence,
+    what the words waited behind, not the gesture's wait (there was none)."""
+    tr = Trace()
+    tr.touch(10.0)
+    tr.request(10.0, "fa", 2, [2, 3], tree=1, command="Gesture", reactive=True,
+               devices=("arm",))
+    tr.start(10.0, "fa", 2, 2, tree=1, command="Gesture", devices=("arm",))
+    tr.end(10.5, "fa", 2, 2, tree=1, command="Gesture", devices=("arm",))
+    tr.speak(10.5, "ea", 5, 5, "Meanwhile, look at this panel.", lasts=2.5, tree=3)
+    tr.speak(13.0, "fa", 3, 3, "Hee-hee!", tree=1, request=False)
+    [r] = tr.judge().reactions
+    assert r.late and r.why.startswith("spoke after 3 s: its words were free to start for")
+    assert r.took is not None and (r.took.app, r.took.ab, r.took.rule) == (
+        "ea", 5, "took its devices")
+
+
 def _message_while_moving(turn_starts: float) -> Report:
     """The user's reception EA (its own TopologicalMove iterating, 0.5 s each) answers a
     message with an ASAP Speak; the connect-channel policy puts a FaceHuman before the
