@@ -139,7 +139,7 @@ def serve(options: Options, base: Base, save: object, out: TextIO, err: TextIO) 
             if fox is not None:
                 fox.stop()
         saves = f"saved {server.saves} time(s)" if server.saves else "not saved"
-        print(f"prima live: stopped at {session.pose[0]:.2f} s of simulated time "
+        print(f"prima live: stopped at {session.reached():.2f} s of simulated time "
               f"({session.state}); {len(session.added)} input(s); {saves}", file=err,
               flush=True)
     return 0

@@ -252,9 +252,12 @@ class Server:
             await ws.close()
             return ws
         owner = self.owner = _Owner(ws)
-        sender = asyncio.create_task(self._send(owner))
+        sender: asyncio.Task[None] | None = None
         try:
             await self._hello(owner)
+            # (only now: the hello sends the trace so far, and one sender at a time says
+            # which lines the page has, or a page taking the session over got each twice)
+            sender = asyncio.create_task(self._send(owner))
             if self.autoplay and self.session.state == "running":
                 self.session.play()
             async for message in ws:
@@ -263,7 +266,8 @@ class Server:
                 elif message.type == WSMsgType.ERROR:
                     break
         finally:
-            sender.cancel()
+            if sender is not None:
+                sender.cancel()
             self.owner = None
             self.session.pause()  # (the author left: the run waits for them)
         return ws
@@ -288,9 +292,10 @@ class Server:
     async def _rows(self, owner: _Owner, upto: int) -> None:
         rows = self.session.rows
         while owner.rows < upto:
-            chunk = rows[owner.rows:min(upto, owner.rows + ROWS_PER_MESSAGE)]
-            await owner.ws.send_str(_json({"rows": chunk, "from": owner.rows}))
-            owner.rows += len(chunk)
+            start = owner.rows
+            chunk = rows[start:min(upto, start + ROWS_PER_MESSAGE)]
+            owner.rows += len(chunk)  # (before the wait to send: counted once, whoever asks)
+            await owner.ws.send_str(_json({"rows": chunk, "from": start}))
 
     async def _send(self, owner: _Owner) -> None:
         """Send the page what is new, at most :data:`_SEND_EVERY` apart."""

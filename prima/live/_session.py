@@ -299,7 +299,7 @@ class Session:
         """Where the session is: the run's time, the clock's, paused, speed, state."""
         with self._lock:
             clock, paused, speed = self.clock.now(), self.clock.paused, self.clock.speed
-        return {"t": round(self.pose[0], 3), "clock": round(min(clock, self.until), 3),
+        return {"t": round(self.reached(), 3), "clock": round(min(clock, self.until), 3),
                 "paused": paused, "speed": speed, "state": self.state, "error": self.error,
                 "until": self.until, "added": len(self.added), "idle": self.caught_up(),
                 "behind": round(self.behind, 4), "points": self.points, "late": self.late}
@@ -310,7 +310,8 @@ class Session:
         by the run's thread, after what the author did before it was asked."""
         def make() -> str:
             last = max((a.tick for a in self.added), default=0)
-            until_tick = min(max(self.run.sim.kernel.tick, last) + 1,
+            reached = math.floor(self.reached() * self.hz + 1e-6)
+            until_tick = min(max(self.run.sim.kernel.tick, reached, last) + 1,
                              round(self.until * self.hz))
             return self.base.saved(list(self.added), until_tick, folder)
         return self._ask(make).result()
@@ -322,6 +323,18 @@ class Session:
             self._wake.set()
         if self._thread is not None:
             self._thread.join(timeout)
+
+    def reached(self) -> float:
+        """How far the run has gone, in simulated seconds: while it waits for the live
+        clock, the clock's time up to the tick it waits to go on to (nothing changes
+        before that tick: the simulator skips the time in between), else the time of
+        its latest pose."""
+        with self._lock:
+            if self.state == "ended":
+                return self.until
+            if self.idle:
+                return max(self.pose[0], min(self.clock.now(), self._waits_for, self.until))
+            return self.pose[0]
 
     def caught_up(self) -> bool:
         """Whether the run has gone as far as the live clock lets it, with nothing waiting

@@ -234,13 +234,15 @@
 
   /* ---------------------------------------------------------------- drawing */
 
-  function now() {  // the simulated time shown: the clock, a step behind the poses' latest
+  function now() {  // the simulated time shown: the clock, as far as the run has gone
     if (!status) return 0;
-    let t = status.clock;
-    if (!status.paused && status.state === "running") {
-      t += (performance.now() - statusAt) / 1000 * status.speed;
+    // (the run says how far it has gone, which may be past its latest pose: nothing
+    // moved since; while it plays, the clock runs on from its last word, a step behind)
+    const latest = Math.max(status.t, lastPose ? lastPose[0] : 0);
+    if (status.paused || status.state !== "running") {
+      return Math.max(0, Math.min(status.clock, latest, status.until));
     }
-    const latest = lastPose ? lastPose[0] : 0;
+    const t = status.clock + (performance.now() - statusAt) / 1000 * status.speed;
     return Math.max(0, Math.min(t, latest + 0.1, status.until) - 0.1);
   }
 

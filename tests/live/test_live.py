@@ -311,6 +311,58 @@ def test_one_page_has_the_session_and_the_next_takes_it_over(tmp_path: Path) -> 
     asyncio.run(visits())
 
 
+def test_a_page_is_sent_each_line_once_whoever_sends_it(tmp_path: Path) -> None:
+    """The page's first lines (the hello's) and what is new (the sender's) may be sent
+    at once, each waiting on the socket in turn: every line goes once, in order (a page
+    taking a long session over got a chunk of 2,000 lines twice, then missed the newest)."""
+    from prima.live._server import ROWS_PER_MESSAGE, _Owner
+
+    class Socket:
+        def __init__(self) -> None:
+            self.sent: list[dict[str, Any]] = []
+
+        async def send_str(self, text: str) -> None:
+            await asyncio.sleep(0)  # (the socket's wait to send: the other sender goes on)
+            self.sent.append(json.loads(text))
+
+    session = _session(tmp_path, VISIT)
+    session.rows += [{"t": 0.0, "seq": k, "kind": "pose"} for k in range(3 * ROWS_PER_MESSAGE)]
+    server = Server(session, title="test", port=0, autoplay=False)
+    socket = Socket()
+    owner = _Owner(socket)  # type: ignore[arg-type]
+
+    async def both() -> None:
+        n = len(session.rows)
+        await asyncio.gather(server._rows(owner, n), server._rows(owner, n))
+
+    asyncio.run(both())
+    got = [row for message in socket.sent for row in message["rows"]]
+    assert [m["from"] for m in socket.sent] == list(range(0, len(session.rows),
+                                                          ROWS_PER_MESSAGE))
+    assert got == session.rows and owner.rows == len(session.rows)
+
+
+def test_the_run_has_gone_as_far_as_the_clock_while_nothing_moves(tmp_path: Path) -> None:
+    """FA1 alone waits to be touched: stepped 5 s three times, the run is at 15 s, not
+    at its last pose's 0 s (the page showed 0.00 s; a poses' line comes only when a pose
+    changes), and a save replays to there."""
+    session = _session(tmp_path, FA1)
+
+    async def steps() -> list[float]:
+        async with _served(session) as server, _page(server) as page:
+            reached = []
+            for _ in range(3):
+                await page.step(5.0)
+                reached.append(page.status["t"])
+            await page.send({"save": True})
+            saved = await page.reply()
+            assert 'until="15.02"' in saved["download"]["text"]
+            return reached
+
+    assert asyncio.run(steps()) == [5.0, 10.0, 15.0]
+    assert session.rows[-1]["t"] < 1.0  # (nothing happened since)
+
+
 def test_a_closed_page_loses_no_saved_session(tmp_path: Path) -> None:
     session = _session(tmp_path, VISIT)
     target = tmp_path / "kept" / "visit.xml"
