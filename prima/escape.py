@@ -29,7 +29,8 @@ import os
 import re
 from typing import Any
 
-__all__ = ["PLAIN_TEXT", "json_line", "markup", "script_json", "shown_path", "terminal"]
+__all__ = ["PLAIN_TEXT", "json_line", "markup", "script_json", "shown_path", "terminal",
+           "unshowable"]
 
 _TERMINAL = ("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028-\u202e\u2066-\u2069"
              "\ud800-\udfff]")
@@ -51,6 +52,14 @@ def _escape_one(match: re.Match[str]) -> str:
     if 0xDC80 <= code <= 0xDCFF:  # a byte of a file name that is not UTF-8 (surrogateescape)
         return f"\\x{code - 0xDC00:02x}"
     return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"
+
+
+def unshowable(text: str) -> str | None:
+    """The first character of ``text`` that :func:`terminal` escapes (a control, a line
+    or paragraph separator, a bidirectional control, an undecodable byte), or None: a
+    place that takes words to show as they are refuses them."""
+    found = re.search(_TERMINAL, text)
+    return found.group() if found else None
 
 
 def terminal(text: str) -> str:

@@ -19,13 +19,13 @@ import concurrent.futures
 import math
 import threading
 import time
-import unicodedata
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
 from prima.errors import LocatedError, PrimaError, SimulationError
+from prima.escape import unshowable
 from prima.live._clock import LiveClock
 from prima.live._scenario import ACTIONS, Added, Base
 from prima.run import Run
@@ -67,14 +67,16 @@ class _Input:
 
 def _words(value: object, what: str, longest: int) -> str:
     """Words from the page: a non-empty string of at most ``longest`` characters with no
-    control character (a scenario file can hold them as they are)."""
+    control character, line or paragraph separator or bidirectional control (a scenario
+    file can hold the rest as they are; a direction control would show the words, and
+    what follows them on the page, in another order than they were said)."""
     if not isinstance(value, str) or not value.strip():
         raise LiveError(f"{what}: give some words")
     if len(value) > longest:
         raise LiveError(f"{what}: at most {longest:,} characters")
-    for c in value:
-        if unicodedata.category(c) in ("Cc", "Cs"):
-            raise LiveError(f"{what}: no control characters (U+{ord(c):04X})")
+    c = unshowable(value)
+    if c is not None:
+        raise LiveError(f"{what}: no control or direction characters (U+{ord(c):04X})")
     return value
 
 

@@ -173,6 +173,8 @@ def test_a_session_refuses_what_it_cannot_keep_and_changes_nothing(tmp_path: Pat
     session = _session(tmp_path, VISIT)
     for bad, said in [({"act": "dance"}, "no such action"), ({"act": "say", "text": ""}, "words"),
                       ({"act": "say", "text": "a\x00b"}, "control"),
+                      ({"act": "say", "text": "\u202eevil rtl"}, r"direction characters \(U\+202E"),
+                      ({"act": "say", "text": "one\u2028two"}, "U\\+2028"),
                       ({"act": "say", "text": "x" * 10_001}, "at most"),
                       ({"act": "walk", "x": "1", "y": 2}, "number"),
                       ({"act": "walk", "x": float("nan"), "y": 2}, "number"),
