@@ -1,5 +1,6 @@
 """The live page: ``prima show``'s drawing (its map, timeline, bubbles and trace table,
-:mod:`prima.show`'s ``draw.js`` and style), with what the author acts with."""
+:mod:`prima.show`'s ``draw.js`` and style), with what the author acts with (disabled until
+the page has the session: ``live.js`` enables what can act)."""
 
 from __future__ import annotations
 
@@ -51,14 +52,15 @@ def page(title: str) -> str:
 <body>
 <header>
 <h1>{name}</h1>
-<button id="play" type="button" title="play or pause simulated time (space)">Pause</button>
-<button id="step" type="button" title="paused: let this much simulated time go by">Step</button>
-<select id="step-by" title="how far a step goes">{steps}</select>
-<label>speed <select id="speed">{speeds}</select></label>
+<button id="play" type="button" title="play or pause simulated time (space)" disabled>Play</button>
+<button id="step" type="button" title="paused: let this much simulated time go by"
+ disabled>Step</button>
+<select id="step-by" title="how far a step goes" disabled>{steps}</select>
+<label>speed <select id="speed" disabled>{speeds}</select></label>
 <span id="clock">0.00 s</span>
 <span id="state"></span>
 <span class="grow"></span>
-<button id="save" type="button" title="keep what you did as a scenario">Save</button>
+<button id="save" type="button" title="keep what you did as a scenario" disabled>Save</button>
 <a id="layout" href="/foxglove-layout.json" hidden>Foxglove layout</a>
 </header>
 <div id="banner" hidden></div>
@@ -70,19 +72,21 @@ def page(title: str) -> str:
 <div id="asking" hidden><span>The robot asks:</span> <q id="prompt"></q>
 <div id="answers"></div></div>
 <form id="say-form" autocomplete="off">
-<input id="say" type="text" maxlength="10000" placeholder="Say something to the robot (Enter)">
-<button id="mic" type="button" title="speak (this browser's speech recognition)" hidden>Mic</button>
-<button type="submit">Say</button>
+<input id="say" type="text" maxlength="10000" placeholder="Say something to the robot (Enter)"
+ disabled>
+<button id="mic" type="button" title="speak (this browser's speech recognition)" hidden
+ disabled>Mic</button>
+<button type="submit" disabled>Say</button>
 </form>
 <div id="acts">
-<button id="touch" type="button">Touch</button>
-<button id="follow" type="button">Follow</button>
-<button id="stop" type="button">Stop</button>
+<button id="touch" type="button" disabled>Touch</button>
+<button id="follow" type="button" disabled>Follow</button>
+<button id="stop" type="button" disabled>Stop</button>
 </div>
 <form id="message-form" autocomplete="off">
-<input id="sender" type="text" list="senders" placeholder="from" maxlength="200">
-<input id="message" type="text" placeholder="a network message" maxlength="10000">
-<button type="submit">Send</button>
+<input id="sender" type="text" list="senders" placeholder="from" maxlength="200" disabled>
+<input id="message" type="text" placeholder="a network message" maxlength="10000" disabled>
+<button type="submit" disabled>Send</button>
 <datalist id="senders"></datalist>
 </form>
 <p id="notice" role="status"></p>
@@ -92,7 +96,10 @@ def page(title: str) -> str:
 <ol id="findings"></ol>
 </aside>
 </section>
-<section id="timeline-box"><div id="timeline"></div><div id="playhead"></div></section>
+<section id="timeline-box"><div id="timeline"></div><div id="playhead"></div>
+<button id="follow-time" type="button" hidden
+ title="the timeline follows the run's last 90 s again (or double-click it)">Back to live</button>
+</section>
 <section id="table-box"><table id="trace"><thead><tr><th>No.</th><th>time</th><th>kind</th>
 <th>app</th><th>AB</th><th>what</th><th>reason</th></tr></thead><tbody></tbody></table></section>
 </main>

@@ -8,15 +8,41 @@
   const KEEP_ROWS = 1500;      // trace lines kept in the table (the page stays quick)
   const KEEP_WORDS = 200;      // lines of words kept
   const ROBOT_SAYS_FOR = 1.0, USER_SAYS_FOR = 3.0;  // as prima show's bubbles
+  const DRAG_PIXELS = 4;       // how far a press must move to drag the user
   let ws = null, D = null, rows = [], poses = [[], []], status = null, statusAt = 0;
   let open = {}, bubbles = [], asking = null, shownBubbles = "", following = true;
   let frames = 0, heard = [], said = [], lastPose = null, pathAt = -1, dragging = false;
-  let shownMarkers = "";
+  let shownMarkers = "", closed = false, userHigher = false;
+  // The inputs this page sent, the refusals it was sent back, and the last input it sent
+  // (its words kept, to put them back in their box if the server refuses them).
+  let acts = 0, refusals = 0, firstAdded = 0, lastAct = null, clearAbove = null;
+  // What the server answers when it refuses an input of any kind, and what starts its
+  // refusals of a say's words and of a message's.
+  const REFUSED_ANY = /^(at most \d+ inputs a second|a session takes at most|the run is over)/;
+  const REFUSED = {say: /^say: /, message: /^the message/};
 
   function notice(text, bad) {
     const p = $("notice");
     p.textContent = text;
     p.className = bad ? "bad" : "";
+    clearAbove = null;
+  }
+
+  /* Say what was refused, until an input sent after it goes through: the server counts
+     the inputs it took (status.added), and more of them than this page had sent and not
+     been refused so far means a later one was taken. */
+  function complain(text) {
+    notice(text, true);
+    clearAbove = acts - refusals;
+  }
+
+  function refused(text) {
+    refusals++;
+    complain(text);
+    const box = lastAct && {say: $("say"), message: $("message")}[lastAct.act];
+    if (box && !box.value && (REFUSED_ANY.test(text) || REFUSED[lastAct.act].test(text))) {
+      box.value = lastAct.text;  // (what was typed is not lost)
+    }
   }
 
   function banner(text) {
@@ -26,8 +52,23 @@
   }
 
   function send(message) {
-    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(message));
-    else notice("not connected", true);
+    if (ws && ws.readyState === WebSocket.OPEN) {
+      ws.send(JSON.stringify(message));
+      if (message.act) { acts++; lastAct = message; }
+    } else {
+      notice("not connected", true);
+    }
+  }
+
+  /* What can act: nothing before the session comes, in a tab that does not have it, or
+     once the connection is closed; once the run is over, only Save (and the timeline). */
+  function setControls() {
+    const mine = D !== null && !closed, going = mine && status && status.state === "running";
+    document.querySelectorAll("header button, header select, #side button, #side input")
+      .forEach(function (c) { c.disabled = !going; });
+    $("save").disabled = !mine;
+    $("step").disabled = !going || !status.paused;
+    $("play").textContent = going && !status.paused ? "Pause" : "Play";
   }
 
   /* ---------------------------------------------------------------- what comes */
@@ -36,6 +77,8 @@
     ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws");
     ws.onmessage = function (e) { receive(JSON.parse(e.data)); };
     ws.onclose = function () {
+      closed = true;
+      setControls();
       if (!$("banner").dataset.busy) banner("The connection to prima live is closed: " +
         "the server stopped, or this tab lost it. Reload to take the session again.");
     };
@@ -49,7 +92,7 @@
     if (m.timeline) drawTimeline(m.timeline);
     if (m.findings) addFindings(m.findings, m.waiting);
     if (m.busy) { $("banner").dataset.busy = "1"; banner(m.busy); }
-    if (m.refused) notice(m.refused, true);
+    if (m.refused) refused(m.refused);
     if (m.saved) notice("saved as " + m.saved + " (save " + m.saves + ")");
     if (m.download) download(m.download);
   }
@@ -61,8 +104,17 @@
     Plotly.newPlot(mapDiv, map.data, map.layout, map.config);
     Plotly.newPlot(timeline, [], {height: 220, margin: {l: 140, r: 10, t: 30, b: 40},
                                  xaxis: {title: "simulated time (s)"}}, {displaylogo: false});
+    // Panned or zoomed, the timeline stays where it was put; double-clicked (Plotly resets
+    // its axes just after), it follows the run again.
+    let reset = false;
+    timeline.on("plotly_doubleclick", function () { reset = true; });
     timeline.on("plotly_relayout", function (e) {
-      if (e && (e["xaxis.range[0]"] !== undefined || e["xaxis.autorange"])) following = false;
+      if (reset) {
+        reset = false;
+        follow();
+      } else if (e && (e["xaxis.range[0]"] !== undefined || e["xaxis.autorange"])) {
+        setFollowing(false);
+      }
       placeHead();
     });
     const senders = $("senders");
@@ -75,6 +127,7 @@
     $("layout").hidden = !h.layout;
     if (h.foxglove) notice("Foxglove: connect to " + h.foxglove);
     addFindings(h.findings, h.waiting);
+    firstAdded = h.status.added;
     setStatus(h.status);
     mapEvents();
     requestAnimationFrame(frame);
@@ -149,6 +202,7 @@
         box.appendChild(b);
       });
     });
+    setControls();
     $("say").focus();
   }
 
@@ -176,8 +230,8 @@
   function setStatus(s) {
     status = s;
     statusAt = performance.now();
-    $("play").textContent = s.paused ? "Play" : "Pause";
-    $("step").disabled = !s.paused || s.state !== "running";
+    if (clearAbove !== null && s.added - firstAdded > clearAbove) notice("");
+    setControls();
     const speed = $("speed");
     if (speed.value !== String(s.speed)) {
       if (![].some.call(speed.options, function (o) { return o.value === String(s.speed); })) {
@@ -210,13 +264,28 @@
     $("waiting").textContent = waiting ? "(" + waiting + " more decided when the run ends)" : "";
   }
 
-  function drawTimeline(fig) {
-    const layout = fig.layout;
+  function lastSeconds() {  // the stretch of the timeline that follows the run
     const t = now();
-    if (following) layout.xaxis.range = [Math.max(0, t - 90), Math.max(t, 30) + 3];
+    return [Math.max(0, t - 90), Math.max(t, 30) + 3];
+  }
+
+  function drawTimeline(fig) {
+    const layout = fig.layout, shown = timeline.layout && timeline.layout.xaxis;
+    if (following) layout.xaxis.range = lastSeconds();
+    else if (shown && shown.range) layout.xaxis.range = shown.range.slice();  // (where it was put)
     layout.uirevision = following ? undefined : "kept";
     Plotly.react(timeline, fig.data, layout, fig.config);
     placeHead();
+  }
+
+  function setFollowing(on) {
+    following = on;
+    $("follow-time").hidden = on;
+  }
+
+  function follow() {  // the timeline follows the run's last 90 s again
+    setFollowing(true);
+    if (timeline.layout) Plotly.relayout(timeline, {"xaxis.range": lastSeconds()});
   }
 
   function download(d) {
@@ -257,14 +326,22 @@
       shownMarkers = markers;
       PrimaDraw.markers(mapDiv, robot, user, D.map.robot, D.map.user);
     }
+    // The bubbles of whoever is higher on the map go up, the other's down: the robot's
+    // and the user's never cover each other, however close they stand.
     const out = [], seen = {robot: 0, user: 0};
+    if (robot && user && Math.abs(user[2] - robot[2]) > 0.1) userHigher = user[2] > robot[2];
+    const below = {robot: userHigher, user: !userHigher};
     Object.keys(open).forEach(function (ab) {
-      if (robot) out.push(PrimaDraw.bubble("robot", robot, open[ab].text, seen.robot++));
+      if (robot) {
+        out.push(PrimaDraw.bubble("robot", robot, open[ab].text, seen.robot++, below.robot));
+      }
     });
     bubbles.forEach(function (b) {
       if (b[1] > t + 0.2 || t > b[2]) return;
       const at = b[0] === "robot" ? robot : user;
-      if (at && seen[b[0]] < 3) out.push(PrimaDraw.bubble(b[0], at, b[3], seen[b[0]]++));
+      if (at && seen[b[0]] < 3) {
+        out.push(PrimaDraw.bubble(b[0], at, b[3], seen[b[0]]++, below[b[0]]));
+      }
     });
     const key = JSON.stringify(out);
     if (key !== shownBubbles) {
@@ -292,7 +369,11 @@
   /* ---------------------------------------------------------------- what the author does */
 
   function say(text) {
-    if (!text.trim()) return;
+    if (!text.trim()) {
+      $("say").value = "";
+      complain("say: type some words first");
+      return;
+    }
     said.push(performance.now());
     send({act: "say", text: text});
     $("say").value = "";
@@ -309,28 +390,33 @@
     return point && pose && Math.hypot(point[0] - pose[1], point[1] - pose[2]) <= metres;
   }
 
+  /* A press near the user that moves more than a few pixels drags the user (a walk);
+     a click without a drag never walks: near the robot, it touches the robot, even with
+     the user beside it. */
   function mapEvents() {
-    let from = null;
+    let from = null, grabbed = false;
     mapDiv.addEventListener("mousedown", function (e) {
-      from = toMap(e);
-      const t = now();
-      dragging = near(from, PrimaDraw.poseAt(poses[1], t), 0.6);
-      if (dragging) e.preventDefault();
+      if (closed || (status && status.state !== "running")) return;
+      from = [e.clientX, e.clientY];
+      grabbed = near(toMap(e), PrimaDraw.poseAt(poses[1], now()), 0.6);
+      if (grabbed) e.preventDefault();
     });
     mapDiv.addEventListener("mousemove", function (e) {
-      if (!dragging) return;
+      if (!grabbed) return;
+      if (!dragging && Math.hypot(e.clientX - from[0], e.clientY - from[1]) <= DRAG_PIXELS) return;
+      dragging = true;
       const to = toMap(e);
       if (to) Plotly.restyle(mapDiv, {x: [[to[0]]], y: [[to[1]]]}, [D.map.user]);
     });
     window.addEventListener("mouseup", function (e) {
       if (from === null) return;
-      const to = toMap(e), t = now();
+      const to = toMap(e);
       if (dragging && to) {
         send({act: "walk", x: Math.round(to[0] * 100) / 100, y: Math.round(to[1] * 100) / 100});
-      } else if (near(to, PrimaDraw.poseAt(poses[0], t), 0.6)) {
+      } else if (!dragging && near(to, PrimaDraw.poseAt(poses[0], now()), 0.6)) {
         send({act: "touch"});
       }
-      dragging = false;
+      dragging = grabbed = false;
       shownMarkers = "";  // (the user's marker goes back to where the user is)
       from = null;
     });
@@ -358,9 +444,23 @@
     send({control: "speed", speed: Number($("speed").value)});
   });
   $("save").addEventListener("click", function () { send({save: true}); });
+  $("follow-time").addEventListener("click", follow);
+
+  /* The space bar plays and pauses wherever the focus is (a button just clicked, a list
+     just chosen from), except in a box one types in. Kept from the focused button, it
+     does not click it again (a button clicks as the space bar comes up). */
+  const NOT_TYPED = /^(button|checkbox|color|file|image|radio|range|reset|submit)$/;
+  function typing(target) {
+    return target.isContentEditable || target.tagName === "TEXTAREA" ||
+      (target.tagName === "INPUT" && !NOT_TYPED.test(target.type));
+  }
   document.addEventListener("keydown", function (e) {
-    if (/^(INPUT|SELECT|BUTTON|TEXTAREA)$/.test(e.target.tagName)) return;
-    if (e.key === " ") { e.preventDefault(); $("play").click(); }
+    if (e.key !== " " || e.ctrlKey || e.altKey || e.metaKey || typing(e.target)) return;
+    e.preventDefault();
+    if (!e.repeat) $("play").click();
+  });
+  document.addEventListener("keyup", function (e) {
+    if (e.key === " " && !typing(e.target)) e.preventDefault();
   });
 
   // Speech, where the browser recognises it; typed words always work.

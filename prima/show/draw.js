@@ -61,9 +61,11 @@ const PrimaDraw = (function () {
     return (90 - heading + 360) % 360;
   }
 
-  function bubble(who, pose, text, n) {  // words (or an action) beside the robot or the user
+  // Words (or an action) beside the robot or the user: the n-th of theirs shown, above
+  // its marker, or below it.
+  function bubble(who, pose, text, n, below) {
     return {x: pose[1], y: pose[2], text: plotlyText(String(text).slice(0, 80)), showarrow: true,
-            arrowhead: 0, ax: who === "robot" ? -40 : 40, ay: -30 - 22 * n,
+            arrowhead: 0, ax: who === "robot" ? -40 : 40, ay: (below ? 1 : -1) * (30 + 22 * n),
             bgcolor: who === "robot" ? "#ecf0f1" : "#fdebd0",
             bordercolor: who === "robot" ? "#2c3e50" : "#e67e22",
             borderpad: 3, font: {size: 11}};

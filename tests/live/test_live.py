@@ -19,6 +19,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import AsyncIterator, Callable
 from pathlib import Path
 from typing import Any
@@ -838,6 +839,7 @@ def test_the_user_walks_where_dragged_the_robot_is_touched_where_clicked_one_tab
         _page_wait(browser, "return !document.getElementById('banner').hidden && "
                             "document.getElementById('banner').textContent.includes('in use')",
                    "the session in use")
+        assert not any(_enabled(browser).values()), "the tab without the session acts in nothing"
         second = browser.current_window_handle
         browser.switch_to.window(first)
         browser.close()
@@ -846,10 +848,183 @@ def test_the_user_walks_where_dragged_the_robot_is_touched_where_clicked_one_tab
         _page_wait(browser, "return window.primaLive.ready() && "
                             "window.primaLive.rows().length > 50", "the session taken over")
         assert browser.find_element(By.ID, "banner").get_attribute("hidden") is not None
+        assert _enabled(browser)["touch"] and _enabled(browser)["save"]
     finally:
         process.send_signal(signal.SIGTERM)
         _out, err = process.communicate(timeout=WAIT)
     assert "2 input(s)" in err
+
+
+_CONTROLS = ("play", "step-by", "speed", "save", "say", "touch", "follow", "stop", "sender",
+             "message")
+
+
+def _enabled(driver: Any) -> dict[str, bool]:
+    """Which of the page's controls can be used (Step only while paused)."""
+    enabled: dict[str, bool] = driver.execute_script(
+        "return Object.fromEntries(arguments[0].map(id => "
+        "[id, !document.getElementById(id).disabled]))", list(_CONTROLS))
+    return enabled
+
+
+def _notice(driver: Any) -> str:
+    notice: str = driver.execute_script("return document.getElementById('notice').textContent")
+    return notice
+
+
+def test_the_space_bar_plays_a_click_touches_and_a_refusal_keeps_the_words_until_one_goes(
+        browser: Any, tmp_path: Path) -> None:
+    """The space bar plays and pauses wherever the focus is (the button just clicked is
+    not clicked again) but in a box one types in; a click near both the robot and the user
+    touches the robot, never walks; a refused input is said until a later one goes
+    through, and refused words stay in their box."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    process, url = _started(str(VISIT), "--paused")
+    try:
+        browser.get(url)
+        _page_wait(browser, "return window.primaLive.ready() && window.primaLive.pose()",
+                   "the session")
+        browser.find_element(By.ID, "touch").click()
+        _page_wait(browser, "return window.primaLive.status().added === 1", "the touch")
+        ActionChains(browser).send_keys(" ").perform()  # (the focus on Touch)
+        _page_wait(browser, "return !window.primaLive.status().paused", "the run played")
+        ActionChains(browser).send_keys(" ").perform()
+        _page_wait(browser, "return window.primaLive.status().paused", "the run paused")
+        box = browser.find_element(By.ID, "say")
+        box.send_keys("a b")  # (typed: spaces, not Play)
+        assert box.get_attribute("value") == "a b"
+        assert browser.execute_script("return window.primaLive.status()")["paused"]
+        box.clear()
+        assert browser.execute_script("return window.primaLive.status().added") == 1
+        # the robot at the museum door, the user 0.8 m behind it: a click between them
+        _t, robot, user = browser.execute_script("return window.primaLive.pose()")
+        x, y = (robot[0] + user[0]) / 2, (robot[1] + user[1]) / 2
+        browser.execute_script(
+            "const d = document.getElementById('map'), l = d._fullLayout, r = "
+            "d.querySelector('.nsewdrag').getBoundingClientRect(), o = {bubbles: true, "
+            "clientX: r.left + l.xaxis.c2p(arguments[0]), clientY: r.top + "
+            "l.yaxis.c2p(arguments[1])}; d.dispatchEvent(new MouseEvent('mousedown', o)); "
+            "window.dispatchEvent(new MouseEvent('mouseup', o));", x, y)
+        _page_wait(browser, "return window.primaLive.status().added === 2", "the click")
+        _steps(browser, "0.1", 1)
+        acts = [r["action"] for r in _rows(browser) if r["kind"] == "user"]
+        assert acts == ["touch", "touch"]
+        # refused, then corrected: the notice goes once the corrected input goes through
+        browser.find_element(By.ID, "sender").clear()
+        message = browser.find_element(By.ID, "message")
+        message.send_keys("shelf-b" + Keys.ENTER)
+        _page_wait(browser, "return document.getElementById('notice').textContent"
+                            ".includes(\"sender: give some words\")", "the refusal")
+        assert message.get_attribute("value") == "shelf-b"
+        browser.find_element(By.ID, "sender").send_keys("library")
+        message.send_keys(Keys.ENTER)
+        _page_wait(browser, "return window.primaLive.status().added === 3 && "
+                            "!document.getElementById('notice').textContent", "the notice gone")
+        assert message.get_attribute("value") == ""
+        box.send_keys("   " + Keys.ENTER)  # (blank: said, not sent)
+        assert "type some words" in _notice(browser) and box.get_attribute("value") == ""
+        # more than 20 inputs a second: the refused words stay in the box
+        browser.execute_script("for (let i = 0; i < 25; i++) { const b = document."
+                               "getElementById('say'); b.value = 'Hey robot ' + i; "
+                               "b.form.requestSubmit(); }")
+        _page_wait(browser, "return document.getElementById('notice').textContent"
+                            ".includes('inputs a second')", "the rate refused")
+        assert box.get_attribute("value") == "Hey robot 24"
+        while box.get_attribute("value"):  # (again, until the second is over)
+            time.sleep(0.1)
+            box.send_keys(Keys.ENTER)
+            _page_wait(browser, "return document.getElementById('say').value || "
+                                "!document.getElementById('notice').textContent",
+                       "the words taken or refused")
+        added = browser.execute_script("return window.primaLive.status().added")
+        errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert errors == []
+    finally:
+        process.send_signal(signal.SIGTERM)
+        _out, err = process.communicate(timeout=WAIT)
+    assert f" {added} input(s)" in err
+
+
+def test_the_timeline_follows_the_run_again_bubbles_stay_apart_and_an_ended_run_keeps_save(
+        browser: Any, tmp_path: Path) -> None:
+    """Panned, the timeline stays where it was put; double-clicked, or with its button, it
+    follows the run again. The user's bubble and the robot's never cover each other. Once
+    the run has ended, only Save is left to act with."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    process, url = _started(str(VISIT), "--script", "--paused", "--until", "40")
+    shown_range = "return document.getElementById('timeline').layout.xaxis.range.map(Number)"
+    redrawn = ("const d = document.getElementById('timeline').data; "
+               "return d.length && !d.seen")
+    try:
+        browser.get(url)
+        _page_wait(browser, "return window.primaLive.ready() && window.primaLive.status()",
+                   "the session")
+        _steps(browser, "5", 6)
+        _steps(browser, "1", 4)  # 34 s: the guide explains the first panel
+        browser.find_element(By.ID, "say").send_keys("Excuse me, where is the toilet?" +
+                                                     Keys.ENTER)
+        _steps(browser, "0.5", 1)
+        _page_wait(browser, "return document.querySelectorAll('#map .annotation').length >= 2",
+                   "the bubbles")
+        boxes = browser.execute_script(
+            "return [...document.querySelectorAll('#map .annotation')].map(a => {"
+            "const r = a.querySelector('.annotation-text-g').getBoundingClientRect(); "
+            "return [a.textContent, r.left, r.top, r.right, r.bottom]; })")
+        mine = [b for b in boxes if b[0] == "Excuse me, where is the toilet?"]
+        theirs = [b for b in boxes if b[0] != mine[0][0]]
+        assert mine and theirs, boxes
+        for b in theirs:  # (apart: one is left of, right of, above or below the other)
+            assert (b[3] <= mine[0][1] or mine[0][3] <= b[1] or b[4] <= mine[0][2]
+                    or mine[0][4] <= b[2]), (mine, b)
+        # (the user higher on the map: its bubbles go up, the robot's down)
+        sides = browser.execute_script(
+            "return document.getElementById('map').layout.annotations.map(a => "
+            "[a.bordercolor === '#e67e22' ? 'user' : 'robot', Math.sign(a.ay)])")
+        assert {side for who, side in sides if who == "user"} == {-1}, sides
+        assert {side for who, side in sides if who == "robot"} == {1}, sides
+        # panned to the start, the timeline stays there while the run goes on
+        _page_wait(browser, redrawn, "the timeline")
+        browser.execute_script("Plotly.relayout('timeline', {'xaxis.range[0]': 0, "
+                               "'xaxis.range[1]': 10});")
+        assert browser.find_element(By.ID, "follow-time").is_displayed()
+        browser.execute_script("document.getElementById('timeline').data.seen = true;")
+        _steps(browser, "1", 1)
+        _page_wait(browser, redrawn, "the timeline redrawn")
+        assert browser.execute_script(shown_range) == [0, 10]
+        area = browser.find_element(By.CSS_SELECTOR, "#timeline .nsewdrag")
+        ActionChains(browser).double_click(area).perform()
+        _page_wait(browser, f"const r = ({shown_range.removeprefix('return ')}); "
+                            "return r[0] === 0 && r[1] > 36", "the timeline following")
+        assert not browser.find_element(By.ID, "follow-time").is_displayed()
+        browser.execute_script("Plotly.relayout('timeline', {'xaxis.range[0]': 5, "
+                               "'xaxis.range[1]': 10});")
+        browser.find_element(By.ID, "follow-time").click()
+        _page_wait(browser, f"return ({shown_range.removeprefix('return ')})[1] > 36",
+                   "the timeline following again")
+        assert not browser.find_element(By.ID, "follow-time").is_displayed()
+        # the end: what cannot act any more is disabled; Save is left
+        assert all(_enabled(browser).values())
+        _steps(browser, "5", 1)
+        _page_wait(browser, "return window.primaLive.status().state === 'ended'", "the end")
+        _page_wait(browser, "return document.getElementById('touch').disabled", "disabled")
+        enabled = _enabled(browser)
+        assert enabled.pop("save") and not any(enabled.values()), enabled
+        assert browser.find_element(By.ID, "step").get_attribute("disabled") is not None
+        paused = browser.execute_script("return window.primaLive.status().paused")
+        ActionChains(browser).send_keys(" ").perform()
+        browser.find_element(By.ID, "save").click()
+        _page_wait(browser, "return window.primaLive.downloaded", "the download")
+        assert browser.execute_script("return window.primaLive.status().paused") == paused
+        assert "the run is over" not in _notice(browser)
+    finally:
+        process.send_signal(signal.SIGTERM)
+        process.communicate(timeout=WAIT)
 
 
 def test_only_the_live_command_imports_the_live_page() -> None:
