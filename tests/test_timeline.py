@@ -10,7 +10,7 @@ import pytest
 
 from prima.run import Run
 from prima.timeline import NO_DEVICE, Bar, Span, blended_devices, runs, timeline
-from tests.work import bytecodes
+from tests.work import allocated, bytecodes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -173,17 +173,12 @@ def test_every_pose_is_kept_in_time_order() -> None:
 def test_a_long_runs_poses_are_held_as_floats() -> None:
     """Four floats a pose sample (an array), not a tuple of a time and a tuple of floats:
     a long run has hundreds of thousands of them (``bench/big_trace.py``)."""
-    import tracemalloc
-
     samples = 20_000
     rows = (row(k * 0.5, "pose", None, robot={"x": k * 0.1, "y": 1.0, "heading": 90.0},
                 user={"x": 2.0, "y": k * 0.1, "heading": 0.0}) for k in range(samples))
-    tracemalloc.start()
-    try:
-        tl = timeline(rows)
-        held = tracemalloc.get_traced_memory()[0]
-    finally:
-        tracemalloc.stop()
+    made: list[Any] = []
+    held, _peak = allocated(lambda: made.append(timeline(rows)))
+    tl = made[0]
     assert len(tl.robot) == len(tl.user) == samples
     assert tl.robot[-1] == ((samples - 1) * 0.5, ((samples - 1) * 0.1, 1.0, 90.0))
     # (as tuples, about 174 bytes a sample)

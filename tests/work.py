@@ -1,11 +1,13 @@
-"""Work counted, not timed: the Python bytecodes a call executes (``sys.settrace`` with
-opcode events), the same on a loaded machine as on an idle one. A test of how work
+"""Work and memory counted, not timed: the Python bytecodes a call executes
+(``sys.settrace`` with opcode events), the same on a loaded machine as on an idle one,
+and the memory Python allocates while it runs (``tracemalloc``). A test of how work
 grows compares the counts of a small and a large input (the pure build only: compiled
 code executes no bytecodes to count)."""
 
 from __future__ import annotations
 
 import sys
+import tracemalloc
 from collections.abc import Callable
 from types import FrameType
 from typing import Any
@@ -32,3 +34,14 @@ def bytecodes(fn: Callable[[], object], only: str | None = None) -> int:
     finally:
         sys.settrace(previous)
     return count
+
+
+def allocated(fn: Callable[[], object]) -> tuple[int, int]:
+    """The bytes Python allocated for ``fn()`` and still held when it returned, and the
+    most it held meanwhile (its peak)."""
+    tracemalloc.start()
+    try:
+        fn()
+        return tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()

@@ -10,8 +10,9 @@ from pathlib import Path
 import pytest
 
 from prima.errors import TraceError
-from prima.judge import MEASURES, judge, judge_file, load_trace
+from prima.judge import MEASURES, Report, judge, judge_file, load_trace
 from tests.judge.helpers import ROOT, THESIS, counts
+from tests.work import allocated
 
 
 # ------------------------------------------------------------------ reading traces
@@ -42,22 +43,22 @@ def test_load_trace_locates_every_bad_line(tmp_path: Path) -> None:
 
 
 def test_a_line_too_long_is_read_past_never_held(tmp_path: Path) -> None:
-    import tracemalloc
-
     from prima.tracefile import MAX_LINE
 
     path = tmp_path / "long.jsonl"
     with path.open("w", encoding="utf-8") as out:  # 48 MiB on one line, then a good line
         out.write('{"t": 0, "seq": 0, "kind": "load", "app": "' + "x" * (48 << 20) + '"}\n'
                   '{"t": 1, "seq": 1, "kind": "load", "app": "fa"}\n')
-    tracemalloc.start()
-    try:
-        with pytest.raises(TraceError) as caught:
+    refused: list[TraceError] = []
+
+    def read() -> None:
+        try:
             load_trace(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    assert [str(p) for p in caught.value.problems] == [
+        except TraceError as exc:
+            refused.append(exc)
+
+    _held, peak = allocated(read)
+    assert [str(p) for p in refused[0].problems] == [
         f"{path}:1:1: error: the line is longer than {MAX_LINE:,} characters"]
     assert peak < 16 << 20, f"{peak:,} bytes to read past a long line"
 
@@ -112,17 +113,10 @@ def test_a_forged_trace_with_more_abs_running_than_a_robot_has_is_refused(
 
 def test_abs_whose_words_are_not_yet_known_share_the_posed_lines_they_wait_for(
         tmp_path: Path) -> None:
-    import tracemalloc
-
     from prima.tracefile import MAX_RUNNING
 
     path = _forged(tmp_path / "forged.jsonl", MAX_RUNNING, 4000)
-    tracemalloc.start()
-    try:
-        judge_file(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    _held, peak = allocated(lambda: judge_file(path))
     # (a pair per AB per posed line, for the unfaced and the leaving measures each, came
     # to about 37 MiB here; shared, the whole judging peaks at about 8)
     assert peak < 16 * 2**20, f"{peak / 2**20:.1f} MiB"
@@ -192,8 +186,6 @@ def test_each_finder_is_fed_every_kind_of_line_it_needs(scenario: str,
 def test_a_scenario_is_judged_as_it_runs_holding_none_of_its_lines(tmp_path: Path) -> None:
     # (an EA whose timers fire on every step makes a long trace of lines no measure keeps:
     # judged after the run, they were all held, some 33 MiB here, growing with the run)
-    import tracemalloc
-
     (tmp_path / "map.xml").write_text(
         '<map xmlns="urn:prima:map:1" name="m"><place name="a" x="0" y="0"/></map>\n')
     timers = range(20)
@@ -207,11 +199,8 @@ def test_a_scenario_is_judged_as_it_runs_holding_none_of_its_lines(tmp_path: Pat
     scenario.write_text('<scenario xmlns="urn:prima:scenario:1" name="s" until="20">'
                         '<map href="map.xml"/><apps ea="ea.pxml"/><robot place="a"/>'
                         "</scenario>\n")
-    tracemalloc.start()
-    try:
-        report = judge_file(scenario)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    reports: list[Report] = []
+    _held, peak = allocated(lambda: reports.append(judge_file(scenario)))
+    report = reports[0]
     assert report.lines > 30_000
     assert peak < 16 * 2**20, f"{peak / 2**20:.1f} MiB"
