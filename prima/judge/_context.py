@@ -543,7 +543,7 @@ class Context:
         if "loses its precedence" in text:
             if spans and spans[-1][1] == _OPEN:
                 return  # (a forged trace's second loss: it had not regained it)
-            spans.append([float(row["t"]), float("inf")])
+            spans.append([float(row["t"]), _OPEN])
             self.demoted_seq.setdefault(app, []).append(int(row["seq"]))
         elif "regains" in text and spans:
             spans[-1][1] = float(row["t"])
@@ -554,14 +554,14 @@ class Context:
         if row.get("text") == "open":
             if spans and spans[-1][1] == _OPEN:
                 return  # (a forged trace's second open: one close ends the block)
-            spans.append([float(row["t"]), float("inf")])
-        elif spans and spans[-1][1] == float("inf"):
+            spans.append([float(row["t"]), _OPEN])
+        elif spans and spans[-1][1] == _OPEN:
             spans[-1][1] = float(row["t"])
 
     def _release(self, row: Row) -> None:
         if row.get("reason") in ("watchdog", "block-close"):
             spans = self.blocks.get(str(row.get("app") or ""))
-            if spans and spans[-1][1] == float("inf"):
+            if spans and spans[-1][1] == _OPEN:
                 spans[-1][1] = float(row["t"])
 
     def _interrupt(self, row: Row) -> None:
@@ -596,7 +596,7 @@ class Context:
         spans = self.demoted.get(app)
         if not spans:
             return False
-        i = bisect.bisect_right(spans, t + EPS, key=_from) - 1
+        i = _begun(spans, t)
         if i < 0 or t >= spans[i][1] - EPS:
             return False
         seqs = self.demoted_seq.get(app, [])
@@ -627,8 +627,14 @@ def span_at(spans: Sequence[list[float]], t: float) -> list[float] | None:
     order and apart (each begins where or after the one before it ended, as a context
     keeps them) hold ``t`` only if that one does; found by bisection, so that a long
     trace's many spans cost no more per question."""
-    i = bisect.bisect_right(spans, t + EPS, key=_from) - 1
+    i = _begun(spans, t)
     return spans[i] if i >= 0 else None
+
+
+def _begun(spans: Sequence[list[float]], t: float) -> int:
+    """Where the last of ``spans`` that began at or before ``t`` is among them (-1: none
+    did), found by bisection (:func:`span_at`)."""
+    return bisect.bisect_right(spans, t + EPS, key=_from) - 1
 
 
 def spans_meeting(spans: Sequence[list[float]], lo: float, hi: float) -> Sequence[list[float]]:

@@ -23,7 +23,15 @@ from typing import Any, Protocol
 from prima.catalog import BODY_DEVICE, SEARCH_DEVICE, STANDARD_COMMANDS
 from prima.judge import _blame as blame
 from prima.judge._blame import Wheels, Whose
-from prima.judge._context import EPS, Ab, Context, Exchange, command_ids, xy
+from prima.judge._context import (
+    EPS,
+    FOLLOW_COMMANDS,
+    Ab,
+    Context,
+    Exchange,
+    command_ids,
+    xy,
+)
 from prima.judge._findings import (
     BargeIn,
     Blame,
@@ -47,7 +55,6 @@ __all__ = ["MEASURES", "Finder", "Measure", "measure", "registered"]
 
 _AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
 _TRAVELS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
-_FOLLOWS = frozenset(c.name for c in STANDARD_COMMANDS if c.follows_user)
 """Commands that move the robot after its user (Tracking Human): following the user
 is not leaving them."""
 
@@ -433,7 +440,7 @@ class _Leaving:
         """An AB started (``by`` 1) or ended (-1): how many follow the user, and take the
         robot somewhere."""
         commands = str(row.get("command") or "").split("+")
-        if any(c in _FOLLOWS for c in commands):
+        if any(c in FOLLOW_COMMANDS for c in commands):
             self.following = max(0, self.following + by)
         if any(c in _TRAVELS for c in commands):
             self.driving = max(0, self.driving + by)
@@ -793,7 +800,7 @@ class _Stuck:
         kind = row["kind"]
         ab = row.get("ab")
         if kind in ("start", "end") and isinstance(ab, int) and any(
-                c in _FOLLOWS for c in str(row.get("command") or "").split("+")):
+                c in FOLLOW_COMMANDS for c in str(row.get("command") or "").split("+")):
             if kind == "start":
                 self.following[ab] = [t, math.inf, str(row.get("app") or "")]
             elif ab in self.following:
