@@ -11,7 +11,8 @@ For each scenario (default: every scenario this tree ships), runs 0 to ``--runs`
 are made: run 0 as written, the others with their timings jittered by 5 s as a sweep
 jitters them (``prima.batch``, seed 7). Each build runs its own copy of the scenario
 and of the documents it names (as :mod:`bench.sweep`'s ``--against`` does), in
-processes of its own, and hashes each run's whole jsonl trace (SHA-256). Prints the
+processes of its own, and hashes each run's whole jsonl trace and the rows the judge
+reads in a judged run that writes no trace (a sweep's runs; SHA-256). Prints the
 runs whose traces differ, and exits 1 if any does (or if a run fails in one build
 only).
 """
@@ -41,12 +42,25 @@ for path in sys.argv[1:]:
     try:
         for line in Run(path).run():
             digest.update(json.dumps(line.to_dict(), sort_keys=True).encode())
-        out[path] = digest.hexdigest()
+        try:
+            rows = []
+            run = Run(path, rows=rows.append)
+        except TypeError:  # (a build from before judged runs' rows)
+            rows = None
+        made = None
+        if rows is not None:
+            run.run()
+            made = hashlib.sha256()
+            for row in rows:  # (in its own key order: the rows are made, not written)
+                made.update(json.dumps(row).encode())
+        out[path] = digest.hexdigest() + (" rows " + made.hexdigest() if made else "")
     except Exception as exc:  # noqa: BLE001 - a failing run is a result to compare
         out[path] = f"error: {type(exc).__name__}: {exc}"
 print(json.dumps(out))
 """
-"""What each build runs on its variants: the hash of each run's trace, or its error."""
+"""What each build runs on its variants: the hash of each run's trace and of the rows a
+judged run hands the judge (``Run(rows=...)``, made without a trace: a sweep's), or its
+error."""
 
 
 def shipped() -> list[Path]:
@@ -96,7 +110,15 @@ def compare(scenario: Path, tree: Path, runs: int) -> list[str]:
     name = scenario.resolve().relative_to(ROOT) if scenario.resolve().is_relative_to(ROOT) \
         else scenario
     return [f"{name} run {i}: {a[:16]} here, {b[:16]} there"
-            for i, (a, b) in enumerate(zip(mine, theirs, strict=True)) if a != b]
+            for i, (a, b) in enumerate(zip(mine, theirs, strict=True)) if _differ(a, b)]
+
+
+def _differ(mine: str, theirs: str) -> bool:
+    """Whether two runs' hashes differ: the traces', and the rows' where both builds
+    make rows (an earlier build may not)."""
+    a, _, a_rows = mine.partition(" rows ")
+    b, _, b_rows = theirs.partition(" rows ")
+    return a != b or bool(a_rows and b_rows and a_rows != b_rows)
 
 
 def main(argv: list[str] | None = None) -> int:
