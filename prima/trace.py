@@ -19,8 +19,9 @@ from prima.mediator import DecisionKind
 from prima.term import BOLD, DIM, PLAIN, Paint
 from prima.vocab import TraceKind, Value
 
-__all__ = ["APP_WIDTH", "Kind", "Pose", "RecordKind", "TextTrace", "TraceLine", "describe",
-           "device_overlaps", "format_jsonl", "format_text", "jsonl_row", "row_of", "user_words"]
+__all__ = ["APP_WIDTH", "Kind", "Pose", "RecordKind", "TextTrace", "TraceLine",
+           "describe", "device_overlaps", "format_jsonl", "format_text", "jsonl_row",
+           "rounded_pose", "row_of", "user_words"]
 
 
 Kind = TraceKind
@@ -123,14 +124,10 @@ def row_of(t: float, seq: int, kind: RecordKind, fields: Mapping[str, Any]) -> d
         out["detail"] = dict(sorted(value.items()))
     value = get("robot")
     if value is not None:
-        out["robot"] = _rounded(value, 0)
+        out["robot"] = rounded_pose(value, 0)
     value = get("user")
     if value is not None:
-        user: dict[str, object] = _rounded(value, 1)
-        detectable = get("detectable")
-        if detectable is not None:
-            user["detectable"] = detectable
-        out["user"] = user
+        out["user"] = rounded_pose(value, 1, get("detectable"))
     return out
 
 
@@ -139,13 +136,17 @@ _ROUNDED: list[tuple[object, dict[str, float]]] = [(None, {}), (None, {})]
 instant, or of a still robot, carry the same pose tuple (``Simulator.poses``)."""
 
 
-def _rounded(pose: Pose, which: int) -> dict[str, Any]:
-    """A pose as a jsonl line writes it (a dict of its own)."""
+def rounded_pose(pose: Pose, which: int, detectable: bool | None = None) -> dict[str, Any]:
+    """A pose as a jsonl line writes it (a dict of its own): ``which`` 0 the robot's, 1
+    the user's, with whether they are ``detectable`` unless that is None."""
     kept = _ROUNDED[which]
     if kept[0] is not pose:
         kept = _ROUNDED[which] = (pose, {"x": round(pose[0], 3), "y": round(pose[1], 3),
                                          "heading": round(pose[2], 1)})
-    return dict(kept[1])
+    out = dict(kept[1])
+    if detectable is not None:
+        out["detectable"] = detectable
+    return out
 
 
 _PLAIN = ("app", "ab", "tree", "command", "text", "reactive", "reason", "action")

@@ -360,4 +360,6 @@ def test_a_run_made_as_rows_is_its_lines_jsonl_dicts(scenario: str) -> None:
     made: list[dict[str, object]] = []
     run = Run(ROOT / "scenarios" / scenario, rows=made.append)
     assert run.run() == []
-    assert made == [line.to_dict() for line in Run(ROOT / "scenarios" / scenario).run()]
+    lines = [line.to_dict() for line in Run(ROOT / "scenarios" / scenario).run()]
+    assert made == lines
+    assert [list(row) for row in made] == [list(line) for line in lines]  # (in its order)
