@@ -6,7 +6,8 @@ command's modules load (before :func:`prima.cli.main` handles it itself) ends th
 process with ``prima: interrupted`` and 130 (143 for SIGTERM); one that comes once
 the command is done, while Python shuts down (its worker pools joined, its files
 closed), ends it at once with the command's own status, instead of a traceback from
-whatever Python was doing then. Tests call :func:`prima.cli.main` itself.
+whatever Python was doing then. A command that a signal ended ends the process as soon
+as it returns, without Python's shutdown. Tests call :func:`prima.cli.main` itself.
 """
 
 from __future__ import annotations
@@ -43,10 +44,12 @@ def main() -> int:
 
 def _done(status: int) -> None:
     """From now on a signal ends the process at once, with ``status``: the command said
-    what it had to (flushed here)."""
+    what it had to (flushed here). A command a signal ended ends the process now."""
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(OSError, ValueError):  # (a closed pipe or stream)
             stream.flush()
+    if status in (EXIT_INTERRUPTED, EXIT_TERMINATED):
+        _leave_now(status)
 
     def leave(_signum: int, _frame: object) -> None:
         os._exit(status)
@@ -57,6 +60,27 @@ def _done(status: int) -> None:
     # exit handler writes to it as its manager thread closes it: "Exception ignored
     # in: <module 'threading'> ... Bad file descriptor"): not the command's words.
     sys.unraisablehook = _unsaid
+
+
+def _leave_now(status: int) -> None:
+    """End the process a signal stopped the command of, its worker processes first.
+
+    The command closed its files and said so. Python's shutdown would join the threads
+    it leaves: a worker pool's manager thread may wait there for ever, on a result that
+    a worker the signal ended was writing (the pipe never ends: this process holds its
+    other end too; a sweep said "interrupted" and hung). A worker still busy (one forked
+    as the signal came, which it did not see) is ended here, as Python's shutdown would
+    have waited for it, not left running with the process' standard error."""
+    if "multiprocessing" in sys.modules:  # (no worker pool without it)
+        import multiprocessing
+
+        children = multiprocessing.active_children()
+        for child in children:
+            with contextlib.suppress(OSError):
+                child.kill()
+        for child in children:
+            child.join()
+    os._exit(status)
 
 
 def _unsaid(_unraisable: object) -> None:

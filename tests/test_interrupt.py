@@ -297,3 +297,41 @@ def test_a_sigterm_as_the_entry_point_takes_it_is_one_line(
         real(signal.SIGTERM, before)
     assert status == 143
     assert capsys.readouterr().err == "prima: interrupted\n"
+
+
+_BLOCKED_AT_EXIT = """
+import multiprocessing, sys, threading, time
+import prima.__main__ as entry
+import prima.cli
+
+def interrupted():
+    # (what a worker pool's manager thread may do once a signal ended the sweep: wait
+    # for ever on a result a killed worker was writing; Python's shutdown joins it)
+    threading.Thread(target=threading.Event().wait).start()
+    # (a worker that did not see the signal, busy with its task, holding standard error)
+    multiprocessing.get_context("fork").Process(target=time.sleep, args=(3600,)).start()
+    print("prima sweep: interrupted after 32 of 60 runs", file=sys.stderr)
+    return int(sys.argv[1])
+
+prima.cli.main = interrupted
+sys.exit(entry.main())
+"""
+
+
+@pytest.mark.parametrize("status", [130, 143])
+def test_a_command_a_signal_ended_ends_the_process_whatever_threads_it_leaves(
+        status: int) -> None:
+    """A sweep said "interrupted after 32 of 60 runs" and then did not exit: Python's
+    shutdown waited for a thread its worker pool left. Here a thread that never ends
+    stands for it, and a worker still busy: the process ends with the command's status
+    all the same, and the worker with it (its standard error is closed)."""
+    process = subprocess.Popen([sys.executable, "-c", _BLOCKED_AT_EXIT, str(status)],
+                               stderr=subprocess.PIPE, cwd=ROOT)
+    try:
+        _, err = process.communicate(timeout=BOUND)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.communicate()
+        pytest.fail("the process waited for its thread at exit")
+    assert process.returncode == status
+    assert err.decode() == "prima sweep: interrupted after 32 of 60 runs\n"
