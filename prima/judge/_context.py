@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import bisect
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,7 +21,7 @@ from prima.judge._reading import Row
 from prima.judge._thresholds import Thresholds
 
 __all__ = ["EPS", "FOLLOW_COMMANDS", "TALK_DEVICES", "UNMEASURED_EVENTS", "Ab", "Context",
-           "Exchange", "Hold", "ReactionState", "span_at", "spans_meeting", "xy"]
+           "Exchange", "Hold", "ReactionState", "covered", "span_at", "spans_meeting", "xy"]
 
 EPS = 1e-6
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
@@ -635,6 +635,18 @@ def _begun(spans: Sequence[list[float]], t: float) -> int:
     """Where the last of ``spans`` that began at or before ``t`` is among them (-1: none
     did), found by bisection (:func:`span_at`)."""
     return bisect.bisect_right(spans, t + EPS, key=_from) - 1
+
+
+def covered(spans: Iterable[tuple[float, float]], lo: float, hi: float) -> float:
+    """How much of [lo, hi] the spans (from, until) cover, counted once."""
+    clipped = sorted((max(a, lo), min(b, hi)) for a, b in spans if b > lo and a < hi)
+    total, reach = 0.0, lo
+    for a, b in clipped:
+        if b <= reach:
+            continue
+        total += b - max(a, reach)
+        reach = b
+    return total
 
 
 def spans_meeting(spans: Sequence[list[float]], lo: float, hi: float) -> Sequence[list[float]]:

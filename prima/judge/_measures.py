@@ -30,6 +30,7 @@ from prima.judge._context import (
     Context,
     Exchange,
     command_ids,
+    covered,
     xy,
 )
 from prima.judge._findings import (
@@ -922,15 +923,8 @@ class _Stuck:
 
     def _followed(self, app: str, lo: float, hi: float) -> float:
         """How long within [lo, hi] another application's AB followed the user."""
-        spans = sorted((max(lo, float(a)), min(hi, float(b))) for a, b, who
-                       in self.following.values() if who != app)
-        total, reach = 0.0, lo
-        for a, b in spans:
-            a = max(a, reach)
-            if b > a:
-                total += b - a
-                reach = b
-        return total
+        return covered(((float(a), float(b)) for a, b, who in self.following.values()
+                        if who != app), lo, hi)
 
     @staticmethod
     def _in_way(ctx: Context, command: _Command) -> Blame | None:

@@ -44,6 +44,7 @@ from prima.judge._context import (
     Context,
     Hold,
     ReactionState,
+    covered,
     span_at,
     spans_meeting,
 )
@@ -64,18 +65,6 @@ def _hold_t(h: Hold) -> float:
 
 def _until(span: Span) -> float:
     return span[1]
-
-
-def _measure(spans: Iterable[Span], lo: float, hi: float) -> float:
-    """How much of [lo, hi] the spans cover (counted once)."""
-    clipped = sorted((max(a, lo), min(b, hi)) for a, b in spans if b > lo and a < hi)
-    total, reach = 0.0, lo
-    for a, b in clipped:
-        if b <= reach:
-            continue
-        total += b - max(a, reach)
-        reach = b
-    return total
 
 
 def _gaps(spans: Iterable[Span], lo: float, hi: float) -> list[Span]:
@@ -526,7 +515,7 @@ class _Analyst:
             allowed.append((r.t, ready, Blame(r.app, r.before, waiting[1], waiting[2],
                                               "after its own AB, never started",
                                               round(ready, 3))))
-        residual = _measure(((a, b) for a, b, _ in allowed), r.t, t1)
+        residual = covered(((a, b) for a, b, _ in allowed), r.t, t1)
         free = max(0.0, (t1 - r.t) - residual)
         spoken = [ab for ab in mine if ab.text and not set(ab.ids).isdisjoint(r.commands)]
         heard = next((ab for ab in spoken if ab.end_reason == "completed"), None)
@@ -586,7 +575,7 @@ class _Analyst:
                 lo = max(asked[0], t0)
                 waiting, _ = self.waits(r, own, ab.devices, ab.low, lo, asked[1], ab.start)
                 spans += [(a, b) for a, b, _ in waiting]
-        return max(0.0, (t1 - t0) - _measure(spans, t0, t1)), waits
+        return max(0.0, (t1 - t0) - covered(spans, t0, t1)), waits
 
     def _unsaid(self, r: ReactionState) -> frozenset[str]:
         """The devices of the AB that was to say the reaction's words and never started,
