@@ -106,7 +106,7 @@ def format_check(result: Check) -> str:
 
 
 def format_coverage(result: Check) -> str:
-    """How much of the EA the check exercised, by kind, with what it never reached."""
+    """How much of the EA the check exercised, by kind, with what it never exercised."""
     cov = result.coverage
     name = result.ea.name
     rows = [f"coverage of {name}: {cov.percent:.0f}% ({len(cov.items) - len(cov.missed())} of "
@@ -118,7 +118,8 @@ def format_coverage(result: Check) -> str:
                         if missed else "")
                      + (f", ... {len(missed) - 6} more" if len(missed) > 6 else "")).rstrip())
     lines = cov.lines()
-    rows.append(f"  lines never reached: {spans(lines)}" if lines else "  every line reached")
+    rows.append(f"  lines not wholly exercised: {spans(lines)}" if lines
+                else "  every line wholly exercised")
     return "\n".join(rows) + "\n"
 
 
@@ -191,5 +192,5 @@ def markdown(result: Check) -> str:
             rows += [f"- {_md(line.strip())}" for line in _failures(cell)]
     missed = result.coverage.lines()
     if missed:
-        rows += ["", f"Lines never reached: {spans(missed)}"]
+        rows += ["", f"Lines not wholly exercised: {spans(missed)}"]
     return "\n".join(rows) + "\n"

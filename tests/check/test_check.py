@@ -151,7 +151,7 @@ def test_coverage_names_what_never_ran_and_min_coverage_fails_the_check(
                          "--runs", "1", "--jobs", "1", "--min-coverage", "95",
                          "--out", str(tmp_path))
     assert code == 1 and "coverage 89% is below --min-coverage 95" in err
-    assert "lines never reached: 23-24" in out
+    assert "lines not wholly exercised: 23-24" in out
     assert cli("check", str(TALKER), "--fa", str(QUIET), "--robot", str(HOME), "--runs", "1",
                "--jobs", "1", "--min-coverage", "80", "--out", str(tmp_path))[0] == 0
 
