@@ -30,6 +30,7 @@ __all__ = [
     "Blend",
     "BUILTIN_JOINTS",
     "CONNECT_COMMAND",
+    "EXTRAS_ACTED_ON",
     "HOLD_SECONDS",
     "MAX_HOLD",
     "MAX_SWAY",
@@ -282,6 +283,23 @@ STEP_LIMITS: Mapping[type, Mapping[str, Range]] = MappingProxyType({
 the step's kind and field: an argument a step takes must lie in the step's range too
 (:meth:`CommandSpec.limits`). A joint's angle is any finite number (it stops at the
 joint's limit)."""
+
+_POSITIVE_SPEED = Range("speed must be positive", 0.0, above=True)
+
+EXTRAS_ACTED_ON: Mapping[tuple[str, str], Range] = MappingProxyType({
+    ("Gesture", "tempo"): Range("tempo must be positive", 0.0, above=True),
+    ("TopologicalMove", "speed"): _POSITIVE_SPEED,
+    ("SetPosition", "speed"): _POSITIVE_SPEED,
+    ("SetPositionAndDirection", "speed"): _POSITIVE_SPEED,
+    ("Turn", "rate"): Range("rate must be positive", 0.0, above=True),
+})
+"""The additional arguments (a profile's ``<extra>``, numbers) the simulated robot acts
+on, by Command and name, with the values it takes: a gesture played at a tempo (1 is
+its own; 2 takes half its time), a move or a drive to a position no faster than a
+speed (m/s), a turn no faster than a rate (deg/s); either at most the robot's own
+limit. Any other additional argument is shown in the trace and changes nothing the
+simulator does. ``prima validate`` refuses a constant outside the range, and the
+robot a value outside it, in the same words."""
 
 
 @dataclass(frozen=True)

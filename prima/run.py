@@ -653,4 +653,5 @@ def _shown_args(catalog: Catalog, call: Call) -> list[str]:
             out.append(f"{name}={value}")
         elif param.shown and not said and value:
             out.append(f'{name}="{value}"')
+    out += [f"{name}={value}" for name, value in call.extra.items()]  # (a profile's extras)
     return out

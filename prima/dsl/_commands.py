@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from lxml import etree
 
-from prima.catalog import SYMBOLIC_KINDS, CommandSpec, Param, ParamKind
+from prima.catalog import EXTRAS_ACTED_ON, SYMBOLIC_KINDS, CommandSpec, Param, ParamKind, Range
 from prima.dsl._binder import Spot
 from prima.dsl._elements import children
 from prima.dsl._expr import (
@@ -364,7 +364,7 @@ def _check_numbers(b: Builder, spec: CommandSpec, args: dict[str, Compiled],
 
 
 def check_number(b: Builder, compiled: Compiled, spot: Spot, name: str,
-                 spec: CommandSpec | None = None) -> bool:
+                 spec: CommandSpec | None = None, extra: Range | None = None) -> bool:
     """Whether the number argument ``name`` (or a ``<timer>``'s ``after``) may have its
     value, as far as it is known when the document loads; False after an error at
     ``spot`` when it is no number.
@@ -374,8 +374,9 @@ def check_number(b: Builder, compiled: Compiled, spot: Spot, name: str,
     requested. A constant argument of ``spec`` must also lie within the ranges the robot
     takes (:meth:`~prima.catalog.CommandSpec.refusal`: the rule the robot applies when it
     performs the Command, said in its words), or the Command would fail when performed:
-    ``QA(..., timeout=-3)``. A value computed from variables is checked when the
-    application runs.
+    ``QA(..., timeout=-3)``; an ``extra``, an additional argument the robot acts on, within
+    its own range instead (``Gesture(dance)[tempo=0]``). A value computed from variables
+    is checked when the application runs.
     """
     if not compiled.constant:
         return True
@@ -388,6 +389,8 @@ def check_number(b: Builder, compiled: Compiled, spot: Spot, name: str,
         b.error(spot, f"{form}={shown}: expected a number, or an expression giving one")
         return False
     refusal = None if spec is None else spec.refusal(name, value)
+    if extra is not None:  # (an additional argument the robot acts on: its own range)
+        refusal = extra.refusal(value)
     if spec is not None and refusal is not None:
         b.error(spot, f"{spec.name}: {refusal}")
     return True
@@ -405,7 +408,13 @@ def _extras(b: Builder, spec: CommandSpec, extras: Sequence[Extra]) -> dict[str,
             b.error(spot, f"{spec.name} has no additional argument '{name}' on this robot "
                           f"(declared: {known})")
         else:
-            _put(extra, name, make())
+            compiled = make()
+            limits = EXTRAS_ACTED_ON.get((spec.name, name))
+            if compiled is not None and limits is not None \
+                    and declared[name].kind is ParamKind.NUMBER \
+                    and not check_number(b, compiled, spot, name, spec, limits):
+                continue
+            _put(extra, name, compiled)
     return extra
 
 

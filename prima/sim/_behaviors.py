@@ -20,6 +20,7 @@ from collections.abc import Callable, Generator, Mapping
 from typing import TYPE_CHECKING, Any
 
 from prima.catalog import (
+    EXTRAS_ACTED_ON,
     HOLD_SECONDS,
     SWAY_DEGREES,
     SWAY_PERIOD,
@@ -75,6 +76,16 @@ def _number(sim: Body, call: Call, name: str, required: bool = True) -> float | 
     return number
 
 
+def _extra(sim: Body, call: Call, name: str) -> float | None:
+    """An additional argument the robot acts on (:data:`~prima.catalog.EXTRAS_ACTED_ON`),
+    if the call gives it: within its range, else the Command ends with the error
+    ``prima validate`` gives a constant outside it."""
+    value = call.extra.get(name)
+    if value is None:
+        return None
+    return _within(_finite(value, f"argument {name!r}"), EXTRAS_ACTED_ON[call.command, name])
+
+
 def _req(sim: Body, call: Call, name: str) -> float:
     value = _number(sim, call, name)
     if value is None:
@@ -109,11 +120,12 @@ def _stop(sim: Body) -> Generator[Wait, Any, None]:
     yield signal(lambda wake: world.stop(lambda: wake(True)))
 
 
-def _turn(sim: Body, delta: float) -> Generator[Wait, Any, None]:
+def _turn(sim: Body, delta: float, rate: float = math.inf) -> Generator[Wait, Any, None]:
+    """Turn by ``delta`` (rad), stopping first, no faster than ``rate`` (rad/s)."""
     world = sim.world
     if world.mode:
         yield from _stop(sim)
-    yield signal(lambda wake: world.turn_by(delta, wake))
+    yield signal(lambda wake: world.turn_by(delta, wake, rate))
 
 
 def _face(sim: Body, heading: float) -> Generator[Wait, Any, None]:
@@ -123,8 +135,10 @@ def _face(sim: Body, heading: float) -> Generator[Wait, Any, None]:
 ARRIVED, UNDER_WAY, BLOCKED = "arrived", "under way", "blocked"
 
 
-def _period_toward(sim: Body, x: float, y: float) -> Generator[Wait, Any, str]:
-    """One control period of going to (x, y): turn toward it, then drive straight.
+def _period_toward(sim: Body, x: float, y: float,
+                   speed: float = math.inf) -> Generator[Wait, Any, str]:
+    """One control period of going to (x, y): turn toward it, then drive straight (no
+    faster than ``speed``, m/s).
 
     A turn or a drive toward it that is already running goes on (a feedback
     Command's iterations flow into each other, without stopping). When the period
@@ -155,7 +169,8 @@ def _period_toward(sim: Body, x: float, y: float) -> Generator[Wait, Any, str]:
             if abs(delta) > math.radians(1.0):
                 turned = yield signal(functools.partial(_turn_by, world, delta), end - k.tick)
             else:
-                ended = yield signal(lambda wake: world.drive_to(x, y, wake), end - k.tick)
+                ended = yield signal(lambda wake: world.drive_to(x, y, wake, speed),
+                                     end - k.tick)
                 if ended is None:
                     return UNDER_WAY
                 return ARRIVED if ended else BLOCKED
@@ -272,7 +287,9 @@ def face_human_and_speak(sim: Body, call: Call, cid: int, it: int) -> Gen:
 
 
 def turn(sim: Body, call: Call, cid: int, it: int) -> Gen:
-    yield from _turn(sim, math.radians(_req(sim, call, "angle")))
+    rate = _extra(sim, call, "rate")
+    yield from _turn(sim, math.radians(_req(sim, call, "angle")),
+                     math.inf if rate is None else math.radians(rate))
     return _pose(sim), True
 
 
@@ -358,8 +375,8 @@ def point_by_hand(sim: Body, call: Call, cid: int, it: int) -> Gen:
 
 def gesture(sim: Body, call: Call, cid: int, it: int) -> Gen:
     name = _text(sim, call, "name")
-    seconds = sim.spec.gestures.get(name)
-    if seconds is None:
+    seconds = _gesture_time(sim, call)
+    if name not in sim.spec.gestures:
         return {"error": f"the robot has no gesture {name!r}"}, True
     yield sleep(sim.ticks(seconds))
     return {"gesture": name}, True
@@ -647,6 +664,7 @@ def _move_leg(sim: Body, call: Call, cid: int) -> Gen:
     goal = _place(sim, call, "to")
     if goal is None:
         raise CommandError("missing argument 'to'")
+    speed = _extra(sim, call, "speed")
     state = sim.loop_state(cid)
     at, path = _route(sim, goal, state)
     if at is not None and at.name == goal.name:
@@ -666,7 +684,7 @@ def _move_leg(sim: Body, call: Call, cid: int) -> Gen:
             yield from _stop(sim)
         yield sleep(sim.ticks(sim.spec.control_period))
         return {"waiting": "user", "toward": nxt.name, "goal": goal.name, **_pose(sim)}, False
-    outcome = yield from _period_toward(sim, nxt.x, nxt.y)
+    outcome = yield from _period_toward(sim, nxt.x, nxt.y, math.inf if speed is None else speed)
     if outcome is BLOCKED and math.dist(sim.world.robot_xy(), (nxt.x, nxt.y)) <= PASS_BY:
         # someone stands on the place: the robot is there, as near as it can get
         state["blocked"] = 0
@@ -760,6 +778,7 @@ its last iteration left it (the wheels stopping in between slide it a little).""
 def _set_position(sim: Body, call: Call, cid: int,
                   heading: float | None) -> Gen:
     tx, ty = _req(sim, call, "x"), _req(sim, call, "y")
+    speed = _extra(sim, call, "speed")
     world, spec = sim.world, sim.spec
     tol = spec.position_tolerance
     x, y = world.robot_xy()
@@ -767,7 +786,8 @@ def _set_position(sim: Body, call: Call, cid: int,
         points = sim.route(x, y, tx, ty, spec.radius / 2)
         if not points:
             return {"error": f"no route to ({tx:g}, {ty:g})"}, True
-        if (yield from _period_toward(sim, *points[0])) is BLOCKED:
+        if (yield from _period_toward(sim, *points[0],
+                                      math.inf if speed is None else speed)) is BLOCKED:
             # someone in the way (the user walking by): wait a second and try again, as
             # a Topological Move does, up to MAX_BLOCKED times in a row
             state = sim.loop_state(cid)
@@ -829,12 +849,16 @@ def _said(sim: Body, call: Call, name: str) -> float:
     return sim.speech_duration(text) if text else 0.0
 
 
-def _turning(sim: Body, degrees: float) -> float:
-    return abs(degrees) / sim.spec.max_turn_rate
+def _turning(sim: Body, degrees: float, rate: float | None = None) -> float:
+    top = sim.spec.max_turn_rate
+    return abs(degrees) / (top if rate is None else min(rate, top))
 
 
 def _gesture_time(sim: Body, call: Call) -> float:
-    return sim.spec.gestures.get(_text(sim, call, "name"), 0.0)
+    """How long the gesture plays: its own time, at the call's tempo if it gives one."""
+    seconds = sim.spec.gestures.get(_text(sim, call, "name"), 0.0)
+    tempo = _extra(sim, call, "tempo")
+    return seconds if tempo is None else seconds / tempo
 
 
 def _search_time(sim: Body, call: Call) -> float:
@@ -848,7 +872,7 @@ PLANNED: Mapping[str, Callable[[Body, Call], float]] = {
     "FaceHumanAndSpeak": lambda sim, call: _turning(sim, 180.0) + _said(sim, call, "text"),
     "TurnAndSpeak": lambda sim, call: max(_turning(sim, _req(sim, call, "angle")),
                                           _said(sim, call, "text")),
-    "Turn": lambda sim, call: _turning(sim, _req(sim, call, "angle")),
+    "Turn": lambda sim, call: _turning(sim, _req(sim, call, "angle"), _extra(sim, call, "rate")),
     "SetSpeedAndTime": lambda sim, call: _req(sim, call, "time"),
     "Gesture": lambda sim, call: _gesture_time(sim, call),
     "ActiveSensingHuman": lambda sim, call: _search_time(sim, call),

@@ -173,7 +173,14 @@ class World:
         self._a_dt = spec.max_accel * self.dt
         self._alpha_dt = math.radians(spec.turn_accel) * self.dt
         self._vmax = spec.max_speed
+        """The fastest the robot drives now: the limit (:meth:`speed_limit`), or the running
+        straight drive's own speed, if lower (:meth:`drive_to`)."""
+        self._limit = spec.max_speed
+        self._cap = math.inf
+        """The running straight drive's own speed (m/s; none: infinite)."""
         self._wmax = math.radians(spec.max_turn_rate)
+        self._wtop = self._wmax
+        """The fastest the running turn turns (rad/s): the robot's, or the turn's own."""
         # a sway superimposed on whatever drives the wheels (a dance step: the blend policy)
         self._sway: tuple[float, float, int] | None = None
         """Amplitude (rad), angular frequency (rad per step) and length (steps)."""
@@ -337,7 +344,8 @@ class World:
 
     def speed_limit(self, speed: float) -> None:
         """Drive no faster than ``speed`` (m/s) from now on (a blend slows the robot)."""
-        self._vmax = min(speed, self.spec.max_speed)
+        self._limit = min(speed, self.spec.max_speed)
+        self._vmax = min(self._limit, self._cap)
 
     def speed_cap(self) -> float:
         """The fastest the robot drives now (m/s)."""
@@ -404,11 +412,14 @@ class World:
         """Call ``done`` instead when the running drive or turn ends (it goes on as is)."""
         self._done = done
 
-    def drive_to(self, x: float, y: float, done: Done) -> bool:
-        """Drive straight to (x, y) from standstill. False if already there."""
+    def drive_to(self, x: float, y: float, done: Done, speed: float = math.inf) -> bool:
+        """Drive straight to (x, y) from standstill, no faster than ``speed`` (m/s), if
+        that is below the limit. False if already there."""
         px, py = self.robot.position
         length = math.hypot(x - px, y - py)
         self._halt()
+        self._cap = speed
+        self._vmax = min(self._limit, speed)
         if length < 1e-6:
             return False
         self._ux = (x - px) / length
@@ -421,11 +432,13 @@ class World:
         self.mode = _LINEAR
         return True
 
-    def turn_by(self, delta: float, done: Done) -> bool:
-        """Turn in place by ``delta`` radians (counter-clockwise positive)."""
+    def turn_by(self, delta: float, done: Done, rate: float = math.inf) -> bool:
+        """Turn in place by ``delta`` radians (counter-clockwise positive), no faster than
+        ``rate`` (rad/s), if that is below the robot's."""
         self._halt()
         if abs(delta) < 1e-9:
             return False
+        self._wtop = min(self._wmax, rate)
         self._ta = self.robot.angle + delta
         self._ta_offset = self._sway_offset
         self._ux = 1.0 if delta > 0 else -1.0
@@ -478,6 +491,9 @@ class World:
             body.angular_velocity = 0.0
         self.mode = _IDLE
         self._done = None
+        if self._cap != math.inf:  # (a drive's own speed goes with it)
+            self._cap = math.inf
+            self._vmax = self._limit
 
     # ---- stepping ------------------------------------------------------------
 
@@ -509,7 +525,7 @@ class World:
         if mode == _ANGULAR:
             rem = self._len - self._s
             accel = math.radians(self.spec.turn_accel)
-            w = min(self._wmax, self._v + self._alpha_dt, math.sqrt(2.0 * accel * rem))
+            w = min(self._wtop, self._v + self._alpha_dt, math.sqrt(2.0 * accel * rem))
             last = w * dt >= rem
             if last:
                 w = rem / dt
@@ -591,6 +607,9 @@ class World:
         self.mode = _IDLE
         self._done = None
         self._v = 0.0
+        if self._cap != math.inf:
+            self._cap = math.inf
+            self._vmax = self._limit
         waiting, self._on_stopped = self._on_stopped, []
         if done is None and not waiting:
             return None

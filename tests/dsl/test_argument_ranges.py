@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import pytest
 
-from prima.catalog import CommandSpec, Param, ParamKind, Range
+from prima.catalog import EXTRAS_ACTED_ON, CommandSpec, Param, ParamKind, Range
 from prima.dsl import check_document, default_profile
 from prima.errors import Problem
+from prima.mediator import Call
 from prima.sim import Pose
 from prima.vocab import Value
 from tests.dsl.test_profile_perform import LASER, _problems
@@ -90,7 +91,38 @@ def test_validation_refuses_a_constant_as_the_robot_refuses_it(
     assert end.data["error"] == refusal and end.time == 0.0  # refused before it starts
 
 
+EXTRA_CASES = [(command, name, limits, value) for (command, name), limits
+               in EXTRAS_ACTED_ON.items() if name in default_profile().extras.get(command, {})
+               for value in _outside(limits)]
+"""Each additional argument the robot acts on that the default robot (the home robot)
+declares: a gesture's tempo, a move's speed, a turn's rate."""
+_EXTRA_ARGS = {"Gesture": ("wave", {"name": "wave"}),
+               "TopologicalMove": ("center", {"to": "center"}),
+               "SetPosition": ("x=9.5, y=5", {"x": 9.5, "y": 5.0}),
+               "SetPositionAndDirection": ("x=9.5, y=5, heading=0",
+                                           {"x": 9.5, "y": 5.0, "heading": 0.0}),
+               "Turn": ("90", {"angle": 90.0})}
+"""How each Command with an additional argument the robot acts on is written, and called."""
+
+
+@pytest.mark.parametrize("command, name, limits, value", EXTRA_CASES,
+                         ids=[f"{c}-{n}={v:g}" for c, n, _limits, v in EXTRA_CASES])
+def test_an_additional_argument_the_robot_acts_on_is_refused_as_the_robot_refuses_it(
+        command: str, name: str, limits: Range, value: float) -> None:
+    refusal = f"{command}: {limits.refusal(value)}"
+    written, args = _EXTRA_ARGS[command]
+    [problem] = _check(f"<chain>{command}({written})[{name}={value:g}]</chain>")
+    assert problem.message == refusal
+    r = runner("museum", Pose(9.5, 4, 0), Pose(11, 4, 180), catalog=default_profile().catalog())
+    r.queue(Call(command, args, {name: value}))
+    r.run(5)
+    [end] = r.ends(command)
+    assert end.data["error"] == refusal
+
+
 @pytest.mark.parametrize("entry", [
+    '<chain>Gesture(wave)[tempo=0.5], TopologicalMove(center)[speed=9], Turn(90)[rate=1]</chain>',
+    '<chain>Gesture(wave)[tempo={n}], Speak("Hi")[volume=-5]</chain>',  # (not acted on)
     '<chain>QA("Ready?", yn, timeout=0), SetSpeedAndTime(0.2, 0), TrackingHuman(0.1)</chain>',
     '<request><qa prompt="Ready?" grammar="yn" timeout="0"/>'
     '<command name="Sway"><arg name="degrees" value="90"/></command></request>',

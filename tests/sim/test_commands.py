@@ -122,6 +122,37 @@ def test_gestures_last_their_profile_time_and_unknown_ones_fail() -> None:
     assert "juggle" in str(juggle.data["error"])
 
 
+def test_the_additional_arguments_the_robot_acts_on_change_what_it_does() -> None:
+    """A gesture's tempo, a drive's speed and a turn's rate (a profile's ``<extra>``s,
+    EXTRAS_ACTED_ON) show in the times and the poses. They used to reach the simulator
+    and change nothing: fa3-dance's ``Gesture(dance)[tempo=1.5]`` danced at its own
+    tempo."""
+    r = runner("museum", CENTER)
+    r.queue(Call("Gesture", {"name": "bow"}, {"tempo": 2.0}),
+            Call("Turn", {"angle": 90}, {"rate": 30.0}))
+    r.run(20)
+    assert r.ends("Gesture")[0].time == pytest.approx(0.75, abs=0.02)  # (1.5 s, tempo 2)
+    turn = r.ends("Turn")[0]
+    assert turn.time - 0.75 == pytest.approx(90 / 30, abs=0.25)  # (1.5 s at 90 deg/s)
+    assert r.sim.robot_pose().heading == pytest.approx(90, abs=0.01)
+    slow = runner("museum", CENTER)
+    slow.queue(Call("SetPosition", {"x": 9.5, "y": 6.0}, {"speed": 0.1}))
+    slow.run(5)
+    made = slow.sim.robot_pose().y - CENTER.y
+    assert 0.25 < made <= 0.35  # (a turn to face the way, then 0.1 m/s: at the robot's
+    #                               0.4 m/s it would have gone over a metre)
+
+
+def test_an_additional_argument_outside_its_range_ends_the_command_with_an_error() -> None:
+    r = runner("museum", CENTER)
+    r.queue(Call("Gesture", {"name": "bow"}, {"tempo": 0.0}),
+            Call("Turn", {"angle": 90}, {"rate": "fast"}))
+    r.run(5)
+    gesture, turn = r.ends("Gesture")[0], r.ends("Turn")[0]
+    assert gesture.data["error"] == "Gesture: tempo must be positive, not 0"
+    assert "argument 'rate' must be a number" in str(turn.data["error"])
+
+
 def _with_camera(duration: float | None) -> Catalog:
     """The standard catalog plus a robot-specific TakePicture lasting ``duration``."""
     picture = CommandSpec("TakePicture", frozenset({"camera"}), robot_specific=True,
