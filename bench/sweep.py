@@ -2,6 +2,7 @@
 worlds; and the peak memory of a sweep as its runs grow.
 
 Usage: python bench/sweep.py [--repeats 5] [--runs 10] [--compiled] [SCENARIO ...]
+       python bench/sweep.py --instructions [--runs 3] [--against TREE] [SCENARIO ...]
        python bench/sweep.py --memory 1000,100000 [--scenario S] [--jobs 2] [--compiled]
 
 Each round runs, for each scenario (default: samples 3, 7 and 10 of the thesis), a
@@ -28,6 +29,14 @@ times a second: what they hold at once) and of its largest process (``ru_maxrss`
 the process waited for), and their ratios, against the promise that the larger
 stays within 10% of the smaller.
 
+``--instructions`` counts instructions instead of timing (valgrind's callgrind, which
+counts the same for the same program and inputs whatever else the machine does): for
+each scenario and build, a cold process of ``--runs`` + 1 runs and one of a single run,
+the difference shared among the ``--runs`` runs (the first run, which also loads the
+documents, left out). Not the targets' measure (CPU time), but one that does not drift:
+for a change too small for this machine's noise to show (a few percent). It takes
+about fifty times the runs' CPU time.
+
 ``--compiled`` measures this checkout's compiled build (``setup.py``,
 ``PRIMA_MYPYC=1``) instead of its pure Python one: it is built first in a temporary
 copy of the checkout (mypy, a C compiler and Python's headers; about three minutes of CPU time).
@@ -38,10 +47,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -125,6 +137,16 @@ class Case:
         self.steps = int(out["steps"])
         return float(out["cpu"])
 
+    def instructions(self) -> float:
+        """Instructions a judged run takes (:func:`counted` of cold processes of
+        ``runs`` + 1 runs and of one run, the difference per run)."""
+        def child(runs: int) -> list[str]:
+            return in_checkout(self.tree, [__file__, "--child", str(self.path),
+                                           "--runs", str(runs), "--first", "0"])
+        with ThreadPoolExecutor(2) as pool:  # (one per core: each takes a while)
+            more, one = pool.map(counted, [child(self.runs + 1), child(1)])
+        return (more - one) / self.runs
+
     def bare(self) -> float:
         from prima.scenario import load_scenario
         from prima.sim import Simulator
@@ -136,6 +158,34 @@ class Case:
             for _ in range(steps):
                 space.step(dt)
         return cpu(step)
+
+
+def counted(argv: list[str]) -> int:
+    """The instructions a cold process of ``argv`` takes, as callgrind counts them."""
+    done = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+                           *argv], capture_output=True, text=True, check=False)
+    found = re.search(r"Collected : (\d+)", done.stderr)
+    if done.returncode or found is None:
+        sys.exit(f"valgrind: {done.stderr.strip().splitlines()[-1] if done.stderr else 'failed'}")
+    return int(found.group(1))
+
+
+def instructions(args: argparse.Namespace, tree: Path) -> int:
+    """Instructions per judged run of each scenario, in this build and ``--against``'s."""
+    if shutil.which("valgrind") is None:
+        sys.exit("--instructions needs valgrind (apt-get install valgrind)")
+    named = {p.stem: p for p in args.scenarios} if args.scenarios else SCENARIOS
+    for name, path in named.items():
+        here = Case(name, path, args.runs, tree).instructions()
+        line = f"{name}: {here / 1e6:,.1f} M instructions a judged run"
+        if args.against is not None:
+            other = args.against.resolve()
+            there = Case(name, in_tree(path, other) or path, args.runs, other).instructions()
+            line += (f"; the earlier build's {there / 1e6:,.1f} M: {there / here:.3f}x fewer"
+                     " (not the targets' measure: CPU time)")
+        print(line, flush=True)
+    print(f"(callgrind, runs 2 to {args.runs + 1} of a cold process) {interpreter()}")
+    return 0
 
 
 def speed(args: argparse.Namespace, tree: Path) -> int:
@@ -272,8 +322,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("scenarios", nargs="*", type=Path,
                         help="scenario files (default: samples 3, 7 and 10)")
     parser.add_argument("--repeats", type=int, default=5, help="interleaved rounds (default 5)")
-    parser.add_argument("--runs", type=int, default=10,
-                        help="judged runs per scenario and round (default 10)")
+    parser.add_argument("--runs", type=int,
+                        help="judged runs per scenario and round (default 10; 3 with "
+                             "--instructions)")
     parser.add_argument("--against", type=Path, metavar="TREE",
                         help="an earlier build of PRIMA (a checkout) measured in the same "
                              "rounds: the speed-up over it, against the target of 2x")
@@ -282,17 +333,22 @@ def main(argv: list[str] | None = None) -> int:
                         "fig5-7.xml", help="the scenario --memory sweeps (default fig5-7)")
     parser.add_argument("--jobs", type=int, help="--memory: the sweeps' --jobs")
     parser.add_argument("--compiled", action="store_true", help=COMPILED_HELP)
+    parser.add_argument("--instructions", action="store_true",
+                        help="count instructions (valgrind) instead of timing: the same on a "
+                             "noisy machine; --runs defaults to 3 then")
     parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--first", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.runs is None:
+        args.runs = 3 if args.instructions else 10
     if args.child is not None:
         child(args.child, args.runs, args.first)
         return 0
+    measure = memory if args.memory else instructions if args.instructions else speed
     if not args.compiled:
-        return memory(args, ROOT) if args.memory else speed(args, ROOT)
+        return measure(args, ROOT)
     with tempfile.TemporaryDirectory(prefix="prima-compiled-") as scratch:
-        tree = compiled_copy(Path(scratch))
-        return memory(args, tree) if args.memory else speed(args, tree)
+        return measure(args, compiled_copy(Path(scratch)))
 
 
 if __name__ == "__main__":
