@@ -26,6 +26,12 @@ const PrimaDraw = (function () {
     if (row.command) parts.push(row.command);
     if (row.text) parts.push(row.command ? '"' + row.text + '"' : row.text);
     if (row.detail && row.detail.args) parts.push(row.detail.args);
+    if (row.kind === "end" && row.detail) {  // why a Command got nowhere, where it did
+      if (row.detail.error) parts.push("(failed: " + row.detail.error + ")");
+      else if (/(^|, )blocked=True(,|$)/.test(row.detail.result || "")) {
+        parts.push("(blocked: something in the way; it tries again)");
+      }
+    }
     if (!parts.length && row.detail) parts.push(JSON.stringify(row.detail));
     return parts.join(" ");
   }

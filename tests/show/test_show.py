@@ -205,6 +205,32 @@ def _errors(browser: Any) -> list[str]:
     return [e["message"] for e in browser.get_log("browser") if e["level"] == "SEVERE"]
 
 
+def test_the_table_says_why_a_command_got_nowhere(browser: Any, tmp_path: Path) -> None:
+    """A move the user stands in the way of tries again and again (prima live's first
+    example: nothing on the page said why the guide stood still); one that gives up
+    says its error."""
+    head = {"app": "ea1", "ab": 7, "tree": 1, "command": "TopologicalMove",
+            "reason": "completed", "devices": ["locomotion"],
+            "robot": {"x": 1.0, "y": 1.0, "heading": 0.0}}
+    rows = [{"t": 0.0, "seq": 0, "kind": "start", **head, "reason": "free-devices",
+             "detail": {"args": "to=panel-1"}},
+            {"t": 1.5, "seq": 1, "kind": "end", **head,
+             "detail": {"args": "to=panel-1", "result": "blocked=True, goal=panel-1"}},
+            {"t": 9.0, "seq": 2, "kind": "end", **head,
+             "detail": {"args": "to=panel-1", "error": "blocked on the way to 'panel-1'",
+                        "result": "error=blocked on the way to 'panel-1'"}}]
+    page = tmp_path / "blocked.html"
+    page.write_text(render(rows, title="blocked"), encoding="utf-8")
+    browser.get(page.as_uri())
+    until(browser, "return !!window.primaShow")
+    said = browser.execute_script(
+        "return Array.from(document.querySelectorAll('#trace tbody tr'))"
+        ".map(tr => tr.cells[5].textContent)")
+    assert said == ["TopologicalMove to=panel-1",
+                    "TopologicalMove to=panel-1 (blocked: something in the way; it tries again)",
+                    "TopologicalMove to=panel-1 (failed: blocked on the way to 'panel-1')"]
+
+
 _ROBOT_MARKER = """
 const trace = document.querySelectorAll('#map .scatterlayer .trace')[PRIMA_SHOW.robotTrace];
 return trace.querySelector('.point').getAttribute('transform');
