@@ -14,7 +14,9 @@ On the WebSocket, the server sends JSON objects: ``hello`` (the map and the time
 as Plotly draws them, the trace so far, the findings so far, what the page may offer),
 then ``rows`` (new trace lines), ``pose``, ``status``, ``timeline``, ``findings``,
 ``saved`` or ``download``, ``refused``; the page sends ``act`` (an input),
-``control`` (play, pause, step, speed) and ``save``.
+``control`` (play, pause, step, speed), ``save``, and ``timeline`` when it can draw
+one: it is sent the latest timeline it has not had, once there is one (a long
+session's timeline takes the page long to draw, and the page draws it only so often).
 """
 
 from __future__ import annotations
@@ -110,6 +112,8 @@ class _Owner:
     waiting: int = 0
     pose: tuple[float, Any, Any] | None = None
     timeline: int = -1
+    wants_timeline: bool = False
+    """The page asked for a timeline and has not been sent one since."""
     status: str = ""
     inputs: list[float] = field(default_factory=list)
 
@@ -133,7 +137,8 @@ class Server:
         self.findings: list[dict[str, Any]] = []
         self.waiting = 0
         """Findings that wait for the run's end (not final yet)."""
-        self.timeline: dict[str, Any] | None = None
+        self.timeline: str | None = None
+        """The latest timeline, as the message that sends it."""
         self.timeline_count = 0
         """How many timelines were made (the page is sent the latest)."""
         self.owner: _Owner | None = None
@@ -323,9 +328,10 @@ class Server:
             new = self.findings[owner.findings:]
             owner.findings, owner.waiting = len(self.findings), self.waiting
             await owner.ws.send_str(_json({"findings": new, "waiting": self.waiting}))
-        if self.timeline is not None and owner.timeline != self.timeline_count:
-            owner.timeline = self.timeline_count
-            await owner.ws.send_str(_json({"timeline": self.timeline}))
+        if (owner.wants_timeline and self.timeline is not None
+                and owner.timeline != self.timeline_count):
+            owner.timeline, owner.wants_timeline = self.timeline_count, False
+            await owner.ws.send_str(self.timeline)
 
     async def _handle(self, owner: _Owner, data: str) -> None:
         try:
@@ -339,8 +345,12 @@ class Server:
                 self._control(message)
             elif "save" in message:
                 await owner.ws.send_str(_json(await self._save()))
+            elif "timeline" in message:
+                owner.wants_timeline = True
+                if self._changed is not None:
+                    self._changed.set()
             else:
-                raise LiveError("give act, control or save")
+                raise LiveError("give act, control, save or timeline")
         except (LiveError, OutputError) as exc:
             await owner.ws.send_str(_json({"refused": str(exc)}))
         except (ValueError, RecursionError):  # (nested past the decoder's depth: no JSON)
@@ -392,8 +402,12 @@ class Server:
 
     async def _judging(self) -> None:
         """Judge the trace so far and redraw the timeline, at most once a second and at
-        most a fifth of the time (a long run's trace takes longer to judge)."""
+        most a fifth of the time (a long run's trace takes longer to judge, and its
+        timeline longer to make and to write as JSON: both are timed, in the thread)."""
         from prima.show import timeline_figure
+
+        def timeline_message(rows: list[dict[str, Any]]) -> str:
+            return _json({"timeline": timeline_figure(rows)})
 
         judged = drawn = -1
         while True:
@@ -411,7 +425,7 @@ class Server:
                     self.waiting = 0
             if n != drawn:
                 drawn = n
-                self.timeline = await asyncio.to_thread(timeline_figure, rows[:n])
+                self.timeline = await asyncio.to_thread(timeline_message, rows[:n])
                 self.timeline_count += 1
             if self._changed is not None:
                 self._changed.set()

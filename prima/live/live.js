@@ -9,10 +9,15 @@
   const KEEP_WORDS = 200;      // lines of words kept
   const ROBOT_SAYS_FOR = 1.0, USER_SAYS_FOR = 3.0;  // as prima show's bubbles
   const DRAG_PIXELS = 4;       // how far a press must move to drag the user
+  const SHARE = 5;             // what grows with the session takes at most 1/SHARE of the time
   let ws = null, D = null, rows = [], poses = [[], []], status = null, statusAt = 0;
   let open = {}, bubbles = [], asking = null, shownBubbles = "", following = true;
   let frames = 0, heard = [], said = [], lastPose = null, pathAt = -1, dragging = false;
   let shownMarkers = "", closed = false, userHigher = false;
+  // What waits to be drawn (paced, below): the latest timeline received, the trace lines
+  // before which the table has them all, the points walked since the paths were drawn
+  // (by trace); and how many timelines were received and drawn.
+  let nextTimeline = null, tabled = 0, walked = {}, timelinesIn = 0, timelinesDrawn = 0;
   // The inputs this page sent, the refusals it was sent back, and the last input it sent
   // (its words kept, to put them back in their box if the server refuses them).
   let acts = 0, refusals = 0, firstAdded = 0, lastAct = null, clearAbove = null;
@@ -60,6 +65,36 @@
     }
   }
 
+  function ask() {  // for the latest timeline, once the page can draw it (closed: none)
+    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({timeline: true}));
+  }
+
+  /* What costs more as the session grows (the timeline, redrawn whole; the trace table,
+     laid out again with each new line; the map's paths) holds up all else on the page
+     while it is drawn: a click waits behind it, and a page that cannot keep up falls
+     ever further behind what comes. So each is drawn at most a fifth of the time: after
+     a draw that took d ms, the next waits 4 d ms, and draws all that came meanwhile at
+     once (the latest timeline). Returns what asks for a draw; once a wait ends with
+     nothing to draw, ready() is called. */
+  function paced(draw, ready) {
+    let wanted = false, timer = null;
+    function run() {
+      wanted = false;
+      const began = performance.now();
+      draw();
+      timer = setTimeout(function () {
+        timer = null;
+        if (wanted) run();
+        else if (ready) ready();
+      }, (SHARE - 1) * (performance.now() - began));
+    }
+    return function () {
+      wanted = true;
+      // (by a timer even when due: what came with it, the run's status say, is shown first)
+      if (timer === null) timer = setTimeout(run, 0);
+    };
+  }
+
   /* What can act: nothing before the session comes, in a tab that does not have it, or
      once the connection is closed; once the run is over, only Save (and the timeline). */
   function setControls() {
@@ -89,7 +124,7 @@
     if (m.rows) addRows(m.rows);
     if (m.pose) pose(m.pose);
     if (m.status) setStatus(m.status);
-    if (m.timeline) drawTimeline(m.timeline);
+    if (m.timeline) gotTimeline(m.timeline);
     if (m.findings) addFindings(m.findings, m.waiting);
     if (m.busy) { $("banner").dataset.busy = "1"; banner(m.busy); }
     if (m.refused) refused(m.refused);
@@ -131,20 +166,33 @@
     setStatus(h.status);
     mapEvents();
     requestAnimationFrame(frame);
+    ask();
   }
 
   function addRows(list) {
-    const atBottom = tableBox.scrollTop + tableBox.clientHeight >= tableBox.scrollHeight - 30;
     list.forEach(function (row) {
-      const i = rows.length;
       rows.push(row);
-      if (row.kind === "pose") return;
-      tbody.appendChild(PrimaDraw.tableRow(row, i));
-      if (tbody.rows.length > KEEP_ROWS) tbody.deleteRow(0);
-      mark(row);
+      if (row.kind !== "pose") mark(row);
     });
-    if (atBottom) tableBox.scrollTop = tableBox.scrollHeight;
+    tableRows();
   }
+
+  const tableRows = paced(function () {  // the lines not in the table yet (its last KEEP_ROWS)
+    const atBottom = tableBox.scrollTop + tableBox.clientHeight >= tableBox.scrollHeight - 30;
+    const added = document.createDocumentFragment();
+    let i = rows.length, n = 0;
+    while (i > tabled && n < KEEP_ROWS) {  // (from the end: none made only to go at once)
+      i--;
+      if (rows[i].kind !== "pose") n++;
+    }
+    for (; i < rows.length; i++) {
+      if (rows[i].kind !== "pose") added.appendChild(PrimaDraw.tableRow(rows[i], i));
+    }
+    tabled = rows.length;
+    tbody.appendChild(added);
+    while (tbody.rows.length > KEEP_ROWS) tbody.deleteRow(0);
+    if (atBottom) tableBox.scrollTop = tableBox.scrollHeight;
+  });
 
   function words(who, text, cls) {
     const li = document.createElement("li");
@@ -218,14 +266,22 @@
     lastPose = p;
     if (t - pathAt >= 0.5 && D) {  // the paths walked, every half second
       pathAt = t;
-      const update = {x: [], y: []}, idx = [];
       [[p[1], D.map.robot - 2], [p[2], D.map.robot - 1]].forEach(function (w) {
         if (!w[0]) return;
-        update.x.push([w[0][0]]); update.y.push([w[0][1]]); idx.push(w[1]);
+        const path = walked[w[1]] || (walked[w[1]] = {x: [], y: []});
+        path.x.push(w[0][0]);
+        path.y.push(w[0][1]);
       });
-      if (idx.length) Plotly.extendTraces(mapDiv, update, idx);
+      drawPaths();
     }
   }
+
+  const drawPaths = paced(function () {
+    const update = {x: [], y: []}, idx = Object.keys(walked).map(Number);
+    idx.forEach(function (k) { update.x.push(walked[k].x); update.y.push(walked[k].y); });
+    walked = {};
+    if (idx.length) Plotly.extendTraces(mapDiv, update, idx);
+  });
 
   function setStatus(s) {
     status = s;
@@ -268,6 +324,21 @@
     const t = now();
     return [Math.max(0, t - 90), Math.max(t, 30) + 3];
   }
+
+  /* The timeline is the whole session's, redrawn whole: paced, and asked of the server
+     only once the page can draw it (the server sends the latest it has, when it has one
+     the page has not had). Of those that came meanwhile, the latest is drawn. */
+  function gotTimeline(fig) {
+    timelinesIn++;
+    nextTimeline = fig;
+    redrawTimeline();
+  }
+
+  const redrawTimeline = paced(function () {
+    drawTimeline(nextTimeline);  // (placeHead reads its layout back: timed with it)
+    nextTimeline = null;
+    timelinesDrawn++;
+  }, ask);
 
   function drawTimeline(fig) {
     const layout = fig.layout, shown = timeline.layout && timeline.layout.xaxis;
@@ -348,7 +419,10 @@
       shownBubbles = key;
       Plotly.relayout(mapDiv, {annotations: out});
     }
-    $("clock").textContent = t.toFixed(2) + " s";
+    const clock = t.toFixed(2) + " s";
+    // (written only when it changed: any change has the whole page laid out and painted
+    // again, which a long session's timeline makes costly)
+    if ($("clock").textContent !== clock) $("clock").textContent = clock;
     placeHead(t);
     requestAnimationFrame(frame);
   }
@@ -493,6 +567,7 @@
     pose: function () { return lastPose; },
     time: now,
     status: function () { return status; },
+    timelines: function () { return {received: timelinesIn, drawn: timelinesDrawn}; },
     ready: function () { return D !== null; },
     downloaded: null,
   };

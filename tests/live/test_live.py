@@ -314,24 +314,27 @@ def test_one_page_has_the_session_and_the_next_takes_it_over(tmp_path: Path) -> 
     asyncio.run(visits())
 
 
+class _Socket:
+    """A page's WebSocket as the server sees it: what was sent on it."""
+
+    def __init__(self) -> None:
+        self.sent: list[dict[str, Any]] = []
+
+    async def send_str(self, text: str) -> None:
+        await asyncio.sleep(0)  # (the socket's wait to send: another sender goes on)
+        self.sent.append(json.loads(text))
+
+
 def test_a_page_is_sent_each_line_once_whoever_sends_it(tmp_path: Path) -> None:
     """The page's first lines (the hello's) and what is new (the sender's) may be sent
     at once, each waiting on the socket in turn: every line goes once, in order (a page
     taking a long session over got a chunk of 2,000 lines twice, then missed the newest)."""
     from prima.live._server import ROWS_PER_MESSAGE, _Owner
 
-    class Socket:
-        def __init__(self) -> None:
-            self.sent: list[dict[str, Any]] = []
-
-        async def send_str(self, text: str) -> None:
-            await asyncio.sleep(0)  # (the socket's wait to send: the other sender goes on)
-            self.sent.append(json.loads(text))
-
     session = _session(tmp_path, VISIT)
     session.rows += [{"t": 0.0, "seq": k, "kind": "pose"} for k in range(3 * ROWS_PER_MESSAGE)]
     server = Server(session, title="test", port=0, autoplay=False)
-    socket = Socket()
+    socket = _Socket()
     owner = _Owner(socket)  # type: ignore[arg-type]
 
     async def both() -> None:
@@ -343,6 +346,44 @@ def test_a_page_is_sent_each_line_once_whoever_sends_it(tmp_path: Path) -> None:
     assert [m["from"] for m in socket.sent] == list(range(0, len(session.rows),
                                                           ROWS_PER_MESSAGE))
     assert got == session.rows and owner.rows == len(session.rows)
+
+
+def test_a_page_is_sent_the_latest_timeline_once_it_asks_for_one(tmp_path: Path) -> None:
+    """A long session's timeline is large and long to draw: the page asks for one when it
+    can draw it, and is sent the latest the server made, once; none it did not ask for
+    (the server made a timeline a second and sent each, which the page could not draw)."""
+    from prima.live._server import _Owner
+
+    server = Server(_session(tmp_path, VISIT), title="test", port=0, autoplay=False)
+    socket = _Socket()
+    owner = _Owner(socket)  # type: ignore[arg-type]
+
+    def made(k: int) -> None:  # (as the judging loop makes them)
+        server.timeline, server.timeline_count = json.dumps({"timeline": {"made": k}}), k
+
+    async def sent(*, ask: bool = False) -> list[int]:
+        before = len(socket.sent)
+        if ask:
+            await server._handle(owner, '{"timeline": true}')
+        await server._update(owner)
+        return [m["timeline"]["made"] for m in socket.sent[before:] if "timeline" in m]
+
+    async def visit() -> None:
+        assert await sent() == []
+        made(1)
+        assert await sent() == []  # (not asked)
+        assert await sent(ask=True) == [1]
+        made(2)
+        made(3)
+        assert await sent() == []
+        assert await sent(ask=True) == [3]  # (the latest only)
+        assert await sent(ask=True) == []  # (none newer yet: sent once there is)
+        made(4)
+        assert await sent() == [4]
+        assert await sent() == []
+        assert not [m for m in socket.sent if "refused" in m]
+
+    asyncio.run(visit())
 
 
 def test_the_run_has_gone_as_far_as_the_clock_while_nothing_moves(tmp_path: Path) -> None:
@@ -1022,6 +1063,80 @@ def test_the_timeline_follows_the_run_again_bubbles_stay_apart_and_an_ended_run_
         _page_wait(browser, "return window.primaLive.downloaded", "the download")
         assert browser.execute_script("return window.primaLive.status().paused") == paused
         assert "the run is over" not in _notice(browser)
+    finally:
+        process.send_signal(signal.SIGTERM)
+        process.communicate(timeout=WAIT)
+
+
+_SOCKETS = """
+window.primaSockets = [];
+window.WebSocket = class extends WebSocket {  // (the page's, kept: what it asks, what comes)
+  constructor(...args) {
+    super(...args);
+    window.primaSockets.push(this);
+    this.asked = this.timelines = 0;
+    this.addEventListener("message", (e) => {
+      if ("timeline" in JSON.parse(e.data)) this.timelines++;
+    });
+  }
+  send(data) {
+    if ("timeline" in JSON.parse(data)) this.asked++;
+    super.send(data);
+  }
+};
+"""
+"""Before the page's own script: its WebSocket counts the timelines it asks for and gets."""
+
+_DRAWN = """
+window.drawn = [];
+const react = Plotly.react;
+Plotly.react = function (div, data, layout) {  // (each timeline drawn, by its title)
+  if (div.id === "timeline") window.drawn.push((layout.title && layout.title.text) || "run");
+  return react.apply(this, arguments);
+};
+"""
+
+_BURST = """
+const socket = window.primaSockets[0];
+for (let k = 0; k < arguments[0]; k++) {  // (all at once: come while the page was busy)
+  socket.onmessage({data: JSON.stringify({timeline: {
+    data: [{type: "bar", orientation: "h", y: ["speaker"], base: [k], x: [1]}],
+    layout: {title: {text: "burst " + k}, xaxis: {}}, config: {}}})});
+}
+"""
+
+
+def test_the_page_draws_the_latest_timeline_not_each_and_asks_for_one_when_it_can(
+        browser: Any) -> None:
+    """A long session's timeline takes long to draw, and a click waits behind each redraw:
+    at 100x, a Pause took 16 s and more, the page drawing every timeline the server sent,
+    one after the other. Of timelines come while the page was busy, it draws the latest
+    once, not each; it asks the server for a timeline when it can draw one, and gets none
+    it did not ask for. (Counted, not timed: how long a redraw takes is the machine's.)"""
+    process, url = _started(str(VISIT), "--script", "--paused")
+    try:
+        browser.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": _SOCKETS})
+        browser.get(url)
+        _page_wait(browser, "return window.primaLive.ready() && window.primaLive.status()",
+                   "the session")
+        browser.execute_script(_DRAWN)
+        _steps(browser, "5", 2)
+        _page_wait(browser, "return window.drawn.length", "the run's timeline")
+        burst = 30
+        browser.execute_script(_BURST, burst)
+        _page_wait(browser, f"return window.drawn.includes('burst {burst - 1}')",
+                   "the burst's last timeline")
+        drawn = [d for d in browser.execute_script("return window.drawn") if d != "run"]
+        assert len(drawn) <= 2 and drawn[-1] == f"burst {burst - 1}", drawn
+        # the run goes on: its next timeline is drawn, and came only as asked for
+        _steps(browser, "5", 1)
+        _page_wait(browser, "return window.drawn[window.drawn.length - 1] === 'run'",
+                   "the run's timeline again")
+        socket = browser.execute_script("const s = window.primaSockets[0]; "
+                                        "return [s.timelines, s.asked]")
+        assert 2 <= socket[0] <= socket[1], socket
+        errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert errors == []
     finally:
         process.send_signal(signal.SIGTERM)
         process.communicate(timeout=WAIT)
