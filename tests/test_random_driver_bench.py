@@ -4,26 +4,19 @@ it has chunks of seeds."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import signal
 import sys
-from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[1] / "bench" / "random_driver.py"
+from tests.benches import load
 
 
 def _driver() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("random_driver_bench", BENCH)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["random_driver_bench"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load("random_driver")
 
 
 def dying_range(seeds: range) -> Any:

@@ -3,24 +3,18 @@ any run is named, with a non-zero exit."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
 
+from tests.benches import load
+
 ROOT = Path(__file__).resolve().parents[1]
-BENCH = ROOT / "bench" / "same_traces.py"
 
 
 def _bench() -> ModuleType:
-    sys.path.insert(0, str(BENCH.parent))  # (its _measure helper)
-    spec = importlib.util.spec_from_file_location("same_traces_bench", BENCH)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load("same_traces")
 
 
 def _other_build(tmp_path: Path, *, touch_at: str = "20") -> Path:

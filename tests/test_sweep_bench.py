@@ -4,17 +4,16 @@ that counts 5 M instructions a run beside a fixed 10 M)."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import stat
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
 
+from tests.benches import load
+
 ROOT = Path(__file__).resolve().parents[1]
-BENCH = ROOT / "bench" / "sweep.py"
 
 _VALGRIND = """#!/bin/sh
 # (a stand-in: says what callgrind says of a process of as many runs as it was given)
@@ -28,12 +27,7 @@ echo "==1== Collected : $((10000000 + 5000000 * runs))" >&2
 
 
 def _bench() -> ModuleType:
-    sys.path.insert(0, str(BENCH.parent))  # (its _measure helper)
-    spec = importlib.util.spec_from_file_location("sweep_bench", BENCH)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load("sweep")
 
 
 def test_instructions_are_counted_per_run_less_the_first(
