@@ -172,15 +172,11 @@ class World:
         self._w = 0.0
         self._a_dt = spec.max_accel * self.dt
         self._alpha_dt = math.radians(spec.turn_accel) * self.dt
-        self._vmax = spec.max_speed
-        """The fastest the robot drives now: the limit (:meth:`speed_limit`), or the running
-        straight drive's own speed, if lower (:meth:`drive_to`)."""
-        self._limit = spec.max_speed
+        # how fast it drives now: the lower of the limit (speed_limit) and the running
+        # straight drive's own speed (drive_to: its cap), and turns (turn_by: the turn's)
+        self._vmax = self._limit = spec.max_speed
         self._cap = math.inf
-        """The running straight drive's own speed (m/s; none: infinite)."""
-        self._wmax = math.radians(spec.max_turn_rate)
-        self._wtop = self._wmax
-        """The fastest the running turn turns (rad/s): the robot's, or the turn's own."""
+        self._wmax = self._wtop = math.radians(spec.max_turn_rate)
         # a sway superimposed on whatever drives the wheels (a dance step: the blend policy)
         self._sway: tuple[float, float, int] | None = None
         """Amplitude (rad), angular frequency (rad per step) and length (steps)."""
