@@ -388,9 +388,10 @@ def check_number(b: Builder, compiled: Compiled, spot: Spot, name: str,
         form = "argument " + name if where == "#text" else f"attribute {where}"
         b.error(spot, f"{form}={shown}: expected a number, or an expression giving one")
         return False
-    refusal = None if spec is None else spec.refusal(name, value)
     if extra is not None:  # (an additional argument the robot acts on: its own range)
         refusal = extra.refusal(value)
+    else:
+        refusal = None if spec is None else spec.refusal(name, value)
     if spec is not None and refusal is not None:
         b.error(spot, f"{spec.name}: {refusal}")
     return True

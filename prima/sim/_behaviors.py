@@ -76,13 +76,14 @@ def _number(sim: Body, call: Call, name: str, required: bool = True) -> float | 
     return number
 
 
-def _extra(sim: Body, call: Call, name: str) -> float | None:
+def _extra(sim: Body, call: Call, name: str, default: float) -> float:
     """An additional argument the robot acts on (:data:`~prima.catalog.EXTRAS_ACTED_ON`),
-    if the call gives it: within its range, else the Command ends with the error
-    ``prima validate`` gives a constant outside it."""
+    else ``default`` (what it is when none is given: no cap, the gesture's own tempo):
+    within its range, else the Command ends with the error ``prima validate`` gives a
+    constant outside it."""
     value = call.extra.get(name)
     if value is None:
-        return None
+        return default
     return _within(_finite(value, f"argument {name!r}"), EXTRAS_ACTED_ON[call.command, name])
 
 
@@ -287,9 +288,8 @@ def face_human_and_speak(sim: Body, call: Call, cid: int, it: int) -> Gen:
 
 
 def turn(sim: Body, call: Call, cid: int, it: int) -> Gen:
-    rate = _extra(sim, call, "rate")
     yield from _turn(sim, math.radians(_req(sim, call, "angle")),
-                     math.inf if rate is None else math.radians(rate))
+                     math.radians(_extra(sim, call, "rate", math.inf)))
     return _pose(sim), True
 
 
@@ -664,7 +664,7 @@ def _move_leg(sim: Body, call: Call, cid: int) -> Gen:
     goal = _place(sim, call, "to")
     if goal is None:
         raise CommandError("missing argument 'to'")
-    speed = _extra(sim, call, "speed")
+    speed = _extra(sim, call, "speed", math.inf)
     state = sim.loop_state(cid)
     at, path = _route(sim, goal, state)
     if at is not None and at.name == goal.name:
@@ -684,7 +684,7 @@ def _move_leg(sim: Body, call: Call, cid: int) -> Gen:
             yield from _stop(sim)
         yield sleep(sim.ticks(sim.spec.control_period))
         return {"waiting": "user", "toward": nxt.name, "goal": goal.name, **_pose(sim)}, False
-    outcome = yield from _period_toward(sim, nxt.x, nxt.y, math.inf if speed is None else speed)
+    outcome = yield from _period_toward(sim, nxt.x, nxt.y, speed)
     if outcome is BLOCKED and math.dist(sim.world.robot_xy(), (nxt.x, nxt.y)) <= PASS_BY:
         # someone stands on the place: the robot is there, as near as it can get
         state["blocked"] = 0
@@ -778,7 +778,7 @@ its last iteration left it (the wheels stopping in between slide it a little).""
 def _set_position(sim: Body, call: Call, cid: int,
                   heading: float | None) -> Gen:
     tx, ty = _req(sim, call, "x"), _req(sim, call, "y")
-    speed = _extra(sim, call, "speed")
+    speed = _extra(sim, call, "speed", math.inf)
     world, spec = sim.world, sim.spec
     tol = spec.position_tolerance
     x, y = world.robot_xy()
@@ -786,8 +786,7 @@ def _set_position(sim: Body, call: Call, cid: int,
         points = sim.route(x, y, tx, ty, spec.radius / 2)
         if not points:
             return {"error": f"no route to ({tx:g}, {ty:g})"}, True
-        if (yield from _period_toward(sim, *points[0],
-                                      math.inf if speed is None else speed)) is BLOCKED:
+        if (yield from _period_toward(sim, *points[0], speed)) is BLOCKED:
             # someone in the way (the user walking by): wait a second and try again, as
             # a Topological Move does, up to MAX_BLOCKED times in a row
             state = sim.loop_state(cid)
@@ -849,16 +848,13 @@ def _said(sim: Body, call: Call, name: str) -> float:
     return sim.speech_duration(text) if text else 0.0
 
 
-def _turning(sim: Body, degrees: float, rate: float | None = None) -> float:
-    top = sim.spec.max_turn_rate
-    return abs(degrees) / (top if rate is None else min(rate, top))
+def _turning(sim: Body, degrees: float, rate: float = math.inf) -> float:
+    return abs(degrees) / min(rate, sim.spec.max_turn_rate)
 
 
 def _gesture_time(sim: Body, call: Call) -> float:
     """How long the gesture plays: its own time, at the call's tempo if it gives one."""
-    seconds = sim.spec.gestures.get(_text(sim, call, "name"), 0.0)
-    tempo = _extra(sim, call, "tempo")
-    return seconds if tempo is None else seconds / tempo
+    return sim.spec.gestures.get(_text(sim, call, "name"), 0.0) / _extra(sim, call, "tempo", 1.0)
 
 
 def _search_time(sim: Body, call: Call) -> float:
@@ -872,7 +868,8 @@ PLANNED: Mapping[str, Callable[[Body, Call], float]] = {
     "FaceHumanAndSpeak": lambda sim, call: _turning(sim, 180.0) + _said(sim, call, "text"),
     "TurnAndSpeak": lambda sim, call: max(_turning(sim, _req(sim, call, "angle")),
                                           _said(sim, call, "text")),
-    "Turn": lambda sim, call: _turning(sim, _req(sim, call, "angle"), _extra(sim, call, "rate")),
+    "Turn": lambda sim, call: _turning(sim, _req(sim, call, "angle"),
+                                       _extra(sim, call, "rate", math.inf)),
     "SetSpeedAndTime": lambda sim, call: _req(sim, call, "time"),
     "Gesture": lambda sim, call: _gesture_time(sim, call),
     "ActiveSensingHuman": lambda sim, call: _search_time(sim, call),

@@ -341,7 +341,12 @@ class World:
     def speed_limit(self, speed: float) -> None:
         """Drive no faster than ``speed`` (m/s) from now on (a blend slows the robot)."""
         self._limit = min(speed, self.spec.max_speed)
-        self._vmax = min(self._limit, self._cap)
+        self._capped(self._cap)
+
+    def _capped(self, speed: float) -> None:
+        """The running straight drive's own speed is ``speed`` (m/s; infinite: none)."""
+        self._cap = speed
+        self._vmax = min(self._limit, speed)
 
     def speed_cap(self) -> float:
         """The fastest the robot drives now (m/s)."""
@@ -414,8 +419,7 @@ class World:
         px, py = self.robot.position
         length = math.hypot(x - px, y - py)
         self._halt()
-        self._cap = speed
-        self._vmax = min(self._limit, speed)
+        self._capped(speed)
         if length < 1e-6:
             return False
         self._ux = (x - px) / length
@@ -488,8 +492,7 @@ class World:
         self.mode = _IDLE
         self._done = None
         if self._cap != math.inf:  # (a drive's own speed goes with it)
-            self._cap = math.inf
-            self._vmax = self._limit
+            self._capped(math.inf)
 
     # ---- stepping ------------------------------------------------------------
 
@@ -603,9 +606,8 @@ class World:
         self.mode = _IDLE
         self._done = None
         self._v = 0.0
-        if self._cap != math.inf:
-            self._cap = math.inf
-            self._vmax = self._limit
+        if self._cap != math.inf:  # (as in _halt)
+            self._capped(math.inf)
         waiting, self._on_stopped = self._on_stopped, []
         if done is None and not waiting:
             return None
