@@ -4,7 +4,6 @@ long as the run says them, and ``prima show --audio``'s page playing them in Chr
 from __future__ import annotations
 
 import io
-import time
 import wave
 from collections.abc import Iterator
 from pathlib import Path
@@ -78,11 +77,9 @@ def test_what_is_synthesised_is_bounded() -> None:
     assert made.shortened and made.duration == pytest.approx(MAX_SECONDS)
     many = " ".join(["word"] * 100_000)
     wordy = Utterance(1, "a", "Speak", 0.0, 40_000.0, many, many)
-    started = time.process_time()
     made = clip(wordy)
     assert made.shortened and made.duration == pytest.approx(MAX_SECONDS)
     assert len(made.words) <= MAX_WORDS
-    assert time.process_time() - started < 5
 
 
 def test_a_clip_lasts_exactly_its_utterance_and_is_the_same_every_time() -> None:

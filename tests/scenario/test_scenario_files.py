@@ -6,7 +6,6 @@ import io
 import os
 import shutil
 import subprocess
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -312,14 +311,15 @@ def test_safe_answer_patterns_load(tmp_path: Path, pattern: str) -> None:
     assert rule.pattern == pattern
 
 
-def test_a_safe_pattern_searches_a_long_prompt_quickly(tmp_path: Path) -> None:
-    pattern = "|".join(["a" * 19 + "b"] * 9)  # 9 alternatives of 20 characters: 188
+def test_a_long_safe_pattern_searches_a_long_prompt(tmp_path: Path) -> None:
+    # Without groups or nested repetition, the regular expression engine tries each
+    # alternative once at each place: 9 alternatives of 20 characters, 10,000 places.
+    pattern = "|".join(["a" * 19 + "b"] * 9)  # 188 characters
     path = scenario_file(tmp_path, MAP_REF + ROBOT +
                          f'  <user x="0" y="0"><answer matches="{pattern}" say="x"/></user>\n')
     [rule] = load_scenario(path).user.answers  # type: ignore[union-attr]
-    start = time.process_time()
     assert not rule.matches("a" * 10_000)
-    assert time.process_time() - start < 0.5
+    assert rule.matches("a" * 10_000 + "b")
 
 
 def test_a_named_file_that_is_not_a_regular_file_is_located(tmp_path: Path) -> None:
