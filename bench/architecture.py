@@ -22,10 +22,10 @@ from pathlib import Path
 
 LAYERS: dict[str, int] = {
     # 0: the shared vocabulary and helpers every layer may use
-    **dict.fromkeys(("prima", "prima.vocab", "prima.errors", "prima.escape", "prima.suggest",
-                     "prima.signals", "prima.term", "prima.shipped", "prima.catalog",
-                     "prima.xmlio", "prima.tracefile", "prima.output", "prima.completion",
-                     "prima.collecting", "prima.audio"), 0),
+    **dict.fromkeys(("prima", "prima.record", "prima.vocab", "prima.errors", "prima.escape",
+                     "prima.suggest", "prima.signals", "prima.term", "prima.shipped",
+                     "prima.catalog", "prima.xmlio", "prima.tracefile", "prima.output",
+                     "prima.completion", "prima.collecting", "prima.audio"), 0),
     # 1: the core: documents, their interpreter, the mediator, the simulated world
     **dict.fromkeys(("prima.dsl", "prima.interpreter", "prima.mediator", "prima.sim"), 1),
     # 2: a scenario made ready, run, and its trace

@@ -13,6 +13,7 @@ as it returns, without Python's shutdown. Tests call :func:`prima.cli.main` itse
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import signal
 import sys
@@ -28,6 +29,9 @@ def _terminated(_signum: int, _frame: object) -> None:
 
 def main() -> int:
     """Run the command the process' arguments name; its exit status."""
+    # What Python made as it started lives as long as the process: the collections
+    # PRIMA's imports set off leave it unvisited (2% of a cold ``prima validate``).
+    gc.freeze()
     try:
         # (as Ctrl-C: the command's own sets it too. Inside the try: a SIGTERM that comes
         # as it is set is handled at once, while setting it still returns)

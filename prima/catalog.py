@@ -23,6 +23,7 @@ from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+from prima.record import Record
 from prima.vocab import Value
 
 __all__ = [
@@ -135,8 +136,8 @@ SYMBOLIC_KINDS = frozenset({ParamKind.PLACE, ParamKind.GESTURE, ParamKind.GRAMMA
 """Kinds written as bare names rather than expressions."""
 
 
-@dataclass(frozen=True)
-class Range:
+@dataclass(frozen=True, repr=False)
+class Range(Record):
     """The numbers a number argument may take, and how a value outside them is refused.
 
     The one rule for both checks: ``prima validate`` reports an argument whose value
@@ -158,8 +159,8 @@ class Range:
         return None if fits else f"{self.says}, not {value:g}"
 
 
-@dataclass(frozen=True)
-class Param:
+@dataclass(frozen=True, repr=False)
+class Param(Record):
     """One motion argument of a Command."""
 
     name: str
@@ -188,8 +189,8 @@ class Param:
         return f"{head}: {self.doc}" if self.doc else head
 
 
-@dataclass(frozen=True)
-class ArgRef:
+@dataclass(frozen=True, repr=False)
+class ArgRef(Record):
     """``{name}`` in a primitive of a ``<perform>``: the Command's argument ``name``,
     else ``default`` (its parameter's default; None: no value)."""
 
@@ -197,8 +198,8 @@ class ArgRef:
     default: Value = None
 
 
-@dataclass(frozen=True)
-class JointSpec:
+@dataclass(frozen=True, repr=False)
+class JointSpec(Record):
     """A joint a ``<perform>`` moves: built in (:data:`BUILTIN_JOINTS`; limits and
     rate None: the robot's own) or declared by the profile's ``<joint>``."""
 
@@ -219,15 +220,15 @@ HOLD_SECONDS = Range(f"a hold lasts 0 to {MAX_HOLD:g} s", 0.0, MAX_HOLD)
 """The seconds a ``<hold>`` step is given by its Command's argument."""
 
 
-@dataclass(frozen=True)
-class Hold:
+@dataclass(frozen=True, repr=False)
+class Hold(Record):
     """Keep the Command's devices for a time (s): a literal, or a number argument."""
 
     seconds: float | ArgRef
 
 
-@dataclass(frozen=True)
-class MoveJoint:
+@dataclass(frozen=True, repr=False)
+class MoveJoint(Record):
     """Move a joint to an angle (deg, relative to the body) or toward a place on the
     map; exactly one of the two must have a value when the step runs. It takes the
     travel over the joint's rate; a target beyond its limits stops at the limit."""
@@ -251,8 +252,8 @@ SWAY_SECONDS = Range(f"a sway lasts more than 0 and at most {MAX_HOLD:g} s", 0.0
                      above=True)
 
 
-@dataclass(frozen=True)
-class SwayBody:
+@dataclass(frozen=True, repr=False)
+class SwayBody(Record):
     """Sway the body about its heading: +- ``degrees``, one whole sway every ``period``
     seconds, for ``seconds`` (whole sways only: it ends facing where it began). Alone
     it turns the robot to and fro in place; blended over a global motion (the blend
@@ -263,8 +264,8 @@ class SwayBody:
     seconds: float | ArgRef
 
 
-@dataclass(frozen=True)
-class RaiseEvent:
+@dataclass(frozen=True, repr=False)
+class RaiseEvent(Record):
     """Post a robot-specific event (one the profile declares) to the applications."""
 
     event: str
@@ -302,8 +303,8 @@ simulator does. ``prima validate`` refuses a constant outside the range, and the
 robot a value outside it, in the same words."""
 
 
-@dataclass(frozen=True)
-class CommandSpec:
+@dataclass(frozen=True, repr=False)
+class CommandSpec(Record):
     """A Command type: what it occupies and how PRIMA schedules it."""
 
     name: str
@@ -551,8 +552,8 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
 )
 
 
-@dataclass(frozen=True)
-class Blend:
+@dataclass(frozen=True, repr=False)
+class Blend(Record):
     """Commands a robot runs together on a shared device (docs/rules.md 7.3 (5)): a
     local motion over a global one (a dance step while it guides), speech over
     quieter sound (ducking). Declared by the robot profile's ``<blend>``."""
@@ -569,8 +570,8 @@ class Blend:
     """The global motion's speed while a local one runs over it, as a fraction."""
 
 
-@dataclass(frozen=True)
-class Catalog:
+@dataclass(frozen=True, repr=False)
+class Catalog(Record):
     """An immutable set of Command types, looked up by name."""
 
     commands: Mapping[str, CommandSpec] = field(default_factory=dict)

@@ -32,6 +32,8 @@ import enum
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
+from prima.record import Record
+
 __all__ = [
     "AppFailure",
     "ClusterError",
@@ -62,8 +64,8 @@ class Severity(str, enum.Enum):
     """The document works but probably not as its author meant."""
 
 
-@dataclass(frozen=True, order=True)
-class Problem:
+@dataclass(frozen=True, order=True, repr=False)
+class Problem(Record):
     """One located finding about an input file."""
 
     file: str

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import TextIO
 
 from prima.escape import terminal
+from prima.record import Record
 
 __all__ = ["BOLD", "CYAN", "DIM", "GREEN", "PLAIN", "RED", "WHEN", "YELLOW", "Cell", "Paint",
            "columns", "is_terminal", "layout", "wants_colour"]
@@ -76,8 +77,8 @@ def columns(stream: TextIO) -> int | None:
         return shutil.get_terminal_size().columns
 
 
-@dataclass(frozen=True)
-class Paint:
+@dataclass(frozen=True, repr=False)
+class Paint(Record):
     """Colours text when ``on``: ``paint(text, RED, BOLD)``. The text is escaped
     first (:func:`~prima.escape.terminal`); off, it is returned as it is."""
 
@@ -93,8 +94,8 @@ PLAIN = Paint()
 """No colour: a pipe, a file, a test."""
 
 
-@dataclass(frozen=True)
-class Cell:
+@dataclass(frozen=True, repr=False)
+class Cell(Record):
     """A table cell and its styles."""
 
     text: str

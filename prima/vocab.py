@@ -13,6 +13,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from types import MappingProxyType
 
+from prima.record import Record
+
 __all__ = [
     "TraceKind",
     "MAX_BLOCK_WATCHDOG",
@@ -219,8 +221,8 @@ MAX_NUMBER = 2.0 ** 53
 """Largest magnitude of a number (beyond it, integers lose exactness anyway)."""
 
 
-@dataclass(frozen=True)
-class Budgets:
+@dataclass(frozen=True, repr=False)
+class Budgets(Record):
     """What one application may consume; a robot profile's ``<budgets>`` sets them.
 
     An EA is written by a stranger, so every resource an application can use is
@@ -261,8 +263,8 @@ stranger, may keep the FA waiting 30 s a minute; the FA, the robot's own acting
 for its user (following them, say), five minutes out of six."""
 
 
-@dataclass(frozen=True)
-class Policy:
+@dataclass(frozen=True, repr=False)
+class Policy(Record):
     """A mediation policy (docs/rules.md 7.3): one of the thesis' future functions,
     switched by the robot profile, the scenario and ``prima run --policy``."""
 

@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 
 from lxml import etree
 
+from prima.record import Record
 from prima.suggest import similar
 from prima.errors import LocatedError, Problem, Severity
 from prima.shipped import packaged
@@ -299,8 +300,8 @@ def _scan_start_tags(text: str) -> tuple[list[_Place], int]:
     return places, deepest
 
 
-@dataclass
-class XmlDocument:
+@dataclass(repr=False)
+class XmlDocument(Record):
     """A parsed document with its source map."""
 
     name: str
@@ -324,8 +325,8 @@ class XmlDocument:
         return Problem(self.name, line, col, severity, message)
 
 
-@dataclass(frozen=True)
-class Bound:
+@dataclass(frozen=True, repr=False)
+class Bound(Record):
     """The range a number written in an attribute must lie in, and its unit."""
 
     high: float

@@ -14,6 +14,7 @@ from typing import TextIO, TypeAlias
 
 from prima.errors import Problem, Severity
 from prima.escape import terminal
+from prima.record import Record
 from prima.signals import Terminated, note_terminated
 from prima.suggest import SuggestingParser
 from prima.term import BOLD, RED, WHEN, YELLOW, Paint, wants_colour
@@ -22,8 +23,8 @@ Commands: TypeAlias = "argparse._SubParsersAction[SuggestingParser]"
 """Where a command adds its parser (``prima``'s subcommands)."""
 
 
-@dataclass(frozen=True)
-class Command:
+@dataclass(frozen=True, repr=False)
+class Command(Record):
     """One ``prima`` command: its name, what adds its arguments, and what it does (given
     the parsed arguments, standard output and error; it returns the exit status)."""
 

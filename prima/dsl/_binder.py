@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING, Protocol
 
 from lxml import etree
 
+from prima.record import Record
+
 if TYPE_CHECKING:
     from prima.catalog import Catalog
     from prima.dsl._expr import Compiled
@@ -25,8 +27,8 @@ Spot = tuple[etree._Element, str | None, int]
 """Where to point: (element, None | "#text" | attribute name, character index)."""
 
 
-@dataclass
-class Refs:
+@dataclass(repr=False)
+class Refs(Record):
     """References collected during the walk, checked once everything is known."""
 
     gotos: list[tuple[str, Spot]] = field(default_factory=list)

@@ -35,6 +35,7 @@ from prima.dsl._expr import (
 )
 from prima.dsl._model import CommandCall
 from prima.dsl._profile import RobotProfile
+from prima.record import Record
 from prima.vocab import MAX_NUMBER, AppKind
 from prima.xmlio import local_name
 
@@ -162,8 +163,8 @@ def bind_chain(b: Builder, el: etree._Element, text: str,
     return calls
 
 
-@dataclass(frozen=True)
-class KeptChain:
+@dataclass(frozen=True, repr=False)
+class KeptChain(Record):
     """A chain's Commands as bound once, with what binding them asked the builder to
     check later, located in the chain's text (where, index) so that they can be
     replayed for another element that holds the same text."""

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, TypeGuard, TypeVar, cast
 from prima.dsl._fastparse import parse_sized as fast_parse_sized
 from prima.dsl._syntax import Node, Token, Tree, from_lark
 from prima.errors import ExecutionError, ExpressionError
+from prima.record import Record
 from prima.vocab import MAX_NUMBER, MAX_TEXT, Value
 
 if TYPE_CHECKING:
@@ -52,8 +53,8 @@ MAX_CHAIN_COMMANDS = 100
 """Most Commands one chain (or ``<request>``) may hold."""
 
 
-@dataclass
-class Scope:
+@dataclass(repr=False)
+class Scope(Record):
     """What an expression can see while it runs."""
 
     variables: Mapping[str, Value]
@@ -65,8 +66,8 @@ class Scope:
 Fn = Callable[[Scope], Value]
 """A compiled expression's function."""
 
-@dataclass(frozen=True)
-class Compiled:
+@dataclass(frozen=True, repr=False)
+class Compiled(Record):
     """A compiled expression: call :meth:`evaluate` with a :class:`Scope`."""
 
     source: str
@@ -672,8 +673,8 @@ def _join(source: str, parts: list[str | Compiled]) -> Compiled:
 
 # ---------------------------------------------------------------- chains
 
-@dataclass(frozen=True)
-class ChainArg:
+@dataclass(frozen=True, repr=False)
+class ChainArg(Record):
     """One argument of a chain step, not yet bound to a Command's parameter."""
 
     name: str | None
@@ -684,8 +685,8 @@ class ChainArg:
     """Where the argument's name is written (named arguments), else -1."""
 
 
-@dataclass(frozen=True)
-class ChainStep:
+@dataclass(frozen=True, repr=False)
+class ChainStep(Record):
     """One Command in a chain, as written: ``label: Name(args)[extras]``."""
 
     label: str | None

@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 from lxml import etree
 
+from prima.record import Record
 from prima.suggest import did_you_mean, similar
 from prima.catalog import ParamKind
 from prima.dsl._binder import Refs, Spot
@@ -865,8 +866,8 @@ Where = tuple[int, str | None, int]
 """A spot inside a kept state: (the element's index in the state's tree, where, index)."""
 
 
-@dataclass(frozen=True)
-class KeptState:
+@dataclass(frozen=True, repr=False)
+class KeptState(Record):
     """A top-level state built without a problem, and what building it asked the builder
     to check later, its spots as indexes in the state's own tree. The same text written
     at the same line and column, in the same setting, is the same state: its model (every

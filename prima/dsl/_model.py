@@ -13,11 +13,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from prima.dsl._expr import Compiled
+from prima.record import Record
 from prima.vocab import AppKind, OnInterrupt, RunningOrder
 
 
-@dataclass(frozen=True)
-class Loc:
+@dataclass(frozen=True, repr=False)
+class Loc(Record):
     """Where something is written: 1-based line and column."""
 
     line: int
@@ -29,8 +30,8 @@ class Loc:
 
 # ---------------------------------------------------------------- Commands
 
-@dataclass(frozen=True)
-class PlaceRef:
+@dataclass(frozen=True, repr=False)
+class PlaceRef(Record):
     """A place written by name as a Command's argument (``to="hall"``,
     ``TopologicalMove("kidode-room")``), not computed: the map it runs on must have it."""
 
@@ -42,8 +43,8 @@ class PlaceRef:
     """The Command and its argument (``TopologicalMove``, ``to``)."""
 
 
-@dataclass(frozen=True)
-class CommandCall:
+@dataclass(frozen=True, repr=False)
+class CommandCall(Record):
     """One Command as written in a request, arguments compiled."""
 
     command: str
@@ -57,8 +58,8 @@ class CommandCall:
     """Q&A only: the variable that receives the answer."""
 
 
-@dataclass(frozen=True)
-class Request:
+@dataclass(frozen=True, repr=False)
+class Request(Record):
     """A ``<request>`` or ``<chain>``: Commands sent together, root first."""
 
     calls: tuple[CommandCall, ...]
@@ -74,8 +75,8 @@ class Request:
 
 # ---------------------------------------------------------------- actions
 
-@dataclass(frozen=True)
-class Assign:
+@dataclass(frozen=True, repr=False)
+class Assign(Record):
     """``<assign name expr>``: set a variable."""
 
     name: str
@@ -83,8 +84,8 @@ class Assign:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class If:
+@dataclass(frozen=True, repr=False)
+class If(Record):
     """``<if>``: the actions of the first branch whose condition holds, else ``otherwise``."""
 
     branches: tuple[tuple[Compiled, tuple[Action, ...]], ...]
@@ -92,16 +93,16 @@ class If:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class Goto:
+@dataclass(frozen=True, repr=False)
+class Goto(Record):
     """``<goto state>``: leave the current state for another."""
 
     state: str
     loc: Loc
 
 
-@dataclass(frozen=True)
-class Send:
+@dataclass(frozen=True, repr=False)
+class Send(Record):
     """A message to the environment's server (e.g. the EA replying to a host)."""
 
     to: str
@@ -109,16 +110,16 @@ class Send:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class Raise:
+@dataclass(frozen=True, repr=False)
+class Raise(Record):
     """Raise a user-defined event (FA only)."""
 
     event: str
     loc: Loc
 
 
-@dataclass(frozen=True)
-class StartTimer:
+@dataclass(frozen=True, repr=False)
+class StartTimer(Record):
     """``<timer name after>``: (re)start a timer; its event is posted when it fires."""
 
     name: str
@@ -127,16 +128,16 @@ class StartTimer:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class CancelTimer:
+@dataclass(frozen=True, repr=False)
+class CancelTimer(Record):
     """``<cancel-timer name>``: stop a timer before it fires."""
 
     name: str
     loc: Loc
 
 
-@dataclass(frozen=True)
-class Log:
+@dataclass(frozen=True, repr=False)
+class Log(Record):
     """``<log text>``: a note in the trace."""
 
     text: Compiled
@@ -164,8 +165,8 @@ class HandlerKind(str, enum.Enum):
     """A labelled Q&A heard something its grammar does not match."""
 
 
-@dataclass(frozen=True)
-class Handler:
+@dataclass(frozen=True, repr=False)
+class Handler(Record):
     """What to do on an event, or on a labelled Command's end or answer."""
 
     kind: HandlerKind
@@ -205,8 +206,8 @@ def words(text: str) -> list[str]:
     return out
 
 
-@dataclass(frozen=True)
-class Choice:
+@dataclass(frozen=True, repr=False)
+class Choice(Record):
     """One answer of a grammar, and the phrases that mean it."""
 
     value: str
@@ -214,8 +215,8 @@ class Choice:
     """Synonyms, each a tuple of normalised words."""
 
 
-@dataclass(frozen=True)
-class Pattern:
+@dataclass(frozen=True, repr=False)
+class Pattern(Record):
     """A pattern: words, ``*`` (any words, captured) and ``#`` (a number, captured).
 
     ``items`` are the normalised words, ``"*"`` and ``"#"``. Matching works on
@@ -239,8 +240,8 @@ MAX_PHRASE_WORDS = 20
 """Most words in one synonym of a choice."""
 
 
-@dataclass(frozen=True)
-class Grammar:
+@dataclass(frozen=True, repr=False)
+class Grammar(Record):
     """An answer grammar: choices with synonyms, and/or patterns."""
 
     id: str
@@ -339,8 +340,8 @@ def match_pattern(items: tuple[str, ...], heard: list[str]) -> list[str] | None:
 
 # ---------------------------------------------------------------- structure
 
-@dataclass(frozen=True)
-class State:
+@dataclass(frozen=True, repr=False)
+class State(Record):
     """A state: actions on entry, and handlers active while the application is in it."""
 
     id: str
@@ -354,8 +355,8 @@ class State:
     """The id of the begin/end block this state belongs to, if any."""
 
 
-@dataclass(frozen=True)
-class StreamBlock:
+@dataclass(frozen=True, repr=False)
+class StreamBlock(Record):
     """An explicit Communication Stream: while the app is in these states, one CS."""
 
     id: str
@@ -364,8 +365,8 @@ class StreamBlock:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class AtomicBlock:
+@dataclass(frozen=True, repr=False)
+class AtomicBlock(Record):
     """A begin/end block: while the app is in these states, one atomic behavior."""
 
     id: str
@@ -375,8 +376,8 @@ class AtomicBlock:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class Variable:
+@dataclass(frozen=True, repr=False)
+class Variable(Record):
     """A document variable, with its initial value (null without one)."""
 
     name: str
@@ -384,8 +385,8 @@ class Variable:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class EventDecl:
+@dataclass(frozen=True, repr=False)
+class EventDecl(Record):
     """A user-defined event (FA only)."""
 
     name: str
@@ -393,8 +394,8 @@ class EventDecl:
     loc: Loc
 
 
-@dataclass(frozen=True)
-class Document:
+@dataclass(frozen=True, repr=False)
+class Document(Record):
     """A validated PXML application."""
 
     path: str

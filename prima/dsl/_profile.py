@@ -57,6 +57,7 @@ from prima.catalog import (
 from prima.dsl._elements import elements, flag
 from prima.dsl._model import words
 from prima.errors import DocumentError, Problem
+from prima.record import Record
 from prima.shipped import packaged
 from prima.vocab import (
     DEFAULT_BUDGETS,
@@ -100,8 +101,8 @@ MAX_BACKCHANNELS = 100
 """Most phrases ``<hearing backchannels>`` may list."""
 
 
-@dataclass(frozen=True)
-class Hearing:
+@dataclass(frozen=True, repr=False)
+class Hearing(Record):
     """When the robot hears its user (``<hearing>``, docs/rules.md 7.5)."""
 
     always: bool = False
@@ -124,8 +125,8 @@ class Hearing:
 _PHRASES = re.compile(r"[.,;:!?]+")
 
 
-@dataclass(frozen=True)
-class RobotProfile:
+@dataclass(frozen=True, repr=False)
+class RobotProfile(Record):
     """A loaded, checked robot hardware profile."""
 
     name: str

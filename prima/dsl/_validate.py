@@ -28,11 +28,12 @@ from prima.dsl._profile import (
     profile_from_xml,
 )
 from prima.errors import DocumentError, PrimaError, Problem, Severity
+from prima.record import Record
 from prima.xmlio import XmlDocument, parse_xml, read_source
 
 
-@dataclass
-class Report:
+@dataclass(repr=False)
+class Report(Record):
     """The outcome of validating some files."""
 
     files: list[str] = field(default_factory=list)
