@@ -10,13 +10,18 @@ through the browser: a WebSocket from another origin is refused), never writes a
 the page gives (it gives none: a save goes where the command line said), and bounds
 what a page may send (64 KiB a message, 20 inputs a second).
 
-On the WebSocket, the server sends JSON objects: ``hello`` (the map and the timeline
-as Plotly draws them, the trace so far, the findings so far, what the page may offer),
-then ``rows`` (new trace lines), ``pose``, ``status``, ``timeline``, ``findings``,
-``saved`` or ``download``, ``refused``; the page sends ``act`` (an input),
-``control`` (play, pause, step, speed), ``save``, and ``timeline`` when it can draw
-one: it is sent the latest timeline it has not had, once there is one (a long
-session's timeline takes the page long to draw, and the page draws it only so often).
+On the WebSocket, the server sends JSON objects: ``hello`` (the map as Plotly draws
+it, the trace so far, the findings so far, what the page may offer), then ``rows`` (new
+trace lines), ``pose``, ``status``, ``timeline`` (with ``covers``), ``findings``,
+``saved`` or ``download``, ``refused``; the page sends ``act`` (an input), ``control``
+(play, pause, step, speed), ``save``, and ``timeline`` when it can draw one: ``true``
+(the window that follows the run: its last 90 s) or the window it shows, ``[from, to]``
+in simulated seconds. It is sent a timeline once there is one it has not had: made from
+a newer digest of the trace than its last (remade at most once a second), or of a
+window its last did not cover. A timeline holds only what is seen in the window and in
+a window's width either side of it, which ``covers`` says (so a small pan shows its bars
+at once): what it costs to make, send and draw is bounded by the window, not by the
+session's length, and the page draws one only so often.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ import time
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from aiohttp import WSMsgType, web
 
@@ -43,12 +48,19 @@ from prima.live._page import page, plotly_script
 from prima.live._session import LiveError, Session
 from prima.output import Inputs, input_named, shown, written
 
+if TYPE_CHECKING:
+    from prima.show import Model
+
 __all__ = ["MAX_MESSAGE", "Hints", "SaveTo", "Server", "check_save"]
 
 MAX_MESSAGE = 64 * 1024
 """The largest message a page may send (bytes)."""
 MAX_INPUTS_PER_SECOND = 20
 """How many inputs a page may send in a wall second (more are refused)."""
+FOLLOWED = 90.0
+"""The seconds of the run a page shows while it follows the run (``timeline: true``)."""
+MAX_TIME = 1e9
+"""How far from 0 (simulated seconds) a window a page asks a timeline of may reach."""
 ROWS_PER_MESSAGE = 2000
 """Trace lines sent in one message at most (the trace so far goes in several)."""
 _SEND_EVERY = 1 / 30
@@ -102,6 +114,39 @@ def _json(value: object) -> str:
     return json_line(value)
 
 
+Window = tuple[float, float]
+"""A stretch of the run's time (from, to: simulated seconds) that a page shows."""
+
+
+def _window(value: object) -> Window | None:
+    """The window a page asks a timeline of: ``true``, the one that follows the run
+    (None); else two numbers of simulated seconds within :data:`MAX_TIME` of 0, the
+    first below the second."""
+    if value is True:
+        return None
+    # (NaN is within no bound, and an int of any size is compared as it is)
+    if not (isinstance(value, list) and len(value) == 2 and all(
+            not isinstance(t, bool) and isinstance(t, (int, float)) and abs(t) <= MAX_TIME
+            for t in value) and value[0] < value[1]):
+        raise LiveError(f"timeline: give true, or the window shown as [from, to]: seconds "
+                        f"within {MAX_TIME:,.0f} of 0, from before to")
+    return float(value[0]), float(value[1])
+
+
+def _inside(window: Window, covers: Window | None) -> bool:
+    return covers is not None and covers[0] <= window[0] and window[1] <= covers[1]
+
+
+def _timeline_message(digested: Model, window: Window) -> tuple[str, Window]:
+    """The timeline message of ``window`` and a window's width either side of it (what
+    it ``covers``): a page panned a little shows the bars there at once."""
+    from prima.show import timeline_figure
+
+    width = window[1] - window[0]
+    covers = (window[0] - width, window[1] + width)
+    return _json({"timeline": timeline_figure(digested, covers), "covers": covers}), covers
+
+
 @dataclass
 class _Owner:
     """The page that has the session, and what it has been sent."""
@@ -112,8 +157,13 @@ class _Owner:
     waiting: int = 0
     pose: tuple[float, Any, Any] | None = None
     timeline: int = -1
+    """The digest its latest timeline was made from (:attr:`Server.digests`)."""
     wants_timeline: bool = False
     """The page asked for a timeline and has not been sent one since."""
+    window: Window | None = None
+    """The window it asked a timeline of (None: the one that follows the run)."""
+    covers: Window | None = None
+    """The stretch of the run its latest timeline covers."""
     status: str = ""
     inputs: list[float] = field(default_factory=list)
 
@@ -137,10 +187,10 @@ class Server:
         self.findings: list[dict[str, Any]] = []
         self.waiting = 0
         """Findings that wait for the run's end (not final yet)."""
-        self.timeline: str | None = None
-        """The latest timeline, as the message that sends it."""
-        self.timeline_count = 0
-        """How many timelines were made (the page is sent the latest)."""
+        self.digest: Model | None = None
+        """The trace so far, digested for the timelines (:func:`prima.show.digest`)."""
+        self.digests = 0
+        """How many digests were made (a page is sent a timeline of the latest)."""
         self.owner: _Owner | None = None
         self.saves = 0
         self.url = ""
@@ -328,10 +378,21 @@ class Server:
             new = self.findings[owner.findings:]
             owner.findings, owner.waiting = len(self.findings), self.waiting
             await owner.ws.send_str(_json({"findings": new, "waiting": self.waiting}))
-        if (owner.wants_timeline and self.timeline is not None
-                and owner.timeline != self.timeline_count):
-            owner.timeline, owner.wants_timeline = self.timeline_count, False
-            await owner.ws.send_str(self.timeline)
+        digested = self.digest
+        if owner.wants_timeline and digested is not None:
+            window = owner.window if owner.window is not None else self._following()
+            if owner.timeline != self.digests or not _inside(window, owner.covers):
+                # (counted before the wait: a request that comes meanwhile is answered next)
+                owner.timeline, owner.wants_timeline = self.digests, False
+                message, owner.covers = await asyncio.to_thread(_timeline_message,
+                                                                digested, window)
+                await owner.ws.send_str(message)
+
+    def _following(self) -> Window:
+        """The window that follows the run, as the page shows it: its last
+        :data:`FOLLOWED` seconds (its first 30, at first), and 3 s ahead."""
+        t = self.session.reached()
+        return max(0.0, t - FOLLOWED), max(t, 30.0) + 3.0
 
     async def _handle(self, owner: _Owner, data: str) -> None:
         try:
@@ -346,7 +407,7 @@ class Server:
             elif "save" in message:
                 await owner.ws.send_str(_json(await self._save()))
             elif "timeline" in message:
-                owner.wants_timeline = True
+                owner.window, owner.wants_timeline = _window(message["timeline"]), True
                 if self._changed is not None:
                     self._changed.set()
             else:
@@ -401,13 +462,10 @@ class Server:
     # ------------------------------------------------------------ the judge, the timeline
 
     async def _judging(self) -> None:
-        """Judge the trace so far and redraw the timeline, at most once a second and at
-        most a fifth of the time (a long run's trace takes longer to judge, and its
-        timeline longer to make and to write as JSON: both are timed, in the thread)."""
-        from prima.show import timeline_figure
-
-        def timeline_message(rows: list[dict[str, Any]]) -> str:
-            return _json({"timeline": timeline_figure(rows)})
+        """Judge the trace so far and digest it for the timelines, at most once a second
+        and at most a fifth of the time (a long run's trace takes longer to judge and to
+        digest: both are timed, in a thread)."""
+        from prima.show import digest
 
         judged = drawn = -1
         while True:
@@ -425,8 +483,8 @@ class Server:
                     self.waiting = 0
             if n != drawn:
                 drawn = n
-                self.timeline = await asyncio.to_thread(timeline_message, rows[:n])
-                self.timeline_count += 1
+                self.digest = await asyncio.to_thread(digest, rows[:n])
+                self.digests += 1
             if self._changed is not None:
                 self._changed.set()
             took = time.monotonic() - began

@@ -18,6 +18,9 @@
   // before which the table has them all, the points walked since the paths were drawn
   // (by trace); and how many timelines were received and drawn.
   let nextTimeline = null, tabled = 0, walked = {}, timelinesIn = 0, timelinesDrawn = 0;
+  // The window of the timeline asked for and not received yet (null: none asked), the
+  // stretch of the run the timeline drawn covers, and the whole run's (the server's range).
+  let asked = null, covers = null, whole = null;
   // The inputs this page sent, the refusals it was sent back, and the last input it sent
   // (its words kept, to put them back in their box if the server refuses them).
   let acts = 0, refusals = 0, firstAdded = 0, lastAct = null, clearAbove = null;
@@ -65,17 +68,35 @@
     }
   }
 
-  function ask() {  // for the latest timeline, once the page can draw it (closed: none)
-    if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({timeline: true}));
+  /* Ask for a timeline of the window shown, once the page can draw one (closed: none).
+     The server sends one once there is one the page has not had: of a newer trace, or
+     of a window the one drawn does not cover. */
+  function ask() {
+    if (ws && ws.readyState === WebSocket.OPEN) {
+      asked = shownWindow();
+      ws.send(JSON.stringify({timeline: asked}));
+    }
   }
 
-  /* What costs more as the session grows (the timeline, redrawn whole; the trace table,
-     laid out again with each new line; the map's paths) holds up all else on the page
-     while it is drawn: a click waits behind it, and a page that cannot keep up falls
-     ever further behind what comes. So each is drawn at most a fifth of the time: after
-     a draw that took d ms, the next waits 4 d ms, and draws all that came meanwhile at
-     once (the latest timeline). Returns what asks for a draw; once a wait ends with
-     nothing to draw, ready() is called. */
+  /* The range shown moved past what the timeline drawn covers: ask again, for the window
+     shown now, if a request is out (the page can draw) and it was for a window covered
+     (no timeline would come of it before the trace grows). */
+  function refill() {
+    if (asked && inside(asked, covers) && !inside(shownWindow(), covers)) ask();
+  }
+
+  function inside(stretch, span) {
+    return span !== null && span[0] <= stretch[0] && stretch[1] <= span[1];
+  }
+
+  /* What costs more as the session grows (the trace table, laid out again with each new
+     line; the map's paths), or as more of it is shown (the timeline, redrawn whole, or
+     its range moved), holds up all else on the page while it is drawn: a click waits
+     behind it, and a page that cannot keep up falls ever further behind what comes. So
+     each is drawn at most a fifth of the time: after a draw that took d ms, the next
+     waits 4 d ms, and draws all that came meanwhile at once (the latest timeline).
+     Returns what asks for a draw; once a wait ends with nothing to draw, ready() is
+     called. */
   function paced(draw, ready) {
     let wanted = false, timer = null;
     function run() {
@@ -124,7 +145,7 @@
     if (m.rows) addRows(m.rows);
     if (m.pose) pose(m.pose);
     if (m.status) setStatus(m.status);
-    if (m.timeline) gotTimeline(m.timeline);
+    if (m.timeline) gotTimeline(m);
     if (m.findings) addFindings(m.findings, m.waiting);
     if (m.busy) { $("banner").dataset.busy = "1"; banner(m.busy); }
     if (m.refused) refused(m.refused);
@@ -147,10 +168,14 @@
       if (reset) {
         reset = false;
         follow();
-      } else if (e && (e["xaxis.range[0]"] !== undefined || e["xaxis.autorange"])) {
+      } else if (e && e["xaxis.autorange"]) {  // autoscaled: the whole run, as it was sent
+        setFollowing(false);
+        if (whole) Plotly.relayout(timeline, {"xaxis.range": whole.slice()});
+      } else if (e && e["xaxis.range[0]"] !== undefined) {
         setFollowing(false);
       }
       placeHead();
+      refill();
     });
     const senders = $("senders");
     h.senders.forEach(function (s) {
@@ -325,12 +350,23 @@
     return [Math.max(0, t - 90), Math.max(t, 30) + 3];
   }
 
-  /* The timeline is the whole session's, redrawn whole: paced, and asked of the server
-     only once the page can draw it (the server sends the latest it has, when it has one
-     the page has not had). Of those that came meanwhile, the latest is drawn. */
-  function gotTimeline(fig) {
+  function shownRange() {  // the timeline's range as drawn, if it is drawn
+    return timeline.layout && timeline.layout.xaxis && timeline.layout.xaxis.range;
+  }
+
+  function shownWindow() {  // the stretch of the run the timeline shows (following: will)
+    const range = shownRange();
+    return following || !range ? lastSeconds() : [Number(range[0]), Number(range[1])];
+  }
+
+  /* A timeline holds what is seen in the window asked for and a window's width either
+     side (its covers), however long the session: redrawn whole, paced, and asked of the
+     server only once the page can draw it. Of those that came meanwhile, the latest is
+     drawn. */
+  function gotTimeline(m) {
     timelinesIn++;
-    nextTimeline = fig;
+    asked = null;
+    nextTimeline = m;
     redrawTimeline();
   }
 
@@ -340,8 +376,10 @@
     timelinesDrawn++;
   }, ask);
 
-  function drawTimeline(fig) {
-    const layout = fig.layout, shown = timeline.layout && timeline.layout.xaxis;
+  function drawTimeline(m) {
+    const fig = m.timeline, layout = fig.layout, shown = timeline.layout && timeline.layout.xaxis;
+    covers = m.covers;
+    whole = layout.xaxis.range.slice();
     if (following) layout.xaxis.range = lastSeconds();
     else if (shown && shown.range) layout.xaxis.range = shown.range.slice();  // (where it was put)
     layout.uirevision = following ? undefined : "kept";
@@ -358,6 +396,14 @@
     setFollowing(true);
     if (timeline.layout) Plotly.relayout(timeline, {"xaxis.range": lastSeconds()});
   }
+
+  /* Following, the range shown moves on once the playhead reaches its end, whether a
+     timeline comes or not (a quiet session's trace does not grow, and no timeline comes):
+     the range moved, nothing redrawn from new data, paced as a draw is; refill() asks
+     for what it moved to. */
+  const keepUp = paced(function () {
+    if (following) Plotly.relayout(timeline, {"xaxis.range": lastSeconds()});
+  });
 
   function download(d) {
     const url = URL.createObjectURL(new Blob([d.text], {type: "application/xml"}));
@@ -423,13 +469,15 @@
     // (written only when it changed: any change has the whole page laid out and painted
     // again, which a long session's timeline makes costly)
     if ($("clock").textContent !== clock) $("clock").textContent = clock;
+    const range = shownRange();
+    if (following && range && t > range[1]) keepUp();
     placeHead(t);
     requestAnimationFrame(frame);
   }
 
   function placeHead(t) {  // a line over the timeline (moving it redraws nothing)
     const area = timeline.querySelector(".nsewdrag");
-    const range = timeline.layout && timeline.layout.xaxis && timeline.layout.xaxis.range;
+    const range = shownRange();
     if (!area || !range) { head.style.display = "none"; return; }
     const at = t === undefined ? now() : t;
     const r = area.getBoundingClientRect(), box = timelineBox.getBoundingClientRect();
@@ -567,7 +615,9 @@
     pose: function () { return lastPose; },
     time: now,
     status: function () { return status; },
-    timelines: function () { return {received: timelinesIn, drawn: timelinesDrawn}; },
+    timelines: function () {
+      return {received: timelinesIn, drawn: timelinesDrawn, covers: covers, asked: asked};
+    },
     ready: function () { return D !== null; },
     downloaded: null,
   };

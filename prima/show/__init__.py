@@ -25,14 +25,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from prima.errors import PrimaError
+from prima.show._model import Model
 
 if TYPE_CHECKING:
     from prima.audio import SynthesisedTiming
     from prima.run import Switches
     from prima.sim import SpeechTiming, WorldMap
 
-__all__ = ["drawing", "map_figure", "read_rows", "render", "speech_timing", "style",
-           "timeline_figure", "write_page"]
+__all__ = ["Model", "digest", "drawing", "map_figure", "read_rows", "render", "speech_timing",
+           "style", "timeline_figure", "write_page"]
 
 _Pose = tuple[float, float, float]
 
@@ -141,7 +142,6 @@ def map_figure(world: WorldMap | None, robot: _Pose | None,
     """The map as the page draws it, the robot and the user at these poses (x, y,
     heading): Plotly's JSON (``data``, ``layout``, ``config``), and which traces are the
     robot's and the user's markers (``robot``, ``user``), to move them."""
-    from prima.show._model import Model
     from prima.timeline import Timeline
 
     page = _drawn()
@@ -151,13 +151,25 @@ def map_figure(world: WorldMap | None, robot: _Pose | None,
     return {**page.figure_json(fig), **index}
 
 
-def timeline_figure(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
-    """The device timeline of a run's trace lines (in trace order), as the page draws it:
-    Plotly's JSON (``data``, ``layout``, ``config``)."""
+def digest(rows: Iterable[Mapping[str, Any]]) -> Model:
+    """A run's trace lines (in trace order) digested for :func:`timeline_figure`, once for
+    as many of its figures as are asked (the table's rows are not kept)."""
     from prima.show._model import build
 
+    return build(rows, table_rows=False)
+
+
+def timeline_figure(digested: Model, window: tuple[float, float] | None = None
+                    ) -> dict[str, Any]:
+    """The device timeline of a run (:func:`digest`), as the page draws it: Plotly's JSON
+    (``data``, ``layout``, ``config``). With ``window`` (from, to: simulated seconds),
+    only what is seen in it: the bars, waits and marks that overlap it, each whole (one
+    begun before it too), and the rest laid out as the whole run's (its rows, its time
+    axis's range, its legend): what a page draws there looks as the whole figure's does
+    (but for the labels' size: Plotly sets them all at the size the tightest one needs,
+    of the bars it has)."""
     page = _drawn()
-    fig, _traces = page.timeline_figure(build(rows))
+    fig, _traces = page.timeline_figure(digested, window)
     return dict(page.figure_json(fig))
 
 

@@ -45,7 +45,7 @@ class Model:
     timeline: Timeline
     rows: list[dict[str, Any]]
     """The trace's lines but its pose samples: the table's rows (empty when they were
-    spooled: :func:`build`)."""
+    spooled or not asked for: :func:`build`)."""
     table: Sequence[int] = field(default_factory=list)
     """A trace line's index -> its row in the table (-1: a pose sample, not in it)."""
     bubbles: list[Bubble] = field(default_factory=list)
@@ -86,9 +86,11 @@ def _distinct(poses: Poses) -> Poses:
     return out
 
 
-def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
+def build(rows: Iterable[Row], spool: TextIO | None = None, *,
+          table_rows: bool = True) -> Model:
     """Digest a trace's rows (in trace order); with ``spool``, the table's rows are
-    written there as JSON (comma-separated) instead of kept."""
+    written there as JSON (comma-separated) instead of kept; without ``table_rows``,
+    neither (a timeline alone needs none, and they are most of what a model holds)."""
     builder = Builder()
     table = array("q")
     kept: list[dict[str, Any]] = []
@@ -102,10 +104,10 @@ def build(rows: Iterable[Row], spool: TextIO | None = None) -> Model:
             continue
         table.append(j)
         starts += kind == "start"
-        if spool is None:
-            kept.append(dict(row))
-        else:
+        if spool is not None:
             spool.write(("," if j else "") + script_json(row))
+        elif table_rows:
+            kept.append(dict(row))
         ab = row.get("ab")
         if ab is not None:
             info = abs_.setdefault(int(ab), array("q", (-1, -1)))

@@ -5,9 +5,9 @@ from __future__ import annotations
 import io
 import shutil
 from array import array
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from itertools import chain, islice
-from typing import Any, TextIO
+from typing import Any, TextIO, TypeVar
 
 import plotly.graph_objects as go
 import plotly.io as pio
@@ -23,6 +23,9 @@ from prima.trace import Pose
 INSTANT = 0.05
 """The least width (s) of a bar: an atomic behavior that took no time is still seen."""
 
+Window = tuple[float, float]
+"""A stretch of the run's time (from, to: simulated seconds) that a timeline shows."""
+
 _SPAN_STYLE = {"suspend": ("/", "#555", "suspended"), "hold": ("x", "#222", "held back")}
 """A wait's hatch, its colour (greys, never an application's) and its name in the legend."""
 _MARK_STYLE = {
@@ -35,6 +38,7 @@ _SOUND_TOGGLE = ('<label title="the words, heard at 0.5x to 4x"><input id="sound
 """With sound in the page: a switch for it beside the playback controls."""
 _PIECE = 4096
 """The items of a long JSON array written at a time (:func:`_write_json`)."""
+_T = TypeVar("_T")
 _CONFIG = {"displaylogo": False, "responsive": True, "modeBarButtonsToRemove": ["select2d",
                                                                                "lasso2d"]}
 
@@ -144,20 +148,66 @@ def _width(t0: float, t1: float) -> float:
     return round(max(t1 - t0, INSTANT), 3)
 
 
-def timeline_figure(model: Model) -> tuple[go.Figure, dict[str, list[int]]]:
+def _shows(t0: float, t1: float, window: Window | None) -> bool:
+    """Whether what is drawn from ``t0`` to ``t1`` (at least :data:`INSTANT` wide) is seen
+    in ``window`` (None: the whole run), in part or whole."""
+    return window is None or (t0 <= window[1] and max(t1, t0 + INSTANT) >= window[0])
+
+
+def _kept(items: list[_T], window: Window | None, when: Callable[[_T], tuple[float, float]],
+          reach: Callable[[_T], tuple[float, float]]) -> list[_T]:
+    """Of a trace's ``items``, in their order, those seen in ``window`` (``when``: from,
+    to; all, without a window), and, seen or not, the first (the legend draws the trace's
+    swatch like it) and those that reach lowest and highest across the rows (``reach``:
+    from, to, in rows): Plotly lays the rows out by how far the traces reach, so they
+    stay where the whole run's figure has them, none dropped for having nothing seen."""
+    if window is None:
+        return items
+    ends = {id(items[0]), id(min(items, key=lambda x: reach(x)[0])),
+            id(max(items, key=lambda x: reach(x)[1]))}
+    return [x for x in items if id(x) in ends or _shows(*when(x), window)]
+
+
+def _rows(tl: Timeline) -> dict[str, int]:
+    """Each device's row, from the bottom (the first device is drawn at the top)."""
+    return {device: k for k, device in enumerate(reversed(tl.devices))}
+
+
+def _across(bar: Bar, i: int) -> tuple[float, float]:
+    """Where a bar of the ``i``-th application lies across its row (offset, width): two
+    applications blended on a device share its row, a half each."""
+    return ((0.0 if i % 2 else -0.4), 0.4) if bar.blended else (-0.4, 0.8)
+
+
+def _reach(row: dict[str, int], i: int) -> Callable[[Bar], tuple[float, float]]:
+    """How far a bar of the ``i``-th application reaches across the rows (from, to)."""
+    def reach(bar: Bar) -> tuple[float, float]:
+        offset, width = _across(bar, i)
+        return row[bar.device] + offset, row[bar.device] + offset + width
+    return reach
+
+
+def timeline_figure(model: Model, window: Window | None = None
+                    ) -> tuple[go.Figure, dict[str, list[int]]]:
     """One row per device: the ABs' bars by application (blended ones on half a row,
     dotted), suspensions and holds hatched, releases, cuts and cancels marked; and which
-    traces are bars, waits and marks (:func:`_drawn`)."""
+    traces are bars, waits and marks (:func:`_drawn`). With ``window`` (from, to: simulated
+    seconds), only what is seen in it, each whole (:func:`_timeline_traces`)."""
     fig = _timeline_layout(model.timeline)
-    for trace in _timeline_traces(model):
+    for trace in _timeline_traces(model, window):
         fig.add_trace(trace)
     return fig, _drawn([trace.meta for trace in fig.data])
 
 
-def _timeline_traces(model: Model) -> Iterator[go.Bar | go.Scatter]:
+def _timeline_traces(model: Model, window: Window | None = None
+                     ) -> Iterator[go.Bar | go.Scatter]:
     """The timeline's traces, made one at a time (:func:`write_page` writes each and lets
-    it go before the next is made): each application's bars, the waits, the marks."""
-    return chain(_bars(model.timeline), _spans(model), _marks(model))
+    it go before the next is made): each application's bars, the waits, the marks. With
+    ``window``, only the bars, waits and marks seen in it, each whole (one begun before it
+    too), and what keeps the rows and the legend as the whole run's (:func:`_kept`): the
+    traces are the whole run's, but for the labels of runs of iterations none of which
+    is seen, and a run is labelled by its length in the whole run."""
+    return chain(_bars(model.timeline, window), _spans(model, window), _marks(model, window))
 
 
 def _drawn(metas: list[str]) -> dict[str, list[int]]:
@@ -184,9 +234,11 @@ def _timeline_layout(tl: Timeline) -> go.Figure:
     return fig
 
 
-def _bars(tl: Timeline) -> Iterator[go.Bar]:
-    """Each application's bars (a feedback Command's run of iterations labelled once)."""
+def _bars(tl: Timeline, window: Window | None = None) -> Iterator[go.Bar]:
+    """Each application's bars (a feedback Command's run of iterations labelled once);
+    with ``window``, those seen in it (:func:`_kept`)."""
     colours = _colours(tl.apps)
+    row = _rows(tl)
     for i, app in enumerate(tl.apps):
         # non-blended first: the legend's swatch is drawn like the first bar
         bars = sorted((b for b in tl.bars if b.app == app), key=lambda b: b.blended)
@@ -195,12 +247,12 @@ def _bars(tl: Timeline) -> Iterator[go.Bar]:
         # a run of a feedback Command's iterations is labelled once (below), not each bar
         repeated = [run for run in runs(b for b in bars if not b.blended) if len(run) > 1]
         in_runs = {id(b) for run in repeated for b in run}
-        # two applications blended on a device share its row: a half each
+        bars = _kept(bars, window, lambda b: (b.t0, b.t1), _reach(row, i))
+        repeated = [r for r in repeated if _shows(r[0].t0, r[-1].t1, window)]
         yield go.Bar(
             name=_esc(app), orientation="h", y=[_esc(b.device) for b in bars],
             base=[b.t0 for b in bars], x=[_width(b.t0, b.t1) for b in bars],
-            width=[0.4 if b.blended else 0.8 for b in bars],
-            offset=[(0.0 if i % 2 else -0.4) if b.blended else -0.4 for b in bars],
+            width=[_across(b, i)[1] for b in bars], offset=[_across(b, i)[0] for b in bars],
             customdata=[b.ab for b in bars],
             text=["" if id(b) in in_runs else _esc(b.command) for b in bars],
             hovertext=[f"AB {b.ab} {_esc(_label(b))}<br>{b.t0:.2f}-{b.t1:.2f} s"
@@ -222,13 +274,16 @@ def _bars(tl: Timeline) -> Iterator[go.Bar]:
                 meta="runs")
 
 
-def _spans(model: Model) -> Iterator[go.Bar]:
-    """Suspensions and holds, hatched."""
+def _spans(model: Model, window: Window | None = None) -> Iterator[go.Bar]:
+    """Suspensions and holds, hatched; with ``window``, those seen in it (:func:`_kept`)."""
     tl = model.timeline
+    row = _rows(tl)
     for kind, (shape, colour, what) in _SPAN_STYLE.items():
         spans = [(s, d) for s in tl.spans if s.kind == kind for d in s.devices]
         if not spans:
             continue
+        spans = _kept(spans, window, lambda sd: (sd[0].t0, sd[0].t1),
+                      lambda sd: (row[sd[1]], row[sd[1]]))
         yield go.Bar(
             name=what, orientation="h", y=[_esc(d) for _, d in spans],
             base=[s.t0 for s, _ in spans], x=[_width(s.t0, s.t1) for s, _ in spans],
@@ -241,14 +296,18 @@ def _spans(model: Model) -> Iterator[go.Bar]:
             meta=kind)
 
 
-def _marks(model: Model) -> Iterator[go.Scatter]:
-    """Releases, cuts and cancels, marked."""
+def _marks(model: Model, window: Window | None = None) -> Iterator[go.Scatter]:
+    """Releases, cuts and cancels, marked; with ``window``, those seen in it
+    (:func:`_kept`)."""
     tl = model.timeline
+    row = _rows(tl)
     for kind, (symbol, colour, what) in _MARK_STYLE.items():
         marks = [(m, d) for m in tl.marks if m.kind == kind for d in m.devices
                  if d in tl.devices]
         if not marks:
             continue
+        marks = _kept(marks, window, lambda md: (md[0].t, md[0].t),
+                      lambda md: (row[md[1]], row[md[1]]))
         yield go.Scatter(
             name=what, x=[m.t for m, _ in marks], y=[_esc(d) for _, d in marks],
             customdata=[model.table[m.line] for m, _ in marks], mode="markers",

@@ -12,6 +12,7 @@ import asyncio
 import contextlib
 import io
 import json
+import math
 import os
 import random
 import re
@@ -319,10 +320,13 @@ class _Socket:
 
     def __init__(self) -> None:
         self.sent: list[dict[str, Any]] = []
+        self.sizes: list[int] = []
+        """Each message's size (bytes)."""
 
     async def send_str(self, text: str) -> None:
         await asyncio.sleep(0)  # (the socket's wait to send: another sender goes on)
         self.sent.append(json.loads(text))
+        self.sizes.append(len(text.encode("utf-8")))
 
 
 def test_a_page_is_sent_each_line_once_whoever_sends_it(tmp_path: Path) -> None:
@@ -348,40 +352,199 @@ def test_a_page_is_sent_each_line_once_whoever_sends_it(tmp_path: Path) -> None:
     assert got == session.rows and owner.rows == len(session.rows)
 
 
+class _Asking:
+    """A page's requests for timelines, as the server answers them: each asked (or not)
+    and the page's next update made at once, on a :class:`_Socket`."""
+
+    def __init__(self, server: Server) -> None:
+        from prima.live._server import _Owner
+
+        self.server, self.socket = server, _Socket()
+        self.owner = _Owner(self.socket)  # type: ignore[arg-type]
+
+    async def sent(self, *asked: object) -> list[dict[str, Any]]:
+        """The timelines and refusals sent at the next update, once ``asked`` (a request's
+        ``timeline``; none: nothing asked)."""
+        before = len(self.socket.sent)
+        for window in asked:
+            await self.server._handle(self.owner, json.dumps({"timeline": window}))
+        await self.server._update(self.owner)
+        return [m for m in self.socket.sent[before:] if {"timeline", "refused"} & m.keys()]
+
+
+def _digested(server: Server, rows: list[dict[str, Any]]) -> None:
+    """A digest of the trace so far, as the judging loop makes one (at most once a second)."""
+    from prima.show import digest
+
+    server.digest, server.digests = digest(rows), server.digests + 1
+
+
+def _points(message: dict[str, Any]) -> dict[str, list[Any]]:
+    """A timeline message's bars, waits and marks: by trace (its meta and name), each
+    point as it is drawn."""
+    drawn: dict[str, list[Any]] = {}
+    for trace in message["timeline"]["data"]:
+        keys = [k for k in ("y", "base", "x", "text", "hovertext", "customdata") if k in trace]
+        points = zip(*(trace[k] if isinstance(trace[k], list) else [trace[k]] * len(trace["y"])
+                       for k in keys), strict=True)
+        drawn[f"{trace['meta']} {trace['name']}"] = [list(point) for point in points]
+    return drawn
+
+
 def test_a_page_is_sent_the_latest_timeline_once_it_asks_for_one(tmp_path: Path) -> None:
-    """A long session's timeline is large and long to draw: the page asks for one when it
-    can draw it, and is sent the latest the server made, once; none it did not ask for
-    (the server made a timeline a second and sent each, which the page could not draw)."""
-    from prima.live._server import _Owner
+    """A long session's timeline is long to draw: the page asks for one when it can draw
+    it, and is sent one of the latest digest of the trace, once; none it did not ask for
+    (the server made a timeline a second and sent each, which the page could not draw).
+    ``true`` asks for the window that follows the run (a run not started: its first 30 s,
+    with a window's width either side)."""
+    from prima.show import read_rows
 
+    rows = read_rows(VISIT)
     server = Server(_session(tmp_path, VISIT), title="test", port=0, autoplay=False)
-    socket = _Socket()
-    owner = _Owner(socket)  # type: ignore[arg-type]
-
-    def made(k: int) -> None:  # (as the judging loop makes them)
-        server.timeline, server.timeline_count = json.dumps({"timeline": {"made": k}}), k
-
-    async def sent(*, ask: bool = False) -> list[int]:
-        before = len(socket.sent)
-        if ask:
-            await server._handle(owner, '{"timeline": true}')
-        await server._update(owner)
-        return [m["timeline"]["made"] for m in socket.sent[before:] if "timeline" in m]
+    page = _Asking(server)
 
     async def visit() -> None:
-        assert await sent() == []
-        made(1)
-        assert await sent() == []  # (not asked)
-        assert await sent(ask=True) == [1]
-        made(2)
-        made(3)
-        assert await sent() == []
-        assert await sent(ask=True) == [3]  # (the latest only)
-        assert await sent(ask=True) == []  # (none newer yet: sent once there is)
-        made(4)
-        assert await sent() == [4]
-        assert await sent() == []
-        assert not [m for m in socket.sent if "refused" in m]
+        assert await page.sent() == []
+        _digested(server, rows[:100])
+        assert await page.sent() == []  # (not asked)
+        [first] = await page.sent(True)
+        assert first["covers"] == [-33.0, 66.0]
+        _digested(server, rows[:200])
+        _digested(server, rows[:300])
+        assert await page.sent() == []
+        [latest] = await page.sent(True)  # (the latest only)
+        assert latest != first and page.owner.timeline == server.digests
+        assert await page.sent(True) == []  # (none newer yet: sent once there is)
+        _digested(server, rows)
+        assert len(await page.sent()) == 1
+        assert await page.sent() == []
+
+    asyncio.run(visit())
+
+
+def test_a_page_that_shows_another_window_is_sent_its_timeline_with_no_new_line(
+        tmp_path: Path) -> None:
+    """Panned or zoomed out of what its timeline covers, the page asks for the window it
+    shows and is sent its timeline, though the trace has not grown (a new window is a
+    reason to send); a window inside what it covers brings none. Its bars are those
+    seen there (one begun before it too) and a window's width either side; ``true``,
+    the window that follows the run, is another."""
+    from prima.show import read_rows
+
+    rows = read_rows(VISIT)
+    server = Server(_session(tmp_path, VISIT), title="test", port=0, autoplay=False)
+    page = _Asking(server)
+    _digested(server, rows)
+
+    async def visit() -> None:
+        [following] = await page.sent([0, 33])
+        assert following["covers"] == [-33.0, 66.0]
+        assert await page.sent([20, 30]) == []  # (zoomed in: it has it)
+        [panned] = await page.sent([100, 110])
+        assert panned["covers"] == [90.0, 120.0]
+        assert await page.sent([100, 110]) == []
+        [back] = await page.sent(True)
+        assert back["covers"] == [-33.0, 66.0]
+        assert server.digest is not None
+        bars = server.digest.timeline.bars
+        drawn = {ab for trace in panned["timeline"]["data"] if trace["meta"] == "bars"
+                 for ab in trace["customdata"]}
+        assert {b.ab for b in bars if b.t0 <= 120 and b.t1 >= 90} <= drawn
+        assert any(b.t0 < 90 < b.t1 for b in bars if b.ab in drawn)  # (begun before)
+        assert len(drawn) < len({b.ab for b in bars}) / 2
+
+    asyncio.run(visit())
+
+
+def _apps_alone(tmp_path: Path, until: float) -> list[dict[str, Any]]:
+    """The trace of FA1 beside EA1 alone, for ``until`` s (run at once, not live): the
+    guide, blocked by the user before it, tries again every second or so."""
+    from prima.run import Run
+
+    base = base_of(Options(inputs=(FA1, EA1), script=False, maps=ROOT / "scenarios" / "maps"))
+    scenario = tmp_path / f"apps-{until:g}.xml"
+    scenario.write_text(base.text(until), encoding="utf-8")
+    rows: list[dict[str, Any]] = []
+    Run(scenario, rows=rows.append).run()
+    return rows
+
+
+def test_the_timeline_of_the_window_shown_does_not_grow_with_the_session(
+        tmp_path: Path) -> None:
+    """At 4,000 s, a session's whole timeline held 9,700 bars, a megabyte of JSON that
+    the page took a second and more to draw, of which it showed 90 s. The page is sent
+    what is seen in the window it shows (its last 90 s) and a window's width either side:
+    at the end of a session of 4,000 s, as many bars and bytes as at the end of one of
+    1,000 s (within a fifth), where the whole timeline grew fourfold."""
+    sent = {}
+    for until in (1000.0, 4000.0):
+        rows = _apps_alone(tmp_path, until)
+        server = Server(_session(tmp_path, FA1, EA1), title="test", port=0, autoplay=False)
+        _digested(server, rows)
+        page = _Asking(server)
+        [message] = asyncio.run(page.sent([until - 90, until + 3]))
+        assert message["covers"] == [until - 183, until + 96]
+        bars = sum(len(points) for points in _points(message).values())
+        assert server.digest is not None
+        sent[until] = (bars, page.socket.sizes[-1], len(server.digest.timeline.bars))
+    (short, short_bytes, short_all), (long, long_bytes, long_all) = sent.values()
+    assert long_all > 3.5 * short_all  # (the session's bars grew with it)
+    assert 100 < long < 1.2 * short and long_bytes < 1.2 * short_bytes, sent
+
+
+def test_a_window_is_drawn_as_the_whole_timeline_draws_it_there() -> None:
+    """``prima show``'s timeline with a window: its layout as the whole run's, and its
+    traces (by meta and name) too, but for the labels of runs of iterations none of which
+    is seen; of each trace, what is seen in the window (a bar begun before it too) drawn
+    as in the whole figure, and what reaches lowest and highest across the rows, seen or
+    not (Plotly lays the rows out by it: a row with nothing seen in the window stays)."""
+    from prima.show import digest, read_rows, timeline_figure
+
+    digested = digest(read_rows(SAMPLE_03))
+    longest = max(digested.timeline.bars, key=lambda b: b.t1 - b.t0)
+    t0 = (longest.t0 + longest.t1) / 2
+    t1 = t0 + 5.0
+    whole = {"timeline": timeline_figure(digested)}
+    part = {"timeline": timeline_figure(digested, (t0, t1))}
+    assert part["timeline"]["layout"] == whole["timeline"]["layout"]
+    everything, drawn = _points(whole), _points(part)
+    assert list(drawn) == [k for k in everything if k in drawn]
+    assert {k for k in everything if k not in drawn} <= {"runs ea3-navigate"}
+    rows = digested.timeline.devices
+    seen = 0
+    for trace, points in everything.items():
+        inside = [p for p in points if (t0 <= p[1] <= t1 if trace.startswith("marks")
+                                        else p[1] <= t1 and p[1] + p[2] >= t0)]
+        shown = drawn.get(trace, [])
+        assert [p for p in shown if p in inside] == inside
+        assert all(p in points for p in shown)
+        if not trace.startswith("runs"):
+            reached = {rows.index(p[0]) for p in points}
+            assert {min(reached), max(reached)} <= {rows.index(p[0]) for p in shown}
+        seen += len(inside)
+    assert longest.ab in {p[5] for p in drawn[f"bars {longest.app}"]}
+    assert 0 < seen < sum(map(len, drawn.values())) < 0.5 * sum(map(len, everything.values()))
+
+
+def test_a_window_a_page_cannot_show_is_refused(tmp_path: Path) -> None:
+    """A window is two numbers of seconds, the first below the second, within a billion
+    seconds of 0: anything else is refused as an input is (said, nothing changed), and
+    the page's next request is answered."""
+    from prima.show import read_rows
+
+    server = Server(_session(tmp_path, VISIT), title="test", port=0, autoplay=False)
+    _digested(server, read_rows(VISIT))
+    page = _Asking(server)
+
+    async def visit() -> None:
+        for bad in [[1], [1, 2, 3], [9, 1], [5, 5], ["0", "9"], [True, 9], [0, math.nan],
+                    [-math.inf, 0], [-1e300, 1e300], [0, 10**400], False, None, "0-9",
+                    {"from": 0, "to": 9}]:
+            [refused] = await page.sent(bad)
+            assert "window shown" in refused.get("refused", ""), bad
+            assert page.owner.window is None and not page.owner.wants_timeline
+        [answered] = await page.sent([-1e9, 1e9])
+        assert answered["covers"] == [-3e9, 3e9]
 
     asyncio.run(visit())
 
@@ -479,6 +642,8 @@ def test_what_a_page_may_not_do(tmp_path: Path) -> None:
                             json.dumps({"control": "step", "seconds": 10**400}),
                             json.dumps({"control": "speed", "speed": -10**400}),
                             json.dumps({"act": "walk", "x": 10**400, "y": 1}),
+                            json.dumps({"timeline": [0, 10**400]}),
+                            json.dumps({"timeline": [9, float("nan")]}),
                             json.dumps({"save": True, "path": "/etc/passwd"})]:
                     await page.ws.send_str(bad)
                     reply = await page.reply()
@@ -1101,7 +1266,8 @@ const socket = window.primaSockets[0];
 for (let k = 0; k < arguments[0]; k++) {  // (all at once: come while the page was busy)
   socket.onmessage({data: JSON.stringify({timeline: {
     data: [{type: "bar", orientation: "h", y: ["speaker"], base: [k], x: [1]}],
-    layout: {title: {text: "burst " + k}, xaxis: {}}, config: {}}})});
+    layout: {title: {text: "burst " + k}, xaxis: {range: [0, 40]}}, config: {}},
+    covers: [-33, 66]})});
 }
 """
 
@@ -1135,6 +1301,53 @@ def test_the_page_draws_the_latest_timeline_not_each_and_asks_for_one_when_it_ca
         socket = browser.execute_script("const s = window.primaSockets[0]; "
                                         "return [s.timelines, s.asked]")
         assert 2 <= socket[0] <= socket[1], socket
+        errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert errors == []
+    finally:
+        process.send_signal(signal.SIGTERM)
+        process.communicate(timeout=WAIT)
+
+
+_COVERED = """
+const t = window.primaLive.time(), shown = document.getElementById("timeline").layout.xaxis;
+const r = shown.range.map(Number), c = window.primaLive.timelines().covers;
+return c && c[0] <= r[0] && r[1] <= c[1] && """
+"""Whether the timeline drawn covers the range shown, and (what follows) the range is as
+said (``r``: the range, ``t``: the clock)."""
+
+
+def test_a_quiet_sessions_timeline_follows_the_clock_and_a_pan_is_filled_in(
+        browser: Any) -> None:
+    """FA1 alone waits to be touched: stepped a minute at a time, its trace does not grow,
+    and no timeline of new lines comes (the range shown stayed at the first 33 s while the
+    clock went on). Following, the range moves on with the clock, and once past what its
+    timeline covers, the page asks for the window it shows and is sent it; panned back,
+    likewise. Counted, not timed: a timeline for each window left, none for each step."""
+    from selenium.webdriver.common.by import By
+
+    process, url = _started(str(FA1), "--paused")
+    step = "window.primaSockets[0].send(JSON.stringify({control: 'step', seconds: 60}));"
+    try:
+        browser.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": _SOCKETS})
+        browser.get(url)
+        _page_wait(browser, "return window.primaLive.ready() && window.primaLive.status() && "
+                            "window.primaLive.timelines().drawn", "the first timeline")
+        _page_wait(browser, "return window.primaLive.timelines().asked", "the next asked for")
+        lines = len(_rows(browser))
+        first = browser.execute_script("return window.primaLive.timelines().received")
+        for minute in range(1, 5):
+            browser.execute_script(step)
+            _page_wait(browser, "const s = window.primaLive.status(); return s.idle && "
+                                f"s.clock >= {60 * minute} - 1e-6", f"minute {minute}")
+        _page_wait(browser, _COVERED + "r[0] <= t && t <= r[1]", "the timeline following")
+        assert len(_rows(browser)) == lines  # (quiet: not a line since)
+        received = browser.execute_script("return window.primaLive.timelines().received")
+        assert 1 <= received - first <= 3, (first, received)  # (240 s: 2 windows of 93 s left)
+        browser.execute_script("Plotly.relayout('timeline', {'xaxis.range[0]': 10, "
+                               "'xaxis.range[1]': 20});")
+        _page_wait(browser, _COVERED + "r[0] === 10 && r[1] === 20", "the pan filled in")
+        browser.find_element(By.ID, "follow-time").click()
+        _page_wait(browser, _COVERED + "r[0] <= t && t <= r[1]", "following again")
         errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
         assert errors == []
     finally:
