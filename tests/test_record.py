@@ -6,6 +6,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from prima.record import Record
 
@@ -72,7 +73,7 @@ def test_every_dataclass_a_cold_validate_loads_shares_the_repr() -> None:
     document = "apps/fa/fa2-follow.pxml"
     done = subprocess.run([sys.executable, "-c", "from prima.record import Record\n" + CHECK,
                            document], capture_output=True, text=True, check=False,
-                          cwd=__file__.rsplit("/tests/", 1)[0])
+                          cwd=Path(__file__).resolve().parents[1])
     assert done.returncode == 0, done.stderr
     assert "1 file checked" in done.stdout + done.stderr
     own = [line for line in done.stdout.splitlines() if "checked" not in line]

@@ -377,11 +377,11 @@
   }, ask);
 
   function drawTimeline(m) {
-    const fig = m.timeline, layout = fig.layout, shown = timeline.layout && timeline.layout.xaxis;
+    const fig = m.timeline, layout = fig.layout, shown = shownRange();
     covers = m.covers;
     whole = layout.xaxis.range.slice();
     if (following) layout.xaxis.range = lastSeconds();
-    else if (shown && shown.range) layout.xaxis.range = shown.range.slice();  // (where it was put)
+    else if (shown) layout.xaxis.range = shown.slice();  // (where it was put)
     layout.uirevision = following ? undefined : "kept";
     Plotly.react(timeline, fig.data, layout, fig.config);
     placeHead();
