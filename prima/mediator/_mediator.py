@@ -415,10 +415,12 @@ class Mediator:
         app = node.app
         ended: tuple[Command, ...] = ()
         cancelled: Command | None = None
+        replaced = False
         if looping:
             cmd0 = node.commands[0]
             if not cmd0.cut:
                 children = [self._next_iteration(node, children)]
+                replaced = True
             else:
                 cancelled = cmd0
                 cmd0.cancelled = True
@@ -437,7 +439,7 @@ class Mediator:
         for child in children:
             if child.state is _PENDING:
                 wm.enter_waiting(child, True)  # (its parent just finished)
-        wm.leave(node)
+        wm.leave(node, replaced)
         if cancelled is not None:
             self._tell_cancelled([cancelled])
         for cmd in ended:
@@ -463,8 +465,7 @@ class Mediator:
 
     def _next_iteration(self, node: Node, children: list[Node]) -> Node:
         """Insert a feedback Command's next iteration between ``node`` and its children."""
-        nxt = self._wm.new_node(node.app, node.tree, node.commands, node.devices,
-                                node.priority, False, node.seq, node.iteration + 1)
+        nxt = self._wm.next_iteration(node)
         if node.commands[0].internal is not None:
             nxt.protected = node.protected  # (a return put before a reply is part of it;
             # a reply's own next iteration comes after its words: the exchange is over)

@@ -11,7 +11,8 @@ entered the waiting list, ABs whose parent just finished, and *dirty* devices
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
+from types import MappingProxyType
 
 from prima.catalog import Priority
 from prima.mediator._index import WaitIndex
@@ -28,6 +29,7 @@ _WAITING = NodeState.WAITING
 _RUNNING = NodeState.RUNNING
 _DONE = NodeState.DONE
 _CANCELLED = NodeState.CANCELLED
+_NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
 
 
 class WorkingMemory:
@@ -54,6 +56,8 @@ class WorkingMemory:
         """ABs that entered the waiting list since the last selection round."""
         self.pjf: dict[AbId, Node] = {}
         """ABs whose parent finished since the last selection round."""
+        self.named: Mapping[AbId, Node] = _NONE_NAMED
+        """The ABs the selection round under way names (``pjf`` as it took it)."""
         self.dirty: set[str] = set()
         """Devices whose best waiting AB may have changed since the last round."""
         self.suspended: dict[TreeId, Tree] = {}
@@ -125,6 +129,22 @@ class WorkingMemory:
             c.node = node
         return node
 
+    def next_iteration(self, node: Node) -> Node:
+        """The next iteration of the feedback AB ``node``, which just ended, in its place
+        in its tree: its tree and app count it instead of ``node``, which leaves working
+        memory next (``leave(node, True)``), so their counts of nodes, by device too, do
+        not change (``new_node`` and ``leave`` would count one in and one out)."""
+        ab = self._next_ab
+        self._next_ab = ab + 1
+        commands = node.commands
+        nxt = Node(ab, node.app, node.tree, commands, node.devices, node.priority, False,
+                   node.seq, node.iteration + 1, node)
+        self.nodes[ab] = nxt
+        node.tree.nodes[ab] = nxt
+        for c in commands:
+            c.node = nxt
+        return nxt
+
     def link(self, parent: Node | None, child: Node) -> None:
         if parent is None:
             return
@@ -144,6 +164,8 @@ class WorkingMemory:
         if node.reserving or node.state is not _PENDING:
             return
         node.reserving = True
+        if self.pjf or self.named:
+            self.count_named()  # (``beside`` counts them)
         dirty = self.dirty
         dirty.update(node.devices)  # (what it keeps steps aside now, and reserves no
         beside = self.beside        # more the other devices it waits for)
@@ -182,7 +204,8 @@ class WorkingMemory:
 
     # ------------------------------------------------------------------ changes
     def _rank_in(self, node: Node) -> None:
-        """Count a waiting AB in its devices' rankings (``ranked``, ``on``)."""
+        """Count a waiting AB in its devices' rankings (``ranked``, ``on``, ``beside``)."""
+        node.counted = True
         key = (node.app.name, node.priority)
         tree = node.tree
         ranked = self.ranked
@@ -211,7 +234,10 @@ class WorkingMemory:
                         others[e] = others.get(e, 0) + 1
 
     def _rank_out(self, node: Node) -> None:
-        """Count a waiting AB out of its devices' rankings (it was counted in)."""
+        """Count a waiting AB out of its devices' rankings, if it was counted in."""
+        if not node.counted:
+            return  # (parked, or named and left out: ``enter_waiting``)
+        node.counted = False
         key = (node.app.name, node.priority)
         tree = node.tree
         ranked = self.ranked
@@ -257,12 +283,34 @@ class WorkingMemory:
             # the index's answer on each device (``_rounds._Round``) as it would if it
             # were filed; that round files it only if it still waits then (most ABs whose
             # parent just finished start in it: the next iteration of a feedback loop).
+            # Nor is it counted in its devices' rankings until something reads them
+            # (``count_named``) or that round files it: where it starts, counting it in
+            # and out again would have changed nothing.
             node.unfiled = True
             self.pjf[node.id] = node
         else:
             self.index.add(node)
-        self._rank_in(node)
+            self._rank_in(node)
         self.new.append(node)
+
+    def count_named(self) -> None:
+        """Count in their devices' rankings the waiting, unparked ABs that the next
+        round or the one under way names and that ``enter_waiting`` left out: before
+        anything reads the rankings (``ranked``, ``on``, ``beside``), as if they had
+        been counted in when they entered the waiting list. (``Selector._idle`` reads
+        ``ranked`` at each round and makes up for them itself.)"""
+        for named in (self.pjf, self.named):
+            for n in named.values():
+                if n.state is _WAITING and n.parked is None and not n.counted:
+                    self._rank_in(n)
+
+    def file(self, node: Node) -> None:
+        """A named AB still waits, unparked, after its round: it is filed in the index,
+        and counted in its devices' rankings if it is not yet."""
+        if node.unfiled:
+            self.index.add(node)
+        if not node.counted:
+            self._rank_in(node)
 
     def unwait(self, node: Node) -> None:
         """A waiting, unparked AB goes back to pending: an AB was put before it (a
@@ -348,8 +396,9 @@ class WorkingMemory:
             self._inactive(node.app, now)
         self.leave(node)
 
-    def leave(self, node: Node) -> None:
-        """Take a finished or cancelled node out of working memory."""
+    def leave(self, node: Node, replaced: bool = False) -> None:
+        """Take a finished or cancelled node out of working memory; ``replaced``: its next
+        iteration took its place in its tree's and app's counts (``next_iteration``)."""
         if node.reserving:
             self._unreserve(node)
         ab = node.id
@@ -359,6 +408,8 @@ class WorkingMemory:
             return
         if node.parked is not None:
             tree.parked -= 1
+        if replaced:
+            return
         app = tree.app
         counts = tree.devices
         for d in node.sorted_devices:
@@ -410,15 +461,24 @@ class WorkingMemory:
                 elif n.state is not _PENDING:
                     del self.after_reactions[ab]
         if self.reserving:
-            beside = self.beside
-            for d, on in self.reserving.items():
-                for r in on.values():
-                    if r.tree is tree:
-                        dirty.add(d)  # (whom it keeps, and so what they reserve, changed)
-                        others = beside.get(d)
-                        if others:
-                            dirty.update(others)
-                        break
+            self._rekept(tree)
+
+    def _rekept(self, tree: Tree) -> None:
+        """The tree's rank changed: the devices its next ABs reserve are looked at again,
+        and the other devices that the ABs waiting for those need (whom they keep, and so
+        what those reserve, changed)."""
+        if self.pjf or self.named:
+            self.count_named()  # (``beside`` counts them)
+        dirty = self.dirty
+        beside = self.beside
+        for d, on in self.reserving.items():
+            for r in on.values():
+                if r.tree is tree:
+                    dirty.add(d)
+                    others = beside.get(d)
+                    if others:
+                        dirty.update(others)
+                    break
 
     # -------------------------------------------------------- suspended stack
     def suspend(self, tree: Tree) -> bool:
@@ -443,6 +503,8 @@ class WorkingMemory:
         """A reaction to the user's own action now keeps the streams it interrupted
         waiting on every device (docs/rules.md 7.6 (1)): the best waiting AB of each
         device is looked at again (one it holds steps aside, reserving nothing)."""
+        if self.pjf or self.named:
+            self.count_named()
         ranked = self.ranked
         self.dirty.update(d for d, apps in ranked.items() if apps)
 

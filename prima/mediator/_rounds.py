@@ -75,8 +75,8 @@ class _Round:
     and the one it points at the ABs each round names (:meth:`name`).
     """
 
-    __slots__ = ("pjf", "best", "rank", "_index", "_ranking", "_heaps", "_named", "_kept",
-                 "_one", "_alive")
+    __slots__ = ("pjf", "best", "after", "rank", "_index", "_ranking", "_heaps", "_named",
+                 "_kept", "_one", "_alive")
 
     def __init__(self, index: WaitIndex, *, names: bool) -> None:
         self.pjf: Mapping[AbId, Node] = _NONE_NAMED
@@ -98,6 +98,10 @@ class _Round:
         self.best: Callable[[str], Node | None] = self._best if names else index.top
         """The best-ranked waiting AB that needs a device, or None (the index's own
         answer for the view of rounds that name no AB)."""
+        self.after: Callable[[str], Node | None] = self._find if names else index.top
+        """What :attr:`best` answers for a device once the AB it answered last has
+        started (whom that start beat there): worked out, as :meth:`_best` would, which
+        finds the AB it kept for the device running."""
         self.rank: Callable[[Node], Rank] = self._rank if names else ranking.unnamed
         """The AB's rank (no key changes within a round: trees are suspended or resumed,
         and apps demoted, between rounds): the one kept on it when the round names no
@@ -262,6 +266,7 @@ class Selector:
         pjf: Mapping[AbId, Node] = wm.pjf
         if pjf:
             wm.pjf = {}
+            wm.named = pjf
         else:
             pjf = _NONE_NAMED
         new = wm.new
@@ -297,6 +302,7 @@ class Selector:
             self._suspend_for_answers()
         if pjf:
             self._unname(pjf)
+            wm.named = _NONE_NAMED
             view.name(_NONE_NAMED)  # (it keeps no AB past its round)
         if overrun is not None:
             for app in overrun.values():
@@ -409,15 +415,16 @@ class Selector:
     def _unname(self, pjf: Mapping[AbId, Node]) -> None:
         """"Parent just finished" lasts one round: at its end, others may rank above
         the ABs it named (their devices are dirty); those that still wait unparked are
-        filed in the index now (``WorkingMemory.enter_waiting`` left them out of it:
-        most start in the round that names them)."""
+        filed in the index and counted in their devices' rankings now
+        (``WorkingMemory.enter_waiting`` left them out: most start in the round that
+        names them)."""
         wm = self._wm
         dirty = wm.dirty
         for n in pjf.values():
             if n.state is _WAITING:
                 dirty.update(n.devices)
-                if n.unfiled and n.parked is None:
-                    wm.index.add(n)
+                if n.parked is None:
+                    wm.file(n)
 
     def _counted(self, app: App) -> bool:
         """Count one more start of ``app`` at this instant; False past its budget."""
@@ -444,8 +451,11 @@ class Selector:
         it may hold what the round looks at). What the index's answer for a dirty device
         is need not be known: ``WorkingMemory.ranked`` counts the waiting, unparked ABs
         on each device by priority, which is whom the index (and a round's named ABs)
-        can answer with. This is the common round that follows a start or an end on a
-        busy device: most of what a round would cost is finding its candidates.
+        can answer with. (It leaves out the ABs a round names until that round files
+        them, ``WorkingMemory.enter_waiting``: they are among the new ones, and one of
+        them on a dirty device it does not find busy makes the round, as its count
+        would.) This is the common round that follows a start or an end on a busy
+        device: most of what a round would cost is finding its candidates.
         """
         wm = self._wm
         if wm.answering:
@@ -456,6 +466,22 @@ class Selector:
         policies = self._policies
         on_busy = policies.on_busy
         reserving = wm.reserving
+        for x in new:
+            if x.state is _WAITING and x.parked is None:
+                if opened or x.priority is _LOW or (
+                        reserving and not reserving.keys().isdisjoint(x.devices)):
+                    return False
+                kept = False
+                counted = x.counted
+                for d in x.sorted_devices:
+                    if d in busy and not (on_busy and policies.may_act_on(d)):
+                        kept = True  # a busy device that keeps it waiting
+                        if counted:
+                            break
+                    elif not counted and d in dirty:
+                        return False  # (what ``ranked`` would say of the device with it)
+                if not kept:
+                    return False
         for d in dirty:
             counts = ranked.get(d)
             if not counts:
@@ -465,16 +491,6 @@ class Selector:
                 return False
             for _app, priority in counts:
                 if priority is _LOW:
-                    return False
-        for x in new:
-            if x.state is _WAITING and x.parked is None:
-                if opened or x.priority is _LOW or (
-                        reserving and not reserving.keys().isdisjoint(x.devices)):
-                    return False
-                for d in x.sorted_devices:  # a busy device that keeps it waiting
-                    if d in busy and not (on_busy and policies.may_act_on(d)):
-                        break
-                else:
                     return False
         return True
 
@@ -622,11 +638,12 @@ class Selector:
         self._wm.start(x)
         x.started_at = self._log.now
         started.append(x)
-        # Who did it beat? The best remaining waiting AB on each of its devices.
-        best = view.best
+        # Who did it beat? The best remaining waiting AB on each of its devices (it
+        # ranked best on each: it was the last answer for each).
+        after = view.after
         losers = []
         for d in x.sorted_devices:
-            b = best(d)
+            b = after(d)
             if b is not None:
                 losers.append(b)
         if x.blended:

@@ -202,19 +202,28 @@ class Node:
                  "restarts", "blended", "head", "order", "ranked", "facts", "plain",
                  "protected", "reserving", "faces", "started_at", "cut_by", "deferred",
                  "looked", "once", "by_user", "taker", "not_before", "dropped", "cut_for",
-                 "speaks", "unfiled", "faced_at", "relooked")
+                 "speaks", "unfiled", "counted", "faced_at", "relooked")
 
     def __init__(self, ab: AbId, app: App, tree: Tree, commands: tuple[Command, ...],
                  devices: frozenset[str], priority: Priority, reactive: bool, seq: int,
-                 iteration: int = 0) -> None:
+                 iteration: int = 0, like: Node | None = None) -> None:
         # (each value kept in a local too where ``facts`` needs it again: one node
-        # per request, on the hot path)
+        # per request, on the hot path. ``like``: a node of the same Commands and
+        # devices, whose next iteration this one is: what they say of it is the same)
         self.id = ab
         self.app = app
         self.tree = tree
         self.commands = commands
         self.devices = devices
-        self.sorted_devices = ordered = _SORTED.get(devices) or _sorted(devices)
+        if like is None:
+            ordered = _SORTED.get(devices) or _sorted(devices)
+            speaks = any(c.spec.spoken(c.call.args) for c in commands)
+        else:
+            ordered = like.sorted_devices
+            speaks = like.speaks
+        self.sorted_devices: tuple[str, ...] = ordered
+        self.speaks: bool = speaks
+        """Some Command of it says words (an utterance, a Q&A's prompt)."""
         self.priority = priority
         self.reactive = reactive
         self.iteration = iteration
@@ -230,6 +239,9 @@ class Node:
         """Waiting, but not yet in the waiting index: its parent just finished, and the
         round that names it files it only if it still waits then
         (``WorkingMemory.enter_waiting``)."""
+        self.counted = False
+        """Counted in its devices' rankings (``WorkingMemory.ranked``, ``on``,
+        ``beside``): waiting, unparked, and not left out of them with ``unfiled``."""
         self.head: tuple[int, ...] | None = None
         self.order: tuple[int, ...] | None = None
         """Its keys under the NODE ranking criteria before and after the first TREE
@@ -239,8 +251,6 @@ class Node:
         """Its full rank when no round names it, with the tree keys it was worked out
         from (``_ranking.Ranking.rank`` keeps it: valid while the tree keeps them)."""
         self._clear_policy_state()
-        self.speaks = any(c.spec.spoken(c.call.args) for c in commands)
-        """Some Command of it says words (an utterance, a Q&A's prompt)."""
         first = commands[0]
         call = first.call
         calls: tuple[Call, ...]
