@@ -188,7 +188,12 @@ class Kernel:
         wake would (the same ticks, in the same order), without waking it. Only the
         first wake of the agenda is looked at, again and again: nothing else is due
         before it. The caller knows that nothing a process reads changes meanwhile (the
-        simulator: no body moves); returns how many wakes were skipped."""
+        simulator: no body moves); returns how many wakes were skipped.
+
+        A process whose next wake would come first again is asked once: ``unchanged``
+        only reads, and nothing it reads changes meanwhile, so its answer would be the
+        same. Its wakes up to the agenda's next other work are skipped at once (the
+        same ticks, tokens and insertion numbers as one by one)."""
         heap = self._heap
         skipped = 0
         while heap:
@@ -199,28 +204,42 @@ class Kernel:
             if (wait is None or not proc.alive or proc.token != wake[0] or tick >= wait.until
                     or not wait.unchanged()):
                 break
-            proc.token += 1
-            self._seq += 1
-            heapq.heapreplace(heap, (tick + min(wait.ticks, wait.until - tick), self._seq,
-                                     proc, (proc.token, wait.timeout)))
-            skipped += 1
+            # (it comes first again at a tick before the others' first: a tie goes to
+            # them, numbered earlier; there the same checks would skip it again)
+            bound = min(limit + 1, wait.until)
+            if len(heap) > 1:
+                bound = min(bound, heap[1][0], heap[2][0]) if len(heap) > 2 \
+                    else min(bound, heap[1][0])
+            n = 0
+            while True:
+                tick += min(wait.ticks, wait.until - tick)
+                n += 1
+                if tick >= bound:
+                    break
+            proc.token += n
+            self._seq += n
+            heapq.heapreplace(heap, (tick, self._seq, proc, (proc.token, wait.timeout)))
+            skipped += n
         return skipped
 
-    def check_polls(self) -> None:
-        """Resume processes whose awaited predicate now holds."""
+    def check_polls(self) -> bool:
+        """Resume processes whose awaited predicate now holds; True if any was."""
         if not self._polls:
-            return
+            return False
         polls, self._polls = self._polls, []
         keep = []
+        woke = False
         for entry in polls:
             proc, token, pred = entry
             if not proc.alive or proc.token != token:
                 continue
             if pred():
                 self._fire(proc, token, True)
+                woke = True
             else:
                 keep.append(entry)
         self._polls = keep + self._polls  # waits begun by the processes just resumed
+        return woke
 
     def spawn(self, gen: ProcGen, exit: Callable[[Any], None] | None = None) -> Process:
         """Start a process later in the current tick; ``exit`` gets its return value."""

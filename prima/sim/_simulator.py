@@ -148,7 +148,8 @@ class Simulator:
         """Call ``on_sample`` every this many ticks (0: never); see :meth:`sample_poses`."""
         self.on_sample: Callable[[], None] = _ignore
         self.steps = 0
-        """Physics steps taken so far."""
+        """Physics steps taken so far (counted as each stretch of steps ends: up to date
+        whenever the simulator has returned)."""
         self.skipped = 0
         """Wakes of processes that would have done nothing, skipped so far
         (:meth:`_skip_idle`)."""
@@ -477,16 +478,24 @@ class Simulator:
         tick, not again and again short of ``t``.)
         """
         k = self.kernel
-        last = max(self._first_tick(t), k.tick)
-        before = self.reports
-        while True:
+        self._run_to(max(self._first_tick(t), k.tick), True, True)
+
+    def _wake_at(self, last: int) -> int:
+        """Where :meth:`advance_until` runs on to from now, toward ``last``: the
+        simulator's own next time (:meth:`next_time`), the wakes up to ``last`` of
+        processes that would do nothing skipped first."""
+        k = self.kernel
+        heap = k._heap
+        if not heap:
+            own = last
+        else:
             if k.idle_first(last):
-                self._skip_idle(last)
-            own = self._next_tick()
-            step = max(last if own is None else min(own, last), k.tick)
-            self._run_to(step, True)
-            if self.reports != before or step >= last or k.tick != step:
-                return
+                self._skip_idle(last)  # (wakes after now: nothing it does is due)
+            own = min(heap[0][0], last)
+        w = self.world
+        if w.mode or w.human_moving or k.tick < w.joints_until or w.swaying:  # (_next_tick)
+            own = min(own, k.tick + k.hz)
+        return max(own, k.tick)
 
     def advance_to(self, t: float, *, stop_on_report: bool = False) -> None:
         """Run up to time ``t``, reporting everything on the way at its own time.
@@ -501,52 +510,82 @@ class Simulator:
             raise SimulationError(f"cannot go back from {self.now()} to {t}")
         self._run_to(target, stop_on_report)
 
-    def _run_to(self, target: int, stop_on_report: bool) -> None:
-        """:meth:`advance_to` the tick ``target`` (not before now)."""
+    def _run_to(self, last: int, stop_on_report: bool, own: bool = False) -> None:
+        """:meth:`advance_to` the tick ``last`` (not before now); with ``own``, as
+        :meth:`advance_until`: by the simulator's own times on the way (:meth:`_wake_at`),
+        settling at each. The simulator settles again only if the last settling may
+        have left something to do (:meth:`_settle`): between two, nothing else runs."""
         k = self.kernel
         world = self.world
         every = self._sense_every
         sample = self.sample_every
+        grid = math.gcd(every, sample)
         heap = k._heap
         pace = self.pace
         before = self.reports if stop_on_report else -1
+        target = self._wake_at(last) if own else last
+        settled = False
         while True:
-            self._settle()
-            if k.tick >= target or (stop_on_report and self.reports != before):
+            if not settled:
+                settled = self._settle()
+            if stop_on_report and self.reports != before:
                 return
+            if k.tick >= target:
+                if k.tick != target or target >= last:
+                    return
+                target = self._wake_at(last)  # (woken at one of its own times)
+                continue
+            settled = False
             if self._moving():
+                # Between sensing and sample ticks (all multiples of ``grid``), the agenda
+                # and the reports change only when a motion ends: the steps between need
+                # only see that something still moves.
+                start = tick = k.tick
+                bound = min(tick - tick % grid + grid, target, heap[0][0] if heap else target)
                 while True:
                     done = world.step()
-                    k.tick += 1
-                    self.steps += 1
-                    if done is not None:
-                        done()
-                    if k.tick % every == 0:
-                        self._sense()
-                        if pace is not None:
-                            pace(k.tick)
-                    if sample and k.tick % sample == 0:
-                        self.on_sample()
-                    if (k.tick >= target or (heap and heap[0][0] <= k.tick)
-                            or (stop_on_report and self.reports != before)
-                            or not (world.mode or world.human_moving
-                                    or k.tick < world.joints_until or world.swaying)):
+                    tick += 1
+                    k.tick = tick
+                    if done is not None or tick >= bound:
+                        if done is not None:
+                            done()
+                        if tick % every == 0:
+                            self._sense()
+                            if pace is not None:
+                                pace(tick)
+                        if sample and tick % sample == 0:
+                            self.on_sample()
+                        if (tick >= target or (heap and heap[0][0] <= tick)
+                                or (stop_on_report and self.reports != before)):
+                            break
+                        bound = min(tick - tick % grid + grid, target,
+                                    heap[0][0] if heap else target)
+                    if not (world.mode or world.human_moving or tick < world.joints_until
+                            or world.swaying):
                         break
+                self.steps += tick - start
             else:
-                if k.idle_first(target):
-                    self._skip_idle(target)
-                nxt = k.next_tick()
-                jump = target if nxt is None or nxt > target else max(nxt, k.tick)
-                if pace is not None and jump > k.tick:
-                    pace(jump)
-                    nxt = k.next_tick()  # (an input added while it waited comes first)
-                    if nxt is not None and k.tick < nxt < jump:
-                        jump = nxt
-                if sample:  # nothing moves: the samples on the way see the same poses
-                    for tick in range((k.tick // sample + 1) * sample, jump + 1, sample):
-                        k.tick = tick
-                        self.on_sample()
-                k.tick = jump
+                self._jump(target)
+
+    def _jump(self, target: int) -> None:
+        """Nothing moves: go on to the agenda's next work, or to ``target`` if sooner."""
+        k = self.kernel
+        if k.idle_first(target):
+            self._skip_idle(target)
+        nxt = k.next_tick()
+        jump = target if nxt is None or nxt > target else max(nxt, k.tick)
+        pace = self.pace
+        if pace is not None and jump > k.tick:
+            pace(jump)
+            nxt = k.next_tick()  # (an input added while it waited comes first)
+            if nxt is not None and k.tick < nxt < jump:
+                jump = nxt
+        sample = self.sample_every
+        if sample:  # nothing moves: the samples on the way see the same poses
+            for tick in range((k.tick // sample + 1) * sample, jump + 1, sample):
+                k.tick = tick
+                self.on_sample()
+        k.tick = jump
 
     # ---- state -------------------------------------------------------------------
 
@@ -826,15 +865,19 @@ class Simulator:
         waiting = self.seen and self._sighted and self._unseen_since is None
         return waiting if seen else not waiting
 
-    def _settle(self) -> None:
+    def _settle(self) -> bool:
+        """Do what is due now, look for the user and resume the processes whose
+        predicate holds, until nothing more is due. True if settling again would do
+        nothing: its last round resumed no process (nothing is due, and human
+        detection and the predicates, asked again, would find the same)."""
         k = self.kernel
         while True:
             k.run_due()
             if self._sensing:
                 self._update_monitor()
-            k.check_polls()
+            woke = k.check_polls()
             if not k.due():
-                return
+                return not woke
 
     def watch_facing(self, tolerance: float, off: Callable[[], None]) -> None:
         """While the robot says words, call ``off`` (a report) each time the user, being

@@ -212,15 +212,15 @@ def test_advancing_until_a_hair_past_a_tick_stops_at_that_tick(
     # is never reached; the simulator is stopped if it goes round and round instead)
     sim = Simulator(world_map("museum"), robot=CENTER)
     calls = [0]
-    real = Simulator._run_to
+    real = Simulator._wake_at
 
-    def counted(self: Simulator, target: int, stop_on_report: bool) -> None:
+    def counted(self: Simulator, last: int) -> int:
         calls[0] += 1
         if calls[0] > 100:
             raise AssertionError("advance_until goes round and round")
-        real(self, target, stop_on_report)
+        return real(self, last)
 
-    monkeypatch.setattr(Simulator, "_run_to", counted)
+    monkeypatch.setattr(Simulator, "_wake_at", counted)
     sim.advance_until(12.6 + past)
     assert sim.now() == 12.6 == sim.on_grid(12.6 + past) and calls[0] <= 2
     assert sim.on_grid(12.61) == 12.62 and sim.on_grid(12.6 - past) == 12.6

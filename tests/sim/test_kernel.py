@@ -72,3 +72,34 @@ def test_a_wake_where_the_process_would_end_is_not_skipped() -> None:
     k.tick = 10
     k.run_due()
     assert ended == [10]
+
+
+def test_a_process_first_again_and_again_is_asked_once_and_keeps_its_place() -> None:
+    # its wakes up to the agenda's next other work are skipped at once (nothing comes
+    # between them to change its answer); work due at the tick it reaches goes first
+    k = Kernel(10)
+    asked = [0]
+    log: list[int | str] = []
+    moved = [False]
+
+    def unchanged() -> bool:
+        asked[0] += 1
+        return not moved[0]
+
+    def poller() -> ProcGen:
+        while True:
+            log.append(k.tick)
+            yield idle(3, unchanged)
+
+    def move() -> None:
+        moved[0] = True
+        log.append("moves")
+
+    k.spawn(poller())
+    k.at(21, move)
+    k.run_due()  # (its start: idle until 3)
+    assert k.skip_idle(100) == 6 and asked[0] == 1  # 3 to 18, and its wake at 21 waits
+    assert k.next_tick() == 21
+    k.tick = 21
+    k.run_due()
+    assert log == [0, "moves", 21]
