@@ -20,8 +20,9 @@ from prima.catalog import STANDARD_COMMANDS
 from prima.judge._reading import Row
 from prima.judge._thresholds import Thresholds
 
-__all__ = ["EPS", "FOLLOW_COMMANDS", "TALK_DEVICES", "UNMEASURED_EVENTS", "Ab", "Context",
-           "Exchange", "Hold", "ReactionState", "covered", "span_at", "spans_meeting", "xy"]
+__all__ = ["EPS", "FOLLOW_COMMANDS", "TALK_DEVICES", "TRAVEL_COMMANDS", "UNMEASURED_EVENTS", "Ab",
+           "Context", "Exchange", "Hold", "ReactionState", "covered", "span_at", "spans_meeting",
+           "xy"]
 
 EPS = 1e-6
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
@@ -44,6 +45,9 @@ LOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.breaks_cc)
 
 FOLLOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.follows_user)
 """Commands that move the robot after its user (Tracking Human)."""
+
+TRAVEL_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
+"""Commands that take the robot somewhere (a move, following the user)."""
 
 
 def xy(pose: Mapping[str, Any]) -> tuple[float, float]:
@@ -191,7 +195,12 @@ class _Window:
 
 
 class Context:
-    """What every measure reads, kept as the lines go by (:meth:`feed`)."""
+    """What every measure reads, kept as the lines go by (:meth:`feed`). Of the line being
+    fed: :attr:`now`, its time; for a start or end line, :attr:`ab`, the AB it starts or
+    ends (None: it names none, or none that started), and :attr:`follows` and
+    :attr:`travels`, whether its Commands follow the user or take the robot somewhere
+    (worked out once for all the measures; a feedback loop's lines name the same Commands
+    again and again)."""
 
     def __init__(self, thresholds: Thresholds) -> None:
         self.th = thresholds
@@ -199,7 +208,11 @@ class Context:
         self.lines = 0
         self.last: Row | None = None
         """The line before the one being fed."""
-        self.robot: tuple[float, float] | None = None
+        self.now = 0.0
+        self.ab: Ab | None = None
+        self.follows = self.travels = False
+        self._moves: dict[str, tuple[bool, bool]] = {}  # (command -> follows, travels)
+        self._robot: Mapping[str, Any] | None = None
         self.last_seen = 0.0
         """Until when the user was known detectable: now while the latest line with poses
         shows them so; else the time of the line with poses that first showed them not
@@ -270,9 +283,16 @@ class Context:
         """AB -> cut because the user spoke over it: whether an application took the
         words (False: none did, a false interruption: it goes on after a pause)."""
 
+    @property
+    def robot(self) -> tuple[float, float] | None:
+        """Where the latest line with poses put the robot (worked out when asked: few
+        lines ask)."""
+        return xy(self._robot) if self._robot is not None else None
+
     # ---------------------------------------------------------------- the pass
     def feed(self, row: Row) -> None:
         t = float(row["t"])
+        self.now = t
         if t > self.t + EPS:
             self._window = None
             self._heard = None
@@ -280,8 +300,9 @@ class Context:
         self.lines += 1
         if self._seeing:
             self.last_seen = t
-        if row.get("robot") is not None:
-            self.robot = xy(row["robot"])
+        robot = row.get("robot")
+        if robot is not None:
+            self._robot = robot
             user = row.get("user")
             self._seeing = user is not None and user.get("detectable") is True
             if self._seeing:
@@ -290,9 +311,14 @@ class Context:
         if handler is not None:
             handler(self, row)
 
-    def fed(self, row: Row) -> None:
-        """The line has been seen by every measure too."""
-        self.last = row
+    def _moved(self, command: str) -> None:
+        """:attr:`follows` and :attr:`travels` for a start or end line's Commands."""
+        moves = self._moves.get(command)
+        if moves is None:
+            names = command.split("+")
+            moves = self._moves[command] = (not FOLLOW_COMMANDS.isdisjoint(names),
+                                            not TRAVEL_COMMANDS.isdisjoint(names))
+        self.follows, self.travels = moves
 
     def _event(self, row: Row) -> None:
         name = str(row.get("text") or "")
@@ -415,6 +441,8 @@ class Context:
     def _start(self, row: Row) -> None:
         ab_id = row.get("ab")
         if not isinstance(ab_id, int):
+            self.ab = None
+            self._moved(str(row.get("command") or ""))
             return
         detail = row.get("detail") or {}
         tree = row.get("tree")
@@ -424,6 +452,8 @@ class Context:
                 str(row.get("reason") or ""), text=str(row.get("text") or ""),
                 cuttable=detail.get("cuttable") is True,
                 iteration=int(detail.get("iteration") or 0))
+        self.ab = ab
+        self._moved(ab.command)
         ws, we = detail.get("words_start"), detail.get("words_end")
         if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
             ab.words = ab.planned = (float(ws), float(we))
@@ -460,7 +490,9 @@ class Context:
 
     def _end(self, row: Row) -> None:
         ab_id = row.get("ab")
-        ab = self.abs.get(ab_id) if isinstance(ab_id, int) else None
+        ab = self.ab = self.abs.get(ab_id) if isinstance(ab_id, int) else None
+        command = str(row.get("command") or "")
+        self._moved(command)
         if ab is not None:
             self.running.pop(ab.id, None)
             ab.end = float(row["t"])
@@ -475,7 +507,7 @@ class Context:
             if ex is not None and ex.reply_ab == ab.id:
                 ex.done = ab.end
                 del self.open_exchange[ab.app]
-        if answered(row):
+        if (command == "QA" or command.endswith("+QA")) and answered(row):
             app = str(row.get("app") or "")
             tree = row.get("tree")
             cid = command_ids(row)

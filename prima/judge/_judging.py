@@ -3,13 +3,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from prima.errors import TraceError
 from prima.judge._context import Context
-from prima.judge._measures import MEASURES, Finder
+from prima.judge._measures import MEASURES
 from prima.judge._reactions import analyse
 from prima.judge._reading import Row, as_rows, read_trace
 from prima.judge._report import Report
@@ -20,6 +20,9 @@ if TYPE_CHECKING:
 
 __all__ = ["Judging", "find_scenarios", "judge", "judge_file"]
 
+
+Feed = Callable[[Row, Context], None]
+"""What a line is fed to: a finder's ``feed``, or its ``feeder``'s for the line's kind."""
 
 HELD = 4096
 """Lines :meth:`Judging.feed` holds at most before the judge reads them: a run judged as
@@ -37,8 +40,8 @@ class Judging:
         self.name = name
         self.ctx = Context(self.th)
         self.finders = [(m, m.finder()) for m in MEASURES]
-        self._fed: dict[str, list[Finder]] = {}
-        """The finders each kind of line goes to, in order."""
+        self._fed: dict[str, list[Feed]] = {}
+        """What each kind of line is fed to, in order (:meth:`_feeders`)."""
         self._held: list[Row] = []
         """Lines fed and not yet read (:meth:`feed`)."""
 
@@ -54,16 +57,30 @@ class Judging:
     def feed_all(self, rows: Iterable[Row]) -> None:
         """Lines of the trace, in order, after the ones before them (the judge's one
         loop: a trace judged whole goes through it once)."""
-        ctx, fed, finders = self.ctx, self._fed, self.finders
+        ctx, fed = self.ctx, self._fed
         for row in rows:
             ctx.feed(row)
             kind = row["kind"]
             those = fed.get(kind)
             if those is None:
-                those = fed[kind] = [f for _m, f in finders if f.kinds is None or kind in f.kinds]
-            for finder in those:
-                finder.feed(row, ctx)
-            ctx.fed(row)
+                those = fed[kind] = self._feeders(kind)
+            for feed in those:
+                feed(row, ctx)
+            ctx.last = row
+
+    def _feeders(self, kind: str) -> list[Feed]:
+        """What each line of ``kind`` is fed to, in the measures' order: the finders that
+        look at that kind, each through its ``feeder`` for it if it has one (its own
+        handling of that kind alone, without asking the line's kind again; None: it has
+        nothing to do with it), else its ``feed``."""
+        out: list[Feed] = []
+        for _m, finder in self.finders:
+            if finder.kinds is None or kind in finder.kinds:
+                feeder: Callable[[str], Feed | None] | None = getattr(finder, "feeder", None)
+                feed = finder.feed if feeder is None else feeder(kind)
+                if feed is not None:
+                    out.append(feed)
+        return out
 
     def report(self) -> Report:
         """What the lines fed show."""

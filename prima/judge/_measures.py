@@ -25,7 +25,7 @@ from prima.judge import _blame as blame
 from prima.judge._blame import Wheels, Whose
 from prima.judge._context import (
     EPS,
-    FOLLOW_COMMANDS,
+    TRAVEL_COMMANDS,
     Ab,
     Context,
     Exchange,
@@ -55,14 +55,13 @@ __all__ = ["MEASURES", "Finder", "Measure", "measure", "registered"]
 
 
 _AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
-_TRAVELS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
-"""Commands that move the robot after its user (Tracking Human): following the user
-is not leaving them."""
 
 
 class Finder(Protocol):
     """What finds one measure's faults: every line of the kinds it looks at, then the
-    findings."""
+    findings. A finder may also have a ``feeder(kind)``: what to feed the lines of that
+    kind to instead of :meth:`feed` (None: nothing), so that the judge asks a line's kind
+    once for all the finders (each of PRIMA's own that looks at many lines has one)."""
 
     @property
     def kinds(self) -> frozenset[str] | None:
@@ -230,30 +229,54 @@ class _Unfaced:
         """A chain's later Command -> the Command before it in the chain."""
 
     def feed(self, row: Row, ctx: Context) -> None:
-        kind = row["kind"]
+        self.feeder(row["kind"])(row, ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        if kind == "request":
+            return self._request
+        if kind == "start":
+            return self._start
+        if kind == "end":
+            return self._end
+        return self._posed
+
+    def _request(self, row: Row, ctx: Context) -> None:
         ab = row.get("ab")
-        if kind == "request" and row.get("reason") == "restart" and isinstance(ab, int):
+        if row.get("reason") == "restart" and isinstance(ab, int):
             cut = row.get("before")
             if isinstance(cut, int):
                 self.restarts[ab] = cut
-        elif kind == "request":
+        else:
             ids = command_ids(row)
             before = row.get("before")
             if ids:
                 self.after_ab[ids[0]] = before if isinstance(before, int) else None
             self.after_command.update(zip(ids[1:], ids, strict=False))
-        elif kind == "start" and isinstance(ab, int):
+        self._posed(row, ctx)
+
+    def _start(self, row: Row, ctx: Context) -> None:
+        ab = ctx.ab  # (the context's: None when the line names no AB)
+        if ab is not None:
             self._started(row, ab, ctx)
-        elif kind == "end" and isinstance(ab, int):
-            talk = self.talking.get(ab)
-            if talk is not None:
-                if talk.words is None and ab in ctx.abs:
-                    talk.words = ctx.abs[ab].words
-                    for posed in talk.pending:
-                        if self._pose(ab, talk, posed.row, posed.mover, ctx):
-                            break
-                if ab in self.talking:
-                    self._ended(ab, talk, float(row["t"]), ctx)
+        if self.talking:
+            self._posed(row, ctx)
+
+    def _end(self, row: Row, ctx: Context) -> None:
+        ab = row.get("ab")
+        talk = self.talking.get(ab) if isinstance(ab, int) else None
+        if talk is not None and isinstance(ab, int):
+            if talk.words is None and ctx.ab is not None:
+                talk.words = ctx.ab.words
+                for posed in talk.pending:
+                    if self._pose(ab, talk, posed.row, posed.mover, ctx):
+                        break
+            if ab in self.talking:
+                self._ended(ab, talk, ctx.now, ctx)
+        if self.talking:
+            self._posed(row, ctx)
+
+    def _posed(self, row: Row, ctx: Context) -> None:
+        """Any line: one with poses is judged for each utterance running."""
         if self.talking and row.get("robot") is not None and row.get("user") is not None:
             mover = _wheels(ctx)
             posed = _Posed(row, mover)  # (one for every AB it waits in: not one each)
@@ -263,13 +286,12 @@ class _Unfaced:
                 else:
                     self._pose(ab_id, talk, row, mover, ctx)
 
-    def _before(self, row: Row, ctx: Context) -> str | None:
+    def _before(self, row: Row, ids: tuple[int, ...], ctx: Context) -> str | None:
         """The Command of the AB an AB follows in its stream, as the mediator links them
         (docs/rules.md 7.3 (4)): the AB its request follows, or the one before it in its
         chain; not an AB of another request that started in between (an ``asap``
         StopMoving beside it). None: it follows none, or one that never ran or that a
         policy put there (aimed at nothing of the application's)."""
-        ids = command_ids(row)
         first = ids[0] if ids else None
         if first in self.after_command:
             ab_id = ctx.cmd_ab.get(self.after_command[first])
@@ -283,9 +305,10 @@ class _Unfaced:
             return None
         return ab.command
 
-    def _started(self, row: Row, ab: int, ctx: Context) -> None:
+    def _started(self, row: Row, started: Ab, ctx: Context) -> None:
+        ab = started.id
         tree = row.get("tree")
-        before = self._before(row, ctx)
+        before = self._before(row, started.ids, ctx)
         cut = self.restarts.pop(ab, None)
         if cut is not None:  # (said again, its words are about what they were about)
             before = self.before_of.get(cut, before)
@@ -293,14 +316,13 @@ class _Unfaced:
         if isinstance(tree, int):
             self.last_command[tree] = str(row.get("command"))
         if not row.get("text") or _about_something_else(row, before) \
-                or not ctx.elsewhere.isdisjoint(command_ids(row)):
+                or not ctx.elsewhere.isdisjoint(started.ids):
             return
         off = _off(row, ctx.th.face_tolerance)
         if off is not None:
             self.found.append(self._finding(row, off, ctx))
             return
-        known = ctx.abs[ab].words if ab in ctx.abs else None
-        self.talking[ab] = _Words(row, known)
+        self.talking[ab] = _Words(row, started.words)
 
     def _pose(self, ab: int, talk: _Words, row: Row, mover: Blame | None,
               ctx: Context) -> bool:
@@ -409,21 +431,37 @@ class _Leaving:
         """The last line with the robot's and the user's poses (they hold until the next)."""
 
     def feed(self, row: Row, ctx: Context) -> None:
-        kind = row["kind"]
-        ab = row.get("ab")
-        if kind == "start" and isinstance(ab, int):
-            self._count(row, 1)
+        self.feeder(row["kind"])(row, ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        if kind == "start":
+            return self._start
+        if kind == "end":
+            return self._end
+        return self._posed
+
+    def _start(self, row: Row, ctx: Context) -> None:
+        ab = ctx.ab  # (the context's: None when the line names no AB)
+        if ab is not None:
+            self._count(ctx, 1)
             if row.get("text") and row.get("robot") is not None:
-                known = ctx.abs[ab].words if ab in ctx.abs else None
-                self.talking[ab] = _Talk(ab, row, None, known)
-        elif kind == "end" and isinstance(ab, int):
-            self._count(row, -1)
+                self.talking[ab.id] = _Talk(ab.id, row, None, ab.words)
+        self._posed(row, ctx)
+
+    def _end(self, row: Row, ctx: Context) -> None:
+        ab = row.get("ab")
+        if isinstance(ab, int):
+            self._count(ctx, -1)
             talk = self.talking.pop(ab, None)
-            if talk is not None and talk.words is None and ab in ctx.abs:
-                talk.words = ctx.abs[ab].words
+            if talk is not None and talk.words is None and ctx.ab is not None:
+                talk.words = ctx.ab.words
                 for posed in talk.pending:
                     if self._pose(talk, posed.row, posed.mover, ctx, posed.driven, posed.held):
                         break
+        self._posed(row, ctx)
+
+    def _posed(self, row: Row, ctx: Context) -> None:
+        """Any line: one with poses is judged for each utterance running, and held."""
         if row.get("robot") is not None and row.get("user") is not None:
             if self.talking:
                 mover = _wheels(ctx)
@@ -437,13 +475,12 @@ class _Leaving:
             self.drove = False
             self.held = row
 
-    def _count(self, row: Row, by: int) -> None:
+    def _count(self, ctx: Context, by: int) -> None:
         """An AB started (``by`` 1) or ended (-1): how many follow the user, and take the
-        robot somewhere."""
-        commands = str(row.get("command") or "").split("+")
-        if any(c in FOLLOW_COMMANDS for c in commands):
+        robot somewhere (as the context found its line's Commands do)."""
+        if ctx.follows:
             self.following = max(0, self.following + by)
-        if any(c in _TRAVELS for c in commands):
+        if ctx.travels:
             self.driving = max(0, self.driving + by)
             self.drove = self.drove or by > 0
 
@@ -498,7 +535,7 @@ def _travels(row: Row) -> bool:
     user): where its stream then speaks is where it chose to go. The restore-state
     policy's return is not one: it takes the robot back."""
     return row.get("reason") != "restore-state" and \
-        any(c in _TRAVELS for c in str(row.get("command") or "").split("+"))
+        any(c in TRAVEL_COMMANDS for c in str(row.get("command") or "").split("+"))
 
 
 class _Elsewhere:
@@ -538,8 +575,15 @@ class _Elsewhere:
             if start is not None and start.get("ab") == row.get("ab"):
                 self._start(start, ctx)  # it resumed speaking
         elif kind == "start":
+            self._started(row, ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        return self._started if kind == "start" else self.feed
+
+    def _started(self, row: Row, ctx: Context) -> None:
+        self.last_start = row
+        if self.resumed:
             self._start(row, ctx)
-            self.last_start = row
 
     def _start(self, row: Row, ctx: Context) -> None:
         tree = row.get("tree")
@@ -599,10 +643,25 @@ class _Splits:
                 self.streams.pop(app, None)
         elif kind == "unload":
             self.streams.pop(app, None)
-        elif kind == "start" and row.get("text"):
-            self._utterance(row, app, ctx)
-        elif kind == "end" and row.get("reason") == "interrupt":
-            self._cut(row, app, ctx)
+        elif kind == "start":
+            self._start(row, ctx)
+        elif kind == "end":
+            self._end(row, ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        if kind == "start":
+            return self._start
+        if kind == "end":
+            return self._end
+        return self.feed
+
+    def _start(self, row: Row, ctx: Context) -> None:
+        if row.get("text"):
+            self._utterance(row, str(row.get("app") or ""), ctx)
+
+    def _end(self, row: Row, ctx: Context) -> None:
+        if row.get("reason") == "interrupt":
+            self._cut(row, str(row.get("app") or ""), ctx)
 
     def _utterance(self, row: Row, app: str, ctx: Context) -> None:
         t = float(row["t"])
@@ -700,30 +759,42 @@ class _Silences:
 
     def feed(self, row: Row, ctx: Context) -> None:
         kind = row["kind"]
-        t = float(row["t"])
-        ab = row.get("ab")
         if kind == "start":
+            self._start(row, ctx)
+        elif kind == "end":
+            self._end(row, ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        return self._start if kind == "start" else self._end if kind == "end" else self.feed
+
+    def _start(self, row: Row, ctx: Context) -> None:
+        t = ctx.now
+        if self.silent:
             for end, at, since in self.silent:
                 gap = round(t - since, 3) if since is not None else 0.0
                 if gap > ctx.th.silence + EPS:
                     self.found.append(Silence(int(end["seq"]), float(end["t"]),
                                               str(end.get("app")), gap, at))
             self.silent = []
-            if isinstance(ab, int):
-                detail = row.get("detail") or {}
-                listens = "QA" in str(row.get("command") or "").split("+")
-                ends = detail.get("words_end") if listens else None
-                self.running[ab] = (str(row.get("command")),
-                                    float(ends) if isinstance(ends, (int, float)) else
-                                    (t if listens else math.inf))
-        elif kind == "end":
-            if isinstance(ab, int):
-                self.running.pop(ab, None)
-            if ctx.exchanges and ctx.exchanges[-1].seq == row.get("seq"):
-                self.silent.append((row, ctx.exchanges[-1].at, self._quiet_from(t)))
-            elif self.silent and not self._showing(t):
-                self.silent = [(r, at, t if since is None else since)
-                               for r, at, since in self.silent]
+        ab = row.get("ab")
+        if isinstance(ab, int):
+            command = str(row.get("command") or "")
+            listens = "QA" in command.split("+")
+            ends = (row.get("detail") or {}).get("words_end") if listens else None
+            self.running[ab] = (command,
+                                float(ends) if isinstance(ends, (int, float)) else
+                                (t if listens else math.inf))
+
+    def _end(self, row: Row, ctx: Context) -> None:
+        t = ctx.now
+        ab = row.get("ab")
+        if isinstance(ab, int):
+            self.running.pop(ab, None)
+        if ctx.exchanges and ctx.exchanges[-1].seq == row.get("seq"):
+            self.silent.append((row, ctx.exchanges[-1].at, self._quiet_from(t)))
+        elif self.silent and not self._showing(t):
+            self.silent = [(r, at, t if since is None else since)
+                           for r, at, since in self.silent]
 
     def _showing(self, t: float) -> bool:
         """Some running AB shows or says something at ``t``."""
@@ -794,37 +865,54 @@ class _Stuck:
         for the wheels are not stuck (the user leads: docs/rules.md 7.6 (1))."""
 
     def feed(self, row: Row, ctx: Context) -> None:
-        t = float(row["t"])
+        self.feeder(row["kind"])(row, ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        return {"request": self._request, "start": self._start, "end": self._end,
+                "cancel": self._cancel, "unload": self._unload}.get(kind, self._tick)
+
+    def _tick(self, row: Row, ctx: Context) -> None:
+        """Any line: the checks due before its time are made."""
+        t = ctx.now
         if t > self.t + EPS:
             self._check(ctx, before=t)
             self.t = t
-        kind = row["kind"]
-        ab = row.get("ab")
-        if kind in ("start", "end") and isinstance(ab, int) and any(
-                c in FOLLOW_COMMANDS for c in str(row.get("command") or "").split("+")):
-            if kind == "start":
-                self.following[ab] = [t, math.inf, str(row.get("app") or "")]
-            elif ab in self.following:
-                self.following[ab][1] = t
-        if kind == "request" and row.get("reason") != "restart":
+
+    def _request(self, row: Row, ctx: Context) -> None:
+        self._tick(row, ctx)
+        if row.get("reason") != "restart":
             # (a Command cut to start again has started once, as a feedback Command's
             # next iteration has: it is not counted as waiting again)
             self._requested(row, ctx)
-        elif kind == "start":
-            self._started(row, ctx)
-        elif kind == "end":
-            ab = row.get("ab")
-            cid = (row.get("detail") or {}).get("command_id")
-            run = self.runs.get(cid) if isinstance(cid, int) else None
-            if run is not None and isinstance(ab, int):
-                run.running.discard(ab)
-                run.last_end = t
-        elif kind == "cancel":
-            for cid in command_ids(row):
-                self._done(cid)
-        elif kind == "unload":
-            for command in list(self.waiting.pop(str(row.get("app") or ""), {}).values()):
-                command.done = True
+
+    def _start(self, row: Row, ctx: Context) -> None:
+        self._tick(row, ctx)
+        ab = ctx.ab  # (the context's: None when the line names no AB)
+        if ab is not None and ctx.follows:
+            self.following[ab.id] = [ctx.now, math.inf, str(row.get("app") or "")]
+        self._started(row, ab.ids if ab is not None else command_ids(row), ctx)
+
+    def _end(self, row: Row, ctx: Context) -> None:
+        self._tick(row, ctx)
+        t = ctx.now
+        ab = row.get("ab")
+        if isinstance(ab, int) and ctx.follows and ab in self.following:
+            self.following[ab][1] = t
+        cid = (row.get("detail") or {}).get("command_id")
+        run = self.runs.get(cid) if isinstance(cid, int) else None
+        if run is not None and isinstance(ab, int):
+            run.running.discard(ab)
+            run.last_end = t
+
+    def _cancel(self, row: Row, ctx: Context) -> None:
+        self._tick(row, ctx)
+        for cid in command_ids(row):
+            self._done(cid)
+
+    def _unload(self, row: Row, ctx: Context) -> None:
+        self._tick(row, ctx)
+        for command in list(self.waiting.pop(str(row.get("app") or ""), {}).values()):
+            command.done = True
 
     def _requested(self, row: Row, ctx: Context) -> None:
         app = str(row.get("app") or "")
@@ -850,12 +938,14 @@ class _Stuck:
             command.done = True
             self.waiting.get(command.app, {}).pop(cid, None)
 
-    def _started(self, row: Row, ctx: Context) -> None:
-        t = float(row["t"])
+    def _started(self, row: Row, ids: tuple[int, ...], ctx: Context) -> None:
+        t = ctx.now
         iteration = (row.get("detail") or {}).get("iteration")
-        for cid in command_ids(row):
+        for cid in ids:
             self._done(cid)
-            run = self.runs.setdefault(cid, _Running())
+            run = self.runs.get(cid)
+            if run is None:
+                run = self.runs[cid] = _Running()
             if not run.running and abs(run.last_end - t) > EPS:
                 run.streak, run.iterated = t, False  # a new run of back-to-back ABs
                 for waiter in self.behind.get(cid, ()):
@@ -979,9 +1069,15 @@ class _BargeIn:
         elif kind == "hear" and row.get("reason") == "backchannel" and self.said:
             self.said[-1].backchannel = True
         elif kind == "end":
-            ab = ctx.abs.get(row.get("ab", -1))
-            if ab is not None and ab.text and ab.words is not None and ab.end is not None:
-                self._ended(ab, ctx)
+            self._end(row, ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        return self._end if kind == "end" else self.feed
+
+    def _end(self, row: Row, ctx: Context) -> None:
+        ab = ctx.ab  # (the context's: the AB the line ends, if it started)
+        if ab is not None and ab.text and ab.words is not None and ab.end is not None:
+            self._ended(ab, ctx)
 
     def _ended(self, ab: Ab, ctx: Context) -> None:
         # (the words as planned, where the start line said: a cut one's end line says
@@ -1125,6 +1221,19 @@ class _Recovery:
                 self.again[ab] = before
         elif kind == "start" and ab in self.again:
             self._check(self.again.pop(ab), float(row["t"]), ctx)
+
+    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+        return self._start if kind == "start" else self._end if kind == "end" else self.feed
+
+    def _start(self, row: Row, ctx: Context) -> None:
+        """A start line matters only while a cut AB waits to start again."""
+        if self.again:
+            self.feed(row, ctx)
+
+    def _end(self, row: Row, ctx: Context) -> None:
+        """An end line matters only while a falsely cut AB's pause is known."""
+        if self.pauses:
+            self.feed(row, ctx)
 
     def _check(self, cut: int, started: float | None, ctx: Context) -> None:
         seq, t = self.cut.pop(cut)

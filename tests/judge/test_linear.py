@@ -19,6 +19,7 @@ import pytest
 from prima.judge import Thresholds, judge
 from prima.judge._context import EPS, Context, span_at
 from prima.run import Run
+from tests.judge.helpers import Trace
 from tests.work import bytecodes
 
 CHATTY = Path(__file__).parents[2] / "bench" / "data" / "chatty.xml"
@@ -33,6 +34,28 @@ def test_the_work_per_line_does_not_grow_with_the_trace() -> None:
 
     short, long = per_line(400), per_line(3200)
     assert long <= 1.1 * short, (short, long)
+
+
+@pytest.mark.pure
+def test_a_feedback_loop_s_lines_go_only_where_they_are_read() -> None:
+    # A loop's iterations (an end line and the next start at one instant, a pose line
+    # between) are most of a judged run's lines: each finder is handed only its own
+    # handling of their kind (its feeder), and reads what the context found of the line
+    # (its time, its AB, whether its Commands move the robot) rather than work it out
+    # again. About 655 bytecodes a line; 880 when every finder sorted out every line.
+    loop = ("human-detection", "locomotion")
+    tr = Trace()
+    tr.line(0.0, "load", app="fa")
+    tr.request(0.0, "fa", 1, 1, command="TrackingHuman", devices=loop)
+    for i in range(200):
+        if i:
+            tr.end(i / 2, "fa", i, 1, command="TrackingHuman", devices=loop, iteration=i - 1,
+                   result="distance=1.0, lost=False")
+        tr.start(i / 2, "fa", i + 1, 1, command="TrackingHuman", devices=loop, iteration=i,
+                 cuttable=True)
+        tr.pose(i / 2 + 0.25)
+    per_line = bytecodes(tr.judge) / len(tr.rows)
+    assert per_line < 750, per_line
 
 
 def _spans(rng: random.Random) -> list[list[float]]:
