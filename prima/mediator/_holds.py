@@ -504,8 +504,7 @@ class Holds:
         # the holder any more: what it kept is looked at again)
         self.refile_reserved()
         found: dict[AbId, Node] = {}
-        if wm.pjf or wm.named:
-            wm.count_named()  # (``on`` counts them)
+        wm.count_named()  # (``on`` counts them)
         for d in devices:
             for tree, nodes in wm.on.get(d, {}).items():
                 if self._may_hold(tree):

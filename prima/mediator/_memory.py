@@ -164,8 +164,7 @@ class WorkingMemory:
         if node.reserving or node.state is not _PENDING:
             return
         node.reserving = True
-        if self.pjf or self.named:
-            self.count_named()  # (``beside`` counts them)
+        self.count_named()  # (``beside`` counts them)
         dirty = self.dirty
         dirty.update(node.devices)  # (what it keeps steps aside now, and reserves no
         beside = self.beside        # more the other devices it waits for)
@@ -299,6 +298,8 @@ class WorkingMemory:
         anything reads the rankings (``ranked``, ``on``, ``beside``), as if they had
         been counted in when they entered the waiting list. (``Selector._idle`` reads
         ``ranked`` at each round and makes up for them itself.)"""
+        if not (self.pjf or self.named):
+            return
         for named in (self.pjf, self.named):
             for n in named.values():
                 if n.state is _WAITING and n.parked is None and not n.counted:
@@ -467,8 +468,7 @@ class WorkingMemory:
         """The tree's rank changed: the devices its next ABs reserve are looked at again,
         and the other devices that the ABs waiting for those need (whom they keep, and so
         what those reserve, changed)."""
-        if self.pjf or self.named:
-            self.count_named()  # (``beside`` counts them)
+        self.count_named()  # (``beside`` counts them)
         dirty = self.dirty
         beside = self.beside
         for d, on in self.reserving.items():
@@ -503,8 +503,7 @@ class WorkingMemory:
         """A reaction to the user's own action now keeps the streams it interrupted
         waiting on every device (docs/rules.md 7.6 (1)): the best waiting AB of each
         device is looked at again (one it holds steps aside, reserving nothing)."""
-        if self.pjf or self.named:
-            self.count_named()
+        self.count_named()
         ranked = self.ranked
         self.dirty.update(d for d, apps in ranked.items() if apps)
 
