@@ -63,9 +63,12 @@ def command_ids(row: Row) -> tuple[int, ...]:
 
 
 def answered(row: Row) -> bool:
+    """An end line of a Q&A (its Commands' last) that its user answered."""
+    command = str(row.get("command") or "")
+    if not (command == "QA" or command.endswith("+QA")):  # (most end lines: no more)
+        return False
     result = (row.get("detail") or {}).get("result")
-    return (str(row.get("command") or "").split("+")[-1] == "QA" and isinstance(result, str)
-            and _ANSWERED.search(result) is not None)
+    return isinstance(result, str) and _ANSWERED.search(result) is not None
 
 
 @dataclass
@@ -507,7 +510,7 @@ class Context:
             if ex is not None and ex.reply_ab == ab.id:
                 ex.done = ab.end
                 del self.open_exchange[ab.app]
-        if (command == "QA" or command.endswith("+QA")) and answered(row):
+        if answered(row):
             app = str(row.get("app") or "")
             tree = row.get("tree")
             cid = command_ids(row)
