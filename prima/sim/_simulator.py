@@ -483,7 +483,9 @@ class Simulator:
     def _wake_at(self, last: int) -> int:
         """Where :meth:`advance_until` runs on to from now, toward ``last``: the
         simulator's own next time (:meth:`next_time`), the wakes up to ``last`` of
-        processes that would do nothing skipped first."""
+        processes that would do nothing skipped first. (:meth:`_next_tick` and
+        :meth:`_moving`, written out: it runs at every stop, and their calls cost a run
+        0.5 to 0.8% more bytecodes.)"""
         k = self.kernel
         heap = k._heap
         if not heap:
@@ -493,7 +495,7 @@ class Simulator:
                 self._skip_idle(last)  # (wakes after now: nothing it does is due)
             own = min(heap[0][0], last)
         w = self.world
-        if w.mode or w.human_moving or k.tick < w.joints_until or w.swaying:  # (_next_tick)
+        if w.mode or w.human_moving or k.tick < w.joints_until or w.swaying:
             own = min(own, k.tick + k.hz)
         return max(own, k.tick)
 
