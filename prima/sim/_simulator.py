@@ -545,26 +545,23 @@ class Simulator:
                 start = tick = k.tick
                 bound = min(tick - tick % grid + grid, target, heap[0][0] if heap else target)
                 while True:
-                    done = world.step()
-                    tick += 1
-                    k.tick = tick
-                    if done is not None or tick >= bound:
-                        if done is not None:
-                            done()
-                        if tick % every == 0:
-                            self._sense()
-                            if pace is not None:
-                                pace(tick)
-                        if sample and tick % sample == 0:
-                            self.on_sample()
-                        if (tick >= target or (heap and heap[0][0] <= tick)
-                                or (stop_on_report and self.reports != before)):
-                            break
-                        bound = min(tick - tick % grid + grid, target,
-                                    heap[0][0] if heap else target)
-                    if not (world.mode or world.human_moving or tick < world.joints_until
-                            or world.swaying):
+                    tick, done = world.run(tick, bound)  # (to the bound, or less if
+                    k.tick = tick                        # a motion ended, or all stopped)
+                    if done is None and tick < bound:
+                        break  # nothing moves any more
+                    if done is not None:
+                        done()
+                    if tick % every == 0:
+                        self._sense()
+                        if pace is not None:
+                            pace(tick)
+                    if sample and tick % sample == 0:
+                        self.on_sample()
+                    if (tick >= target or (heap and heap[0][0] <= tick)
+                            or (stop_on_report and self.reports != before)):
                         break
+                    bound = min(tick - tick % grid + grid, target,
+                                heap[0][0] if heap else target)
                 self.steps += tick - start
             else:
                 self._jump(target)

@@ -14,7 +14,9 @@ profiles keep their own progress instead of reading positions back. What the
 world does at every step, and the poses it reads most, go straight to the
 Chipmunk functions that pymunk's properties and ``Space.step`` call (through
 pymunk's own binding of them): the same calls with the same numbers, without
-three to five times their cost in Python around each.
+three to five times their cost in Python around each. The simulator steps the world a
+stretch of steps at a time (:meth:`World.run`: the steps between two sensing ticks),
+in a loop of the motion's own, each step as :meth:`World.step` takes it.
 
 What is worked out from the poses is worked out once per pose: :attr:`World.version`
 moves on whenever a body may have moved or turned (every step, and every pose
@@ -64,6 +66,9 @@ _IDLE, _LINEAR, _ANGULAR, _VELOCITY = 0, 1, 2, 3
 _CHECK_EVERY = 5
 """A straight drive compares its real progress with its plan every this many steps
 (reading the body's position costs more than a physics step)."""
+_MARGIN = 1e-9
+"""A length (m) far longer than the rounding of a straight drive's progress over a
+stretch of steps, far shorter than a step."""
 _BLOCKED_LAG = 0.1
 """A straight drive that lags this far (m) behind its plan is blocked: it ends at once."""
 STILL = 1e-4
@@ -385,11 +390,14 @@ class World:
             return self._w
         return 0.0
 
-    def _advance(self, dt: float) -> None:
-        """Step the physics, with the sway under way, if any, on top of the wheels."""
+    def _advance(self, space: object, dt: float) -> None:
+        """Step the physics with the sway under way on top of the wheels: in a stretch
+        with a sway, the step the loops of :meth:`_stretch` take instead of
+        ``cpSpaceStep(space, dt)`` (the same arguments; the wheels' turning rate, which
+        the sway adds to, is the controller's attribute: the loops keep it up to date)."""
         sway = self._sway
-        if sway is None:
-            _cp.cpSpaceStep(self._sp, dt)  # (Space.step: no callbacks, nothing added later)
+        if sway is None:  # (it ended within the stretch)
+            _cp.cpSpaceStep(space, dt)
             return
         amplitude, omega, steps = sway
         k = self._sway_k + 1
@@ -397,7 +405,7 @@ class World:
         rb = self._rb
         base = self._base_w()
         _cp.cpBodySetAngularVelocity(rb, base + (offset - self._sway_offset) / dt)
-        _cp.cpSpaceStep(self._sp, dt)
+        _cp.cpSpaceStep(space, dt)
         self._sway_offset = offset
         self._sway_k = k
         if k >= steps:
@@ -497,53 +505,167 @@ class World:
     # ---- stepping ------------------------------------------------------------
 
     def step(self) -> Callable[[], None] | None:
-        """Advance one fixed step; returns a callback if a motion just ended."""
-        self.version += 1
+        """Advance one fixed step, whatever moves; returns a callback if a motion just
+        ended."""
+        return self._stretch(0, 1)[1]
+
+    def run(self, tick: int, bound: int) -> tuple[int, Callable[[], None] | None]:
+        """Step from the tick ``tick`` on while anything moves (a drive, a turn, a sway,
+        the user walking, a joint before :attr:`joints_until`), up to the tick ``bound``
+        or a step whose motion ended (its callback, as :meth:`step` returns it).
+        Returns the tick reached and that callback: where the simulator looks at its
+        agenda and senses next, it stops (a run takes thousands of steps)."""
+        while True:
+            sway = self._sway
+            if self.mode == _IDLE:
+                if self.human_moving:
+                    end = bound
+                else:  # (still, once the joints and the sway are done)
+                    end = min(bound, max(self.joints_until,
+                                         tick if sway is None else tick + sway[2] - self._sway_k))
+                    if end <= tick:
+                        return tick, None
+            else:
+                end = bound
+            tick, done = self._stretch(tick, end)
+            if done is not None or tick >= bound:
+                return tick, done
+
+    def _stretch(self, tick: int, bound: int) -> tuple[int, Callable[[], None] | None]:
+        """Steps from the tick ``tick`` up to ``bound`` (at least one), or to the step
+        whose motion ended (its callback): a loop of the wheels' controller's own (idle,
+        a straight drive, a turn, a velocity command), without a method's call a step.
+        A stretch with a sway steps through :meth:`_advance`; one without it calls
+        Chipmunk's step directly."""
+        advance: Callable[[object, float], None] = (
+            _cp.cpSpaceStep if self._sway is None else self._advance)
         mode = self.mode
-        dt = self.dt
+        if mode == _IDLE:
+            return self._run_idle(tick, bound, advance), None
         if mode == _LINEAR:
-            rem = self._len - self._s
-            v = min(self._vmax, self._v + self._a_dt, math.sqrt(2.0 * self.spec.max_accel * rem))
-            last = v * dt >= rem
-            if last:
-                v = rem / dt
-            rb = self._rb
-            vx, vy = self._ux * v, self._uy * v
-            now = _cp.cpBodyGetVelocity(rb)
-            if v != self._v or now.x != vx or now.y != vy:
-                _cp.cpBodySetVelocity(rb, (vx, vy))  # (the wheels hold the course: a push
-                self._v = v                          # sets it off the line for a step)
-            self._advance(dt)
-            self._s += v * dt
-            if last:
-                return self._finish_linear()
-            self._steps += 1
-            if self._steps % _CHECK_EVERY == 0 and self._lagging():
-                return self._finish(False)  # blocked: someone or something in the way
-            return None
+            return self._run_linear(tick, bound, advance)
         if mode == _ANGULAR:
-            rem = self._len - self._s
-            accel = math.radians(self.spec.turn_accel)
-            w = min(self._wtop, self._v + self._alpha_dt, math.sqrt(2.0 * accel * rem))
+            return self._run_angular(tick, bound, advance)
+        return self._run_velocity(tick, bound, advance)
+
+    def _run_idle(self, tick: int, end: int, advance: Callable[[object, float], None]) -> int:
+        """Idle steps up to the tick ``end``, each followed by :meth:`_hold` if the body
+        has any speed (a push: else it has nothing to do)."""
+        space, rb, dt = self._sp, self._rb, self.dt
+        velocity = _cp.cpBodyGetVelocity
+        for _ in range(end - tick):
+            advance(space, dt)
+            v = velocity(rb)
+            if v.x or v.y:
+                self._hold()
+        self.version += end - tick
+        return end
+
+    def _run_linear(self, tick: int, bound: int, advance: Callable[[object, float], None]
+                    ) -> tuple[int, Callable[[], None] | None]:
+        """Straight-drive steps up to the tick ``bound`` or the drive's end: each speeds
+        up, cruises or brakes (whichever is slowest), so as to stop at the end, and sets
+        the body's velocity along the line again if a push set it off.
+
+        A stretch cruising all along (at the top speed, far enough from the end to brake
+        after ``bound``) leaves only the push check and the lag check to each step: its
+        speed is the top speed again (the first of the three in ``min``: the others,
+        the speed plus a positive gain and the braking speed, are at least it), and it is
+        not the last step. The rest of the drive left after ``bound``, less a margin far
+        wider than the rounding of the progress's sums, passes the tests of the speed and
+        of the last step: both grow with the rest, in floating point as in reals, and
+        every step's rest is longer."""
+        dt, rb, space, vmax = self.dt, self._rb, self._sp, self._vmax
+        length, s, v, steps = self._len, self._s, self._v, self._steps
+        twice = 2.0 * self.spec.max_accel
+        start = tick
+        last = blocked = False
+        ds = vmax * dt
+        low = length - s - (bound - tick) * ds - _MARGIN if v == vmax else -1.0
+        if ds < low and vmax <= math.sqrt(twice * low):
+            vx, vy = self._ux * vmax, self._uy * vmax
+            while tick < bound:
+                now = _cp.cpBodyGetVelocity(rb)
+                if now.x != vx or now.y != vy:
+                    _cp.cpBodySetVelocity(rb, (vx, vy))  # (pushed off its course)
+                    v = vmax
+                advance(space, dt)
+                s += ds
+                tick += 1
+                steps += 1
+                if steps % _CHECK_EVERY == 0:
+                    self._s = s
+                    if self._lagging():
+                        blocked = True
+                        break
+        else:
+            a_dt, ux, uy = self._a_dt, self._ux, self._uy
+            while True:
+                rem = length - s
+                nv = min(vmax, v + a_dt, math.sqrt(twice * rem))
+                last = nv * dt >= rem
+                if last:
+                    nv = rem / dt
+                vx, vy = ux * nv, uy * nv
+                now = _cp.cpBodyGetVelocity(rb)
+                if nv != v or now.x != vx or now.y != vy:
+                    _cp.cpBodySetVelocity(rb, (vx, vy))
+                    v = nv
+                advance(space, dt)
+                s += nv * dt
+                tick += 1
+                if last:
+                    break
+                steps += 1
+                if steps % _CHECK_EVERY == 0:
+                    self._s = s
+                    if self._lagging():
+                        blocked = True
+                        break
+                if tick >= bound:
+                    break
+        self._s, self._v, self._steps = s, v, steps
+        self.version += tick - start
+        if last:
+            return tick, self._finish_linear()
+        if blocked:
+            return tick, self._finish(False)  # someone or something in the way
+        return tick, None
+
+    def _run_angular(self, tick: int, bound: int, advance: Callable[[object, float], None]
+                     ) -> tuple[int, Callable[[], None] | None]:
+        """Turning steps up to the tick ``bound`` or the turn's end, ramped as a straight
+        drive's speed is, each followed by :meth:`_hold` if pushed (the wheels hold the
+        body where it turns)."""
+        dt, rb, space = self.dt, self._rb, self._sp
+        wtop, alpha_dt, sense = self._wtop, self._alpha_dt, self._ux
+        twice = 2.0 * math.radians(self.spec.turn_accel)
+        length, s, v = self._len, self._s, self._v
+        start = tick
+        while True:
+            rem = length - s
+            w = min(wtop, v + alpha_dt, math.sqrt(twice * rem))
             last = w * dt >= rem
             if last:
                 w = rem / dt
-            if w != self._v:
-                _cp.cpBodySetAngularVelocity(self._rb, self._ux * w)
-                self._v = w
-            self._advance(dt)
-            self._hold()
-            self._s += w * dt
-            if last:
-                _cp.cpBodySetAngularVelocity(self._rb, 0.0)
-                _cp.cpBodySetAngle(self._rb, self._ta + self._sway_offset - self._ta_offset)
-                return self._finish(True)
-            return None
-        if mode == _VELOCITY:
-            return self._step_velocity(dt)
-        self._advance(dt)
-        self._hold()
-        return None
+            if w != v:
+                _cp.cpBodySetAngularVelocity(rb, sense * w)
+                v = self._v = w  # (a sway turns on top of it)
+            advance(space, dt)
+            pushed = _cp.cpBodyGetVelocity(rb)
+            if pushed.x or pushed.y:
+                self._hold()
+            s += w * dt
+            tick += 1
+            if last or tick >= bound:
+                break
+        self._s, self._v = s, v
+        self.version += tick - start
+        if last:
+            _cp.cpBodySetAngularVelocity(rb, 0.0)
+            _cp.cpBodySetAngle(rb, self._ta + self._sway_offset - self._ta_offset)
+            return tick, self._finish(True)
+        return tick, None
 
     def _hold(self) -> None:
         """Idle or turning in place, the wheels hold the body where it is: a push (the
@@ -557,34 +679,51 @@ class World:
         """A sway runs (the world must be stepped, whatever else is idle)."""
         return self._sway is not None
 
-    def _step_velocity(self, dt: float) -> Callable[[], None] | None:
+    def _run_velocity(self, tick: int, bound: int, advance: Callable[[object, float], None]
+                      ) -> tuple[int, Callable[[], None] | None]:
+        """Velocity-command steps up to the tick ``bound`` or the robot's standstill:
+        the speed and the turning rate each go toward the command's, within the
+        accelerations."""
+        dt, rb, space = self.dt, self._rb, self._sp
+        a, al = self._a_dt, self._alpha_dt
+        cmd_v, cmd_w = self._cmd_v, self._cmd_w
         v, w = self._v, self._w
-        dv = self._cmd_v - v
-        dw = self._cmd_w - w
-        a = self._a_dt
-        al = self._alpha_dt
-        nv = v + (dv if -a <= dv <= a else (a if dv > 0 else -a))
-        nw = w + (dw if -al <= dw <= al else (al if dw > 0 else -al))
-        rb = self._rb
-        if nv != 0.0 and (nv != v or w != 0.0 or nw != w):
-            ang = _cp.cpBodyGetAngle(rb)
-            _cp.cpBodySetVelocity(rb, (math.cos(ang) * nv, math.sin(ang) * nv))
-        elif nv == 0.0 and v != 0.0:
-            _cp.cpBodySetVelocity(rb, (0.0, 0.0))
-        if nw != w:
-            _cp.cpBodySetAngularVelocity(rb, nw)
-        self._v, self._w = nv, nw
-        self._advance(dt)
-        if nv == 0.0 and nw == 0.0 and self._cmd_v == 0.0 and self._cmd_w == 0.0:
-            _cp.cpBodySetVelocity(rb, (0.0, 0.0))
-            self.mode = _IDLE
-            waiting, self._on_stopped = self._on_stopped, []
-            if waiting:
-                def report() -> None:
-                    for f in waiting:
-                        f()
-                return report
-        return None
+        start = tick
+        still = False
+        while not still and tick < bound:
+            dv = cmd_v - v
+            dw = cmd_w - w
+            nv = v + (dv if -a <= dv <= a else (a if dv > 0 else -a))
+            nw = w + (dw if -al <= dw <= al else (al if dw > 0 else -al))
+            if nv != 0.0 and (nv != v or w != 0.0 or nw != w):
+                ang = _cp.cpBodyGetAngle(rb)
+                _cp.cpBodySetVelocity(rb, (math.cos(ang) * nv, math.sin(ang) * nv))
+            elif nv == 0.0 and v != 0.0:
+                _cp.cpBodySetVelocity(rb, (0.0, 0.0))
+            if nw != w:
+                _cp.cpBodySetAngularVelocity(rb, nw)
+                self._w = nw  # (a sway turns on top of it)
+            v, w = nv, nw
+            advance(space, dt)
+            tick += 1
+            still = nv == 0.0 and nw == 0.0 and cmd_v == 0.0 and cmd_w == 0.0
+        self._v, self._w = v, w
+        self.version += tick - start
+        return tick, self._stopped() if still else None
+
+    def _stopped(self) -> Callable[[], None] | None:
+        """The velocity command has brought the robot to a standstill: idle; whoever
+        waits for it (:meth:`stop`) is told."""
+        _cp.cpBodySetVelocity(self._rb, (0.0, 0.0))
+        self.mode = _IDLE
+        waiting, self._on_stopped = self._on_stopped, []
+        if not waiting:
+            return None
+
+        def report() -> None:
+            for f in waiting:
+                f()
+        return report
 
     def _lagging(self) -> bool:
         """The drive is well behind its plan: the body does not get where it is driven."""

@@ -1,0 +1,181 @@
+"""The world stepped a stretch at a time (:meth:`World.run`, as the simulator steps it)
+ends each stretch exactly as stepping it one :meth:`World.step` at a time does: the
+same poses and speeds to the last bit, the same motions ended at the same ticks. And
+it costs less: a stretch of steps runs in a loop of its motion's own, and a straight
+drive cruising at its top speed does only its push and lag checks at each step."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+
+import pytest
+
+from prima.sim import Pose, RobotSpec, WorldMap
+from prima.sim._world import World
+from tests.sim.helpers import world_map
+from tests.work import bytecodes
+
+Stepper = Callable[[World, int, int], tuple[int, Callable[[], None] | None]]
+Action = Callable[[World, list[object]], None]
+
+
+def _one_by_one(world: World, tick: int, bound: int) -> tuple[int, Callable[[], None] | None]:
+    """:meth:`World.run` as single steps: what the simulator did before it."""
+    while world.mode or world.human_moving or tick < world.joints_until or world.swaying:
+        done = world.step()
+        tick += 1
+        if done is not None or tick >= bound:
+            return tick, done
+    return tick, None
+
+
+def _run(world: World, tick: int, bound: int) -> tuple[int, Callable[[], None] | None]:
+    return world.run(tick, bound)
+
+
+def _state(world: World) -> tuple[object, ...]:
+    r, h = world.robot, world.human
+    return (tuple(r.position), r.angle, tuple(r.velocity), r.angular_velocity,
+            tuple(h.position), h.angle, tuple(h.velocity), world.mode, world.version,
+            world._s, world._v, world._w, world._steps, world.swaying)
+
+
+def _play(stepper: Stepper, robot: Pose, user: Pose, actions: dict[int, Action],
+          until: int) -> list[object]:
+    """Steps a fresh museum world to ``until`` in stretches of changing lengths (cut at
+    the ticks of ``actions``), recording the state after each stretch and each end."""
+    world = World(world_map("museum"), RobotSpec(), 50, robot, user)
+    log: list[object] = []
+    lengths = itertools.cycle((5, 1, 3, 5, 7, 2, 40))
+    tick = 0
+    while tick < until:
+        if tick in actions:
+            actions[tick](world, log)
+        bound = min([tick + next(lengths), until] + [t for t in actions if t > tick])
+        if not (world.mode or world.human_moving or tick < world.joints_until
+                or world.swaying):
+            tick = bound
+            continue
+        tick, done = stepper(world, tick, bound)
+        if done is not None:
+            done()
+        log.append((tick, _state(world)))
+    return log
+
+
+def _drive(x: float, y: float, speed: float = math.inf) -> Action:
+    return lambda w, log: log.append(("drive", w.drive_to(x, y, log.append, speed)))
+
+
+def _turn(angle: float) -> Action:
+    return lambda w, log: log.append(("turn", w.turn_by(angle, log.append)))
+
+
+def _walk(vx: float, vy: float) -> Action:
+    return lambda w, _log: w.walk_user(vx, vy)
+
+
+CASES: dict[str, tuple[Pose, Pose, dict[int, Action], int]] = {
+    # idle while the user walks past, then into the robot and on (a push to hold off)
+    # (against a wall)
+    "idle-pushed": (Pose(6.0, 2.0, 0), Pose(9.0, 2.1, 0),
+                    {0: _walk(-0.3, 0.0), 90: _walk(-1.0, 0.0), 300: _walk(0.0, 0.0)}, 400),
+    # a long drive: accelerating, cruising, braking, arriving
+    "drive": (Pose(5.0, 2.0, 0), Pose(8.0, 6.0, 0), {0: _drive(14.0, 5.0)}, 1400),
+    # a drive into a wall (blocked: it lags behind)
+    "drive-walled": (Pose(1.5, 1.5, 0), Pose(8.0, 6.0, 0), {0: _drive(6.0, 1.5)}, 500),
+    # a drive slowed, then sped up again under way (a blend), and a second drive
+    "drive-limited": (Pose(1.5, 1.5, 0), Pose(8.0, 6.0, 0),
+                      {0: _drive(6.0, 1.5), 60: lambda w, _log: w.speed_limit(0.2),
+                       140: lambda w, _log: w.speed_limit(math.inf),
+                       400: _drive(2.0, 2.5, 0.3)}, 900),
+    # a drive at a user standing in the way (pushed, then blocked: it lags behind)
+    "drive-blocked": (Pose(1.5, 1.5, 0), Pose(3.5, 1.5, 0), {0: _drive(6.0, 1.5)}, 500),
+    # a drive at a user walking into the robot
+    "drive-met": (Pose(5.0, 2.0, 0), Pose(12.0, 2.05, 0),
+                  {0: _drive(14.0, 2.0), 1: _walk(-0.6, 0.0)}, 800),
+    # turns, one while the user walks into the robot
+    "turns": (Pose(4.0, 2.0, 0), Pose(6.0, 2.0, 0),
+              {0: _turn(2.5), 30: _walk(-0.8, 0.0), 100: _turn(-4.0)}, 400),
+    # velocity commands: speeding up, turning, stopping (with whoever waits told)
+    "velocity": (Pose(2.0, 2.0, 0), Pose(8.0, 6.0, 0),
+                 {0: lambda w, _log: w.command(0.3, 0.0),
+                  60: lambda w, _log: w.command(0.3, 0.5),
+                  120: lambda w, _log: w.command(0.0, -0.4),
+                  180: lambda w, log: log.append(("stop", w.stop(lambda: log.append("still"))))},
+                 400),
+    # a sway alone, then over a drive; a joint moving meanwhile
+    "sway": (Pose(3.0, 3.0, 0), Pose(8.0, 6.0, 0),
+             {0: lambda w, _log: w.sway(0.3, 2, 60, 1), 80: _drive(3.0, 5.5),
+              90: lambda w, _log: w.sway(0.2, 3, 90, 2),
+              300: lambda w, _log: setattr(w, "joints_until", 330)}, 600),
+    # a joint moving while nothing else does, twice
+    "joint": (Pose(3.0, 3.0, 0), Pose(8.0, 6.0, 0),
+              {10: lambda w, _log: setattr(w, "joints_until", 37),
+               50: lambda w, _log: setattr(w, "joints_until", 121)}, 200),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_a_stretch_run_at_once_ends_as_stepped_one_step_at_a_time(case: str) -> None:
+    robot, user, actions, until = CASES[case]
+    expected = _play(_one_by_one, robot, user, actions, until)
+    assert _play(_run, robot, user, actions, until) == expected
+    assert len(expected) > 10
+
+
+def test_a_cruise_ends_where_the_drive_brakes_whatever_stretch_it_ends_in() -> None:
+    # A stretch run as cruising must end before the step that brakes: from each tick
+    # near the first braking step, stretches of each length end as single steps do.
+    def driving(ticks: int) -> World:
+        world = _fresh()
+        world.drive_to(3.0, 0.0, lambda _arrived: None)
+        for _ in range(ticks):
+            world.step()
+        return world
+
+    braking = next(t for t in range(1000) if driving(t + 1)._v < driving(t)._v)
+    for start in range(braking - 12, braking + 1):
+        assert driving(start)._v == driving(start)._vmax
+        for length in range(1, 13):
+            one, many = driving(start), driving(start)
+            assert many.run(start, start + length) == (start + length, None)
+            for _ in range(length):
+                assert one.step() is None
+            assert _state(one) == _state(many), (start, length)
+
+
+def _fresh() -> World:
+    return World(WorldMap("open"), RobotSpec(), 50, Pose(0.0, 0.0, 0), Pose(5.0, 5.0, 0))
+
+
+@pytest.mark.pure
+def test_an_idle_stretch_costs_a_fraction_of_its_single_steps() -> None:
+    # While only the user walks, a step of a stretch is the physics step and a look at
+    # the robot's speed: about 24 bytecodes, where a single step() (a stretch of one)
+    # pays for choosing its loop too.
+    one, many = _fresh(), _fresh()
+    one.walk_user(0.0, -0.5)
+    many.walk_user(0.0, -0.5)
+    stepped = bytecodes(lambda: [one.step() for _ in range(50)]) / 50
+    run = bytecodes(lambda: many.run(0, 50)) / 50
+    assert run < 0.4 * stepped, (run, stepped)
+    assert _state(one) == _state(many)
+
+
+@pytest.mark.pure
+def test_a_cruising_drive_does_only_its_checks_at_each_step() -> None:
+    # At its top speed, far from braking: about 56 bytecodes a step, 100 when each step
+    # works its speed out again (as accelerating and braking do, and a stretch of one).
+    one, many = _fresh(), _fresh()
+    for world in (one, many):
+        world.drive_to(20.0, 0.0, lambda _arrived: None)
+        world.run(0, 100)
+        assert world._v == world._vmax
+    cruising = bytecodes(lambda: many.run(100, 150)) / 50
+    for _ in range(50):
+        one.step()
+    assert cruising < 70, cruising
+    assert _state(one) == _state(many)
