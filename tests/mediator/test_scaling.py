@@ -130,9 +130,10 @@ class _Watched(dict[Any, Any]):
     """A ranking of working memory's that checks, whenever it is read, that it counts
     every waiting AB (``WorkingMemory.enter_waiting`` leaves out the ABs a round names
     until something reads the rankings): only the counting itself, and
-    ``Selector._idle``, which makes up for them, may read it meanwhile."""
+    ``Selector._idle`` and ``Selector._alone``, which make up for them, may read it
+    meanwhile."""
 
-    ALLOWED = frozenset({"_rank_in", "_rank_out", "_idle"})
+    ALLOWED = frozenset({"_rank_in", "_rank_out", "_idle", "_alone"})
 
     def __init__(self, wm: WorkingMemory, reads: list[int]) -> None:
         super().__init__()
