@@ -58,6 +58,11 @@ _TICK = 0.02
 
 Span = tuple[float, float]
 
+Why = Blame | tuple[Ab, str, float | None]
+"""What rightly held a reaction's devices for a while: a :class:`Blame`, or an AB with
+the rule and the time until which it counted, whose Blame is made only if the finding
+shows it (:meth:`_Analyst._top`: three a reaction at most, of the many its waits hold)."""
+
 
 def _hold_t(h: Hold) -> float:
     return h.t
@@ -318,21 +323,21 @@ class _Analyst:
     def waits(self, r: ReactionState, own: set[int], devices: frozenset[str], low: bool,
               t0: float, seq0: int, t1: float, ready: float | None = None,
               turn: bool = False
-              ) -> tuple[list[tuple[float, float, Blame]], list[tuple[float, float, Ab]]]:
+              ) -> tuple[list[tuple[float, float, Why]], list[tuple[float, float, Ab]]]:
         """What rightly held ``devices`` within [t0, t1], and what took them wrongly.
         ``own``: the reaction's Commands (its own ABs never count against it);
         ``ready``: when it could first ask for a cut (after its own AB before it);
         ``turn``: the devices of a turn to the user put before it (:meth:`may_cut`)."""
         ready = t0 if ready is None else max(t0, ready)
         ctx = self.ctx
-        allowed: list[tuple[float, float, Blame]] = []
+        allowed: list[tuple[float, float, Why]] = []
         took: list[tuple[float, float, Ab]] = []
         for y in self.near(devices, t0, t1):
             y_end = y.until(self.end)
             if y_end < t0 - EPS or y.start > t1 + EPS:
                 continue
             if not own.isdisjoint(y.ids) or y.tree in r.trees:
-                allowed.append((y.start, y_end, self._blame(y, "its own")))
+                allowed.append((y.start, y_end, (y, "its own", None)))
                 continue
             running = y.start < t0 - EPS or (abs(y.start - t0) <= EPS and y.seq < seq0)
             # (one that started while the reacting application had lost its precedence
@@ -348,11 +353,10 @@ class _Analyst:
                 if not why and y.listens and said is not None and stop >= said[1] - EPS:
                     why = "uncut: a Q&A on the last word of its prompt, then listening"
                 if why:
-                    allowed.append((y.start, y_end, self._blame(y, why, y_end)))
+                    allowed.append((y.start, y_end, (y, why, y_end)))
                 else:
                     stop = min(y_end, stop)
-                    allowed.append((y.start, stop, self._blame(y, "cut at a word boundary",
-                                                               stop)))
+                    allowed.append((y.start, stop, (y, "cut at a word boundary", stop)))
                     if y_end > stop + EPS:
                         took.append((stop, y_end, y))
                 continue
@@ -361,7 +365,7 @@ class _Analyst:
                 # it kept its devices from when it was ready (waiting, or next in a
                 # reaction's tree, docs/rules.md 7.1): when the AB before it in its tree
                 # ended, or when it was asked for if later
-                allowed.append((self.ready(y), y_end, self._blame(y, why, y_end)))
+                allowed.append((self.ready(y), y_end, (y, why, y_end)))
             else:
                 took.append((y.start, y_end, y))
         allowed += self._holds(r, own, low, t0, t1)
@@ -406,9 +410,9 @@ class _Analyst:
         return found
 
     def _holds(self, r: ReactionState, own: set[int], low: bool, t0: float,
-               t1: float) -> list[tuple[float, float, Blame]]:
+               t1: float) -> list[tuple[float, float, Why]]:
         """The holds the mediator reports on the reaction's ABs that the rules allow."""
-        out: list[tuple[float, float, Blame]] = []
+        out: list[tuple[float, float, Why]] = []
         holds = self.ctx.holds  # (in trace order: their times never go back)
         for k in range(bisect.bisect_left(holds, t0 - EPS, key=_hold_t), len(holds)):
             h = holds[k]
@@ -426,8 +430,7 @@ class _Analyst:
                 if not self.goes_first(nxt, r, low, h.t):
                     continue
                 until = min(nxt.start, t1)
-                out.append((h.t, until, self._blame(nxt, "kept for a reaction's next AB "
-                                                          "(7.1)", until)))
+                out.append((h.t, until, (nxt, "kept for a reaction's next AB (7.1)", until)))
             elif h.reason == "block":
                 span = span_at(self.ctx.blocks.get(h.holder, ()), h.t)
                 until = t1 if span is None else span[1]
@@ -445,7 +448,7 @@ class _Analyst:
         return out
 
     def _kept_for_gone(self, r: ReactionState, h: Hold, t1: float
-                       ) -> list[tuple[float, float, Blame]]:
+                       ) -> list[tuple[float, float, Why]]:
         """A hold that kept ``r``'s devices for another reaction's next AB that never
         started: rightly, while that reaction's stream goes before ``r``, until its
         application cancelled the AB (a newer request of its own replaced it)."""
@@ -510,7 +513,7 @@ class _Analyst:
                 allowed += [(max(a, t_put), b, blame) for a, b, blame in more]
                 took += [(max(a, t_put), b, y) for a, b, y in taken]
         if behind is not None and ready > r.t:
-            allowed.append((r.t, ready, self._blame(behind, "after its own AB", ready)))
+            allowed.append((r.t, ready, (behind, "after its own AB", ready)))
         elif waiting is not None and ready > r.t:
             allowed.append((r.t, ready, Blame(r.app, r.before, waiting[1], waiting[2],
                                               "after its own AB, never started",
@@ -666,21 +669,26 @@ class _Analyst:
             return 0.0
         return onward[i] - max(0.0, since - union[i][0])
 
-    @staticmethod
-    def _top(allowed: list[tuple[float, float, Blame]]) -> tuple[Blame, ...]:
-        """What it waited for, longest first (three at most), other than its own."""
-        longest: dict[object, tuple[float, Blame]] = {}
-        for a, b, blame in allowed:
-            if blame.rule == "its own":
-                continue
-            key = (blame.app, blame.ab, blame.rule)
+    def _top(self, allowed: list[tuple[float, float, Why]]) -> tuple[Blame, ...]:
+        """What it waited for, longest first (three at most), other than its own (the
+        Blames of these alone made: :data:`Why`)."""
+        longest: dict[object, tuple[float, Why]] = {}
+        for a, b, why in allowed:
+            if isinstance(why, Blame):
+                key: tuple[str, int | None, str] = (why.app, why.ab, why.rule)
+            else:
+                y, rule, _until = why
+                if rule == "its own":
+                    continue
+                key = (y.app, y.id, rule)
             if key not in longest or b - a > longest[key][0]:
-                longest[key] = (b - a, blame)
+                longest[key] = (b - a, why)
         ranked = sorted(longest.values(), key=lambda item: -item[0])
-        return tuple(blame for _, blame in ranked[:3])
+        return tuple(why if isinstance(why, Blame) else self._blame(why[0], why[1], why[2])
+                     for _, why in ranked[:3])
 
     def _culprit(self, took: list[tuple[float, float, Ab]],
-                 allowed: list[tuple[float, float, Blame]], lo: float,
+                 allowed: list[tuple[float, float, Why]], lo: float,
                  hi: float) -> Blame | None:
         """The AB that held its devices longest while it was free to start."""
         free = _gaps(((a, b) for a, b, _ in allowed), lo, hi)
