@@ -399,9 +399,26 @@ class Run:
         """A pose sample, unless it would repeat the poses of the line with poses before
         it: while the robot and the user stand still, time passes without a line (a
         trace's length follows what happens, not how long; a reader holds each line's
-        poses until the next line with poses)."""
-        if self.sim.poses() != self._posed[0]:
+        poses until the next line with poses). For ``rows``, its dict is made at once:
+        the same as :func:`~prima.trace.row_of` makes of its fields, key for key and in
+        its order (a judged run's third most frequent line, after starts and ends)."""
+        posed = self.sim.poses()
+        if posed == self._posed[0]:
+            return
+        rows = self._rows
+        if rows is None:
             self._line(Kind.POSE)
+            return
+        stop_if_signalled()
+        now = self.sim.now()
+        self._posed = (posed, now)
+        robot, user, detectable = posed
+        row: dict[str, object] = {"t": round(now, 3), "seq": self._count, "kind": "pose",
+                                  "robot": rounded_pose(robot, 0)}
+        if user is not None:
+            row["user"] = rounded_pose(user, 1, detectable)
+        rows(row)
+        self._count += 1
 
     def _decision(self, d: Decision) -> None:
         if d.kind is DecisionKind.FAILURE:
