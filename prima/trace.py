@@ -133,14 +133,16 @@ def row_of(t: float, seq: int, kind: RecordKind, fields: Mapping[str, Any]) -> d
 
 _ROUNDED: list[tuple[object, dict[str, float]]] = [(None, {}), (None, {})]
 """The robot's and the user's last pose and its rounded dict: a run's lines of one
-instant, or of a still robot, carry the same pose tuple (``Simulator.poses``)."""
+instant, or of a still robot, carry the same pose (``Simulator.poses``). Compared by
+value, not by identity: the compiled build passes a pose as three floats, not a tuple,
+so it would never find the tuple it kept (and a pose back where it was is found too)."""
 
 
 def rounded_pose(pose: Pose, which: int, detectable: bool | None = None) -> dict[str, Any]:
     """A pose as a jsonl line writes it (a dict of its own): ``which`` 0 the robot's, 1
     the user's, with whether they are ``detectable`` unless that is None."""
     kept = _ROUNDED[which]
-    if kept[0] is not pose:
+    if kept[0] != pose:
         kept = _ROUNDED[which] = (pose, {"x": round(pose[0], 3), "y": round(pose[1], 3),
                                          "heading": round(pose[2], 1)})
     out = dict(kept[1])

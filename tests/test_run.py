@@ -363,3 +363,25 @@ def test_a_run_made_as_rows_is_its_lines_jsonl_dicts(scenario: str) -> None:
     lines = [line.to_dict() for line in Run(ROOT / "scenarios" / scenario).run()]
     assert made == lines
     assert [list(row) for row in made] == [list(line) for line in lines]  # (in its order)
+
+
+@pytest.mark.pure  # (it counts round() by patching the module's name: not in a compiled one)
+def test_a_pose_equal_to_the_last_one_is_not_rounded_again(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # Kept by value, not by identity: the compiled build hands a pose over as three
+    # floats, so a tuple kept by identity would never be found again there.
+    calls: list[float] = []
+
+    def counted(x: float, digits: int) -> float:
+        calls.append(x)
+        return round(x, digits)
+
+    monkeypatch.setattr(prima.trace, "round", counted, raising=False)
+    x, y, heading = 1.23456, 2.0, 90.04
+    first = prima.trace.rounded_pose((x, y, heading), 0)
+    again = prima.trace.rounded_pose((x, y, heading), 0)  # (an equal tuple, made anew)
+    assert again == first == {"x": 1.235, "y": 2.0, "heading": 90.0}
+    assert again is not first  # (each line has a dict of its own)
+    assert len(calls) == 3
+    prima.trace.rounded_pose((x, 2.5, heading), 0)
+    assert len(calls) == 6
