@@ -210,12 +210,11 @@ class Kernel:
             if len(heap) > 1:
                 bound = min(bound, heap[1][0], heap[2][0]) if len(heap) > 2 \
                     else min(bound, heap[1][0])
-            n = 0
-            while True:
-                tick += min(wait.ticks, wait.until - tick)
-                n += 1
-                if tick >= bound:
-                    break
+            # (one sleep at least, then as many as reach ``bound``: all but the last end
+            # before it, so before ``until``, and whole; the last is cut at ``until``)
+            every = wait.ticks
+            n = max(1, (bound - tick + every - 1) // every)
+            tick = min(tick + n * every, wait.until)
             proc.token += n
             self._seq += n
             heapq.heapreplace(heap, (tick, self._seq, proc, (proc.token, wait.timeout)))

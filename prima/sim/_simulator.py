@@ -488,16 +488,15 @@ class Simulator:
         0.5 to 0.8% more bytecodes.)"""
         k = self.kernel
         heap = k._heap
-        if not heap:
-            own = last
-        else:
-            if k.idle_first(last):
-                self._skip_idle(last)  # (wakes after now: nothing it does is due)
-            own = min(heap[0][0], last)
         w = self.world
         if w.mode or w.human_moving or k.tick < w.joints_until or w.swaying:
-            own = min(own, k.tick + k.hz)
-        return max(own, k.tick)
+            own = min(heap[0][0], last) if heap else last
+            return max(min(own, k.tick + k.hz), k.tick)
+        if not heap:
+            return max(last, k.tick)
+        if k.idle_first(last):
+            self._skip_idle(last)  # (wakes after now: nothing it does is due)
+        return max(min(heap[0][0], last), k.tick)
 
     def advance_to(self, t: float, *, stop_on_report: bool = False) -> None:
         """Run up to time ``t``, reporting everything on the way at its own time.
@@ -538,10 +537,10 @@ class Simulator:
                 target = self._wake_at(last)  # (woken at one of its own times)
                 continue
             settled = False
-            if self._moving():
-                # Between sensing and sample ticks (all multiples of ``grid``), the agenda
-                # and the reports change only when a motion ends: the steps between need
-                # only see that something still moves.
+            if world.mode or world.human_moving or k.tick < world.joints_until or world.swaying:
+                # (:meth:`_moving`, written out.) Between sensing and sample ticks (all
+                # multiples of ``grid``), the agenda and the reports change only when a
+                # motion ends: the steps between need only see that something still moves.
                 start = tick = k.tick
                 bound = min(tick - tick % grid + grid, target, heap[0][0] if heap else target)
                 while True:
@@ -847,12 +846,11 @@ class Simulator:
 
     def _skip_idle(self, limit: int) -> None:
         """Skip the wakes up to ``limit`` of processes that would do nothing woken
-        (:meth:`Kernel.skip_idle`). While no body moves, nothing any process reads
-        changes until the agenda's next other work, if that work changes nothing
-        either: human detection would find nothing new and no predicate a process
-        waits for holds. (Not while a live run keeps pace with the clock.)"""
-        if (self.pace is None and not self._moving() and self._monitor_steady()
-                and not self.kernel.polls_hold()):
+        (:meth:`Kernel.skip_idle`). Asked only while no body moves: then nothing any
+        process reads changes until the agenda's next other work, if that work changes
+        nothing either: human detection would find nothing new and no predicate a
+        process waits for holds. (Not while a live run keeps pace with the clock.)"""
+        if self.pace is None and self._monitor_steady() and not self.kernel.polls_hold():
             self.skipped += self.kernel.skip_idle(limit)
 
     def _monitor_steady(self) -> bool:
@@ -870,12 +868,13 @@ class Simulator:
         nothing: its last round resumed no process (nothing is due, and human
         detection and the predicates, asked again, would find the same)."""
         k = self.kernel
+        heap = k._heap
         while True:
             k.run_due()
             if self._sensing:
                 self._update_monitor()
-            woke = k.check_polls()
-            if not k.due():
+            woke = bool(k._polls) and k.check_polls()  # (mostly none: not asked)
+            if not heap or heap[0][0] > k.tick:  # (:meth:`Kernel.due`, written out)
                 return not woke
 
     def watch_facing(self, tolerance: float, off: Callable[[], None]) -> None:

@@ -83,6 +83,12 @@ Done = Callable[[bool], None]
 """Called when a profile motion ends; the flag is True if it arrived, False if blocked."""
 
 
+_UNSEEN: tuple[int, float, tuple[float, ...], tuple[bool, float]] = (
+    -1, math.nan, (), (False, math.inf))
+"""Human detection's answer before it first looks (:attr:`World._ahead`): at no version,
+for no pan (NaN equals nothing)."""
+
+
 def wrap_angle(a: float) -> float:
     """An angle in radians brought into [-pi, pi)."""
     return (a + math.pi) % (2.0 * math.pi) - math.pi
@@ -150,11 +156,12 @@ class World:
         self.human_moving = False
         self.version = 0
         """Moves on whenever a body may have moved or turned (see the module's doc)."""
-        self._sight: dict[bool, tuple[int, int, float, tuple[float, ...],
-                                      tuple[bool, float]]] = {}
-        """Human detection's last answer with and without ``any_direction``: the tick,
-        the version, the camera's pan and the poses it was worked out for, and the
-        answer."""
+        self._ahead: tuple[int, float, tuple[float, ...], tuple[bool, float]] = _UNSEEN
+        self._around = _UNSEEN
+        """Human detection's last answer without and with ``any_direction``: the
+        version, the camera's pan and the poses it was worked out for, and the answer
+        (one attribute each: asked again at the same version, as it mostly is, it is
+        found at once)."""
         self.head_pan = _Joint()
         self.head_tilt = _Joint()
         self.arm = _Joint()
@@ -258,37 +265,46 @@ class World:
         With ``any_direction`` the field of view is ignored (the robot senses
         the user around it, as Face Human needs). Returns (seen, distance).
         """
+        if any_direction:
+            pan = 0.0
+            kept = self._around
+        else:
+            head = self.head_pan
+            pan = head.a1 if tick >= head.t1 else head.at(tick)
+            kept = self._ahead
+        if kept[0] == self.version and kept[1] == pan:
+            return kept[3]  # (the same poses, the camera the same way: at any tick)
         if not self.has_user:
             return False, math.inf
-        pan = 0.0 if any_direction else self.head_pan.at(tick)
-        kept = self._sight.get(any_direction)
-        if kept is not None and kept[1] == self.version and kept[2] == pan:
-            return kept[4]  # (the same poses, the camera the same way: at any tick)
         r = _cp.cpBodyGetPosition(self._rb)
         u = _cp.cpBodyGetPosition(self._hb)
         rx, ry, ux, uy = r.x, r.y, u.x, u.y
         angle = 0.0 if any_direction else _cp.cpBodyGetAngle(self._rb)
         poses = (rx, ry, angle, ux, uy)
-        if kept is not None and kept[2] == pan and kept[3] == poses:
-            seen = kept[4]  # nothing moved since it last looked
+        if kept[1] == pan and kept[2] == poses:
+            seen = kept[3]  # nothing moved since it last looked
         else:
-            seen = self._look(pan, any_direction, rx, ry, ux, uy)
-        self._sight[any_direction] = (tick, self.version, pan, poses, seen)
+            seen = self._look(pan, angle, any_direction, rx, ry, ux, uy)
+        if any_direction:
+            self._around = (self.version, pan, poses, seen)
+        else:
+            self._ahead = (self.version, pan, poses, seen)
         return seen
 
-    def _look(self, pan: float, any_direction: bool, rx: float, ry: float, ux: float,
-              uy: float) -> tuple[bool, float]:
+    def _look(self, pan: float, angle: float, any_direction: bool, rx: float, ry: float,
+              ux: float, uy: float) -> tuple[bool, float]:
         dx = ux - rx
         dy = uy - ry
         d = math.hypot(dx, dy)
         if d > self.spec.camera_range:
             return False, d
         if not any_direction:
-            rel = wrap_angle(math.atan2(dy, dx)
-                             - (_cp.cpBodyGetAngle(self._rb) + math.radians(pan)))
+            rel = wrap_angle(math.atan2(dy, dx) - (angle + math.radians(pan)))
             if abs(rel) > math.radians(self.spec.camera_fov) / 2:
                 return False, d
-        return self._clear((rx, ry), (ux, uy), 0.0), d
+        # (:meth:`_clear`, written out: a look at each sensing tick while anything moves)
+        hit = _cp.cpSpaceSegmentQueryFirst(self._sp, (rx, ry), (ux, uy), 0.0, _SIGHT, _ffi.NULL)
+        return bool(hit == _ffi.NULL), d
 
     def places_near(self, x: float, y: float, radius: float,
                     slack: float = 0.0) -> tuple[list[int], float]:
@@ -515,9 +531,12 @@ class World:
         or a step whose motion ended (its callback, as :meth:`step` returns it).
         Returns the tick reached and that callback: where the simulator looks at its
         agenda and senses next, it stops (a run takes thousands of steps)."""
-        while True:
+        while True:  # (:meth:`_stretch`'s choice of loop, written out: once a stretch)
             sway = self._sway
-            if self.mode == _IDLE:
+            advance: Callable[[object, float], None] = (
+                _cp.cpSpaceStep if sway is None else self._advance)
+            mode = self.mode
+            if mode == _IDLE:
                 if self.human_moving:
                     end = bound
                 else:  # (still, once the joints and the sway are done)
@@ -525,9 +544,14 @@ class World:
                                          tick if sway is None else tick + sway[2] - self._sway_k))
                     if end <= tick:
                         return tick, None
+                tick = self._run_idle(tick, end, advance)
+                done = None
+            elif mode == _LINEAR:
+                tick, done = self._run_linear(tick, bound, advance)
+            elif mode == _ANGULAR:
+                tick, done = self._run_angular(tick, bound, advance)
             else:
-                end = bound
-            tick, done = self._stretch(tick, end)
+                tick, done = self._run_velocity(tick, bound, advance)
             if done is not None or tick >= bound:
                 return tick, done
 

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 from prima.sim._kernel import Kernel, ProcGen, idle, sleep
 
 END = 40
@@ -103,3 +105,54 @@ def test_a_process_first_again_and_again_is_asked_once_and_keeps_its_place() -> 
     k.tick = 21
     k.run_due()
     assert log == [0, "moves", 21]
+
+
+def _skipped_one_by_one(tick: int, every: int, until: int, bound: int) -> tuple[int, int]:
+    """How many wakes an idle sleep's skip passes, and the tick of the wake it keeps,
+    skipped one at a time."""
+    n = 0
+    while True:
+        tick += min(every, until - tick)
+        n += 1
+        if tick >= bound:
+            return n, tick
+
+
+def _skipped_at_once(every: int, until: int, other: int, limit: int) -> tuple[int, int, int]:
+    """A process idle every ``every`` ticks up to ``until`` from tick 0, and work at
+    ``other`` (scheduled after it): the wakes one skip up to ``limit`` passes, the tick
+    of the wake it keeps, and how often it asked the process."""
+    k = Kernel(10)
+    asked = [0]
+
+    def unchanged() -> bool:
+        asked[0] += 1
+        return True
+
+    def poller() -> ProcGen:
+        while k.tick < until:
+            yield idle(every, unchanged, until)
+
+    k.spawn(poller())
+    k.run_due()  # (its start: idle until ``every``)
+    k.at(other, lambda: None)
+    n = k.skip_idle(limit)
+    kept = [tick for tick, _seq, _what, wake in k._heap if wake is not None]
+    assert len(kept) == 1
+    return n, kept[0], asked[0]
+
+
+def test_the_wakes_skipped_at_once_are_those_skipped_one_by_one() -> None:
+    # The process first on the agenda: its wakes are skipped up to the other work (a
+    # tie goes to the work) or ``limit``, at least one, the last cut at ``until``,
+    # whether or not they fit in whole; it is asked once.
+    cases = 0
+    for every, until, other, limit in itertools.product(
+            range(1, 5), range(3, 14), range(3, 15), range(3, 15)):
+        if every >= until or every > limit or every > other:
+            continue  # (nothing to skip: its end, past the limit, or not first)
+        n, end = _skipped_one_by_one(every, every, until, min(limit + 1, until, other))
+        assert _skipped_at_once(every, until, other, limit) == (n, end, 1), \
+            (every, until, other, limit)
+        cases += 1
+    assert cases > 300

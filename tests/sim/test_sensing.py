@@ -34,6 +34,17 @@ def test_the_camera_panning_within_a_tick_is_seen_at_once() -> None:
     assert not world.sees_user(tick)[0]
 
 
+def test_the_camera_panning_over_ticks_is_seen_where_it_looks_at_each() -> None:
+    # nothing moves but the head, panning left over 100 ticks: the camera looks where
+    # the head is at each tick asked (60 degrees wide: 30 either way)
+    sim = _sighted(Pose(0, 0, 0), Pose(2, 0, 0))
+    world = sim.world
+    world.head_pan.move(90.0, 0, 100)
+    assert [world.sees_user(t)[0] for t in (0, 30, 34, 100, 40)] == [
+        True, True, False, False, False]
+    assert world.sees_user(100, any_direction=True)[0]
+
+
 def test_the_user_put_elsewhere_within_a_tick_is_seen_at_once() -> None:
     sim = _sighted(Pose(0, 0, 0), Pose(2, 0, 0))
     world, tick = sim.world, sim.kernel.tick
