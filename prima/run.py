@@ -17,7 +17,7 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 from prima.catalog import Catalog, ParamKind
 from prima.dsl import Document
@@ -37,7 +37,7 @@ from prima.mediator import (
 from prima.scenario import Loaded, Scenario, Setup, Switches, spec_from_profile
 from prima.signals import stop_if_signalled
 from prima.sim import Simulator, SpeechTiming, UserAction, ZoneEntry
-from prima.trace import Kind, RecordKind, TraceLine, rounded_pose, row_of
+from prima.trace import Kind, RecordKind, TraceLine, rounded, rounded_pose, row_of
 from prima.vocab import (
     FACE_TOLERANCE,
     MAX_EAS,
@@ -60,11 +60,33 @@ POSE_RATE = 2.0
 """Pose samples per simulated second in the trace, by default (at most: a sample that
 would repeat the poses of the line with poses before it is left out)."""
 
-_SHOWN_KEPT = 1024
+_SHOWN_KEPT: Final = 1024
 """How many calls' words and shown arguments a run keeps (:meth:`Run._shown`)."""
 
-_POSED = frozenset({DecisionKind.START, DecisionKind.END, Kind.USER, Kind.EVENT, Kind.POSE})
+_POSED: Final = frozenset({DecisionKind.START, DecisionKind.END, Kind.USER, Kind.EVENT, Kind.POSE})
 """Lines that carry the robot's and the user's poses."""
+
+# The members a run's lines are told apart by, as constants: compiled, a Final name is a C
+# static, where ``DecisionKind.START`` is a lookup in the module's dict and one on an enum
+# class (through its metaclass's ``__getattr__``: some 700 instructions), at every line.
+_REQUEST: Final = DecisionKind.REQUEST
+_START: Final = DecisionKind.START
+_END: Final = DecisionKind.END
+_CANCEL: Final = DecisionKind.CANCEL
+_FAILURE: Final = DecisionKind.FAILURE
+_LOAD: Final = DecisionKind.LOAD
+_ERROR: Final = Kind.ERROR
+_POSE: Final = Kind.POSE
+_EVENT: Final = Kind.EVENT
+_USER: Final = Kind.USER
+_BLEND: Final = Rule.BLEND
+_RESTART: Final = Rule.RESTART
+_CUTS: Final = frozenset({Rule.INTERRUPT, Rule.BARGE_IN})
+"""The rules that cut an AB short (its end line says what was said and not)."""
+_WORDED: Final = frozenset({DecisionKind.START, DecisionKind.REQUEST, DecisionKind.END})
+"""Decisions whose line's text is their words (else: their detail, if any)."""
+_NEVER: Final = OnInterrupt.NEVER
+_TEXT: Final = ParamKind.TEXT
 
 
 @dataclass
@@ -379,7 +401,7 @@ class Run:
 
     def _line(self, kind: RecordKind, **fields: Any) -> None:
         stop_if_signalled()  # (a Ctrl-C a finalizer dropped stops the run here)
-        if kind is Kind.ERROR:
+        if kind is _ERROR:
             fields["text"] = self._portable(str(fields.get("text") or ""))
         now = self.sim.now()
         if kind in _POSED:
@@ -407,13 +429,13 @@ class Run:
             return
         rows = self._rows
         if rows is None:
-            self._line(Kind.POSE)
+            self._line(_POSE)
             return
         stop_if_signalled()
         now = self.sim.now()
         self._posed = (posed, now)
         robot, user, detectable = posed
-        row: dict[str, object] = {"t": round(now, 3), "seq": self._count, "kind": "pose",
+        row: dict[str, object] = {"t": rounded(now, 3), "seq": self._count, "kind": "pose",
                                   "robot": rounded_pose(robot, 0)}
         if user is not None:
             row["user"] = rounded_pose(user, 1, detectable)
@@ -421,14 +443,14 @@ class Run:
         self._count += 1
 
     def _decision(self, d: Decision) -> None:
-        if d.kind is DecisionKind.FAILURE:
+        if d.kind is _FAILURE:
             app = self.apps.get(d.app or "")
             if app is None or not app.failed:  # not an error the interpreter already reported
-                self._line(Kind.ERROR, app=d.app, text=self._located(app, d.detail),
+                self._line(_ERROR, app=d.app, text=self._located(app, d.detail),
                            reason=d.rule.value)
             if app is not None:
                 self._fail(app)
-        elif d.kind is DecisionKind.LOAD:
+        elif d.kind is _LOAD:
             self._line(d.kind, app=d.app, detail={"document": self._loading.name,
                                                   "role": d.detail.lower()})
         elif (rows := self._rows) is not None:
@@ -443,13 +465,13 @@ class Run:
         detail: dict[str, Value] = {}
         if d.command_id is not None:
             detail["command_id"] = d.command_id
-        if kind is DecisionKind.REQUEST:
+        if kind is _REQUEST:
             self._where(d, detail)
-        elif kind is DecisionKind.START:
+        elif kind is _START:
             self._starting(d, detail)
-        if kind is DecisionKind.END and d.ab is not None:
+        if kind is _END and d.ab is not None:
             self._ended(d, detail)
-        elif kind is DecisionKind.CANCEL:
+        elif kind is _CANCEL:
             for cid in d.command_ids:
                 self._requested.pop(cid, None)
                 self._elsewhere.discard(cid)
@@ -460,7 +482,7 @@ class Run:
             spoken = tuple(words for said, _args in shown for words in said)
             others = tuple(arg for _said, args in shown for arg in args)
         text = " / ".join(spoken) if spoken else None
-        if (kind is DecisionKind.START and d.iteration and d.command_id is not None
+        if (kind is _START and d.iteration and d.command_id is not None
                 and self.sim.quiet(d.command_id)):
             text = None  # an iteration that says nothing (a search's watch)
         if others:
@@ -471,9 +493,9 @@ class Run:
             detail["iteration"] = d.iteration
         if d.precedes is not None:
             detail["precedes"] = d.precedes
-        if d.rule is Rule.BLEND and d.detail:
+        if d.rule is _BLEND and d.detail:
             detail["over"] = d.detail
-        if d.detail and kind not in (DecisionKind.START, DecisionKind.REQUEST, DecisionKind.END):
+        if d.detail and kind not in _WORDED:
             text = d.detail
         return text, detail
 
@@ -493,7 +515,7 @@ class Run:
         stop_if_signalled()
         now = self.sim.now()
         kind = d.kind
-        row: dict[str, object] = {"t": round(now, 3), "seq": self._count, "kind": kind._value_}
+        row: dict[str, object] = {"t": rounded(now, 3), "seq": self._count, "kind": kind._value_}
         if d.app is not None:
             row["app"] = d.app
         ab = d.ab
@@ -516,7 +538,7 @@ class Run:
             row["before"] = d.before
         if detail:
             row["detail"] = dict(sorted(detail.items())) if len(detail) > 1 else detail
-        if kind is DecisionKind.START or kind is DecisionKind.END:  # (lines with poses)
+        if kind is _START or kind is _END:  # (lines with poses)
             posed = self.sim.poses()
             self._posed = (posed, now)
             robot, user, detectable = posed
@@ -549,7 +571,7 @@ class Run:
             detail["result"] = ", ".join([f"{k}={v}" for k, v in sorted(outcome.values.items())])
             if "error" in outcome.values:
                 detail["error"] = outcome.values["error"]
-            if d.rule in (Rule.INTERRUPT, Rule.BARGE_IN):
+            if d.rule in _CUTS:
                 detail["interrupt"] = d.detail
                 detail["spoken"] = outcome.values.get("spoken")
                 detail["unspoken"] = outcome.values.get("unspoken")
@@ -567,11 +589,11 @@ class Run:
         ids = d.command_ids or ((d.command_id,) if d.command_id is not None else ())
         request = self.requesting
         app = self.apps.get(d.app or "")
-        mine = d.rule is not Rule.RESTART and d.precedes is None
+        mine = d.rule is not _RESTART and d.precedes is None
         if mine and request is not None and app is not None and request.app == d.app:
             loc = app.interpreter.last_request
             at = f"{self._paths[app.name].name}:{loc.line}:{loc.col}" if loc else ""
-            cuttable = request.on_interrupt is not OnInterrupt.NEVER
+            cuttable = request.on_interrupt is not _NEVER
             for cid in ids:
                 self._requested[cid] = (at, cuttable)
             if not request.face_user:
@@ -581,7 +603,7 @@ class Run:
             at, _cuttable = self._requested.get(for_command or 0, ("", True))
             for cid in ids:
                 self._requested.setdefault(cid, (at, True))
-            if d.rule is Rule.RESTART and for_command in self._elsewhere:
+            if d.rule is _RESTART and for_command in self._elsewhere:
                 self._elsewhere.update(ids)  # (said again, its words are still about that)
         found = self._requested.get(ids[0]) if ids else None
         if found is not None and found[0]:
@@ -636,7 +658,7 @@ class Run:
         return not any(app.interpreter.takes(words) for app in apps)
 
     def _event(self, event: Event) -> None:
-        self._line(Kind.EVENT, text=event.name, detail=dict(event.data))
+        self._line(_EVENT, text=event.name, detail=dict(event.data))
         if event.name == SPEECH_EVENT:
             self.mediator.hear(event)  # to one application (docs/rules.md 7.5)
         else:
@@ -648,10 +670,10 @@ class Run:
             detail["target"] = action.target
         if action.heard is not None:
             detail["heard"] = action.heard
-        self._line(Kind.USER, action=action.action.value, text=action.text, detail=detail)
+        self._line(_USER, action=action.action.value, text=action.text, detail=detail)
 
     def _note(self, note: Note) -> None:
-        if note.kind is Kind.ERROR:
+        if note.kind is _ERROR:
             app = self.apps.get(note.app)
             if app is not None:
                 app.failed = True  # the mediator's own failure decision adds nothing
@@ -666,7 +688,7 @@ def _shown_args(catalog: Catalog, call: Call) -> list[str]:
     out = []
     for name, value in call.args.items():
         param = spec.param(name)
-        if param is None or (param.shown and param.kind is not ParamKind.TEXT):
+        if param is None or (param.shown and param.kind is not _TEXT):
             out.append(f"{name}={value}")
         elif param.shown and not said and value:
             out.append(f'{name}="{value}"')

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import io
 import json
+import math
+import random
+import struct
 from pathlib import Path
 
 import pytest
@@ -365,7 +368,7 @@ def test_a_run_made_as_rows_is_its_lines_jsonl_dicts(scenario: str) -> None:
     assert [list(row) for row in made] == [list(line) for line in lines]  # (in its order)
 
 
-@pytest.mark.pure  # (it counts round() by patching the module's name: not in a compiled one)
+@pytest.mark.pure  # (it counts roundings by patching the module's name: not in a compiled one)
 def test_a_pose_equal_to_the_last_one_is_not_rounded_again(
         monkeypatch: pytest.MonkeyPatch) -> None:
     # Kept by value, not by identity: the compiled build hands a pose over as three
@@ -376,7 +379,7 @@ def test_a_pose_equal_to_the_last_one_is_not_rounded_again(
         calls.append(x)
         return round(x, digits)
 
-    monkeypatch.setattr(prima.trace, "round", counted, raising=False)
+    monkeypatch.setattr(prima.trace, "rounded", counted)
     x, y, heading = 1.23456, 2.0, 90.04
     first = prima.trace.rounded_pose((x, y, heading), 0)
     again = prima.trace.rounded_pose((x, y, heading), 0)  # (an equal tuple, made anew)
@@ -385,3 +388,21 @@ def test_a_pose_equal_to_the_last_one_is_not_rounded_again(
     assert len(calls) == 3
     prima.trace.rounded_pose((x, 2.5, heading), 0)
     assert len(calls) == 6
+
+
+def test_the_lines_numbers_are_rounded_as_round_rounds_them() -> None:
+    # The compiled build rounds a line's numbers in floating point where that is exact
+    # (trace._rounded): the same float as round(), its sign and all, halfway or not.
+    rng = random.Random(7)
+    values = [0.0, -0.0, 1e-9, -1e-9, 0.0004, -0.0004, 0.0005, -0.0005, 0.0015, 2.675,
+              1.0005, 123.4565, 359.95, 359.96, 0.05, 0.15, 0.25, -2.5e-4, 1e300, -1e300,
+              math.inf, -math.inf]
+    for _ in range(20_000):
+        scale = rng.choice([1.0, 10.0, 1000.0, 1e6, 1e13])
+        values += [rng.uniform(-scale, scale), round(rng.uniform(-scale, scale), 4),
+                   rng.randint(-10**6, 10**6) / 2000, rng.randint(-10**6, 10**6) / 20]
+    for x in values:
+        for digits in (1, 3):
+            assert struct.pack("<d", prima.trace._rounded(x, digits)) == \
+                struct.pack("<d", round(x, digits)), (x, digits)
+    assert math.isnan(prima.trace._rounded(math.nan, 3))

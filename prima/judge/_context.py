@@ -14,7 +14,7 @@ import bisect
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Final
 
 from prima.catalog import STANDARD_COMMANDS
 from prima.judge._reading import Row
@@ -24,7 +24,7 @@ __all__ = ["EPS", "FOLLOW_COMMANDS", "TALK_DEVICES", "TRAVEL_COMMANDS", "UNMEASU
            "Context", "Exchange", "Hold", "ReactionState", "covered", "span_at", "spans_meeting",
            "xy"]
 
-EPS = 1e-6
+EPS: Final = 1e-6
 """Times in a trace are rounded to the millisecond: comparisons allow this much."""
 
 UNMEASURED_EVENTS = frozenset({"place-reached"})
@@ -645,7 +645,7 @@ class Context:
         return self.during(self.blocks.get(app), t)
 
 
-_OPEN = float("inf")
+_OPEN: Final = float("inf")
 """The end of a span still open."""
 
 

@@ -35,6 +35,7 @@ import bisect
 import dataclasses
 import math
 from collections.abc import Iterable, Sequence
+from typing import Final
 
 from prima.judge._context import (
     EPS,
@@ -53,7 +54,7 @@ from prima.vocab import MAX_ANSWER_HOLD
 
 __all__ = ["analyse"]
 
-_TICK = 0.02
+_TICK: Final = 0.02
 """A cut reaches its word boundary on the simulator's next step at the latest."""
 
 Span = tuple[float, float]

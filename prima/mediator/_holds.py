@@ -28,6 +28,7 @@ budget, :mod:`._fairness`) holds nothing with its streams and blocks.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Final
 
 from prima.catalog import Catalog, Priority
 from prima.errors import MediationError
@@ -41,11 +42,11 @@ __all__ = ["Block", "Holds", "Stream"]
 
 # Enum members read on hot paths (:meth:`Holds.holder`), bound once: reading a member
 # from its class costs far more than a module global in Python 3.11.
-_LOW = Priority.LOW
-_KEEP_CHANNEL = Rule.KEEP_CHANNEL
-_RESTORE_STATE = Rule.RESTORE_STATE
-_BLOCK = Rule.BLOCK
-_STREAM_HOLD = Rule.STREAM_HOLD
+_LOW: Final = Priority.LOW
+_KEEP_CHANNEL: Final = Rule.KEEP_CHANNEL
+_RESTORE_STATE: Final = Rule.RESTORE_STATE
+_BLOCK: Final = Rule.BLOCK
+_STREAM_HOLD: Final = Rule.STREAM_HOLD
 
 
 class Stream:

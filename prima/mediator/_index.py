@@ -32,14 +32,14 @@ from __future__ import annotations
 
 import heapq
 from collections.abc import Iterable, Set
-from typing import Any
+from typing import Any, Final
 
 from prima.mediator._ranking import Keys, Ranking
 from prima.mediator._state import Node, NodeState, Tree
 
 __all__ = ["WaitIndex"]
 
-_WAITING = NodeState.WAITING
+_WAITING: Final = NodeState.WAITING
 _heappush = heapq.heappush
 _NO_DEVICES: frozenset[str] = frozenset()
 

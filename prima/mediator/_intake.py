@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Mapping, Sequence
+from typing import Final
 
 from prima.catalog import Catalog, CommandSpec, Param, Priority
 from prima.errors import MediationError
@@ -52,14 +53,14 @@ _ASAP_NEW_TREE: Link = (Rule.ASAP, None, None, True, False, True)
 _NONE_CANCELLED: tuple[Command, ...] = ()
 # (enum members read once: reading one from its class goes through the enum's
 # metaclass, many times slower than a global)
-_RUNNING = NodeState.RUNNING
-_END_EVENT = Rule.END_EVENT
-_ASAP_RULE = Rule.ASAP
-_AFTER_LATEST = Rule.AFTER_LATEST
-_STREAM = Rule.STREAM
-_CANCEL = DecisionKind.CANCEL
-_EA = AppKind.EA
-_ASAP = RunningOrder.ASAP
+_RUNNING: Final = NodeState.RUNNING
+_END_EVENT: Final = Rule.END_EVENT
+_ASAP_RULE: Final = Rule.ASAP
+_AFTER_LATEST: Final = Rule.AFTER_LATEST
+_STREAM: Final = Rule.STREAM
+_CANCEL: Final = DecisionKind.CANCEL
+_EA: Final = AppKind.EA
+_ASAP: Final = RunningOrder.ASAP
 _NO_PARAMS: tuple[Param, ...] = ()
 
 

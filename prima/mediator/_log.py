@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Final
 
 from prima.mediator._decisions import Decision, DecisionKind, Rule
 from prima.mediator._state import Command, Node
@@ -10,7 +11,7 @@ from prima.mediator._state import Command, Node
 __all__ = ["DecisionLog"]
 
 _new = tuple.__new__
-_REQUEST = DecisionKind.REQUEST  # (read once: from its class, through the enum's metaclass)
+_REQUEST: Final = DecisionKind.REQUEST  # (read once: from its class, through the enum's metaclass)
 
 
 class DecisionLog:

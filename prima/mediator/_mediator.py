@@ -27,6 +27,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Sequence
 from types import TracebackType
+from typing import Final
 
 from prima.catalog import BODY_DEVICE, CONNECT_COMMAND, SPEAKER, Catalog, ParamKind
 from prima.errors import MediationError
@@ -68,10 +69,11 @@ __all__ = ["Mediator", "MediatorConfig"]
 
 # (enum members read once on the hot paths: reading one from its class goes through the
 # enum's metaclass, many times slower than a global)
-_PENDING = NodeState.PENDING
-_RUNNING = NodeState.RUNNING
-_END = DecisionKind.END
-_COMPLETED = Rule.COMPLETED
+_PENDING: Final = NodeState.PENDING
+_RUNNING: Final = NodeState.RUNNING
+_END: Final = DecisionKind.END
+_COMPLETED: Final = Rule.COMPLETED
+_CONNECT_CHANNEL: Final = Rule.CONNECT_CHANNEL
 
 
 class _Operation:
@@ -458,7 +460,7 @@ class Mediator:
             self._wm.heard(tree)
         if tree.answered_since and node.seq >= tree.answered_since and node.speaks:
             self._wm.replied(tree)
-        if node.commands[0].internal is Rule.CONNECT_CHANNEL:
+        if node.commands[0].internal is _CONNECT_CHANNEL:
             for child in children:
                 child.looked = tree.suspensions
                 child.faced_at = self._log.now

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from types import MappingProxyType
+from typing import Final
 
 from prima.catalog import Priority
 from prima.mediator._index import WaitIndex
@@ -24,11 +25,11 @@ __all__ = ["WorkingMemory"]
 
 # (enum members read once: reading one from its class goes through the enum's
 # metaclass, many times slower than a global)
-_PENDING = NodeState.PENDING
-_WAITING = NodeState.WAITING
-_RUNNING = NodeState.RUNNING
-_DONE = NodeState.DONE
-_CANCELLED = NodeState.CANCELLED
+_PENDING: Final = NodeState.PENDING
+_WAITING: Final = NodeState.WAITING
+_RUNNING: Final = NodeState.RUNNING
+_DONE: Final = NodeState.DONE
+_CANCELLED: Final = NodeState.CANCELLED
 _NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
 
 

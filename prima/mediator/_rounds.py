@@ -18,6 +18,7 @@ from __future__ import annotations
 import heapq
 from collections.abc import Callable, Mapping, Set
 from types import MappingProxyType
+from typing import Final
 
 from prima.catalog import Priority
 from prima.mediator._decisions import DecisionKind, Rule
@@ -34,16 +35,16 @@ __all__ = ["Selector", "atomic_behavior"]
 
 # Enum members read on hot paths, bound once: in Python 3.11 reading a member from its
 # class costs about as much as a short function call, a module global almost nothing.
-_WAITING = NodeState.WAITING
-_LOW = Priority.LOW
-_START = DecisionKind.START
-_RESUME = DecisionKind.RESUME
-_SUSPEND = DecisionKind.SUSPEND
-_BLEND = Rule.BLEND
-_RESTART = Rule.RESTART
-_FREE_DEVICES = Rule.FREE_DEVICES
-_KEEP_CHANNEL = Rule.KEEP_CHANNEL
-_ANSWERING = Rule.ANSWERING
+_WAITING: Final = NodeState.WAITING
+_LOW: Final = Priority.LOW
+_START: Final = DecisionKind.START
+_RESUME: Final = DecisionKind.RESUME
+_SUSPEND: Final = DecisionKind.SUSPEND
+_BLEND: Final = Rule.BLEND
+_RESTART: Final = Rule.RESTART
+_FREE_DEVICES: Final = Rule.FREE_DEVICES
+_KEEP_CHANNEL: Final = Rule.KEEP_CHANNEL
+_ANSWERING: Final = Rule.ANSWERING
 _NO_DEVICES: frozenset[str] = frozenset()
 _NO_NODES: list[Node] = []  # (never changed)
 _NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Final
 
 from prima.catalog import CommandSpec, Priority
 from prima.mediator._interface import AbId, Call, CommandId, TreeId
@@ -178,7 +178,7 @@ class Tree:
         policy has put its return before the stream's next AB (or found none needed)."""
 
 
-_PENDING = NodeState.PENDING
+_PENDING: Final = NodeState.PENDING
 _NO_DEVICES: frozenset[str] = frozenset()
 _SORTED: dict[frozenset[str], tuple[str, ...]] = {}
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import heapq
 from collections.abc import Callable, Generator
-from typing import Any
+from typing import Any, Final
 
 from prima.errors import SimulationError
 
@@ -60,7 +60,7 @@ def sleep(ticks: int) -> Wait:
 _SLEEPS: dict[int, Wait] = {}
 """The waits of :func:`sleep` by length (the kernel never changes a wait: processes
 share them; a behavior sleeps its control period again and again)."""
-_SLEEPS_KEPT = 1024
+_SLEEPS_KEPT: Final = 1024
 
 
 def idle(ticks: int, unchanged: Callable[[], bool], until: int | None = None) -> Wait:
@@ -73,7 +73,7 @@ def idle(ticks: int, unchanged: Callable[[], bool], until: int | None = None) ->
                 until=until if until is not None else _NEVER)
 
 
-_NEVER = 1 << 60
+_NEVER: Final = 1 << 60
 """An idle sleep's ``until`` when it has none: never (a tick no run reaches)."""
 
 

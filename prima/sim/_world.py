@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any, Final
 
 import pymunk
 from pymunk._chipmunk_cffi import ffi as _ffi  # (pymunk's binding of Chipmunk: see above)
@@ -51,27 +52,50 @@ from prima.sim._spec import RobotSpec
 
 __all__ = ["World", "wrap_angle"]
 
+# What the hot paths call, each as a constant: compiled, a Final name is a C static,
+# where ``_cp.cpSpaceStep`` is a lookup in the module's dict and one in the binding's,
+# and ``math.hypot`` one in the module's and one in ``math``'s (some 300 to 500
+# instructions), at every call: a run makes tens of thousands.
+_cpBodyGetAngle: Final = _cp.cpBodyGetAngle
+_cpBodyGetAngularVelocity: Final = _cp.cpBodyGetAngularVelocity
+_cpBodyGetPosition: Final = _cp.cpBodyGetPosition
+_cpBodyGetVelocity: Final = _cp.cpBodyGetVelocity
+_cpBodySetAngle: Final = _cp.cpBodySetAngle
+_cpBodySetAngularVelocity: Final = _cp.cpBodySetAngularVelocity
+_cpBodySetVelocity: Final = _cp.cpBodySetVelocity
+_cpSpaceSegmentQueryFirst: Final = _cp.cpSpaceSegmentQueryFirst
+_cpSpaceStep: Final = _cp.cpSpaceStep
+_hypot: Final = math.hypot
+_atan2: Final = math.atan2
+_degrees: Final = math.degrees
+_radians: Final = math.radians
+_INF: Final = math.inf
+_NULL: Final = _ffi.NULL
+
 WALL = 0b001
 ROBOT = 0b010
 HUMAN = 0b100
-_SIGHT = pymunk.ShapeFilter(mask=WALL)
+_SIGHT: Final = pymunk.ShapeFilter(mask=WALL)
 HUMAN_RADIUS = 0.25
-_PLACE_MARGIN = 1e-3
+_PLACE_MARGIN: Final = 1e-3
 """A margin (m) for rounding: the places' index is asked about a box this much
 wider than needed, and the distance a point may move without changing which
 places are near it is this much shorter than measured."""
 
-_IDLE, _LINEAR, _ANGULAR, _VELOCITY = 0, 1, 2, 3
+_IDLE: Final = 0
+_LINEAR: Final = 1
+_ANGULAR: Final = 2
+_VELOCITY: Final = 3
 
-_CHECK_EVERY = 5
+_CHECK_EVERY: Final = 5
 """A straight drive compares its real progress with its plan every this many steps
 (reading the body's position costs more than a physics step)."""
-_MARGIN = 1e-9
+_MARGIN: Final = 1e-9
 """A length (m) far longer than the rounding of a straight drive's progress over a
 stretch of steps, far shorter than a step."""
-_BLOCKED_LAG = 0.1
+_BLOCKED_LAG: Final = 0.1
 """A straight drive that lags this far (m) behind its plan is blocked: it ends at once."""
-STILL = 1e-4
+STILL: Final = 1e-4
 """The wheels' least speed (m/s) and turning rate (rad/s): a controller that asks for
 less asks them to stand still (at this bound the robot would creep a millimetre, or 0.06
 degrees, in ten seconds). A proportional controller that has nearly converged (a robot
@@ -84,9 +108,14 @@ Done = Callable[[bool], None]
 
 
 _UNSEEN: tuple[int, float, tuple[float, ...], tuple[bool, float]] = (
-    -1, math.nan, (), (False, math.inf))
+    -1, math.nan, (), (False, _INF))
 """Human detection's answer before it first looks (:attr:`World._ahead`): at no version,
 for no pan (NaN equals nothing)."""
+
+
+def _length(v: Any) -> float:
+    """A velocity's length, as ``Vec2d.length`` works it out (pymunk's ``body.velocity``)."""
+    return math.sqrt(v.x**2 + v.y**2)
 
 
 def wrap_angle(a: float) -> float:
@@ -135,7 +164,7 @@ class World:
             space.add(seg)
         body = pymunk.Body(20.0, float("inf"))
         body.position = (robot.x, robot.y)
-        body.angle = math.radians(robot.heading)
+        body.angle = _radians(robot.heading)
         shape = pymunk.Circle(body, spec.radius)
         shape.filter = pymunk.ShapeFilter(categories=ROBOT)
         shape.friction = 0.0
@@ -146,7 +175,7 @@ class World:
         human = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         start = user or Pose(-1000.0, -1000.0)
         human.position = (start.x, start.y)
-        human.angle = math.radians(start.heading)
+        human.angle = _radians(start.heading)
         hshape = pymunk.Circle(human, HUMAN_RADIUS)
         hshape.filter = pymunk.ShapeFilter(categories=HUMAN)
         space.add(human, hshape)
@@ -183,12 +212,12 @@ class World:
         self._cmd_v = self._cmd_w = 0.0
         self._w = 0.0
         self._a_dt = spec.max_accel * self.dt
-        self._alpha_dt = math.radians(spec.turn_accel) * self.dt
+        self._alpha_dt = _radians(spec.turn_accel) * self.dt
         # how fast it drives now: the lower of the limit (speed_limit) and the running
         # straight drive's own speed (drive_to: its cap), and turns (turn_by: the turn's)
         self._vmax = self._limit = spec.max_speed
-        self._cap = math.inf
-        self._wmax = self._wtop = math.radians(spec.max_turn_rate)
+        self._cap = _INF
+        self._wmax = self._wtop = _radians(spec.max_turn_rate)
         # a sway superimposed on whatever drives the wheels (a dance step: the blend policy)
         self._sway: tuple[float, float, int] | None = None
         """Amplitude (rad), angular frequency (rad per step) and length (steps)."""
@@ -216,35 +245,35 @@ class World:
         return self.joint(name).at(tick)
 
     def robot_pose(self) -> Pose:
-        p = _cp.cpBodyGetPosition(self._rb)
-        return Pose(p.x, p.y, math.degrees(_cp.cpBodyGetAngle(self._rb)) % 360.0)
+        p = _cpBodyGetPosition(self._rb)
+        return Pose(p.x, p.y, _degrees(_cpBodyGetAngle(self._rb)) % 360.0)
 
     def user_pose(self) -> Pose:
-        p = _cp.cpBodyGetPosition(self._hb)
-        return Pose(p.x, p.y, math.degrees(_cp.cpBodyGetAngle(self._hb)) % 360.0)
+        p = _cpBodyGetPosition(self._hb)
+        return Pose(p.x, p.y, _degrees(_cpBodyGetAngle(self._hb)) % 360.0)
 
     def robot_xy(self) -> tuple[float, float]:
         """Where the robot is (m): ``robot.position``, read for less."""
-        p = _cp.cpBodyGetPosition(self._rb)
+        p = _cpBodyGetPosition(self._rb)
         return p.x, p.y
 
     def user_xy(self) -> tuple[float, float]:
         """Where the user is (m): ``human.position``, read for less."""
-        p = _cp.cpBodyGetPosition(self._hb)
+        p = _cpBodyGetPosition(self._hb)
         return p.x, p.y
 
     def robot_angle(self) -> float:
         """The robot's body angle (radians): ``robot.angle``, read for less."""
-        return float(_cp.cpBodyGetAngle(self._rb))
+        return float(_cpBodyGetAngle(self._rb))
 
     def user_angle(self) -> float:
         """The user's body angle (radians): ``human.angle``, read for less."""
-        return float(_cp.cpBodyGetAngle(self._hb))
+        return float(_cpBodyGetAngle(self._hb))
 
     def user_distance(self) -> float:
-        r = _cp.cpBodyGetPosition(self._rb)
-        u = _cp.cpBodyGetPosition(self._hb)
-        return math.hypot(u.x - r.x, u.y - r.y)
+        r = _cpBodyGetPosition(self._rb)
+        u = _cpBodyGetPosition(self._hb)
+        return _hypot(u.x - r.x, u.y - r.y)
 
     def clear(self, ax: float, ay: float, bx: float, by: float, radius: float = 0.0) -> bool:
         """True if no wall lies on the segment from a to b (fattened by ``radius``)."""
@@ -252,12 +281,12 @@ class World:
 
     def _clear(self, a: tuple[float, float], b: tuple[float, float], radius: float) -> bool:
         # (Space.segment_query_first, without the result's Python objects)
-        hit = _cp.cpSpaceSegmentQueryFirst(self._sp, a, b, radius, _SIGHT, _ffi.NULL)
-        return bool(hit == _ffi.NULL)
+        hit = _cpSpaceSegmentQueryFirst(self._sp, a, b, radius, _SIGHT, _NULL)
+        return bool(hit == _NULL)
 
     def camera_heading(self, tick: int) -> float:
         """Where the head camera looks (radians, map frame)."""
-        return self.robot_angle() + math.radians(self.head_pan.at(tick))
+        return self.robot_angle() + _radians(self.head_pan.at(tick))
 
     def sees_user(self, tick: int, *, any_direction: bool = False) -> tuple[bool, float]:
         """Human detection: in range, in the camera's field of view, in line of sight.
@@ -275,11 +304,11 @@ class World:
         if kept[0] == self.version and kept[1] == pan:
             return kept[3]  # (the same poses, the camera the same way: at any tick)
         if not self.has_user:
-            return False, math.inf
-        r = _cp.cpBodyGetPosition(self._rb)
-        u = _cp.cpBodyGetPosition(self._hb)
+            return False, _INF
+        r = _cpBodyGetPosition(self._rb)
+        u = _cpBodyGetPosition(self._hb)
         rx, ry, ux, uy = r.x, r.y, u.x, u.y
-        angle = 0.0 if any_direction else _cp.cpBodyGetAngle(self._rb)
+        angle = 0.0 if any_direction else _cpBodyGetAngle(self._rb)
         poses = (rx, ry, angle, ux, uy)
         if kept[1] == pan and kept[2] == poses:
             seen = kept[3]  # nothing moved since it last looked
@@ -295,16 +324,16 @@ class World:
               ux: float, uy: float) -> tuple[bool, float]:
         dx = ux - rx
         dy = uy - ry
-        d = math.hypot(dx, dy)
+        d = _hypot(dx, dy)
         if d > self.spec.camera_range:
             return False, d
         if not any_direction:
-            rel = wrap_angle(math.atan2(dy, dx) - (angle + math.radians(pan)))
-            if abs(rel) > math.radians(self.spec.camera_fov) / 2:
+            rel = wrap_angle(_atan2(dy, dx) - (angle + _radians(pan)))
+            if abs(rel) > _radians(self.spec.camera_fov) / 2:
                 return False, d
         # (:meth:`_clear`, written out: a look at each sensing tick while anything moves)
-        hit = _cp.cpSpaceSegmentQueryFirst(self._sp, (rx, ry), (ux, uy), 0.0, _SIGHT, _ffi.NULL)
-        return bool(hit == _ffi.NULL), d
+        hit = _cpSpaceSegmentQueryFirst(self._sp, (rx, ry), (ux, uy), 0.0, _SIGHT, _NULL)
+        return bool(hit == _NULL), d
 
     def places_near(self, x: float, y: float, radius: float,
                     slack: float = 0.0) -> tuple[list[int], float]:
@@ -321,7 +350,7 @@ class World:
         found = []
         clear = slack
         for i in sorted(self.map.places_in(x - m, y - m, x + m, y + m)):
-            d = math.hypot(places[i].x - x, places[i].y - y)
+            d = _hypot(places[i].x - x, places[i].y - y)
             if d <= radius:
                 found.append(i)
             clear = min(clear, abs(d - radius))
@@ -329,9 +358,9 @@ class World:
 
     def user_bearing(self) -> float:
         """Direction from the robot to the user relative to the body (radians)."""
-        r = _cp.cpBodyGetPosition(self._rb)
-        u = _cp.cpBodyGetPosition(self._hb)
-        return wrap_angle(math.atan2(u.y - r.y, u.x - r.x) - _cp.cpBodyGetAngle(self._rb))
+        r = _cpBodyGetPosition(self._rb)
+        u = _cpBodyGetPosition(self._hb)
+        return wrap_angle(_atan2(u.y - r.y, u.x - r.x) - _cpBodyGetAngle(self._rb))
 
     # ---- poses written from outside the step --------------------------------------
 
@@ -350,7 +379,7 @@ class World:
         human.velocity = (vx, vy)
         self.human_moving = vx != 0.0 or vy != 0.0
         if self.human_moving:
-            human.angle = math.atan2(vy, vx)
+            human.angle = _atan2(vy, vx)
             self.version += 1
 
     # ---- robot wheel commands --------------------------------------------------
@@ -413,21 +442,21 @@ class World:
         the sway adds to, is the controller's attribute: the loops keep it up to date)."""
         sway = self._sway
         if sway is None:  # (it ended within the stretch)
-            _cp.cpSpaceStep(space, dt)
+            _cpSpaceStep(space, dt)
             return
         amplitude, omega, steps = sway
         k = self._sway_k + 1
         offset = amplitude * math.sin(omega * k) if k < steps else 0.0
         rb = self._rb
         base = self._base_w()
-        _cp.cpBodySetAngularVelocity(rb, base + (offset - self._sway_offset) / dt)
-        _cp.cpSpaceStep(space, dt)
+        _cpBodySetAngularVelocity(rb, base + (offset - self._sway_offset) / dt)
+        _cpSpaceStep(space, dt)
         self._sway_offset = offset
         self._sway_k = k
         if k >= steps:
             self._sway = None
             self.sway_owner = 0
-            _cp.cpBodySetAngularVelocity(rb, base)
+            _cpBodySetAngularVelocity(rb, base)
 
     def turning_to(self) -> float | None:
         """The body angle the running turn ends at (radians), if one runs."""
@@ -437,11 +466,11 @@ class World:
         """Call ``done`` instead when the running drive or turn ends (it goes on as is)."""
         self._done = done
 
-    def drive_to(self, x: float, y: float, done: Done, speed: float = math.inf) -> bool:
+    def drive_to(self, x: float, y: float, done: Done, speed: float = _INF) -> bool:
         """Drive straight to (x, y) from standstill, no faster than ``speed`` (m/s), if
         that is below the limit. False if already there."""
-        px, py = self.robot.position
-        length = math.hypot(x - px, y - py)
+        px, py = self.robot_xy()
+        length = _hypot(x - px, y - py)
         self._halt()
         self._capped(speed)
         if length < 1e-6:
@@ -456,14 +485,14 @@ class World:
         self.mode = _LINEAR
         return True
 
-    def turn_by(self, delta: float, done: Done, rate: float = math.inf) -> bool:
+    def turn_by(self, delta: float, done: Done, rate: float = _INF) -> bool:
         """Turn in place by ``delta`` radians (counter-clockwise positive), no faster than
         ``rate`` (rad/s), if that is below the robot's."""
         self._halt()
         if abs(delta) < 1e-9:
             return False
         self._wtop = min(self._wmax, rate)
-        self._ta = self.robot.angle + delta
+        self._ta = self.robot_angle() + delta
         self._ta_offset = self._sway_offset
         self._ux = 1.0 if delta > 0 else -1.0
         self._len, self._s, self._v = abs(delta), 0.0, 0.0
@@ -509,14 +538,15 @@ class World:
     def _halt(self) -> None:
         """Forget the current controller (the caller sets a new one). The body stops too,
         idle or not: a push (a user walking into it) leaves it no speed of its own."""
-        body = self.robot
-        if self.mode != _IDLE or body.velocity.length > 0.0 or body.angular_velocity:
-            body.velocity = (0.0, 0.0)
-            body.angular_velocity = 0.0
+        rb = self._rb  # (``robot.velocity.length``, ``robot.angular_velocity``, read for less)
+        if (self.mode != _IDLE or _length(_cpBodyGetVelocity(rb)) > 0.0
+                or _cpBodyGetAngularVelocity(rb)):
+            _cpBodySetVelocity(rb, (0.0, 0.0))
+            _cpBodySetAngularVelocity(rb, 0.0)
         self.mode = _IDLE
         self._done = None
-        if self._cap != math.inf:  # (a drive's own speed goes with it)
-            self._capped(math.inf)
+        if self._cap != _INF:  # (a drive's own speed goes with it)
+            self._capped(_INF)
 
     # ---- stepping ------------------------------------------------------------
 
@@ -534,7 +564,7 @@ class World:
         while True:  # (:meth:`_stretch`'s choice of loop, written out: once a stretch)
             sway = self._sway
             advance: Callable[[object, float], None] = (
-                _cp.cpSpaceStep if sway is None else self._advance)
+                _cpSpaceStep if sway is None else self._advance)
             mode = self.mode
             if mode == _IDLE:
                 if self.human_moving:
@@ -562,7 +592,7 @@ class World:
         A stretch with a sway steps through :meth:`_advance`; one without it calls
         Chipmunk's step directly."""
         advance: Callable[[object, float], None] = (
-            _cp.cpSpaceStep if self._sway is None else self._advance)
+            _cpSpaceStep if self._sway is None else self._advance)
         mode = self.mode
         if mode == _IDLE:
             return self._run_idle(tick, bound, advance), None
@@ -576,7 +606,7 @@ class World:
         """Idle steps up to the tick ``end``, each followed by :meth:`_hold` if the body
         has any speed (a push: else it has nothing to do)."""
         space, rb, dt = self._sp, self._rb, self.dt
-        velocity = _cp.cpBodyGetVelocity
+        velocity = _cpBodyGetVelocity
         for _ in range(end - tick):
             advance(space, dt)
             v = velocity(rb)
@@ -609,9 +639,9 @@ class World:
         if ds < low and vmax <= math.sqrt(twice * low):
             vx, vy = self._ux * vmax, self._uy * vmax
             while tick < bound:
-                now = _cp.cpBodyGetVelocity(rb)
+                now = _cpBodyGetVelocity(rb)
                 if now.x != vx or now.y != vy:
-                    _cp.cpBodySetVelocity(rb, (vx, vy))  # (pushed off its course)
+                    _cpBodySetVelocity(rb, (vx, vy))  # (pushed off its course)
                     v = vmax
                 advance(space, dt)
                 s += ds
@@ -631,9 +661,9 @@ class World:
                 if last:
                     nv = rem / dt
                 vx, vy = ux * nv, uy * nv
-                now = _cp.cpBodyGetVelocity(rb)
+                now = _cpBodyGetVelocity(rb)
                 if nv != v or now.x != vx or now.y != vy:
-                    _cp.cpBodySetVelocity(rb, (vx, vy))
+                    _cpBodySetVelocity(rb, (vx, vy))
                     v = nv
                 advance(space, dt)
                 s += nv * dt
@@ -663,7 +693,7 @@ class World:
         body where it turns)."""
         dt, rb, space = self.dt, self._rb, self._sp
         wtop, alpha_dt, sense = self._wtop, self._alpha_dt, self._ux
-        twice = 2.0 * math.radians(self.spec.turn_accel)
+        twice = 2.0 * _radians(self.spec.turn_accel)
         length, s, v = self._len, self._s, self._v
         start = tick
         while True:
@@ -673,10 +703,10 @@ class World:
             if last:
                 w = rem / dt
             if w != v:
-                _cp.cpBodySetAngularVelocity(rb, sense * w)
+                _cpBodySetAngularVelocity(rb, sense * w)
                 v = self._v = w  # (a sway turns on top of it)
             advance(space, dt)
-            pushed = _cp.cpBodyGetVelocity(rb)
+            pushed = _cpBodyGetVelocity(rb)
             if pushed.x or pushed.y:
                 self._hold()
             s += w * dt
@@ -686,17 +716,16 @@ class World:
         self._s, self._v = s, v
         self.version += tick - start
         if last:
-            _cp.cpBodySetAngularVelocity(rb, 0.0)
-            _cp.cpBodySetAngle(rb, self._ta + self._sway_offset - self._ta_offset)
+            _cpBodySetAngularVelocity(rb, 0.0)
+            _cpBodySetAngle(rb, self._ta + self._sway_offset - self._ta_offset)
             return tick, self._finish(True)
         return tick, None
 
     def _hold(self) -> None:
         """Idle or turning in place, the wheels hold the body where it is: a push (the
         user walking into it) leaves it no speed to drift on with."""
-        v = _cp.cpBodyGetVelocity(self._rb)
-        if math.sqrt(v.x**2 + v.y**2) > 1e-9:  # (body.velocity.length)
-            _cp.cpBodySetVelocity(self._rb, (0.0, 0.0))
+        if _length(_cpBodyGetVelocity(self._rb)) > 1e-9:
+            _cpBodySetVelocity(self._rb, (0.0, 0.0))
 
     @property
     def swaying(self) -> bool:
@@ -720,12 +749,12 @@ class World:
             nv = v + (dv if -a <= dv <= a else (a if dv > 0 else -a))
             nw = w + (dw if -al <= dw <= al else (al if dw > 0 else -al))
             if nv != 0.0 and (nv != v or w != 0.0 or nw != w):
-                ang = _cp.cpBodyGetAngle(rb)
-                _cp.cpBodySetVelocity(rb, (math.cos(ang) * nv, math.sin(ang) * nv))
+                ang = _cpBodyGetAngle(rb)
+                _cpBodySetVelocity(rb, (math.cos(ang) * nv, math.sin(ang) * nv))
             elif nv == 0.0 and v != 0.0:
-                _cp.cpBodySetVelocity(rb, (0.0, 0.0))
+                _cpBodySetVelocity(rb, (0.0, 0.0))
             if nw != w:
-                _cp.cpBodySetAngularVelocity(rb, nw)
+                _cpBodySetAngularVelocity(rb, nw)
                 self._w = nw  # (a sway turns on top of it)
             v, w = nv, nw
             advance(space, dt)
@@ -738,7 +767,7 @@ class World:
     def _stopped(self) -> Callable[[], None] | None:
         """The velocity command has brought the robot to a standstill: idle; whoever
         waits for it (:meth:`stop`) is told."""
-        _cp.cpBodySetVelocity(self._rb, (0.0, 0.0))
+        _cpBodySetVelocity(self._rb, (0.0, 0.0))
         self.mode = _IDLE
         waiting, self._on_stopped = self._on_stopped, []
         if not waiting:
@@ -751,7 +780,7 @@ class World:
 
     def _lagging(self) -> bool:
         """The drive is well behind its plan: the body does not get where it is driven."""
-        p = _cp.cpBodyGetPosition(self._rb)
+        p = _cpBodyGetPosition(self._rb)
         made: float = (p.x - self._x0) * self._ux + (p.y - self._y0) * self._uy
         return self._s - made > _BLOCKED_LAG
 
@@ -759,7 +788,7 @@ class World:
         body = self.robot
         body.velocity = (0.0, 0.0)
         x, y = body.position
-        arrived = math.hypot(x - self._tx, y - self._ty) < 0.05
+        arrived = _hypot(x - self._tx, y - self._ty) < 0.05
         if arrived:
             body.position = (self._tx, self._ty)
         return self._finish(arrived)
@@ -769,8 +798,8 @@ class World:
         self.mode = _IDLE
         self._done = None
         self._v = 0.0
-        if self._cap != math.inf:  # (as in _halt)
-            self._capped(math.inf)
+        if self._cap != _INF:  # (as in _halt)
+            self._capped(_INF)
         waiting, self._on_stopped = self._on_stopped, []
         if done is None and not waiting:
             return None
