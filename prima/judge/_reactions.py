@@ -114,6 +114,9 @@ class _Analyst:
         self._user_until: dict[int, float] = {}
         self._by_tree: dict[int, list[ReactionState]] | None = None
         self._ready: dict[int, float] = {}
+        self._went: dict[tuple[int, int, bool], str] = {}
+        """(AB, reaction, low) -> :meth:`goes_first` of an AB that started while the
+        reaction waited (:meth:`went_first`)."""
         self._requested_by: dict[int, tuple[int, ...]] | None = None
         self._following: dict[str, tuple[list[Span], list[float]]] = {}
         """App -> when other applications followed the user (:meth:`_followed`)."""
@@ -257,6 +260,17 @@ class _Analyst:
                     else "the latest reaction first (4.2)")
         return ""
 
+    def went_first(self, y: Ab, r: ReactionState, low: bool) -> str:
+        """:meth:`goes_first` as ``y`` started, worked out once: each of a reaction's waits
+        that spans ``y`` asks it (its first start's, its words', its words' AB's from its
+        request), one long wait another application's whole feedback loop (some 140 ABs
+        three times over in a sample-7 run)."""
+        key = (y.id, id(r), low)
+        found = self._went.get(key)
+        if found is None:
+            found = self._went[key] = self.goes_first(y, r, low, y.start)
+        return found
+
     def may_cut(self, y: Ab, r: ReactionState, low: bool, t: float, turn: bool = False) -> str:
         """Empty if the reaction may cut ``y`` (running at ``t``); else why not. ``turn``:
         for the turn to the user put before its words, which may cut its own
@@ -361,7 +375,7 @@ class _Analyst:
                     if y_end > stop + EPS:
                         took.append((stop, y_end, y))
                 continue
-            why = self.goes_first(y, r, low, y.start)
+            why = self.went_first(y, r, low)
             if why:
                 # it kept its devices from when it was ready (waiting, or next in a
                 # reaction's tree, docs/rules.md 7.1): when the AB before it in its tree
@@ -479,8 +493,10 @@ class _Analyst:
         own = set(r.commands)
         for cid in r.commands:
             own.update(self.policy_for.get(cid, ()))
-        mine = [ab for cid in own for ab in self.cmd_abs.get(cid, ())]
-        mine.sort(key=lambda ab: ab.seq)
+        # (each once: an AB of several Commands is each one's, and the wait of its words,
+        # worked out for each, went through another application's whole loop three times)
+        mine = sorted({ab.id: ab for cid in own for ab in self.cmd_abs.get(cid, ())}.values(),
+                      key=lambda ab: ab.seq)
         first = mine[0] if mine else None
         devices = set(r.devices)
         put: list[tuple[frozenset[str], float, int, bool]] = []

@@ -20,6 +20,7 @@ import pytest
 
 from prima.judge import Blame, Thresholds, judge
 from prima.judge._context import EPS, Context, span_at
+from prima.judge._reactions import _Analyst
 from prima.run import Run
 from tests.judge.helpers import Trace
 from tests.work import bytecodes
@@ -91,6 +92,53 @@ def test_a_reaction_s_waits_make_the_blames_of_what_they_show_alone() -> None:
         (52, "its begin/end block (rule 3)", 23.75), (2, "its begin/end block (rule 3)", 10.25),
         (3, "its begin/end block (rule 3)", 10.5)]
     assert made <= 8, made
+
+
+@pytest.mark.pure
+def test_a_reaction_s_words_wait_through_a_loop_once() -> None:
+    # A reaction turns at once; its words, in an AB of three Commands, wait through
+    # another application's 100 ABs in its begin/end block. The words' wait, and their
+    # AB's from its request, each go through those ABs: that AB is among the reaction's
+    # own once (its wait was worked out once for each of its Commands: 5 passes through
+    # the loop in all), and whether each of the 100 went first is worked out once (400
+    # times; in a sample-7 run, 3% and 1.4% of its bytecodes).
+    turn, group = ("locomotion",), ("arm", "locomotion", "speaker")
+    command = "SetDirection+PointByHand+Speak"
+    tr = Trace()
+    tr.line(9.0, "block", app="ea", text="open", detail={"id": "camera-work"})
+    tr.event(10.0, "message")
+    tr.request(10.0, "fa", 1, 1, tree=1, command="SetDirection", devices=turn, reactive=True)
+    tr.request(10.0, "fa", 2, [2, 3, 4], tree=1, command=command, text="Over there.",
+               devices=group, reason="end-event", before=1)
+    tr.start(10.0, "fa", 1, 1, tree=1, command="SetDirection", devices=turn)
+    tr.end(10.5, "fa", 1, 1, tree=1, command="SetDirection", devices=turn)
+    for i in range(100):
+        tr.speak(10.25 + i / 4, "ea", i + 3, i + 5, "Smile.", tree=2, lasts=0.25,
+                 request=i == 0)
+    tr.line(35.25, "block", app="ea", text="close", detail={"id": "camera-work"})
+    said = (35.25, 36.25)
+    tr.start(35.25, "fa", 2, 2, tree=1, command=command, text="Over there.", devices=group,
+             words=said)
+    tr.end(36.25, "fa", 2, 2, tree=1, command=command, devices=group, words=said,
+           text="Over there.")
+    for row in tr.rows[-2:]:
+        row["command_ids"] = [2, 3, 4]
+    calls = {_Analyst.goes_first.__code__: 0, _Analyst.near.__code__: 0}
+
+    def count(frame: FrameType, event: str, _arg: Any) -> None:
+        if event == "call" and frame.f_code in calls:
+            calls[frame.f_code] += 1
+
+    previous = sys.gettrace()
+    sys.settrace(count)
+    try:
+        report = tr.judge()
+    finally:
+        sys.settrace(previous)
+    (r,) = report.reactions
+    assert (r.first_utterance, r.words_free, r.late) == (35.25, 0.0, False)
+    assert calls[_Analyst.goes_first.__code__] <= 100, calls
+    assert calls[_Analyst.near.__code__] <= 3, calls
 
 
 def _spans(rng: random.Random) -> list[list[float]]:
