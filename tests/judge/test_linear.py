@@ -13,12 +13,12 @@ import math
 import random
 import sys
 from pathlib import Path
-from types import FrameType
+from types import CodeType, FrameType
 from typing import Any
 
 import pytest
 
-from prima.judge import Blame, Thresholds, judge
+from prima.judge import Blame, Report, Thresholds, judge
 from prima.judge._context import EPS, Context, span_at
 from prima.judge._reactions import _Analyst
 from prima.run import Run
@@ -61,6 +61,22 @@ def test_a_feedback_loop_s_lines_go_only_where_they_are_read() -> None:
     assert per_line < 750, per_line
 
 
+def _calls(tr: Trace, *functions: Any) -> tuple[Report, dict[CodeType, int]]:
+    """The trace judged, and how often each of ``functions`` was called meanwhile."""
+    calls = {f.__code__: 0 for f in functions}
+
+    def count(frame: FrameType, event: str, _arg: Any) -> None:
+        if event == "call" and frame.f_code in calls:
+            calls[frame.f_code] += 1
+
+    previous = sys.gettrace()
+    sys.settrace(count)
+    try:
+        return tr.judge(), calls
+    finally:
+        sys.settrace(previous)
+
+
 def test_a_reaction_s_waits_make_the_blames_of_what_they_show_alone() -> None:
     # A reaction that waits through another application's loop in its begin/end block
     # is rightly kept by each of its ABs (hundreds a run, in a thesis sample), and shows
@@ -75,18 +91,8 @@ def test_a_reaction_s_waits_make_the_blames_of_what_they_show_alone() -> None:
                  request=i == 0)
     tr.line(40.0, "block", app="ea", text="close", detail={"id": "camera-work"})
     tr.speak(40.0, "fa", 1, 1, "A message.", request=False)
-    made = 0
-
-    def count(frame: FrameType, event: str, _arg: Any) -> None:
-        nonlocal made
-        made += event == "call" and frame.f_code is Blame.__init__.__code__
-
-    previous = sys.gettrace()
-    sys.settrace(count)
-    try:
-        report = tr.judge()
-    finally:
-        sys.settrace(previous)
+    report, calls = _calls(tr, Blame.__init__)
+    made = calls[Blame.__init__.__code__]
     (r,) = report.reactions
     assert [(w.ab, w.rule, w.until) for w in r.waits] == [
         (52, "its begin/end block (rule 3)", 23.75), (2, "its begin/end block (rule 3)", 10.25),
@@ -123,18 +129,7 @@ def test_a_reaction_s_words_wait_through_a_loop_once() -> None:
            text="Over there.")
     for row in tr.rows[-2:]:
         row["command_ids"] = [2, 3, 4]
-    calls = {_Analyst.goes_first.__code__: 0, _Analyst.near.__code__: 0}
-
-    def count(frame: FrameType, event: str, _arg: Any) -> None:
-        if event == "call" and frame.f_code in calls:
-            calls[frame.f_code] += 1
-
-    previous = sys.gettrace()
-    sys.settrace(count)
-    try:
-        report = tr.judge()
-    finally:
-        sys.settrace(previous)
+    report, calls = _calls(tr, _Analyst.goes_first, _Analyst.near)
     (r,) = report.reactions
     assert (r.first_utterance, r.words_free, r.late) == (35.25, 0.0, False)
     assert calls[_Analyst.goes_first.__code__] <= 100, calls
