@@ -16,7 +16,7 @@ Chipmunk functions that pymunk's properties and ``Space.step`` call (through
 pymunk's own binding of them): the same calls with the same numbers, without
 three to five times their cost in Python around each. The simulator steps the world a
 stretch of steps at a time (:meth:`World.run`: the steps between two sensing ticks),
-in a loop of the motion's own, each step as :meth:`World.step` takes it.
+in a loop of the wheels' controller's own (:meth:`World.step` is a stretch of one).
 
 What is worked out from the poses is worked out once per pose: :attr:`World.version`
 moves on whenever a body may have moved or turned (every step, and every pose
