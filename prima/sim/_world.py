@@ -16,7 +16,7 @@ Chipmunk functions that pymunk's properties and ``Space.step`` call (through
 pymunk's own binding of them): the same calls with the same numbers, without
 three to five times their cost in Python around each. The simulator steps the world a
 stretch of steps at a time (:meth:`World.run`: the steps between two sensing ticks),
-in a loop of the wheels' controller's own (:meth:`World.step` is a stretch of one).
+in a loop of the wheels' controller's own (:meth:`World.step`: a stretch of one).
 
 What is worked out from the poses is worked out once per pose: :attr:`World.version`
 moves on whenever a body may have moved or turned (every step, and every pose
@@ -437,7 +437,7 @@ class World:
 
     def _advance(self, space: object, dt: float) -> None:
         """Step the physics with the sway under way on top of the wheels: in a stretch
-        with a sway, the step the loops of :meth:`_stretch` take instead of
+        with a sway, the step the loops of :meth:`run` take instead of
         ``cpSpaceStep(space, dt)`` (the same arguments; the wheels' turning rate, which
         the sway adds to, is the controller's attribute: the loops keep it up to date)."""
         sway = self._sway
@@ -551,9 +551,9 @@ class World:
     # ---- stepping ------------------------------------------------------------
 
     def step(self) -> Callable[[], None] | None:
-        """Advance one fixed step, whatever moves; returns a callback if a motion just
-        ended."""
-        return self._stretch(0, 1)[1]
+        """Advance one fixed step if anything moves (:meth:`run` a stretch of one);
+        returns a callback if a motion just ended."""
+        return self.run(0, 1)[1]
 
     def run(self, tick: int, bound: int) -> tuple[int, Callable[[], None] | None]:
         """Step from the tick ``tick`` on while anything moves (a drive, a turn, a sway,
@@ -561,7 +561,7 @@ class World:
         or a step whose motion ended (its callback, as :meth:`step` returns it).
         Returns the tick reached and that callback: where the simulator looks at its
         agenda and senses next, it stops (a run takes thousands of steps)."""
-        while True:  # (:meth:`_stretch`'s choice of loop, written out: once a stretch)
+        while True:  # (a loop of the controller's own for each stretch)
             sway = self._sway
             advance: Callable[[object, float], None] = (
                 _cpSpaceStep if sway is None else self._advance)
@@ -584,23 +584,6 @@ class World:
                 tick, done = self._run_velocity(tick, bound, advance)
             if done is not None or tick >= bound:
                 return tick, done
-
-    def _stretch(self, tick: int, bound: int) -> tuple[int, Callable[[], None] | None]:
-        """Steps from the tick ``tick`` up to ``bound`` (at least one), or to the step
-        whose motion ended (its callback): a loop of the wheels' controller's own (idle,
-        a straight drive, a turn, a velocity command), without a method's call a step.
-        A stretch with a sway steps through :meth:`_advance`; one without it calls
-        Chipmunk's step directly."""
-        advance: Callable[[object, float], None] = (
-            _cpSpaceStep if self._sway is None else self._advance)
-        mode = self.mode
-        if mode == _IDLE:
-            return self._run_idle(tick, bound, advance), None
-        if mode == _LINEAR:
-            return self._run_linear(tick, bound, advance)
-        if mode == _ANGULAR:
-            return self._run_angular(tick, bound, advance)
-        return self._run_velocity(tick, bound, advance)
 
     def _run_idle(self, tick: int, end: int, advance: Callable[[object, float], None]) -> int:
         """Idle steps up to the tick ``end``, each followed by :meth:`_hold` if the body
