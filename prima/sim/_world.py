@@ -299,7 +299,7 @@ class World:
             kept = self._around
         else:
             head = self.head_pan
-            pan = head.a1 if tick >= head.t1 else head.at(tick)
+            pan = head.a1 if tick >= head.t1 else head.at(tick)  # (at rest: at()'s first case)
             kept = self._ahead
         if kept[0] == self.version and kept[1] == pan:
             return kept[3]  # (the same poses, the camera the same way: at any tick)
