@@ -37,7 +37,7 @@ from prima.mediator import (
 from prima.scenario import Loaded, Scenario, Setup, Switches, spec_from_profile
 from prima.signals import stop_if_signalled
 from prima.sim import Simulator, SpeechTiming, UserAction, ZoneEntry
-from prima.trace import Kind, RecordKind, TraceLine, rounded, rounded_pose, row_of
+from prima.trace import Kind, Pose, RecordKind, TraceLine, rounded, rounded_pose, row_of
 from prima.vocab import (
     FACE_TOLERANCE,
     MAX_EAS,
@@ -59,6 +59,9 @@ MAX_IDLE_ROUNDS = 10_000
 POSE_RATE = 2.0
 """Pose samples per simulated second in the trace, by default (at most: a sample that
 would repeat the poses of the line with poses before it is left out)."""
+
+_Posed = tuple[Pose, Pose | None, bool | None]
+"""The robot's pose, the user's and whether they are detectable (``Simulator.poses``)."""
 
 _SHOWN_KEPT: Final = 1024
 """How many calls' words and shown arguments a run keeps (:meth:`Run._shown`)."""
@@ -433,14 +436,20 @@ class Run:
             return
         stop_if_signalled()
         now = self.sim.now()
-        self._posed = (posed, now)
-        robot, user, detectable = posed
-        row: dict[str, object] = {"t": rounded(now, 3), "seq": self._count, "kind": "pose",
-                                  "robot": rounded_pose(robot, 0)}
-        if user is not None:
-            row["user"] = rounded_pose(user, 1, detectable)
+        row: dict[str, object] = {"t": rounded(now, 3), "seq": self._count, "kind": "pose"}
+        self._with_poses(row, posed, now)
         rows(row)
         self._count += 1
+
+    def _with_poses(self, row: dict[str, object], posed: _Posed, now: float) -> None:
+        """Put the robot's and the user's poses (:meth:`Simulator.poses`) in a line's
+        row, last of its fields, as :func:`~prima.trace.row_of` does; they are the
+        poses the next pose sample compares with."""
+        self._posed = (posed, now)
+        robot, user, detectable = posed
+        row["robot"] = rounded_pose(robot, 0)
+        if user is not None:
+            row["user"] = rounded_pose(user, 1, detectable)
 
     def _decision(self, d: Decision) -> None:
         if d.kind is _FAILURE:
@@ -539,12 +548,7 @@ class Run:
         if detail:
             row["detail"] = dict(sorted(detail.items())) if len(detail) > 1 else detail
         if kind is _START or kind is _END:  # (lines with poses)
-            posed = self.sim.poses()
-            self._posed = (posed, now)
-            robot, user, detectable = posed
-            row["robot"] = rounded_pose(robot, 0)
-            if user is not None:
-                row["user"] = rounded_pose(user, 1, detectable)
+            self._with_poses(row, self.sim.poses(), now)
         rows(row)
         self._count += 1
 
