@@ -41,6 +41,36 @@ def job(runs: int = 6, scenario: Path = SHORT) -> Job:
     return Job(bundle_scenario(scenario), runs, 5, 3.0, Thresholds())
 
 
+# ------------------------------------------------------------ a worker's chunks
+
+def test_a_jobs_chunks_in_one_worker_load_its_documents_once(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    import prima.scenario._setup
+
+    loads: list[str] = []
+    real = prima.scenario._setup.load_document
+
+    def counted(path: Any, profile: Any) -> Any:
+        loads.append(Path(path).name)
+        return real(path, profile)
+
+    monkeypatch.setattr(prima.scenario._setup, "load_document", counted)
+    prima.batch._work._last.kept = None
+    short, touched = job(4), job(2, TOUCHED)
+    first = prima.batch._work.run_chunk(Chunk(0, short, 0, 2))
+    folder = prima.batch._work._last.kept.folder
+    once = list(loads)
+    assert once and len(set(once)) == len(once)  # (each document of the job, once)
+    second = prima.batch._work.run_chunk(Chunk(0, short, 2, 2))
+    assert loads == once
+    prima.batch._work.run_chunk(Chunk(1, touched, 0, 2))
+    assert len(loads) > len(once) and not folder.exists()  # (the last job's folder: gone)
+    whole = prima.batch._work.run_chunk(Chunk(0, short, 0, 4))
+    strip = [{k: v for k, v in r.items() if k != prima.batch._work.CPU} for r in whole]
+    assert strip == [{k: v for k, v in r.items() if k != prima.batch._work.CPU}
+                     for r in first + second]
+
+
 # ------------------------------------------------------------ the order of the runs
 
 class _Backwards(concurrent.futures.Executor):
