@@ -89,6 +89,7 @@ class _Operation:
         m = self._m
         self._outer = m._depth == 0 and not m._settling
         m._depth += 1
+        m._quiet = False
         m._log.now = m._clock.now()
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
@@ -99,6 +100,7 @@ class _Operation:
             m._settle()
             if m._log.news:
                 m._tell_news()
+            m._quiet = True
 
 
 class Mediator:
@@ -133,6 +135,10 @@ class Mediator:
         self._fairness = Fairness(self._apps, self._wm, self._holds, self._log, clock)
         self._depth = 0
         self._settling = False
+        self._quiet = False
+        """No operation began since the last outermost one completed, settled (a round
+        found nothing left to start and the wait share observed it): nothing changed
+        since, but for the time (:meth:`advance`)."""
         self._telling = False
         self._told: dict[str, int] = {}
         self._told_at = -1.0
@@ -243,6 +249,7 @@ class Mediator:
         # (what ``with self._operation():`` does, written out: the hottest operation)
         outer = self._depth == 0 and not self._settling
         self._depth += 1
+        self._quiet = False
         self._log.now = now = self._clock.now()
         try:
             ids, cancelled = self._intake.accept(request, now)
@@ -254,6 +261,7 @@ class Mediator:
             self._settle()
             if self._log.news:
                 self._tell_news()
+            self._quiet = True
         return ids
 
     def _interrupted(self, node: Node, outcome: Outcome) -> None:
@@ -375,6 +383,7 @@ class Mediator:
         # (what ``with self._operation():`` does, written out: the other hot operation)
         outer = self._depth == 0 and not self._settling
         self._depth += 1
+        self._quiet = False
         self._log.now = self._clock.now()
         try:
             if self._beside:
@@ -398,6 +407,7 @@ class Mediator:
                 self._settle()
             if self._log.news:
                 self._tell_news()
+            self._quiet = True
 
     def _end(self, node: Node, outcome: Outcome) -> None:
         if node.cutting and outcome.values.get("interrupted") is True \
@@ -707,6 +717,21 @@ class Mediator:
 
     def advance(self) -> None:
         """Handle every deadline that has passed, then run selection."""
+        wm = self._wm
+        if self._quiet and not (self._holds.opened or wm.answering or self._resting
+                                or wm.new or wm.dirty or wm.pjf or wm.unreserved
+                                or wm.answered):
+            # Nothing changed since the last operation settled, and nothing but the wait
+            # share has a deadline: what the operation would do past handling the wait
+            # share's deadlines is a round that finds nothing to look at and an
+            # observation that finds the same apps keeping others waiting, at the
+            # instant the wait share just settled (which changes nothing). (The run asks
+            # at every report of the simulator, most often with nothing due.)
+            self._log.now = self._clock.now()
+            if self._fairness.expire():  # (a precedence changed: others may start)
+                with self._operation():
+                    pass
+            return
         with self._operation():
             now = self._log.now
             self._holds.expire(now)
