@@ -275,6 +275,8 @@ class Interpreter:
         Only the timers due when this call begins fire; one restarted meanwhile
         fires on a later call. Too many firings at one instant is an error.
         """
+        if not self._timers:
+            return  # (asked at every report of the simulator: most often no timer runs)
         now = self.clock.now()
         due = sorted((t.due, t.seq, name) for name, t in self._timers.items() if t.due <= now)
         for _due, seq, name in due:
