@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Generator, Mapping
+from collections.abc import Callable, Generator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from prima.catalog import (
@@ -740,7 +740,7 @@ def _would_leave(sim: Body, x: float, y: float, bound: float) -> bool:
 
 
 def _route(sim: Body, goal: Place,
-           state: dict[str, Value]) -> tuple[Place | None, list[Place]]:
+           state: dict[str, Value]) -> tuple[Place | None, Sequence[Place]]:
     """The places still to visit; on the way to one, keep heading for it.
 
     Replanning from scratch only when the robot is not near where this loop left
@@ -755,8 +755,7 @@ def _route(sim: Body, goal: Place,
         moving_on = sim.world.heading_to() == (toward.x, toward.y)
         if moving_on or (isinstance(lx, float) and isinstance(ly, float)
                          and math.hypot(x - lx, y - ly) < KEEP_COURSE):
-            names = sim.map.shortest_path({toward.name: 0.0}, {goal.name: 0.0})
-            places = [p for p in (sim.map.place(n) for n in names) if p is not None]
+            places = sim.map.route(toward.name, goal.name)
             if places:
                 return None, places
     return sim.plan(goal.name)

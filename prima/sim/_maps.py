@@ -114,6 +114,12 @@ class WorldMap:
     _grid: Mapping[tuple[int, int], tuple[int, ...]] = field(
         init=False, repr=False, compare=False)
     """The places by the square of :data:`_CELL` metres they are in (their indices)."""
+    _order: Mapping[str, int] = field(init=False, repr=False, compare=False)
+    """Each place's index in :attr:`places` (the search's tie-break)."""
+    _routes: dict[tuple[str, str], tuple[Place, ...]] = field(
+        init=False, repr=False, compare=False)
+    """:meth:`route` by its two places, once asked (a move asks again at each of its
+    iterations; the map never changes)."""
 
     def outline(self) -> list[tuple[float, float]]:
         """The points that span the map: the walls' ends and the places (to frame it)."""
@@ -137,6 +143,8 @@ class WorldMap:
             adjacent[a].append((b, d))
             adjacent[b].append((a, d))
         object.__setattr__(self, "_index", index)
+        object.__setattr__(self, "_order", {p.name: i for i, p in enumerate(self.places)})
+        object.__setattr__(self, "_routes", {})
         object.__setattr__(self, "_adjacent",
                            {k: tuple(v) for k, v in adjacent.items()})
         grid: dict[tuple[int, int], list[int]] = {}
@@ -179,7 +187,7 @@ class WorldMap:
         included; empty if no goal is reachable. Ties are broken by place
         order in the map, so plans are deterministic.
         """
-        order = {p.name: i for i, p in enumerate(self.places)}
+        order = self._order
         best: dict[str, float] = {}
         back: dict[str, str | None] = {}
         heap: list[tuple[float, int, int, str, str | None]] = []
@@ -207,6 +215,18 @@ class WorldMap:
             path.append(node)
             node = back[node]
         return path[::-1]
+
+    def route(self, start: str, goal: str) -> tuple[Place, ...]:
+        """The places of the cheapest path from the place ``start`` to the place ``goal``
+        (:meth:`shortest_path` with no cost to get on or off the graph), both included;
+        empty if ``goal`` is unreachable or either is no place. Worked out once per pair."""
+        key = (start, goal)
+        found = self._routes.get(key)
+        if found is None:
+            index = self._index
+            found = tuple(index[n] for n in self.shortest_path({start: 0.0}, {goal: 0.0}))
+            self._routes[key] = found
+        return found
 
     def to_dict(self) -> dict[str, object]:
         return {

@@ -10,7 +10,8 @@ import pytest
 
 from prima.errors import SimulationError
 from prima.sim import CommandRunner, Place, PlaceKind, Pose, Simulator, Wall, WorldMap
-from tests.sim.helpers import call
+from tests.sim.helpers import call, world_map
+from tests.work import bytecodes
 
 RADIUS = 1.5  # the robot spec's passing radius
 
@@ -115,3 +116,21 @@ def test_places_passed_are_reported_at_the_same_ticks_as_measuring_every_place()
         reports.append([(e.time, e.data["place"]) for e in r.events("place-reached")])
     assert len(reports[0]) > 50
     assert reports[0] == reports[1]
+
+
+@pytest.mark.pure
+def test_a_route_between_two_places_is_the_shortest_path_worked_out_once() -> None:
+    # A move asks for the rest of its route at each of its iterations: the map works each
+    # pair out once (it never changes), and answers as the search does.
+    museum = world_map("museum")
+    names = [p.name for p in museum.places]
+    for start in names:
+        for goal in names:
+            path = museum.shortest_path({start: 0.0}, {goal: 0.0})
+            assert [p.name for p in museum.route(start, goal)] == path
+    assert museum.route("nowhere", names[0]) == museum.route(names[0], "nowhere") == ()
+    fresh = WorldMap(museum.name, museum.walls, museum.places, museum.edges)
+    first = bytecodes(lambda: fresh.route(names[0], names[-1]))
+    again = bytecodes(lambda: fresh.route(names[0], names[-1]))
+    assert len(fresh.route(names[0], names[-1])) > 2
+    assert again < 0.1 * first, (again, first)
