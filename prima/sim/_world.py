@@ -731,6 +731,19 @@ class World:
             dw = cmd_w - w
             nv = v + (dv if -a <= dv <= a else (a if dv > 0 else -a))
             nw = w + (dw if -al <= dw <= al else (al if dw > 0 else -al))
+            if nv == v and nw == w and (nv != 0.0 or nw != 0.0 or cmd_v != 0.0 or cmd_w != 0.0):
+                # a fixed point: every step up to ``bound`` is this one (it works its speeds
+                # out from the same numbers; only a heading that turns moves the velocity)
+                if nv != 0.0 and nw != 0.0:
+                    for _ in range(bound - tick):
+                        ang = _cpBodyGetAngle(rb)
+                        _cpBodySetVelocity(rb, (math.cos(ang) * nv, math.sin(ang) * nv))
+                        advance(space, dt)
+                else:
+                    for _ in range(bound - tick):
+                        advance(space, dt)
+                v, w, tick = nv, nw, bound
+                break
             if nv != 0.0 and (nv != v or w != 0.0 or nw != w):
                 ang = _cpBodyGetAngle(rb)
                 _cpBodySetVelocity(rb, (math.cos(ang) * nv, math.sin(ang) * nv))
