@@ -120,6 +120,9 @@ class _Analyst:
         self._requested_by: dict[int, tuple[int, ...]] | None = None
         self._following: dict[str, tuple[list[Span], list[float]]] = {}
         """App -> when other applications followed the user (:meth:`_followed`)."""
+        self._tree_gone: dict[int, float] = {}
+        """Tree -> when its last AB ended (inf while one ran at the end; 0.0: it has
+        none), for :meth:`_gone`."""
 
     # ------------------------------------------------------------ precedence
     def user_until(self, r: ReactionState) -> float:
@@ -156,11 +159,23 @@ class _Analyst:
         """When the last AB of ``r``'s trees ended (inf while one ran at the end)."""
         last = 0.0
         for tree in r.trees:
+            last = max(last, self._tree_end(tree))
+        return last if last else math.inf
+
+    def _tree_end(self, tree: int) -> float:
+        """When ``tree``'s last AB ended (inf while one ran at the end; 0.0: it has none),
+        worked out once: every reaction of its application to the user's own action asks
+        it for each answering hold (a feedback loop's tree has hundreds of ABs)."""
+        found = self._tree_gone.get(tree)
+        if found is None:
+            found = 0.0
             for ab in self.ctx.tree_abs.get(tree, ()):
                 if ab.end is None:
-                    return math.inf
-                last = max(last, ab.end)
-        return last if last else math.inf
+                    found = math.inf
+                    break
+                found = max(found, ab.end)
+            self._tree_gone[tree] = found
+        return found
 
     def reaction_key(self, r: ReactionState, t: float) -> tuple[int, float]:
         if r.answer:  # (the reply to an answer goes on in its Q&A's tree, with its rank)
@@ -331,7 +346,8 @@ class _Analyst:
             i = bisect.bisect_left(starts, lo - self.longest - EPS)
             j = bisect.bisect_right(starts, hi + EPS)
             for ab in abs_[i:j]:
-                if ab.until(self.end) > lo - EPS or ab.end is None:
+                end = ab.end  # (one still running at the end runs past lo)
+                if end is None or end > lo - EPS:
                     found[ab.id] = ab
         return sorted(found.values(), key=lambda ab: ab.seq)
 
@@ -398,9 +414,12 @@ class _Analyst:
     def _regained(self, r: ReactionState, t: float) -> float | None:
         """When ``r``'s application regained its precedence, if it had lost it at ``t``
         (None if it had not, or ``r`` was not rationed then: 7.6 (4))."""
+        spans = self.ctx.demoted.get(r.app)
+        if not spans:  # (most applications never lose it: asked of every AB a wait meets)
+            return None
         if r.user and self.user_until(r) > t + EPS:
             return None
-        span = span_at(self.ctx.demoted.get(r.app, ()), t)
+        span = span_at(spans, t)
         return span[1] if span is not None and t < span[1] - EPS else None
 
     def ready(self, y: Ab) -> float:

@@ -18,8 +18,8 @@ from typing import Any
 
 import pytest
 
-from prima.judge import Blame, Report, Thresholds, judge
-from prima.judge._context import EPS, Context, span_at
+from prima.judge import Blame, Judging, Report, Thresholds, judge
+from prima.judge._context import EPS, Context, ReactionState, span_at
 from prima.judge._reactions import _Analyst
 from prima.run import Run
 from tests.judge.helpers import Trace
@@ -134,6 +134,35 @@ def test_a_reaction_s_words_wait_through_a_loop_once() -> None:
     assert (r.first_utterance, r.words_free, r.late) == (35.25, 0.0, False)
     assert calls[_Analyst.goes_first.__code__] <= 100, calls
     assert calls[_Analyst.near.__code__] <= 3, calls
+
+
+@pytest.mark.pure
+def test_when_a_loop_s_tree_was_over_is_worked_out_once() -> None:
+    # Each answering hold asks, of every reaction of its application to the user's own
+    # action, when the last AB of that reaction's trees ended: a tree that loops has
+    # hundreds of ABs (12 passes through a 114-iteration loop, 0.35% of a sample-7 run's
+    # bytecodes, when each question went through them all).
+    loop = ("human-detection", "locomotion")
+    tr = Trace()
+    tr.request(0.0, "fa", 1, 1, tree=1, command="TrackingHuman", devices=loop)
+    for i in range(200):
+        if i:
+            tr.end(i / 2, "fa", i, 1, tree=1, command="TrackingHuman", devices=loop,
+                   iteration=i - 1)
+        tr.start(i / 2, "fa", i + 1, 1, tree=1, command="TrackingHuman", devices=loop,
+                 iteration=i)
+    tr.end(100.0, "fa", 200, 1, tree=1, command="TrackingHuman", devices=loop,
+           iteration=199)
+    judging = Judging()
+    judging.feed_all(tr.rows)
+    analyst = _Analyst(judging.ctx, 100.0)
+    touch, speech = (ReactionState(event, 1.0, 1, "fa", True, "", 1, trees=[1])
+                     for event in ("touched", "speech"))
+    assert analyst._gone(touch) == analyst._gone(speech) == 100.0
+    fresh = _Analyst(judging.ctx, 100.0)
+    first = bytecodes(lambda: fresh._gone(touch))
+    again = bytecodes(lambda: fresh._gone(speech))
+    assert again * 20 < first, (first, again)
 
 
 def _spans(rng: random.Random) -> list[list[float]]:
