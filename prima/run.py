@@ -115,7 +115,7 @@ class _Channel:
 
     def pose(self) -> Mapping[str, Value]:
         p = self._sim.robot_pose()
-        return {"x": round(p.x, 2), "y": round(p.y, 2), "heading": round(p.heading, 1)}
+        return {"x": rounded(p.x, 2), "y": rounded(p.y, 2), "heading": rounded(p.heading, 1)}
 
     def displaced(self, pose: Mapping[str, Value]) -> bool:
         p = self._sim.robot_pose()
@@ -581,7 +581,7 @@ class Run:
                 detail["unspoken"] = outcome.values.get("unspoken")
         said = self._said.pop(d.ab or 0, None)
         if said is not None:
-            detail["words_start"], detail["words_end"] = round(said[0], 3), round(said[1], 3)
+            detail["words_start"], detail["words_end"] = rounded(said[0], 3), rounded(said[1], 3)
         if d.detail not in ("not terminal", "to restart", "to go on"):  # its Commands are over
             for cid in d.command_ids:
                 self._requested.pop(cid, None)
@@ -628,7 +628,8 @@ class Run:
             ahead = self.sim.words_ahead(d.calls, ids, d.iteration)
             if ahead is not None:
                 now = self.sim.now()
-                detail["words_start"], detail["words_end"] = round(now, 3), round(now + ahead, 3)
+                detail["words_start"] = rounded(now, 3)
+                detail["words_end"] = rounded(now + ahead, 3)
 
     @staticmethod
     def _located(app: _App | None, message: str) -> str:

@@ -105,7 +105,9 @@ def _rounded(x: float, digits: int) -> float:
     ``x * 10**digits`` (exactly). The product's rounding is less than a millionth of its
     size: unless it lies that near halfway between two integers (or is huge, or not
     finite), the integer nearest it is ``k``. Else, and for a zero (its sign), ``round``."""
-    scale = 10.0**digits
+    # (the usual scales written out: compiled, ``10.0**digits`` is a generic power)
+    scale = (1000.0 if digits == 3 else 10.0 if digits == 1 else 100.0 if digits == 2
+             else 10.0**digits)
     y = x * scale
     if -1e12 < y < 1e12:
         k = math.floor(y + 0.5)

@@ -402,7 +402,7 @@ def test_the_lines_numbers_are_rounded_as_round_rounds_them() -> None:
         values += [rng.uniform(-scale, scale), round(rng.uniform(-scale, scale), 4),
                    rng.randint(-10**6, 10**6) / 2000, rng.randint(-10**6, 10**6) / 20]
     for x in values:
-        for digits in (1, 3):
+        for digits in (1, 2, 3):
             assert struct.pack("<d", prima.trace._rounded(x, digits)) == \
                 struct.pack("<d", round(x, digits)), (x, digits)
     assert math.isnan(prima.trace._rounded(math.nan, 3))

@@ -208,8 +208,9 @@ class Kernel:
             # them, numbered earlier; there the same checks would skip it again)
             bound = min(limit + 1, wait.until)
             if len(heap) > 1:
-                bound = min(bound, heap[1][0], heap[2][0]) if len(heap) > 2 \
-                    else min(bound, heap[1][0])
+                bound = min(bound, heap[1][0])  # (of two: compiled, a comparison)
+                if len(heap) > 2:
+                    bound = min(bound, heap[2][0])
             # (one sleep at least, then as many as reach ``bound``: all but the last end
             # before it, so before ``until``, and whole; the last is cut at ``until``)
             every = wait.ticks

@@ -542,7 +542,8 @@ class Simulator:
                 # multiples of ``grid``), the agenda and the reports change only when a
                 # motion ends: the steps between need only see that something still moves.
                 start = tick = k.tick
-                bound = min(tick - tick % grid + grid, target, heap[0][0] if heap else target)
+                bound = min(min(tick - tick % grid + grid, target),  # (of two: a comparison,
+                            heap[0][0] if heap else target)        # compiled)
                 while True:
                     tick, done = world.run(tick, bound)  # (to the bound, or less if
                     k.tick = tick                        # a motion ended, or all stopped)
@@ -559,7 +560,7 @@ class Simulator:
                     if (tick >= target or (heap and heap[0][0] <= tick)
                             or (stop_on_report and self.reports != before)):
                         break
-                    bound = min(tick - tick % grid + grid, target,
+                    bound = min(min(tick - tick % grid + grid, target),
                                 heap[0][0] if heap else target)
                 self.steps += tick - start
             else:
