@@ -63,6 +63,11 @@ would repeat the poses of the line with poses before it is left out)."""
 _Posed = tuple[Pose, Pose | None, bool | None]
 """The robot's pose, the user's and whether they are detectable (``Simulator.poses``)."""
 
+_Made = tuple[tuple[object, ...], dict[str, object], dict[str, Value], bool]
+"""A decision's fields but its time, number, kind, AB and iteration, its row before its
+poses, the part of its detail those fields decide, and for a start, whether the interrupt
+policy may cut its Commands (:meth:`Run._ab_row`)."""
+
 _SHOWN_KEPT: Final = 1024
 """How many calls' words and shown arguments a run keeps (:meth:`Run._shown`)."""
 
@@ -89,7 +94,17 @@ _CUTS: Final = frozenset({Rule.INTERRUPT, Rule.BARGE_IN})
 _WORDED: Final = frozenset({DecisionKind.START, DecisionKind.REQUEST, DecisionKind.END})
 """Decisions whose line's text is their words (else: their detail, if any)."""
 _NEVER: Final = OnInterrupt.NEVER
+_FIXED: Final = frozenset({"command_id", "args", "label", "precedes", "over"})
+"""What a start's or an end's detail says that its decision's fields but its time, number,
+AB and iteration decide (:meth:`Run._ab_row`): the rest is the line's own."""
 _TEXT: Final = ParamKind.TEXT
+_OWN: Final = ("t", "seq", "kind", "ab", "iteration")
+"""A decision's fields that differ from one iteration's start (or end) to the next's: the
+rest, sliced out of the tuple (:data:`_SAME_A` to :data:`_SAME_C`), must be the same for
+a row to be made from the last one (:meth:`Run._ab_row`)."""
+_SAME_A: Final = slice(3, 5)
+_SAME_B: Final = slice(6, 12)
+_SAME_C: Final = slice(13, None)
 
 
 @dataclass
@@ -201,12 +216,7 @@ class Run:
         self.ea_paths: list[Path] = list(setup.ea_paths)
         """The EAs running from the start (``<apps ea>`` or ``ea=``, then ``<apps><ea>``)."""
         self._documents: dict[Path, Document] = dict(setup.documents)
-        self.lines: list[TraceLine] = []
-        self._sink = sink or self.lines.append
-        self._rows = rows
-        self._count = 0
-        self._posed: tuple[object, float] = (None, -1.0)
-        """The poses the last line with poses carried (:meth:`Simulator.poses`), and when."""
+        self._recording(sink, rows)
         self.budgets: Mapping[AppKind, Budgets] = self.profile.budgets
         self.apps: dict[str, _App] = {}
         self._paths: dict[str, Path] = {}
@@ -221,8 +231,6 @@ class Run:
         """Command id -> where its request is written (``doc.pxml:line:col``) and whether
         the interrupt policy may cut it (the request did not say ``never``), while it is
         in working memory."""
-        self._shown_calls: dict[int, tuple[Call, tuple[str, ...], tuple[str, ...]]] = {}
-        """Calls shown in the trace -> their words and their arguments as shown."""
         self._elsewhere: set[int] = set()
         """Commands whose request said their words are about something else
         (``face_user`` false), while they are in working memory."""
@@ -245,6 +253,27 @@ class Run:
         self.sim.on_zone = self._zone
         self.sim.sample_poses(pose_rate, self._sample)
         self._port = _Port(self)
+
+    def _recording(self, sink: Callable[[TraceLine], None] | None,
+                   rows: Callable[[dict[str, object]], None] | None) -> None:
+        """Where the trace's lines go, and what making them keeps as the run goes."""
+        self.lines: list[TraceLine] = []
+        self._sink = sink or self.lines.append
+        self._rows = rows
+        self._count = 0
+        self._posed: tuple[object, float] = (None, -1.0)
+        """The poses the last line with poses carried (:meth:`Simulator.poses`), and when."""
+        self._shown_poses: tuple[object, dict[str, object], dict[str, object] | None] = (
+            None, {}, None)
+        """The poses the last row with poses carried (:meth:`_with_poses`), and their rounded
+        dicts (:func:`~prima.trace.rounded_pose`): the robot's, the user's (None without)."""
+        self._shown_calls: dict[int, tuple[Call, tuple[str, ...], tuple[str, ...]]] = {}
+        """Calls shown in the trace -> their words and their arguments as shown."""
+        self._starts: dict[int, _Made] = {}
+        self._quiet: dict[int, _Made] = {}
+        self._ends: dict[int, _Made] = {}
+        """Command id -> the last start (one of an iteration that says nothing; end) row
+        of an AB of it (:meth:`_ab_row`; at most :data:`_SHOWN_KEPT` Commands kept)."""
 
     # ------------------------------------------------------------ the loop
 
@@ -444,24 +473,34 @@ class Run:
     def _with_poses(self, row: dict[str, object], posed: _Posed, now: float) -> None:
         """Put the robot's and the user's poses (:meth:`Simulator.poses`) in a line's
         row, last of its fields, as :func:`~prima.trace.row_of` does; they are the
-        poses the next pose sample compares with."""
+        poses the next pose sample compares with. Rounded once for the rows that carry
+        the same poses one after the other (a loop's end and its next start, at one
+        instant; a still robot)."""
         self._posed = (posed, now)
-        robot, user, detectable = posed
-        row["robot"] = rounded_pose(robot, 0)
-        if user is not None:
-            row["user"] = rounded_pose(user, 1, detectable)
+        shown = self._shown_poses
+        if shown[0] != posed:
+            robot, user, detectable = posed
+            shown = self._shown_poses = (posed, rounded_pose(robot, 0), None if user is None
+                                         else rounded_pose(user, 1, detectable))
+        row["robot"] = shown[1].copy()  # (a dict of its own in each row)
+        if shown[2] is not None:
+            row["user"] = shown[2].copy()
 
     def _decision(self, d: Decision) -> None:
-        if d.kind is _FAILURE:
+        kind = d.kind
+        if (kind is _START or kind is _END) and (rows := self._rows) is not None \
+                and d.ab is not None and (cid := d.command_id) is not None:
+            self._ab_row(rows, d, cid)  # (most decisions: first)
+        elif kind is _FAILURE:
             app = self.apps.get(d.app or "")
             if app is None or not app.failed:  # not an error the interpreter already reported
                 self._line(_ERROR, app=d.app, text=self._located(app, d.detail),
                            reason=d.rule.value)
             if app is not None:
                 self._fail(app)
-        elif d.kind is _LOAD:
-            self._line(d.kind, app=d.app, detail={"document": self._loading.name,
-                                                  "role": d.detail.lower()})
+        elif kind is _LOAD:
+            self._line(kind, app=d.app, detail={"document": self._loading.name,
+                                                "role": d.detail.lower()})
         elif (rows := self._rows) is not None:
             self._decision_row(rows, d, *self._decision_fields(d))
         else:
@@ -516,11 +555,12 @@ class Run:
                    command_ids=d.command_ids if len(d.command_ids) > 1 else None)
 
     def _decision_row(self, rows: Callable[[dict[str, object]], None], d: Decision,
-                      text: str | None, detail: dict[str, Value]) -> None:
+                      text: str | None, detail: dict[str, Value]) -> dict[str, object]:
         """What :meth:`_line` hands ``rows`` for a decision's line, made from the decision
         at once: the same dict as :func:`~prima.trace.row_of` makes of the line's fields,
         key for key and in its order (``bench/same_traces.py`` compares them), without
-        the fields gathered first (a judged run's most frequent lines: starts and ends)."""
+        the fields gathered first (a judged run's most frequent lines: starts and ends).
+        Returns the row as it was before its poses (:meth:`_ab_row` keeps it)."""
         stop_if_signalled()
         now = self.sim.now()
         kind = d.kind
@@ -547,8 +587,60 @@ class Run:
             row["before"] = d.before
         if detail:
             row["detail"] = dict(sorted(detail.items())) if len(detail) > 1 else detail
+        made = row
         if kind is _START or kind is _END:  # (lines with poses)
+            made = row.copy()
             self._with_poses(row, self.sim.poses(), now)
+        rows(row)
+        self._count += 1
+        return made
+
+    def _ab_row(self, rows: Callable[[dict[str, object]], None], d: Decision, cid: int) -> None:
+        """A start's or an end's row, for a Command's AB: a copy of the row of the last
+        one of its Command (:meth:`_decision_row`'s, kept), where it is the same decision
+        but for its time, number, AB and iteration (a loop's iterations, one after the
+        other), with these set and its detail made again from the part that stays
+        (:data:`_FIXED`) and the line's own (words, result, iteration). Setting a key a
+        dict has keeps its place: the same dict as :meth:`_decision_row` makes, key for
+        key and in its order, for a fraction of its work (a judged run's most frequent
+        lines, a loop's ends and starts)."""
+        start = d.kind is _START
+        if not start:
+            made = self._ends
+        elif d.iteration and self.sim.quiet(cid):  # (an iteration that says nothing)
+            made = self._quiet
+        else:
+            made = self._starts
+        fields: tuple[object, ...] = d
+        same = fields[_SAME_A] + fields[_SAME_B] + fields[_SAME_C]  # (all but :data:`_OWN`)
+        kept = made.get(cid)
+        if kept is None or kept[0] != same:
+            text, detail = self._decision_fields(d)
+            row = self._decision_row(rows, d, text, detail)
+            if len(made) >= _SHOWN_KEPT:
+                made.clear()
+            made[cid] = (same, row, {k: v for k, v in detail.items() if k in _FIXED},
+                         start and self._cuts(d))
+            return
+        stop_if_signalled()
+        now = self.sim.now()
+        row = kept[1].copy()
+        row["t"] = rounded(now, 3)
+        row["seq"] = self._count
+        row["ab"] = d.ab
+        if d.devices:
+            row["devices"] = list(d.devices)  # (a list of its own, as every row has)
+        if len(d.command_ids) > 1:
+            row["command_ids"] = list(d.command_ids)
+        detail = kept[2].copy()
+        if start:
+            self._starting(d, detail, kept[3])
+        else:
+            self._ended(d, detail)
+        if d.iteration:
+            detail["iteration"] = d.iteration
+        row["detail"] = dict(sorted(detail.items()))
+        self._with_poses(row, self.sim.poses(), now)
         rows(row)
         self._count += 1
 
@@ -615,14 +707,15 @@ class Run:
         if ids and ids[0] in self._elsewhere:
             detail["face_user"] = False  # (its words are about something else)
 
-    def _starting(self, d: Decision, detail: dict[str, Value]) -> None:
+    def _starting(self, d: Decision, detail: dict[str, Value], cuts: bool | None = None) -> None:
         """A start line says whether the interrupt policy may cut the AB (its Commands
-        are interruptible on this robot and their request allows it) and, for words said
-        as it starts, when they end (the judge's cuts, listening and talking)."""
+        are interruptible on this robot, ``cuts`` if known (:meth:`_cuts`), and their
+        request allows it) and, for words said as it starts, when they end (the judge's
+        cuts, listening and talking)."""
         ids = d.command_ids or ((d.command_id,) if d.command_id is not None else ())
-        if (self.setup.config.interrupt and d.calls
-                and all(self.catalog[c.command].interruptible for c in d.calls)
-                and all(self._requested.get(cid, ("", True))[1] for cid in ids)):
+        if cuts is None:
+            cuts = self._cuts(d)
+        if cuts and all(self._requested.get(cid, ("", True))[1] for cid in ids):
             detail["cuttable"] = True
         if d.ab is not None:
             ahead = self.sim.words_ahead(d.calls, ids, d.iteration)
@@ -630,6 +723,12 @@ class Run:
                 now = self.sim.now()
                 detail["words_start"] = rounded(now, 3)
                 detail["words_end"] = rounded(now + ahead, 3)
+
+    def _cuts(self, d: Decision) -> bool:
+        """The interrupt policy may cut the AB's Commands on this robot (their requests
+        may still say ``never``): the same for every iteration of a loop."""
+        return bool(self.setup.config.interrupt and d.calls
+                    and all(self.catalog[c.command].interruptible for c in d.calls))
 
     @staticmethod
     def _located(app: _App | None, message: str) -> str:

@@ -358,14 +358,47 @@ def test_a_line_made_in_one_go_is_the_line_the_class_makes(
 
 
 @pytest.mark.parametrize("scenario", ["thesis/sample-03.xml", "examples/museum-cafe.xml",
-                                      "policies/interrupt-on.xml"])
+                                      "policies/interrupt-on.xml", "thesis/sample-07.xml"])
 def test_a_run_made_as_rows_is_its_lines_jsonl_dicts(scenario: str) -> None:
+    # (sample-03: loops; museum-cafe: a search's iterations that say nothing; sample-07:
+    # a cut AB's restart, and a loop's Command whose AB goes from reactive to not: a
+    # loop's row made from its last one's, or not, Run._ab_row)
     made: list[dict[str, object]] = []
     run = Run(ROOT / "scenarios" / scenario, rows=made.append)
     assert run.run() == []
     lines = [line.to_dict() for line in Run(ROOT / "scenarios" / scenario).run()]
     assert made == lines
     assert [list(row) for row in made] == [list(line) for line in lines]  # (in its order)
+    rows = [row for row in made if "robot" in row]
+    assert len({id(row["robot"]) for row in rows}) == len(rows)  # (dicts of their own)
+    assert len({id(row["detail"]) for row in made if "detail" in row}) == \
+        len([row for row in made if "detail" in row])
+
+
+def test_a_loops_row_is_made_again_if_any_field_but_its_own_differs() -> None:
+    # Run._ab_row compares a decision's fields but its own (time, number, kind, AB,
+    # iteration) through three slices of the tuple: they cover every other field.
+    from prima.mediator import Decision
+    from prima.run import _OWN, _SAME_A, _SAME_B, _SAME_C
+
+    fields = Decision._fields
+    same = fields[_SAME_A] + fields[_SAME_B] + fields[_SAME_C]
+    assert sorted(same + _OWN) == sorted(fields) and not set(same) & set(_OWN)
+
+
+@pytest.mark.pure  # (it counts calls by patching the class: a compiled Run's are fixed)
+def test_a_loops_rows_are_made_from_its_last_ones(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A loop's iterations' starts and ends are made from the rows of the ones before
+    (``Run._ab_row``): their fields are not gathered again, but for a few."""
+    gathered: list[object] = []
+    gather = Run._decision_fields
+    monkeypatch.setattr(Run, "_decision_fields",
+                        lambda run, d: (gathered.append(d), gather(run, d))[1])
+    made: list[dict[str, object]] = []
+    Run(ROOT / "scenarios" / "thesis" / "sample-03.xml", rows=made.append).run()
+    ends = [row for row in made if row["kind"] == "end"]
+    assert len(ends) > 300
+    assert len(gathered) < len(ends) / 3
 
 
 @pytest.mark.pure  # (it counts roundings by patching the module's name: not in a compiled one)
