@@ -728,7 +728,7 @@ class Run:
         """The interrupt policy may cut the AB's Commands on this robot (their requests
         may still say ``never``): the same for every iteration of a loop."""
         return bool(self.setup.config.interrupt and d.calls
-                    and all(self.catalog[c.command].interruptible for c in d.calls))
+                    and all(self.catalog.commands[c.command].interruptible for c in d.calls))
 
     @staticmethod
     def _located(app: _App | None, message: str) -> str:

@@ -56,7 +56,10 @@ Behavior = Callable[["Body", Call, int, int], Gen]
 
 def _arg(sim: Body, call: Call, name: str) -> Value:
     """The argument as given, else its parameter's default in the robot's catalog."""
-    return sim.catalog[call.command].arg(call.args, name)
+    args = call.args
+    if name in args:  # (nearly always: the catalog is asked only for a default)
+        return args[name]
+    return sim.catalog.commands[call.command].arg(args, name)
 
 
 def _number(sim: Body, call: Call, name: str, required: bool = True) -> float | None:
@@ -70,9 +73,11 @@ def _number(sim: Body, call: Call, name: str, required: bool = True) -> float | 
             raise CommandError(f"missing argument {name!r}")
         return None
     number = _finite(value, f"argument {name!r}")
-    refusal = sim.catalog[call.command].refusal(name, number)
-    if refusal is not None:
-        raise CommandError(refusal)
+    spec = sim.catalog.commands[call.command]
+    if name in spec.ranges:  # (most numbers have no range to be refused by)
+        refusal = spec.refusal(name, number)
+        if refusal is not None:
+            raise CommandError(refusal)
     return number
 
 
@@ -890,13 +895,12 @@ def blended_motion(sim: Body, call: Call, cid: int, it: int) -> Gen:
 
 def planned(sim: Body, call: Call) -> float:
     """How long performing ``call`` will take, as far as it can be known at its start."""
-    performed = sim.catalog.get(call.command)
-    if performed is not None and performed.perform:
-        return _perform_time(sim, call, performed)
+    spec = sim.catalog.commands.get(call.command)
+    if spec is not None and spec.perform:
+        return _perform_time(sim, call, spec)
     estimate = PLANNED.get(call.command)
     if estimate is not None:
         return estimate(sim, call)
-    spec = sim.catalog.get(call.command)
     return (spec.duration or 0.0) if spec is not None else 0.0
 
 
@@ -911,9 +915,10 @@ def perform(sim: Body, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
     values: Values = {}
     terminal = True
     length = 0.0
+    commands = sim.catalog.commands  # (the catalog's own lookups are one call more each)
     for call in ab.calls:
         try:
-            length += planned(sim, call) if call.command in sim.catalog else 0.0
+            length += planned(sim, call) if call.command in commands else 0.0
         except CommandError as exc:  # an unusable argument: nothing has started
             return {"error": f"{call.command}: {exc}"}, True
     if length > sim.longest_for(ab.app):
@@ -922,7 +927,7 @@ def perform(sim: Body, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
                          "(its longest-AB budget)"}, True
     for i, call in enumerate(ab.calls):
         cid = ab.command_ids[i] if i < len(ab.command_ids) else 0
-        spec = sim.catalog.get(call.command)
+        spec = commands.get(call.command)
         behavior = perform_steps if spec is not None and spec.perform else BEHAVIORS.get(
             call.command)
         if (behavior is None and spec is not None and spec.robot_specific

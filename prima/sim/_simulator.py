@@ -306,9 +306,9 @@ class Simulator:
         """``ab`` goes on to ``call``: whether it drives the wheels now (a grouped
         atomic behavior that holds them for a later call does not keep a motion
         before it rolling)."""
-        spec = self.catalog.get(call.command)
-        if spec is not None and "locomotion" in spec.devices_for(call.args) \
-                and not spec.perform:
+        spec = self.catalog.commands.get(call.command)
+        if spec is not None and not spec.perform and (
+                "locomotion" in spec.devices or "locomotion" in spec.devices_for(call.args)):
             self._driving.add(ab.id)
         else:  # (no primitive of a <perform> drives the wheels: a sway swings the body
             self._driving.discard(ab.id)  # about whatever drives them)
