@@ -71,9 +71,11 @@ def answered(row: Row) -> bool:
     return isinstance(result, str) and _ANSWERED.search(result) is not None
 
 
-@dataclass
+@dataclass(init=False)
 class Ab:
-    """One atomic behavior as the trace shows it."""
+    """One atomic behavior as the trace shows it. (Its ``__init__`` is written out: the
+    compiled build compiles it, where the one ``dataclass`` writes runs as Python, once
+    for each start line.)"""
 
     id: int
     app: str
@@ -106,6 +108,34 @@ class Ab:
     """It was cut and its request said to drop it: it is not said again."""
     place: int = 0
     """Where it is among its tree's ABs (``Context.tree_abs``)."""
+
+    def __init__(self, id: int, app: str, tree: int, command: str, ids: tuple[int, ...],
+                 devices: frozenset[str], start: float, seq: int, reason: str,
+                 text: str = "", cuttable: bool = False, iteration: int = 0,
+                 words: tuple[float, float] | None = None,
+                 planned: tuple[float, float] | None = None, end: float | None = None,
+                 end_seq: int | None = None, end_reason: str = "", blended_over: bool = False,
+                 dropped: bool = False, place: int = 0) -> None:
+        self.id = id
+        self.app = app
+        self.tree = tree
+        self.command = command
+        self.ids = ids
+        self.devices = devices
+        self.start = start
+        self.seq = seq
+        self.reason = reason
+        self.text = text
+        self.cuttable = cuttable
+        self.iteration = iteration
+        self.words = words
+        self.planned = planned
+        self.end = end
+        self.end_seq = end_seq
+        self.end_reason = end_reason
+        self.blended_over = blended_over
+        self.dropped = dropped
+        self.place = place
 
     @property
     def low(self) -> bool:

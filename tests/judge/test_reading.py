@@ -5,12 +5,14 @@ each finder fed every kind of line it needs).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
 
 from prima.errors import TraceError
 from prima.judge import MEASURES, Report, judge, judge_file, load_trace
+from prima.judge._context import Ab
 from tests.judge.helpers import ROOT, THESIS, counts
 from tests.work import allocated
 
@@ -204,3 +206,17 @@ def test_a_scenario_is_judged_as_it_runs_holding_none_of_its_lines(tmp_path: Pat
     report = reports[0]
     assert report.lines > 30_000
     assert peak < 16 * 2**20, f"{peak / 2**20:.1f} MiB"
+
+
+def test_an_ab_s_written_out_init_takes_its_fields_in_their_order() -> None:
+    """``Ab.__init__`` is written out (compiled, it is not the one ``dataclass`` writes):
+    a field added to the class and left out of it would be read as the class's default."""
+    given = (7, "fa", 2, "Speak", (3,), frozenset({"speaker"}), 1.5, 9, "free", "hi", True,
+             4, (1.5, 2.0), (1.6, 2.1), 3.0, 12, "done", True, True, 5)
+    ab = Ab(*given)
+    fields = dataclasses.fields(Ab)
+    assert tuple(getattr(ab, f.name) for f in fields) == given
+    short = Ab(*given[:9])
+    for f in fields[9:]:
+        assert getattr(short, f.name) == f.default
+    assert ab == dataclasses.replace(ab) and repr(ab).startswith("Ab(id=7, app='fa',")
