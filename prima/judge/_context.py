@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import bisect
 import re
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -227,13 +227,25 @@ class _Window:
     reactions: dict[str, ReactionState] = field(default_factory=dict)
 
 
+Feed = Callable[[Row, "Context"], None]
+"""What a line is fed to: a finder's ``feed``, or its ``feeder``'s for the line's kind."""
+
+Route = tuple[Callable[["Context", Row], None] | None, list[Feed]]
+"""What a kind of line goes to: the context's handling of it (None: none), then what the
+measures feed it to, in order (:meth:`Context.feed_all`)."""
+
+
+def _no_feeders(_kind: str) -> list[Feed]:
+    return []
+
+
 class Context:
     """What every measure reads, kept as the lines go by (:meth:`feed`). Of the line being
     fed: :attr:`now`, its time; for a start or end line, :attr:`ab`, the AB it starts or
     ends (None: it names none, or none that started), and :attr:`follows` and
-    :attr:`travels`, whether its Commands follow the user or take the robot somewhere
-    (worked out once for all the measures; a feedback loop's lines name the same Commands
-    again and again)."""
+    :attr:`travels`, whether its Commands follow the user or take the robot somewhere, and
+    :attr:`listens`, whether one is a Q&A (worked out once for all the measures; a feedback
+    loop's lines name the same Commands again and again)."""
 
     def __init__(self, thresholds: Thresholds) -> None:
         self.th = thresholds
@@ -243,8 +255,10 @@ class Context:
         """The line before the one being fed."""
         self.now = 0.0
         self.ab: Ab | None = None
-        self.follows = self.travels = False
-        self._moves: dict[str, tuple[bool, bool]] = {}  # (command -> follows, travels)
+        self.follows = self.travels = self.listens = False
+        self._moves: dict[str, tuple[bool, bool, bool]] = {}  # (command -> follows, ...)
+        self._routes: dict[str, Route] = {}
+        """What each kind of line goes to (:meth:`feed_all`'s, :meth:`reroute`)."""
         self._robot: Mapping[str, Any] | None = None
         self.last_seen = 0.0
         """Until when the user was known detectable: now while the latest line with poses
@@ -257,6 +271,9 @@ class Context:
         self.running: dict[int, Ab] = {}
         self.on_device: dict[str, list[Ab]] = {}
         """Device -> its ABs, in start order (what a reaction's wait is judged on)."""
+        self._on_devices: dict[frozenset[str], list[list[Ab]]] = {}
+        """Devices an AB runs on -> their lists in :attr:`on_device` (a loop's ABs run on
+        the same ones again and again)."""
         self.cmd_ab: dict[int, int] = {}
         """Command -> its latest AB."""
         self.cmd_at: dict[int, str] = {}
@@ -324,34 +341,60 @@ class Context:
 
     # ---------------------------------------------------------------- the pass
     def feed(self, row: Row) -> None:
-        t = float(row["t"])
-        self.now = t
-        if t > self.t + EPS:
-            self._window = None
-            self._heard = None
-            self.t = t
-        self.lines += 1
-        if self._seeing:
-            self.last_seen = t
-        robot = row.get("robot")
-        if robot is not None:
-            self._robot = robot
-            user = row.get("user")
-            self._seeing = user is not None and user.get("detectable") is True
+        """One line, taken in (a line alone: :meth:`feed_all` feeds the measures too)."""
+        self.feed_all((row,), {}, _no_feeders)
+
+    def feed_all(self, rows: Iterable[Row], routes: dict[str, Route],
+                 feeders: Callable[[str], list[Feed]]) -> None:
+        """Lines of the trace, in order: each taken in, then fed to what ``routes`` has
+        for its kind (``feeders(kind)``: what to feed that kind, asked the first time),
+        and :attr:`last` set. The judge's one loop (:meth:`Judging.feed_all
+        <prima.judge.Judging.feed_all>`): what every line needs is done here, not in a
+        call of its own, and its kind is asked once for the context and the measures."""
+        self._routes = routes
+        for row in rows:
+            t = float(row["t"])
+            self.now = t
+            if t > self.t + EPS:
+                self._window = None
+                self._heard = None
+                self.t = t
+            self.lines += 1
             if self._seeing:
                 self.last_seen = t
-        handler = _HANDLERS.get(row["kind"])
-        if handler is not None:
-            handler(self, row)
+            robot = row.get("robot")
+            if robot is not None:
+                self._robot = robot
+                user = row.get("user")
+                self._seeing = user is not None and user.get("detectable") is True
+                if self._seeing:
+                    self.last_seen = t
+            kind = row["kind"]
+            route = routes.get(kind)
+            if route is None:
+                route = routes[kind] = (_HANDLERS.get(kind), feeders(kind))
+            handler, those = route
+            if handler is not None:
+                handler(self, row)
+            for feed in those:
+                feed(row, self)
+            self.last = row
 
-    def _moved(self, command: str) -> None:
-        """:attr:`follows` and :attr:`travels` for a start or end line's Commands."""
-        moves = self._moves.get(command)
-        if moves is None:
-            names = command.split("+")
-            moves = self._moves[command] = (not FOLLOW_COMMANDS.isdisjoint(names),
-                                            not TRAVEL_COMMANDS.isdisjoint(names))
-        self.follows, self.travels = moves
+    def reroute(self) -> None:
+        """What the kinds of line are fed to is asked again, from the next line on: a
+        finder whose ``feeder`` for a kind depends on its state (one that has nothing to
+        do with the lines of that kind until some other line comes) says so when that
+        state changes."""
+        self._routes.clear()
+
+    def _moves_of(self, command: str) -> tuple[bool, bool, bool]:
+        """:attr:`follows`, :attr:`travels` and :attr:`listens` for a start or end line's
+        Commands, the first time they are seen (kept in :attr:`_moves`, which the
+        handlers read first)."""
+        names = command.split("+")
+        moves = self._moves[command] = (not FOLLOW_COMMANDS.isdisjoint(names),
+                                        not TRAVEL_COMMANDS.isdisjoint(names), "QA" in names)
+        return moves
 
     def _event(self, row: Row) -> None:
         name = str(row.get("text") or "")
@@ -475,7 +518,9 @@ class Context:
         ab_id = row.get("ab")
         if not isinstance(ab_id, int):
             self.ab = None
-            self._moved(str(row.get("command") or ""))
+            command = str(row.get("command") or "")
+            moves = self._moves.get(command) or self._moves_of(command)
+            self.follows, self.travels, self.listens = moves
             return
         detail = row.get("detail") or {}
         tree = row.get("tree")
@@ -486,7 +531,8 @@ class Context:
                 cuttable=detail.get("cuttable") is True,
                 iteration=int(detail.get("iteration") or 0))
         self.ab = ab
-        self._moved(ab.command)
+        moves = self._moves.get(ab.command) or self._moves_of(ab.command)
+        self.follows, self.travels, self.listens = moves
         ws, we = detail.get("words_start"), detail.get("words_end")
         if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
             ab.words = ab.planned = (float(ws), float(we))
@@ -497,8 +543,12 @@ class Context:
                         other.blended_over = True
         self.abs[ab_id] = ab
         self.running[ab_id] = ab
-        for d in ab.devices:
-            self.on_device.setdefault(d, []).append(ab)
+        lists = self._on_devices.get(ab.devices)
+        if lists is None:
+            lists = self._on_devices[ab.devices] = [self.on_device.setdefault(d, [])
+                                                    for d in ab.devices]
+        for on in lists:
+            on.append(ab)
         siblings = self.tree_abs.setdefault(ab.tree, [])
         ab.place = len(siblings)
         siblings.append(ab)
@@ -525,7 +575,8 @@ class Context:
         ab_id = row.get("ab")
         ab = self.ab = self.abs.get(ab_id) if isinstance(ab_id, int) else None
         command = str(row.get("command") or "")
-        self._moved(command)
+        moves = self._moves.get(command) or self._moves_of(command)
+        self.follows, self.travels, self.listens = moves
         if ab is not None:
             self.running.pop(ab.id, None)
             ab.end = float(row["t"])
@@ -540,7 +591,7 @@ class Context:
             if ex is not None and ex.reply_ab == ab.id:
                 ex.done = ab.end
                 del self.open_exchange[ab.app]
-        if answered(row):
+        if moves[2] and answered(row):  # (a Q&A's: the others are not answered)
             app = str(row.get("app") or "")
             tree = row.get("tree")
             cid = command_ids(row)

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from prima.errors import TraceError
-from prima.judge._context import Context
+from prima.judge._context import Context, Feed, Route
 from prima.judge._measures import MEASURES
 from prima.judge._reactions import analyse
 from prima.judge._reading import Row, as_rows, read_trace
@@ -20,9 +20,6 @@ if TYPE_CHECKING:
 
 __all__ = ["Judging", "find_scenarios", "judge", "judge_file"]
 
-
-Feed = Callable[[Row, Context], None]
-"""What a line is fed to: a finder's ``feed``, or its ``feeder``'s for the line's kind."""
 
 HELD = 4096
 """Lines :meth:`Judging.feed` holds at most before the judge reads them: a run judged as
@@ -40,8 +37,9 @@ class Judging:
         self.name = name
         self.ctx = Context(self.th)
         self.finders = [(m, m.finder()) for m in MEASURES]
-        self._fed: dict[str, list[Feed]] = {}
-        """What each kind of line is fed to, in order (:meth:`_feeders`)."""
+        self._routes: dict[str, Route] = {}
+        """What each kind of line goes to: the context's handling, then the finders
+        (:meth:`_feeders`), in order."""
         self._held: list[Row] = []
         """Lines fed and not yet read (:meth:`feed`)."""
 
@@ -57,16 +55,7 @@ class Judging:
     def feed_all(self, rows: Iterable[Row]) -> None:
         """Lines of the trace, in order, after the ones before them (the judge's one
         loop: a trace judged whole goes through it once)."""
-        ctx, fed = self.ctx, self._fed
-        for row in rows:
-            ctx.feed(row)
-            kind = row["kind"]
-            those = fed.get(kind)
-            if those is None:
-                those = fed[kind] = self._feeders(kind)
-            for feed in those:
-                feed(row, ctx)
-            ctx.last = row
+        self.ctx.feed_all(rows, self._routes, self._feeders)
 
     def _feeders(self, kind: str) -> list[Feed]:
         """What each line of ``kind`` is fed to, in the measures' order: the finders that

@@ -61,7 +61,10 @@ class Finder(Protocol):
     """What finds one measure's faults: every line of the kinds it looks at, then the
     findings. A finder may also have a ``feeder(kind)``: what to feed the lines of that
     kind to instead of :meth:`feed` (None: nothing), so that the judge asks a line's kind
-    once for all the finders (each of PRIMA's own that looks at many lines has one)."""
+    once for all the finders (each of PRIMA's own that looks at many lines has one). Its
+    answer may depend on the finder's state (nothing to do with end lines until the user
+    has said something, say): the finder then calls the context's ``reroute()`` when that
+    state changes, and the judge asks it again from the next line on."""
 
     @property
     def kinds(self) -> frozenset[str] | None:
@@ -262,6 +265,8 @@ class _Unfaced:
             self._posed(row, ctx)
 
     def _end(self, row: Row, ctx: Context) -> None:
+        if not self.talking:
+            return  # (nothing said now: most end lines, a loop's)
         ab = row.get("ab")
         talk = self.talking.get(ab) if isinstance(ab, int) else None
         if talk is not None and isinstance(ab, int):
@@ -315,7 +320,7 @@ class _Unfaced:
         self.before_of[ab] = before
         if isinstance(tree, int):
             self.last_command[tree] = str(row.get("command"))
-        if not row.get("text") or _about_something_else(row, before) \
+        if not started.text or _about_something_else(row, before) \
                 or not ctx.elsewhere.isdisjoint(started.ids):
             return
         off = _off(row, ctx.th.face_tolerance)
@@ -443,15 +448,22 @@ class _Leaving:
     def _start(self, row: Row, ctx: Context) -> None:
         ab = ctx.ab  # (the context's: None when the line names no AB)
         if ab is not None:
-            self._count(ctx, 1)
-            if row.get("text") and row.get("robot") is not None:
+            if ctx.follows:  # (how many ABs follow the user, take the robot somewhere)
+                self.following += 1
+            if ctx.travels:
+                self.driving += 1
+                self.drove = True
+            if ab.text and row.get("robot") is not None:
                 self.talking[ab.id] = _Talk(ab.id, row, None, ab.words)
         self._posed(row, ctx)
 
     def _end(self, row: Row, ctx: Context) -> None:
         ab = row.get("ab")
         if isinstance(ab, int):
-            self._count(ctx, -1)
+            if ctx.follows:  # (a forged trace's end of an AB never started: not below 0)
+                self.following = max(0, self.following - 1)
+            if ctx.travels:
+                self.driving = max(0, self.driving - 1)
             talk = self.talking.pop(ab, None)
             if talk is not None and talk.words is None and ctx.ab is not None:
                 talk.words = ctx.ab.words
@@ -474,15 +486,6 @@ class _Leaving:
                         del self.talking[ab_id]
             self.drove = False
             self.held = row
-
-    def _count(self, ctx: Context, by: int) -> None:
-        """An AB started (``by`` 1) or ended (-1): how many follow the user, and take the
-        robot somewhere (as the context found its line's Commands do)."""
-        if ctx.follows:
-            self.following = max(0, self.following + by)
-        if ctx.travels:
-            self.driving = max(0, self.driving + by)
-            self.drove = self.drove or by > 0
 
     def _pose(self, talk: _Talk, row: Row, mover: Blame | None, ctx: Context,
               driven: bool = True, held: Row | None = None) -> bool:
@@ -776,12 +779,12 @@ class _Silences:
                     self.found.append(Silence(int(end["seq"]), float(end["t"]),
                                               str(end.get("app")), gap, at))
             self.silent = []
-        ab = row.get("ab")
-        if isinstance(ab, int):
-            command = str(row.get("command") or "")
-            listens = "QA" in command.split("+")
+        ab = ctx.ab  # (the context's: None when the line names no AB)
+        if ab is not None:
+            command = ab.command
+            listens = ctx.listens
             ends = (row.get("detail") or {}).get("words_end") if listens else None
-            self.running[ab] = (command,
+            self.running[ab.id] = (command,
                                 float(ends) if isinstance(ends, (int, float)) else
                                 (t if listens else math.inf))
 
@@ -886,15 +889,26 @@ class _Stuck:
             self._requested(row, ctx)
 
     def _start(self, row: Row, ctx: Context) -> None:
-        self._tick(row, ctx)
+        t = ctx.now
+        if t > self.t + EPS:  # (:meth:`_tick`, written out: a loop's lines are many)
+            self._check(ctx, before=t)
+            self.t = t
         ab = ctx.ab  # (the context's: None when the line names no AB)
-        if ab is not None and ctx.follows:
-            self.following[ab.id] = [ctx.now, math.inf, str(row.get("app") or "")]
-        self._started(row, ab.ids if ab is not None else command_ids(row), ctx)
+        if ab is None:
+            self._started(row, command_ids(row), (row.get("detail") or {}).get("iteration"),
+                          SEARCH_DEVICE in (row.get("devices") or ()), None,
+                          str(row.get("app") or ""), ctx)
+            return
+        if ctx.follows:
+            self.following[ab.id] = [t, math.inf, ab.app]
+        self._started(row, ab.ids, ab.iteration, SEARCH_DEVICE in ab.devices, ab.id, ab.app,
+                      ctx)
 
     def _end(self, row: Row, ctx: Context) -> None:
-        self._tick(row, ctx)
         t = ctx.now
+        if t > self.t + EPS:  # (:meth:`_tick`, written out)
+            self._check(ctx, before=t)
+            self.t = t
         ab = row.get("ab")
         if isinstance(ab, int) and ctx.follows and ab in self.following:
             self.following[ab][1] = t
@@ -938,9 +952,11 @@ class _Stuck:
             command.done = True
             self.waiting.get(command.app, {}).pop(cid, None)
 
-    def _started(self, row: Row, ids: tuple[int, ...], ctx: Context) -> None:
+    def _started(self, row: Row, ids: tuple[int, ...], iteration: object, searches: bool,
+                 ab: int | None, app: str, ctx: Context) -> None:
+        """A start line's Commands (its AB's, as the context took them in when it has
+        one): its ``iteration`` detail, whether it ``searches`` for the user, its AB."""
         t = ctx.now
-        iteration = (row.get("detail") or {}).get("iteration")
         for cid in ids:
             self._done(cid)
             run = self.runs.get(cid)
@@ -955,16 +971,14 @@ class _Stuck:
                         heapq.heappush(self.checks, (due, command.seq, waiter))
             if iteration:
                 run.iterated = True
-                if SEARCH_DEVICE in (row.get("devices") or ()):
-                    self._searching(row, cid, run, ctx)
-            ab = row.get("ab")
-            if isinstance(ab, int):
+                if searches:
+                    self._searching(row, app, cid, run, ctx)
+            if ab is not None:
                 run.running.add(ab)
 
-    def _searching(self, row: Row, cid: int, run: _Running, ctx: Context) -> None:
-        app = str(row.get("app") or "")
+    def _searching(self, row: Row, app: str, cid: int, run: _Running, ctx: Context) -> None:
         since = max(run.streak, ctx.last_seen)
-        t = float(row["t"])
+        t = ctx.now
         if app not in self.stuck and t - since > ctx.th.search_after + EPS:
             self.stuck[app] = Stuck(app, round(since + ctx.th.search_after, 3),
                                     int(row["seq"]), cid, round(since, 3), "search",
@@ -1064,6 +1078,8 @@ class _BargeIn:
         if kind == "user":
             if row.get("action") == "say" and (row.get("detail") or {}).get("heard"):
                 said = _Said(int(row["seq"]), float(row["t"]), str(row.get("text") or ""))
+                if not self.said:
+                    ctx.reroute()  # (end lines matter from now on: :meth:`feeder`)
                 self.said.append(said)
                 self.times.append(said.t)
         elif kind == "hear" and row.get("reason") == "backchannel" and self.said:
@@ -1071,8 +1087,12 @@ class _BargeIn:
         elif kind == "end":
             self._end(row, ctx)
 
-    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
-        return self._end if kind == "end" else self.feed
+    def feeder(self, kind: str) -> Callable[[Row, Context], None] | None:
+        """An end line is judged once the user has said something (before, no words of
+        theirs ran over it: a loop's many end lines then go to nothing)."""
+        if kind == "end":
+            return self._end if self.said else None
+        return self.feed
 
     def _end(self, row: Row, ctx: Context) -> None:
         ab = ctx.ab  # (the context's: the AB the line ends, if it started)
@@ -1212,6 +1232,8 @@ class _Recovery:
         if kind == "interrupt" and reason == "barge-in":
             found = _PAUSE.search(str(row.get("text") or ""))
             if found is not None:
+                if self._idle():
+                    ctx.reroute()  # (the other kinds matter from now on: :meth:`feeder`)
                 self.pauses[ab] = float(found.group(1))
         elif kind == "end" and reason == "barge-in" and ab in self.pauses:
             self.cut[ab] = (int(row["seq"]), float(row["t"]))
@@ -1222,13 +1244,22 @@ class _Recovery:
         elif kind == "start" and ab in self.again:
             self._check(self.again.pop(ab), float(row["t"]), ctx)
 
-    def feeder(self, kind: str) -> Callable[[Row, Context], None]:
+    def feeder(self, kind: str) -> Callable[[Row, Context], None] | None:
+        """While no falsely cut AB is known (:meth:`_idle`), only an interrupt line
+        matters: a loop's many start and end lines then go to nothing."""
+        if kind != "interrupt" and self._idle():
+            return None
         return self._start if kind == "start" else self._end if kind == "end" else self.feed
+
+    def _idle(self) -> bool:
+        return not (self.pauses or self.cut or self.again)
 
     def _start(self, row: Row, ctx: Context) -> None:
         """A start line matters only while a cut AB waits to start again."""
         if self.again:
             self.feed(row, ctx)
+            if self._idle():
+                ctx.reroute()  # (back to interrupt lines alone)
 
     def _end(self, row: Row, ctx: Context) -> None:
         """An end line matters only while a falsely cut AB's pause is known."""
