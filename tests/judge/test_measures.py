@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from prima.judge import Blame, Report, format_table
+from prima.judge import Blame, Report, format_table, judge
 from tests.judge.helpers import FACING, ROOT, TALK, Trace, USER, clean, counts
 
 
@@ -691,5 +691,42 @@ def test_a_prompt_cut_by_its_answer_is_allowed_the_word_under_way() -> None:
 
     assert over(0.9) == {}
     assert over(1.3) == {"barge_in": 1}
+
+
+def test_end_lines_are_judged_for_barge_in_from_the_users_first_words_on() -> None:
+    """The barge-in measure is fed end lines only once the user has said something (its
+    feeder says so, ctx.reroute() when the first words come): an end line before them,
+    a gesture's, does not leave the prompt's end unjudged after them."""
+    tr = Trace()
+    prompt = "Please tell me a title or an author of a book."
+    tr.start(0.0, "fa", 2, 2, command="Gesture", devices=("arms",))
+    tr.request(0.0, "ea", 1, 1, command="QA", text=prompt, devices=TALK)
+    tr.start(0.0, "ea", 1, 1, command="QA", text=prompt, devices=TALK, words=(0.0, 4.4),
+             cuttable=True)
+    tr.end(0.2, "fa", 2, 2, command="Gesture", devices=("arms",))
+    tr.say(0.5, "Uh-huh.")
+    tr.end(1.3, "ea", 1, 1, command="QA", devices=TALK, words=(0.0, 1.3),
+           result="barge_in=True, spoken=Please tell, status=answered")
+    assert {k: v for k, v in counts(tr.judge()).items() if k == "barge_in"} == {"barge_in": 1}
+
+
+def test_a_false_interruption_is_followed_from_its_interrupt_line_on() -> None:
+    """The recovery measure is fed start, end and request lines only once a false
+    interruption is known (its interrupt line: ctx.reroute()), after lines of those kinds
+    came: a cut utterance that never goes on is found."""
+    from prima.run import Run
+
+    lines = [line.to_dict() for line in
+             Run(ROOT / "scenarios" / "examples" / "barge-in-cough.xml").run()]
+    again = {row["ab"] for row in lines if row["kind"] == "request"
+             and row.get("reason") == "restart"}
+    first = next(i for i, row in enumerate(lines) if row["kind"] == "interrupt")
+    assert again and {"start", "end", "request"} <= {row["kind"] for row in lines[:first]}
+    # (the user's lines left out: the barge-in measure, fed its first words, would have
+    # every kind asked again for it too)
+    kept = [row for row in lines if row["kind"] != "user"
+            and not (row["kind"] == "start" and row.get("ab") in again)]
+    assert counts(judge(lines)).get("recovery") is None
+    assert counts(judge(kept))["recovery"] == len(again)
 
 
