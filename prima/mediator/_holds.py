@@ -455,6 +455,11 @@ class Holds:
                 best = blk.deadline
         return best
 
+    def due(self, now: float) -> bool:
+        """Some hold's timeout or block's watchdog has passed: :meth:`expire` ends it."""
+        best = self.next_deadline()
+        return best is not None and best <= now
+
     def expire(self, now: float) -> None:
         """End every hold whose timeout and every block whose watchdog has passed."""
         if not self.opened:

@@ -718,20 +718,22 @@ class Mediator:
     def advance(self) -> None:
         """Handle every deadline that has passed, then run selection."""
         wm = self._wm
-        if self._quiet and not (self._holds.opened or wm.answering or self._resting
-                                or wm.new or wm.dirty or wm.pjf or wm.unreserved
-                                or wm.answered):
-            # Nothing changed since the last operation settled, and nothing but the wait
-            # share has a deadline: what the operation would do past handling the wait
-            # share's deadlines is a round that finds nothing to look at and an
-            # observation that finds the same apps keeping others waiting, at the
-            # instant the wait share just settled (which changes nothing). (The run asks
-            # at every report of the simulator, most often with nothing due.)
-            self._log.now = self._clock.now()
-            if self._fairness.expire():  # (a precedence changed: others may start)
-                with self._operation():
-                    pass
-            return
+        if self._quiet and not (wm.answering or self._resting or wm.new or wm.dirty
+                                or wm.pjf or wm.unreserved or wm.answered):
+            self._log.now = now = self._clock.now()
+            if not self._holds.opened or not self._holds.due(now):
+                # Nothing changed since the last operation settled, and nothing but the
+                # wait share has a deadline that passed: what the operation would do
+                # past handling the wait share's deadlines is a round that finds nothing
+                # to look at (an open stream's hold is armed or lapsed as the last
+                # round left it: no app went idle or busy since) and an observation
+                # that finds the same apps keeping others waiting, at the instant the
+                # wait share just settled (which changes nothing). (The run asks at
+                # every report of the simulator, most often with nothing due.)
+                if self._fairness.expire():  # (a precedence changed: others may start)
+                    with self._operation():
+                        pass
+                return
         with self._operation():
             now = self._log.now
             self._holds.expire(now)
