@@ -281,18 +281,35 @@ class Run:
         """Run to the end; returns the trace (empty when it went to a sink)."""
         self._begin()
         sim = self.sim
+        mediator = self.mediator
+        apps = self.apps
+        until = self.until
         idle, last = 0, -1.0
-        while sim.now() < self.until:
+        now = sim.now()
+        # (an iteration for about every AB end of a run: the earliest deadline and the
+        # interpreters' guard written out, with no list of deadlines made)
+        while now < until:
             # To the next deadline of the mediator or an application, or the first
             # report (the simulator's own wake-ups on the way concern neither).
-            deadlines = [self.mediator.next_deadline()]
-            deadlines += [a.interpreter.next_deadline() for a in list(self.apps.values())]
-            sim.advance_until(min([d for d in deadlines if d is not None] + [self.until]))
-            self.mediator.advance()
-            for app in list(self.apps.values()):
-                self._guard(app, app.interpreter.advance)
-            idle = idle + 1 if sim.now() == last else 0
-            last = sim.now()
+            to = until
+            t = mediator.next_deadline()
+            if t is not None and t < to:
+                to = t
+            for a in apps.values():  # (asking changes no application)
+                t = a.interpreter.next_deadline()
+                if t is not None and t < to:
+                    to = t
+            sim.advance_until(to)
+            mediator.advance()
+            for app in list(apps.values()):
+                if not app.failed:  # (``_guard``)
+                    try:
+                        app.interpreter.advance()
+                    except AppFailure:
+                        self._unload_failed(app)
+            now = sim.now()
+            idle = idle + 1 if now == last else 0
+            last = now
             if idle > MAX_IDLE_ROUNDS:
                 raise RunError(f"run loop stuck at t={last}")
         if self.sim.sample_every and self._posed[1] < sim.now():
@@ -384,9 +401,13 @@ class Run:
         try:
             work()
         except AppFailure:
-            self._fail(app)
-            if app.name in self.mediator.apps():
-                self.mediator.unregister(app.name)
+            self._unload_failed(app)
+
+    def _unload_failed(self, app: _App) -> None:
+        """An interpreter call failed: the application is unloaded."""
+        self._fail(app)
+        if app.name in self.mediator.apps():
+            self.mediator.unregister(app.name)
 
     def _fail(self, app: _App) -> None:
         app.failed = True
