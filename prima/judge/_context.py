@@ -311,7 +311,10 @@ class Context:
         self._heard: tuple[float, int, str] | None = None
         self.reaction_cmds: dict[int, ReactionState] = {}
         """Command -> the reaction that asked for it."""
-        # exchanges, holds, precedence, blocks
+        self._exchanges_and_holds()
+
+    def _exchanges_and_holds(self) -> None:
+        """What :meth:`__init__` keeps of exchanges, holds, precedence and blocks."""
         self.exchanges: list[Exchange] = []
         self.open_exchange: dict[str, Exchange] = {}
         """App -> its exchange whose reply is not yet known or not yet over."""
