@@ -390,13 +390,16 @@ class Context:
         state changes."""
         self._routes.clear()
 
-    def _moves_of(self, command: str) -> tuple[bool, bool, bool]:
+    def _moved(self, command: str) -> tuple[bool, bool, bool]:
         """:attr:`follows`, :attr:`travels` and :attr:`listens` for a start or end line's
-        Commands, the first time they are seen (kept in :attr:`_moves`, which the
-        handlers read first)."""
-        names = command.split("+")
-        moves = self._moves[command] = (not FOLLOW_COMMANDS.isdisjoint(names),
-                                        not TRAVEL_COMMANDS.isdisjoint(names), "QA" in names)
+        Commands (worked out the first time they are seen), set and returned."""
+        moves = self._moves.get(command)
+        if moves is None:
+            names = command.split("+")
+            moves = self._moves[command] = (not FOLLOW_COMMANDS.isdisjoint(names),
+                                            not TRAVEL_COMMANDS.isdisjoint(names),
+                                            "QA" in names)
+        self.follows, self.travels, self.listens = moves
         return moves
 
     def _event(self, row: Row) -> None:
@@ -521,9 +524,7 @@ class Context:
         ab_id = row.get("ab")
         if not isinstance(ab_id, int):
             self.ab = None
-            command = str(row.get("command") or "")
-            moves = self._moves.get(command) or self._moves_of(command)
-            self.follows, self.travels, self.listens = moves
+            self._moved(str(row.get("command") or ""))
             return
         detail = row.get("detail") or {}
         tree = row.get("tree")
@@ -534,8 +535,7 @@ class Context:
                 cuttable=detail.get("cuttable") is True,
                 iteration=int(detail.get("iteration") or 0))
         self.ab = ab
-        moves = self._moves.get(ab.command) or self._moves_of(ab.command)
-        self.follows, self.travels, self.listens = moves
+        self._moved(ab.command)
         ws, we = detail.get("words_start"), detail.get("words_end")
         if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
             ab.words = ab.planned = (float(ws), float(we))
@@ -578,8 +578,7 @@ class Context:
         ab_id = row.get("ab")
         ab = self.ab = self.abs.get(ab_id) if isinstance(ab_id, int) else None
         command = str(row.get("command") or "")
-        moves = self._moves.get(command) or self._moves_of(command)
-        self.follows, self.travels, self.listens = moves
+        moves = self._moved(command)
         if ab is not None:
             self.running.pop(ab.id, None)
             ab.end = float(row["t"])

@@ -889,10 +889,7 @@ class _Stuck:
             self._requested(row, ctx)
 
     def _start(self, row: Row, ctx: Context) -> None:
-        t = ctx.now
-        if t > self.t + EPS:  # (:meth:`_tick`, written out: a loop's lines are many)
-            self._check(ctx, before=t)
-            self.t = t
+        self._tick(row, ctx)
         ab = ctx.ab  # (the context's: None when the line names no AB)
         if ab is None:
             self._started(row, command_ids(row), (row.get("detail") or {}).get("iteration"),
@@ -900,15 +897,13 @@ class _Stuck:
                           str(row.get("app") or ""), ctx)
             return
         if ctx.follows:
-            self.following[ab.id] = [t, math.inf, ab.app]
+            self.following[ab.id] = [ctx.now, math.inf, ab.app]
         self._started(row, ab.ids, ab.iteration, SEARCH_DEVICE in ab.devices, ab.id, ab.app,
                       ctx)
 
     def _end(self, row: Row, ctx: Context) -> None:
+        self._tick(row, ctx)
         t = ctx.now
-        if t > self.t + EPS:  # (:meth:`_tick`, written out)
-            self._check(ctx, before=t)
-            self.t = t
         ab = row.get("ab")
         if isinstance(ab, int) and ctx.follows and ab in self.following:
             self.following[ab][1] = t
