@@ -263,10 +263,6 @@ class Run:
         self._count = 0
         self._posed: tuple[object, float] = (None, -1.0)
         """The poses the last line with poses carried (:meth:`Simulator.poses`), and when."""
-        self._shown_poses: tuple[object, dict[str, object], dict[str, object] | None] = (
-            None, {}, None)
-        """The poses the last row with poses carried (:meth:`_with_poses`), and their rounded
-        dicts (:func:`~prima.trace.rounded_pose`): the robot's, the user's (None without)."""
         self._shown_calls: dict[int, tuple[Call, tuple[str, ...], tuple[str, ...]]] = {}
         """Calls shown in the trace -> their words and their arguments as shown."""
         self._starts: dict[int, _Made] = {}
@@ -286,8 +282,8 @@ class Run:
         until = self.until
         idle, last = 0, -1.0
         now = sim.now()
-        # (an iteration for about every AB end of a run: the earliest deadline and the
-        # interpreters' guard written out, with no list of deadlines made)
+        # (an iteration for about every AB end of a run: the earliest deadline found
+        # without a list of deadlines made)
         while now < until:
             # To the next deadline of the mediator or an application, or the first
             # report (the simulator's own wake-ups on the way concern neither).
@@ -302,11 +298,7 @@ class Run:
             sim.advance_until(to)
             mediator.advance()
             for app in list(apps.values()):
-                if not app.failed:  # (``_guard``)
-                    try:
-                        app.interpreter.advance()
-                    except AppFailure:
-                        self._unload_failed(app)
+                self._guard(app, app.interpreter.advance)
             now = sim.now()
             idle = idle + 1 if now == last else 0
             last = now
@@ -401,13 +393,9 @@ class Run:
         try:
             work()
         except AppFailure:
-            self._unload_failed(app)
-
-    def _unload_failed(self, app: _App) -> None:
-        """An interpreter call failed: the application is unloaded."""
-        self._fail(app)
-        if app.name in self.mediator.apps():
-            self.mediator.unregister(app.name)
+            self._fail(app)
+            if app.name in self.mediator.apps():
+                self.mediator.unregister(app.name)
 
     def _fail(self, app: _App) -> None:
         app.failed = True
@@ -494,18 +482,12 @@ class Run:
     def _with_poses(self, row: dict[str, object], posed: _Posed, now: float) -> None:
         """Put the robot's and the user's poses (:meth:`Simulator.poses`) in a line's
         row, last of its fields, as :func:`~prima.trace.row_of` does; they are the
-        poses the next pose sample compares with. Rounded once for the rows that carry
-        the same poses one after the other (a loop's end and its next start, at one
-        instant; a still robot)."""
+        poses the next pose sample compares with."""
         self._posed = (posed, now)
-        shown = self._shown_poses
-        if shown[0] != posed:
-            robot, user, detectable = posed
-            shown = self._shown_poses = (posed, rounded_pose(robot, 0), None if user is None
-                                         else rounded_pose(user, 1, detectable))
-        row["robot"] = shown[1].copy()  # (a dict of its own in each row)
-        if shown[2] is not None:
-            row["user"] = shown[2].copy()
+        robot, user, detectable = posed
+        row["robot"] = rounded_pose(robot, 0)
+        if user is not None:
+            row["user"] = rounded_pose(user, 1, detectable)
 
     def _decision(self, d: Decision) -> None:
         kind = d.kind
