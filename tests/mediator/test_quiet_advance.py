@@ -65,31 +65,19 @@ def test_a_quiet_advance_decides_what_the_whole_operation_would(
     assert quiet > 5_000, quiet  # (the short way was taken: the check checked something)
 
 
-def test_an_advance_with_nothing_due_does_little_work() -> None:
+@pytest.mark.parametrize("stream, most", [(False, 120), (True, 200)])
+def test_an_advance_with_nothing_due_does_little_work(stream: bool, most: int) -> None:
+    # (with a stream open too: its hold, armed or not, has no deadline past)
     h = Harness(duration=1.0, outcome=feedback_iterations(1_000))
     h.app("fa", AppKind.FA)
     h.app("ea", AppKind.EA)
     m = h.mediator
+    if stream:
+        m.open_stream("ea", 30.0)
     m.submit(req("ea", call("TrackingHuman")))
     m.submit(req("fa", call("Speak", text="hello")))  # (waits, on the neck)
     h.run(until=5.0)
     m.advance()
-    assert m._quiet  # white box: what the short way needs
+    assert m._quiet and m._holds.opened == stream  # white box: what the short way needs
     work = bytecodes(m.advance)
-    assert work < 120, work  # (the whole operation: some 400)
-
-
-def test_an_advance_with_nothing_due_and_a_stream_open_does_little_work() -> None:
-    # (an open stream's hold, armed or not, has no deadline past: the short way too)
-    h = Harness(duration=1.0, outcome=feedback_iterations(1_000))
-    h.app("fa", AppKind.FA)
-    h.app("ea", AppKind.EA)
-    m = h.mediator
-    m.open_stream("ea", 30.0)
-    m.submit(req("ea", call("TrackingHuman")))
-    m.submit(req("fa", call("Speak", text="hello")))  # (waits, on the neck)
-    h.run(until=5.0)
-    m.advance()
-    assert m._quiet and m._holds.opened  # white box: what the short way needs
-    work = bytecodes(m.advance)
-    assert work < 200, work  # (the whole operation: some 400)
+    assert work < most, work  # (the whole operation: some 400)
