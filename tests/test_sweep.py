@@ -380,6 +380,24 @@ def test_a_run_whose_worker_always_dies_is_named_and_the_others_finish(dying: Pa
     assert json.loads(lines[2]) == {"job": 0, "run": 1, "lost": True}
 
 
+def test_a_killed_worker_leaves_no_files_behind(dying: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    """A worker killed outright deletes nothing; the sweep deletes the folder its
+    workers unpacked their runs in, theirs too."""
+    import tempfile
+
+    temporary = dying / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))  # (the workers' too: forked)
+    (dying / "allowed").write_text("1")
+    monkeypatch.chdir(dying)
+    status, out, err = cli("sweep", str(SHORT), "--runs", "4", "--jitter", "3", "--jobs", "2",
+                           "--worst", "0")
+    assert status == 0, err
+    assert (dying / "deaths").read_text() == "x"  # (one was killed)
+    assert list(temporary.iterdir()) == []
+
+
 def test_never_more_workers_than_runs() -> None:
     assert pool_for(None, 1024, 2).workers == 2
     assert pool_for(None, 1, 5).workers == 1 and pool_for(None, 3, 5).workers == 3

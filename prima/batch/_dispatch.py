@@ -18,13 +18,15 @@ import concurrent.futures
 import concurrent.futures.process
 import math
 import multiprocessing
+import shutil
 import signal
+import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol
 
 from prima.batch._results import ResultsFile
-from prima.batch._work import CPU, Chunk, Job, run_chunk
+from prima.batch._work import CPU, Chunk, Job, run_chunk, unpack_in
 from prima.errors import ClusterError
 from prima.escape import shown_path
 from prima.signals import deferred, sticky
@@ -107,13 +109,15 @@ class Inline:
         pass
 
 
-def _quiet() -> None:
+def _worker(scratch: str) -> None:
     """Workers leave Ctrl-C to the parent, which stops the pool, and SIGTERM ends them
     at once, without a word (as the parent's :meth:`Processes.stop` does; they are
     forked with the parent's handlers, which note these signals meanwhile:
-    :func:`prima.signals.deferred`)."""
+    :func:`prima.signals.deferred`). They unpack their bundles in the pool's
+    ``scratch`` folder."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    unpack_in(scratch)
 
 
 RECYCLE = 10
@@ -122,6 +126,11 @@ tasks per pool). What a run leaves behind in a process (C libraries' memory, whi
 grows a little with every run, and pages the allocator never gives back) goes with
 it: a sweep's memory stays flat in its number of runs. At 50 runs a task, a fresh
 process costs one fork per 500 runs."""
+
+
+STOPPING = 2.0
+"""Seconds :meth:`Processes.stop` waits for a worker it sent SIGTERM to exit before it
+kills it (so that the workers' folder is deleted after them)."""
 
 
 class _Recycling(concurrent.futures.Executor):
@@ -134,9 +143,10 @@ class _Recycling(concurrent.futures.Executor):
     held twice the workers while its last tasks ran). What this costs is the last tasks'
     unevenness, once per pool: the workers that finish first wait for the last one."""
 
-    def __init__(self, workers: int, recycle: int) -> None:
+    def __init__(self, workers: int, recycle: int, scratch: str) -> None:
         self.workers = workers
         self.limit = workers * recycle
+        self.scratch = scratch
         self._pool: concurrent.futures.ProcessPoolExecutor | None = None
         self._taken = 0
         self._futures: list[concurrent.futures.Future[Any]] = []
@@ -146,7 +156,8 @@ class _Recycling(concurrent.futures.Executor):
         if self._pool is None or self._taken >= self.limit:
             self._retire()
             self._pool = concurrent.futures.ProcessPoolExecutor(
-                self.workers, mp_context=multiprocessing.get_context(), initializer=_quiet)
+                self.workers, mp_context=multiprocessing.get_context(), initializer=_worker,
+                initargs=(self.scratch,))
             self._taken = 0
         with deferred():  # (a new pool forks its workers here)
             future = self._pool.submit(fn, *args, **kwargs)
@@ -178,7 +189,11 @@ class _Recycling(concurrent.futures.Executor):
 class Processes:
     """``jobs`` worker processes on this machine, replaced by fresh ones every
     :data:`RECYCLE` tasks. A worker that dies breaks its pool (every task it took and
-    did not finish fails with it): a fresh pool takes the work on."""
+    did not finish fails with it): a fresh pool takes the work on.
+
+    The workers unpack their runs' files in one temporary folder of the batch's, which
+    :meth:`close` and :meth:`stop` delete: a worker killed outright (out of memory,
+    SIGKILL) cannot delete its own, and would leave them in the system's."""
 
     chunk = CHUNK
     poll = None
@@ -188,12 +203,15 @@ class Processes:
         self.recycle = recycle
         self._pool: _Recycling | None = None
         self._broken = False
+        self._scratch: str | None = None
 
     def executor(self) -> concurrent.futures.Executor:
         if self._pool is None or self._broken:
             if self._pool is not None:
                 self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = _Recycling(self.workers, self.recycle)
+            if self._scratch is None:
+                self._scratch = tempfile.mkdtemp(prefix="prima-sweep-")
+            self._pool = _Recycling(self.workers, self.recycle, self._scratch)
             self._broken = False
         return self._pool
 
@@ -211,15 +229,28 @@ class Processes:
             return
         pools = pool.pools()
         pool.shutdown(wait=False, cancel_futures=True)
-        for each in pools:
-            processes = getattr(each, "_processes", None) or {}
-            for process in list(processes.values()):
-                process.terminate()
+        stopping = [process for each in pools
+                    for process in list((getattr(each, "_processes", None) or {}).values())]
+        for process in stopping:
+            process.terminate()
+        for process in stopping:  # (SIGTERM ends a worker at once, once _worker has run;
+            process.join(STOPPING)  # one forked a moment before notes it and goes on)
+            if process.is_alive():
+                process.kill()
+                process.join()
+        self._forget_scratch()
 
     def close(self) -> None:
         pool, self._pool = self._pool, None
         if pool is not None:
             pool.shutdown()
+        self._forget_scratch()
+
+    def _forget_scratch(self) -> None:
+        """Delete the workers' folder (their processes have all exited)."""
+        scratch, self._scratch = self._scratch, None
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
 
 
 def chunk_size(runs: int, workers: int, largest: int = CHUNK) -> int:

@@ -34,7 +34,8 @@ from prima.judge import Report, Thresholds
 if TYPE_CHECKING:
     from prima.run import Loaded  # (imported where runs are made, as Run is)
 
-__all__ = ["CPU", "Analysis", "Chunk", "Job", "Observer", "record_of", "run_chunk", "run_one"]
+__all__ = ["CPU", "Analysis", "Chunk", "Job", "Observer", "record_of", "run_chunk", "run_one",
+           "unpack_in"]
 
 
 class Observer(Protocol):
@@ -183,6 +184,19 @@ def run_chunk(chunk: Chunk) -> list[dict[str, Any]]:
         return out
 
 
+_scratch: str | None = None
+"""The folder this process unpacks bundles in (:func:`unpack_in`); None: the system's
+temporary folder."""
+
+
+def unpack_in(folder: str | None) -> None:
+    """Unpack this process' bundles in ``folder`` from now on: a worker process of this
+    machine's pool unpacks in a folder its sweep owns, which the sweep deletes at its end,
+    so that a worker killed outright (which deletes nothing) leaves nothing behind."""
+    global _scratch
+    _scratch = folder
+
+
 class _Unpacked:
     """A bundle unpacked in a folder of its own, its scenario parsed, and the
     :class:`~prima.run.Loaded` its runs load their documents through."""
@@ -191,7 +205,7 @@ class _Unpacked:
         from prima.run import Loaded  # (imported where runs are made, as Run is)
 
         self.digest = bundle.digest
-        self.folder = Path(tempfile.mkdtemp(prefix="prima-runs-"))
+        self.folder = Path(tempfile.mkdtemp(prefix="prima-runs-", dir=_scratch))
         self.delete = Finalize(self, shutil.rmtree, args=(self.folder,),
                                kwargs={"ignore_errors": True}, exitpriority=0)
         """Deletes the folder: once, when called, when the object is dropped (its thread
