@@ -23,8 +23,15 @@ moves on whenever a body may have moved or turned (every step, and every pose
 written through the world's methods), and human detection keeps its answer
 until the version or the camera's pan changes; then it looks again
 only if something moved: the robot, the user or the camera (a step in which
-nothing moved keeps the answer). A pose written on a body directly, from outside,
-must be followed by :meth:`World.moved`.
+nothing moved keeps the answer). The poses themselves are read once per version
+too (the robot's and the user's position, the robot's angle: a run reads each
+several times over at one version, from the senses, the behaviors, the scripted
+user and the trace, and a read through Chipmunk costs more than a kept one). So
+the version moves on after every pose written, before anything can read it: a
+stretch of steps moves it on after its last step and whatever its end writes (a
+drive's snap to its goal, a turn's final angle); a pose written on a body directly,
+from outside, must be followed by :meth:`World.moved`. Within a stretch (the
+version not yet moved on) the world reads its bodies afresh.
 
 The map files its places by the squares of a grid (:meth:`WorldMap.places_in`,
 made once per map, not per run): :meth:`World.places_near` asks it which places
@@ -185,6 +192,8 @@ class World:
         self.human_moving = False
         self.version = 0
         """Moves on whenever a body may have moved or turned (see the module's doc)."""
+        self._pk = self._ak = -1  # (the kept reads, of no version yet: :meth:`_read`)
+        self._rxy, self._hxy, self._ra = (0.0, 0.0), (0.0, 0.0), 0.0
         self._ahead: tuple[int, float, tuple[float, ...], tuple[bool, float]] = _UNSEEN
         self._around = _UNSEEN
         """Human detection's last answer without and with ``any_direction``: the
@@ -206,8 +215,7 @@ class World:
         self._s = 0.0  # progress along the profile
         self._len = 0.0
         self._ux = self._uy = 0.0
-        self._tx = self._ty = self._ta = 0.0
-        self._x0 = self._y0 = 0.0
+        self._tx = self._ty = self._ta = self._x0 = self._y0 = 0.0
         self._steps = 0
         self._cmd_v = self._cmd_w = 0.0
         self._w = 0.0
@@ -245,35 +253,54 @@ class World:
         return self.joint(name).at(tick)
 
     def robot_pose(self) -> Pose:
-        p = _cpBodyGetPosition(self._rb)
-        return Pose(p.x, p.y, _degrees(_cpBodyGetAngle(self._rb)) % 360.0)
+        x, y = self.robot_xy()
+        return Pose(x, y, _degrees(self.robot_angle()) % 360.0)
 
     def user_pose(self) -> Pose:
-        p = _cpBodyGetPosition(self._hb)
-        return Pose(p.x, p.y, _degrees(_cpBodyGetAngle(self._hb)) % 360.0)
+        x, y = self.user_xy()
+        return Pose(x, y, _degrees(_cpBodyGetAngle(self._hb)) % 360.0)
+
+    def _read(self) -> None:
+        """Read the robot's and the user's positions afresh, at a new version: kept in
+        ``_rxy`` and ``_hxy`` while ``_pk`` is the version (read together: most versions
+        that read one read both). The robot's angle is kept as ``_ra`` while ``_ak`` is
+        (:meth:`robot_angle`)."""
+        r = _cpBodyGetPosition(self._rb)
+        h = _cpBodyGetPosition(self._hb)
+        self._rxy = (r.x, r.y)
+        self._hxy = (h.x, h.y)
+        self._pk = self.version
 
     def robot_xy(self) -> tuple[float, float]:
-        """Where the robot is (m): ``robot.position``, read for less."""
-        p = _cpBodyGetPosition(self._rb)
-        return p.x, p.y
+        """Where the robot is (m): ``robot.position``, read for less (once a version)."""
+        if self._pk != self.version:
+            self._read()
+        return self._rxy
 
     def user_xy(self) -> tuple[float, float]:
-        """Where the user is (m): ``human.position``, read for less."""
-        p = _cpBodyGetPosition(self._hb)
-        return p.x, p.y
+        """Where the user is (m): ``human.position``, read for less (once a version)."""
+        if self._pk != self.version:
+            self._read()
+        return self._hxy
 
     def robot_angle(self) -> float:
-        """The robot's body angle (radians): ``robot.angle``, read for less."""
-        return float(_cpBodyGetAngle(self._rb))
+        """The robot's body angle (radians): ``robot.angle``, read for less (once a
+        version)."""
+        if self._ak != self.version:
+            self._ra = float(_cpBodyGetAngle(self._rb))
+            self._ak = self.version
+        return self._ra
 
     def user_angle(self) -> float:
         """The user's body angle (radians): ``human.angle``, read for less."""
         return float(_cpBodyGetAngle(self._hb))
 
     def user_distance(self) -> float:
-        r = _cpBodyGetPosition(self._rb)
-        u = _cpBodyGetPosition(self._hb)
-        return _hypot(u.x - r.x, u.y - r.y)
+        if self._pk != self.version:
+            self._read()
+        rx, ry = self._rxy
+        ux, uy = self._hxy
+        return _hypot(ux - rx, uy - ry)
 
     def clear(self, ax: float, ay: float, bx: float, by: float, radius: float = 0.0) -> bool:
         """True if no wall lies on the segment from a to b (fattened by ``radius``)."""
@@ -305,10 +332,11 @@ class World:
             return kept[3]  # (the same poses, the camera the same way: at any tick)
         if not self.has_user:
             return False, _INF
-        r = _cpBodyGetPosition(self._rb)
-        u = _cpBodyGetPosition(self._hb)
-        rx, ry, ux, uy = r.x, r.y, u.x, u.y
-        angle = 0.0 if any_direction else _cpBodyGetAngle(self._rb)
+        if self._pk != self.version:
+            self._read()
+        rx, ry = self._rxy
+        ux, uy = self._hxy
+        angle = 0.0 if any_direction else self.robot_angle()
         poses = (rx, ry, angle, ux, uy)
         if kept[1] == pan and kept[2] == poses:
             seen = kept[3]  # nothing moved since it last looked
@@ -358,9 +386,11 @@ class World:
 
     def user_bearing(self) -> float:
         """Direction from the robot to the user relative to the body (radians)."""
-        r = _cpBodyGetPosition(self._rb)
-        u = _cpBodyGetPosition(self._hb)
-        return wrap_angle(_atan2(u.y - r.y, u.x - r.x) - _cpBodyGetAngle(self._rb))
+        if self._pk != self.version:
+            self._read()
+        rx, ry = self._rxy
+        ux, uy = self._hxy
+        return wrap_angle(_atan2(uy - ry, ux - rx) - self.robot_angle())
 
     # ---- poses written from outside the step --------------------------------------
 
@@ -664,12 +694,13 @@ class World:
                 if tick >= bound:
                     break
         self._s, self._v, self._steps = s, v, steps
-        self.version += tick - start
+        done = None
         if last:
-            return tick, self._finish_linear()
-        if blocked:
-            return tick, self._finish(False)  # someone or something in the way
-        return tick, None
+            done = self._finish_linear()
+        elif blocked:
+            done = self._finish(False)  # someone or something in the way
+        self.version += tick - start  # (after the end's snap: see the module's doc)
+        return tick, done
 
     def _run_angular(self, tick: int, bound: int, advance: Callable[[object, float], None]
                      ) -> tuple[int, Callable[[], None] | None]:
@@ -699,12 +730,13 @@ class World:
             if last or tick >= bound:
                 break
         self._s, self._v = s, v
-        self.version += tick - start
+        done = None
         if last:
             _cpBodySetAngularVelocity(rb, 0.0)
             _cpBodySetAngle(rb, self._ta + self._sway_offset - self._ta_offset)
-            return tick, self._finish(True)
-        return tick, None
+            done = self._finish(True)
+        self.version += tick - start  # (after the final angle: see the module's doc)
+        return tick, done
 
     def _hold(self) -> None:
         """Idle or turning in place, the wheels hold the body where it is: a push (the
@@ -778,7 +810,7 @@ class World:
 
     def _lagging(self) -> bool:
         """The drive is well behind its plan: the body does not get where it is driven."""
-        p = _cpBodyGetPosition(self._rb)
+        p = _cpBodyGetPosition(self._rb)  # (afresh: the stretch has not moved the version on)
         made: float = (p.x - self._x0) * self._ux + (p.y - self._y0) * self._uy
         return self._s - made > _BLOCKED_LAG
 
