@@ -22,6 +22,7 @@ import enum
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Final
 
 from prima.record import Record
 from prima.vocab import Value
@@ -77,14 +78,14 @@ TALK_DEVICES = frozenset({"speaker", "speech-recognition"})
 """Devices through which the robot talks with its user: while another application
 uses them, a Command that breaks the Communication Channel waits (thesis Sec. 3.3)."""
 
-SPEAKER = "speaker"
+SPEAKER: Final = "speaker"
 """The device words are said through: a Command's text arguments are words only if
 its call occupies it."""
 
-BODY_DEVICE = "locomotion"
+BODY_DEVICE: Final = "locomotion"
 """The wheels: a Command that uses them turns or moves the robot's body."""
 
-SEARCH_DEVICE = "human-detection"
+SEARCH_DEVICE: Final = "human-detection"
 """The camera's human detection: a Command on it looks for, faces or follows the user."""
 
 CONNECT_COMMAND = "FaceHuman"

@@ -53,7 +53,7 @@ from prima.vocab import (
 __all__ = ["MAX_IDLE_ROUNDS", "POSE_RATE", "Loaded", "Run", "Setup", "Switches",
            "spec_from_profile"]
 
-MAX_IDLE_ROUNDS = 10_000
+MAX_IDLE_ROUNDS: Final = 10_000
 """Loop rounds allowed without simulated time moving (a stuck loop is a bug)."""
 
 POSE_RATE = 2.0

@@ -157,7 +157,7 @@ def row_of(t: float, seq: int, kind: RecordKind, fields: Mapping[str, Any]) -> d
     return out
 
 
-_ROUNDED: list[tuple[object, dict[str, float]]] = [(None, {}), (None, {})]
+_ROUNDED: Final[list[tuple[object, dict[str, float]]]] = [(None, {}), (None, {})]
 """The robot's and the user's last pose and its rounded dict: a run's lines of one
 instant, or of a still robot, carry the same pose (``Simulator.poses``). Compared by
 value, not by identity: the compiled build passes a pose as three floats, not a tuple,

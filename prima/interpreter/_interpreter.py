@@ -17,7 +17,7 @@ from collections import deque
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any, NamedTuple, Protocol, get_args
+from typing import Any, Final, NamedTuple, Protocol, get_args
 
 from prima.catalog import Catalog, ParamKind
 from prima.dsl import (
@@ -555,7 +555,7 @@ class Interpreter:
         return f"{self.document.path}:{loc.line}:{loc.col}: " if loc else f"{self.document.path}: "
 
 
-_ACTIONS: Mapping[type, Callable[[Interpreter, Any, Scope], None]] = {
+_ACTIONS: Final[Mapping[type, Callable[[Interpreter, Any, Scope], None]]] = {
     Request: Interpreter._request,
     Assign: Interpreter._assign,
     If: Interpreter._if,

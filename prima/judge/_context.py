@@ -40,7 +40,7 @@ _ANSWERED = re.compile(r"(?:^|, )status=answered(?:,|$)")
 _ANSWERS = " answers the user"
 """How a hold or a suspension for a reaction to the user's own action ends its text."""
 
-LOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.breaks_cc)
+LOW_COMMANDS: Final = frozenset(c.name for c in STANDARD_COMMANDS if c.breaks_cc)
 """Commands that break the Communication Channel (LOW priority)."""
 
 FOLLOW_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.follows_user)
@@ -774,7 +774,7 @@ def spans_meeting(spans: Sequence[list[float]], lo: float, hi: float) -> Sequenc
     return spans[first:bisect.bisect_left(spans, hi + EPS, key=_from)]
 
 
-_HANDLERS = {
+_HANDLERS: Final = {
     "event": Context._event,
     "user": Context._user,
     "request": Context._request,

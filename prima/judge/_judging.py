@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Final
 
 from prima.errors import TraceError
 from prima.judge._context import Context, Feed, Route
@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 __all__ = ["Judging", "find_scenarios", "judge", "judge_file"]
 
 
-HELD = 4096
+HELD: Final = 4096
 """Lines :meth:`Judging.feed` holds at most before the judge reads them: a run judged as
 it goes holds no more of its trace, however long it is."""
 

@@ -18,7 +18,7 @@ import re
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Final, Protocol
 
 from prima.catalog import BODY_DEVICE, SEARCH_DEVICE, STANDARD_COMMANDS
 from prima.judge import _blame as blame
@@ -54,7 +54,7 @@ __all__ = ["MEASURES", "Finder", "Measure", "measure", "registered"]
 
 
 
-_AIMING = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
+_AIMING: Final = frozenset(c.name for c in STANDARD_COMMANDS if c.aims)
 
 
 class Finder(Protocol):
@@ -138,7 +138,7 @@ def _off_heading(robot: Row, user: Row) -> float | None:
     return float(abs((bearing - robot["heading"] + 180.0) % 360.0 - 180.0))
 
 
-_POLICY_REASONS = frozenset({"connect-channel", "restore-state"})
+_POLICY_REASONS: Final = frozenset({"connect-channel", "restore-state"})
 """The reasons of the ABs a policy puts in a stream (none aims at anything of its app's)."""
 
 
@@ -187,7 +187,7 @@ class _Words:
     """Posed lines while its words' times are not known yet: judged at its end."""
 
 
-ROUNDED_OFF = 0.2
+ROUNDED_OFF: Final = 0.2
 """Degrees a trace's rounded poses (positions to the millimetre, headings to the tenth
 of a degree) may put a user off the robot's heading, beyond the simulator's own
 figure: a user found off by no more than the tolerance plus this is not off."""

@@ -25,6 +25,7 @@ from collections import deque
 from collections.abc import Mapping
 from itertools import islice
 from math import inf
+from typing import Final
 
 from prima.mediator._decisions import DecisionKind, Rule
 from prima.mediator._holds import Holds
@@ -36,11 +37,11 @@ from prima.mediator._state import App
 __all__ = ["Fairness"]
 
 
-_SLACK = 1e-9
+_SLACK: Final = 1e-9
 """Seconds of a wait share that floating-point sums may leave over: below this, it
 is spent (else its next check would fall on the very instant it is made)."""
 
-_MARGIN = 1e-6
+_MARGIN: Final = 1e-6
 """Far more than the rounding of any sum of a share, relative to the times and budgets
 summed: a share this much short of running out, or more, need not be summed."""
 

@@ -40,8 +40,8 @@ from prima.mediator._state import Node, NodeState, Tree
 __all__ = ["WaitIndex"]
 
 _WAITING: Final = NodeState.WAITING
-_heappush = heapq.heappush
-_NO_DEVICES: frozenset[str] = frozenset()
+_heappush: Final = heapq.heappush
+_NO_DEVICES: Final[frozenset[str]] = frozenset()
 
 _NodeEntry = tuple[Any, ...]
 """The AB's order keys spliced in, then its id, its version when filed and the AB:

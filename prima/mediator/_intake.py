@@ -48,9 +48,9 @@ it ranks as 'parent just finished', and whether it may be reactive. (A plain tup
 once by ``Intake.accept``: a named tuple costs several times more to build, and one is
 built for most requests.)"""
 
-_NEW_TREE: Link = (Rule.NEW_TREE, None, None, True, False, True)
-_ASAP_NEW_TREE: Link = (Rule.ASAP, None, None, True, False, True)
-_NONE_CANCELLED: tuple[Command, ...] = ()
+_NEW_TREE: Final[Link] = (Rule.NEW_TREE, None, None, True, False, True)
+_ASAP_NEW_TREE: Final[Link] = (Rule.ASAP, None, None, True, False, True)
+_NONE_CANCELLED: Final[tuple[Command, ...]] = ()
 # (enum members read once: reading one from its class goes through the enum's
 # metaclass, many times slower than a global)
 _RUNNING: Final = NodeState.RUNNING
@@ -61,7 +61,7 @@ _STREAM: Final = Rule.STREAM
 _CANCEL: Final = DecisionKind.CANCEL
 _EA: Final = AppKind.EA
 _ASAP: Final = RunningOrder.ASAP
-_NO_PARAMS: tuple[Param, ...] = ()
+_NO_PARAMS: Final[tuple[Param, ...]] = ()
 
 
 class Intake:

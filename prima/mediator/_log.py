@@ -10,7 +10,7 @@ from prima.mediator._state import Command, Node
 
 __all__ = ["DecisionLog"]
 
-_new = tuple.__new__
+_new: Final = tuple.__new__
 _REQUEST: Final = DecisionKind.REQUEST  # (read once: from its class, through the enum's metaclass)
 
 

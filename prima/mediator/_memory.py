@@ -30,7 +30,7 @@ _WAITING: Final = NodeState.WAITING
 _RUNNING: Final = NodeState.RUNNING
 _DONE: Final = NodeState.DONE
 _CANCELLED: Final = NodeState.CANCELLED
-_NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
+_NONE_NAMED: Final[Mapping[AbId, Node]] = MappingProxyType({})
 
 
 class WorkingMemory:

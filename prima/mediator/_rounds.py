@@ -45,10 +45,10 @@ _RESTART: Final = Rule.RESTART
 _FREE_DEVICES: Final = Rule.FREE_DEVICES
 _KEEP_CHANNEL: Final = Rule.KEEP_CHANNEL
 _ANSWERING: Final = Rule.ANSWERING
-_NO_DEVICES: frozenset[str] = frozenset()
-_NO_NODES: list[Node] = []  # (never changed)
-_NONE_NAMED: Mapping[AbId, Node] = MappingProxyType({})
-_new = tuple.__new__
+_NO_DEVICES: Final[frozenset[str]] = frozenset()
+_NO_NODES: Final[list[Node]] = []  # (never changed)
+_NONE_NAMED: Final[Mapping[AbId, Node]] = MappingProxyType({})
+_new: Final = tuple.__new__
 
 
 def atomic_behavior(node: Node) -> AtomicBehavior:

@@ -179,8 +179,8 @@ class Tree:
 
 
 _PENDING: Final = NodeState.PENDING
-_NO_DEVICES: frozenset[str] = frozenset()
-_SORTED: dict[frozenset[str], tuple[str, ...]] = {}
+_NO_DEVICES: Final[frozenset[str]] = frozenset()
+_SORTED: Final[dict[frozenset[str], tuple[str, ...]]] = {}
 
 
 def _sorted(devices: frozenset[str]) -> tuple[str, ...]:

@@ -17,8 +17,9 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Generator, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Final
 
+from prima import compiled
 from prima.catalog import (
     EXTRAS_ACTED_ON,
     HOLD_SECONDS,
@@ -35,7 +36,7 @@ from prima.catalog import (
 )
 from prima.errors import CommandError
 from prima.mediator import AtomicBehavior, Call
-from prima.sim._kernel import Wait, idle, signal, sleep, until
+from prima.sim._kernel import Wait, finish, idle, signal, sleep, until
 from prima.sim._maps import Place
 from prima.sim._records import Picture
 from prima.sim._world import World, wrap_angle
@@ -138,7 +139,9 @@ def _face(sim: Body, heading: float) -> Generator[Wait, Any, None]:
     yield from _turn(sim, wrap_angle(heading - sim.world.robot_angle()))
 
 
-ARRIVED, UNDER_WAY, BLOCKED = "arrived", "under way", "blocked"
+ARRIVED: Final = "arrived"
+UNDER_WAY: Final = "under way"
+BLOCKED: Final = "blocked"
 
 
 def _period_toward(sim: Body, x: float, y: float,
@@ -234,17 +237,17 @@ def qa(sim: Body, call: Call, cid: int, it: int) -> Gen:
 
 # ---- turning --------------------------------------------------------------------------------
 
-FACE_AIM = math.radians(5.0)
+FACE_AIM: Final = math.radians(5.0)
 """Face Human turns until the robot is this close to facing its user."""
-FACE_GAIN = 6.0
+FACE_GAIN: Final = 6.0
 """How fast Face Human turns after a user who walks (rad/s per rad off them): a user
 who walks round the robot stays within a few degrees (a walk round at 1 m, about
 25 degrees a second, is followed within about 5)."""
-FACE_WITHIN = 4.0
+FACE_WITHIN: Final = 4.0
 """Seconds Face Human follows a user who keeps walking round the robot, at most."""
 
 
-FACE_STILL = math.radians(10.0)
+FACE_STILL: Final = math.radians(10.0)
 """Face Human is done turning only below this turning rate (rad/s): the robot brakes
 from there within a degree and a half."""
 
@@ -766,15 +769,15 @@ def _route(sim: Body, goal: Place,
     return sim.plan(goal.name)
 
 
-PASS_BY = 0.5
+PASS_BY: Final = 0.5
 """A move blocked this close (m) to the place it heads for (its user stands on it, say)
 has reached it: it reports it and goes on to the next place, instead of waiting for
 the place to clear."""
 
-MAX_BLOCKED = 30
+MAX_BLOCKED: Final = 30
 """Blocked iterations in a row after which a move gives up (about 30 s of waiting)."""
 
-KEEP_COURSE = 0.3
+KEEP_COURSE: Final = 0.3
 """A move keeps heading for the same place when the robot is this close (m) to where
 its last iteration left it (the wheels stopping in between slide it a little)."""
 
@@ -819,7 +822,7 @@ def set_position_and_direction(sim: Body, call: Call, cid: int, it: int) -> Gen:
     return (yield from _set_position(sim, call, cid, _req(sim, call, "heading")))
 
 
-BEHAVIORS: Mapping[str, Behavior] = {
+BEHAVIORS: Final[Mapping[str, Behavior]] = {
     "ActiveSensingHuman": active_sensing_human,
     "FaceHuman": face_human,
     "QA": qa,
@@ -866,7 +869,7 @@ def _search_time(sim: Body, call: Call) -> float:
     return look + _turning(sim, _req(sim, call, "turn"))
 
 
-PLANNED: Mapping[str, Callable[[Body, Call], float]] = {
+PLANNED: Final[Mapping[str, Callable[[Body, Call], float]]] = {
     "Speak": lambda sim, call: _said(sim, call, "text"),
     "QA": lambda sim, call: _said(sim, call, "prompt") + _req(sim, call, "timeout"),
     "FaceHumanAndSpeak": lambda sim, call: _turning(sim, 180.0) + _said(sim, call, "text"),
@@ -949,4 +952,13 @@ def perform(sim: Body, ab: AtomicBehavior) -> Generator[Wait, Any, Result]:
         if "error" in out:
             return values, True
         terminal = terminal and done
+    if _FINISH:
+        yield finish((values, terminal))
     return values, terminal
+
+
+_FINISH: Final = compiled()
+"""Whether :func:`perform` ends by yielding :func:`finish`, not by returning: in the
+compiled build, where a generator's return raises a StopIteration with a traceback
+(some 4,000 instructions at every atomic behavior's end). Interpreted, returning costs
+less: a return there is a plain one, and the yield would make a wait."""

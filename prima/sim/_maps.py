@@ -11,6 +11,7 @@ import heapq
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Final
 
 from prima.errors import SimulationError
 
@@ -93,7 +94,7 @@ class Area:
         return {"name": self.name, "x1": self.x1, "y1": self.y1, "x2": self.x2, "y2": self.y2}
 
 
-_CELL = 2.0
+_CELL: Final = 2.0
 """The side (m) of the squares a map files its places by (:meth:`WorldMap.places_in`)."""
 
 

@@ -24,7 +24,7 @@ import random
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Final
 
 from prima.catalog import Blend, Catalog
 from prima.errors import SimulationError
@@ -57,7 +57,7 @@ RECORDS_KEPT = 1000
 (the latest): memory stays flat over a run of any length."""
 SENSE_HZ = 10
 """How often (per simulated second) sensors are read while something moves."""
-_PASSING_SLACK = 1.0
+_PASSING_SLACK: Final = 1.0
 """The places near the robot are looked up for this much (m) beyond the passing
 radius, so that the answer holds until the robot has moved up to this far."""
 
@@ -66,7 +66,7 @@ def _ignore(*_: object) -> None:
     return None
 
 
-_SPEAK_AT_ONCE = frozenset({"Speak", "QA", "TurnAndSpeak", "ActiveSensingHuman"})
+_SPEAK_AT_ONCE: Final = frozenset({"Speak", "QA", "TurnAndSpeak", "ActiveSensingHuman"})
 """The Commands whose behaviors begin with their words (a Face Human and Speak turns
 first)."""
 
@@ -999,7 +999,7 @@ class Simulator:
             self.world.stop()
 
 
-ON_THE_WAY = 0.5
+ON_THE_WAY: Final = 0.5
 """A place this close (m) to the straight way from the robot to another place is on
 the way: a Topological Move started off the map's places visits it first."""
 

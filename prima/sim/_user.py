@@ -16,7 +16,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Final
 
 from prima.errors import SimulationError
 
@@ -109,11 +109,11 @@ ADDED_ACTIONS = 10_000
 """How many actions may be added to a run as it goes (:meth:`ScriptedUser.add`): a live
 session's bound (``prima live``)."""
 
-_FOLLOW_PERIOD = 0.1
-_STEP_ASIDE = 0.6
+_FOLLOW_PERIOD: Final = 0.1
+_STEP_ASIDE: Final = 0.6
 """A following user steps out of the robot's way when it comes this close (a fraction
 of the following distance) heading their way: people do not stand in a robot's path."""
-_APPROACH_GAP = 0.15
+_APPROACH_GAP: Final = 0.15
 
 
 class ScriptedUser:

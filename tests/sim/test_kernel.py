@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import itertools
 
-from prima.sim._kernel import Kernel, ProcGen, idle, sleep
+from prima.sim._kernel import Kernel, ProcGen, finish, idle, sleep
 
 END = 40
 
@@ -156,3 +156,32 @@ def test_the_wakes_skipped_at_once_are_those_skipped_one_by_one() -> None:
             (every, until, other, limit)
         cases += 1
     assert cases > 300
+
+
+def test_a_process_that_yields_finish_ends_as_one_that_returns() -> None:
+    # (the same exit, with the same value, at the same point among the tick's work; and
+    # a finished process is never resumed again)
+    def ends(by_finish: bool) -> tuple[list[tuple[int, str, object]], bool]:
+        k = Kernel(10)
+        log: list[tuple[int, str, object]] = []
+
+        def process() -> ProcGen:
+            yield sleep(3)
+            log.append((k.tick, "result", None))
+            if by_finish:
+                yield finish({"done": k.tick})
+                log.append((k.tick, "resumed after its finish", None))
+            return {"done": k.tick}
+
+        proc = k.spawn(process(), lambda value: log.append((k.tick, "exit", value)))
+        k.at(3, lambda: log.append((k.tick, "before", None)))
+        # (work at 3 after its wake there, which it asks for as it starts, at 0)
+        k.at(0, lambda: k.at(3, lambda: log.append((k.tick, "after", None))))
+        while (nxt := k.next_tick()) is not None:
+            k.tick = nxt
+            k.run_due()
+        return log, proc.alive
+
+    assert ends(by_finish=True) == ends(by_finish=False) == (
+        [(3, "before", None), (3, "result", None), (3, "exit", {"done": 3}), (3, "after", None)],
+        False)

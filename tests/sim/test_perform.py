@@ -19,6 +19,7 @@ from prima.catalog import (
     Primitive,
     RaiseEvent,
 )
+import prima.sim._behaviors as behaviors_module
 from prima.sim import Pose
 
 from tests.sim.helpers import call, runner
@@ -49,6 +50,21 @@ def test_a_hold_keeps_the_devices_for_its_time() -> None:
     first, second = r.ends("Light")
     assert (first.time, second.time) == (pytest.approx(1.5 + 2.0), pytest.approx(3.5 + 1.5 + 0.5))
     assert first.data == {} and "error" not in second.data
+
+
+def test_an_ab_ends_the_same_whether_it_returns_or_yields_finish(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # (the compiled build ends an AB by yielding finish, the interpreted one by returning)
+    def ends(by_finish: bool) -> list[tuple[float, dict[str, object]]]:
+        monkeypatch.setattr(behaviors_module, "_FINISH", by_finish)
+        r = _run(_catalog(Hold(1.5), MoveJoint(LASER, to=ArgRef("angle"))),
+                 call("Light", angle=90), call("Light", angle="wide"), call("Light", angle=-40))
+        return [(e.time, dict(e.data)) for e in r.ends("Light")]
+
+    assert ends(by_finish=True) == ends(by_finish=False)
+    assert [(t, sorted(data)) for t, data in ends(by_finish=True)] == [
+        (pytest.approx(2.0), ["laser-pan"]), (pytest.approx(2.0), ["error"]),
+        (pytest.approx(2.0 + 1.5 + 130 / 180, abs=0.02), ["laser-pan"])]  # (in whole ticks)
 
 
 def test_a_joint_moves_at_its_rate_within_its_limits() -> None:
