@@ -225,6 +225,9 @@ class Selector:
         self._answered: list[tuple[Node, Tree]] = []
         """ABs of streams under way that a round held for a reaction to the user's own
         action, with its tree: their streams are suspended once the round is over."""
+        self._losers: list[Node] = _NO_NODES
+        """What :meth:`_alone` found the index answering on the devices of the AB it found
+        alone (none where no AB waits): whom its start beats, for :meth:`_goes_on`."""
 
     def settle(self) -> None:
         """Run rounds until nothing more can start."""
@@ -352,22 +355,33 @@ class Selector:
             return False
         if wm.reserving and self._reserved(x) is not None:
             return False
-        return not contested or self._beats(x)
+        if not contested:
+            # (no AB waits on its devices: the index answers none there, ``ranked``
+            # counting every AB it files, so its start beats nobody)
+            self._losers = _NO_NODES
+            return True
+        return self._beats(x)
 
     def _beats(self, x: Node) -> bool:
         """Whether ``x``, the AB the round names, ranks better on each of its devices than
         the best AB filed there: what the round's view would answer for them. If it does,
         the view is left pointed at the round's ABs, for :meth:`_goes_on` to rank whom
-        ``x``'s start beats."""
+        ``x``'s start beats, and those answers are kept (:attr:`_losers`): nothing files,
+        parks or re-ranks an AB before ``x`` starts (``x`` itself is not filed; a policy
+        that puts its AB before ``x`` keeps it from starting), so they stand."""
         view = self._naming
         view.name(self._wm.pjf)
         top = self._wm.index.top
         rank = view.rank
+        losers = []
         for d in x.sorted_devices:
             t = top(d)
-            if t is not None and t is not x and rank(t) < rank(x):
-                view.name(_NONE_NAMED)
-                return False
+            if t is not None:
+                if t is not x and rank(t) < rank(x):
+                    view.name(_NONE_NAMED)
+                    return False
+                losers.append(t)
+        self._losers = losers
         return True
 
     def _goes_on(self, x: Node) -> list[Node]:
@@ -389,6 +403,8 @@ class Selector:
         started: list[Node] = []
         x.blended = _NO_DEVICES
         overran = False
+        losers = self._losers  # (the index's answers on its devices: ``_alone``)
+        self._losers = _NO_NODES  # (it keeps no AB past its round)
         if not self._policies.prepare(x):
             if not self._counted(x.app):
                 overran = True
@@ -396,12 +412,6 @@ class Selector:
                 wm.start(x)
                 x.started_at = self._log.now
                 started.append(x)
-                top = wm.index.top  # (as the round asks its view for whom the start beat)
-                losers = []
-                for d in x.sorted_devices:
-                    b = top(d)
-                    if b is not None:
-                        losers.append(b)
                 later: list[tuple[bool, Tree]] = []
                 if losers and view.pjf is not pjf:  # (named by ``_beats`` where they wait)
                     view.name(pjf)
