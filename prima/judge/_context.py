@@ -227,6 +227,44 @@ class _Window:
     reactions: dict[str, ReactionState] = field(default_factory=dict)
 
 
+class _Shape:
+    """What a start line gives its AB, but its number, time, line and iteration
+    (:meth:`Context._shape`): the line it was made of (but for those, its detail apart,
+    and its poses) and what it says, the AB's lists in :attr:`Context.on_device` and
+    :attr:`Context.tree_abs`, and whether its Commands follow the user, travel, listen."""
+
+    __slots__ = ("app", "command", "detail", "devices", "ids", "lists", "moves", "reason",
+                 "row", "siblings", "text", "tree", "words")
+
+    def __init__(self, row: dict[str, Any], detail: dict[str, Any], app: str, tree: int,
+                 command: str, ids: tuple[int, ...], devices: frozenset[str], reason: str,
+                 text: str, words: tuple[float, float] | None,
+                 moves: tuple[bool, bool, bool], lists: list[list[Ab]],
+                 siblings: list[Ab]) -> None:
+        self.row = row
+        self.detail = detail
+        self.app = app
+        self.tree = tree
+        self.command = command
+        self.ids = ids
+        self.devices = devices
+        self.reason = reason
+        self.text = text
+        self.words = words
+        self.moves = moves
+        self.lists = lists
+        self.siblings = siblings
+
+
+_OWN: Final[dict[str, Any]] = {"t": None, "seq": None, "ab": None, "detail": None,
+                               "robot": None, "user": None}
+"""What a start line says of its own AB, apart (a copy of a line updated by this is the
+same for the lines of a loop's iterations; its detail, but its iteration, too)."""
+
+_SHAPES_KEPT: Final = 1024
+"""How many Commands' start lines a context keeps (:meth:`Context._shape`)."""
+
+
 Feed = Callable[[Row, "Context"], None]
 """What a line is fed to: a finder's ``feed``, or its ``feeder``'s for the line's kind."""
 
@@ -271,9 +309,10 @@ class Context:
         self.running: dict[int, Ab] = {}
         self.on_device: dict[str, list[Ab]] = {}
         """Device -> its ABs, in start order (what a reaction's wait is judged on)."""
-        self._on_devices: dict[frozenset[str], list[list[Ab]]] = {}
-        """Devices an AB runs on -> their lists in :attr:`on_device` (a loop's ABs run on
-        the same ones again and again)."""
+        self._shapes: dict[object, _Shape] = {}
+        """Command -> what the latest start line of an AB of it gives its AB
+        (:meth:`_shape`): a loop's start lines are the same but for their AB, time, line,
+        iteration and poses, and start theirs from it."""
         self.cmd_ab: dict[int, int] = {}
         """Command -> its latest AB."""
         self.cmd_at: dict[int, str] = {}
@@ -527,37 +566,54 @@ class Context:
             self._moved(str(row.get("command") or ""))
             return
         detail = row.get("detail") or {}
-        tree = row.get("tree")
-        ab = Ab(ab_id, str(row.get("app") or ""), tree if isinstance(tree, int) else -1,
-                str(row.get("command") or ""), command_ids(row),
-                frozenset(row.get("devices") or ()), float(row["t"]), int(row["seq"]),
-                str(row.get("reason") or ""), text=str(row.get("text") or ""),
+        key = detail.get("command_id")
+        shape = self._shapes.get(key)
+        if shape is None or {**row, **_OWN} != shape.row \
+                or {**detail, "iteration": None} != shape.detail:
+            shape = self._shape(row, detail, key)  # (else: a loop's next iteration, say)
+        ab = Ab(ab_id, shape.app, shape.tree, shape.command, shape.ids, shape.devices,
+                float(row["t"]), int(row["seq"]), shape.reason, text=shape.text,
                 cuttable=detail.get("cuttable") is True,
-                iteration=int(detail.get("iteration") or 0))
+                iteration=int(detail.get("iteration") or 0), words=shape.words,
+                planned=shape.words)
         self.ab = ab
-        self._moved(ab.command)
-        ws, we = detail.get("words_start"), detail.get("words_end")
-        if isinstance(ws, (int, float)) and isinstance(we, (int, float)):
-            ab.words = ab.planned = (float(ws), float(we))
-        if ab.reason == "blend":
+        self.follows, self.travels, self.listens = shape.moves
+        if shape.reason == "blend":
             for d in ab.devices:
                 for other in self.running.values():
                     if d in other.devices:
                         other.blended_over = True
         self.abs[ab_id] = ab
         self.running[ab_id] = ab
-        lists = self._on_devices.get(ab.devices)
-        if lists is None:
-            lists = self._on_devices[ab.devices] = [self.on_device.setdefault(d, [])
-                                                    for d in ab.devices]
-        for on in lists:
+        for on in shape.lists:
             on.append(ab)
-        siblings = self.tree_abs.setdefault(ab.tree, [])
+        siblings = shape.siblings
         ab.place = len(siblings)
         siblings.append(ab)
         for cid in ab.ids:
             self.cmd_ab[cid] = ab_id
         self._reply_started(ab)
+
+    def _shape(self, row: Row, detail: Mapping[str, Any], key: object) -> _Shape:
+        """What a start line gives its AB but its number, time, line and iteration, kept
+        under its Command for the next start line that is the same but for these."""
+        tree = row.get("tree")
+        tree = tree if isinstance(tree, int) else -1
+        command = str(row.get("command") or "")
+        devices = frozenset(row.get("devices") or ())
+        ws, we = detail.get("words_start"), detail.get("words_end")
+        shape = _Shape({**row, **_OWN}, {**detail, "iteration": None},
+                       str(row.get("app") or ""), tree, command, command_ids(row), devices,
+                       str(row.get("reason") or ""), str(row.get("text") or ""),
+                       (float(ws), float(we)) if isinstance(ws, (int, float))
+                       and isinstance(we, (int, float)) else None,
+                       self._moved(command),
+                       [self.on_device.setdefault(d, []) for d in devices],
+                       self.tree_abs.setdefault(tree, []))
+        if len(self._shapes) >= _SHAPES_KEPT:
+            self._shapes.clear()
+        self._shapes[key] = shape
+        return shape
 
     def _reply_started(self, ab: Ab) -> None:
         ex = self.open_exchange.get(ab.app)

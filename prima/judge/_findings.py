@@ -13,7 +13,7 @@ import dataclasses
 from dataclasses import dataclass
 
 __all__ = ["BargeIn", "Blame", "Elsewhere", "Finding", "Ignored", "Leaving", "Reaction",
-           "Recovery", "Silence", "Split", "Stuck", "Unfaced"]
+           "Recovery", "Silence", "Split", "Stuck", "Unfaced", "after"]
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,11 @@ class Blame:
 
     def to_dict(self) -> dict[str, object]:
         return dataclasses.asdict(self)
+
+
+def after(t0: float, t: float | None) -> float | None:
+    """Seconds from ``t0`` to ``t`` (None: never), as a reaction's latencies are given."""
+    return None if t is None else round(t - t0, 3)
 
 
 @dataclass(frozen=True)
@@ -96,12 +101,12 @@ class Reaction:
     @property
     def latency(self) -> float | None:
         """From the event to the first start (None: it never started)."""
-        return None if self.first_start is None else round(self.first_start - self.t, 3)
+        return after(self.t, self.first_start)
 
     @property
     def utterance_latency(self) -> float | None:
         """From the event to the first utterance heard whole (None: none was)."""
-        return None if self.first_utterance is None else round(self.first_utterance - self.t, 3)
+        return after(self.t, self.first_utterance)
 
     def to_dict(self) -> dict[str, object]:
         return {

@@ -32,7 +32,6 @@ again).
 from __future__ import annotations
 
 import bisect
-import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from typing import Final
@@ -49,7 +48,7 @@ from prima.judge._context import (
     span_at,
     spans_meeting,
 )
-from prima.judge._findings import Blame, Reaction
+from prima.judge._findings import Blame, Reaction, after
 from prima.vocab import MAX_ANSWER_HOLD
 
 __all__ = ["analyse"]
@@ -564,22 +563,25 @@ class _Analyst:
         cut_by_user = heard is None and any(ab.end_reason == "barge-in" for ab in spoken)
         if first is not None and words and not cut_by_user:  # (the user's own cut: 7.5)
             words_free, words_waits = self._words_free(r, own, mine, spoken, first, heard)
-        found = Reaction(
-            r.event, r.t, r.seq, r.app, r.order, tuple(r.commands), tuple(r.trees),
-            tuple(sorted(devices)), user=r.user, at=r.at, residual=round(residual, 3),
-            free=round(free, 3),
-            first_start=None if first is None else first.start,
-            first_start_seq=None if first is None else first.seq,
-            first_utterance=None if heard is None else heard.start,
-            first_utterance_seq=None if heard is None else heard.seq,
-            words=words, words_free=round(words_free, 3),
-            unheard=words and heard is None and self._unheard(r, spoken),
-            text=r.text, waits=self._top(allowed), took=self._culprit(took, allowed, r.t, t1))
-        why, by_words = self._why(found)
+        first_start = None if first is None else first.start
+        first_utterance = None if heard is None else heard.start
+        residual, free = round(residual, 3), round(free, 3)
+        words_free = round(words_free, 3)
+        why, by_words = self._why(r.t, residual, free, first_start, first_utterance,
+                                  words_free)
+        waits, by = self._top(allowed), self._culprit(took, allowed, r.t, t1)
         if by_words:  # (late for its words: what they waited for, not its first AB)
-            return dataclasses.replace(found, late=True, why=why, waits=words_waits[0],
-                                       took=words_waits[1])
-        return dataclasses.replace(found, late=bool(why), why=why)
+            waits, by = words_waits
+        return Reaction(
+            r.event, r.t, r.seq, r.app, r.order, tuple(r.commands), tuple(r.trees),
+            tuple(sorted(devices)), user=r.user, at=r.at, residual=residual, free=free,
+            first_start=first_start,
+            first_start_seq=None if first is None else first.seq,
+            first_utterance=first_utterance,
+            first_utterance_seq=None if heard is None else heard.seq,
+            words=words, words_free=words_free,
+            unheard=words and heard is None and self._unheard(r, spoken),
+            late=bool(why), why=why, text=r.text, waits=waits, took=by)
 
     def _words_free(self, r: ReactionState, own: set[int], mine: Sequence[Ab],
                     spoken: Sequence[Ab], first: Ab, heard: Ab | None
@@ -737,27 +739,31 @@ class _Analyst:
             return None
         return self._blame(best[1], "took its devices", best[1].until(self.end))
 
-    def _why(self, r: Reaction) -> tuple[str, bool]:
-        """Why the reaction is late (empty: it is not), and whether its words made it
-        so (its first start was in time)."""
+    def _why(self, t0: float, residual: float, free: float, first_start: float | None,
+             first_utterance: float | None, words_free: float) -> tuple[str, bool]:
+        """Why a reaction to an event at ``t0`` is late (empty: it is not), and whether its
+        words made it so (its first start was in time): of its :class:`Reaction`'s
+        figures, worked out before it is made (it is made once, late or not)."""
         t = self.th
+        latency = after(t0, first_start)
         if t.react_within is not None:
-            if r.latency is None:
+            if latency is None:
                 return "never started", False
-            if r.latency > t.react_within + EPS:
-                return f"started after {r.latency:g} s (allowed {t.react_within:g} s)", False
+            if latency > t.react_within + EPS:
+                return f"started after {latency:g} s (allowed {t.react_within:g} s)", False
             bound = t.react_within + t.utterance_slack
-            if r.utterance_latency is not None and r.utterance_latency > bound + EPS:
-                return f"spoke after {r.utterance_latency:g} s (allowed {bound:g} s)", False
+            heard = after(t0, first_utterance)
+            if heard is not None and heard > bound + EPS:
+                return f"spoke after {heard:g} s (allowed {bound:g} s)", False
             return "", False
-        if r.free > t.reaction_slack + EPS:
-            what = "never started" if r.latency is None else f"started after {r.latency:g} s"
-            return (f"{what}: free to start for {r.free:g} s (the rules let it wait "
-                    f"{r.residual:g} s, and {t.reaction_slack:g} s more)"), False
-        if r.words_free > t.reaction_slack + t.utterance_slack + EPS:
-            said = ("its words never said whole" if r.first_utterance is None
-                    else f"spoke after {r.utterance_latency:g} s")
-            return (f"{said}: its words were free to start for {r.words_free:g} s "
+        if free > t.reaction_slack + EPS:
+            what = "never started" if latency is None else f"started after {latency:g} s"
+            return (f"{what}: free to start for {free:g} s (the rules let it wait "
+                    f"{residual:g} s, and {t.reaction_slack:g} s more)"), False
+        if words_free > t.reaction_slack + t.utterance_slack + EPS:
+            said = ("its words never said whole" if first_utterance is None
+                    else f"spoke after {after(t0, first_utterance):g} s")
+            return (f"{said}: its words were free to start for {words_free:g} s "
                     f"(allowed {t.reaction_slack + t.utterance_slack:g} s)"), True
         return "", False
 
