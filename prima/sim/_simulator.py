@@ -115,6 +115,10 @@ class Simulator:
         self._passing_probe = (0.0, 0.0, -1.0)
         """Where the places near the robot were last looked up, and how far the robot
         may go from there before they can change (negative: look them up)."""
+        self._goals: tuple[tuple[float, float, float], dict[str, float]] = ((0.0, 0.0, -1.0), {})
+        """:meth:`route`'s last target (and radius) and the places it may be reached from
+        straight (the walls stand still: a user walking to a robot that waits asks
+        again and again)."""
         for ev in events:
             self.kernel.at(round(ev.at * hz), functools.partial(self._post, ev))
         self._room = Room(self.kernel, ADDED_ACTIONS, "input")
@@ -804,8 +808,11 @@ class Simulator:
         places = self.map.places
         starts = {p.name: math.hypot(p.x - x, p.y - y) for p in places
                   if world.clear(x, y, p.x, p.y, radius)}
-        goals = {p.name: math.hypot(p.x - tx, p.y - ty) for p in places
-                 if world.clear(p.x, p.y, tx, ty, radius)}
+        target = (tx, ty, radius)
+        if self._goals[0] != target:
+            self._goals = (target, {p.name: math.hypot(p.x - tx, p.y - ty) for p in places
+                                    if world.clear(p.x, p.y, tx, ty, radius)})
+        goals = self._goals[1]
         path = self.map.shortest_path(starts, goals)
         if not path:
             return []

@@ -33,6 +33,13 @@ drive's snap to its goal, a turn's final angle); a pose written on a body direct
 from outside, must be followed by :meth:`World.moved`. Within a stretch (the
 version not yet moved on) the world reads its bodies afresh.
 
+An idle or turning robot is checked for a push (the user walking into it) after
+each step, but only after the first of a *calm* stretch: one in which neither the
+user nor a wall can come near enough to touch it (:meth:`World._calmed`, worked out
+from the poses read at the stretch's start and kept for the stretches after it), so
+that no step can change the speed the first check left it (a step changes a speed
+only through a contact: the space has no gravity and no damping).
+
 The map files its places by the squares of a grid (:meth:`WorldMap.places_in`,
 made once per map, not per run): :meth:`World.places_near` asks it which places
 may be near a point, instead of measuring the distance to every place, and
@@ -70,6 +77,7 @@ _cpBodyGetVelocity: Final = _cp.cpBodyGetVelocity
 _cpBodySetAngle: Final = _cp.cpBodySetAngle
 _cpBodySetAngularVelocity: Final = _cp.cpBodySetAngularVelocity
 _cpBodySetVelocity: Final = _cp.cpBodySetVelocity
+_cpSpacePointQueryNearest: Final = _cp.cpSpacePointQueryNearest
 _cpSpaceSegmentQueryFirst: Final = _cp.cpSpaceSegmentQueryFirst
 _cpSpaceStep: Final = _cp.cpSpaceStep
 _hypot: Final = math.hypot
@@ -100,6 +108,14 @@ _CHECK_EVERY: Final = 5
 _MARGIN: Final = 1e-9
 """A length (m) far longer than the rounding of a straight drive's progress over a
 stretch of steps, far shorter than a step."""
+_REACH: Final = 5.0
+"""How far (m) :meth:`World._calmed` looks for the wall nearest the robot."""
+_CLEAR: Final = 1e-6
+"""A length (m) far longer than the rounding of the bodies' positions over a run, by
+which :meth:`World._calmed` keeps them apart."""
+_RETRY: Final = 10
+"""Steps for which :meth:`World._calmed`, having found the robot too near the user or
+a wall, is not asked again."""
 _BLOCKED_LAG: Final = 0.1
 """A straight drive that lags this far (m) behind its plan is blocked: it ends at once."""
 STILL: Final = 1e-4
@@ -153,6 +169,15 @@ class _Joint:
         self.t1 = tick + ticks
 
 
+def _add_walls(space: pymunk.Space, world_map: WorldMap) -> None:
+    """The map's walls, as static segments of the space (which nothing moves)."""
+    for w in world_map.walls:
+        seg = pymunk.Segment(space.static_body, (w.x1, w.y1), (w.x2, w.y2), w.thickness / 2)
+        seg.filter = pymunk.ShapeFilter(categories=WALL)
+        seg.friction = 0.0
+        space.add(seg)
+
+
 class World:
     """The pymunk space and the bodies in it, stepped at ``1 / hz`` seconds."""
 
@@ -164,11 +189,7 @@ class World:
         self.dt = 1.0 / hz
         space = pymunk.Space()
         space.collision_slop = 0.005  # metres: the default 0.1 would let bodies sink 10 cm
-        for w in world_map.walls:
-            seg = pymunk.Segment(space.static_body, (w.x1, w.y1), (w.x2, w.y2), w.thickness / 2)
-            seg.filter = pymunk.ShapeFilter(categories=WALL)
-            seg.friction = 0.0
-            space.add(seg)
+        _add_walls(space, world_map)
         body = pymunk.Body(20.0, float("inf"))
         body.position = (robot.x, robot.y)
         body.angle = _radians(robot.heading)
@@ -182,7 +203,7 @@ class World:
         human = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         start = user or Pose(-1000.0, -1000.0)
         human.position = (start.x, start.y)
-        human.angle = _radians(start.heading)
+        human.angle = self._ha = _radians(start.heading)
         hshape = pymunk.Circle(human, HUMAN_RADIUS)
         hshape.filter = pymunk.ShapeFilter(categories=HUMAN)
         space.add(human, hshape)
@@ -190,6 +211,9 @@ class World:
         self._rb, self._hb, self._sp = body._body, human._body, space._space
         """The robot, the user and the space as Chipmunk knows them."""
         self.human_moving = False
+        self._calm = self._retry = -1  # (:meth:`_calmed`)
+        self._wall = (0.0, 0.0, -_INF)  # (the same)
+        self._nearest: Any = _ffi.new("cpPointQueryInfo *")
         self.version = 0
         """Moves on whenever a body may have moved or turned (see the module's doc)."""
         self._pk = self._ak = -1  # (the kept reads, of no version yet: :meth:`_read`)
@@ -258,7 +282,7 @@ class World:
 
     def user_pose(self) -> Pose:
         x, y = self.user_xy()
-        return Pose(x, y, _degrees(_cpBodyGetAngle(self._hb)) % 360.0)
+        return Pose(x, y, _degrees(self._ha) % 360.0)
 
     def _read(self) -> None:
         """Read the robot's and the user's positions afresh, at a new version: kept in
@@ -292,8 +316,10 @@ class World:
         return self._ra
 
     def user_angle(self) -> float:
-        """The user's body angle (radians): ``human.angle``, read for less."""
-        return float(_cpBodyGetAngle(self._hb))
+        """The user's body angle (radians): ``human.angle``, as last written (the world
+        writes it, and nothing turns the user: a step adds their turning rate, nought,
+        which can only make a -0.0 0.0)."""
+        return self._ha
 
     def user_distance(self) -> float:
         if self._pk != self.version:
@@ -397,19 +423,22 @@ class World:
     def moved(self) -> None:
         """A body's pose was written directly: forget what was worked out from the poses."""
         self.version += 1
+        self._calm = -1
 
     def put_user(self, x: float, y: float) -> None:
         """Put the user at (x, y) now."""
         self.human.position = (x, y)
         self.version += 1
+        self._calm = -1
 
     def walk_user(self, vx: float, vy: float) -> None:
         """Move the user at (vx, vy) m/s from the next step on, facing the way they walk."""
         human = self.human
         human.velocity = (vx, vy)
+        self._calm = -1  # (:meth:`_calmed` reckoned with the walk before)
         self.human_moving = vx != 0.0 or vy != 0.0
         if self.human_moving:
-            human.angle = _atan2(vy, vx)
+            human.angle = self._ha = _atan2(vy, vx)
             self.version += 1
 
     # ---- robot wheel commands --------------------------------------------------
@@ -617,15 +646,21 @@ class World:
 
     def _run_idle(self, tick: int, end: int, advance: Callable[[object, float], None]) -> int:
         """Idle steps up to the tick ``end``, each followed by :meth:`_hold` if the body
-        has any speed (a push: else it has nothing to do)."""
+        has any speed (a push: else it has nothing to do); in a calm stretch only the
+        first (:meth:`_calmed`)."""
         space, rb, dt = self._sp, self._rb, self.dt
         velocity = _cpBodyGetVelocity
-        for _ in range(end - tick):
+        steps = end - tick
+        checked = (1 if end <= self._calm or tick >= self._retry and self._calmed(tick, end)
+                   else steps)
+        for _ in range(checked):
             advance(space, dt)
             v = velocity(rb)
             if v.x or v.y:
                 self._hold()
-        self.version += end - tick
+        for _ in range(steps - checked):  # (calm: the body keeps what the first left it)
+            advance(space, dt)
+        self.version += steps
         return end
 
     def _run_linear(self, tick: int, bound: int, advance: Callable[[object, float], None]
@@ -706,12 +741,14 @@ class World:
                      ) -> tuple[int, Callable[[], None] | None]:
         """Turning steps up to the tick ``bound`` or the turn's end, ramped as a straight
         drive's speed is, each followed by :meth:`_hold` if pushed (the wheels hold the
-        body where it turns)."""
+        body where it turns); in a calm stretch only the first (:meth:`_calmed`)."""
         dt, rb, space = self.dt, self._rb, self._sp
         wtop, alpha_dt, sense = self._wtop, self._alpha_dt, self._ux
         twice = 2.0 * _radians(self.spec.turn_accel)
         length, s, v = self._len, self._s, self._v
         start = tick
+        checked = (tick + 1 if bound <= self._calm
+                   or tick >= self._retry and self._calmed(tick, bound) else bound)
         while True:
             rem = length - s
             w = min(min(wtop, v + alpha_dt), math.sqrt(twice * rem))  # (of two: _run_linear)
@@ -722,9 +759,10 @@ class World:
                 _cpBodySetAngularVelocity(rb, sense * w)
                 v = self._v = w  # (a sway turns on top of it)
             advance(space, dt)
-            pushed = _cpBodyGetVelocity(rb)
-            if pushed.x or pushed.y:
-                self._hold()
+            if tick < checked:  # (calm, the body keeps what the first check left it)
+                pushed = _cpBodyGetVelocity(rb)
+                if pushed.x or pushed.y:
+                    self._hold()
             s += w * dt
             tick += 1
             if last or tick >= bound:
@@ -737,6 +775,48 @@ class World:
             done = self._finish(True)
         self.version += tick - start  # (after the final angle: see the module's doc)
         return tick, done
+
+    def _calmed(self, tick: int, end: int) -> bool:
+        """True if no body can touch the robot in the steps from the tick ``tick`` up to
+        ``end``: then each leaves the robot's velocity as it was (Chipmunk pushes only
+        shapes that overlap once the step has moved them; this space has no gravity or
+        damping), and the stretch checks it for a push only after its first step.
+
+        Worked out from the poses of this version (else False) as the tick up to which
+        it holds (:attr:`_calm`), kept for the stretches after it: until then, at the
+        fastest the robot moves (as fast as now, or as its wheels may drive it) and the
+        user walks (as now: a new walk forgets it), neither the gap between them nor
+        the one between the robot and the nearest wall closes. A pose written forgets
+        it too. Found too near either, it is not asked again for :data:`_RETRY` steps
+        (:attr:`_retry`: it would mostly find them so again). :attr:`_wall` keeps
+        where the robot was when the nearest wall was last looked for, and how far
+        that wall was from its rim (at most :data:`_REACH`): it is looked for again
+        only when the robot may have come too near it since.
+        """
+        if self._pk != self.version:
+            self._retry = tick + _RETRY  # (not read: mostly not at the next stretches either)
+            return False
+        rx, ry = self._rxy
+        ux, uy = self._hxy
+        gap = _hypot(ux - rx, uy - ry) - self.spec.radius - HUMAN_RADIUS - _CLEAR
+        h = _cpBodyGetVelocity(self._hb)
+        hv = math.sqrt(h.x * h.x + h.y * h.y)
+        if gap < (end - tick) * self.dt * (self.spec.max_speed + hv):
+            self._retry = tick + _RETRY  # (the user too near: see below)
+            return False
+        vr = max(_length(_cpBodyGetVelocity(self._rb)), self.spec.max_speed)
+        ax, ay, room = self._wall
+        room -= _hypot(rx - ax, ry - ay)  # (the wall is no nearer than that)
+        if room < (end - tick) * self.dt * vr + _CLEAR:
+            _cpSpacePointQueryNearest(self._sp, (rx, ry), _REACH, _SIGHT, self._nearest)
+            room = float(self._nearest.distance) - self.spec.radius  # (_REACH if none)
+            self._wall = (rx, ry, room)
+        reach = min(gap / (vr + hv), (room - _CLEAR) / vr)
+        self._calm = tick + max(int(reach / self.dt), 0)
+        if end <= self._calm:
+            return True
+        self._retry = tick + _RETRY
+        return False
 
     def _hold(self) -> None:
         """Idle or turning in place, the wheels hold the body where it is: a push (the
@@ -821,6 +901,7 @@ class World:
         arrived = _hypot(x - self._tx, y - self._ty) < 0.05
         if arrived:
             body.position = (self._tx, self._ty)
+            self._calm = -1
         return self._finish(arrived)
 
     def _finish(self, arrived: bool) -> Callable[[], None] | None:

@@ -134,3 +134,13 @@ def test_a_route_between_two_places_is_the_shortest_path_worked_out_once() -> No
     again = bytecodes(lambda: fresh.route(names[0], names[-1]))
     assert len(fresh.route(names[0], names[-1])) > 2
     assert again < 0.1 * first, (again, first)
+
+
+def test_a_route_to_a_target_asked_again_is_the_one_a_fresh_simulator_plans() -> None:
+    # The places a target is reached from straight are kept for the last target (the
+    # walls stand still): asked in turns, each route is the one a fresh simulator plans.
+    asks = [(1.0, 1.0, 9.0, 6.0, 0.0), (1.0, 1.0, 9.0, 6.0, 0.3), (2.0, 6.0, 9.0, 6.0, 0.3),
+            (9.0, 6.0, 1.0, 1.0, 0.0), (2.0, 6.0, 9.0, 6.0, 0.3), (8.0, 2.0, 9.0, 6.0, 0.0)]
+    sim = Simulator(world_map("museum"))
+    for ask in asks * 2:
+        assert sim.route(*ask) == Simulator(world_map("museum")).route(*ask), ask
