@@ -129,8 +129,11 @@ def test_a_sweep_killed_outright_keeps_its_records_to_go_on_from(tmp_path: Path)
     after it, and the records it wrote are in the results file all the same, read back
     by --resume to the file an uninterrupted sweep writes."""
     results = tmp_path / "killed.jsonl"
+    scratch = tmp_path / "tmp"  # (a sweep killed outright leaves its workers' folder)
+    scratch.mkdir()
     process = subprocess.Popen(_sweep(results, "--results"), stdout=subprocess.DEVNULL,
-                               stderr=subprocess.DEVNULL, start_new_session=True, cwd=ROOT)
+                               stderr=subprocess.DEVNULL, start_new_session=True, cwd=ROOT,
+                               env={**os.environ, "TMPDIR": str(scratch)})
     try:
         deadline = time.monotonic() + BOUND
         while _records(results) < 10 and process.poll() is None \
