@@ -272,9 +272,7 @@ class Kernel:
         try:
             wait = proc.gen.send(value)
         except StopIteration as stop:
-            proc.alive = False
-            if proc.exit is not None:
-                proc.exit(stop.value)
+            self._ended(proc, stop.value)
             return
         token = proc.token
         proc.idle = wait if wait.unchanged is not None else None
@@ -286,15 +284,19 @@ class Kernel:
                 return
         if wait.ticks is None:
             if wait.start is None and wait.pred is None:  # a wait for nothing: :func:`finish`
-                proc.alive = False
-                if proc.exit is not None:
-                    proc.exit(wait.timeout)
+                self._ended(proc, wait.timeout)
                 return
         else:
             self._wake(self.tick + wait.ticks, proc, token, wait.timeout)
         if wait.pred is not None:
             self._polls.append((proc, token, wait.pred))
 
+    @staticmethod
+    def _ended(proc: Process, value: Any) -> None:
+        """The process is over, by returning ``value`` or yielding :func:`finish`."""
+        proc.alive = False
+        if proc.exit is not None:
+            proc.exit(value)
 
 class Room:
     """Insertion numbers a kernel keeps (:meth:`Kernel.reserve`) for work added as a run

@@ -428,8 +428,7 @@ class World:
     def put_user(self, x: float, y: float) -> None:
         """Put the user at (x, y) now."""
         self.human.position = (x, y)
-        self.version += 1
-        self._calm = -1
+        self.moved()
 
     def walk_user(self, vx: float, vy: float) -> None:
         """Move the user at (vx, vy) m/s from the next step on, facing the way they walk."""
@@ -799,8 +798,7 @@ class World:
         rx, ry = self._rxy
         ux, uy = self._hxy
         gap = _hypot(ux - rx, uy - ry) - self.spec.radius - HUMAN_RADIUS - _CLEAR
-        h = _cpBodyGetVelocity(self._hb)
-        hv = math.sqrt(h.x * h.x + h.y * h.y)
+        hv = _length(_cpBodyGetVelocity(self._hb))
         if gap < (end - tick) * self.dt * (self.spec.max_speed + hv):
             self._retry = tick + _RETRY  # (the user too near: see below)
             return False
