@@ -139,11 +139,11 @@ def run_one(job: Job, index: int, root: etree._Element, folder: Path,
         judging = Judging(job.thresholds, f"run {index}")
         observer = job.analysis.observer() if job.analysis is not None else None
 
-        feed: Callable[[Mapping[str, Any]], None] = judging.feed  # (few lines are kept)
+        feed: Callable[[dict[str, Any]], None] = judging.feed  # (few lines are kept)
         if observer is not None:
             watch, judged = observer.feed, judging.feed
 
-            def feed(row: Mapping[str, Any]) -> None:
+            def feed(row: dict[str, Any]) -> None:
                 watch(row)
                 judged(row)
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import bisect
 import re
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -50,7 +50,7 @@ TRAVEL_COMMANDS = frozenset(c.name for c in STANDARD_COMMANDS if c.travels)
 """Commands that take the robot somewhere (a move, following the user)."""
 
 
-def xy(pose: Mapping[str, Any]) -> tuple[float, float]:
+def xy(pose: dict[str, Any]) -> tuple[float, float]:
     return float(pose["x"]), float(pose["y"])
 
 
@@ -58,7 +58,8 @@ def command_ids(row: Row) -> tuple[int, ...]:
     ids = row.get("command_ids")
     if ids:
         return tuple(ids)
-    cid = (row.get("detail") or {}).get("command_id")
+    detail: dict[str, Any] = row.get("detail") or {}  # (typed: the compiled build's dict)
+    cid = detail.get("command_id")
     return (cid,) if isinstance(cid, int) else ()
 
 
@@ -67,7 +68,8 @@ def answered(row: Row) -> bool:
     command = str(row.get("command") or "")
     if not (command == "QA" or command.endswith("+QA")):  # (most end lines: no more)
         return False
-    result = (row.get("detail") or {}).get("result")
+    detail: dict[str, Any] = row.get("detail") or {}
+    result = detail.get("result")
     return isinstance(result, str) and _ANSWERED.search(result) is not None
 
 
@@ -297,7 +299,7 @@ class Context:
         self._moves: dict[str, tuple[bool, bool, bool]] = {}  # (command -> follows, ...)
         self._routes: dict[str, Route] = {}
         """What each kind of line goes to (:meth:`feed_all`'s, :meth:`reroute`)."""
-        self._robot: Mapping[str, Any] | None = None
+        self._robot: dict[str, Any] | None = None
         self.last_seen = 0.0
         """Until when the user was known detectable: now while the latest line with poses
         shows them so; else the time of the line with poses that first showed them not
@@ -407,7 +409,7 @@ class Context:
             robot = row.get("robot")
             if robot is not None:
                 self._robot = robot
-                user = row.get("user")
+                user: dict[str, Any] | None = row.get("user")
                 self._seeing = user is not None and user.get("detectable") is True
                 if self._seeing:
                     self.last_seen = t
@@ -466,7 +468,7 @@ class Context:
 
     def _request(self, row: Row) -> None:
         app = str(row.get("app") or "")
-        detail = row.get("detail") or {}
+        detail: dict[str, Any] = row.get("detail") or {}
         ids = command_ids(row)
         ab = row.get("ab")
         at = str(detail.get("at") or "")
@@ -565,7 +567,7 @@ class Context:
             self.ab = None
             self._moved(str(row.get("command") or ""))
             return
-        detail = row.get("detail") or {}
+        detail: dict[str, Any] = row.get("detail") or {}
         key = detail.get("command_id")
         shape = self._shapes.get(key)
         if shape is None or {**row, **_OWN} != shape.row \
@@ -594,7 +596,7 @@ class Context:
             self.cmd_ab[cid] = ab_id
         self._reply_started(ab)
 
-    def _shape(self, row: Row, detail: Mapping[str, Any], key: object) -> _Shape:
+    def _shape(self, row: Row, detail: dict[str, Any], key: object) -> _Shape:
         """What a start line gives its AB but its number, time, line and iteration, kept
         under its Command for the next start line that is the same but for these."""
         tree = row.get("tree")
@@ -640,7 +642,7 @@ class Context:
             ab.end = float(row["t"])
             ab.end_seq = int(row["seq"])
             ab.end_reason = str(row.get("reason") or "")
-            detail = row.get("detail") or {}
+            detail: dict[str, Any] = row.get("detail") or {}
             ab.dropped = detail.get("interrupt") == "dropped"
             ws, we = detail.get("words_start"), detail.get("words_end")
             if isinstance(ws, (int, float)) and isinstance(we, (int, float)):

@@ -196,7 +196,8 @@ figure: a user found off by no more than the tolerance plus this is not off."""
 def _off(row: Row, tolerance: float) -> float | None:
     """How far off the user is on a posed line, if detectable and beyond ``tolerance``
     (give or take what the trace's rounding moves it by)."""
-    robot, user = row.get("robot"), row.get("user")
+    robot: dict[str, Any] | None = row.get("robot")
+    user: dict[str, Any] | None = row.get("user")
     if robot is None or user is None or user.get("detectable") is not True:
         return None
     off = _off_heading(robot, user)
@@ -783,7 +784,8 @@ class _Silences:
         if ab is not None:
             command = ab.command
             listens = ctx.listens
-            ends = (row.get("detail") or {}).get("words_end") if listens else None
+            detail: dict[str, Any] = row.get("detail") or {}
+            ends = detail.get("words_end") if listens else None
             self.running[ab.id] = (command,
                                 float(ends) if isinstance(ends, (int, float)) else
                                 (t if listens else math.inf))
@@ -907,7 +909,8 @@ class _Stuck:
         ab = row.get("ab")
         if isinstance(ab, int) and ctx.follows and ab in self.following:
             self.following[ab][1] = t
-        cid = (row.get("detail") or {}).get("command_id")
+        detail: dict[str, Any] = row.get("detail") or {}
+        cid = detail.get("command_id")
         run = self.runs.get(cid) if isinstance(cid, int) else None
         if run is not None and isinstance(ab, int):
             run.running.discard(ab)

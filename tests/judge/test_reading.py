@@ -134,6 +134,34 @@ def test_a_trace_line_and_its_jsonl_are_judged_alike(tmp_path: Path) -> None:
     assert judge(lines).to_dict() == judge(load_trace(path)).to_dict()
 
 
+def test_lines_given_as_other_mappings_are_judged_as_their_dicts(tmp_path: Path) -> None:
+    """The judge reads dicts (:data:`prima.tracefile.Row`: the compiled build reads their
+    fields directly); a caller's read-only mappings, a line's and its detail's and poses',
+    are judged as the same lines as dicts."""
+    from types import MappingProxyType
+
+    from prima.tracefile import rows
+
+    lines = load_trace(_trace_file(tmp_path))
+    frozen = [MappingProxyType({k: MappingProxyType(v) if isinstance(v, dict) else v
+                                for k, v in line.items()}) for line in lines]
+    made = list(rows(frozen))
+    assert made == lines and all(type(r) is dict and all(
+        type(v) is not MappingProxyType for v in r.values()) for r in made)
+    assert judge(frozen).to_dict() == judge(lines).to_dict()
+
+
+def _trace_file(folder: Path) -> Path:
+    """Sample 3's trace, run and written to a jsonl file in ``folder``."""
+    from prima.run import Run
+    from prima.trace import jsonl_row
+
+    path = folder / "sample-03.jsonl"
+    path.write_text("".join(map(jsonl_row, Run(THESIS / "sample-03.xml").run())),
+                    encoding="utf-8")
+    return path
+
+
 # ------------------------------------------------------------------ the shipped scenarios
 
 def test_sample_05_is_natural_under_the_rules() -> None:
