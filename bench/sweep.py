@@ -8,7 +8,8 @@ Usage: python bench/sweep.py [--repeats 5] [--runs 10] [--compiled] [SCENARIO ..
 Each round runs, for each scenario (default: samples 3, 7 and 10 of the thesis), a
 cold process that does what a sweep's worker does for ``--runs`` runs: each run's
 variant jittered by 5 s (new run indices every round: distinct inputs), run, judged,
-its record made (``prima.batch.run_chunk``: one task of that many runs). The process
+its record made (``prima.batch.run_chunk``: one task of that many runs), with its
+bytecode cached as an install has it (bench/cold.py's ``use_bytecode``). The process
 times its runs alone (``time.process_time``, its imports left out: the run machinery
 and the judge, which both builds import on their first run, are imported before the
 clock starts, as a worker imports them once for all its runs) and says how many
@@ -57,6 +58,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from cold import bytecode_mode, use_bytecode
 from _measure import (COMPILED_HELP, ROOT, compiled_copy, cpu, in_checkout, in_tree,
                       interleaved, interpreter, report)
 
@@ -196,6 +198,8 @@ def speed(args: argparse.Namespace, tree: Path) -> int:
     earlier = {name: Case(name, in_tree(path, args.against.resolve()) or path, args.runs,
                           args.against.resolve())
                for name, path in named.items()} if args.against else {}
+    pyc = tempfile.TemporaryDirectory(prefix="prima-pyc-")
+    use_bytecode(pyc.name)  # (as an install has it, whatever the environment says)
     for case in [*cases.values(), *earlier.values()]:
         case.sweep()  # (a round not counted: the bytecode cache, the steps for the peer)
     work = {}
@@ -220,7 +224,8 @@ def speed(args: argparse.Namespace, tree: Path) -> int:
             line += (f"; the earlier build's {before:.1f}: {ratio:.2f}x (target {target:g}x: "
                      f"{'met' if ratio >= target else 'NOT met'})")
         print(line)
-    print(interpreter())
+    print(f"{interpreter()}; bytecode: {bytecode_mode()}")
+    pyc.cleanup()
     return 0 if met else 1
 
 
