@@ -45,7 +45,8 @@ class Judging:
 
     def feed(self, row: Row) -> None:
         """One line of the trace, after the ones before it (read in batches of at most
-        :data:`HELD` lines: the judge's loop is at its fastest so)."""
+        :data:`HELD` lines: the judge's loop is at its fastest so): a dict, its mappings
+        dicts too (:data:`~prima.tracefile.Row`; :func:`judge` makes them so)."""
         held = self._held
         held.append(row)
         if len(held) >= HELD:
