@@ -33,12 +33,12 @@ drive's snap to its goal, a turn's final angle); a pose written on a body direct
 from outside, must be followed by :meth:`World.moved`. Within a stretch (the
 version not yet moved on) the world reads its bodies afresh.
 
-An idle or turning robot is checked for a push (the user walking into it) after
-each step, but only after the first of a *calm* stretch: one in which neither the
-user nor a wall can come near enough to touch it (:meth:`World._calmed`, worked out
-from the poses read at the stretch's start and kept for the stretches after it), so
-that no step can change the speed the first check left it (a step changes a speed
-only through a contact: the space has no gravity and no damping).
+A robot is checked for a push (the user walking into it, a wall it drives into)
+after the first step of each stretch and after each step in which it touched
+something: Chipmunk says so (a handler of the robot's contacts, called only for a
+step with one, sets :attr:`World._touched`). A step changes the robot's speed only
+through a contact (the space has no gravity and no damping), so every other step
+leaves it the speed the check before it left: reading it again would find the same.
 
 The map files its places by the squares of a grid (:meth:`WorldMap.places_in`,
 made once per map, not per run): :meth:`World.places_near` asks it which places
@@ -77,7 +77,6 @@ _cpBodyGetVelocity: Final = _cp.cpBodyGetVelocity
 _cpBodySetAngle: Final = _cp.cpBodySetAngle
 _cpBodySetAngularVelocity: Final = _cp.cpBodySetAngularVelocity
 _cpBodySetVelocity: Final = _cp.cpBodySetVelocity
-_cpSpacePointQueryNearest: Final = _cp.cpSpacePointQueryNearest
 _cpSpaceSegmentQueryFirst: Final = _cp.cpSpaceSegmentQueryFirst
 _cpSpaceStep: Final = _cp.cpSpaceStep
 _hypot: Final = math.hypot
@@ -108,14 +107,8 @@ _CHECK_EVERY: Final = 5
 _MARGIN: Final = 1e-9
 """A length (m) far longer than the rounding of a straight drive's progress over a
 stretch of steps, far shorter than a step."""
-_REACH: Final = 5.0
-"""How far (m) :meth:`World._calmed` looks for the wall nearest the robot."""
-_CLEAR: Final = 1e-6
-"""A length (m) far longer than the rounding of the bodies' positions over a run, by
-which :meth:`World._calmed` keeps them apart."""
-_RETRY: Final = 10
-"""Steps for which :meth:`World._calmed`, having found the robot too near the user or
-a wall, is not asked again."""
+_ROBOT_KIND: Final = 1
+"""The robot's shape's collision type: :func:`_touching` is told of its contacts."""
 _BLOCKED_LAG: Final = 0.1
 """A straight drive that lags this far (m) behind its plan is blocked: it ends at once."""
 STILL: Final = 1e-4
@@ -139,6 +132,12 @@ for no pan (NaN equals nothing)."""
 def _length(v: Any) -> float:
     """A velocity's length, as ``Vec2d.length`` works it out (pymunk's ``body.velocity``)."""
     return math.sqrt(v.x**2 + v.y**2)
+
+
+def _touching(_arbiter: object, _space: object, touched: list[bool]) -> None:
+    """The robot touches something in this step (Chipmunk calls it before it works out
+    the contact's push): :attr:`World._touched` says so until a check reads it."""
+    touched[0] = True
 
 
 def wrap_angle(a: float) -> float:
@@ -196,7 +195,12 @@ class World:
         shape = pymunk.Circle(body, spec.radius)
         shape.filter = pymunk.ShapeFilter(categories=ROBOT)
         shape.friction = 0.0
+        shape.collision_type = _ROBOT_KIND
         space.add(body, shape)
+        self._touched = [False]
+        """Whether the robot touched something since its speed was last checked (set by
+        Chipmunk's call of :func:`_touching`, which holds this list, not the world)."""
+        space.on_collision(_ROBOT_KIND, None, pre_solve=_touching, data=self._touched)
         self.space = space
         self.robot = body
         self.has_user = user is not None
@@ -211,9 +215,6 @@ class World:
         self._rb, self._hb, self._sp = body._body, human._body, space._space
         """The robot, the user and the space as Chipmunk knows them."""
         self.human_moving = False
-        self._calm = self._retry = -1  # (:meth:`_calmed`)
-        self._wall = (0.0, 0.0, -_INF)  # (the same)
-        self._nearest: Any = _ffi.new("cpPointQueryInfo *")
         self.version = 0
         """Moves on whenever a body may have moved or turned (see the module's doc)."""
         self._pk = self._ak = -1  # (the kept reads, of no version yet: :meth:`_read`)
@@ -423,7 +424,6 @@ class World:
     def moved(self) -> None:
         """A body's pose was written directly: forget what was worked out from the poses."""
         self.version += 1
-        self._calm = -1
 
     def put_user(self, x: float, y: float) -> None:
         """Put the user at (x, y) now."""
@@ -434,7 +434,6 @@ class World:
         """Move the user at (vx, vy) m/s from the next step on, facing the way they walk."""
         human = self.human
         human.velocity = (vx, vy)
-        self._calm = -1  # (:meth:`_calmed` reckoned with the walk before)
         self.human_moving = vx != 0.0 or vy != 0.0
         if self.human_moving:
             human.angle = self._ha = _atan2(vy, vx)
@@ -644,22 +643,19 @@ class World:
                 return tick, done
 
     def _run_idle(self, tick: int, end: int, advance: Callable[[object, float], None]) -> int:
-        """Idle steps up to the tick ``end``, each followed by :meth:`_hold` if the body
-        has any speed (a push: else it has nothing to do); in a calm stretch only the
-        first (:meth:`_calmed`)."""
-        space, rb, dt = self._sp, self._rb, self.dt
-        velocity = _cpBodyGetVelocity
-        steps = end - tick
-        checked = (1 if end <= self._calm or tick >= self._retry and self._calmed(tick, end)
-                   else steps)
-        for _ in range(checked):
+        """Idle steps up to the tick ``end``, the first and each one that touched
+        something (a push) followed by :meth:`_hold` if the body has any speed (else it
+        has nothing to do)."""
+        space, rb, dt, touched = self._sp, self._rb, self.dt, self._touched
+        touched[0] = True  # (the first step is checked)
+        for _ in range(end - tick):
             advance(space, dt)
-            v = velocity(rb)
-            if v.x or v.y:
-                self._hold()
-        for _ in range(steps - checked):  # (calm: the body keeps what the first left it)
-            advance(space, dt)
-        self.version += steps
+            if touched[0]:
+                touched[0] = False
+                v = _cpBodyGetVelocity(rb)
+                if v.x or v.y:
+                    self._hold()
+        self.version += end - tick
         return end
 
     def _run_linear(self, tick: int, bound: int, advance: Callable[[object, float], None]
@@ -668,8 +664,11 @@ class World:
         up, cruises or brakes (whichever is slowest), so as to stop at the end, and sets
         the body's velocity along the line again if a push set it off.
 
-        A stretch cruising all along (at the top speed, far enough from the end to brake
-        after ``bound``) leaves only the push check and the lag check to each step: its
+        The push check reads the body's speed only before a stretch's first step and
+        after a step that touched something (:attr:`_touched`): every other step leaves
+        it the speed the one before set. A stretch cruising all along (at the top speed,
+        far enough from the end to brake after ``bound``) leaves only the push check and
+        the lag check to each step: its
         speed is the top speed again (the first of the three in ``min``: the others,
         the speed plus a positive gain and the braking speed, are at least it), and it is
         not the last step. The rest of the drive left after ``bound``, less a margin far
@@ -678,6 +677,8 @@ class World:
         every step's rest is longer."""
         dt, rb, space, vmax = self.dt, self._rb, self._sp, self._vmax
         length, s, v, steps = self._len, self._s, self._v, self._steps
+        touched = self._touched
+        touched[0] = True  # (the first step is checked)
         twice = 2.0 * self.spec.max_accel
         start = tick
         last = blocked = False
@@ -686,19 +687,15 @@ class World:
         if ds < low and vmax <= math.sqrt(twice * low):
             vx, vy = self._ux * vmax, self._uy * vmax
             while tick < bound:
-                now = _cpBodyGetVelocity(rb)
-                if now.x != vx or now.y != vy:
-                    _cpBodySetVelocity(rb, (vx, vy))  # (pushed off its course)
+                if touched[0] and self._pushed(vx, vy):
                     v = vmax
                 advance(space, dt)
                 s += ds
                 tick += 1
                 steps += 1
-                if steps % _CHECK_EVERY == 0:
-                    self._s = s
-                    if self._lagging():
-                        blocked = True
-                        break
+                if steps % _CHECK_EVERY == 0 and self._lagging(s):
+                    blocked = True
+                    break
         else:
             a_dt, ux, uy = self._a_dt, self._ux, self._uy
             while True:
@@ -710,21 +707,21 @@ class World:
                 if last:
                     nv = rem / dt
                 vx, vy = ux * nv, uy * nv
-                now = _cpBodyGetVelocity(rb)
-                if nv != v or now.x != vx or now.y != vy:
+                if nv != v:
                     _cpBodySetVelocity(rb, (vx, vy))
                     v = nv
+                    touched[0] = False
+                elif touched[0]:
+                    self._pushed(vx, vy)
                 advance(space, dt)
                 s += nv * dt
                 tick += 1
                 if last:
                     break
                 steps += 1
-                if steps % _CHECK_EVERY == 0:
-                    self._s = s
-                    if self._lagging():
-                        blocked = True
-                        break
+                if steps % _CHECK_EVERY == 0 and self._lagging(s):
+                    blocked = True
+                    break
                 if tick >= bound:
                     break
         self._s, self._v, self._steps = s, v, steps
@@ -736,18 +733,30 @@ class World:
         self.version += tick - start  # (after the end's snap: see the module's doc)
         return tick, done
 
+    def _pushed(self, vx: float, vy: float) -> bool:
+        """After a step that touched something (or before a stretch's first): the body's
+        velocity set back to (vx, vy) if a push changed it (off the drive's course);
+        whether it did."""
+        self._touched[0] = False
+        now = _cpBodyGetVelocity(self._rb)
+        if now.x != vx or now.y != vy:
+            _cpBodySetVelocity(self._rb, (vx, vy))
+            return True
+        return False
+
     def _run_angular(self, tick: int, bound: int, advance: Callable[[object, float], None]
                      ) -> tuple[int, Callable[[], None] | None]:
         """Turning steps up to the tick ``bound`` or the turn's end, ramped as a straight
         drive's speed is, each followed by :meth:`_hold` if pushed (the wheels hold the
-        body where it turns); in a calm stretch only the first (:meth:`_calmed`)."""
+        body where it turns): the first and each one that touched something
+        (:attr:`_touched`)."""
         dt, rb, space = self.dt, self._rb, self._sp
         wtop, alpha_dt, sense = self._wtop, self._alpha_dt, self._ux
         twice = 2.0 * _radians(self.spec.turn_accel)
         length, s, v = self._len, self._s, self._v
         start = tick
-        checked = (tick + 1 if bound <= self._calm
-                   or tick >= self._retry and self._calmed(tick, bound) else bound)
+        touched = self._touched
+        touched[0] = True  # (the first step is checked)
         while True:
             rem = length - s
             w = min(min(wtop, v + alpha_dt), math.sqrt(twice * rem))  # (of two: _run_linear)
@@ -758,7 +767,8 @@ class World:
                 _cpBodySetAngularVelocity(rb, sense * w)
                 v = self._v = w  # (a sway turns on top of it)
             advance(space, dt)
-            if tick < checked:  # (calm, the body keeps what the first check left it)
+            if touched[0]:
+                touched[0] = False
                 pushed = _cpBodyGetVelocity(rb)
                 if pushed.x or pushed.y:
                     self._hold()
@@ -774,47 +784,6 @@ class World:
             done = self._finish(True)
         self.version += tick - start  # (after the final angle: see the module's doc)
         return tick, done
-
-    def _calmed(self, tick: int, end: int) -> bool:
-        """True if no body can touch the robot in the steps from the tick ``tick`` up to
-        ``end``: then each leaves the robot's velocity as it was (Chipmunk pushes only
-        shapes that overlap once the step has moved them; this space has no gravity or
-        damping), and the stretch checks it for a push only after its first step.
-
-        Worked out from the poses of this version (else False) as the tick up to which
-        it holds (:attr:`_calm`), kept for the stretches after it: until then, at the
-        fastest the robot moves (as fast as now, or as its wheels may drive it) and the
-        user walks (as now: a new walk forgets it), neither the gap between them nor
-        the one between the robot and the nearest wall closes. A pose written forgets
-        it too. Found too near either, it is not asked again for :data:`_RETRY` steps
-        (:attr:`_retry`: it would mostly find them so again). :attr:`_wall` keeps
-        where the robot was when the nearest wall was last looked for, and how far
-        that wall was from its rim (at most :data:`_REACH`): it is looked for again
-        only when the robot may have come too near it since.
-        """
-        if self._pk != self.version:
-            self._retry = tick + _RETRY  # (not read: mostly not at the next stretches either)
-            return False
-        rx, ry = self._rxy
-        ux, uy = self._hxy
-        gap = _hypot(ux - rx, uy - ry) - self.spec.radius - HUMAN_RADIUS - _CLEAR
-        hv = _length(_cpBodyGetVelocity(self._hb))
-        if gap < (end - tick) * self.dt * (self.spec.max_speed + hv):
-            self._retry = tick + _RETRY  # (the user too near: see below)
-            return False
-        vr = max(_length(_cpBodyGetVelocity(self._rb)), self.spec.max_speed)
-        ax, ay, room = self._wall
-        room -= _hypot(rx - ax, ry - ay)  # (the wall is no nearer than that)
-        if room < (end - tick) * self.dt * vr + _CLEAR:
-            _cpSpacePointQueryNearest(self._sp, (rx, ry), _REACH, _SIGHT, self._nearest)
-            room = float(self._nearest.distance) - self.spec.radius  # (_REACH if none)
-            self._wall = (rx, ry, room)
-        reach = min(gap / (vr + hv), (room - _CLEAR) / vr)
-        self._calm = tick + max(int(reach / self.dt), 0)
-        if end <= self._calm:
-            return True
-        self._retry = tick + _RETRY
-        return False
 
     def _hold(self) -> None:
         """Idle or turning in place, the wheels hold the body where it is: a push (the
@@ -886,8 +855,10 @@ class World:
                 f()
         return report
 
-    def _lagging(self) -> bool:
-        """The drive is well behind its plan: the body does not get where it is driven."""
+    def _lagging(self, s: float) -> bool:
+        """The drive is well behind its plan, ``s`` along it (kept as its progress): the
+        body does not get where it is driven."""
+        self._s = s
         p = _cpBodyGetPosition(self._rb)  # (afresh: the stretch has not moved the version on)
         made: float = (p.x - self._x0) * self._ux + (p.y - self._y0) * self._uy
         return self._s - made > _BLOCKED_LAG
@@ -899,7 +870,6 @@ class World:
         arrived = _hypot(x - self._tx, y - self._ty) < 0.05
         if arrived:
             body.position = (self._tx, self._ty)
-            self._calm = -1
         return self._finish(arrived)
 
     def _finish(self, arrived: bool) -> Callable[[], None] | None:
