@@ -89,7 +89,10 @@ _NULL: Final = _ffi.NULL
 WALL = 0b001
 ROBOT = 0b010
 HUMAN = 0b100
-_SIGHT: Final = pymunk.ShapeFilter(mask=WALL)
+_SIGHTED: Final = _ffi.new("cpShapeFilter *", tuple(pymunk.ShapeFilter(mask=WALL)))
+_SIGHT: Final = _SIGHTED[0]
+"""What hides the user from the camera: the walls (a filter as Chipmunk takes it, made
+once: a ``ShapeFilter`` is converted field by field at every query)."""
 HUMAN_RADIUS = 0.25
 _PLACE_MARGIN: Final = 1e-3
 """A margin (m) for rounding: the places' index is asked about a box this much
