@@ -139,7 +139,8 @@ def _length(v: Any) -> float:
 
 def _touching(_arbiter: object, _space: object, touched: list[bool]) -> None:
     """The robot touches something in this step (Chipmunk calls it before it works out
-    the contact's push): :attr:`World._touched` says so until a check reads it."""
+    the contact's push): :attr:`World._touched` says so until a check reads it. (It is
+    handed that list, not the world: the space does not hold the world.)"""
     touched[0] = True
 
 
@@ -201,8 +202,7 @@ class World:
         shape.collision_type = _ROBOT_KIND
         space.add(body, shape)
         self._touched = [False]
-        """Whether the robot touched something since its speed was last checked (set by
-        Chipmunk's call of :func:`_touching`, which holds this list, not the world)."""
+        """Whether the robot touched something since its speed was last checked."""
         space.on_collision(_ROBOT_KIND, None, pre_solve=_touching, data=self._touched)
         self.space = space
         self.robot = body
