@@ -227,10 +227,9 @@ class Processes:
         pool, self._pool = self._pool, None
         if pool is None:
             return
-        pools = pool.pools()
-        pool.shutdown(wait=False, cancel_futures=True)
-        stopping = [process for each in pools
+        stopping = [process for each in pool.pools()  # (before the shutdown, which
                     for process in list((getattr(each, "_processes", None) or {}).values())]
+        pool.shutdown(wait=False, cancel_futures=True)  # forgets its processes)
         for process in stopping:
             process.terminate()
         for process in stopping:  # (SIGTERM ends a worker at once, once _worker has run;

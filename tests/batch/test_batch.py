@@ -337,3 +337,39 @@ def test_a_sweep_keeps_its_worst_runs_and_no_other(tmp_path: Path) -> None:
     ranked = sorted(result.kept, key=lambda r: r.rank())
     assert result.kept == ranked
 
+
+
+def _wait_for_ever(started: str) -> None:
+    """A task that says it started, then never ends (until its worker is stopped)."""
+    import time
+
+    Path(started).write_text("x", encoding="utf-8")
+    while True:
+        time.sleep(60)
+
+
+def test_stopping_the_processes_ends_their_workers_then_deletes_their_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C or SIGTERM stops a batch's workers at once, busy or not (SIGTERM, then
+    SIGKILL after a while), and only then deletes the folder they unpack their runs in:
+    deleted under a worker still unpacking, it was left behind, in part."""
+    import tempfile
+    import time
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    processes = Processes(1)
+    started = tmp_path / "started"
+    processes.executor().submit(_wait_for_ever, str(started))
+    assert processes._pool is not None
+    workers = [p for each in processes._pool.pools() for p in each._processes.values()]
+    try:
+        deadline = time.monotonic() + 300  # (a bound, not a measure: the worker forks)
+        while not started.exists() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert started.exists() and [w.is_alive() for w in workers] == [True]
+        processes.stop()
+        assert [w.is_alive() for w in workers] == [False]
+        assert not list(tmp_path.glob("prima-sweep-*"))
+    finally:
+        for worker in workers:
+            worker.kill()
