@@ -225,11 +225,10 @@ class Processes:
 
     def stop(self) -> None:
         pool, self._pool = self._pool, None
-        if pool is None:
-            return
-        stopping = [process for each in pool.pools()  # (before the shutdown, which
+        stopping = [process for each in (pool.pools() if pool is not None else [])
                     for process in list((getattr(each, "_processes", None) or {}).values())]
-        pool.shutdown(wait=False, cancel_futures=True)  # forgets its processes)
+        if pool is not None:  # (its processes taken first: its shutdown forgets them)
+            pool.shutdown(wait=False, cancel_futures=True)
         for process in stopping:
             process.terminate()
         for process in stopping:  # (SIGTERM ends a worker at once, once _worker has run;
@@ -237,7 +236,7 @@ class Processes:
             if process.is_alive():
                 process.kill()
                 process.join()
-        self._forget_scratch()
+        self._forget_scratch()  # (made even if its pool was not: Ctrl-C in between)
 
     def close(self) -> None:
         pool, self._pool = self._pool, None

@@ -373,3 +373,22 @@ def test_stopping_the_processes_ends_their_workers_then_deletes_their_folder(
     finally:
         for worker in workers:
             worker.kill()
+
+
+def test_stopped_while_its_pool_is_made_the_processes_leave_no_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C after the workers' folder is made and before their pool is: stopping
+    deletes the folder all the same (an empty prima-sweep-* folder was left in /tmp)."""
+    import tempfile
+
+    def interrupted(*_args: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(prima.batch._dispatch, "_Recycling", interrupted)
+    processes = Processes(1)
+    with pytest.raises(KeyboardInterrupt):
+        processes.executor()
+    assert list(tmp_path.glob("prima-sweep-*"))
+    processes.stop()
+    assert not list(tmp_path.glob("prima-sweep-*"))
