@@ -647,17 +647,13 @@ class World:
 
     def _run_idle(self, tick: int, end: int, advance: Callable[[object, float], None]) -> int:
         """Idle steps up to the tick ``end``, the first and each one that touched
-        something (a push) followed by :meth:`_hold` if the body has any speed (else it
-        has nothing to do)."""
-        space, rb, dt, touched = self._sp, self._rb, self.dt, self._touched
+        something (a push) followed by :meth:`_hold`."""
+        space, dt, touched = self._sp, self.dt, self._touched
         touched[0] = True  # (the first step is checked)
         for _ in range(end - tick):
             advance(space, dt)
             if touched[0]:
-                touched[0] = False
-                v = _cpBodyGetVelocity(rb)
-                if v.x or v.y:
-                    self._hold()
+                self._hold()
         self.version += end - tick
         return end
 
@@ -771,10 +767,7 @@ class World:
                 v = self._v = w  # (a sway turns on top of it)
             advance(space, dt)
             if touched[0]:
-                touched[0] = False
-                pushed = _cpBodyGetVelocity(rb)
-                if pushed.x or pushed.y:
-                    self._hold()
+                self._hold()
             s += w * dt
             tick += 1
             if last or tick >= bound:
@@ -789,8 +782,10 @@ class World:
         return tick, done
 
     def _hold(self) -> None:
-        """Idle or turning in place, the wheels hold the body where it is: a push (the
-        user walking into it) leaves it no speed to drift on with."""
+        """After a step that touched something (or a stretch's first), idle or turning
+        in place: the wheels hold the body where it is, a push (the user walking into it)
+        leaves it no speed to drift on with (:meth:`_pushed`'s twin for a drive)."""
+        self._touched[0] = False
         if _length(_cpBodyGetVelocity(self._rb)) > 1e-9:
             _cpBodySetVelocity(self._rb, (0.0, 0.0))
 
