@@ -201,7 +201,7 @@ class Run:
         """Where maps, profiles and documents are loaded (shared by a sweep's runs)."""
         loaded = setup.scenario
         self.scenario: Scenario = loaded
-        self._folder = os.path.abspath(Path(loaded.source).parent)
+        self._folder = os.path.abspath(os.path.dirname(loaded.source))
         self._named: dict[str, str] = {}
         """A file's path as an error names it -> as the trace names it: relative to the
         scenario's folder (a golden trace reads the same on every machine)."""
@@ -325,7 +325,8 @@ class Run:
         found = list(self._documents.values())
         for zone in self.scenario.zones:
             try:
-                found.append(self._files.document(self.scenario.resolve(zone.ea), self.profile))
+                found.append(self._files.document(self._files.resolve(self.scenario, zone.ea),
+                                                  self.profile))
             except LocatedError:
                 continue
         return found
@@ -340,7 +341,7 @@ class Run:
         folder (:meth:`_portable`)."""
         key = str(path)
         if key and key not in self._named:
-            self._named[key] = os.path.relpath(os.path.abspath(key), self._folder)
+            self._named[key] = self._files.relative(key, self._folder)
 
     def _portable(self, text: str) -> str:
         """An error's text with every file the run read named relative to the scenario's
@@ -410,7 +411,7 @@ class Run:
         join = zone is not None and zone.join
         self._line(Kind.ZONE, text=entry.zone,
                    detail={"ea": entry.ea, "join": True} if join else {"ea": entry.ea})
-        path = self.scenario.resolve(entry.ea)
+        path = self._files.resolve(self.scenario, entry.ea)
         running = [a for a in self.apps.values() if a.role is AppKind.EA]
         if not join:
             for current in running:

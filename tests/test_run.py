@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import math
@@ -337,6 +338,36 @@ def test_shared_loaded_files_are_read_again_when_they_change(tmp_path: Path) -> 
         files.map(building)
     with pytest.raises(ScenarioError):
         files.map(tmp_path / "missing.xml")
+
+
+def test_unchanging_loaded_files_are_read_once_and_their_paths_worked_out_once(
+        tmp_path: Path) -> None:
+    """A sweep's worker promises that its unpacked files do not change: a file is kept by
+    its path alone, not read again (a change is not seen), and a scenario's paths are
+    resolved and named once; a file that cannot be loaded is still not kept."""
+    files = Loaded(unchanging=True)
+    for name in ("sample-03", "sample-10", "sample-03"):
+        path = ROOT / "scenarios" / "thesis" / f"{name}.xml"
+        assert format_jsonl(Run(path, files=files).run()) == format_jsonl(Run(path).run())
+    fa = tmp_path / "fa.pxml"
+    source = (ROOT / "apps" / "fa" / "fa1-emotions.pxml").read_text(encoding="utf-8")
+    fa.write_text(source, encoding="utf-8")
+    profile = files.profile(ROOT / "robots" / "home-robot.xml")
+    kept = files.document(fa, profile)
+    fa.write_text("<pxml", encoding="utf-8")
+    assert files.document(fa, profile) is kept  # (not read again)
+    for _ in range(2):  # (not kept: asked again, it fails again)
+        with pytest.raises(DocumentError):
+            files.document(tmp_path / "missing.pxml", profile)
+    loaded = dataclasses.replace(Run(ROOT / "scenarios" / "thesis" / "sample-03.xml").scenario,
+                                 source=str(tmp_path / "bundle" / "run-1.xml"))
+    place = files.resolve(loaded, "../robots/x.xml")
+    assert place == tmp_path / "robots" / "x.xml"
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "robots" / "x.xml").symlink_to(fa)
+    assert files.resolve(loaded, "../robots/x.xml") is place  # (worked out once)
+    assert Loaded().resolve(loaded, "../robots/x.xml") == fa  # (a Loaded whose files change)
+    assert files.relative(str(fa), str(tmp_path / "bundle")) == "../fa.pxml"
 
 
 @pytest.mark.parametrize("at_once", [pytest.param(True, marks=pytest.mark.pure), False])

@@ -212,7 +212,7 @@ class _Unpacked:
         ended), or as the process ends (a worker process too: multiprocessing runs
         these, where it skips ``atexit``)."""
         self.root = etree.fromstring(bundle.unpack(self.folder).read_bytes())
-        self.files = Loaded()
+        self.files = Loaded(unchanging=True)  # (nothing else writes in the folder)
 
 
 _last = threading.local()

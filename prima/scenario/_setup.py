@@ -10,6 +10,7 @@ files a sweep's runs share.
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,27 +54,36 @@ class Loaded:
     """Maps, robot profiles and documents loaded for runs, kept by file and content, so
     that runs of the same files (a sweep's) read and check each file once. Maps,
     profiles and documents are immutable: runs share them. A file that cannot be
-    loaded is not kept (each run reports it as it would alone)."""
+    loaded is not kept (each run reports it as it would alone).
 
-    def __init__(self) -> None:
+    ``unchanging``: the caller promises that no file the runs read changes, moves or is
+    replaced while they run, and that the working folder stays (a sweep's worker, its
+    bundle unpacked in a folder of its own). Each file is then kept by its path alone,
+    not read again to see whether it changed, and where the paths a scenario writes lead
+    (:meth:`resolve`) and how a run names a file (:meth:`relative`) are worked out once:
+    a run of a sweep reads only its own scenario."""
+
+    def __init__(self, unchanging: bool = False) -> None:
+        self.unchanging = unchanging
         self._maps: dict[tuple[str, bytes], WorldMap] = {}
         self._profiles: dict[tuple[str, bytes], RobotProfile] = {}
         self._documents: dict[tuple[str, bytes], tuple[RobotProfile, Document]] = {}
+        self._places: dict[tuple[str, str], Path] = {}
+        self._names: dict[tuple[str, str], str] = {}
 
     def map(self, path: Path) -> WorldMap:
         """The map in ``path`` (:func:`prima.scenario.load_map`)."""
-        return _kept(self._maps, path, load_map)
+        return _kept(self._maps, self._key(path), path, load_map)
 
     def profile(self, path: str | Path) -> RobotProfile:
         """The robot profile in ``path`` (:func:`prima.dsl.load_profile`)."""
-        return _kept(self._profiles, path, load_profile)
+        return _kept(self._profiles, self._key(path), path, load_profile)
 
     def document(self, path: str | Path, profile: RobotProfile) -> Document:
         """The document in ``path``, checked for ``profile``
         (:func:`prima.dsl.load_document`)."""
-        try:
-            key = (str(path), Path(path).read_bytes())
-        except OSError:
+        key = self._key(path)
+        if key is None:
             return load_document(path, profile)
         found = self._documents.get(key)
         if found is not None and found[0] is profile:
@@ -82,16 +92,48 @@ class Loaded:
         self._documents[key] = (profile, document)
         return document
 
+    def resolve(self, scenario: Scenario, path: str) -> Path:
+        """Where ``path``, written in ``scenario``, leads (:meth:`Scenario.resolve`): kept
+        by the scenario's folder when :attr:`unchanging` (a sweep's runs are variants
+        of one scenario, in one folder)."""
+        if not self.unchanging:
+            return scenario.resolve(path)
+        key = (os.path.dirname(scenario.source), path)
+        found = self._places.get(key)
+        if found is None:
+            found = self._places[key] = scenario.resolve(path)
+        return found
+
+    def relative(self, path: str, folder: str) -> str:
+        """``path`` relative to the absolute ``folder``, as a run's error lines name a
+        file it read: kept when :attr:`unchanging`."""
+        if not self.unchanging:
+            return os.path.relpath(os.path.abspath(path), folder)
+        key = (path, folder)
+        found = self._names.get(key)
+        if found is None:
+            found = self._names[key] = os.path.relpath(os.path.abspath(path), folder)
+        return found
+
+    def _key(self, path: str | Path) -> tuple[str, bytes] | None:
+        """What a file is kept by: its path, and its content unless :attr:`unchanging`;
+        None for a file that cannot be read."""
+        if self.unchanging:
+            return str(path), b""
+        try:
+            return str(path), Path(path).read_bytes()
+        except OSError:
+            return None
+
 
 _Loadable = TypeVar("_Loadable")
 
 
-def _kept(kept: dict[tuple[str, bytes], _Loadable], path: str | Path,
-          load: Callable[[str | Path], _Loadable]) -> _Loadable:
-    """What ``load`` makes of the file ``path``, kept by its path and content."""
-    try:
-        key = (str(path), Path(path).read_bytes())
-    except OSError:
+def _kept(kept: dict[tuple[str, bytes], _Loadable], key: tuple[str, bytes] | None,
+          path: str | Path, load: Callable[[str | Path], _Loadable]) -> _Loadable:
+    """What ``load`` makes of the file ``path``, kept by ``key`` (:meth:`Loaded._key`;
+    None: not kept)."""
+    if key is None:
         return load(path)  # (which says what is wrong with the file)
     found = kept.get(key)
     if found is None:
@@ -167,12 +209,13 @@ class Setup:
         if seed is not None:
             loaded = dataclasses.replace(loaded, seed=seed)
         read = [loaded.source]
-        profile_path = robot or (loaded.resolve(loaded.profile) if loaded.profile else None)
+        place = files.resolve
+        profile_path = robot or (place(loaded, loaded.profile) if loaded.profile else None)
         profile = files.profile(profile_path) if profile_path else default_profile()
         switched = policy_settings(profile.policies, loaded.policies, policies or {})
-        fa_path = Path(fa) if fa else (loaded.resolve(loaded.fa) if loaded.fa else None)
-        ea_path = Path(ea) if ea else (loaded.resolve(loaded.ea) if loaded.ea else None)
-        ea_paths = ([ea_path] if ea_path else []) + [loaded.resolve(more) for more in loaded.eas]
+        fa_path = Path(fa) if fa else (place(loaded, loaded.fa) if loaded.fa else None)
+        ea_path = Path(ea) if ea else (place(loaded, loaded.ea) if loaded.ea else None)
+        ea_paths = ([ea_path] if ea_path else []) + [place(loaded, more) for more in loaded.eas]
         documents = _starting(loaded, profile, files, fa_path, ea_paths, read)
         return cls(loaded, loaded.until if until is None else until, profile,
                    profile.catalog(), spec_from_profile(profile), switched,
