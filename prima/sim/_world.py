@@ -76,6 +76,7 @@ _cpBodyGetPosition: Final = _cp.cpBodyGetPosition
 _cpBodyGetVelocity: Final = _cp.cpBodyGetVelocity
 _cpBodySetAngle: Final = _cp.cpBodySetAngle
 _cpBodySetAngularVelocity: Final = _cp.cpBodySetAngularVelocity
+_cpBodySetPosition: Final = _cp.cpBodySetPosition
 _cpBodySetVelocity: Final = _cp.cpBodySetVelocity
 _cpSpaceSegmentQueryFirst: Final = _cp.cpSpaceSegmentQueryFirst
 _cpSpaceStep: Final = _cp.cpSpaceStep
@@ -435,11 +436,11 @@ class World:
 
     def walk_user(self, vx: float, vy: float) -> None:
         """Move the user at (vx, vy) m/s from the next step on, facing the way they walk."""
-        human = self.human
-        human.velocity = (vx, vy)
+        _cpBodySetVelocity(self._hb, (vx, vy))  # (what ``human.velocity = ...`` calls)
         self.human_moving = vx != 0.0 or vy != 0.0
         if self.human_moving:
-            human.angle = self._ha = _atan2(vy, vx)
+            self._ha = _atan2(vy, vx)
+            _cpBodySetAngle(self._hb, self._ha)
             self.version += 1
 
     # ---- robot wheel commands --------------------------------------------------
@@ -862,12 +863,12 @@ class World:
         return self._s - made > _BLOCKED_LAG
 
     def _finish_linear(self) -> Callable[[], None] | None:
-        body = self.robot
-        body.velocity = (0.0, 0.0)
-        x, y = body.position
-        arrived = _hypot(x - self._tx, y - self._ty) < 0.05
+        rb = self._rb  # (Chipmunk's calls, as pymunk's properties make them)
+        _cpBodySetVelocity(rb, (0.0, 0.0))
+        p = _cpBodyGetPosition(rb)
+        arrived = _hypot(p.x - self._tx, p.y - self._ty) < 0.05
         if arrived:
-            body.position = (self._tx, self._ty)
+            _cpBodySetPosition(rb, (self._tx, self._ty))
         return self._finish(arrived)
 
     def _finish(self, arrived: bool) -> Callable[[], None] | None:
