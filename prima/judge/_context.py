@@ -153,9 +153,10 @@ class Ab:
         return self.end if self.end is not None else end
 
 
-@dataclass
+@dataclass(init=False)
 class ReactionState:
-    """A reaction as the pass collects it (the finding is made at the end)."""
+    """A reaction as the pass collects it (the finding is made at the end). (Its
+    ``__init__`` is written out, as :class:`Ab`'s is.)"""
 
     event: str
     t: float
@@ -176,6 +177,18 @@ class ReactionState:
     """A reaction to a heard answer (its Q&A's tree goes on: no reaction of its own)."""
     before: int | None = None
     """The AB its first request follows (its application's own, still to end), if any."""
+
+    def __init__(self, event: str, t: float, seq: int, app: str, user: bool, text: str,
+                 order: int, commands: list[int] | None = None,
+                 trees: list[int] | None = None, devices: frozenset[str] = frozenset(),
+                 at: str = "", words: bool = False, answer: bool = False,
+                 before: int | None = None) -> None:
+        self.event, self.t, self.seq, self.app, self.user = event, t, seq, app, user
+        self.text, self.order = text, order
+        self.commands = [] if commands is None else commands
+        self.trees = [] if trees is None else trees
+        self.devices, self.at, self.words, self.answer = devices, at, words, answer
+        self.before = before
 
 
 @dataclass

@@ -403,19 +403,26 @@ def _unfaced_line(u: Unfaced) -> str:
 
 # ---------------------------------------------------------------- leaving
 
-@dataclass
+@dataclass(init=False)
 class _Talk:
+    """(Its ``__init__`` written out, as ``Ab``'s is: compiled.)"""
+
     ab: int
     row: Row
     was: tuple[float, float] | None
     """Where the robot was when the words began (None: not yet)."""
     words: tuple[float, float] | None
     """When the words run, if known."""
-    gap: float = 0.0
+    gap: float
     """How far it was from the user when the words began."""
-    pending: list[_Posed] = field(default_factory=list)
+    pending: list[_Posed]
     """Poses while its words' times are not known yet (they are said after something
     else in its AB): judged at its end."""
+
+    def __init__(self, ab: int, row: Row, was: tuple[float, float] | None,
+                 words: tuple[float, float] | None, gap: float = 0.0) -> None:
+        self.ab, self.row, self.was, self.words, self.gap = ab, row, was, words, gap
+        self.pending = []
 
 
 class _Leaving:
@@ -823,30 +830,42 @@ def _silence_line(s: Silence) -> str:
 
 # ---------------------------------------------------------------- stuck
 
-@dataclass
+@dataclass(init=False)
 class _Command:
+    """(Its ``__init__`` written out, as ``Ab``'s is: compiled.)"""
+
     id: int
     app: str
     t: float
     seq: int
     pred: int | None
     """The Command ahead of it in its stream, if known."""
-    devices: frozenset[str] = frozenset()
+    devices: frozenset[str]
     """The devices its AB needs, as its request says (a request names its first
     Command's: empty for a chain's later ones)."""
-    done: bool = False
+    done: bool
+
+    def __init__(self, id: int, app: str, t: float, seq: int, pred: int | None,
+                 devices: frozenset[str] = frozenset(), done: bool = False) -> None:
+        self.id, self.app, self.t, self.seq, self.pred = id, app, t, seq, pred
+        self.devices, self.done = devices, done
 
 
-@dataclass
+@dataclass(init=False)
 class _Running:
-    """A Command's ABs (feedback iterations) as they run."""
+    """A Command's ABs (feedback iterations) as they run. (Its ``__init__`` written out,
+    as ``Ab``'s is: compiled.)"""
 
-    running: set[int] = field(default_factory=set)
-    streak: float = 0.0
+    running: set[int]
+    streak: float
     """When its current run of back-to-back ABs began."""
-    last_end: float = -1.0
-    iterated: bool = False
+    last_end: float
+    iterated: bool
     """An iteration (not the first AB) started in the current streak."""
+
+    def __init__(self) -> None:
+        self.running = set()
+        self.streak, self.last_end, self.iterated = 0.0, -1.0, False
 
 
 class _Stuck:
