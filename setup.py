@@ -29,11 +29,14 @@ COMPILED = [
     "prima/sim/_user.py",
     "prima/sim/_behaviors.py",
     "prima/sim/_maps.py",
+    "prima/sim/_records.py",
+    "prima/sim/_spec.py",
     "prima/mediator/_config.py",
     "prima/mediator/_fairness.py",
     "prima/mediator/_holds.py",
     "prima/mediator/_index.py",
     "prima/mediator/_intake.py",
+    "prima/mediator/_interface.py",
     "prima/mediator/_log.py",
     "prima/mediator/_mediator.py",
     "prima/mediator/_memory.py",
@@ -42,16 +45,31 @@ COMPILED = [
     "prima/mediator/_rounds.py",
     "prima/mediator/_state.py",
     "prima/interpreter/_interpreter.py",
+    "prima/dsl/_model.py",
+    "prima/dsl/_fastparse.py",
+    "prima/dsl/_commands.py",
+    "prima/dsl/_loader.py",
+    "prima/dsl/_profile.py",
     "prima/judge/_context.py",
+    "prima/judge/_findings.py",
     "prima/judge/_judging.py",
     "prima/judge/_measures.py",
     "prima/judge/_reactions.py",
     "prima/judge/_thresholds.py",
+    "prima/scenario/_file.py",
+    "prima/scenario/_setup.py",
+    "prima/catalog.py",
+    "prima/record.py",
     "prima/run.py",
     "prima/trace.py",
+    "prima/xmlio.py",
 ]
 """What the compiled build compiles: where a run spends its time, from the simulator's
-steps to the judge's measures and the lines of the trace."""
+steps to the judge's measures and the lines of the trace; the records they read (the
+catalog's Commands, calls and outcomes, poses, the robot's figures: read from compiled
+code, a compiled class's field is a C read, an interpreted one's a lookup by name), and
+a run's setting up (its scenario read and checked). ``record.py`` with them: the
+catalog's records derive from its ``Record``."""
 
 ext_modules = []
 if os.environ.get("PRIMA_MYPYC") == "1":

@@ -64,6 +64,7 @@ __all__ = [
     "SourceMap",
     "XmlDocument",
     "integer",
+    "is_element",
     "limit",
     "local_name",
     "number",
@@ -537,12 +538,20 @@ def _check_depth(doc: XmlDocument, fail: Callable[[etree._Element, str], Located
         el, depth = stack.pop()
         if depth > MAX_DEPTH:
             raise fail(el, f"elements nest deeper than {MAX_DEPTH} levels")
-        stack.extend((child, depth + 1) for child in el if isinstance(child.tag, str))
+        stack.extend((child, depth + 1) for child in el if is_element(child))
+
+
+def is_element(node: etree._Element) -> bool:
+    """Whether ``node``, a child as lxml gives it, is an element: not a comment or a
+    processing instruction, whose ``tag`` is a function. (lxml's stubs say a ``str``:
+    read as one, the compiled build checks it is one and fails. Every compiled module
+    asks this, or reads ``tag`` of elements only.)"""
+    return isinstance(getattr(node, "tag"), str)  # noqa: B009 (Any: not checked as a str)
 
 
 def local_name(el: etree._Element) -> str:
     """The element's tag without its namespace."""
-    tag = el.tag
+    tag: object = getattr(el, "tag")  # noqa: B009 (see is_element)
     if isinstance(tag, str):  # "{namespace}name" or "name": what QName reads, without it
         return tag.rpartition("}")[2]
     return etree.QName(el).localname
@@ -650,7 +659,7 @@ def _problems(doc: XmlDocument, xsd: xmlschema.XMLSchema, hint: Hint | None) -> 
         m = re.compile(_UNEXPECTED).search(reason)
         if m:
             if el not in children:
-                children[el] = [c for c in el if isinstance(c.tag, str)]
+                children[el] = [c for c in el if is_element(c)]
             yield _unexpected(doc, el, children[el], int(m.group("pos")) - 1,
                               _clean(m.group("tag")), _element_names(xsd))
             continue
@@ -966,7 +975,6 @@ def _at_path(root: etree._Element, path: str) -> etree._Element | None:
                 return None
             continue
         name = m.group("name").rpartition(":")[2]
-        same = (c for c in el if isinstance(c.tag, str)
-                and (name == "*" or local_name(c) == name))
+        same = (c for c in el if is_element(c) and (name == "*" or local_name(c) == name))
         el = next((c for i, c in enumerate(same) if i == pos), None)
     return el

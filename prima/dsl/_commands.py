@@ -347,7 +347,7 @@ def _check_signature(b: Builder, spec: CommandSpec, where: Spot, spots: dict[str
         if param.required and param.name not in spots:
             b.error(where, f"{spec.name} needs the argument '{param.name}'")
     for group in spec.one_of:
-        present = sorted(group & spots.keys())
+        present = sorted(name for name in group if name in spots)
         if len(present) != 1:
             got = f" (got {', '.join(present)})" if present else ""
             b.error(where, f"{spec.name} needs exactly one of {' or '.join(sorted(group))}{got}")

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from lxml import etree
 
-from prima.xmlio import local_name
+from prima.xmlio import is_element, local_name
 
 
 def elements(parent: etree._Element) -> list[etree._Element]:
     """The child elements, without comments and processing instructions."""
-    return [c for c in parent if isinstance(c.tag, str)]
+    return [c for c in parent if is_element(c)]
 
 
 def children(parent: etree._Element, tag: str) -> list[etree._Element]:

@@ -281,7 +281,7 @@ def parse_sized(text: str, start: str) -> tuple[Tree | None, int]:
     try:
         parser = _Parser(text)
         tree = parser.or_() if start == "expression" else parser.chain()
-        if parser.toks[parser.i] is not _END:
+        if parser.toks[parser.i] != _END:  # (by value: compiled, a tuple is boxed anew)
             return None, 0
         return tree, len(parser.toks) - 1
     except (_GiveUp, RecursionError):

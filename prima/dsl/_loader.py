@@ -85,6 +85,7 @@ from prima.vocab import (
 from prima.xmlio import (
     MAX_PROBLEMS,
     XmlDocument,
+    is_element,
     limit,
     local_name,
     parse_xml,
@@ -271,7 +272,7 @@ class Builder:
             self.labels[label] = call
 
     def _top(self, tag: str) -> list[etree._Element]:
-        return [c for c in self.doc.root if c.tag == _NS + tag]
+        return [c for c in self.doc.root if is_element(c) and c.tag == _NS + tag]
 
     # ------------------------------------------------------------ the walk
 

@@ -51,6 +51,7 @@ from prima.xmlio import (
     Bound,
     XmlDocument,
     integer,
+    is_element,
     limit,
     local_name,
     number,
@@ -168,7 +169,7 @@ def _parse(path: Path, schema: str, namespace: str, root: str) -> XmlDocument:
 
 
 def _children(el: etree._Element) -> Iterator[etree._Element]:
-    return (c for c in el if isinstance(c.tag, str))
+    return (c for c in el if is_element(c))
 
 
 class _Numbers:

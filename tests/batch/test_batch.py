@@ -43,6 +43,7 @@ def job(runs: int = 6, scenario: Path = SHORT) -> Job:
 
 # ------------------------------------------------------------ a worker's chunks
 
+@pytest.mark.pure  # (it counts the loader's calls: compiled, Setup calls it directly)
 def test_a_jobs_chunks_in_one_worker_load_its_documents_once(
         monkeypatch: pytest.MonkeyPatch) -> None:
     import prima.scenario._setup

@@ -52,6 +52,7 @@ def test_text_positions_skip_cdata_markup_and_crlf() -> None:
     assert doc.where.text(doc.root, 7) == (2, 2)   # z
 
 
+@pytest.mark.pure  # (it counts xmlio's bytecodes: compiled, it runs none)
 def test_locating_many_faults_in_one_long_text_is_linear() -> None:
     # 20,000 faults, 100 to a line: finding a fault's line is a binary search, not a
     # walk from the start of the text.
