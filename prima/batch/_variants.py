@@ -24,7 +24,7 @@ from prima.errors import Problem, ScenarioError, Severity
 from prima.escape import shown_path
 from prima.output import written
 from prima.scenario import FILE_ATTRIBUTES, SCHEDULED, USER_TIMED
-from prima.xmlio import local_name, parse_xml, read_source
+from prima.xmlio import is_element, local_name, parse_xml, read_source
 
 if TYPE_CHECKING:
     from prima.run import Switches
@@ -51,10 +51,10 @@ def rng(seed: int, index: int) -> random.Random:
 def shift_timings(root: etree._Element, draws: random.Random, amount: float) -> None:
     """Jitter a scenario's timings in place: one draw per timed element, in document
     order; a shifted action is never earlier than the one before it."""
-    user = next((c for c in root if isinstance(c.tag, str) and local_name(c) == "user"), None)
+    user = next((c for c in root if is_element(c) and local_name(c) == "user"), None)
     last = 0.0
     for el in user if user is not None else ():
-        if not isinstance(el.tag, str):
+        if not is_element(el):
             continue
         if local_name(el) == "answer":
             given = float(el.get("after", "1.0"))
@@ -67,18 +67,18 @@ def shift_timings(root: etree._Element, draws: random.Random, amount: float) -> 
             el.set("at", number(last))
     last = 0.0
     for el in root:
-        if isinstance(el.tag, str) and local_name(el) in SCHEDULED:
+        if is_element(el) and local_name(el) in SCHEDULED:
             last = max(last, float(el.get("at", "0")) + draws.uniform(-amount, amount))
             el.set("at", number(last))
 
 
 def _named(root: etree._Element) -> list[tuple[etree._Element, str]]:
     """Every (element, attribute) of a scenario that names a file, in document order."""
-    apps = [c for c in root if isinstance(c.tag, str) and local_name(c) == "apps"]
-    more = [c for a in apps for c in a if isinstance(c.tag, str) and local_name(c) == "ea"]
+    apps = [c for c in root if is_element(c) and local_name(c) == "apps"]
+    more = [c for a in apps for c in a if is_element(c) and local_name(c) == "ea"]
     found = []
     for el in [*root, *more]:
-        if not isinstance(el.tag, str):
+        if not is_element(el):
             continue
         for attribute in FILE_ATTRIBUTES.get(local_name(el), ()):
             if el.get(attribute) is not None:
@@ -101,7 +101,7 @@ def _switch(root: etree._Element, switches: Switches) -> None:
     """Write the command line's switches into a scenario: its FA and EA, its robot's
     profile (absolute paths, made relative with the others), its policy switches."""
     ns = etree.QName(root).namespace
-    children = [c for c in root if isinstance(c.tag, str)]
+    children = [c for c in root if is_element(c)]
     named = {local_name(c): c for c in children}
     apps = named.get("apps")
     if apps is None and (switches.fa or switches.ea) and "map" in named:
@@ -124,7 +124,7 @@ def _switch(root: etree._Element, switches: Switches) -> None:
                 root.remove(c)
         after = robot
         for c in root:
-            if isinstance(c.tag, str) and local_name(c) == "policy":
+            if is_element(c) and local_name(c) == "policy":
                 after = c
         for name, on in switches.policies:
             policy = etree.Element(f"{{{ns}}}policy" if ns else "policy",

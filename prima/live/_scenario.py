@@ -28,7 +28,7 @@ from prima.escape import markup
 from prima.run import Switches
 from prima.scenario import SCENARIO_NS, SCHEDULED, USER_TIMED, load_scenario
 from prima.sim import ScheduledEvent, TimedAction, UserActionKind, WorldMap
-from prima.xmlio import local_name
+from prima.xmlio import is_element, local_name
 
 __all__ = ["ACTIONS", "Added", "Base", "for_apps", "from_scenario", "user_spot"]
 
@@ -76,7 +76,7 @@ class Added:
 
 
 def _children(el: etree._Element) -> list[etree._Element]:
-    return [c for c in el if isinstance(c.tag, str)]
+    return [c for c in el if is_element(c)]
 
 
 def _child(root: etree._Element, name: str) -> etree._Element | None:
@@ -198,7 +198,7 @@ def _named(root: etree._Element) -> list[tuple[str, Path]]:
     """The files a (base) scenario names, each with what it is: its paths are absolute."""
     out = []
     for el in root.iter():
-        if not isinstance(el.tag, str):
+        if not is_element(el):
             continue
         for (tag, attribute), what in _WHAT.items():
             value = el.get(attribute)
