@@ -13,8 +13,10 @@ bytecode cached as an install has it (bench/cold.py's ``use_bytecode``). The pro
 times its runs alone (``time.process_time``, its imports left out: the run machinery
 and the judge, which both builds import on their first run, are imported before the
 clock starts, as a worker imports them once for all its runs) and says how many
-physics steps they took; the peer, measured in the same rounds in this process,
-steps a bare pymunk space of the same world (walls, robot, user) as many times.
+physics steps they took (and how many of them the world worked out without Chipmunk,
+where nothing could touch the robot: ``World.glided``); the peer, measured in the same
+rounds in this process, steps a bare pymunk space of the same world (walls, robot,
+user) as many times, every step Chipmunk's.
 Printed per scenario: both medians, their ratio, and runs per CPU second; with
 ``--against TREE`` (a checkout of an earlier build: ``git worktree add /tmp/before
 <commit>``), that build's runs of the same scenarios in the same rounds (its own copy
@@ -78,7 +80,7 @@ def child(scenario: Path, runs: int, first: int) -> None:
     import prima.run  # (a worker imports the run machinery once, not per run: it is
     from prima.judge import Thresholds, judge  # noqa: F401 (imported before the clock starts)
 
-    steps = [0]
+    steps = [0, 0]
     real = prima.run.Run
 
     class Counted:
@@ -92,6 +94,7 @@ def child(scenario: Path, runs: int, first: int) -> None:
         def run(self) -> Any:
             lines = self.real.run()
             steps[0] += self.real.sim.steps
+            steps[1] += getattr(self.real.sim.world, "glided", 0)  # (an earlier build: none)
             return lines
 
     setattr(prima.run, "Run", Counted)  # noqa: B010 (mypy: a class is not assigned to)
@@ -106,7 +109,8 @@ def child(scenario: Path, runs: int, first: int) -> None:
             start = time.process_time()
             for task in tasks:
                 _work(task)
-            print(json.dumps({"cpu": time.process_time() - start, "steps": steps[0]}))
+            print(json.dumps({"cpu": time.process_time() - start, "steps": steps[0],
+                              "glided": steps[1]}))
         return
     job = Job(bundle_scenario(scenario), first + runs, 0, JITTER, Thresholds())
     start = time.process_time()
@@ -115,7 +119,7 @@ def child(scenario: Path, runs: int, first: int) -> None:
     failed = [r for r in records if "error" in r]
     if failed:
         sys.exit(f"a run failed: {failed[0]['error']}")
-    print(json.dumps({"cpu": spent, "steps": steps[0]}))
+    print(json.dumps({"cpu": spent, "steps": steps[0], "glided": steps[1]}))
 
 
 class Case:
@@ -124,7 +128,7 @@ class Case:
     def __init__(self, name: str, path: Path, runs: int, tree: Path = ROOT) -> None:
         self.name, self.path, self.runs, self.tree = name, path, runs, tree
         self.round = 0
-        self.steps = 0
+        self.steps = self.glided = 0
 
     def sweep(self) -> float:
         first = self.round * self.runs  # distinct runs every round
@@ -137,6 +141,7 @@ class Case:
             sys.exit(done.stderr)
         out = json.loads(done.stdout)
         self.steps = int(out["steps"])
+        self.glided = int(out["glided"])
         return float(out["cpu"])
 
     def instructions(self) -> float:
@@ -211,7 +216,8 @@ def speed(args: argparse.Namespace, tree: Path) -> int:
     medians = interleaved(work, args.repeats)
     met = True
     for name, case in cases.items():
-        report(f"{name}: {case.runs} judged runs a round, {case.steps:,} physics steps",
+        report(f"{name}: {case.runs} judged runs a round, {case.steps:,} physics steps "
+               f"({case.glided:,} without Chipmunk)",
                {key: v for key, v in medians.items() if key.startswith(f"{name} ")},
                f"{name} bare pymunk", repeats=args.repeats)
         rate = case.runs / medians[f"{name} sweep runs"]

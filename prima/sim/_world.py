@@ -40,6 +40,17 @@ step with one, sets :attr:`World._touched`). A step changes the robot's speed on
 through a contact (the space has no gravity and no damping), so every other step
 leaves it the speed the check before it left: reading it again would find the same.
 
+Where nothing can touch the robot, the world works its steps out without Chipmunk
+(:meth:`World._glides`): idle or turning in place, it has touched nothing for
+Chipmunk's collision persistence (so Chipmunk keeps no contact of its), no push left it
+a speed, nothing sways it, and the user cannot come within reach in the stretch. A step
+then only turns the robot at its turning rate and moves the user on at their velocity,
+which the world works out as Chipmunk's position update does, to the last bit
+(``p + (v + 0) * dt``: the tests compare them). The user's position is then kept in
+Python and written to Chipmunk only before its next step or when the bodies are handed
+out (:meth:`World._sync`); about half the steps of a run that guides and explains are
+worked out so (:attr:`World.glided`).
+
 The map files its places by the squares of a grid (:meth:`WorldMap.places_in`,
 made once per map, not per run): :meth:`World.places_near` asks it which places
 may be near a point, instead of measuring the distance to every place, and
@@ -111,6 +122,11 @@ _CHECK_EVERY: Final = 5
 _MARGIN: Final = 1e-9
 """A length (m) far longer than the rounding of a straight drive's progress over a
 stretch of steps, far shorter than a step."""
+_GLIDE_MARGIN: Final = 0.01
+"""How far (m) the user must stay from touching the robot for the steps between them
+to be worked out without Chipmunk (:meth:`World._glides`): far wider than the rounding
+of the distance, which is all a contact waits for (Chipmunk's circles touch when they
+overlap)."""
 _ROBOT_KIND: Final = 1
 """The robot's shape's collision type: :func:`_touching` is told of its contacts."""
 _BLOCKED_LAG: Final = 0.1
@@ -205,7 +221,7 @@ class World:
         self._touched = [False]
         """Whether the robot touched something since its speed was last checked."""
         space.on_collision(_ROBOT_KIND, None, pre_solve=_touching, data=self._touched)
-        self.space = space
+        self._space = space
         self.robot = body
         self.has_user = user is not None
         human = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
@@ -215,10 +231,10 @@ class World:
         hshape = pymunk.Circle(human, HUMAN_RADIUS)
         hshape.filter = pymunk.ShapeFilter(categories=HUMAN)
         space.add(human, hshape)
-        self.human = human
+        self._human = human
         self._rb, self._hb, self._sp = body._body, human._body, space._space
         """The robot, the user and the space as Chipmunk knows them."""
-        self.human_moving = False
+        self._start_glides(space, spec)
         self.version = 0
         """Moves on whenever a body may have moved or turned (see the module's doc)."""
         self._pk = self._ak = -1  # (the kept reads, of no version yet: :meth:`_read`)
@@ -266,6 +282,51 @@ class World:
         self.sway_owner = 0
         """The Command whose sway runs (0: none)."""
 
+    def _start_glides(self, space: pymunk.Space, spec: RobotSpec) -> None:
+        """What :meth:`_glides` keeps: the user's velocity, the calm, the user's
+        position while Chipmunk's is behind."""
+        self.human_moving = False
+        self._hv = (0.0, 0.0)
+        """The user's velocity (m/s), as :meth:`walk_user` last wrote it."""
+        self._calm = 0
+        """Physics steps in a row, idle or turning in place, in which the robot touched
+        nothing (a drive's steps count none): after ``_persist`` of them Chipmunk keeps
+        no contact of the robot's (see :meth:`_glides`)."""
+        self._persist = int(space.collision_persistence)
+        self._still: bool | None = None
+        """Whether the robot's velocity is exactly nought, as read since the calm began
+        (None: not read; idle, nothing turns it)."""
+        self._lazy = False
+        """True while steps worked out without Chipmunk (:meth:`_glide_user`) have left the
+        user's position in Chipmunk behind: ``_lx``, ``_ly`` are it (:meth:`_sync`)."""
+        self._lx = self._ly = 0.0
+        self.glided = 0
+        """Physics steps worked out without Chipmunk so far (:meth:`_glides`): of the
+        steps the world took, those Chipmunk did not."""
+        self._reach = spec.radius + HUMAN_RADIUS + _GLIDE_MARGIN
+
+    # ---- the bodies ------------------------------------------------------------
+
+    @property
+    def space(self) -> pymunk.Space:
+        """The pymunk space, its bodies where the world says they are (:meth:`_sync`)."""
+        self._sync()
+        return self._space
+
+    @property
+    def human(self) -> pymunk.Body:
+        """The user's pymunk body, where the world says the user is (:meth:`_sync`)."""
+        self._sync()
+        return self._human
+
+    def _sync(self) -> None:
+        """Write the user's position to Chipmunk if steps worked out without it
+        (:meth:`_glide_user`) left it behind: before any real step, and before the bodies
+        are handed out."""
+        if self._lazy:
+            self._lazy = False
+            _cpBodySetPosition(self._hb, (self._lx, self._ly))
+
     # ---- queries -------------------------------------------------------------
 
     def joint(self, name: str) -> _Joint:
@@ -295,9 +356,12 @@ class World:
         that read one read both). The robot's angle is kept as ``_ra`` while ``_ak`` is
         (:meth:`robot_angle`)."""
         r = _cpBodyGetPosition(self._rb)
-        h = _cpBodyGetPosition(self._hb)
         self._rxy = (r.x, r.y)
-        self._hxy = (h.x, h.y)
+        if self._lazy:
+            self._hxy = (self._lx, self._ly)
+        else:
+            h = _cpBodyGetPosition(self._hb)
+            self._hxy = (h.x, h.y)
         self._pk = self.version
 
     def robot_xy(self) -> tuple[float, float]:
@@ -426,8 +490,11 @@ class World:
     # ---- poses written from outside the step --------------------------------------
 
     def moved(self) -> None:
-        """A body's pose was written directly: forget what was worked out from the poses."""
+        """A body's pose was written directly: forget what was worked out from the poses
+        (and the calm: a body put against another touches it at the next step)."""
         self.version += 1
+        self._calm = 0
+        self._still = None
 
     def put_user(self, x: float, y: float) -> None:
         """Put the user at (x, y) now."""
@@ -437,6 +504,7 @@ class World:
     def walk_user(self, vx: float, vy: float) -> None:
         """Move the user at (vx, vy) m/s from the next step on, facing the way they walk."""
         _cpBodySetVelocity(self._hb, (vx, vy))  # (what ``human.velocity = ...`` calls)
+        self._hv = (vx, vy)
         self.human_moving = vx != 0.0 or vy != 0.0
         if self.human_moving:
             self._ha = _atan2(vy, vx)
@@ -592,6 +660,7 @@ class World:
                 self._v, self._w = 0.0, v * ux
                 body.angular_velocity = v * ux  # (the body keeps its speed as it brakes)
         self._cmd_v = self._cmd_w = 0.0
+        self._still = None
         if stopped is not None:
             self._on_stopped.append(stopped)
         return True
@@ -604,6 +673,7 @@ class World:
                 or _cpBodyGetAngularVelocity(rb)):
             _cpBodySetVelocity(rb, (0.0, 0.0))
             _cpBodySetAngularVelocity(rb, 0.0)
+            self._still = None
         self.mode = _IDLE
         self._done = None
         if self._cap != _INF:  # (a drive's own speed goes with it)
@@ -648,15 +718,85 @@ class World:
 
     def _run_idle(self, tick: int, end: int, advance: Callable[[object, float], None]) -> int:
         """Idle steps up to the tick ``end``, the first and each one that touched
-        something (a push) followed by :meth:`_hold`."""
+        something (a push) followed by :meth:`_hold`; worked out without Chipmunk if they
+        can be (:meth:`_glides`)."""
+        n = end - tick
+        version = self.version
+        if self._glides(n):
+            self._glided(version, n)
+            if self._ak == version:
+                self._ak = version + n  # (idle, it faces the same way)
+            return end
+        self._sync()
         space, dt, touched = self._sp, self.dt, self._touched
-        touched[0] = True  # (the first step is checked)
-        for _ in range(end - tick):
+        touched[0] = False
+        advance(space, dt)
+        calm = 0 if touched[0] else self._calm + 1
+        self._hold()  # (the first step is checked)
+        for _ in range(n - 1):
             advance(space, dt)
             if touched[0]:
+                calm = 0
                 self._hold()
-        self.version += end - tick
+            else:
+                calm += 1
+        self._calm = calm
+        self.version = version + n
         return end
+
+    def _glides(self, n: int) -> bool:
+        """Whether the next ``n`` steps, idle or turning in place, can be worked out
+        without Chipmunk (:meth:`_glide_user`), to the last bit what its steps would
+        give. They can if nothing can touch the robot in them: it has touched nothing
+        for Chipmunk's collision persistence (so Chipmunk keeps no contact of its, and
+        no push left it a speed of its own: its velocity, read once in a calm, is
+        nought), nothing sways it, and the user cannot come within reach in ``n`` steps.
+        A step then only turns the robot by its turning rate and moves the user on by
+        their velocity, as Chipmunk's position update does: ``p + (v + 0) * dt``."""
+        if self._calm < self._persist or self._sway is not None:
+            return False
+        still = self._still
+        if still is None:
+            v = _cpBodyGetVelocity(self._rb)
+            still = self._still = v.x == 0.0 and v.y == 0.0
+        if not still:
+            return False
+        if self._pk != self.version:
+            self._read()
+        if not self.human_moving:
+            return True
+        rx, ry = self._rxy
+        ux, uy = self._hxy
+        vx, vy = self._hv
+        return _hypot(ux - rx, uy - ry) - _hypot(vx, vy) * (n * self.dt) > self._reach
+
+    def _glided(self, version: int, n: int) -> None:
+        """``n`` steps from the version ``version`` were worked out without Chipmunk
+        (:meth:`_glides`): the user moves on, the version too, and the poses read at it
+        (:meth:`_glides` reads them) stay read: the robot stands where it was."""
+        self.glided += n
+        self._glide_user(n)
+        self.version = version + n
+        self._hxy = (self._lx, self._ly) if self._lazy else self._hxy
+        self._pk = version + n
+
+    def _glide_user(self, n: int) -> None:
+        """Move the user on by ``n`` steps as Chipmunk would (:meth:`_glides`), kept in
+        ``_lx``, ``_ly`` until a real step or the bodies need it in Chipmunk
+        (:meth:`_sync`). A user who stands stays where Chipmunk has them."""
+        if not self.human_moving:
+            return
+        if not self._lazy:
+            h = _cpBodyGetPosition(self._hb)
+            self._lx, self._ly = h.x, h.y
+            self._lazy = True
+        vx, vy = self._hv
+        dx, dy = (vx + 0.0) * self.dt, (vy + 0.0) * self.dt
+        x, y = self._lx, self._ly
+        for _ in range(n):
+            x += dx
+            y += dy
+        self._lx, self._ly = x, y
 
     def _run_linear(self, tick: int, bound: int, advance: Callable[[object, float], None]
                     ) -> tuple[int, Callable[[], None] | None]:
@@ -675,6 +815,7 @@ class World:
         wider than the rounding of the progress's sums, passes the tests of the speed and
         of the last step: both grow with the rest, in floating point as in reals, and
         every step's rest is longer."""
+        self._unsettled()
         dt, rb, space, vmax = self.dt, self._rb, self._sp, self._vmax
         length, s, v, steps = self._len, self._s, self._v, self._steps
         touched = self._touched
@@ -755,8 +896,16 @@ class World:
         twice = 2.0 * _radians(self.spec.turn_accel)
         length, s, v = self._len, self._s, self._v
         start = tick
+        version = self.version
+        glide = self._glides(bound - tick)  # (then the steps turn ``a`` at ``rate``)
+        a = self.robot_angle() if glide else 0.0
+        rate = sense * v  # (the body's turning rate: what the last step or turn wrote)
+        if not glide:
+            self._sync()
+        calm = self._calm
         touched = self._touched
-        touched[0] = True  # (the first step is checked)
+        touched[0] = False
+        first = True  # (the first step is checked)
         while True:
             rem = length - s
             w = min(min(wtop, v + alpha_dt), math.sqrt(twice * rem))  # (of two: _run_linear)
@@ -764,22 +913,37 @@ class World:
             if last:
                 w = rem / dt
             if w != v:
-                _cpBodySetAngularVelocity(rb, sense * w)
+                rate = sense * w
+                if not glide:
+                    _cpBodySetAngularVelocity(rb, rate)
                 v = self._v = w  # (a sway turns on top of it)
-            advance(space, dt)
-            if touched[0]:
-                self._hold()
+            if glide:
+                a += (rate + 0.0) * dt  # (Chipmunk's position update; see _glides)
+            else:
+                advance(space, dt)
+                if touched[0] or first:
+                    calm = 0 if touched[0] else calm + 1
+                    first = False
+                    self._hold()
+                else:
+                    calm += 1
             s += w * dt
             tick += 1
             if last or tick >= bound:
                 break
-        self._s, self._v = s, v
+        self._s, self._v, self._calm = s, v, calm
         done = None
+        if glide and not last:
+            _cpBodySetAngularVelocity(rb, rate)  # (what the steps left: Chipmunk's next
+            _cpBodySetAngle(rb, a)               # step goes on from it)
         if last:
             _cpBodySetAngularVelocity(rb, 0.0)
             _cpBodySetAngle(rb, self._ta + self._sway_offset - self._ta_offset)
             done = self._finish(True)
-        self.version += tick - start  # (after the final angle: see the module's doc)
+        if glide:
+            self._glided(version, tick - start)  # (after the final angle, as below)
+        else:
+            self.version += tick - start  # (after the final angle: see the module's doc)
         return tick, done
 
     def _hold(self) -> None:
@@ -789,6 +953,15 @@ class World:
         self._touched[0] = False
         if _length(_cpBodyGetVelocity(self._rb)) > 1e-9:
             _cpBodySetVelocity(self._rb, (0.0, 0.0))
+            self._still = None
+
+    def _unsettled(self) -> None:
+        """The robot drives (a straight drive or a velocity command: its steps may
+        touch anything): Chipmunk steps, from the user where they are, and the calm
+        starts again after (:meth:`_glides`)."""
+        self._sync()
+        self._calm = 0
+        self._still = None
 
     @property
     def swaying(self) -> bool:
@@ -800,6 +973,7 @@ class World:
         """Velocity-command steps up to the tick ``bound`` or the robot's standstill:
         the speed and the turning rate each go toward the command's, within the
         accelerations."""
+        self._unsettled()
         dt, rb, space = self.dt, self._rb, self._sp
         a, al = self._a_dt, self._alpha_dt
         cmd_v, cmd_w = self._cmd_v, self._cmd_w

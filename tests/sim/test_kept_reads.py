@@ -117,7 +117,7 @@ def _checked_run(name: str) -> int:
     against pymunk's properties; how many reads were checked."""
     run = Run(ROOT / "scenarios" / "thesis" / f"{name}.xml")
     world = run.sim.world
-    r, h = world.robot, world.human
+    r = world.robot
     asked = 0
 
     def checked(read: Callable[[], object], fresh: Callable[[], object]
@@ -131,7 +131,8 @@ def _checked_run(name: str) -> int:
         return reading
 
     world.robot_xy = checked(world.robot_xy, lambda: tuple(r.position))  # type: ignore
-    world.user_xy = checked(world.user_xy, lambda: tuple(h.position))  # type: ignore
+    world.user_xy = checked(  # (``world.human``: where the world has the user, written
+        world.user_xy, lambda: tuple(world.human.position))  # to Chipmunk if it glided)
     world.robot_angle = checked(world.robot_angle, lambda: r.angle)  # type: ignore
     run.run()
     return asked

@@ -44,10 +44,14 @@ def _state(world: World) -> tuple[object, ...]:
 
 
 def _play(stepper: Stepper, robot: Pose, user: Pose, actions: dict[int, Action],
-          until: int) -> list[object]:
+          until: int, state: Callable[[World], object] = _state,
+          worlds: list[World] | None = None) -> list[object]:
     """Steps a fresh museum world to ``until`` in stretches of changing lengths (cut at
-    the ticks of ``actions``), recording the state after each stretch and each end."""
+    the ticks of ``actions``), recording the ``state`` after each stretch and each end
+    (and the world in ``worlds``)."""
     world = World(world_map("museum"), RobotSpec(), 50, robot, user)
+    if worlds is not None:
+        worlds.append(world)
     log: list[object] = []
     lengths = itertools.cycle((5, 1, 3, 5, 7, 2, 40))
     tick = 0
@@ -62,7 +66,8 @@ def _play(stepper: Stepper, robot: Pose, user: Pose, actions: dict[int, Action],
         tick, done = stepper(world, tick, bound)
         if done is not None:
             done()
-        log.append((tick, _state(world)))
+        log.append((tick, state(world)))
+    log.append(_state(world))
     return log
 
 
@@ -100,6 +105,10 @@ CASES: dict[str, tuple[Pose, Pose, dict[int, Action], int]] = {
     # turns, one while the user walks into the robot
     "turns": (Pose(4.0, 2.0, 0), Pose(6.0, 2.0, 0),
               {0: _turn(2.5), 30: _walk(-0.8, 0.0), 100: _turn(-4.0)}, 400),
+    # turns in the open, the user walking up from far off and into the robot as it turns
+    "turns-in-the-open": (Pose(6.0, 2.0, 0), Pose(9.0, 2.1, 0),
+                          {0: _turn(2.5), 20: _walk(-0.3, 0.0), 100: _turn(-4.0),
+                           130: _walk(-1.0, 0.0), 200: _turn(1.0)}, 400),
     # velocity commands: speeding up, turning, stopping (with whoever waits told)
     "velocity": (Pose(2.0, 2.0, 0), Pose(8.0, 6.0, 0),
                  {0: lambda w, _log: w.command(0.3, 0.0),
@@ -149,6 +158,73 @@ def test_a_stretch_run_at_once_ends_as_stepped_one_step_at_a_time(case: str) -> 
     expected = _play(_one_by_one, robot, user, actions, until)
     assert _play(_run, robot, user, actions, until) == expected
     assert len(expected) > 10
+
+
+def _in_chipmunk(world: World, tick: int, bound: int
+                 ) -> tuple[int, Callable[[], None] | None]:
+    """:meth:`World.run` with every step Chipmunk's: the robot is never calm enough to
+    glide."""
+    world._persist = 1 << 30
+    return world.run(tick, bound)
+
+
+def _kept(world: World) -> str:
+    """What the world says of the poses (its kept reads: a glided user is not written to
+    Chipmunk for them), to the last bit."""
+    return repr((world.robot_xy(), world.robot_angle(), world.user_xy(), world.version,
+                 world.mode, world._s, world._v))
+
+
+def test_steps_worked_out_without_chipmunk_end_as_chipmunk_steps_them() -> None:
+    # Idle or turning in place, with the user out of reach, a stretch is worked out
+    # without Chipmunk (World._glides): every stretch ends as Chipmunk's steps end it, to
+    # the last bit, the user walking into the robot and pushing it included; and at the
+    # end the bodies in Chipmunk are where they would be.
+    glided = 0
+    for case in sorted(CASES):
+        robot, user, actions, until = CASES[case]
+        worlds: list[World] = []
+        expected = _play(_in_chipmunk, robot, user, actions, until, _kept)
+        assert _play(_run, robot, user, actions, until, _kept, worlds) == expected, case
+        assert worlds[0].glided < until
+        glided += worlds[0].glided
+    assert glided > 500  # (1,000 of their 7,100 steps)
+
+
+def test_a_user_glided_up_to_the_robot_pushes_it_as_in_chipmunk() -> None:
+    # Walking at it from far off, the user is moved without Chipmunk until the stretch
+    # that could bring them within reach: that one Chipmunk steps, and the push is the
+    # same. Stretches of every length from every tick on the way.
+    def walked(stepper: Stepper, ticks: int, length: int) -> tuple[str, int]:
+        world = World(world_map("museum"), RobotSpec(), 50, Pose(6.0, 2.0, 0),
+                      Pose(9.0, 2.1, 0))
+        world.walk_user(-1.2, 0.0)
+        tick = 0
+        while tick < ticks:
+            tick = stepper(world, tick, min(ticks, tick + length))[0]
+        return repr(_state(world)), world.glided
+
+    for length in (1, 3, 7, 25):
+        for ticks in (60, 90, 101, 102, 103, 110, 140):
+            expected, none = walked(_in_chipmunk, ticks, length)
+            got, glided = walked(_run, ticks, length)
+            assert got == expected, (length, ticks)
+            assert none == 0 and (glided > 0 or length > ticks)
+
+
+def test_a_robot_left_the_least_speed_drifts_as_in_chipmunk() -> None:
+    # A push can leave an idle robot a speed too small for the wheels to hold
+    # (World._hold: up to 1e-9 m/s); its steps then move it, so Chipmunk steps them.
+    def drifted(stepper: Stepper) -> tuple[str, int]:
+        world = _fresh()
+        world.walk_user(0.0, -0.5)
+        world.robot.velocity = (1e-10, 0.0)
+        tick = 0
+        while tick < 200:
+            tick = stepper(world, tick, tick + 7)[0]
+        return repr(_state(world)), world.glided
+
+    assert drifted(_run) == drifted(_in_chipmunk)
 
 
 def test_a_cruise_ends_where_the_drive_brakes_whatever_stretch_it_ends_in() -> None:
