@@ -37,9 +37,12 @@ Pose = tuple[float, float, float]
 """x and y (m) on the map, heading (degrees, 0 = east, 90 = north)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class TraceLine:
-    """One record of a run."""
+    """One record of a run. (Its ``__init__`` is written out, as the other records made
+    once for everything that happens have theirs: compiled, it runs at C speed, where
+    the one ``dataclass`` writes runs as Python; ``test_record.py`` checks it takes the
+    fields in order, with their defaults.)"""
 
     t: float
     seq: int
@@ -66,6 +69,33 @@ class TraceLine:
     detectable: bool | None = None
     """With ``user``: whether the robot could see the user now if it looked their way
     (in camera range, nothing in between)."""
+
+    def __init__(self, t: float, seq: int, kind: RecordKind, app: str | None = None,
+                 ab: int | None = None, tree: int | None = None, command: str | None = None,
+                 text: str | None = None, devices: tuple[str, ...] | None = None,
+                 reactive: bool | None = None, reason: str | None = None,
+                 action: str | None = None, detail: Mapping[str, Value] | None = None,
+                 command_ids: tuple[int, ...] | None = None, before: int | None = None,
+                 robot: Pose | None = None, user: Pose | None = None,
+                 detectable: bool | None = None) -> None:
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "seq", seq)
+        object.__setattr__(self, "kind", kind)
+        object.__setattr__(self, "app", app)
+        object.__setattr__(self, "ab", ab)
+        object.__setattr__(self, "tree", tree)
+        object.__setattr__(self, "command", command)
+        object.__setattr__(self, "text", text)
+        object.__setattr__(self, "devices", devices)
+        object.__setattr__(self, "reactive", reactive)
+        object.__setattr__(self, "reason", reason)
+        object.__setattr__(self, "action", action)
+        object.__setattr__(self, "detail", {} if detail is None else detail)
+        object.__setattr__(self, "command_ids", command_ids)
+        object.__setattr__(self, "before", before)
+        object.__setattr__(self, "robot", robot)
+        object.__setattr__(self, "user", user)
+        object.__setattr__(self, "detectable", detectable)
 
     @classmethod
     def made(cls, t: float, seq: int, kind: RecordKind, fields: Mapping[str, Any]) -> TraceLine:

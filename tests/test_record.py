@@ -3,12 +3,21 @@ compiles; and every dataclass a cold ``prima validate`` loads uses it."""
 
 from __future__ import annotations
 
+import dataclasses
+import inspect
 import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
+import pytest
+
+from prima.judge import Blame
+from prima.mediator import Call, Event, Outcome
 from prima.record import Record
+from prima.sim import Pose, UserAction
+from prima.trace import TraceLine
 
 
 @dataclass(frozen=True)
@@ -78,3 +87,28 @@ def test_every_dataclass_a_cold_validate_loads_shares_the_repr() -> None:
     assert "1 file checked" in done.stdout + done.stderr
     own = [line for line in done.stdout.splitlines() if "checked" not in line]
     assert own == [], "declare these @dataclass(..., repr=False), derived from Record"
+
+
+WRITTEN_OUT = [TraceLine, Pose, UserAction, Call, Outcome, Event, Blame]
+"""Frozen records whose ``__init__`` is written out (compiled, the one ``dataclass``
+writes runs as Python): each must take what the generated one would."""
+
+
+@pytest.mark.pure  # (compiled, a method's signature is not kept)
+@pytest.mark.parametrize("cls", WRITTEN_OUT, ids=lambda c: c.__name__)
+def test_a_written_out_init_takes_the_fields_in_order_with_their_defaults(
+        cls: type[Any]) -> None:
+    params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+    assert [p.name for p in params] == [f.name for f in dataclasses.fields(cls) if f.init]
+    blank = cls(*[object() for p in params if p.default is inspect.Parameter.empty])
+    for f, p in zip(dataclasses.fields(cls), params, strict=True):
+        if f.default is not dataclasses.MISSING:
+            assert p.default == f.default and getattr(blank, f.name) == f.default, f.name
+        elif f.default_factory is not dataclasses.MISSING:
+            assert getattr(blank, f.name) == f.default_factory(), f.name
+        else:
+            assert p.default is inspect.Parameter.empty, f.name
+    given = [object() for _ in params]
+    assert [getattr(cls(*given), p.name) for p in params] == given
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        setattr(blank, params[0].name, None)

@@ -16,9 +16,11 @@ __all__ = ["BargeIn", "Blame", "Elsewhere", "Finding", "Ignored", "Leaving", "Re
            "Recovery", "Silence", "Split", "Stuck", "Unfaced", "after"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Blame:
-    """An application's atomic behavior that a finding is about, and why it counts."""
+    """An application's atomic behavior that a finding is about, and why it counts.
+    (Its ``__init__`` is written out: compiled, it runs at C speed, where the one
+    ``dataclass`` writes runs as Python.)"""
 
     app: str
     ab: int | None
@@ -31,6 +33,15 @@ class Blame:
     first (4.2)``, ``reply (7.4)``...), or what it did."""
     until: float | None = None
     """When it stopped counting (its end, or the word boundary a cut would reach)."""
+
+    def __init__(self, app: str, ab: int | None, command: str, at: str = "", rule: str = "",
+                 until: float | None = None) -> None:
+        object.__setattr__(self, "app", app)
+        object.__setattr__(self, "ab", ab)
+        object.__setattr__(self, "command", command)
+        object.__setattr__(self, "at", at)
+        object.__setattr__(self, "rule", rule)
+        object.__setattr__(self, "until", until)
 
     def __str__(self) -> str:
         ab = f" AB{self.ab}" if self.ab is not None else ""

@@ -53,9 +53,11 @@ TreeId = int
 """Mediator-wide id of one AB tree (increasing from 0)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Call:
-    """One Command with its arguments, as an application requests it."""
+    """One Command with its arguments, as an application requests it. (This record,
+    :class:`Outcome` and :class:`Event` have their ``__init__`` written out: compiled, it
+    runs at C speed, where the one ``dataclass`` writes runs as Python.)"""
 
     command: str
     args: Mapping[str, Value] = field(default_factory=_empty, hash=False)
@@ -65,6 +67,15 @@ class Call:
     """The author's id for this Command, if any (shown in traces)."""
     extra_devices: frozenset[str] = frozenset()
     """Devices occupied beyond the catalog's (e.g. the speaker for a sensing prompt)."""
+
+    def __init__(self, command: str, args: Mapping[str, Value] = EMPTY,
+                 extra: Mapping[str, Value] = EMPTY, label: str | None = None,
+                 extra_devices: frozenset[str] = frozenset()) -> None:
+        object.__setattr__(self, "command", command)
+        object.__setattr__(self, "args", args)
+        object.__setattr__(self, "extra", extra)
+        object.__setattr__(self, "label", label)
+        object.__setattr__(self, "extra_devices", extra_devices)
 
 
 class Request(NamedTuple):
@@ -123,7 +134,7 @@ class AtomicBehavior(NamedTuple):
     over a global one, speech over quieter sound."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Outcome:
     """How an atomic behavior ended, as the driver reports it."""
 
@@ -132,14 +143,24 @@ class Outcome:
     terminal: bool = True
     """For a feedback iteration: True when the Command's loop is done."""
 
+    def __init__(self, values: Mapping[str, Value] = EMPTY, terminal: bool = True) -> None:
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "terminal", terminal)
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, init=False)
 class Event:
     """Something PRIMA posts to every loaded application (rule 5)."""
 
     name: str
     data: Mapping[str, Value] = field(default_factory=_empty, hash=False)
     time: float = 0.0
+
+    def __init__(self, name: str, data: Mapping[str, Value] = EMPTY, time: float = 0.0
+                 ) -> None:
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "data", data)
+        object.__setattr__(self, "time", time)
 
 
 class Clock(Protocol):

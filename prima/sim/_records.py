@@ -1,6 +1,8 @@
 """Plain records: poses, user actions, zone entries, pictures, scheduled events, zones.
 
-All are frozen dataclasses with a ``to_dict()`` giving plain data (for JSON).
+All are frozen dataclasses with a ``to_dict()`` giving plain data (for JSON). Those a run
+makes many of (poses, user actions) have their ``__init__`` written out: compiled, it runs
+at C speed, where the one ``dataclass`` writes runs as Python.
 """
 
 from __future__ import annotations
@@ -17,13 +19,18 @@ __all__ = ["Picture", "Pose", "ScheduledEvent", "UserAction", "UserActionKind", 
            "ZoneEntry"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Pose:
     """A position on the map (m) and a heading (deg, 0 = east, 90 = north)."""
 
     x: float
     y: float
     heading: float = 0.0
+
+    def __init__(self, x: float, y: float, heading: float = 0.0) -> None:
+        object.__setattr__(self, "x", x)
+        object.__setattr__(self, "y", y)
+        object.__setattr__(self, "heading", heading)
 
     def distance_to(self, x: float, y: float) -> float:
         return math.hypot(x - self.x, y - self.y)
@@ -51,7 +58,7 @@ class UserActionKind(str, enum.Enum):
     """Stopped walking or following and stands still."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class UserAction:
     """One thing the scripted user did, at simulated time ``time`` (s)."""
 
@@ -61,6 +68,14 @@ class UserAction:
     target: str | None = None
     heard: bool | None = None
     """For ``say``: whether a listening Q&A heard it."""
+
+    def __init__(self, time: float, action: UserActionKind, text: str | None = None,
+                 target: str | None = None, heard: bool | None = None) -> None:
+        object.__setattr__(self, "time", time)
+        object.__setattr__(self, "action", action)
+        object.__setattr__(self, "text", text)
+        object.__setattr__(self, "target", target)
+        object.__setattr__(self, "heard", heard)
 
     def to_dict(self) -> dict[str, object]:
         out: dict[str, object] = {"time": self.time, "action": self.action.value}
