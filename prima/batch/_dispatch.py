@@ -210,7 +210,8 @@ class Processes:
             if self._pool is not None:
                 self._pool.shutdown(wait=False, cancel_futures=True)
             if self._scratch is None:
-                self._scratch = tempfile.mkdtemp(prefix="prima-sweep-")
+                with deferred():  # (a signal once it is made, before it is noted, left it)
+                    self._scratch = tempfile.mkdtemp(prefix="prima-sweep-")
             self._pool = _Recycling(self.workers, self.recycle, self._scratch)
             self._broken = False
         return self._pool
@@ -239,16 +240,17 @@ class Processes:
         self._forget_scratch()  # (made even if its pool was not: Ctrl-C in between)
 
     def close(self) -> None:
-        pool, self._pool = self._pool, None
-        if pool is not None:
-            pool.shutdown()
+        if self._pool is not None:  # (kept until its processes have exited: stop() ends
+            self._pool.shutdown()   # them if a Ctrl-C comes while it waits)
+            self._pool = None
         self._forget_scratch()
 
     def _forget_scratch(self) -> None:
         """Delete the workers' folder (their processes have all exited)."""
-        scratch, self._scratch = self._scratch, None
-        if scratch is not None:
-            shutil.rmtree(scratch, ignore_errors=True)
+        with deferred():  # (a signal meanwhile would leave it half deleted)
+            scratch, self._scratch = self._scratch, None
+            if scratch is not None:
+                shutil.rmtree(scratch, ignore_errors=True)
 
 
 def chunk_size(runs: int, workers: int, largest: int = CHUNK) -> int:
@@ -402,11 +404,11 @@ def dispatch(jobs: Sequence[Job], pool: Pool, *, size: int, skip: int = 0,
                 finished += len(records)
                 if records and progress is not None:
                     progress(finished)
+            pool.close()  # (Ctrl-C while it waits for the workers to exit: they are stopped)
     except BaseException:  # Ctrl-C, or a fault of the batch's own: stop the workers now
         with deferred():  # (a second Ctrl-C meanwhile is noted, and the stop finishes)
             pool.stop()
         raise
-    pool.close()
 
 
 def collect(jobs: Sequence[Job], take: Callable[[Record], None], *,

@@ -393,3 +393,55 @@ def test_stopped_while_its_pool_is_made_the_processes_leave_no_folder(
     assert list(tmp_path.glob("prima-sweep-*"))
     processes.stop()
     assert not list(tmp_path.glob("prima-sweep-*"))
+
+
+def test_a_signal_as_the_workers_folder_is_made_leaves_no_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C just as the workers' folder is made, before the processes have noted it
+    (a sweep signalled as it starts: an empty prima-sweep-* folder was left in /tmp now
+    and then): it is raised once the folder is noted, and stopping deletes it."""
+    import os
+    import signal
+    import tempfile
+
+    made = tempfile.mkdtemp
+
+    def signalled(*args: Any, **kwargs: Any) -> str:
+        folder = made(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)  # (its handler runs before this returns)
+        return folder
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(tempfile, "mkdtemp", signalled)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    processes = Processes(1)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            processes.executor()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    processes.stop()
+    assert not list(tmp_path.glob("prima-sweep-*"))
+
+
+def test_a_signal_as_the_batch_ends_stops_its_workers_and_leaves_no_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C while a finished batch waits for its workers to exit: they are stopped, and
+    their folder deleted after them (it was left behind, the workers too)."""
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    waited = prima.batch._dispatch._Recycling.shutdown
+    workers: list[Any] = []
+
+    def interrupted(self: Any, wait: bool = True, **kwargs: Any) -> None:
+        if wait:  # (the end's wait, not the stop's)
+            workers.extend(p for each in self.pools() for p in each._processes.values())
+            raise KeyboardInterrupt
+        waited(self, wait, **kwargs)
+
+    monkeypatch.setattr(prima.batch._dispatch._Recycling, "shutdown", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        list(dispatch([job(2)], Processes(2), size=1))
+    assert workers and not any(w.is_alive() for w in workers)
+    assert not list(tmp_path.glob("prima-sweep-*"))
