@@ -5,13 +5,22 @@ compiled classes and modules do not allow, or copy its source as a build of its 
 
 And the tests that take seconds each are marked ``slow`` here, in one table
 (:data:`SLOW`): ``python -m pytest -m 'not slow'`` is the quick subset for daily work
-(README); CI runs them all."""
+(README); CI runs them all.
+
+A test process started with Ctrl-C ignored (a shell's background job: ``pytest &``)
+takes it back: the commands its tests start inherit an ignored SIGINT, as a shell's
+background job does, and the tests that stop a command with SIGINT found it going on."""
 
 from __future__ import annotations
+
+import signal
 
 import pytest
 
 import prima
+
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:  # (see above)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 SLOW = (
