@@ -77,6 +77,7 @@ def _calls(tr: Trace, *functions: Any) -> tuple[Report, dict[CodeType, int]]:
         sys.settrace(previous)
 
 
+@pytest.mark.pure  # (compiled, Blame's written-out __init__ is native: no trace sees it)
 def test_a_reaction_s_waits_make_the_blames_of_what_they_show_alone() -> None:
     # A reaction that waits through another application's loop in its begin/end block
     # is rightly kept by each of its ABs (hundreds a run, in a thesis sample), and shows
