@@ -257,7 +257,7 @@ def _face_rate(sim: Body, off: float, period: float) -> float:
     seconds: ``FACE_GAIN`` times how far off they are, but never faster than the robot can
     brake from within what is left once that period is over (it would turn past them)."""
     alpha = math.radians(sim.spec.turn_accel)
-    turning = abs(sim.world.robot.angular_velocity)
+    turning = abs(sim.world.turning_rate())
     left = max(0.0, abs(off) - turning * period)
     return math.copysign(min(FACE_GAIN * abs(off), math.sqrt(2.0 * alpha * left)), off)
 
@@ -280,7 +280,7 @@ def face_human(sim: Body, call: Call, cid: int, it: int) -> Gen:
     period = k.hz // 10
     while k.tick < end:
         off = world.user_bearing()
-        if abs(off) <= FACE_AIM and abs(world.robot.angular_velocity) <= FACE_STILL:
+        if abs(off) <= FACE_AIM and abs(world.turning_rate()) <= FACE_STILL:
             break
         world.command(0.0, _face_rate(sim, off, period / k.hz))
         yield sleep(period)

@@ -117,7 +117,6 @@ def _checked_run(name: str) -> int:
     against pymunk's properties; how many reads were checked."""
     run = Run(ROOT / "scenarios" / "thesis" / f"{name}.xml")
     world = run.sim.world
-    r = world.robot
     asked = 0
 
     def checked(read: Callable[[], object], fresh: Callable[[], object]
@@ -130,10 +129,12 @@ def _checked_run(name: str) -> int:
             return kept
         return reading
 
-    world.robot_xy = checked(world.robot_xy, lambda: tuple(r.position))  # type: ignore
-    world.user_xy = checked(  # (``world.human``: where the world has the user, written
-        world.user_xy, lambda: tuple(world.human.position))  # to Chipmunk if it glided)
-    world.robot_angle = checked(world.robot_angle, lambda: r.angle)  # type: ignore
+    # (``world.robot`` and ``world.human``: where the world has them, written to
+    # Chipmunk if it worked steps out without it)
+    world.robot_xy = checked(  # type: ignore
+        world.robot_xy, lambda: tuple(world.robot.position))
+    world.user_xy = checked(world.user_xy, lambda: tuple(world.human.position))  # type: ignore
+    world.robot_angle = checked(world.robot_angle, lambda: world.robot.angle)  # type: ignore
     run.run()
     return asked
 

@@ -149,6 +149,20 @@ CASES.update({
     # a user far off, walking slowly, then fast into the robot
     "faster": (Pose(6.0, 2.0, 0), Pose(8.5, 2.05, 0),
                {0: _walk(-0.001, 0.0), 50: _walk(-3.0, 0.0), 70: _walk(-0.5, 0.0)}, 300),
+    # drives in the open, the user walking into the second's path (it is blocked)
+    "drive-crossed": (Pose(6.0, 2.0, 0), Pose(12.5, 4.5, 0),
+                      {0: _drive(9.0, 2.0), 150: _drive(12.0, 6.5), 160: _walk(-0.25, 0.0)},
+                      700),
+    # a velocity command into a wall from far off, then turning along it
+    "velocity-walled": (Pose(8.0, 2.0, 270), Pose(14.0, 7.0, 0),
+                        {0: lambda w, _log: w.command(0.5, 0.0),
+                         300: lambda w, _log: w.command(0.5, 0.6)}, 500),
+    # a slow velocity command, the user walking into the robot from behind and stopping:
+    # the push leaves the robot the user's speed (a steady command sets none again), on
+    # to the wall
+    "velocity-pushed": (Pose(8.0, 4.0, 0), Pose(5.0, 4.0, 0),
+                        {0: lambda w, _log: w.command(0.2, 0.0), 1: _walk(1.2, 0.0),
+                         130: _walk(0.0, 0.0)}, 700),
 })
 
 
@@ -188,7 +202,7 @@ def test_steps_worked_out_without_chipmunk_end_as_chipmunk_steps_them() -> None:
         assert _play(_run, robot, user, actions, until, _kept, worlds) == expected, case
         assert worlds[0].glided < until
         glided += worlds[0].glided
-    assert glided > 500  # (1,000 of their 7,100 steps)
+    assert glided > 4000  # (of their 8,900 steps)
 
 
 def test_a_user_glided_up_to_the_robot_pushes_it_as_in_chipmunk() -> None:
