@@ -1313,16 +1313,15 @@ class World:
         return report
 
     def _lagging(self, s: float) -> bool:
-        """The drive is well behind its plan, ``s`` along it (kept as its progress): the
-        body does not get where it is driven."""
+        """The drive is well behind its plan, ``s`` along it: the body does not get where
+        it is driven."""
         p = _cpBodyGetPosition(self._rb)  # (afresh: the stretch has not moved the version on)
         return self._lags(s, p.x, p.y)
 
     def _lags(self, s: float, x: float, y: float) -> bool:
-        """:meth:`_lagging` at the position (x, y)."""
-        self._s = s
+        """:meth:`_lagging` at the position (x, y). (The stretch keeps ``s`` itself.)"""
         made: float = (x - self._x0) * self._ux + (y - self._y0) * self._uy
-        return self._s - made > _BLOCKED_LAG
+        return s - made > _BLOCKED_LAG
 
     def _finish_linear(self) -> Callable[[], None] | None:
         rb = self._rb  # (Chipmunk's calls, as pymunk's properties make them)
