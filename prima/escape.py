@@ -24,6 +24,7 @@ Imports nothing of PRIMA (any module may use it).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import re
@@ -38,10 +39,18 @@ _TERMINAL = ("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u2028-\u202e\u2066-\u2069"
 separators, the bidirectional controls (U+061C, U+200E, U+200F, U+202A to U+202E,
 U+2066 to U+2069: they reorder what a terminal shows after them) and undecodable bytes.
 
-(This module's patterns are compiled on their first use, through :mod:`re`'s own cache:
-every command imports this module, and compiling them all would cost each command's
-start about a millisecond, most of them never used.)"""
+(This module's patterns are compiled on their first use (:func:`_re`): every command
+imports this module, and compiling them all would cost each command's start about a
+millisecond, most of them never used.)"""
 _NAMED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+@functools.cache
+def _re(source: str) -> re.Pattern[str]:
+    """``source`` compiled, on its first use: ``re.sub(source, ...)`` would find it in
+    :mod:`re`'s own cache, but by Python code that costs each call as much as the
+    search (a text trace escapes every row)."""
+    return re.compile(source)
 
 
 def _escape_one(match: re.Match[str]) -> str:
@@ -58,7 +67,7 @@ def unshowable(text: str) -> str | None:
     """The first character of ``text`` that :func:`terminal` escapes (a control, a line
     or paragraph separator, a bidirectional control, an undecodable byte), or None: a
     place that takes words to show as they are refuses them."""
-    found = re.search(_TERMINAL, text)
+    found = _re(_TERMINAL).search(text)
     return found.group() if found else None
 
 
@@ -67,7 +76,7 @@ def terminal(text: str) -> str:
     line and paragraph separators, the bidirectional controls and undecodable bytes as
     ``\\n``, ``\\x1b``, ``\\u2028``, ``\\u202e``, ``\\xff``... A document cannot forge a
     line, reorder one or send an escape sequence."""
-    return re.sub(_TERMINAL, _escape_one, text)
+    return _re(_TERMINAL).sub(_escape_one, text)
 
 
 def shown_path(path: str | os.PathLike[str]) -> str:
@@ -87,13 +96,13 @@ def _u(match: re.Match[str]) -> str:
 def json_line(value: object) -> str:
     """``value`` as JSON on one line (no newline at its end): non-ASCII kept as itself but
     for what a reader might split a line at or a UTF-8 file cannot hold."""
-    return re.sub(_JSON_UNSAFE, _u, json.dumps(value, ensure_ascii=False))
+    return _re(_JSON_UNSAFE).sub(_u, json.dumps(value, ensure_ascii=False))
 
 
 def script_json(value: object) -> str:
     """``value`` as compact JSON safe inside an HTML ``<script>`` element."""
     text = json.dumps(value, ensure_ascii=False, separators=(",", ":"))
-    return re.sub(_SCRIPT_UNSAFE, _u, text)
+    return _re(_SCRIPT_UNSAFE).sub(_u, text)
 
 
 _SURROGATE = "[\ud800-\udfff]"
@@ -104,7 +113,7 @@ def markup(text: str) -> str:
     name as ``\\xff``."""
     import html  # (its entities table is large: only the pages and pictures need it)
 
-    return html.escape(re.sub(_SURROGATE, _escape_one, text))
+    return html.escape(_re(_SURROGATE).sub(_escape_one, text))
 
 
 PLAIN_TEXT: dict[Any, Any] = {"text.parse_math": False, "text.usetex": False}

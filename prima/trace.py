@@ -378,7 +378,8 @@ class TextTrace:
         mark = " (o)" if line.kind is Kind.EVENT or reactive_start else ""
         why = f"[{line.reason}]" if line.reason and line.kind in _REASON_SHOWN else ""
         app = _escape(line.app or "")
-        row = _escape(f"{self._n:5d} {line.t:8.2f}   {who}   ") + f"{app:<{self.width}} " \
+        # (the number, the time and R or U are digits and letters: nothing to escape)
+        row = f"{self._n:5d} {line.t:8.2f}   {who}   {app:<{self.width}} " \
             + _escape(f"{text}{mark}")
         self._n += 1
         return row + ("  " + self._paint(_escape(why), DIM) if why else "")
