@@ -137,7 +137,7 @@ SYMBOLIC_KINDS = frozenset({ParamKind.PLACE, ParamKind.GESTURE, ParamKind.GRAMMA
 """Kinds written as bare names rather than expressions."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Range(Record):
     """The numbers a number argument may take, and how a value outside them is refused.
 
@@ -160,7 +160,7 @@ class Range(Record):
         return None if fits else f"{self.says}, not {value:g}"
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Param(Record):
     """One motion argument of a Command."""
 
@@ -190,7 +190,7 @@ class Param(Record):
         return f"{head}: {self.doc}" if self.doc else head
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class ArgRef(Record):
     """``{name}`` in a primitive of a ``<perform>``: the Command's argument ``name``,
     else ``default`` (its parameter's default; None: no value)."""
@@ -199,7 +199,7 @@ class ArgRef(Record):
     default: Value = None
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class JointSpec(Record):
     """A joint a ``<perform>`` moves: built in (:data:`BUILTIN_JOINTS`; limits and
     rate None: the robot's own) or declared by the profile's ``<joint>``."""
@@ -221,14 +221,14 @@ HOLD_SECONDS = Range(f"a hold lasts 0 to {MAX_HOLD:g} s", 0.0, MAX_HOLD)
 """The seconds a ``<hold>`` step is given by its Command's argument."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Hold(Record):
     """Keep the Command's devices for a time (s): a literal, or a number argument."""
 
     seconds: float | ArgRef
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class MoveJoint(Record):
     """Move a joint to an angle (deg, relative to the body) or toward a place on the
     map; exactly one of the two must have a value when the step runs. It takes the
@@ -253,7 +253,7 @@ SWAY_SECONDS = Range(f"a sway lasts more than 0 and at most {MAX_HOLD:g} s", 0.0
                      above=True)
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class SwayBody(Record):
     """Sway the body about its heading: +- ``degrees``, one whole sway every ``period``
     seconds, for ``seconds`` (whole sways only: it ends facing where it began). Alone
@@ -265,7 +265,7 @@ class SwayBody(Record):
     seconds: float | ArgRef
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class RaiseEvent(Record):
     """Post a robot-specific event (one the profile declares) to the applications."""
 
@@ -304,7 +304,7 @@ simulator does. ``prima validate`` refuses a constant outside the range, and the
 robot a value outside it, in the same words."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class CommandSpec(Record):
     """A Command type: what it occupies and how PRIMA schedules it."""
 
@@ -553,7 +553,7 @@ STANDARD_COMMANDS: tuple[CommandSpec, ...] = (
 )
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Blend(Record):
     """Commands a robot runs together on a shared device (docs/rules.md 7.3 (5)): a
     local motion over a global one (a dance step while it guides), speech over
@@ -571,7 +571,7 @@ class Blend(Record):
     """The global motion's speed while a local one runs over it, as a fraction."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Catalog(Record):
     """An immutable set of Command types, looked up by name."""
 

@@ -77,7 +77,7 @@ def columns(stream: TextIO) -> int | None:
         return shutil.get_terminal_size().columns
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Paint(Record):
     """Colours text when ``on``: ``paint(text, RED, BOLD)``. The text is escaped
     first (:func:`~prima.escape.terminal`); off, it is returned as it is."""
@@ -94,7 +94,7 @@ PLAIN = Paint()
 """No colour: a pipe, a file, a test."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Cell(Record):
     """A table cell and its styles."""
 

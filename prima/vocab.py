@@ -221,7 +221,7 @@ MAX_NUMBER = 2.0 ** 53
 """Largest magnitude of a number (beyond it, integers lose exactness anyway)."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Budgets(Record):
     """What one application may consume; a robot profile's ``<budgets>`` sets them.
 
@@ -263,7 +263,7 @@ stranger, may keep the FA waiting 30 s a minute; the FA, the robot's own acting
 for its user (following them, say), five minutes out of six."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Policy(Record):
     """A mediation policy (docs/rules.md 7.3): one of the thesis' future functions,
     switched by the robot profile, the scenario and ``prima run --policy``."""

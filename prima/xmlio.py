@@ -326,7 +326,7 @@ class XmlDocument(Record):
         return Problem(self.name, line, col, severity, message)
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Bound(Record):
     """The range a number written in an attribute must lie in, and its unit."""
 

@@ -1,5 +1,6 @@
-"""Records (prima.record): one shared ``__repr__``, the same as the one a dataclass
-compiles; and every dataclass a cold ``prima validate`` loads uses it."""
+"""Records (prima.record): one shared ``__repr__``, ``__eq__`` and ``__hash__``, the same as
+the ones a dataclass compiles; and every dataclass a cold ``prima validate`` loads uses
+them (the last two where it is frozen)."""
 
 from __future__ import annotations
 
@@ -36,6 +37,34 @@ class Shared(Record):
     hidden: int = field(default=0, repr=False)
 
 
+@dataclass(frozen=True)
+class GeneratedKeys:
+    name: str
+    size: float = 1.5
+    note: str = field(default="", compare=False)
+    seen: int = field(default=0, hash=False)
+    forced: int = field(default=0, compare=False, hash=True)
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class SharedKeys(Record):
+    name: str
+    size: float = 1.5
+    note: str = field(default="", compare=False)
+    seen: int = field(default=0, hash=False)
+    forced: int = field(default=0, compare=False, hash=True)
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class SharedOne(Record):
+    name: str
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class SharedNone(Record):
+    pass
+
+
 @dataclass
 class GeneratedLoop:
     items: list[object]
@@ -62,6 +91,30 @@ def test_a_record_that_holds_itself_shows_dots_there() -> None:
         == "SharedLoop(items=[...])"
 
 
+NAN = float("nan")
+KEYED = [("a", 1.5, "", 0, 0), ("a", 1.5, "other note", 0, 0), ("b", 1.5, "", 0, 0),
+         ("a", 2.0, "", 0, 0), ("a", 1.5, "", 7, 0), ("a", 1.5, "", 0, 7), ("a", NAN, "", 0, 0)]
+"""Fields of records to compare two by two: equal but for a field not compared, unequal in
+one compared field, a hashed field not compared, a compared field not hashed, a NaN."""
+
+
+def test_a_frozen_record_compares_and_hashes_as_its_generated_methods_would() -> None:
+    for one in KEYED:
+        for other in KEYED:
+            generated = GeneratedKeys(*one) == GeneratedKeys(*other)
+            assert (SharedKeys(*one) == SharedKeys(*other)) is generated, (one, other)
+            assert (SharedKeys(*one) != SharedKeys(*other)) is not generated, (one, other)
+        assert hash(SharedKeys(*one)) == hash(GeneratedKeys(*one)), one
+        record = SharedKeys(*one)
+        assert record == record  # (itself, even with a NaN: as tuples compare)
+    assert SharedKeys("a") != GeneratedKeys("a")  # another class: never equal
+    assert SharedKeys("a").__eq__(SharedOne("a")) is NotImplemented
+    assert SharedOne("a") == SharedOne("a") != SharedOne("b")
+    assert hash(SharedOne("a")) == hash(("a",))
+    assert SharedNone() == SharedNone() and hash(SharedNone()) == hash(())
+    assert len({SharedKeys("a"), SharedKeys("a", note="x"), SharedKeys("b")}) == 2
+
+
 CHECK = """
 import dataclasses, sys
 from prima.cli import main
@@ -69,16 +122,22 @@ main(["validate", sys.argv[1]])
 for name, module in sorted(sys.modules.items()):
     if name.startswith("prima"):
         for cls in vars(module).values():
-            if (isinstance(cls, type) and dataclasses.is_dataclass(cls)
-                    and cls.__module__ == name and (cls.__dataclass_params__.repr
-                                                    or cls.__repr__ is not Record.__repr__)):
-                print(f"{name}.{cls.__qualname__}")
+            if not (isinstance(cls, type) and dataclasses.is_dataclass(cls)
+                    and cls.__module__ == name):
+                continue
+            params = cls.__dataclass_params__
+            if params.repr or cls.__repr__ is not Record.__repr__:
+                print(f"{name}.{cls.__qualname__} repr")
+            if params.frozen and not params.order and (params.eq
+                                                       or cls.__eq__ is not Record.__eq__):
+                print(f"{name}.{cls.__qualname__} eq")
 """
 
 
-def test_every_dataclass_a_cold_validate_loads_shares_the_repr() -> None:
+def test_every_dataclass_a_cold_validate_loads_shares_its_methods() -> None:
     """Each generated ``__repr__`` costs about half a million instructions to compile,
-    in every process that imports it."""
+    in every process that imports it, and so do a frozen one's ``__eq__`` and ``__hash__``
+    (one ordered keeps them: ``order`` needs ``eq``)."""
     document = "apps/fa/fa2-follow.pxml"
     done = subprocess.run([sys.executable, "-c", "from prima.record import Record\n" + CHECK,
                            document], capture_output=True, text=True, check=False,
@@ -86,7 +145,8 @@ def test_every_dataclass_a_cold_validate_loads_shares_the_repr() -> None:
     assert done.returncode == 0, done.stderr
     assert "1 file checked" in done.stdout + done.stderr
     own = [line for line in done.stdout.splitlines() if "checked" not in line]
-    assert own == [], "declare these @dataclass(..., repr=False), derived from Record"
+    assert own == [], ("declare these @dataclass(..., repr=False), derived from Record, "
+                       "and eq=False too where frozen")
 
 
 WRITTEN_OUT = [TraceLine, Pose, UserAction, Call, Outcome, Event, Blame]

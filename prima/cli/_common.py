@@ -23,7 +23,7 @@ Commands: TypeAlias = "argparse._SubParsersAction[SuggestingParser]"
 """Where a command adds its parser (``prima``'s subcommands)."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Command(Record):
     """One ``prima`` command: its name, what adds its arguments, and what it does (given
     the parsed arguments, standard output and error; it returns the exit status)."""

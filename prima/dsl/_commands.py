@@ -163,7 +163,7 @@ def bind_chain(b: Builder, el: etree._Element, text: str,
     return calls
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class KeptChain(Record):
     """A chain's Commands as bound once, with what binding them asked the builder to
     check later, located in the chain's text (where, index) so that they can be

@@ -66,7 +66,7 @@ class Scope(Record):
 Fn = Callable[[Scope], Value]
 """A compiled expression's function."""
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Compiled(Record):
     """A compiled expression: call :meth:`evaluate` with a :class:`Scope`."""
 
@@ -673,7 +673,7 @@ def _join(source: str, parts: list[str | Compiled]) -> Compiled:
 
 # ---------------------------------------------------------------- chains
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class ChainArg(Record):
     """One argument of a chain step, not yet bound to a Command's parameter."""
 
@@ -685,7 +685,7 @@ class ChainArg(Record):
     """Where the argument's name is written (named arguments), else -1."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class ChainStep(Record):
     """One Command in a chain, as written: ``label: Name(args)[extras]``."""
 

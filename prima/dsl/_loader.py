@@ -867,7 +867,7 @@ Where = tuple[int, str | None, int]
 """A spot inside a kept state: (the element's index in the state's tree, where, index)."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class KeptState(Record):
     """A top-level state built without a problem, and what building it asked the builder
     to check later, its spots as indexes in the state's own tree. The same text written

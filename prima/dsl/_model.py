@@ -17,7 +17,7 @@ from prima.record import Record
 from prima.vocab import AppKind, OnInterrupt, RunningOrder
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Loc(Record):
     """Where something is written: 1-based line and column."""
 
@@ -30,7 +30,7 @@ class Loc(Record):
 
 # ---------------------------------------------------------------- Commands
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class PlaceRef(Record):
     """A place written by name as a Command's argument (``to="hall"``,
     ``TopologicalMove("kidode-room")``), not computed: the map it runs on must have it."""
@@ -43,7 +43,7 @@ class PlaceRef(Record):
     """The Command and its argument (``TopologicalMove``, ``to``)."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class CommandCall(Record):
     """One Command as written in a request, arguments compiled."""
 
@@ -58,7 +58,7 @@ class CommandCall(Record):
     """Q&A only: the variable that receives the answer."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Request(Record):
     """A ``<request>`` or ``<chain>``: Commands sent together, root first."""
 
@@ -75,7 +75,7 @@ class Request(Record):
 
 # ---------------------------------------------------------------- actions
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Assign(Record):
     """``<assign name expr>``: set a variable."""
 
@@ -84,7 +84,7 @@ class Assign(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class If(Record):
     """``<if>``: the actions of the first branch whose condition holds, else ``otherwise``."""
 
@@ -93,7 +93,7 @@ class If(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Goto(Record):
     """``<goto state>``: leave the current state for another."""
 
@@ -101,7 +101,7 @@ class Goto(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Send(Record):
     """A message to the environment's server (e.g. the EA replying to a host)."""
 
@@ -110,7 +110,7 @@ class Send(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Raise(Record):
     """Raise a user-defined event (FA only)."""
 
@@ -118,7 +118,7 @@ class Raise(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class StartTimer(Record):
     """``<timer name after>``: (re)start a timer; its event is posted when it fires."""
 
@@ -128,7 +128,7 @@ class StartTimer(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class CancelTimer(Record):
     """``<cancel-timer name>``: stop a timer before it fires."""
 
@@ -136,7 +136,7 @@ class CancelTimer(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Log(Record):
     """``<log text>``: a note in the trace."""
 
@@ -165,7 +165,7 @@ class HandlerKind(str, enum.Enum):
     """A labelled Q&A heard something its grammar does not match."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Handler(Record):
     """What to do on an event, or on a labelled Command's end or answer."""
 
@@ -206,7 +206,7 @@ def words(text: str) -> list[str]:
     return out
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Choice(Record):
     """One answer of a grammar, and the phrases that mean it."""
 
@@ -215,7 +215,7 @@ class Choice(Record):
     """Synonyms, each a tuple of normalised words."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Pattern(Record):
     """A pattern: words, ``*`` (any words, captured) and ``#`` (a number, captured).
 
@@ -240,7 +240,7 @@ MAX_PHRASE_WORDS = 20
 """Most words in one synonym of a choice."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Grammar(Record):
     """An answer grammar: choices with synonyms, and/or patterns."""
 
@@ -340,7 +340,7 @@ def match_pattern(items: tuple[str, ...], heard: list[str]) -> list[str] | None:
 
 # ---------------------------------------------------------------- structure
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class State(Record):
     """A state: actions on entry, and handlers active while the application is in it."""
 
@@ -355,7 +355,7 @@ class State(Record):
     """The id of the begin/end block this state belongs to, if any."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class StreamBlock(Record):
     """An explicit Communication Stream: while the app is in these states, one CS."""
 
@@ -365,7 +365,7 @@ class StreamBlock(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class AtomicBlock(Record):
     """A begin/end block: while the app is in these states, one atomic behavior."""
 
@@ -376,7 +376,7 @@ class AtomicBlock(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Variable(Record):
     """A document variable, with its initial value (null without one)."""
 
@@ -385,7 +385,7 @@ class Variable(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class EventDecl(Record):
     """A user-defined event (FA only)."""
 
@@ -394,7 +394,7 @@ class EventDecl(Record):
     loc: Loc
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Document(Record):
     """A validated PXML application."""
 

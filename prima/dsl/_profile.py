@@ -101,7 +101,7 @@ MAX_BACKCHANNELS = 100
 """Most phrases ``<hearing backchannels>`` may list."""
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Hearing(Record):
     """When the robot hears its user (``<hearing>``, docs/rules.md 7.5)."""
 
@@ -125,7 +125,7 @@ class Hearing(Record):
 _PHRASES = re.compile(r"[.,;:!?]+")
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class RobotProfile(Record):
     """A loaded, checked robot hardware profile."""
 
