@@ -251,7 +251,8 @@ class Run:
         self.sim.on_event = self._event
         self.sim.on_user = self._user
         self.sim.on_zone = self._zone
-        self.sim.sample_poses(pose_rate, self._sample)
+        self.sim.sample_poses(pose_rate, self._sample, moved=True)  # (a still instant
+        # would repeat the poses of the line before it: ``_sample`` writes no line)
         self._port = _Port(self)
 
     def _recording(self, sink: Callable[[TraceLine], None] | None,

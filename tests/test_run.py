@@ -18,6 +18,7 @@ from prima.cli import main
 from prima.errors import DocumentError, ScenarioError
 from prima.mediator import DecisionKind
 from prima.run import Loaded, Run
+from prima.sim import Simulator
 from prima.trace import Kind, TraceLine, device_overlaps, format_jsonl, format_text
 
 ROOT = Path(__file__).parents[1]
@@ -241,7 +242,10 @@ def test_the_jsonl_trace_carries_poses_at_a_fixed_rate_where_they_changed(
     assert all(line.robot is not None and line.user is not None for line in posed)
     poses = [line for line in office if line.kind is Kind.POSE]
     assert all(line.t * 2 == round(line.t * 2) for line in poses)
-    monkeypatch.setattr(Run, "_sample", lambda run: run._line(Kind.POSE))  # (every one)
+    monkeypatch.setattr(Run, "_sample", lambda run: run._line(Kind.POSE))  # (every one,
+    plain = Simulator.sample_poses  # at every instant, even one at which nothing moved)
+    monkeypatch.setattr(Simulator, "sample_poses",
+                        lambda sim, rate, on_sample, moved=False: plain(sim, rate, on_sample))
     every = [line for line in Run(OFFICE, until=120).run() if line.kind in _POSED]
     assert len([line for line in every if line.kind is Kind.POSE]) == 2 * 120 + 1
     kept = [line for before, line in zip([None, *every], every, strict=False)
@@ -254,6 +258,27 @@ def test_the_jsonl_trace_carries_poses_at_a_fixed_rate_where_they_changed(
     assert len(poses) < len(every) - len(posed) + len(poses) - 40  # (many were repeats)
     record = json.loads(format_jsonl(poses[:1]))
     assert set(record["robot"]) == {"x", "y", "heading"}
+
+
+def test_standing_still_costs_a_run_no_pose_sample() -> None:
+    """Fig. 5.7's robot and user stand still from 60 s on: a run to 6,000 s asks for no
+    more samples than a run to 120 s, and writes the same lines but for the last pose's
+    time (a run's cost follows what happens, not how long it goes on)."""
+    def run(until: float) -> tuple[int, list[tuple[object, ...]]]:
+        made = Run(ROOT / "scenarios" / "thesis" / "fig5-7.xml", until=until)
+        asked = [0]
+        sample = made.sim.on_sample
+
+        def counted() -> None:
+            asked[0] += 1
+            sample()
+        made.sim.on_sample = counted
+        lines = made.run()
+        assert lines[-1].kind is Kind.POSE and lines[-1].t == until
+        return asked[0], [(x.t, x.kind, x.text, x.robot, x.user) for x in lines[:-1]]
+
+    assert run(6000.0) == run(120.0)
+    assert 0 < run(120.0)[0] < 40
 
 
 def test_pose_samples_change_nothing_else() -> None:

@@ -151,6 +151,10 @@ class Simulator:
         self.sample_every = 0
         """Call ``on_sample`` every this many ticks (0: never); see :meth:`sample_poses`."""
         self.on_sample: Callable[[], None] = _ignore
+        self._moved = False
+        self._sampled = -1
+        """With :meth:`sample_poses`'s ``moved``, the world's version at the last call of
+        ``on_sample`` (-1: none yet, or every instant called)."""
         self.steps = 0
         """Physics steps taken so far (counted as each stretch of steps ends: up to date
         whenever the simulator has returned)."""
@@ -560,7 +564,7 @@ class Simulator:
                         if pace is not None:
                             pace(tick)
                     if sample and tick % sample == 0:
-                        self.on_sample()
+                        self._sample()
                     if (tick >= target or (heap and heap[0][0] <= tick)
                             or (stop_on_report and self.reports != before)):
                         break
@@ -586,8 +590,10 @@ class Simulator:
         sample = self.sample_every
         if sample:  # nothing moves: the samples on the way see the same poses
             for tick in range((k.tick // sample + 1) * sample, jump + 1, sample):
+                if self.world.version == self._sampled:
+                    break  # (``moved``: the rest would see what the last one saw)
                 k.tick = tick
-                self.on_sample()
+                self._sample()
         k.tick = jump
 
     # ---- state -------------------------------------------------------------------
@@ -659,12 +665,24 @@ class Simulator:
     def ticks(self, seconds: float) -> int:
         return self.kernel.ticks(seconds)
 
-    def sample_poses(self, rate: float, on_sample: Callable[[], None]) -> None:
+    def sample_poses(self, rate: float, on_sample: Callable[[], None], *,
+                     moved: bool = False) -> None:
         """Call ``on_sample`` ``rate`` times per simulated second (rounded to whole
         ticks), at fixed instants, whether or not anything moves; ``rate`` 0: never.
-        Sampling never changes what happens."""
+        With ``moved``, the instants at which nothing moves are skipped once a call has
+        seen the poses they would show (no body has moved since): however long the robot
+        and the user stand still, at most one call, so that a run's cost follows what
+        happens, not how long. Sampling never changes what happens."""
         self.on_sample = on_sample
         self.sample_every = max(1, round(self.kernel.hz / rate)) if rate > 0 else 0
+        self._moved = moved
+        self._sampled = -1
+
+    def _sample(self) -> None:
+        """Call ``on_sample`` (:meth:`sample_poses`)."""
+        if self._moved:
+            self._sampled = self.world.version
+        self.on_sample()
 
     def longest_for(self, app: str) -> float:
         """The longest atomic behavior ``app`` may start (s); unbounded if not set."""
