@@ -221,6 +221,8 @@ class Run:
         self.apps: dict[str, _App] = {}
         self._paths: dict[str, Path] = {}
         """Each loaded application's document."""
+        self._file_names: dict[str, str] = {}
+        """Each loaded application's document's file name (a request line's ``at``)."""
         self._outcomes: dict[int, Outcome] = {}
         self._said: dict[int, tuple[float, float]] = {}
         """An ended AB's words: when they began and ended (for its end line)."""
@@ -386,6 +388,7 @@ class Run:
         self.mediator.register(name, role, interpreter)  # its load decision is traced
         self.apps[name] = app
         self._paths[name] = path
+        self._file_names[name] = path.name
         self._guard(app, interpreter.start)
 
     def _guard(self, app: _App, work: Callable[[], None]) -> None:
@@ -693,7 +696,7 @@ class Run:
         mine = d.rule is not _RESTART and d.precedes is None
         if mine and request is not None and app is not None and request.app == d.app:
             loc = app.interpreter.last_request
-            at = f"{self._paths[app.name].name}:{loc.line}:{loc.col}" if loc else ""
+            at = f"{self._file_names[app.name]}:{loc.line}:{loc.col}" if loc else ""
             cuttable = request.on_interrupt is not _NEVER
             for cid in ids:
                 self._requested[cid] = (at, cuttable)

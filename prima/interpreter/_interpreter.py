@@ -110,14 +110,6 @@ def _handler_table(document: Document, state_id: str | None
     return table
 
 
-class _Leave(Exception):
-    """A goto: unwinds the running handler."""
-
-    def __init__(self, target: str, loc: Loc) -> None:
-        self.target = target
-        self.loc = loc
-
-
 @dataclass(slots=True)
 class _Handling:
     """What the current handling adds to requests (rules 5 and 6)."""
@@ -366,10 +358,9 @@ class Interpreter:
         self._note(Note(self.clock.now(), self.app, TraceKind.HANDLER, f"<{tag}> {key}",
                         {"handler": tag, "key": key, "state": self.state,
                          "line": handler.loc.line, "col": handler.loc.col}))
-        try:
-            self._actions(handler.actions, scope)
-        except _Leave as leave:
-            self._transition(leave.target, leave.loc)
+        leave = self._actions(handler.actions, scope)
+        if leave is not None:
+            self._transition(leave.state, leave.loc)
 
     def _handlers(self, kind: HandlerKind, key: str) -> tuple[Handler, ...]:
         """The handlers for ``kind``/``key`` in the order they are tried: the state's own
@@ -383,22 +374,23 @@ class Interpreter:
         """Enter ``target`` (and the states its entries go to); ``goto``: the <goto> that
         led there, where a loop of them is reported."""
         for _ in range(MAX_TRANSITIONS):
-            try:
-                self._enter(target)
+            leave = self._enter(target)
+            if leave is None:
                 return
-            except _Leave as leave:
-                target, goto = leave.target, leave.loc
+            target, goto = leave.state, leave.loc
         raise ExecutionError(f"{self._where(goto)}more than {MAX_TRANSITIONS} state changes "
                              "while handling one event (a <goto> loop?)")
 
-    def _enter(self, target: str) -> None:
+    def _enter(self, target: str) -> Goto | None:
+        """Enter ``target`` and run its entry actions: the <goto> among them that leaves
+        it at once, if any."""
         old = self.document.states.get(self.state or "")
         new = self.document.states[target]
         self._switch_groups(old, new)
         self.state = target
         self._note(Note(self.clock.now(), self.app, TraceKind.STATE, target,
                         {"line": new.loc.line, "col": new.loc.col}))
-        self._actions(new.entry, self._scope(None))
+        return self._actions(new.entry, self._scope(None))
 
     def _switch_groups(self, old: State | None, new: State) -> None:
         if old is not None and old.block is not None and old.block != new.block:
@@ -420,25 +412,27 @@ class Interpreter:
 
     # ------------------------------------------------------------ actions
 
-    def _actions(self, actions: tuple[Action, ...], scope: Scope) -> None:
+    def _actions(self, actions: tuple[Action, ...], scope: Scope) -> Goto | None:
+        """Run ``actions`` in order, up to a <goto>: the one that ends them, if any (it
+        leaves the running handler: each caller passes it up, to the state change). (Not
+        an exception: compiled, one costs a traceback entry in every frame it unwinds.)"""
         for action in actions:
-            self._action(action, scope)
-
-    def _action(self, action: Action, scope: Scope) -> None:
-        _ACTIONS[type(action)](self, action, scope)
+            leave = _ACTIONS[type(action)](self, action, scope)
+            if leave is not None:
+                return leave
+        return None
 
     def _assign(self, action: Assign, scope: Scope) -> None:
         self.variables[action.name] = self._eval(action.expr, action.loc, scope)
 
-    def _if(self, action: If, scope: Scope) -> None:
+    def _if(self, action: If, scope: Scope) -> Goto | None:
         for cond, body in action.branches:
             if truthy(self._eval(cond, action.loc, scope)):
-                self._actions(body, scope)
-                return
-        self._actions(action.otherwise, scope)
+                return self._actions(body, scope)
+        return self._actions(action.otherwise, scope)
 
-    def _goto(self, action: Goto, _scope: Scope) -> None:
-        raise _Leave(action.state, action.loc)
+    def _goto(self, action: Goto, _scope: Scope) -> Goto:
+        return action
 
     def _send_action(self, action: Send, scope: Scope) -> None:
         text = self._text(self._eval(action.text, action.loc, scope), "a message", action.loc)
@@ -555,7 +549,7 @@ class Interpreter:
         return f"{self.document.path}:{loc.line}:{loc.col}: " if loc else f"{self.document.path}: "
 
 
-_ACTIONS: Final[Mapping[type, Callable[[Interpreter, Any, Scope], None]]] = {
+_ACTIONS: Final[Mapping[type, Callable[[Interpreter, Any, Scope], Goto | None]]] = {
     Request: Interpreter._request,
     Assign: Interpreter._assign,
     If: Interpreter._if,
@@ -566,7 +560,8 @@ _ACTIONS: Final[Mapping[type, Callable[[Interpreter, Any, Scope], None]]] = {
     CancelTimer: Interpreter._cancel_timer,
     Log: Interpreter._log,
 }
-"""How each kind of action runs: one method per action type."""
+"""How each kind of action runs: one method per action type (what it returns: the
+<goto> that leaves the running handler, if any)."""
 
 if set(_ACTIONS) != set(get_args(Action)):  # pragma: no cover - a new action needs a method
     raise TypeError(f"Interpreter has no method for {set(get_args(Action)) - set(_ACTIONS)}")

@@ -95,6 +95,23 @@ def test_first_request_of_a_reactive_event_is_reactive_and_only_the_first() -> N
     assert interp.state == "t"
 
 
+def test_a_goto_ends_its_handler_and_its_entry_however_deep() -> None:
+    """A <goto> inside an <if> leaves the handler (or the entry) at once: nothing after
+    it runs, in its branch or after the <if>; the state it names is entered, and its
+    entry's own <goto> goes on from there."""
+    interp, port, *_ = make(
+        '<var name="n" expr="0"/>'
+        '<state id="s" initial="true"><on event="touched"><if cond="n == 0">'
+        '<assign name="n" expr="1"/><goto state="t"/><assign name="n" expr="2"/></if>'
+        '<chain>Speak("after the if")</chain></on></state>'
+        '<state id="t"><entry><if cond="true"><goto state="u"/></if>'
+        '<chain>Speak("in t")</chain></entry></state>'
+        '<state id="u"><entry><chain>Speak("in u")</chain></entry></state>')
+    interp.event(Event("touched"))
+    assert interp.state == "u" and interp.variables["n"] == 1
+    assert texts(port) == [["in u"]]
+
+
 def test_a_touch_is_the_users_own_action_on_any_robot() -> None:
     """docs/rules.md 7.1: the interpreter is given no user events by its robot here, yet
     what it requests while handling a touch is a reaction to the user's own action; a
