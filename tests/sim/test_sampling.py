@@ -1,6 +1,7 @@
-"""Pose samples (``Simulator.sample_poses``): at fixed instants; with ``moved``, only at
-those at which a body has moved since the last sample, so that a world standing still
-costs no sample however long it stands (a run's cost follows what happens)."""
+"""Pose samples (``Simulator.sample_poses``): at fixed instants; with ``moved``, those at
+which nothing moves are skipped once a sample has seen the poses they would show, so that
+a world standing still costs no sample however long it stands (a run's cost follows what
+happens)."""
 
 from __future__ import annotations
 
