@@ -67,6 +67,8 @@ def unshowable(text: str) -> str | None:
     """The first character of ``text`` that :func:`terminal` escapes (a control, a line
     or paragraph separator, a bidirectional control, an undecodable byte), or None: a
     place that takes words to show as they are refuses them."""
+    if text.isprintable():  # (no character :func:`terminal` escapes: see there)
+        return None
     found = _re(_TERMINAL).search(text)
     return found.group() if found else None
 
@@ -76,6 +78,12 @@ def terminal(text: str) -> str:
     line and paragraph separators, the bidirectional controls and undecodable bytes as
     ``\\n``, ``\\x1b``, ``\\u2028``, ``\\u202e``, ``\\xff``... A document cannot forge a
     line, reorder one or send an escape sequence."""
+    # (Every character it escapes is one Python calls unprintable: a control, a format
+    # character, a separator or a surrogate. A text with none, almost every one, is
+    # returned as it is at once: the pattern's search looks at each character in turn,
+    # some 8,000 instructions for one row of the text trace.)
+    if text.isprintable():
+        return text
     return _re(_TERMINAL).sub(_escape_one, text)
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from prima import escape
 from prima.cli import main
 from prima.escape import json_line, markup, script_json, terminal
 from prima.judge import load_trace
@@ -48,6 +49,24 @@ def _cli(*argv: str) -> tuple[int, str, str]:
 ])
 def test_terminal(text: str, shown: str) -> None:
     assert terminal(text) == shown
+
+
+def test_terminal_escapes_no_character_python_calls_printable() -> None:
+    """:func:`terminal` and :func:`~prima.escape.unshowable` return a printable text as it
+    is, without the pattern's search: sound only while the pattern takes no printable
+    character. Each of the 1,114,112 code points, alone and amid words, is shown as the
+    pattern alone would show it."""
+    pattern = re.compile(escape._TERMINAL)
+    for code in range(0x110000):
+        c = chr(code)
+        if pattern.fullmatch(c):
+            assert not c.isprintable(), f"U+{code:04X}"
+    for c in "\n\x1b\x9b\u061c\u200f\u2028\u202e\u2069\udcff\x00":
+        text = f"say {c} now"
+        assert terminal(text) == pattern.sub(escape._escape_one, text) != text
+        assert escape.unshowable(text) == c
+    for text in ("caf\u00e9 \u3042", "a\u00a0b", "zero\u200bwidth", ""):
+        assert terminal(text) == text and escape.unshowable(text) is None
 
 
 @pytest.mark.parametrize("value", ["a\u2028b\u2029c\x85d", "<!--<script>", "</script>", "\u3042"])
