@@ -13,7 +13,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any, Final, NoReturn
 
 from prima.escape import json_line, terminal
 from prima.mediator import DecisionKind
@@ -98,15 +98,27 @@ class TraceLine:
         object.__setattr__(self, "detectable", detectable)
 
     @classmethod
-    def made(cls, t: float, seq: int, kind: RecordKind, fields: Mapping[str, Any]) -> TraceLine:
+    def made(cls, t: float, seq: int, kind: RecordKind, fields: dict[str, Any]) -> TraceLine:
         """The line ``TraceLine(t, seq, kind, **fields)`` makes, made at a third of the
         cost (a run makes one for everything that happens): its fields are stored at
         once rather than one by one through the frozen class's guard."""
-        if not fields.keys() <= _DEFAULTS.keys():
-            unknown = sorted(fields.keys() - _DEFAULTS.keys())
-            raise TypeError(f"TraceLine has no field {unknown[0]!r}")
         if not _STORED_AT_ONCE:
-            return cls(t, seq, kind, **fields)
+            # (compiled: the fields given by position, to the native ``__init__``. By name,
+            # its 18 keywords were parsed again for every line: some 10,000 instructions,
+            # a fifth of a run of Fig. 5.7. ``fields`` a dict: each ``get`` a C call.)
+            known = _DEFAULTS
+            for name in fields:
+                if name not in known:
+                    _no_field(fields)
+            return TraceLine(t, seq, kind, fields.get("app"), fields.get("ab"),
+                             fields.get("tree"), fields.get("command"), fields.get("text"),
+                             fields.get("devices"), fields.get("reactive"),
+                             fields.get("reason"), fields.get("action"), fields.get("detail"),
+                             fields.get("command_ids"), fields.get("before"),
+                             fields.get("robot"), fields.get("user"),
+                             fields.get("detectable"))
+        if not fields.keys() <= _DEFAULTS.keys():
+            _no_field(fields)
         line = object.__new__(cls)
         state = dict(_DEFAULTS)
         state.update(fields)
@@ -120,6 +132,12 @@ class TraceLine:
         fields = (self.__dict__ if _STORED_AT_ONCE
                   else {name: getattr(self, name) for name in _DEFAULTS})
         return row_of(self.t, self.seq, self.kind, fields)
+
+
+def _no_field(fields: Mapping[str, Any]) -> NoReturn:
+    """Refuse fields a line does not have, as ``TraceLine(**fields)`` would."""
+    unknown = sorted(fields.keys() - _DEFAULTS.keys())
+    raise TypeError(f"TraceLine has no field {unknown[0]!r}")
 
 
 _STORED_AT_ONCE = "__dict__" in vars(TraceLine)
@@ -150,6 +168,8 @@ rounded: Final[Callable[[float, int], float]] = round if _STORED_AT_ONCE else _r
 """``round`` for the numbers of the lines (times, poses): where the module is compiled,
 :func:`_rounded`, some ten times cheaper than ``round``; else ``round`` itself, one call
 where :func:`_rounded` would run some twenty bytecodes."""
+_NATIVE: Final = not _STORED_AT_ONCE
+"""Whether this module is compiled (where :func:`_rounded` is the rounding of choice)."""
 
 _DEFAULTS: dict[str, Any] = {
     f.name: None if f.default is dataclasses.MISSING else f.default
@@ -199,8 +219,13 @@ def rounded_pose(pose: Pose, which: int, detectable: bool | None = None) -> dict
     the user's, with whether they are ``detectable`` unless that is None."""
     kept = _ROUNDED[which]
     if kept[0] != pose:
-        kept = _ROUNDED[which] = (pose, {"x": rounded(pose[0], 3), "y": rounded(pose[1], 3),
-                                         "heading": rounded(pose[2], 1)})
+        x, y, heading = pose
+        if _NATIVE:  # (compiled: :func:`_rounded` called in C; ``rounded`` is a call by
+            # name, its floats boxed and parsed again: some 400 instructions each)
+            shown = {"x": _rounded(x, 3), "y": _rounded(y, 3), "heading": _rounded(heading, 1)}
+        else:
+            shown = {"x": round(x, 3), "y": round(y, 3), "heading": round(heading, 1)}
+        kept = _ROUNDED[which] = (pose, shown)
     out = dict(kept[1])
     if detectable is not None:
         out["detectable"] = detectable

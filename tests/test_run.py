@@ -447,6 +447,14 @@ def test_a_line_made_in_one_go_is_the_line_the_class_makes(
     fields = {"app": "fa", "ab": 3, "command": "Speak", "text": 'say "hi"\n',
               "devices": ("speaker",), "detail": {"b": 1, "a": None},
               "robot": (1.0, 2.0, 90.0), "user": (3.0, 4.0, 0.0), "detectable": True}
+    every: dict[str, object] = {  # (each field its own value, of its type)
+        "app": "fa", "ab": 3, "tree": 4, "command": "Speak", "text": "hi",
+        "devices": ("speaker",), "reactive": True, "reason": "free-devices", "action": "say",
+        "detail": {"a": 1}, "command_ids": (5, 6), "before": 7, "robot": (1.0, 2.0, 3.0),
+        "user": (4.0, 5.0, 6.0), "detectable": False}
+    assert [*every] == [*prima.trace._DEFAULTS][3:]
+    made = TraceLine.made(1.25, 7, DecisionKind.START, every)
+    assert {name: getattr(made, name) for name in every} == every
     for given in ({}, fields, {"reason": "start", "before": 2}):
         made = TraceLine.made(1.25, 7, DecisionKind.START, given)
         assert made == TraceLine(1.25, 7, DecisionKind.START, **given)
@@ -454,6 +462,8 @@ def test_a_line_made_in_one_go_is_the_line_the_class_makes(
     assert TraceLine.made(0.0, 0, Kind.POSE, {}).detail == {}
     with pytest.raises(TypeError, match="no field 'colour'"):
         TraceLine.made(0.0, 0, Kind.POSE, {"colour": "red"})
+    with pytest.raises(TypeError, match="no field 'colour'"):  # (the first unknown, by name)
+        TraceLine.made(0.0, 0, Kind.POSE, {"app": "fa", "zone": 1, "colour": "red"})
 
 
 @pytest.mark.parametrize("scenario", ["thesis/sample-03.xml", "examples/museum-cafe.xml",
@@ -511,7 +521,7 @@ def test_a_pose_equal_to_the_last_one_is_not_rounded_again(
         calls.append(x)
         return round(x, digits)
 
-    monkeypatch.setattr(prima.trace, "rounded", counted)
+    monkeypatch.setattr(prima.trace, "round", counted, raising=False)  # (the builtin, shadowed)
     x, y, heading = 1.23456, 2.0, 90.04
     first = prima.trace.rounded_pose((x, y, heading), 0)
     again = prima.trace.rounded_pose((x, y, heading), 0)  # (an equal tuple, made anew)
