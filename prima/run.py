@@ -503,7 +503,7 @@ class Run:
             app = self.apps.get(d.app or "")
             if app is None or not app.failed:  # not an error the interpreter already reported
                 self._line(_ERROR, app=d.app, text=self._located(app, d.detail),
-                           reason=d.rule.value)
+                           reason=d.rule._value_)
             if app is not None:
                 self._fail(app)
         elif kind is _LOAD:
@@ -559,7 +559,7 @@ class Run:
         self._line(d.kind, app=d.app, ab=d.ab, tree=d.tree, command=d.command, text=text,
                    devices=tuple(d.devices) if d.devices else None,
                    reactive=d.reactive if d.ab is not None else None,
-                   reason=d.rule.value, detail=detail, before=d.before,
+                   reason=d.rule._value_, detail=detail, before=d.before,
                    command_ids=d.command_ids if len(d.command_ids) > 1 else None)
 
     def _decision_row(self, rows: Callable[[dict[str, object]], None], d: Decision,
@@ -782,7 +782,7 @@ class Run:
             detail["target"] = action.target
         if action.heard is not None:
             detail["heard"] = action.heard
-        self._line(_USER, action=action.action.value, text=action.text, detail=detail)
+        self._line(_USER, action=action.action._value_, text=action.text, detail=detail)
 
     def _note(self, note: Note) -> None:
         if note.kind is _ERROR:

@@ -110,9 +110,11 @@ def _handler_table(document: Document, state_id: str | None
     return table
 
 
-@dataclass(slots=True)
+@dataclass(slots=True, init=False)
 class _Handling:
-    """What the current handling adds to requests (rules 5 and 6)."""
+    """What the current handling adds to requests (rules 5 and 6). (Its ``__init__`` is
+    written out, as :class:`_Timer`'s: compiled, it runs at C speed, where the one
+    ``dataclass`` writes runs as Python; one is made for every handler run.)"""
 
     reactive: bool = False
     follows: CommandId | None = None
@@ -120,14 +122,27 @@ class _Handling:
     user: bool = False
     """The event handled is the user's own action (docs/rules.md 7.1)."""
 
+    def __init__(self, reactive: bool = False, follows: CommandId | None = None,
+                 requested: bool = False, user: bool = False) -> None:
+        self.reactive = reactive
+        self.follows = follows
+        self.requested = requested
+        self.user = user
 
-@dataclass
+
+@dataclass(init=False)
 class _Timer:
     due: float
     reactive: bool
     seq: int
     loc: Loc
     """The ``<timer>`` that started it."""
+
+    def __init__(self, due: float, reactive: bool, seq: int, loc: Loc) -> None:
+        self.due = due
+        self.reactive = reactive
+        self.seq = seq
+        self.loc = loc
 
 
 class Interpreter:
@@ -167,6 +182,9 @@ class Interpreter:
         self._fired_at, self._fired = -1.0, 0
         self._tables: dict[str | None, dict[tuple[HandlerKind, str], tuple[Handler, ...]]] = {}
         """Per state: its handlers and the document's, by kind and key (built when first asked)."""
+        self._defaults: dict[str, tuple[tuple[str, Value], ...]] = {}
+        """Per Command: the defaults a call that leaves an argument out gets (built when first
+        asked: the catalog's parameters are looked through once, not at every call)."""
 
     # ------------------------------------------------------------ lifecycle
 
@@ -240,12 +258,12 @@ class Interpreter:
             return
         utterance = values.get("utterance")
         kind = HandlerKind.NOINPUT
-        data: dict[str, Value] = {"name": kind.value}
+        data: dict[str, Value] = {"name": kind._value_}
         if values.get("status") == "answered" and utterance is not None:
             grammar = self.document.grammars[call.grammar or ""]
             answer = grammar.match(to_text(utterance))
             kind = HandlerKind.NOMATCH if answer is None else HandlerKind.ANSWER
-            data = {"name": kind.value, "utterance": to_text(utterance), "answer": answer}
+            data = {"name": kind._value_, "utterance": to_text(utterance), "answer": answer}
             if answer is not None and call.into:
                 self.variables[call.into] = answer
         self._guard(lambda: self._dispatch(kind, call.label or "", data, False, command_id))
@@ -354,7 +372,7 @@ class Interpreter:
             return
         if kind is HandlerKind.EVENT and handler.reactive is not None:
             self._handling.reactive = handler.reactive
-        tag = kind.value
+        tag = kind._value_
         self._note(Note(self.clock.now(), self.app, TraceKind.HANDLER, f"<{tag}> {key}",
                         {"handler": tag, "key": key, "state": self.state,
                          "line": handler.loc.line, "col": handler.loc.col}))
@@ -492,24 +510,30 @@ class Interpreter:
             self._commands[cid] = call
 
     def _call(self, call: CommandCall, scope: Scope) -> Call:
-        spec = self.catalog[call.command]
+        command = call.command
+        spec = self.catalog[command]
+        loc = call.loc
         args: dict[str, Value] = {}
         for name, compiled in call.args.items():
             param = spec.param(name)
-            value = self._eval(compiled, call.loc, scope)
-            what = f"{call.command} '{name}'"
-            if param is not None and param.kind is ParamKind.NUMBER:
-                args[name] = self._number(value, what, call.loc)
+            kind = param.kind if param is not None else None
+            value = self._eval(compiled, loc, scope)
+            if kind is ParamKind.NUMBER:
+                args[name] = self._number(value, command, loc, name)
             else:
-                args[name] = self._text(value, what, call.loc)
-            if param is not None and param.kind is ParamKind.GESTURE:
-                self._check_gesture(str(args[name]), call.loc)
-        for param in spec.params:
-            if param.name not in args and param.default is not None and \
-                    param.kind not in (ParamKind.GRAMMAR, ParamKind.VARIABLE):
-                args[param.name] = param.default
-        extra = {name: self._eval(c, call.loc, scope) for name, c in call.extra.items()}
-        return Call(call.command, args, extra, call.label)
+                args[name] = text = self._text(value, command, loc, name)
+                if kind is ParamKind.GESTURE:
+                    self._check_gesture(text, loc)
+        defaults = self._defaults.get(command)
+        if defaults is None:
+            defaults = self._defaults[command] = tuple(
+                (p.name, p.default) for p in spec.params
+                if p.default is not None and p.kind not in (ParamKind.GRAMMAR, ParamKind.VARIABLE))
+        for name, default in defaults:
+            if name not in args:
+                args[name] = default
+        extra = {name: self._eval(c, loc, scope) for name, c in call.extra.items()}
+        return Call(command, args, extra, call.label)
 
     def _check_gesture(self, name: str, loc: Loc) -> None:
         """A gesture computed at run time passes the checks a literal one passes."""
@@ -522,12 +546,15 @@ class Interpreter:
 
     # ------------------------------------------------------------ values
 
-    def _text(self, value: Value, what: str, loc: Loc) -> str:
-        """A value as text, within the application's text budget."""
+    def _text(self, value: Value, what: str, loc: Loc, arg: str | None = None) -> str:
+        """A value as text, within the application's text budget. (``what`` it is, or with
+        ``arg``, the Command whose argument ``arg`` it is: its words are made only for an
+        error.)"""
         text = to_text(value)
         if len(text) > self.budgets.text:
-            raise ExecutionError(f"{self._where(loc)}{what} is {len(text)} characters long; "
-                                 f"the limit is {self.budgets.text} (its text budget)")
+            raise ExecutionError(f"{self._where(loc)}{_what(what, arg)} is {len(text)} "
+                                 f"characters long; the limit is {self.budgets.text} (its "
+                                 "text budget)")
         return text
 
     def _scope(self, event: Mapping[str, Value] | None) -> Scope:
@@ -540,13 +567,20 @@ class Interpreter:
         except ExecutionError as exc:
             raise ExecutionError(f"{self._where(loc)}{exc} (in {compiled.source!r})") from exc
 
-    def _number(self, value: Value, what: str, loc: Loc) -> float | int:
+    def _number(self, value: Value, what: str, loc: Loc, arg: str | None = None) -> float | int:
+        """A value that must be a number (``what`` and ``arg``: as for :meth:`_text`)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ExecutionError(f"{self._where(loc)}{what} must be a number, got {value!r}")
+            raise ExecutionError(f"{self._where(loc)}{_what(what, arg)} must be a number, "
+                                 f"got {value!r}")
         return value
 
     def _where(self, loc: Loc | None) -> str:
         return f"{self.document.path}:{loc.line}:{loc.col}: " if loc else f"{self.document.path}: "
+
+
+def _what(what: str, arg: str | None) -> str:
+    """What a value is, in an error: ``what``, or a Command's argument (``Speak 'text'``)."""
+    return what if arg is None else f"{what} '{arg}'"
 
 
 _ACTIONS: Final[Mapping[type, Callable[[Interpreter, Any, Scope], Goto | None]]] = {

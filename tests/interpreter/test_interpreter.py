@@ -9,7 +9,7 @@ import pytest
 from prima.dsl import check_document, default_profile
 from prima.interpreter import AppFailure, Interpreter, Note
 from prima.mediator import Event, ManualClock, Outcome, Request, RunningOrder
-from prima.vocab import TraceKind
+from prima.vocab import Budgets, TraceKind
 
 
 class Port:
@@ -237,6 +237,27 @@ def test_number_argument_of_the_wrong_type_is_a_runtime_error() -> None:
                           '<on event="touched"><chain>Turn({a})</chain></on></state>')
     with pytest.raises(AppFailure, match="Turn 'angle' must be a number"):
         interp.event(Event("touched"))
+
+
+def test_a_computed_argument_longer_than_the_text_budget_is_a_runtime_error() -> None:
+    source = (b'<pxml xmlns="urn:prima:pxml:1" kind="fa" name="t"><var name="a" expr="\'ab\'"/>'
+              b'<state id="s" initial="true"><on event="touched"><chain>Speak("{a}{a}{a}")'
+              b'</chain></on></state></pxml>')
+    document, problems = check_document(source, "t.pxml")
+    assert document is not None, [str(p) for p in problems]
+    interp = Interpreter(document, "app", Port(), ManualClock(),
+                         catalog=default_profile().catalog(), budgets=Budgets(text=5))
+    interp.start()
+    with pytest.raises(AppFailure, match="Speak 'text' is 6 characters long; the limit is 5"):
+        interp.event(Event("touched"))
+
+
+def test_a_call_gets_the_defaults_of_the_arguments_it_leaves_out_every_time() -> None:
+    _i, port, *_ = make('<state id="s" initial="true"><entry><chain>ActiveSensingHuman(), '
+                        'ActiveSensingHuman("Here?"), ActiveSensingHuman()</chain></entry>'
+                        '</state>')
+    assert [c.args for c in port.requests[0].calls] == [
+        {"say": "", "turn": 90.0}, {"say": "Here?", "turn": 90.0}, {"say": "", "turn": 90.0}]
 
 
 def test_active_sensing_passes_its_prompt_and_the_default_turn() -> None:
