@@ -97,6 +97,7 @@ _cpBodySetPosition: Final = _cp.cpBodySetPosition
 _cpBodySetVelocity: Final = _cp.cpBodySetVelocity
 _cpSpacePointQueryNearest: Final = _cp.cpSpacePointQueryNearest
 _cpSpaceSegmentQueryFirst: Final = _cp.cpSpaceSegmentQueryFirst
+_cpShapeSegmentQuery: Final = _cp.cpShapeSegmentQuery
 _cpSpaceStep: Final = _cp.cpSpaceStep
 _hypot: Final = math.hypot
 _atan2: Final = math.atan2
@@ -209,13 +210,20 @@ class _Joint:
         self.t1 = tick + ticks
 
 
-def _add_walls(space: pymunk.Space, world_map: WorldMap) -> None:
-    """The map's walls, as static segments of the space (which nothing moves)."""
+def _add_walls(space: pymunk.Space,
+               world_map: WorldMap) -> list[tuple[float, float, float, float, Any]]:
+    """The map's walls, as static segments of the space (which nothing moves); returns
+    each one's bounding box (left, bottom, right, top) and its shape as Chipmunk knows
+    it."""
+    out = []
     for w in world_map.walls:
         seg = pymunk.Segment(space.static_body, (w.x1, w.y1), (w.x2, w.y2), w.thickness / 2)
         seg.filter = pymunk.ShapeFilter(categories=WALL)
         seg.friction = 0.0
         space.add(seg)
+        bb = seg.cache_bb()
+        out.append((bb.left, bb.bottom, bb.right, bb.top, seg._shape))
+    return out
 
 
 class World:
@@ -229,7 +237,7 @@ class World:
         self.dt = 1.0 / hz
         space = pymunk.Space()
         space.collision_slop = 0.005  # metres: the default 0.1 would let bodies sink 10 cm
-        _add_walls(space, world_map)
+        self._walls = _add_walls(space, world_map)  # (their boxes and shapes: _clear)
         body = pymunk.Body(20.0, float("inf"))
         body.position = (robot.x, robot.y)
         body.angle = _radians(robot.heading)
@@ -463,7 +471,22 @@ class World:
     def _clear(self, a: tuple[float, float], b: tuple[float, float], radius: float) -> bool:
         # (Space.segment_query_first, without the result's Python objects)
         hit = _cpSpaceSegmentQueryFirst(self._sp, a, b, radius, _SIGHT, _NULL)
-        return bool(hit == _NULL)
+        if hit != _NULL:
+            return False
+        if radius <= 0.0:
+            return True
+        # Chipmunk's query of the space fattens the segment only where it asks a shape:
+        # it asks the shapes whose bounding boxes the thin segment crosses, so a wall
+        # within ``radius`` of it beside it (along a drive, by a doorway) is never asked.
+        # Each wall whose box lies within ``radius`` of the segment's is asked itself.
+        (ax, ay), (bx, by) = a, b
+        x0, x1 = (ax - radius, bx + radius) if ax < bx else (bx - radius, ax + radius)
+        y0, y1 = (ay - radius, by + radius) if ay < by else (by - radius, ay + radius)
+        for left, bottom, right, top, shape in self._walls:
+            if (left <= x1 and right >= x0 and bottom <= y1 and top >= y0
+                    and _cpShapeSegmentQuery(shape, a, b, radius, _NULL)):
+                return False
+        return True
 
     def camera_heading(self, tick: int) -> float:
         """Where the head camera looks (radians, map frame)."""
