@@ -95,7 +95,63 @@ class Area:
 
 
 _CELL: Final = 2.0
-"""The side (m) of the squares a map files its places by (:meth:`WorldMap.places_in`)."""
+"""The side (m) of the squares a map files its places and walls by
+(:meth:`WorldMap.places_along`, :meth:`WorldMap.walls_along`)."""
+_LONG: Final = 64
+"""A wall that reaches into more squares than this is not filed by square: each question
+about the walls along a segment offers it (:meth:`WorldMap.walls_along`)."""
+_ROUNDING: Final = 1e-6
+"""A margin (m) for rounding: a segment's squares are found for a reach this much longer
+(a map's numbers are at most 10,000 m, where a float's last bit is 2e-12 m)."""
+
+
+def _squares(ax: float, ay: float, bx: float, by: float, reach: float,
+             limit: int) -> list[tuple[int, int]] | None:
+    """The squares of the grid that hold a point within ``reach`` of the segment from a
+    to b, and maybe some more beside them; None when they are more than ``limit``, so
+    that a long segment costs no more than a question to every thing filed. Where the
+    segment's box (widened by ``reach``) has at most twice as many squares as it has
+    columns and rows (a walk would find nearly as many), or the segment is upright, they
+    are the box's squares; else, column by column, the rows the part of the segment over that
+    column (widened by ``reach``) spans."""
+    if ax > bx:
+        ax, ay, bx, by = bx, by, ax, ay
+    reach += _ROUNDING
+    c0, c1 = math.floor((ax - reach) / _CELL), math.floor((bx + reach) / _CELL)
+    low, high = (ay, by) if ay <= by else (by, ay)
+    r0, r1 = math.floor((low - reach) / _CELL), math.floor((high + reach) / _CELL)
+    if c1 - c0 >= limit or r1 - r0 >= limit:  # (each column holds one, and each row)
+        return None
+    cols, rows = c1 - c0 + 1, r1 - r0 + 1
+    if cols * rows <= 2 * (cols + rows) or ax == bx:
+        if cols * rows > limit:
+            return None
+        return [(cx, cy) for cx in range(c0, c1 + 1) for cy in range(r0, r1 + 1)]
+    dx = bx - ax
+    dy = by - ay
+    found: list[tuple[int, int]] = []
+    for cx in range(c0, c1 + 1):  # (the part of the segment within reach of the column)
+        t0 = min(max((cx * _CELL - reach - ax) / dx, 0.0), 1.0)
+        t1 = min(max(((cx + 1) * _CELL + reach - ax) / dx, 0.0), 1.0)
+        y0, y1 = ay + dy * t0, ay + dy * t1
+        if y0 > y1:
+            y0, y1 = y1, y0
+        low_row, high_row = math.floor((y0 - reach) / _CELL), math.floor((y1 + reach) / _CELL)
+        if len(found) + high_row - low_row + 1 > limit:
+            return None
+        for cy in range(low_row, high_row + 1):
+            found.append((cx, cy))
+    return found
+
+
+def _filed(grid: Mapping[tuple[int, int], tuple[int, ...]],
+           squares: list[tuple[int, int]]) -> list[int]:
+    """What ``grid`` files in ``squares``, each once, in the order first met."""
+    found: dict[int, None] = {}
+    for square in squares:
+        for i in grid.get(square, ()):
+            found[i] = None
+    return list(found)
 
 
 @dataclass(frozen=True)
@@ -115,6 +171,12 @@ class WorldMap:
     _grid: Mapping[tuple[int, int], tuple[int, ...]] = field(
         init=False, repr=False, compare=False)
     """The places by the square of :data:`_CELL` metres they are in (their indices)."""
+    _wall_grid: Mapping[tuple[int, int], tuple[int, ...]] = field(
+        init=False, repr=False, compare=False)
+    """The walls by the squares that hold a point of them (their indices), but those
+    in :attr:`_long`."""
+    _long: tuple[int, ...] = field(init=False, repr=False, compare=False)
+    """The walls that reach into more than :data:`_LONG` squares (their indices)."""
     _order: Mapping[str, int] = field(init=False, repr=False, compare=False)
     """Each place's index in :attr:`places` (the search's tie-break)."""
     _routes: dict[tuple[str, str], tuple[Place, ...]] = field(
@@ -152,22 +214,42 @@ class WorldMap:
         for i, p in enumerate(self.places):
             grid.setdefault((math.floor(p.x / _CELL), math.floor(p.y / _CELL)), []).append(i)
         object.__setattr__(self, "_grid", {k: tuple(v) for k, v in grid.items()})
+        walls: dict[tuple[int, int], list[int]] = {}
+        long = []
+        for i, w in enumerate(self.walls):
+            squares = _squares(w.x1, w.y1, w.x2, w.y2, w.thickness / 2, _LONG)
+            if squares is None:
+                long.append(i)
+                continue
+            for square in squares:
+                walls.setdefault(square, []).append(i)
+        object.__setattr__(self, "_wall_grid", {k: tuple(v) for k, v in walls.items()})
+        object.__setattr__(self, "_long", tuple(long))
 
-    def places_in(self, x1: float, y1: float, x2: float, y2: float) -> list[int]:
-        """The places in the box from (x1, y1) to (x2, y2), edges included, and maybe
-        some more near it (their indices, in no particular order): the candidates a
-        search for the places near a point measures. It looks only at the squares the
-        box covers, or at every place when they are fewer."""
-        cx1, cx2 = math.floor(x1 / _CELL), math.floor(x2 / _CELL)
-        cy1, cy2 = math.floor(y1 / _CELL), math.floor(y2 / _CELL)
-        if (cx2 - cx1 + 1) * (cy2 - cy1 + 1) > len(self.places):
+    def places_along(self, ax: float, ay: float, bx: float, by: float,
+                     reach: float) -> list[int]:
+        """The places within ``reach`` of the segment from a to b (a point when a is b),
+        and maybe some more near it (their indices, each once, in no particular order):
+        the candidates a search for the places near a point or a way measures. It looks
+        only at the squares within reach of the segment, or at every place when they
+        are more than the places."""
+        squares = _squares(ax, ay, bx, by, reach, len(self.places))
+        if squares is None:
             return list(range(len(self.places)))
-        grid = self._grid
-        found: list[int] = []
-        for cx in range(cx1, cx2 + 1):
-            for cy in range(cy1, cy2 + 1):
-                found.extend(grid.get((cx, cy), ()))
-        return found
+        return _filed(self._grid, squares)
+
+    def walls_along(self, ax: float, ay: float, bx: float, by: float,
+                    reach: float) -> list[int]:
+        """The walls that may come within ``reach`` of the segment from a to b (their
+        indices, each once, in no particular order): those filed in the squares within
+        reach of the segment, and the long ones; or every wall, when the squares are
+        more than the walls. A wall is within reach when a point of it (its thickness
+        included) is."""
+        walls = len(self.walls)
+        squares = _squares(ax, ay, bx, by, reach, walls)
+        if squares is None:
+            return list(range(walls))
+        return [*self._long, *_filed(self._wall_grid, squares)]
 
     def place(self, name: str) -> Place | None:
         """The place called ``name``, or None."""

@@ -854,9 +854,11 @@ class Simulator:
             # straight and that passes no other place on the way (within ON_THE_WAY):
             # every place on its way is visited and reported
             radius = self.spec.radius / 2
+            places = self.map.places
             starts = {p.name: d for d, _, p in near
                       if self.world.clear(x, y, p.x, p.y, radius)
-                      and not any(_on_the_way(x, y, p, q) for q in self.map.places)}
+                      and not any(_on_the_way(x, y, p, places[i]) for i in
+                                  self.map.places_along(x, y, p.x, p.y, ON_THE_WAY))}
         names = self.map.shortest_path(starts, {goal: 0.0})
         if at is not None and names:
             names = names[1:]

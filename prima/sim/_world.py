@@ -57,10 +57,12 @@ two walls at once, Chipmunk may meet the two contacts in the other order, and so
 them to other last bits than it would have (a corner scraped: in 2 of 1,360 jittered
 runs of the shipped scenarios, the user's touch 0.2 s off).
 
-The map files its places by the squares of a grid (:meth:`WorldMap.places_in`,
-made once per map, not per run): :meth:`World.places_near` asks it which places
-may be near a point, instead of measuring the distance to every place, and
-says how far the point may move before the answer can change.
+The map files its places and walls by the squares of a grid (made once per map, not
+per run): :meth:`World.places_near` asks it which places may be near a point
+(:meth:`WorldMap.places_along`), instead of measuring the distance to every place, and
+says how far the point may move before the answer can change; :meth:`World.clear`
+asks it which walls may be near a segment fattened by a radius
+(:meth:`WorldMap.walls_along`), instead of asking every wall.
 
 The user is a kinematic body moved by the scripted user. Head and arm
 angles, and those of the joints a robot profile declares (a laser pointer's
@@ -469,20 +471,21 @@ class World:
         return self._clear((ax, ay), (bx, by), radius)
 
     def _clear(self, a: tuple[float, float], b: tuple[float, float], radius: float) -> bool:
-        # (Space.segment_query_first, without the result's Python objects)
-        hit = _cpSpaceSegmentQueryFirst(self._sp, a, b, radius, _SIGHT, _NULL)
-        if hit != _NULL:
-            return False
         if radius <= 0.0:
-            return True
+            # (Space.segment_query_first, without the result's Python objects)
+            return bool(_cpSpaceSegmentQueryFirst(self._sp, a, b, 0.0, _SIGHT, _NULL)
+                        == _NULL)
         # Chipmunk's query of the space fattens the segment only where it asks a shape:
         # it asks the shapes whose bounding boxes the thin segment crosses, so a wall
         # within ``radius`` of it beside it (along a drive, by a doorway) is never asked.
-        # Each wall whose box lies within ``radius`` of the segment's is asked itself.
+        # Each wall the map files near the segment, whose box lies within ``radius`` of
+        # the segment's, is asked itself.
         (ax, ay), (bx, by) = a, b
         x0, x1 = (ax - radius, bx + radius) if ax < bx else (bx - radius, ax + radius)
         y0, y1 = (ay - radius, by + radius) if ay < by else (by - radius, ay + radius)
-        for left, bottom, right, top, shape in self._walls:
+        walls = self._walls
+        for i in self.map.walls_along(ax, ay, bx, by, radius):
+            left, bottom, right, top, shape = walls[i]
             if (left <= x1 and right >= x0 and bottom <= y1 and top >= y0
                     and _cpShapeSegmentQuery(shape, a, b, radius, _NULL)):
                 return False
@@ -547,14 +550,14 @@ class World:
         leaves it (at most ``slack``).
 
         The map's index of its places finds the candidates within ``radius +
-        slack`` (:meth:`WorldMap.places_in`); each is then measured as a scan of
+        slack`` (:meth:`WorldMap.places_along`); each is then measured as a scan of
         every place would measure it, so the places found are the scan's.
         """
         m = radius + slack + _PLACE_MARGIN
         places = self.map.places
         found = []
         clear = slack
-        for i in sorted(self.map.places_in(x - m, y - m, x + m, y + m)):
+        for i in sorted(self.map.places_along(x, y, x, y, m)):
             d = _hypot(places[i].x - x, places[i].y - y)
             if d <= radius:
                 found.append(i)

@@ -10,8 +10,7 @@ import pytest
 
 from prima.run import Run
 from prima.sim import Pose, Simulator, UserScript, WorldMap
-from prima.sim._world import WALL, World
-from tests.sim.helpers import ROOT, world_map
+from tests.sim.helpers import ROOT, clear_as_each_wall_says, world_map
 
 
 def _sighted(robot: Pose, user: Pose) -> Simulator:
@@ -122,13 +121,6 @@ def test_in_whole_runs_the_kept_answer_is_always_the_fresh_one() -> None:
     assert asked > 5_000  # (about 8,000: fewer since wakes that would find nothing are skipped)
 
 
-def _walls_within(world: World, a: tuple[float, float], b: tuple[float, float],
-                  radius: float) -> bool:
-    """Whether any wall lies within ``radius`` of the segment, each wall asked itself."""
-    walls = [s for s in world.space.shapes if s.filter.categories & WALL]
-    return any(w.segment_query(a, b, radius) is not None for w in walls)
-
-
 def test_a_segment_fattened_is_clear_only_of_every_wall_within_its_radius() -> None:
     """Chipmunk's query of the space asks only the shapes whose bounding boxes the thin
     segment crosses: a wall beside a segment, within its radius, went unseen, and a
@@ -136,16 +128,8 @@ def test_a_segment_fattened_is_clear_only_of_every_wall_within_its_radius() -> N
     office, some 1,000 of them by walls, are clear exactly when no wall, asked itself,
     lies within the radius."""
     world = Simulator(world_map("office"), robot=Pose(8, 5, 0)).world
-    rng = random.Random(5)
-    beside = 0
-    for _ in range(3000):
-        ax, ay = rng.uniform(-1, 21), rng.uniform(-1, 13)
-        length, heading = rng.uniform(0.05, 3.0), rng.uniform(0, 2 * math.pi)
-        b = (ax + length * math.cos(heading), ay + length * math.sin(heading))
-        radius = rng.choice([0.0, 0.1, 0.26, 0.5])
-        near = _walls_within(world, (ax, ay), b, radius)
-        assert world.clear(ax, ay, *b, radius) is not near, ((ax, ay), b, radius)
-        beside += near and world.clear(ax, ay, *b)  # (clear thin, not fattened)
+    _blocked, beside = clear_as_each_wall_says(world, random.Random(5), (-1, -1), (22, 14),
+                                               3.0, (0.0, 0.1, 0.26, 0.5), 3000)
     assert beside > 200
     # the case that showed it: 0.12 m from the wall x = 14, in no box the segment crosses
     assert not world.clear(13.5839, 12.1535, 13.8379, 10.3305, 0.3)
