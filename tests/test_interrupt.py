@@ -41,9 +41,9 @@ SIGINT itself at exit, whoever caught the exception; and a signal before Python 
 set its handlers kills the process at once, with nothing said."""
 
 
-def _sweep(results: Path, *more: str) -> list[str]:
+def _sweep(results: Path, *more: str, jobs: str = "2") -> list[str]:
     return [sys.executable, "-m", "prima", "sweep", str(SCENARIO), "--runs", RUNS, "--jitter",
-            "3", "--seed", "4", "--jobs", "2", "--worst", "0", *more, str(results)]
+            "3", "--seed", "4", "--jobs", jobs, "--worst", "0", *more, str(results)]
 
 
 def _records(results: Path) -> int:
@@ -66,12 +66,14 @@ def _took_the_signals(pid: int) -> bool:
     return bool(int(caught, 16) >> (signal.SIGTERM - 1) & 1)
 
 
-def _interrupted(results: Path, sig: signal.Signals, lines: int | None) -> tuple[int, str]:
-    """A sweep given ``sig`` (its process group) once its results file has ``lines``
-    lines (None: as soon as PRIMA has taken the signals): its exit status and what it
-    said on standard error."""
-    process = subprocess.Popen(_sweep(results, "--results"), stdout=subprocess.DEVNULL,
-                               stderr=subprocess.PIPE, start_new_session=True, cwd=ROOT)
+def _interrupted(results: Path, sig: signal.Signals, lines: int | None, jobs: str = "2",
+                 env: dict[str, str] | None = None) -> tuple[int, str]:
+    """A sweep on ``jobs`` given ``sig`` (its process group) once its results file has
+    ``lines`` lines (None: as soon as PRIMA has taken the signals): its exit status and
+    what it said on standard error."""
+    process = subprocess.Popen(_sweep(results, "--results", jobs=jobs),
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                               start_new_session=True, cwd=ROOT, env=env)
     try:
         deadline = time.monotonic() + BOUND
         while lines is None and not _took_the_signals(process.pid) \
@@ -122,6 +124,21 @@ def test_a_sweep_stopped_mid_run_resumes_to_the_file_an_uninterrupted_one_writes
         done = subprocess.run(argv, capture_output=True, cwd=ROOT, timeout=BOUND, check=False)
         assert done.returncode == 0, done.stderr.decode()
     assert results.read_bytes() == whole.read_bytes()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+def test_a_sweep_in_one_process_a_signal_stopped_leaves_no_folder_behind(
+        tmp_path: Path, sig: signal.Signals) -> None:
+    """With --jobs 1 the runs are unpacked in a folder of the sweep's own process; a
+    command a signal stopped ends its process without Python's exit handlers, so the
+    sweep deletes that folder itself as it stops."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    results = tmp_path / "r.jsonl"
+    status, err = _interrupted(results, sig, 5, jobs="1",
+                               env={**os.environ, "TMPDIR": str(scratch)})
+    assert status in STATUS[sig] and "interrupted after" in err, err
+    assert list(scratch.iterdir()) == []
 
 
 def test_a_sweep_killed_outright_keeps_its_records_to_go_on_from(tmp_path: Path) -> None:

@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol
 
 from prima.batch._results import ResultsFile
-from prima.batch._work import CPU, Chunk, Job, run_chunk, unpack_in
+from prima.batch._work import CPU, Chunk, Job, forget_unpacked, run_chunk, unpack_in
 from prima.errors import ClusterError
 from prima.escape import shown_path
 from prima.signals import deferred, sticky
@@ -103,10 +103,10 @@ class Inline:
         pass
 
     def stop(self) -> None:
-        pass
+        forget_unpacked()  # (the runs' folder: Ctrl-C or SIGTERM ends the process bare)
 
     def close(self) -> None:
-        pass
+        forget_unpacked()
 
 
 def _worker(scratch: str) -> None:

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from prima.run import Loaded  # (imported where runs are made, as Run is)
 
 __all__ = ["CPU", "Analysis", "Chunk", "Job", "Observer", "record_of", "run_chunk", "run_one",
-           "unpack_in"]
+           "forget_unpacked", "unpack_in"]
 
 
 class Observer(Protocol):
@@ -217,6 +217,16 @@ class _Unpacked:
 
 _last = threading.local()
 """Each thread's last bundle unpacked (:func:`_unpacked`)."""
+
+
+def forget_unpacked() -> None:
+    """Delete the folder of this thread's last bundle unpacked, now. A batch run in this
+    process (``--jobs 1``) calls it as it ends, however it ends: a command a signal ended
+    ends its process without the exit handlers that would delete it."""
+    kept: _Unpacked | None = getattr(_last, "kept", None)
+    if kept is not None:
+        _last.kept = None
+        kept.delete()
 
 
 def _unpacked(bundle: Bundle) -> tuple[Path, etree._Element, Loaded]:
